@@ -1,0 +1,28 @@
+# thermaxis: thermal positioning error of a linear axis, from raw runs to the paper's
+# figures and tables (Xu et al., decoupling and step-by-step modelling).
+from snakemake.utils import min_version, validate
+
+min_version("9.0")
+
+
+configfile: "config/config.yaml"
+
+
+validate(config, "workflow/schemas/config.schema.yaml", set_default=True)
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/ingest.smk"
+include: "workflow/rules/clean.smk"
+include: "workflow/rules/assemble.smk"
+include: "workflow/rules/decouple.smk"
+include: "workflow/rules/select.smk"
+include: "workflow/rules/model.smk"
+include: "workflow/rules/tables.smk"
+include: "workflow/rules/figures.smk"
+
+
+rule all:
+    input:
+        all_outputs(),
+    default_target: True

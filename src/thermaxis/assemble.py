@@ -1,0 +1,184 @@
+"""From one run's raw logs to tidy tables: unzeroed errors and measurement temperatures.
+
+The unzeroed error matrix keeps the drift the paper is about: the interferometer
+datum is set once per run, so a later measurement's first-position reading is not 0.
+The re-zeroed view (each measurement minus its own first-position reading, Fig. 8)
+is kept beside it only to show what re-zeroing hides.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from . import clean
+from .io import DataError, Dataset, RawRun
+
+__all__ = [
+    "RunTables",
+    "settings_from_config",
+    "clean_and_assemble_run",
+    "tidy_errors",
+    "tidy_temperatures",
+    "unzeroed_matrix",
+    "model_inputs",
+    "MINUTE",
+]
+
+MINUTE = np.timedelta64(60, "s")
+
+
+@dataclass(frozen=True)
+class RunTables:
+    run: str
+    series: pd.DataFrame  # cleaned temperatures on the common grid
+    qc: pd.DataFrame
+    gaps: pd.DataFrame
+    errors: pd.DataFrame  # tidy, one row per measurement x position
+    temperatures: pd.DataFrame  # tidy, one row per measurement x sensor
+    windows: pd.DataFrame
+    notes: tuple[str, ...] = field(default=())
+
+
+def settings_from_config(config: dict) -> tuple[clean.TemperatureCleaning, clean.ErrorCleaning]:
+    t = config["temperatures"]
+    e = config["errors"]
+    temperature = clean.TemperatureCleaning(
+        interval_s=float(t["interval_s"]),
+        hampel_window=int(t["hampel_window"]),
+        hampel_threshold=float(t["hampel_threshold"]),
+        hampel_min_deviation_c=float(t["hampel_min_deviation_c"]),
+        limits_c=(float(t["limits_c"][0]), float(t["limits_c"][1])),
+        max_gap_s=float(t["max_gap_s"]),
+        estimate_clock_offsets=bool(t["estimate_clock_offsets"]),
+    )
+    error = clean.ErrorCleaning(direction=e["direction"], max_missing_fraction=float(e["max_missing_fraction"]))
+    return temperature, error
+
+
+def _targets(raw: RawRun) -> np.ndarray:
+    """The run's target set: every position read in any of its measurements."""
+    positions = np.concatenate([m["position_mm"].to_numpy() for m in raw.measurements.values()])
+    return np.unique(positions)
+
+
+def tidy_errors(run: str, condition: int, windows: pd.DataFrame, combined: list[pd.Series]) -> pd.DataFrame:
+    """Unzeroed errors (passes combined) plus the re-zeroed view, one row per reading."""
+    t0 = windows["start"].iloc[0]
+    rows = []
+    for (_, w), curve in zip(windows.iterrows(), combined):
+        first = curve.dropna()
+        origin = first.iloc[0] if len(first) else np.nan
+        time_min = (w["start"] - t0) / pd.Timedelta(minutes=1)
+        for position, value in curve.items():
+            rows.append((run, condition, int(w["measurement"]), time_min, float(position), value, value - origin))
+    return pd.DataFrame(
+        rows,
+        columns=["run", "condition", "measurement", "time_min", "position_mm", "error_um", "rezeroed_um"],
+    )
+
+
+def tidy_temperatures(run: str, condition: int, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
+    """Absolute temperatures per measurement and their rise since the run's first measurement."""
+    t0 = windows["start"].iloc[0]
+    time_min = ((windows["start"] - t0) / pd.Timedelta(minutes=1)).to_numpy()
+    sensors = [c for c in at_measurements.columns if c not in ("measurement", "start", "end")]
+    frames = []
+    for sensor in sensors:
+        absolute = at_measurements[sensor].to_numpy(dtype=float)
+        frames.append(
+            pd.DataFrame(
+                {
+                    "run": run,
+                    "condition": condition,
+                    "measurement": windows["measurement"].to_numpy(dtype=int),
+                    "time_min": time_min,
+                    "sensor": sensor,
+                    "absolute_c": absolute,
+                    "relative_c": absolute - absolute[0],
+                }
+            )
+        )
+    return pd.concat(frames, ignore_index=True)
+
+
+def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTables:
+    """Clean one run's logs and assemble its unzeroed errors and measurement temperatures."""
+    t_settings, e_settings = settings_from_config(config)
+    run = raw.run
+    condition = dataset.condition_of(run)
+    windows = raw.windows()
+    notes: list[str] = []
+
+    targets = _targets(raw)
+    combined = []
+    for name, measurement in raw.measurements.items():
+        curve, warns = clean.combine_passes(measurement, targets, e_settings, name=f"{run}/errors/{name}.csv")
+        notes.extend(warns)
+        combined.append(curve)
+
+    # The grid spans the measurements with a margin so window means never extrapolate.
+    margin = pd.Timedelta(seconds=max(60.0, 3 * t_settings.interval_s))
+    start = windows["start"].min() - margin
+    end = windows["end"].max() + margin
+    cleaned = clean.clean_temperatures(raw.sources, dataset.clock_offsets_s(), t_settings, start=start, end=end)
+    gap_notes = clean.check_gaps(
+        cleaned.gaps, windows, allow=bool(config["temperatures"]["allow_long_gaps"])
+    )
+    notes.extend(f"{run}: {n}" for n in gap_notes)
+    at_measurements = clean.temperatures_in_windows(cleaned.frame, windows, how=config["temperatures"]["window"])
+    sensors = [s for s in dataset.sensors if s in at_measurements.columns]
+    missing = at_measurements[sensors].isna().any()
+    if missing.any() and not config["temperatures"]["allow_long_gaps"]:
+        sensor = missing[missing].index[0]
+        raise DataError(f"{dataset.root / run / 'temperatures'}: sensor {sensor!r} has no usable reading during a measurement")
+
+    series = cleaned.frame.copy()
+    series.insert(1, "elapsed_min", (series["time"] - windows["start"].iloc[0]) / pd.Timedelta(minutes=1))
+    return RunTables(
+        run=run,
+        series=series,
+        qc=cleaned.qc.assign(run=run),
+        gaps=cleaned.gaps.assign(run=run),
+        errors=tidy_errors(run, condition, windows, combined),
+        temperatures=tidy_temperatures(run, condition, windows, at_measurements[["measurement", *sensors]] if "measurement" in at_measurements else at_measurements[sensors]),
+        windows=windows.assign(run=run),
+        notes=tuple(notes),
+    )
+
+
+def unzeroed_matrix(errors: pd.DataFrame, value: str = "error_um") -> pd.DataFrame:
+    """Measurement x position matrix of one run (rows (run, measurement), columns position_mm)."""
+    return errors.pivot_table(index=["run", "measurement"], columns="position_mm", values=value, dropna=False, sort=True)
+
+
+def model_inputs(errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The estimators' view: X (run, measurement, time_min, absolute temperature per sensor) and Y.
+
+    Relative temperatures are NOT passed: the models derive them from each run's own
+    first measurement, so a held-out run can never borrow another run's start.
+    """
+    wide = temperatures.pivot_table(index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True)
+    if sensors is None:
+        sensors = list(wide.columns)
+    times = errors.groupby(["run", "measurement"], sort=True)["time_min"].first()
+    Y = unzeroed_matrix(errors)
+    index = Y.index.intersection(wide.index)
+    if len(index) != len(Y.index):
+        missing = Y.index.difference(wide.index)[0]
+        raise DataError(f"assembled tables: run {missing[0]!r} measurement {missing[1]} has errors but no temperatures")
+    X = wide.loc[index, list(sensors)].reset_index()
+    X.insert(2, "time_min", times.loc[index].to_numpy())
+    X.columns.name = None
+    Y = Y.loc[index].reset_index(drop=True)
+    Y.columns = [float(c) for c in Y.columns]
+    Y.columns.name = None
+    return X, Y
+
+
+def warn_all(notes) -> None:
+    for note in notes:
+        warnings.warn(note, stacklevel=2)

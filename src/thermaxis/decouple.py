@@ -1,0 +1,116 @@
+"""Slope/intercept decoupling of a positioning-error curve (the paper's Eq. 6).
+
+Each measurement's errors e(x) at the targets are fitted by least squares on the
+*shifted* stroke ``x - x_first`` (185 ... 445 mm becomes 0 ... 260 mm in the paper),
+so that the intercept b is the error at the first target and the slope k is in
+um per metre of travel.  Degrees 2 and 3 are offered because the paper names a
+strongly non-linear error curve as the method's limitation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["DecoupledFit", "decouple_measurement", "compose_curve", "MM_PER_M"]
+
+MM_PER_M = 1000.0
+
+
+@dataclass(frozen=True)
+class DecoupledFit:
+    """Result of decoupling one measurement.
+
+    ``coefficients`` are in ascending powers of the shifted position in metres:
+    c0 [um], c1 [um/m], c2 [um/m^2], ...; so ``k = c1`` and ``b = c0``.
+    """
+
+    k_um_per_m: float
+    b_um: float
+    r2: float
+    rms_um: float
+    coefficients: tuple[float, ...]
+    origin_mm: float
+
+
+def _design(shifted_m: np.ndarray, degree: int) -> np.ndarray:
+    return np.vander(shifted_m, degree + 1, increasing=True)
+
+
+def decouple_measurement(
+    position_mm, error_um, degree: int = 1, origin_mm: float | None = None
+) -> DecoupledFit:
+    """Least-squares fit of one measurement's error curve.
+
+    ``origin_mm`` defaults to the smallest position (the first target); pass the
+    dataset's first target explicitly when a measurement lost its first reading,
+    so that b keeps the same meaning for every measurement.
+    """
+    x = np.asarray(position_mm, dtype=float)
+    y = np.asarray(error_um, dtype=float)
+    if x.shape != y.shape or x.ndim != 1:
+        raise ValueError("position_mm and error_um must be 1-D arrays of equal length")
+    if degree not in (1, 2, 3):
+        raise ValueError(f"decoupling degree must be 1, 2 or 3, got {degree}")
+    if np.unique(x).size < degree + 1:
+        raise ValueError(
+            f"decoupling of degree {degree} needs at least {degree + 1} distinct positions, got {np.unique(x).size}"
+        )
+    origin = float(np.min(x)) if origin_mm is None else float(origin_mm)
+    shifted_m = (x - origin) / MM_PER_M
+    design = _design(shifted_m, degree)
+    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+    fitted = design @ coef
+    residual = y - fitted
+    ss_res = float(residual @ residual)
+    centred = y - y.mean()
+    ss_tot = float(centred @ centred)
+    # An exactly flat curve is perfectly explained by any fit.
+    r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else 1.0
+    rms = float(np.sqrt(ss_res / y.size))
+    return DecoupledFit(
+        k_um_per_m=float(coef[1]),
+        b_um=float(coef[0]),
+        r2=float(r2),
+        rms_um=rms,
+        coefficients=tuple(float(c) for c in coef),
+        origin_mm=origin,
+    )
+
+
+def compose_curve(k_um_per_m, b_um, position_mm, origin_mm: float) -> np.ndarray:
+    """The paper's Eq. 7, y = k x + b, on the shifted stroke.
+
+    Broadcasts: k and b of shape (n,) with positions of shape (p,) give (n, p).
+    """
+    k = np.asarray(k_um_per_m, dtype=float)
+    b = np.asarray(b_um, dtype=float)
+    shifted_m = (np.asarray(position_mm, dtype=float) - origin_mm) / MM_PER_M
+    return k[..., None] * shifted_m + b[..., None]
+
+
+def decouple_table(errors, degree: int = 1):
+    """Decouple every measurement of a tidy errors table (run, measurement, time_min, position_mm, error_um).
+
+    Returns ``(kb, coefficients)``: the Table 5 frame (run, measurement, time_min,
+    k_um_per_m, b_um, r2, rms_um) and a long frame of all polynomial coefficients.
+    The origin is each run's first target, so a measurement that lost its first
+    reading keeps the same meaning of b.
+    """
+    import pandas as pd
+
+    rows, coef_rows = [], []
+    for run, run_errors in errors.groupby("run", sort=True):
+        origin = float(run_errors["position_mm"].min())
+        for measurement, m in run_errors.groupby("measurement", sort=True):
+            valid = m.dropna(subset=["error_um"])
+            fit = decouple_measurement(valid["position_mm"], valid["error_um"], degree=degree, origin_mm=origin)
+            rows.append(
+                (run, int(measurement), float(m["time_min"].iloc[0]), fit.k_um_per_m, fit.b_um, fit.r2, fit.rms_um)
+            )
+            for power, value in enumerate(fit.coefficients):
+                coef_rows.append((run, int(measurement), power, value))
+    kb = pd.DataFrame(rows, columns=["run", "measurement", "time_min", "k_um_per_m", "b_um", "r2", "rms_um"])
+    coefficients = pd.DataFrame(coef_rows, columns=["run", "measurement", "power", "value"])
+    return kb, coefficients

@@ -1,0 +1,900 @@
+"""Figures of the paper (Figs. 2-17) and the fold comparison, for any dataset shape.
+
+Every ``fig*`` function takes tidy tables, returns a :class:`matplotlib.figure.Figure`
+and touches no file; :func:`save_figure` is the only writer.  The figures are built
+as bare ``Figure`` objects (not through ``pyplot``) so that rendering many of them in
+a workflow leaves no global figure registry behind.
+
+Style and determinism
+---------------------
+All drawing happens inside ``matplotlib.rc_context(STYLE)``: global rcParams are
+never changed, except that importing this module selects the non-interactive Agg
+backend (figures are only ever written to files).  ``save_figure`` renders inside the
+same context because several parameters (``svg.hashsalt``, ``pdf.fonttype``, the
+minus sign, ...) are read when the file is written, not when the artists are made;
+together with the fixed metadata below the bytes of PNG, PDF and SVG output are the
+same for two renders of the same data.
+
+Lines that have a natural order (measurements in time, target positions) are coloured
+by their value on a sequential map and get a legend while there are few of them and a
+colour bar when there are many; unordered lines (runs, sensors, algorithms) take a
+fixed qualitative cycle of colours and markers.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+import string
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from cycler import cycler  # noqa: E402
+from matplotlib.cm import ScalarMappable  # noqa: E402
+from matplotlib.colors import ListedColormap, Normalize  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
+
+__all__ = [
+    "STYLE",
+    "SINGLE_COLUMN_IN",
+    "DOUBLE_COLUMN_IN",
+    "SIMULATED_NOTE",
+    "POINTWISE_APPROACH",
+    "fig2_positioning_error",
+    "fig3_ambient",
+    "fig5_unzeroed",
+    "fig6_error_vs_time",
+    "fig7_error_surface",
+    "fig8_rezeroed",
+    "fig9_other_runs",
+    "fig10_temperature_rise",
+    "fig11_pointwise_prediction",
+    "fig12_slope_intercept",
+    "fig_kb_prediction",
+    "fig_error_prediction",
+    "fig_fold_comparison",
+    "save_figure",
+    "figure_caption",
+]
+
+SINGLE_COLUMN_IN = 3.5
+DOUBLE_COLUMN_IN = 7.0
+SIMULATED_NOTE = "Simulated data (thermal twin), not the paper's measurements."
+POINTWISE_APPROACH = "pointwise"
+
+# Matplotlib's tab10, written out so that the palette does not depend on the version.
+CATEGORICAL_COLORS = (
+    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+    "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+)  # fmt: skip
+MARKERS = ("o", "s", "^", "v", "D", "<", ">", "p", "h", "X")
+# The light yellow end of viridis vanishes on white paper, hence the truncation.
+ORDERED_CMAP = ListedColormap(plt.get_cmap("viridis")(np.linspace(0.0, 0.85, 256)), name="thermaxis_ordered")
+SURFACE_CMAP = "coolwarm"
+
+# More entries than this: the legend moves out of the axes; more than
+# MAX_LEGEND_ENTRIES ordered lines: a colour bar replaces the legend.
+MAX_INSIDE_LEGEND = 6
+MAX_LEGEND_ENTRIES = 10
+# Dense time series get about this many markers per line so markers stay readable.
+MARKERS_PER_SERIES = 12
+
+STYLE: dict[str, object] = {
+    "font.family": "sans-serif",
+    # DejaVu Sans ships with matplotlib, so every machine draws the same glyphs.
+    "font.sans-serif": ["DejaVu Sans"],
+    "font.size": 8.0,
+    "axes.titlesize": 8.0,
+    "axes.labelsize": 8.0,
+    "xtick.labelsize": 7.5,
+    "ytick.labelsize": 7.5,
+    "legend.fontsize": 7.0,
+    "legend.frameon": False,
+    "legend.handlelength": 2.2,
+    "axes.linewidth": 0.6,
+    "axes.grid": True,
+    "grid.linewidth": 0.4,
+    "grid.alpha": 0.35,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "axes.prop_cycle": cycler(color=list(CATEGORICAL_COLORS)),
+    "lines.linewidth": 1.0,
+    "lines.markersize": 3.5,
+    "xtick.major.width": 0.6,
+    "ytick.major.width": 0.6,
+    "xtick.direction": "in",
+    "ytick.direction": "in",
+    "figure.dpi": 100,
+    "savefig.dpi": 300,
+    "savefig.bbox": None,
+    "svg.hashsalt": "thermaxis",
+    "svg.fonttype": "path",
+    "pdf.fonttype": 42,
+    "path.simplify": False,
+}
+
+_SAVE_METADATA = {
+    "png": {"Software": None},
+    "pdf": {"Creator": None, "Producer": None, "CreationDate": None},
+    "svg": {"Creator": None, "Date": None},
+}
+
+ERROR_LABEL = "Positioning error (µm)"
+POSITION_LABEL = "Position (mm)"
+TIME_LABEL = "Time since first measurement (min)"
+
+
+def _styled(func):
+    """Build the figure inside the module style so global rcParams stay untouched."""
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with matplotlib.rc_context(STYLE):
+            return func(*args, **kwargs)
+
+    return wrapper
+
+
+# --------------------------------------------------------------------------- checks
+
+
+def _require_columns(table: pd.DataFrame, columns: Iterable[str], name: str) -> None:
+    missing = [c for c in columns if c not in table.columns]
+    if missing:
+        raise ValueError(f"{name} table lacks column(s) {', '.join(missing)}; it has {', '.join(map(str, table.columns))}")
+
+
+def _natural_key(value) -> tuple:
+    """Sort 'E2' before 'E10' and numbers numerically, so run and fold order reads naturally."""
+    parts = re.split(r"(\d+)", str(value))
+    return tuple((0, int(p), "") if p.isdigit() else (1, 0, p) for p in parts)
+
+
+def _natural_sorted(values: Iterable) -> list:
+    return sorted(pd.unique(pd.Series(list(values))), key=_natural_key)
+
+
+def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
+    """Rows where every column equals the given value; a ValueError names the choices when none match."""
+    out = table
+    for column, value in equals.items():
+        hit = out[out[column] == value]
+        if hit.empty:
+            choices = ", ".join(map(str, _natural_sorted(out[column]))) or "none"
+            raise ValueError(f"{name} table has no rows with {column}={value!r}; available: {choices}")
+        out = hit
+    return out
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _new_figure(width: float, height: float, **kwargs) -> Figure:
+    return Figure(figsize=(width, height), layout="constrained", **kwargs)
+
+
+def _categorical_style(index: int) -> dict:
+    return {"color": CATEGORICAL_COLORS[index % len(CATEGORICAL_COLORS)], "marker": MARKERS[index % len(MARKERS)]}
+
+
+def _markevery(n_points: int) -> int:
+    return max(1, n_points // MARKERS_PER_SERIES)
+
+
+def _panel_label(index: int) -> str:
+    """(a), (b), ..., (z), (aa), (ab), ... for any number of panels."""
+    letters = ""
+    index += 1
+    while index:
+        index, rest = divmod(index - 1, 26)
+        letters = chr(ord("a") + rest) + letters
+    return f"({letters})"
+
+
+def _add_legend(ax, n_entries: int, loc: str = "best", **kwargs) -> None:
+    """Inside the axes at ``loc`` for a few entries, outside on the right for many."""
+    if n_entries <= MAX_INSIDE_LEGEND:
+        ax.legend(loc=loc, **kwargs)
+    else:
+        ncol = math.ceil(n_entries / 16)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, ncol=ncol, **kwargs)
+
+
+def _ordered_norm(values: Sequence[float]) -> Normalize:
+    values = np.asarray(values, dtype=float)
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return Normalize(0.0, 1.0)
+    return Normalize(float(finite.min()), float(finite.max()))
+
+
+def _ordered_key(fig: Figure, ax, norm: Normalize, n_lines: int, quantity_label: str, axes_for_bar=None) -> None:
+    """Legend for a few ordered lines, a colour bar for many."""
+    if n_lines <= MAX_LEGEND_ENTRIES:
+        _add_legend(ax, n_lines)
+    else:
+        mappable = ScalarMappable(norm=norm, cmap=ORDERED_CMAP)
+        bar = fig.colorbar(mappable, ax=ax if axes_for_bar is None else axes_for_bar, pad=0.02, aspect=30)
+        bar.set_label(quantity_label)
+
+
+def _measurement_times(errors: pd.DataFrame) -> pd.Series:
+    """Each measurement's time: its first reading (readings of one measurement may carry their own times)."""
+    return errors.groupby("measurement")["time_min"].min().sort_index()
+
+
+def _time_label(minutes: float) -> str:
+    return f"{minutes:.0f} min" if np.isfinite(minutes) else "time unknown"
+
+
+def _curves_by_measurement(fig: Figure, ax, run_errors: pd.DataFrame, value_column: str, key: bool = True) -> None:
+    """One error curve per measurement, coloured by its time, on ``ax``."""
+    times = _measurement_times(run_errors)
+    norm = _ordered_norm(times.to_numpy())
+    for i, (measurement, group) in enumerate(run_errors.groupby("measurement", sort=True)):
+        curve = group.groupby("position_mm")[value_column].mean().sort_index()
+        t = float(times.loc[measurement])
+        ax.plot(
+            curve.index.to_numpy(dtype=float),
+            curve.to_numpy(dtype=float),
+            color=ORDERED_CMAP(norm(t)),
+            marker=MARKERS[i % len(MARKERS)],
+            label=_time_label(t),
+        )
+    ax.set_xlabel(POSITION_LABEL)
+    if key:
+        _ordered_key(fig, ax, norm, len(times), TIME_LABEL)
+
+
+_ERRORS_COLUMNS = ("run", "measurement", "time_min", "position_mm", "error_um")
+
+
+def _run_errors(errors: pd.DataFrame, run, extra: Sequence[str] = ()) -> pd.DataFrame:
+    _require_columns(errors, (*_ERRORS_COLUMNS, *extra), "errors")
+    return _select(errors, "errors", run=run)
+
+
+# --------------------------------------------------------------------------- figures
+
+
+@_styled
+def fig2_positioning_error(errors: pd.DataFrame, run) -> Figure:
+    """Positioning error of the first measurement of a run against position (the paper's Fig. 2).
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tidy errors table (run, measurement, time_min, position_mm, error_um, ...); passes
+        are expected combined already, remaining duplicates of a position are averaged.
+    run : str
+        The run to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    run_errors = _run_errors(errors, run)
+    first = run_errors[run_errors["measurement"] == run_errors["measurement"].min()]
+    curve = first.groupby("position_mm")["error_um"].mean().sort_index()
+    fig = _new_figure(SINGLE_COLUMN_IN, 2.4)
+    ax = fig.subplots()
+    ax.plot(curve.index.to_numpy(dtype=float), curve.to_numpy(dtype=float), label=f"Run {run}, first measurement", **_categorical_style(0))
+    ax.set_xlabel(POSITION_LABEL)
+    ax.set_ylabel(ERROR_LABEL)
+    _add_legend(ax, 1)
+    return fig
+
+
+@_styled
+def fig3_ambient(ambient: pd.DataFrame) -> Figure:
+    """Ambient temperature of every run against elapsed time (the paper's Fig. 3).
+
+    Parameters
+    ----------
+    ambient : pandas.DataFrame
+        Long table with columns run, elapsed_min, temperature_c.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _require_columns(ambient, ("run", "elapsed_min", "temperature_c"), "ambient")
+    if ambient.empty:
+        raise ValueError("ambient table is empty; expected at least one sample of one run")
+    runs = _natural_sorted(ambient["run"])
+    fig = _new_figure(SINGLE_COLUMN_IN, 2.4)
+    ax = fig.subplots()
+    for i, run in enumerate(runs):
+        series = ambient[ambient["run"] == run].sort_values("elapsed_min", kind="stable")
+        series = series[np.isfinite(series["temperature_c"].to_numpy(dtype=float))]
+        ax.plot(
+            series["elapsed_min"].to_numpy(dtype=float),
+            series["temperature_c"].to_numpy(dtype=float),
+            markevery=_markevery(len(series)),
+            label=f"Run {run}",
+            **_categorical_style(i),
+        )
+    ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel("Ambient temperature (°C)")
+    # An explicit corner: 'best' would scan every sample of long series.
+    _add_legend(ax, len(runs), loc="upper right")
+    return fig
+
+
+@_styled
+def fig5_unzeroed(errors: pd.DataFrame, run) -> Figure:
+    """Unzeroed errors of every measurement of a run against position (the paper's Fig. 5).
+
+    One curve per measurement, labelled by the measurement's time since the run's first
+    measurement.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tidy errors table.
+    run : str
+        The run to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    run_errors = _run_errors(errors, run)
+    fig = _new_figure(SINGLE_COLUMN_IN, 2.6)
+    ax = fig.subplots()
+    _curves_by_measurement(fig, ax, run_errors, "error_um")
+    ax.set_ylabel(ERROR_LABEL)
+    return fig
+
+
+@_styled
+def fig6_error_vs_time(errors: pd.DataFrame, run) -> Figure:
+    """Unzeroed error of a run against time, one curve per target position (the paper's Fig. 6).
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tidy errors table.
+    run : str
+        The run to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    run_errors = _run_errors(errors, run)
+    positions = np.sort(run_errors["position_mm"].unique().astype(float))
+    norm = _ordered_norm(positions)
+    fig = _new_figure(SINGLE_COLUMN_IN, 2.6)
+    ax = fig.subplots()
+    for i, position in enumerate(positions):
+        at = run_errors[run_errors["position_mm"] == position]
+        curve = at.groupby("measurement").agg(time_min=("time_min", "min"), error_um=("error_um", "mean")).sort_index()
+        ax.plot(
+            curve["time_min"].to_numpy(dtype=float),
+            curve["error_um"].to_numpy(dtype=float),
+            color=ORDERED_CMAP(norm(position)),
+            marker=MARKERS[i % len(MARKERS)],
+            label=f"{position:g} mm",
+        )
+    ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel(ERROR_LABEL)
+    _ordered_key(fig, ax, norm, len(positions), POSITION_LABEL)
+    return fig
+
+
+@_styled
+def fig7_error_surface(errors: pd.DataFrame, run) -> Figure:
+    """Unzeroed error of a run over position and time as a 3-D surface (the paper's Fig. 7).
+
+    A run with a single measurement or a single position cannot span a surface; its
+    curves are drawn in the same 3-D axes instead.  Missing readings leave holes.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tidy errors table.
+    run : str
+        The run to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    run_errors = _run_errors(errors, run)
+    grid = run_errors.pivot_table(index="measurement", columns="position_mm", values="error_um", aggfunc="mean", dropna=False)
+    grid = grid.sort_index().sort_index(axis=1)
+    times = _measurement_times(run_errors).reindex(grid.index).to_numpy(dtype=float)
+    positions = grid.columns.to_numpy(dtype=float)
+    z = grid.to_numpy(dtype=float)
+    x, y = np.meshgrid(positions, times)
+
+    fig = _new_figure(SINGLE_COLUMN_IN, 3.0)
+    ax = fig.add_subplot(projection="3d")
+    finite = z[np.isfinite(z)]
+    norm = Normalize(float(finite.min()), float(finite.max())) if finite.size else Normalize(0.0, 1.0)
+    if z.shape[0] >= 2 and z.shape[1] >= 2:
+        surface = ax.plot_surface(
+            x, y, np.ma.masked_invalid(z), cmap=SURFACE_CMAP, norm=norm, edgecolor="k", linewidth=0.25, antialiased=True
+        )
+        bar = fig.colorbar(surface, ax=ax, shrink=0.6, pad=0.12, aspect=20)
+    else:
+        for row in range(z.shape[0]):
+            ax.plot(x[row], y[row], z[row], color="k", marker="o")
+        bar = fig.colorbar(ScalarMappable(norm=norm, cmap=SURFACE_CMAP), ax=ax, shrink=0.6, pad=0.12, aspect=20)
+    bar.set_label(ERROR_LABEL)
+    ax.set_xlabel(POSITION_LABEL, labelpad=2)
+    ax.set_ylabel("Time (min)", labelpad=2)
+    ax.set_zlabel("Error (µm)", labelpad=2)
+    ax.tick_params(pad=0)
+    ax.view_init(elev=25.0, azim=-60.0)
+    return fig
+
+
+@_styled
+def fig8_rezeroed(errors: pd.DataFrame, run) -> Figure:
+    """Re-zeroed errors of a run against position (the paper's Fig. 8).
+
+    Every curve is that measurement minus its own reading at the first position, so
+    all curves start at zero: the drift between measurements is hidden and only the
+    expansion along the stroke is left, as the paper argues.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tidy errors table with the column ``rezeroed_um``.
+    run : str
+        The run to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    run_errors = _run_errors(errors, run, extra=("rezeroed_um",))
+    fig = _new_figure(SINGLE_COLUMN_IN, 2.6)
+    ax = fig.subplots()
+    _curves_by_measurement(fig, ax, run_errors, "rezeroed_um")
+    ax.set_ylabel("Re-zeroed positioning error (µm)")
+    return fig
+
+
+@_styled
+def fig9_other_runs(errors: pd.DataFrame, runs: Sequence) -> Figure:
+    """Unzeroed errors of several runs, one panel (a), (b), ... per run (the paper's Fig. 9).
+
+    Panels are laid out two per row; each panel has its own error scale because the
+    runs' error ranges differ.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tidy errors table.
+    runs : sequence of str
+        The runs, one panel each, in the given order.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    runs = list(runs) if not isinstance(runs, str) else [runs]
+    if not runs:
+        raise ValueError("fig9 needs at least one run; got an empty list")
+    selected = [_run_errors(errors, run) for run in runs]
+    ncols = min(len(runs), 2)
+    nrows = math.ceil(len(runs) / ncols)
+    fig = _new_figure(DOUBLE_COLUMN_IN, 2.4 * nrows)
+    axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
+    for i, (run, run_errors) in enumerate(zip(runs, selected)):
+        ax = axes[i]
+        _curves_by_measurement(fig, ax, run_errors, "error_um")
+        ax.set_ylabel(ERROR_LABEL)
+        ax.set_title(f"{_panel_label(i)} Run {run}", loc="left")
+    for ax in axes[len(runs):]:
+        ax.remove()
+    return fig
+
+
+@_styled
+def fig10_temperature_rise(series: pd.DataFrame, sensors: Sequence[str] | None = None) -> Figure:
+    """Temperature rise of a run's sensors relative to the start of its first measurement (Fig. 10).
+
+    The reference of each sensor is its value at ``elapsed_min == 0``, linearly
+    interpolated between the neighbouring samples because sources sample at their own
+    moments; a sensor without samples on one side of 0 takes its nearest sample.
+    Sensors with no sample at all are left out.
+
+    Parameters
+    ----------
+    series : pandas.DataFrame
+        One run's cleaned series: ``time``, ``elapsed_min`` and one float column per sensor.
+    sensors : sequence of str, optional
+        Sensors to draw, in this order; default every sensor column in table order.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _require_columns(series, ("elapsed_min",), "series")
+    available = [c for c in series.columns if c not in ("time", "elapsed_min")]
+    if sensors is None:
+        sensors = available
+    else:
+        sensors = [sensors] if isinstance(sensors, str) else list(sensors)
+        unknown = [s for s in sensors if s not in available]
+        if unknown:
+            raise ValueError(f"series table has no sensor column(s) {', '.join(unknown)}; available: {', '.join(available)}")
+    elapsed = series["elapsed_min"].to_numpy(dtype=float)
+    order = np.argsort(elapsed, kind="stable")
+    elapsed = elapsed[order]
+    fig = _new_figure(SINGLE_COLUMN_IN, 2.6)
+    ax = fig.subplots()
+    drawn = 0
+    for i, sensor in enumerate(sensors):
+        values = series[sensor].to_numpy(dtype=float)[order]
+        ok = np.isfinite(values) & np.isfinite(elapsed)
+        if not ok.any():
+            continue
+        reference = np.interp(0.0, elapsed[ok], values[ok])
+        ax.plot(elapsed[ok], values[ok] - reference, markevery=_markevery(int(ok.sum())), label=str(sensor), **_categorical_style(i))
+        drawn += 1
+    if drawn == 0:
+        raise ValueError("series table has no finite sample in any requested sensor; expected at least one")
+    ax.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
+    ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel("Temperature rise (°C)")
+    _add_legend(ax, drawn, loc="upper left")
+    return fig
+
+
+@_styled
+def fig12_slope_intercept(kb: pd.DataFrame) -> Figure:
+    """Slope k (top) and intercept b (bottom) of every measurement, one line per run (Fig. 12).
+
+    Parameters
+    ----------
+    kb : pandas.DataFrame
+        Columns run, measurement, k_um_per_m, b_um.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _require_columns(kb, ("run", "measurement", "k_um_per_m", "b_um"), "kb")
+    if kb.empty:
+        raise ValueError("kb table is empty; expected one row per run and measurement")
+    runs = _natural_sorted(kb["run"])
+    fig = _new_figure(SINGLE_COLUMN_IN, 3.6)
+    ax_k, ax_b = fig.subplots(2, 1, sharex=True)
+    for i, run in enumerate(runs):
+        rows = kb[kb["run"] == run].sort_values("measurement", kind="stable")
+        m = rows["measurement"].to_numpy(dtype=float)
+        ax_k.plot(m, rows["k_um_per_m"].to_numpy(dtype=float), label=f"Run {run}", **_categorical_style(i))
+        ax_b.plot(m, rows["b_um"].to_numpy(dtype=float), label=f"Run {run}", **_categorical_style(i))
+    ax_k.set_ylabel("Slope k (µm/m)")
+    ax_b.set_ylabel("Intercept b (µm)")
+    ax_b.set_xlabel("Measurement")
+    ax_b.xaxis.set_major_locator(MaxNLocator(integer=True))
+    _add_legend(ax_k, len(runs))
+    return fig
+
+
+def _prediction_columns(n_runs: int) -> float:
+    return SINGLE_COLUMN_IN if n_runs == 1 else DOUBLE_COLUMN_IN
+
+
+def _has_band(rows: pd.DataFrame) -> bool:
+    return bool(np.isfinite(rows["lower"].to_numpy(dtype=float)).any() and np.isfinite(rows["upper"].to_numpy(dtype=float)).any())
+
+
+_KB_PRED_COLUMNS = ("fold", "approach", "algorithm", "run", "measurement", "target", "measured", "predicted", "lower", "upper")
+_KB_TARGETS = (("k", "Slope k (µm/m)"), ("b", "Intercept b (µm)"))
+
+
+@_styled
+def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str) -> Figure:
+    """Predicted against measured slope k and intercept b of the held-out run(s) (Figs. 14 and 16).
+
+    One column per held-out run of the fold; k on top, b below, against the
+    measurement number.  A prediction interval is shaded where ``lower``/``upper``
+    are given (GPR).
+
+    Parameters
+    ----------
+    kb_pred : pandas.DataFrame
+        Tidy predictions of k and b (columns fold, approach, algorithm, run, measurement,
+        target, measured, predicted, lower, upper).
+    fold, approach, algorithm
+        Which predictions to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _require_columns(kb_pred, _KB_PRED_COLUMNS, "kb_pred")
+    rows = _select(kb_pred, "kb_pred", fold=fold, approach=approach, algorithm=algorithm)
+    runs = _natural_sorted(rows["run"])
+    fig = _new_figure(_prediction_columns(len(runs)), 3.6)
+    axes = fig.subplots(2, len(runs), sharex="col", squeeze=False)
+    for col, run in enumerate(runs):
+        for row, (target, label) in enumerate(_KB_TARGETS):
+            ax = axes[row, col]
+            part = rows[(rows["run"] == run) & (rows["target"] == target)].sort_values("measurement", kind="stable")
+            m = part["measurement"].to_numpy(dtype=float)
+            if _has_band(part):
+                ax.fill_between(m, part["lower"].to_numpy(dtype=float), part["upper"].to_numpy(dtype=float),
+                                color=CATEGORICAL_COLORS[1], alpha=0.25, linewidth=0, label="Prediction interval")
+            ax.plot(m, part["measured"].to_numpy(dtype=float), label="Measured", **_categorical_style(0))
+            ax.plot(m, part["predicted"].to_numpy(dtype=float), linestyle="--", label=f"Predicted ({algorithm})", **_categorical_style(1))
+            ax.set_ylabel(label if col == 0 else "")
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+            if row == 0:
+                ax.set_title(f"Held-out run {run}", loc="left")
+                _add_legend(ax, 3)
+        axes[-1, col].set_xlabel("Measurement")
+    return fig
+
+
+_ERR_PRED_COLUMNS = ("fold", "approach", "algorithm", "run", "measurement", "time_min", "position_mm", "measured", "predicted", "residual", "lower", "upper")
+
+
+@_styled
+def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm: str) -> Figure:
+    """Predicted against measured error curves and their residuals (Figs. 15 and 17).
+
+    One column per held-out run: on top the measured curves (solid) and predicted
+    curves (dashed) of every measurement, coloured by the measurement's time, with the
+    prediction interval shaded where given; below the residuals (measured - predicted).
+
+    Parameters
+    ----------
+    err_pred : pandas.DataFrame
+        Tidy error predictions (columns fold, approach, algorithm, run, measurement,
+        time_min, position_mm, measured, predicted, residual, lower, upper).
+    fold, approach, algorithm
+        Which predictions to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _require_columns(err_pred, _ERR_PRED_COLUMNS, "err_pred")
+    rows = _select(err_pred, "err_pred", fold=fold, approach=approach, algorithm=algorithm)
+    runs = _natural_sorted(rows["run"])
+    fig = _new_figure(_prediction_columns(len(runs)), 4.0)
+    axes = fig.subplots(2, len(runs), sharex="col", squeeze=False, height_ratios=(3, 2))
+    for col, run in enumerate(runs):
+        ax_curve, ax_res = axes[0, col], axes[1, col]
+        run_rows = rows[rows["run"] == run]
+        times = _measurement_times(run_rows)
+        norm = _ordered_norm(times.to_numpy())
+        for i, (measurement, group) in enumerate(run_rows.groupby("measurement", sort=True)):
+            group = group.sort_values("position_mm", kind="stable")
+            x = group["position_mm"].to_numpy(dtype=float)
+            t = float(times.loc[measurement])
+            color = ORDERED_CMAP(norm(t))
+            marker = MARKERS[i % len(MARKERS)]
+            if _has_band(group):
+                ax_curve.fill_between(x, group["lower"].to_numpy(dtype=float), group["upper"].to_numpy(dtype=float),
+                                      color=color, alpha=0.15, linewidth=0)
+            ax_curve.plot(x, group["measured"].to_numpy(dtype=float), color=color, marker=marker)
+            ax_curve.plot(x, group["predicted"].to_numpy(dtype=float), color=color, linestyle="--")
+            ax_res.plot(x, group["residual"].to_numpy(dtype=float), color=color, marker=marker, label=_time_label(t))
+        ax_res.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
+        ax_curve.set_title(f"Held-out run {run}", loc="left")
+        ax_curve.set_ylabel(ERROR_LABEL if col == 0 else "")
+        ax_res.set_ylabel("Residual (µm)" if col == 0 else "")
+        ax_res.set_xlabel(POSITION_LABEL)
+        ax_curve.legend(
+            handles=[
+                Line2D([], [], color="0.2", marker="o", label="Measured"),
+                Line2D([], [], color="0.2", linestyle="--", label=f"Predicted ({algorithm})"),
+            ],
+            loc="best",
+        )
+        _ordered_key(fig, ax_res, norm, len(times), TIME_LABEL)
+    return fig
+
+
+@_styled
+def fig11_pointwise_prediction(err_pred: pd.DataFrame, fold, algorithm: str, approach: str = POINTWISE_APPROACH) -> Figure:
+    """Point-by-point prediction of the held-out run(s): curves and residuals (the paper's Fig. 11).
+
+    The same drawing as :func:`fig_error_prediction` for the point-by-point approach,
+    whose label in ``err_pred`` is ``approach`` (default :data:`POINTWISE_APPROACH`).
+
+    Parameters
+    ----------
+    err_pred : pandas.DataFrame
+        Tidy error predictions.
+    fold, algorithm
+        Which predictions to draw.
+    approach : str, optional
+        Label of the point-by-point approach in ``err_pred``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    return fig_error_prediction(err_pred, fold, approach, algorithm)
+
+
+_METRIC_UNITS = {"k": "µm/m", "b": "µm", "error": "µm"}
+
+
+@_styled
+def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
+    """RMSE (top) and maximum absolute residual (bottom) of every fold, approach and algorithm.
+
+    Grouped bars: one group per fold, one bar per (approach, algorithm) pair; a pair
+    missing from a fold leaves a gap.
+
+    Parameters
+    ----------
+    metrics : pandas.DataFrame
+        Columns fold, approach, algorithm, target, rmse, max_abs.
+    target : str, optional
+        Which target's metrics to compare (``"error"``, ``"k"`` or ``"b"``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _require_columns(metrics, ("fold", "approach", "algorithm", "target", "rmse", "max_abs"), "metrics")
+    rows = _select(metrics, "metrics", target=target)
+    folds = _natural_sorted(rows["fold"])
+    pairs = sorted({(str(a), str(g)) for a, g in zip(rows["approach"], rows["algorithm"])}, key=lambda p: (_natural_key(p[0]), _natural_key(p[1])))
+    unit = _METRIC_UNITS.get(str(target))
+    suffix = f" ({unit})" if unit else ""
+    width = SINGLE_COLUMN_IN if len(folds) * len(pairs) <= 12 else DOUBLE_COLUMN_IN
+    fig = _new_figure(width, 3.6)
+    ax_rmse, ax_max = fig.subplots(2, 1, sharex=True)
+    bar_width = 0.8 / len(pairs)
+    centres = np.arange(len(folds), dtype=float)
+    keyed = rows.assign(approach=rows["approach"].astype(str), algorithm=rows["algorithm"].astype(str))
+    for j, (approach, algorithm) in enumerate(pairs):
+        pair_rows = keyed[(keyed["approach"] == approach) & (keyed["algorithm"] == algorithm)]
+        offsets = centres + (j - (len(pairs) - 1) / 2) * bar_width
+        for ax, column in ((ax_rmse, "rmse"), (ax_max, "max_abs")):
+            by_fold = pair_rows.groupby("fold")[column].mean()
+            heights = np.array([by_fold.get(f, np.nan) for f in folds], dtype=float)
+            keep = np.isfinite(heights)
+            ax.bar(offsets[keep], heights[keep], width=bar_width, color=CATEGORICAL_COLORS[j % len(CATEGORICAL_COLORS)],
+                   edgecolor="0.2", linewidth=0.4, label=f"{approach}, {algorithm}")
+    ax_rmse.set_ylabel(f"RMSE{suffix}")
+    ax_max.set_ylabel(f"Max |residual|{suffix}")
+    ax_max.set_xticks(centres, [str(f) for f in folds])
+    ax_max.set_xlabel("Fold (held-out run)")
+    for ax in (ax_rmse, ax_max):
+        ax.grid(axis="x", visible=False)
+        ax.set_axisbelow(True)
+    _add_legend(ax_rmse, len(pairs), loc="upper right")
+    return fig
+
+
+# --------------------------------------------------------------------------- output
+
+
+def save_figure(fig: Figure, paths) -> None:
+    """Write ``fig`` to every path (format from the suffix: png, pdf or svg), then close it.
+
+    The output bytes depend only on the figure: timestamps and software versions are
+    left out of the metadata and SVG ids are salted with a fixed string.  Parent
+    folders are created.  All suffixes are checked before anything is written.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure, as returned by one of the ``fig*`` functions.
+    paths : str or os.PathLike or iterable of them
+        Output files.
+    """
+    if isinstance(paths, (str, Path)) or not isinstance(paths, Iterable):
+        paths = [paths]
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise ValueError("save_figure needs at least one output path; got none")
+    for path in paths:
+        fmt = path.suffix.lower().lstrip(".")
+        if fmt not in _SAVE_METADATA:
+            raise ValueError(f"cannot save figure as {path.name!r}; expected a .png, .pdf or .svg suffix")
+    try:
+        with matplotlib.rc_context(STYLE):
+            for path in paths:
+                fmt = path.suffix.lower().lstrip(".")
+                path.parent.mkdir(parents=True, exist_ok=True)
+                fig.savefig(path, format=fmt, metadata=_SAVE_METADATA[fmt])
+    finally:
+        plt.close(fig)
+
+
+# --------------------------------------------------------------------------- captions
+
+# figure id -> (the paper's figure, caption body with {detail} placeholders)
+_CAPTIONS: dict[str, tuple[str | None, str]] = {
+    "fig2": ("2", "Positioning error of the axis in the first measurement of run {run}, before the axis warms up "
+                  "(forward and backward passes combined)."),
+    "fig3": ("3", "Ambient temperature of every run against the time since the run's first measurement."),
+    "fig5": ("5", "Unzeroed thermal positioning error of run {run}: one curve per measurement, labelled by the time "
+                  "since the first measurement; the interferometer is zeroed only before the first measurement."),
+    "fig6": ("6", "Unzeroed thermal positioning error of run {run} at every target position against the time since "
+                  "the first measurement."),
+    "fig7": ("7", "Unzeroed thermal positioning error of run {run} over position and time."),
+    "fig8": ("8", "Re-zeroed thermal positioning error of run {run}: each measurement minus its own reading at the "
+                  "first position, which hides the drift between measurements and leaves the expansion along the stroke."),
+    "fig9": ("9", "Unzeroed thermal positioning error of runs {runs}, one panel per run, one curve per measurement."),
+    "fig10": ("10", "Temperature rise of the sensors of run {run} relative to their values at the start of the first "
+                    "measurement."),
+    "fig11": ("11", "Point-by-point prediction ({algorithm}) of the held-out run of fold {fold}: measured (solid) and "
+                    "predicted (dashed) errors of every measurement, and the residuals (measured minus predicted)."),
+    "fig12": ("12", "Slope k (top) and intercept b (bottom) of the decoupled error line of every measurement, one "
+                    "line per run."),
+    "fig14": ("14", "Measured and predicted slope k and intercept b of the held-out run of fold {fold} "
+                    "({approach} approach, {algorithm})."),
+    "fig15": ("15", "Measured (solid) and predicted (dashed) thermal positioning error of the held-out run of fold "
+                    "{fold} ({approach} approach, {algorithm}) and the residuals (measured minus predicted)."),
+    "fold_comparison": (None, "Prediction accuracy of every fold (held-out run), approach and algorithm: RMSE (top) "
+                              "and maximum absolute residual (bottom) of the {target}."),
+}
+# The paper repeats Figs. 14/15 for SVR as Figs. 16/17; the library draws both with one function.
+_CAPTIONS["fig16"] = ("16", _CAPTIONS["fig14"][1])
+_CAPTIONS["fig17"] = ("17", _CAPTIONS["fig15"][1])
+_CAPTIONS["kb_prediction"] = ("14/16", _CAPTIONS["fig14"][1])
+_CAPTIONS["error_prediction"] = ("15/17", _CAPTIONS["fig15"][1])
+
+
+def _detail_text(value) -> str:
+    if isinstance(value, (list, tuple)):
+        return ", ".join(str(v) for v in value)
+    return str(value)
+
+
+def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details) -> str:
+    """One English caption for a figure of the pipeline.
+
+    Parameters
+    ----------
+    figure_id : str
+        ``"fig2"`` ... ``"fig17"`` (not 4 and 13, which are photographs/schematics),
+        ``"kb_prediction"``, ``"error_prediction"`` or ``"fold_comparison"``.
+    dataset_name : str
+        Name of the dataset the figure was drawn from.
+    simulated : bool
+        Whether the dataset is simulated; if so the caption ends with
+        :data:`SIMULATED_NOTE`.
+    **details
+        Exactly the placeholders the caption needs, e.g. ``run="E1"``, ``runs=["E2", "E3"]``,
+        ``fold``, ``approach``, ``algorithm``, ``target``.
+
+    Returns
+    -------
+    str
+    """
+    if figure_id not in _CAPTIONS:
+        raise ValueError(f"unknown figure id {figure_id!r}; expected one of {', '.join(_CAPTIONS)}")
+    if not isinstance(dataset_name, str) or not dataset_name:
+        raise ValueError(f"dataset_name must be a non-empty string, got {dataset_name!r}")
+    paper_figure, body = _CAPTIONS[figure_id]
+    needed = {field for _, field, _, _ in string.Formatter().parse(body) if field}
+    missing = sorted(needed - details.keys())
+    extra = sorted(details.keys() - needed)
+    if missing or extra:
+        raise ValueError(
+            f"caption {figure_id} needs details {sorted(needed)}; missing {missing}, unexpected {extra}"
+        )
+    parts = [body.format(**{k: _detail_text(v) for k, v in details.items()})]
+    if paper_figure is not None:
+        parts.append(f"Counterpart of the paper's Fig. {paper_figure}.")
+    parts.append(f"Dataset: {dataset_name}.")
+    if simulated:
+        parts.append(SIMULATED_NOTE)
+    return " ".join(parts)

@@ -1,0 +1,79 @@
+"""Small summaries and Markdown renderings of the tables (no plotting, no models)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .io import Dataset
+
+__all__ = ["dataset_summary", "markdown_table", "table5_markdown", "data_statement"]
+
+
+def data_statement(dataset_name: str, simulated: bool) -> str:
+    """The sentence every report and caption carries about where the numbers come from."""
+    if simulated:
+        return (
+            f"Dataset `{dataset_name}`: SIMULATED data (thermal twin calibrated to the paper's Table 5), "
+            "not the paper's measurements."
+        )
+    return f"Dataset `{dataset_name}`: measured data."
+
+
+def dataset_summary(dataset: Dataset) -> pd.DataFrame:
+    """One row per run: condition, feed, and how many measurements and sensors it has."""
+    rows = []
+    for _, run in dataset.runs.iterrows():
+        folder = dataset.root / run["run"]
+        measurements = sorted((folder / "errors").glob("*.csv"))
+        rows.append(
+            {
+                "dataset": dataset.name,
+                "provenance": dataset.meta["provenance"]["kind"],
+                "run": run["run"],
+                "condition": int(run["condition"]),
+                "feed_mm_min": float(run["feed_mm_min"]),
+                "n_measurements": len(measurements),
+                "n_sensors": len(dataset.sensors),
+                "n_sources": len(dataset.sources),
+                "description": run["description"],
+            }
+        )
+    return pd.DataFrame(rows).sort_values("run", ignore_index=True)
+
+
+def _cell(value, float_format: str) -> str:
+    if isinstance(value, (float, np.floating)):
+        return "" if np.isnan(value) else float_format % value
+    return str(value)
+
+
+def markdown_table(frame: pd.DataFrame, float_format: str = "%.2f") -> str:
+    header = "| " + " | ".join(map(str, frame.columns)) + " |"
+    rule = "|" + "|".join("---" for _ in frame.columns) + "|"
+    body = ["| " + " | ".join(_cell(v, float_format) for v in row) + " |" for row in frame.itertuples(index=False)]
+    return "\n".join([header, rule, *body]) + "\n"
+
+
+def table5_markdown(kb: pd.DataFrame, dataset_name: str, simulated: bool, paper_dir=None) -> str:
+    """Table 5 as Markdown; for the twin, the paper's published k and b beside it."""
+    lines = [f"# Table 5: slope k and intercept b of every measurement", "", data_statement(dataset_name, simulated), ""]
+    table = kb[["run", "measurement", "time_min", "k_um_per_m", "b_um", "r2", "rms_um"]].copy()
+    paper_file = Path(paper_dir) / "table5_slope_intercept.csv" if paper_dir else None
+    if simulated and dataset_name == "twin" and paper_file is not None and paper_file.is_file():
+        paper = pd.read_csv(paper_file).rename(columns={"k_um_per_m": "paper_k", "b_um": "paper_b"})
+        table = table.merge(paper[["run", "measurement", "paper_k", "paper_b"]], on=["run", "measurement"], how="left")
+        table["diff_k"] = table["k_um_per_m"] - table["paper_k"]
+        table["diff_b"] = table["b_um"] - table["paper_b"]
+        lines.append(
+            "The paper's Table 5 is shown beside the twin's values (the twin is calibrated to it; "
+            f"RMS difference k {np.sqrt(np.nanmean(table['diff_k'] ** 2)):.2f} um/m, "
+            f"b {np.sqrt(np.nanmean(table['diff_b'] ** 2)):.2f} um)."
+        )
+        lines.append("")
+    lines.append("k in um/m, b in um (at the first target), r2 and rms_um of the least-squares line.")
+    lines.append("")
+    lines.append(markdown_table(table, float_format="%.2f"))
+    return "\n".join(lines)

@@ -1,0 +1,400 @@
+"""Tests of thermaxis.models against coefficients known by construction or computed directly."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from thermaxis.evaluate import loco_predict
+from thermaxis.models import (
+    ALGORITHMS,
+    DecoupledAxisModel,
+    PointwiseAxisModel,
+    fit_svr_by_group_search,
+    linear_terms,
+    make_regressor,
+    predict_with_std,
+    relative_temperatures,
+)
+
+pytestmark = pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
+
+POSITIONS = np.arange(185.0, 446.0, 20.0)  # the paper's 14 targets
+SENSORS = [f"T{i}" for i in range(1, 13)]
+
+# Eq. 9 as printed: k [um/m] on absolute, b [um] on relative temperatures.
+EQ9_K = {"const": -306.494, "T1": 13.247, "T6": -6.629, "T12": 3.326}
+EQ9_B = {"const": -0.576, "T2": -11.058, "T7": 0.974, "T11": -1.915}
+
+# Eq. 8 prints rows 1-3 and 14; rows 4-13 are interpolated linearly between row 3 and row 14.
+_EQ8_PRINTED = {
+    0: (-0.421, -7.417, -2.961, 1.180),
+    1: (-0.708, -7.288, -2.706, 1.066),
+    2: (-1.131, -7.237, -2.548, 1.001),
+    13: (-4.544, -4.908, 2.436, -1.032),
+}
+EQ8 = np.array(
+    [
+        _EQ8_PRINTED[j]
+        if j in _EQ8_PRINTED
+        else tuple(np.array(_EQ8_PRINTED[2]) + (j - 2) / 11 * (np.array(_EQ8_PRINTED[13]) - np.array(_EQ8_PRINTED[2])))
+        for j in range(14)
+    ]
+)  # columns const, T1, T11, T12
+
+
+def synthetic_temperatures(runs=("E1", "E2", "E3", "E4"), n_measurements=8, seed=20220510) -> pd.DataFrame:
+    """Smooth warming curves plus a slow random walk per sensor, so sensors are not collinear."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n_measurements) / (n_measurements - 1)
+    rows = []
+    for run in runs:
+        base = rng.uniform(26.0, 32.0) + rng.normal(0.0, 1.0, len(SENSORS))
+        rise = rng.uniform(0.5, 6.0, len(SENSORS))
+        tau = rng.uniform(0.2, 1.0, len(SENSORS))
+        walk = np.cumsum(rng.normal(0.0, 0.15, (n_measurements, len(SENSORS))), axis=0)
+        temps = base + rise * (1.0 - np.exp(-t[:, None] / tau)) + walk
+        for m in range(n_measurements):
+            rows.append({"run": run, "measurement": m + 1, **dict(zip(SENSORS, temps[m]))})
+    return pd.DataFrame(rows)
+
+
+def eq9_truth(X: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """k and b straight from Eq. 9, relative temperatures computed here by hand."""
+    k = EQ9_K["const"] + sum(c * X[s].to_numpy() for s, c in EQ9_K.items() if s != "const")
+    b = np.full(len(X), EQ9_B["const"])
+    for s, c in EQ9_B.items():
+        if s == "const":
+            continue
+        first = X.loc[X["measurement"] == 1].set_index("run")[s]
+        b = b + c * (X[s].to_numpy() - first.loc[X["run"]].to_numpy())
+    return k, b
+
+
+def eq9_errors(X: pd.DataFrame, c2=None) -> pd.DataFrame:
+    k, b = eq9_truth(X)
+    shifted_m = (POSITIONS - POSITIONS[0]) / 1000.0
+    errors = k[:, None] * shifted_m + b[:, None]
+    if c2 is not None:
+        errors = errors + c2[:, None] * shifted_m**2
+    return pd.DataFrame(errors, columns=POSITIONS, index=X.index)
+
+
+def eq8_errors(X: pd.DataFrame) -> pd.DataFrame:
+    first = X.loc[X["measurement"] == 1].set_index("run")
+    rel = np.column_stack(
+        [X[s].to_numpy() - first.loc[X["run"], s].to_numpy() for s in ("T1", "T11", "T12")]
+    )
+    design = np.column_stack([np.ones(len(X)), rel])
+    return pd.DataFrame(design @ EQ8.T, columns=POSITIONS, index=X.index)
+
+
+# --------------------------------------------------------------------------- relative temperatures
+
+
+def test_relative_temperatures_use_each_runs_own_first_measurement():
+    X = pd.DataFrame(
+        {
+            "run": ["B", "A", "A", "B", "A"],
+            "measurement": [2, 3, 1, 1, 2],
+            "T1": [25.0, 12.0, 10.0, 20.0, 11.5],
+        },
+        index=[10, 11, 12, 13, 14],
+    )
+    rel = relative_temperatures(X)
+    # A's reference is 10.0 (measurement 1), B's is 20.0.
+    assert rel.index.tolist() == [10, 11, 12, 13, 14]
+    np.testing.assert_allclose(rel["T1"].to_numpy(), [5.0, 2.0, 0.0, 0.0, 1.5])
+
+
+# --------------------------------------------------------------------------- exact recovery
+
+
+def test_decoupled_mlr_recovers_eq9_and_predicts_exactly():
+    X = synthetic_temperatures()
+    Y = eq9_errors(X)
+    model = DecoupledAxisModel().fit(X, Y)
+
+    coefs = model.coefficients()
+    assert len(coefs) == 8 and coefs["position_mm"].isna().all()
+    found = {(r.target, r.term, r.temperature): r.value for r in coefs.itertuples()}
+    for target, eq, kind in (("k", EQ9_K, "absolute"), ("b", EQ9_B, "relative")):
+        for term, value in eq.items():
+            assert found[(target, term, kind)] == pytest.approx(value, abs=1e-6), (target, term)
+
+    k, b = eq9_truth(X)
+    np.testing.assert_allclose(model.kb_["k_um_per_m"], k, atol=1e-8)
+    np.testing.assert_allclose(model.kb_["b_um"], b, atol=1e-8)
+
+    # A run never seen in training, predicted from its own temperatures only.
+    X_new = synthetic_temperatures(runs=("E5",), seed=7)
+    np.testing.assert_allclose(model.predict(X_new), eq9_errors(X_new).to_numpy(), atol=1e-6)
+    kb = model.predict_kb(X_new)
+    k_new, b_new = eq9_truth(X_new)
+    np.testing.assert_allclose(kb["k_um_per_m"], k_new, atol=1e-6)
+    np.testing.assert_allclose(kb["b_um"], b_new, atol=1e-6)
+
+
+def test_decoupled_skips_missing_readings():
+    X = synthetic_temperatures()
+    Y = eq9_errors(X)
+    Y.iloc[3, 0] = np.nan  # lost first target: b is still defined at 185 mm through origin_mm
+    Y.iloc[10, 7] = np.nan
+    model = DecoupledAxisModel().fit(X, Y)
+    k, b = eq9_truth(X)
+    np.testing.assert_allclose(model.kb_["b_um"], b, atol=1e-8)
+    coefs = model.coefficients().set_index(["target", "term"])["value"]
+    assert coefs[("k", "T6")] == pytest.approx(EQ9_K["T6"], abs=1e-6)
+    assert coefs[("b", "T2")] == pytest.approx(EQ9_B["T2"], abs=1e-6)
+
+
+def test_decoupled_degree_two_models_curvature_on_absolute_temperatures():
+    X = synthetic_temperatures()
+    c2_terms = {"const": 40.0, "T1": -2.0, "T6": 1.5, "T12": 0.5}  # um/m^2
+    c2 = c2_terms["const"] + sum(v * X[s].to_numpy() for s, v in c2_terms.items() if s != "const")
+    model = DecoupledAxisModel(degree=2).fit(X, eq9_errors(X, c2=c2))
+    coefs = model.coefficients().set_index(["target", "term"])
+    for term, value in c2_terms.items():
+        assert coefs.loc[("c2", term), "value"] == pytest.approx(value, abs=1e-6)
+        assert coefs.loc[("c2", term), "temperature"] == "absolute"
+    assert coefs.loc[("k", "T1"), "value"] == pytest.approx(EQ9_K["T1"], abs=1e-6)
+    X_new = synthetic_temperatures(runs=("E5",), seed=3)
+    c2_new = c2_terms["const"] + sum(v * X_new[s].to_numpy() for s, v in c2_terms.items() if s != "const")
+    np.testing.assert_allclose(model.predict(X_new), eq9_errors(X_new, c2=c2_new).to_numpy(), atol=1e-6)
+
+
+def test_pointwise_mlr_recovers_eq8_per_position():
+    X = synthetic_temperatures()
+    Y = eq8_errors(X)
+    Y.iloc[5, 2] = np.nan  # one missing reading: that position's fit uses the other 31 rows
+    model = PointwiseAxisModel().fit(X, Y)
+    coefs = model.coefficients()
+    assert set(coefs["target"]) == {"error"} and set(coefs["temperature"]) == {"relative"}
+    table = coefs.pivot(index="position_mm", columns="term", values="value")
+    np.testing.assert_allclose(table.index.to_numpy(), POSITIONS)
+    np.testing.assert_allclose(table[["const", "T1", "T11", "T12"]].to_numpy(), EQ8, atol=1e-6)
+    X_new = synthetic_temperatures(runs=("E5",), seed=11)
+    np.testing.assert_allclose(model.predict(X_new), eq8_errors(X_new).to_numpy(), atol=1e-6)
+
+
+# --------------------------------------------------------------------------- leakage
+
+
+def _noisy_eq9():
+    X = synthetic_temperatures()
+    rng = np.random.default_rng(5)
+    Y = eq9_errors(X) + rng.normal(0.0, 0.3, (len(X), POSITIONS.size))
+    return X, Y
+
+
+SMALL_GRID = {"C": [1.0, 10.0], "epsilon": [0.05], "gamma": ["scale"]}
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
+@pytest.mark.parametrize("approach", ["decoupled", "pointwise"])
+def test_held_out_errors_do_not_reach_the_fold_model(algorithm, approach):
+    X, Y = _noisy_eq9()
+    held_out = "E3"
+    perturbed = Y.copy()
+    rows = (X["run"] == held_out).to_numpy()
+    perturbed.loc[rows, :] = perturbed.loc[rows, :].to_numpy() + 50.0 * np.random.default_rng(1).normal(
+        size=(rows.sum(), POSITIONS.size)
+    )
+    cls = DecoupledAxisModel if approach == "decoupled" else PointwiseAxisModel
+    estimator = cls(algorithm=algorithm, svr_grid=SMALL_GRID)
+
+    original = {f.fold: f for f in loco_predict(estimator, X, Y)}
+    changed = {f.fold: f for f in loco_predict(estimator, X, perturbed)}
+
+    np.testing.assert_array_equal(original[held_out].predicted, changed[held_out].predicted)
+    pd.testing.assert_frame_equal(original[held_out].model.coefficients(), changed[held_out].model.coefficients())
+    assert original[held_out].model.svr_params_ == changed[held_out].model.svr_params_
+    # The perturbation is large enough to show up wherever E3 IS used for training.
+    assert any(
+        not np.allclose(original[f].predicted, changed[f].predicted) for f in original if f != held_out
+    )
+
+
+def test_prediction_uses_only_the_predicted_runs_temperatures():
+    X = synthetic_temperatures()
+    Y = eq9_errors(X)
+    model = DecoupledAxisModel(algorithm="ridge").fit(X, Y)
+    alone = model.predict(X[X["run"] == "E2"])
+    shuffled = X.sample(frac=1.0, random_state=0)
+    together = pd.DataFrame(model.predict(shuffled), index=shuffled.index).loc[X.index[X["run"] == "E2"]]
+    np.testing.assert_allclose(together.to_numpy(), alone, rtol=0, atol=1e-12)
+
+
+# --------------------------------------------------------------------------- regressors
+
+
+def _noisy_linear(n=40, seed=0):
+    rng = np.random.default_rng(seed)
+    X = rng.normal(30.0, 3.0, (n, 3)) + np.array([0.0, 5.0, -2.0])
+    y = 4.0 + X @ np.array([1.5, -0.7, 0.2]) + rng.normal(0.0, 0.5, n)
+    return X, y
+
+
+def test_mlr_matches_plain_least_squares_and_is_unit_invariant():
+    X, y = _noisy_linear()
+    names = ["a", "b", "c"]
+    terms = linear_terms(make_regressor("mlr").fit(X, y), names)
+    design = np.column_stack([np.ones(len(X)), X])
+    direct, *_ = np.linalg.lstsq(design, y, rcond=None)
+    np.testing.assert_allclose([terms[n] for n in ("const", *names)], direct, rtol=1e-9, atol=1e-9)
+
+    # Same data in degrees Fahrenheit: identical predictions, slopes divided by 1.8.
+    X_f = X * 1.8 + 32.0
+    model_f = make_regressor("mlr").fit(X_f, y)
+    np.testing.assert_allclose(model_f.predict(X_f), design @ direct, atol=1e-9)
+    terms_f = linear_terms(model_f, names)
+    np.testing.assert_allclose([terms_f[n] for n in names], direct[1:] / 1.8, rtol=1e-9)
+
+
+def _standardised(X, y):
+    mx, sx = X.mean(axis=0), X.std(axis=0)
+    my, sy = y.mean(), y.std()
+    return (X - mx) / sx, (y - my) / sy, (mx, sx, my, sy)
+
+
+def _to_original(beta_s, stats):
+    mx, sx, my, sy = stats
+    slopes = beta_s * sy / sx
+    return np.concatenate([[my - slopes @ mx], slopes])
+
+
+def test_ridge_linear_terms_match_closed_form():
+    X, y = _noisy_linear()
+    alpha = 7.0
+    terms = linear_terms(make_regressor("ridge", {"alpha": alpha}).fit(X, y), ["a", "b", "c"])
+    Xs, ys, stats = _standardised(X, y)
+    beta_s = np.linalg.solve(Xs.T @ Xs + alpha * np.eye(3), Xs.T @ ys)
+    np.testing.assert_allclose(list(terms.values()), _to_original(beta_s, stats), rtol=1e-9, atol=1e-9)
+
+
+def test_pls_linear_terms_match_one_component_closed_form():
+    X, y = _noisy_linear()
+    terms = linear_terms(make_regressor("pls", {"n_components": 1}).fit(X, y), ["a", "b", "c"])
+    Xs, ys, stats = _standardised(X, y)
+    w = Xs.T @ ys
+    w /= np.linalg.norm(w)
+    t = Xs @ w
+    q = (t @ ys) / (t @ t)
+    np.testing.assert_allclose(list(terms.values()), _to_original(w * q, stats), rtol=1e-8, atol=1e-8)
+
+
+def test_pls_with_all_components_is_least_squares():
+    X, y = _noisy_linear()
+    model = make_regressor("pls", {"n_components": 5}, n_features=3).fit(X, y)
+    direct, *_ = np.linalg.lstsq(np.column_stack([np.ones(len(X)), X]), y, rcond=None)
+    np.testing.assert_allclose(list(linear_terms(model, ["a", "b", "c"]).values()), direct, rtol=1e-7, atol=1e-7)
+
+
+def test_linear_terms_is_none_for_nonlinear_algorithms():
+    X, y = _noisy_linear()
+    for algorithm in ("svr", "gpr"):
+        assert linear_terms(make_regressor(algorithm).fit(X, y), ["a", "b", "c"]) is None
+
+
+def test_gpr_interval_contains_mean_and_widens_away_from_data():
+    x = np.linspace(0.0, 3.0, 15)[:, None]
+    y = np.sin(x).ravel()
+    model = make_regressor("gpr").fit(x, y)
+    mean, std = predict_with_std(model, np.array([[1.5], [9.0]]))
+    np.testing.assert_allclose(mean, model.predict(np.array([[1.5], [9.0]])), atol=1e-9)
+    assert np.all(std > 0)
+    assert std[1] > 5 * std[0]
+    assert mean[0] == pytest.approx(np.sin(1.5), abs=0.05)
+
+
+def test_decoupled_gpr_interval_brackets_prediction_and_widens_far_from_training():
+    X, Y = _noisy_eq9()
+    model = DecoupledAxisModel(algorithm="gpr").fit(X, Y)
+    X_near = synthetic_temperatures(runs=("E5",), seed=7)
+    X_far = X_near.assign(**{s: X_near[s] + 25.0 for s in SENSORS})  # same rise, hotter machine
+    for X_new in (X_near, X_far):
+        lower, upper = model.predict_interval(X_new, level=0.9)
+        mean = model.predict(X_new)
+        assert lower.shape == mean.shape == (8, 14)
+        assert np.all(lower < mean) and np.all(mean < upper)
+    width_near = np.subtract(*model.predict_interval(X_near)[::-1])
+    width_far = np.subtract(*model.predict_interval(X_far)[::-1])
+    # k uses absolute temperatures, so the far run's slope is uncertain: wider at the far end.
+    assert np.all(width_far[:, -1] > width_near[:, -1])
+    lower90, upper90 = model.predict_interval(X_near, level=0.9)
+    lower99, upper99 = model.predict_interval(X_near, level=0.99)
+    assert np.all(upper99 - lower99 > upper90 - lower90)
+
+
+def test_pointwise_gpr_interval_and_non_gpr_refusal():
+    X, Y = _noisy_eq9()
+    model = PointwiseAxisModel(algorithm="gpr").fit(X, Y)
+    lower, upper = model.predict_interval(X.iloc[:8])
+    mean = model.predict(X.iloc[:8])
+    assert np.all(lower < mean) and np.all(mean < upper)
+    with pytest.raises(NotImplementedError):
+        PointwiseAxisModel().fit(X, Y).predict_interval(X)
+    with pytest.raises(NotImplementedError):
+        DecoupledAxisModel().fit(X, Y).predict_interval(X)
+
+
+def test_svr_group_search_picks_the_known_best_point():
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-2.0, 2.0, (30, 1))
+    y = np.sin(2.0 * x).ravel()
+    groups = np.repeat(["a", "b", "c"], 10)
+    # C = 1e-3 keeps the prediction near the mean; C = 100 follows the curve.
+    grid = {"C": [1e-3, 100.0], "epsilon": [0.01]}
+    model, chosen = fit_svr_by_group_search(x, y, groups, grid)
+    assert chosen == {"C": 100.0, "epsilon": 0.01}
+
+    # Independent leave-one-group-out computation of the mean fold RMSE per grid point.
+    def mean_rmse(params):
+        scores = []
+        for g in "abc":
+            test = groups == g
+            fitted = make_regressor("svr", params).fit(x[~test], y[~test])
+            scores.append(np.sqrt(np.mean((fitted.predict(x[test]) - y[test]) ** 2)))
+        return np.mean(scores)
+
+    assert mean_rmse({"C": 100.0, "epsilon": 0.01}) < mean_rmse({"C": 1e-3, "epsilon": 0.01})
+    refit = make_regressor("svr", chosen).fit(x, y)
+    np.testing.assert_allclose(model.predict(x), refit.predict(x))
+
+
+def test_svr_group_search_falls_back_to_first_grid_point_with_one_group():
+    x = np.linspace(0.0, 1.0, 10)[:, None]
+    _, chosen = fit_svr_by_group_search(x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]})
+    assert chosen == {"C": 100.0, "epsilon": 0.2}
+
+
+def test_svr_coefficients_are_empty_but_svr_params_recorded():
+    X, Y = _noisy_eq9()
+    model = DecoupledAxisModel(algorithm="svr", svr_grid=SMALL_GRID).fit(X, Y)
+    assert model.coefficients().empty
+    assert list(model.coefficients().columns) == ["target", "position_mm", "term", "temperature", "value"]
+    assert set(model.svr_params_) == {"k", "b"}
+    assert model.svr_params_["k"]["C"] in (1.0, 10.0)
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def test_bad_input_raises_value_error():
+    X = synthetic_temperatures()
+    Y = eq9_errors(X)
+    with pytest.raises(ValueError, match="unknown algorithm"):
+        make_regressor("lasso")
+    with pytest.raises(ValueError, match="unknown parameter"):
+        make_regressor("ridge", {"C": 1.0})
+    with pytest.raises(ValueError, match="rows"):
+        DecoupledAxisModel().fit(X, Y.iloc[:-1])
+    with pytest.raises(ValueError, match="lacks column"):
+        DecoupledAxisModel().fit(X.drop(columns="T6"), Y)
+    with pytest.raises(ValueError, match="ascending"):
+        PointwiseAxisModel().fit(X, Y[Y.columns[::-1]])
+    X_missing = X.copy()
+    X_missing.loc[4, "T1"] = np.nan
+    with pytest.raises(ValueError, match="missing temperatures"):
+        DecoupledAxisModel().fit(X_missing, Y)

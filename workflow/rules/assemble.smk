@@ -1,0 +1,17 @@
+rule assemble:
+    input:
+        errors=expand(f"{OUT}/clean/{{run}}/errors.parquet", run=RUNS),
+        temperatures=expand(f"{OUT}/clean/{{run}}/measurement_temperatures.parquet", run=RUNS),
+        qc=expand(f"{OUT}/clean/{{run}}/qc.csv", run=RUNS),
+    output:
+        errors=f"{OUT}/assembled/errors.parquet",
+        temperatures=f"{OUT}/assembled/temperatures.parquet",
+        qc=f"{OUT}/tables/cleaning_qc.csv",
+    log:
+        f"{LOGS}/assemble.log",
+    benchmark:
+        f"{BENCH}/assemble.tsv"
+    conda:
+        ENV
+    script:
+        "../scripts/assemble.py"

@@ -1,0 +1,23 @@
+rule clean_run:
+    input:
+        sheets=dataset_sheets(),
+        raw=lambda wc: raw_files(wc.run),
+    output:
+        series=f"{OUT}/clean/{{run}}/temperatures.parquet",
+        qc=f"{OUT}/clean/{{run}}/qc.csv",
+        gaps=f"{OUT}/clean/{{run}}/gaps.csv",
+        errors=f"{OUT}/clean/{{run}}/errors.parquet",
+        temperatures=f"{OUT}/clean/{{run}}/measurement_temperatures.parquet",
+        windows=f"{OUT}/clean/{{run}}/windows.csv",
+    params:
+        dataset=str(DATASET.root),
+        temperatures=config["temperatures"],
+        errors=config["errors"],
+    log:
+        f"{LOGS}/clean/{{run}}.log",
+    benchmark:
+        f"{BENCH}/clean/{{run}}.tsv"
+    conda:
+        ENV
+    script:
+        "../scripts/clean_run.py"

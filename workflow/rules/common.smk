@@ -1,0 +1,56 @@
+import sys
+from pathlib import Path
+
+from thermaxis.io import DataError, load_dataset
+
+# The dataset is validated when the workflow is parsed, so a bad sheet or a
+# missing run folder stops everything with one line before any job starts.
+try:
+    DATASET = load_dataset(config["dataset"])
+except DataError as exc:
+    sys.exit(f"thermaxis error: {exc}")
+
+RUNS = list(DATASET.run_ids)
+OUT = f"results/{DATASET.name}"
+LOGS = f"logs/{DATASET.name}"
+BENCH = f"benchmarks/{DATASET.name}"
+ENV = "../../envs/thermaxis.yaml"
+SIMULATED = DATASET.simulated
+FOLDS = list(config["folds"]) or RUNS
+APPROACHES = ["decoupled", "pointwise"]
+ALGORITHMS = list(config["models"]["algorithms"])
+FIG_FORMATS = list(config["figures"]["formats"])
+FIG_RUN = config["figures"]["run"] or RUNS[0]
+
+for _fold in FOLDS:
+    if _fold not in RUNS:
+        sys.exit(f"thermaxis error: config folds: {_fold!r} is not a run of {DATASET.root / 'runs.tsv'}")
+if FIG_RUN not in RUNS:
+    sys.exit(f"thermaxis error: config figures.run: {FIG_RUN!r} is not a run of {DATASET.root / 'runs.tsv'}")
+
+
+wildcard_constraints:
+    run="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
+    fold="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
+
+
+def raw_files(run):
+    """Every file of a run, so editing any raw log reruns its cleaning."""
+    folder = DATASET.root / run
+    return sorted(str(p) for p in folder.rglob("*.csv"))
+
+
+def dataset_sheets():
+    return [str(DATASET.root / "dataset.yaml"), str(DATASET.root / "runs.tsv")]
+
+
+def figure_paths(stem):
+    return [f"{OUT}/figures/{stem}.{ext}" for ext in FIG_FORMATS]
+
+
+def all_outputs():
+    return [
+        f"{OUT}/tables/dataset_summary.csv",
+        f"{OUT}/assembled/errors.parquet",
+        f"{OUT}/tables/table5_slope_intercept.csv",
+    ]

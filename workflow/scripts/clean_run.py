@@ -1,0 +1,25 @@
+import logging
+
+from thermaxis.assemble import clean_and_assemble_run
+from thermaxis.io import load_dataset, read_run
+from thermaxis.runner import run_script, write_csv, write_parquet
+
+
+def main(snakemake):
+    config = {"temperatures": snakemake.params.temperatures, "errors": snakemake.params.errors}
+    dataset = load_dataset(snakemake.params.dataset)
+    raw = read_run(dataset, snakemake.wildcards.run)
+    tables = clean_and_assemble_run(dataset, raw, config)
+    log = logging.getLogger("thermaxis")
+    for note in tables.notes:
+        log.warning(note)
+    out = snakemake.output
+    write_parquet(tables.series, out.series)
+    write_csv(tables.qc, out.qc)
+    write_csv(tables.gaps, out.gaps)
+    write_parquet(tables.errors, out.errors)
+    write_parquet(tables.temperatures, out.temperatures)
+    write_csv(tables.windows, out.windows)
+
+
+run_script(main, snakemake)

@@ -1,0 +1,22 @@
+import pandas as pd
+
+from thermaxis.decouple import decouple_table
+from thermaxis.runner import run_script, write_csv, write_text
+from thermaxis.summary import table5_markdown
+
+
+def main(snakemake):
+    errors = pd.read_parquet(snakemake.input.errors)
+    kb, coefficients = decouple_table(errors, degree=snakemake.params.degree)
+    write_csv(kb, snakemake.output.table, float_format="%.4f")
+    write_csv(coefficients, snakemake.output.coefficients, float_format="%.6g")
+    markdown = table5_markdown(
+        kb,
+        dataset_name=snakemake.params.dataset_name,
+        simulated=snakemake.params.simulated,
+        paper_dir=snakemake.params.paper_dir,
+    )
+    write_text(markdown, snakemake.output.markdown)
+
+
+run_script(main, snakemake)
