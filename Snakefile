@@ -1,5 +1,6 @@
 # thermaxis: thermal positioning error of a linear axis, from raw runs to the paper's
 # figures and tables (Xu et al., decoupling and step-by-step modelling).
+import thermaxis  # first: keeps jsonschema imports fast (see thermaxis/__init__.py)
 from snakemake.utils import min_version, validate
 
 min_version("9.0")

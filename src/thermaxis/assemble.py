@@ -141,13 +141,19 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
     return RunTables(
         run=run,
         series=series,
-        qc=cleaned.qc.assign(run=run),
-        gaps=cleaned.gaps.assign(run=run),
+        qc=_with_run(cleaned.qc, run),
+        gaps=_with_run(cleaned.gaps, run),
         errors=tidy_errors(run, condition, windows, combined),
-        temperatures=tidy_temperatures(run, condition, windows, at_measurements[["measurement", *sensors]] if "measurement" in at_measurements else at_measurements[sensors]),
-        windows=windows.assign(run=run),
+        temperatures=tidy_temperatures(run, condition, windows, at_measurements[sensors]),
+        windows=_with_run(windows, run),
         notes=tuple(notes),
     )
+
+
+def _with_run(frame: pd.DataFrame, run: str) -> pd.DataFrame:
+    out = frame.copy()
+    out.insert(0, "run", run)
+    return out
 
 
 def unzeroed_matrix(errors: pd.DataFrame, value: str = "error_um") -> pd.DataFrame:

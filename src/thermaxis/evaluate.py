@@ -50,7 +50,9 @@ def prediction_metrics(measured, predicted) -> dict[str, float]:
     measured = np.asarray(measured, dtype=float)
     predicted = np.asarray(predicted, dtype=float)
     if measured.shape != predicted.shape:
-        raise ValueError(f"measured has shape {measured.shape} but predicted {predicted.shape}; expected equal shapes")
+        raise ValueError(
+            f"measured has shape {measured.shape} but predicted {predicted.shape}; expected equal shapes"
+        )
     residual = (measured - predicted).ravel()
     residual = residual[np.isfinite(residual)]
     if residual.size == 0:

@@ -16,6 +16,8 @@ Data conventions
 1-based time order within the run) and one float column per sensor id, absolute degrees C.
 ``Y`` has the same rows (matched by position, not by index); its columns are the target
 positions in mm, ascending, values the unzeroed errors in um (NaN where a reading is missing).
+Relative temperatures are referenced to each run's lowest ``measurement`` present in X,
+so an X passed to ``predict`` must hold the run's first measurement.
 
 Every regressor is wrapped so that inputs AND target are standardised (see
 :func:`make_regressor`); :func:`linear_terms` converts any affine fit back to the paper's
@@ -122,10 +124,11 @@ def _base_regressor(algorithm: str, params: dict, random_state: int, n_features:
             epsilon=float(params.get("epsilon", 0.1)),
             gamma=params.get("gamma", "scale"),
         )
-    # gpr: bounds are in standardised units; a noise floor of 1e-6 keeps exact
-    # (noise-free) training data numerically well posed.
-    kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(
-        float(params.get("length_scale", 1.0)), (1e-2, 1e3)
+    # gpr: bounds are in standardised units.  A nearly linear response drives the RBF
+    # towards long length scales and large amplitudes, hence the wide upper bounds; a
+    # noise floor of 1e-6 keeps exact (noise-free) training data well posed.
+    kernel = ConstantKernel(1.0, (1e-3, 1e5)) * RBF(
+        float(params.get("length_scale", 1.0)), (1e-2, 1e4)
     ) + WhiteKernel(float(params.get("noise_level", 0.1)), (1e-6, 1e1))
     return GaussianProcessRegressor(
         kernel=kernel,
@@ -283,9 +286,13 @@ def _check_X(X, sensors: Sequence[str]) -> None:
         raise ValueError(f"X must be a pandas DataFrame, got {type(X).__name__}")
     missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
     if missing:
-        raise ValueError(f"X lacks column(s) {missing}; expected run, measurement and sensors {list(sensors)}")
+        raise ValueError(
+            f"X lacks column(s) {missing}; expected run, measurement and sensors {list(sensors)}"
+        )
     if X[list(sensors)].isna().to_numpy().any():
-        raise ValueError(f"X has missing temperatures in sensor column(s) {list(sensors)}; fill or drop those rows")
+        raise ValueError(
+            f"X has missing temperatures in sensor column(s) {list(sensors)}; fill or drop those rows"
+        )
     if X.duplicated(list(_ID_COLUMNS)).any():
         raise ValueError("X has duplicate (run, measurement) rows; expected one row per measurement")
 
@@ -294,7 +301,9 @@ def _positions_of(X: pd.DataFrame, Y) -> np.ndarray:
     if not isinstance(Y, pd.DataFrame):
         raise ValueError(f"Y must be a pandas DataFrame, got {type(Y).__name__}")
     if len(Y) != len(X):
-        raise ValueError(f"Y has {len(Y)} rows but X has {len(X)}; expected one row of errors per measurement")
+        raise ValueError(
+            f"Y has {len(Y)} rows but X has {len(X)}; expected one row of errors per measurement"
+        )
     try:
         positions = np.asarray(Y.columns, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -312,7 +321,7 @@ def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None)
     X : DataFrame
         Columns ``run``, ``measurement`` and sensor columns in absolute degrees C.
     sensors : sequence of str, optional
-        Which sensor columns; default all columns other than run and measurement.
+        Which sensor columns; default every numeric column other than run and measurement.
 
     Returns
     -------
@@ -321,7 +330,9 @@ def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None)
         ``measurement`` among the rows of X, so a run's first row is all zeros.  A run's
         reference comes from its own rows only, whatever other runs X holds.
     """
-    sensors = [c for c in X.columns if c not in _ID_COLUMNS] if sensors is None else list(sensors)
+    if sensors is None:
+        sensors = [c for c in X.columns if c not in _ID_COLUMNS and pd.api.types.is_numeric_dtype(X[c].dtype)]
+    sensors = list(sensors)
     missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
     if missing:
         raise ValueError(f"X lacks column(s) {missing}; expected run, measurement and sensor columns")
@@ -353,7 +364,13 @@ def _coefficient_rows(target, position_mm, temperature, terms: dict | None) -> l
     if terms is None:
         return []
     return [
-        {"target": target, "position_mm": position_mm, "term": term, "temperature": temperature, "value": value}
+        {
+            "target": target,
+            "position_mm": position_mm,
+            "term": term,
+            "temperature": temperature,
+            "value": value,
+        }
         for term, value in terms.items()
     ]
 
@@ -473,14 +490,35 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
                 self.svr_params_[target] = chosen
         return self
 
-    def predict_kb(self, X: pd.DataFrame) -> pd.DataFrame:
-        """Predicted k [um/m] and b [um] (and c2, c3) per row of X, index aligned with X."""
+    def predict_kb(self, X: pd.DataFrame, return_std: bool = False) -> pd.DataFrame:
+        """Predicted decoupling coefficients per row of X.
+
+        Parameters
+        ----------
+        X : DataFrame
+            Temperatures of the runs to predict (each run's first measurement included).
+        return_std : bool
+            Also return each coefficient's predictive standard deviation as a
+            ``<column>_std`` column (gpr only, else ``NotImplementedError``).
+
+        Returns
+        -------
+        DataFrame
+            Index aligned with X; columns k_um_per_m, b_um (c2_um_per_m2, c3_um_per_m3 for
+            higher degrees), then the ``_std`` columns if asked for.
+        """
+        if return_std and self.algorithm != "gpr":
+            raise NotImplementedError("predictive standard deviations are only available for algorithm 'gpr'")
         _check_X(X, (*self.k_sensors, *self.b_sensors))
-        columns = {}
+        means, stds = {}, {}
         for target, sensors, temperature in self._targets():
             features = _features(X, sensors, temperature)
-            columns[_KB_COLUMNS[target]] = np.asarray(self.estimators_[target].predict(features)).ravel()
-        return pd.DataFrame(columns, index=X.index)
+            column = _KB_COLUMNS[target]
+            if return_std:
+                means[column], stds[f"{column}_std"] = predict_with_std(self.estimators_[target], features)
+            else:
+                means[column] = np.asarray(self.estimators_[target].predict(features)).ravel()
+        return pd.DataFrame({**means, **stds}, index=X.index)
 
     def _shifted_powers(self) -> np.ndarray:
         """(degree + 1, p): powers 0..degree of the shifted stroke in metres."""
@@ -510,13 +548,10 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         if self.algorithm != "gpr":
             raise NotImplementedError("prediction intervals are only available for algorithm 'gpr'")
         z = _z_score(level)
-        _check_X(X, (*self.k_sensors, *self.b_sensors))
-        order = {"b": 0, "k": 1, "c2": 2, "c3": 3}
-        means = np.zeros((len(X), self.degree + 1))
-        stds = np.zeros_like(means)
-        for target, sensors, temperature in self._targets():
-            mean, std = predict_with_std(self.estimators_[target], _features(X, sensors, temperature))
-            means[:, order[target]], stds[:, order[target]] = mean, std
+        kb = self.predict_kb(X, return_std=True)
+        columns = [_KB_COLUMNS[t] for t in ("b", "k", "c2", "c3")[: self.degree + 1]]
+        means = kb[columns].to_numpy()
+        stds = kb[[f"{c}_std" for c in columns]].to_numpy()
         powers = self._shifted_powers()
         centre = means @ powers
         half = z * np.sqrt(stds**2 @ powers**2)
@@ -564,7 +599,9 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         Chosen SVR parameters per position (empty for other algorithms).
     """
 
-    def __init__(self, sensors=("T1", "T11", "T12"), algorithm="mlr", params=None, svr_grid=None, random_state=0):
+    def __init__(
+        self, sensors=("T1", "T11", "T12"), algorithm="mlr", params=None, svr_grid=None, random_state=0
+    ):
         self.sensors = sensors
         self.algorithm = algorithm
         self.params = params
@@ -583,10 +620,17 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         for j, position in enumerate(self.positions_mm_):
             valid = np.isfinite(errors[:, j])
             if valid.sum() < 2:
-                raise ValueError(f"position {position:g} mm has {valid.sum()} error reading(s); need at least 2")
+                raise ValueError(
+                    f"position {position:g} mm has {valid.sum()} error reading(s); need at least 2"
+                )
             model, chosen = _fit_one(
-                features[valid], errors[valid, j], groups[valid],
-                self.algorithm, self.params, self.svr_grid, self.random_state,
+                features[valid],
+                errors[valid, j],
+                groups[valid],
+                self.algorithm,
+                self.params,
+                self.svr_grid,
+                self.random_state,
             )
             self.estimators_.append(model)
             if chosen is not None:

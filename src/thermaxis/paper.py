@@ -261,12 +261,11 @@ def _table5_rows(df: pd.DataFrame) -> list[dict]:
 def _table6_rows(df: pd.DataFrame) -> list[dict]:
     rows = []
     for r in df.itertuples(index=False):
+        prefix = f"table6/{r.target}/{r.sensor}"
         keys = {"approach": "decoupled", "target": r.target, "term": r.sensor}
-        rows.append(_row(f"table6/{r.target}/{r.sensor}/cluster", "table6", "cluster", r.cluster, _DIMENSIONLESS, **keys))
+        rows.append(_row(f"{prefix}/cluster", "table6", "cluster", r.cluster, _DIMENSIONLESS, **keys))
         if r.selected:
-            rows.append(
-                _row(f"table6/{r.target}/{r.sensor}/sensitive_point", "table6", "sensitive_point", 1, _DIMENSIONLESS, **keys)
-            )
+            rows.append(_row(f"{prefix}/sensitive_point", "table6", "sensitive_point", 1, _DIMENSIONLESS, **keys))
     return rows
 
 

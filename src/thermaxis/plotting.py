@@ -42,6 +42,8 @@ from matplotlib.cm import ScalarMappable  # noqa: E402
 from matplotlib.colors import ListedColormap, Normalize  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 __all__ = [
@@ -77,7 +79,8 @@ CATEGORICAL_COLORS = (
     "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
     "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
 )  # fmt: skip
-MARKERS = ("o", "s", "^", "v", "D", "<", ">", "p", "h", "X")
+# Seven markers against ten colours: the (colour, marker) pair repeats only after 70 lines.
+MARKERS = ("o", "s", "^", "v", "D", "<", ">")
 # The light yellow end of viridis vanishes on white paper, hence the truncation.
 ORDERED_CMAP = ListedColormap(plt.get_cmap("viridis")(np.linspace(0.0, 0.85, 256)), name="thermaxis_ordered")
 SURFACE_CMAP = "coolwarm"
@@ -128,6 +131,18 @@ _SAVE_METADATA = {
     "pdf": {"Creator": None, "Producer": None, "CreationDate": None},
     "svg": {"Creator": None, "Date": None},
 }
+
+# How the model labels of the tables (thermaxis.models) read in legends and captions;
+# unknown labels are shown as they are.
+DISPLAY_NAMES = {
+    "mlr": "MLR", "svr": "SVR", "gpr": "GPR", "pls": "PLS", "ridge": "ridge",
+    "decoupled": "decoupled", "pointwise": "point-by-point",
+}  # fmt: skip
+
+
+def _display(label) -> str:
+    return DISPLAY_NAMES.get(str(label), str(label))
+
 
 ERROR_LABEL = "Positioning error (µm)"
 POSITION_LABEL = "Position (mm)"
@@ -393,12 +408,31 @@ def fig6_error_vs_time(errors: pd.DataFrame, run) -> Figure:
     return fig
 
 
+def _surface_quads(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> tuple[list, np.ndarray]:
+    """Grid cells whose four corners are all measured, with their mean height.
+
+    Matplotlib's ``plot_surface`` draws a cell with a missing corner as a stray
+    triangle in the 'bad' colour; dropping the cell shows the gap honestly.
+    """
+    quads, heights = [], []
+    for i in range(z.shape[0] - 1):
+        for j in range(z.shape[1] - 1):
+            corners = ((i, j), (i, j + 1), (i + 1, j + 1), (i + 1, j))
+            zs = np.array([z[c] for c in corners])
+            if np.isfinite(zs).all():
+                quads.append([(x[c], y[c], z[c]) for c in corners])
+                heights.append(zs.mean())
+    return quads, np.asarray(heights, dtype=float)
+
+
 @_styled
 def fig7_error_surface(errors: pd.DataFrame, run) -> Figure:
     """Unzeroed error of a run over position and time as a 3-D surface (the paper's Fig. 7).
 
-    A run with a single measurement or a single position cannot span a surface; its
-    curves are drawn in the same 3-D axes instead.  Missing readings leave holes.
+    Every measurement's curve is drawn as a black line with markers; the grid cells
+    between two neighbouring measurements and positions are filled and coloured by
+    their height.  A cell with a missing reading stays open, and a run with one
+    measurement or one position shows its curves only.
 
     Parameters
     ----------
@@ -419,26 +453,42 @@ def fig7_error_surface(errors: pd.DataFrame, run) -> Figure:
     z = grid.to_numpy(dtype=float)
     x, y = np.meshgrid(positions, times)
 
-    fig = _new_figure(SINGLE_COLUMN_IN, 3.0)
-    ax = fig.add_subplot(projection="3d")
-    finite = z[np.isfinite(z)]
-    norm = Normalize(float(finite.min()), float(finite.max())) if finite.size else Normalize(0.0, 1.0)
-    if z.shape[0] >= 2 and z.shape[1] >= 2:
-        surface = ax.plot_surface(
-            x, y, np.ma.masked_invalid(z), cmap=SURFACE_CMAP, norm=norm, edgecolor="k", linewidth=0.25, antialiased=True
+    # Fixed axes instead of constrained layout, which does not see the labels of 3-D axes.
+    # The cells are coloured by height for readability only; the z axis is their scale,
+    # so no colour bar is needed.
+    fig = Figure(figsize=(SINGLE_COLUMN_IN, 3.0))
+    ax = fig.add_axes((0.02, 0.02, 0.9, 0.96), projection="3d")
+    quads, heights = _surface_quads(x, y, z)
+    if quads:
+        cmap = plt.get_cmap(SURFACE_CMAP)
+        ax.add_collection3d(
+            Poly3DCollection(quads, facecolors=cmap(_ordered_norm(heights)(heights)), edgecolors="none", alpha=0.9)
         )
-        bar = fig.colorbar(surface, ax=ax, shrink=0.6, pad=0.12, aspect=20)
-    else:
-        for row in range(z.shape[0]):
-            ax.plot(x[row], y[row], z[row], color="k", marker="o")
-        bar = fig.colorbar(ScalarMappable(norm=norm, cmap=SURFACE_CMAP), ax=ax, shrink=0.6, pad=0.12, aspect=20)
-    bar.set_label(ERROR_LABEL)
+    for row in range(z.shape[0]):
+        ax.plot(x[row], y[row], z[row], color="k", linewidth=0.6, marker="o", markersize=1.8)
+    finite = np.isfinite(z)
+    if finite.any():
+        ax.set_zlim(*_padded_limits(z[finite]))
+    ax.set_xlim(*_padded_limits(positions))
+    ax.set_ylim(*_padded_limits(times))
     ax.set_xlabel(POSITION_LABEL, labelpad=2)
     ax.set_ylabel("Time (min)", labelpad=2)
     ax.set_zlabel("Error (µm)", labelpad=2)
     ax.tick_params(pad=0)
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(5))
     ax.view_init(elev=25.0, azim=-60.0)
+    ax.set_box_aspect(None, zoom=0.88)
     return fig
+
+
+def _padded_limits(values: np.ndarray) -> tuple[float, float]:
+    """Data range with a little room; a single value gets a unit-wide window."""
+    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
+    if lo == hi:
+        return lo - 0.5, hi + 0.5
+    pad = 0.02 * (hi - lo)
+    return lo - pad, hi + pad
 
 
 @_styled
@@ -634,7 +684,7 @@ def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str
                 ax.fill_between(m, part["lower"].to_numpy(dtype=float), part["upper"].to_numpy(dtype=float),
                                 color=CATEGORICAL_COLORS[1], alpha=0.25, linewidth=0, label="Prediction interval")
             ax.plot(m, part["measured"].to_numpy(dtype=float), label="Measured", **_categorical_style(0))
-            ax.plot(m, part["predicted"].to_numpy(dtype=float), linestyle="--", label=f"Predicted ({algorithm})", **_categorical_style(1))
+            ax.plot(m, part["predicted"].to_numpy(dtype=float), linestyle="--", label=f"Predicted ({_display(algorithm)})", **_categorical_style(1))
             ax.set_ylabel(label if col == 0 else "")
             ax.xaxis.set_major_locator(MaxNLocator(integer=True))
             if row == 0:
@@ -694,13 +744,13 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
         ax_curve.set_ylabel(ERROR_LABEL if col == 0 else "")
         ax_res.set_ylabel("Residual (µm)" if col == 0 else "")
         ax_res.set_xlabel(POSITION_LABEL)
-        ax_curve.legend(
-            handles=[
-                Line2D([], [], color="0.2", marker="o", label="Measured"),
-                Line2D([], [], color="0.2", linestyle="--", label=f"Predicted ({algorithm})"),
-            ],
-            loc="best",
-        )
+        handles = [
+            Line2D([], [], color="0.2", marker="o", label="Measured"),
+            Line2D([], [], color="0.2", linestyle="--", label=f"Predicted ({_display(algorithm)})"),
+        ]
+        if _has_band(run_rows):
+            handles.append(Patch(facecolor="0.2", alpha=0.15, label="Prediction interval"))
+        ax_curve.legend(handles=handles, loc="best")
         _ordered_key(fig, ax_res, norm, len(times), TIME_LABEL)
     return fig
 
@@ -769,7 +819,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
             heights = np.array([by_fold.get(f, np.nan) for f in folds], dtype=float)
             keep = np.isfinite(heights)
             ax.bar(offsets[keep], heights[keep], width=bar_width, color=CATEGORICAL_COLORS[j % len(CATEGORICAL_COLORS)],
-                   edgecolor="0.2", linewidth=0.4, label=f"{approach}, {algorithm}")
+                   edgecolor="0.2", linewidth=0.4, label=f"{_display(approach)}, {_display(algorithm)}")
     ax_rmse.set_ylabel(f"RMSE{suffix}")
     ax_max.set_ylabel(f"Max |residual|{suffix}")
     ax_max.set_xticks(centres, [str(f) for f in folds])
@@ -777,7 +827,8 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     for ax in (ax_rmse, ax_max):
         ax.grid(axis="x", visible=False)
         ax.set_axisbelow(True)
-    _add_legend(ax_rmse, len(pairs), loc="upper right")
+    # Above both panels: inside, the legend would hide bars.
+    fig.legend(*ax_rmse.get_legend_handles_labels(), loc="outside upper center", ncol=min(len(pairs), 4))
     return fig
 
 
@@ -834,13 +885,13 @@ _CAPTIONS: dict[str, tuple[str | None, str]] = {
     "fig9": ("9", "Unzeroed thermal positioning error of runs {runs}, one panel per run, one curve per measurement."),
     "fig10": ("10", "Temperature rise of the sensors of run {run} relative to their values at the start of the first "
                     "measurement."),
-    "fig11": ("11", "Point-by-point prediction ({algorithm}) of the held-out run of fold {fold}: measured (solid) and "
+    "fig11": ("11", "Point-by-point prediction ({algorithm}) of the held-out run(s) of fold {fold}: measured (solid) and "
                     "predicted (dashed) errors of every measurement, and the residuals (measured minus predicted)."),
     "fig12": ("12", "Slope k (top) and intercept b (bottom) of the decoupled error line of every measurement, one "
                     "line per run."),
-    "fig14": ("14", "Measured and predicted slope k and intercept b of the held-out run of fold {fold} "
+    "fig14": ("14", "Measured and predicted slope k and intercept b of the held-out run(s) of fold {fold} "
                     "({approach} approach, {algorithm})."),
-    "fig15": ("15", "Measured (solid) and predicted (dashed) thermal positioning error of the held-out run of fold "
+    "fig15": ("15", "Measured (solid) and predicted (dashed) thermal positioning error of the held-out run(s) of fold "
                     "{fold} ({approach} approach, {algorithm}) and the residuals (measured minus predicted)."),
     "fold_comparison": (None, "Prediction accuracy of every fold (held-out run), approach and algorithm: RMSE (top) "
                               "and maximum absolute residual (bottom) of the {target}."),
@@ -854,8 +905,8 @@ _CAPTIONS["error_prediction"] = ("15/17", _CAPTIONS["fig15"][1])
 
 def _detail_text(value) -> str:
     if isinstance(value, (list, tuple)):
-        return ", ".join(str(v) for v in value)
-    return str(value)
+        return ", ".join(_display(v) for v in value)
+    return _display(value)
 
 
 def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details) -> str:

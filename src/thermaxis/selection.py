@@ -100,6 +100,18 @@ def _sensor_names(X: pd.DataFrame) -> list[str]:
 # --------------------------------------------------------------------------- #
 # step 1: fuzzy similarity matrix (Eq. 1)
 # --------------------------------------------------------------------------- #
+def _unit_deviations(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Columns minus their mean, scaled to unit length; constant columns become zeros."""
+    dev = arr - arr.mean(axis=0)
+    norms = np.sqrt(np.sum(dev**2, axis=0))
+    # Relative to the column's own magnitude so that round-off in the mean of
+    # a constant column does not count as variation.
+    scale = np.maximum(np.abs(arr).max(axis=0), 1.0)
+    constant = norms <= 1e-12 * scale * np.sqrt(arr.shape[0])
+    unit = np.where(constant, 0.0, dev / np.where(constant, 1.0, norms))
+    return unit, constant
+
+
 def similarity_matrix(X, method: str = "pearson") -> np.ndarray:
     """Fuzzy similarity matrix between sensors (the paper's Eq. 1).
 
@@ -129,13 +141,7 @@ def similarity_matrix(X, method: str = "pearson") -> np.ndarray:
     """
     if method not in SIMILARITY_METHODS:
         raise ValueError(f"similarity method must be one of {SIMILARITY_METHODS}, got {method!r}")
-    arr = _as_samples_by_sensors(X)
-    dev = arr - arr.mean(axis=0)
-    norms = np.sqrt(np.sum(dev**2, axis=0))
-    # Relative to the column's own magnitude so that round-off in the mean of
-    # a constant column does not count as variation.
-    scale = np.maximum(np.abs(arr).max(axis=0), 1.0)
-    constant = norms <= 1e-12 * scale * np.sqrt(arr.shape[0])
+    unit, constant = _unit_deviations(_as_samples_by_sensors(X))
     if constant.any():
         warnings.warn(
             f"constant sensor column(s) {np.flatnonzero(constant).tolist()}: "
@@ -143,8 +149,6 @@ def similarity_matrix(X, method: str = "pearson") -> np.ndarray:
             UserWarning,
             stacklevel=2,
         )
-    safe = np.where(constant, 1.0, norms)
-    unit = np.where(constant, 0.0, dev / safe)
     if method == "pearson":
         sim = np.abs(unit.T @ unit)
     else:
@@ -550,10 +554,17 @@ def rank_by_correlation(X: pd.DataFrame, y, n: int) -> tuple[str, ...]:
     target = _as_sequence(y, values.shape[0])
     if isinstance(n, bool) or int(n) != n or not (1 <= n <= len(names)):
         raise ValueError(f"n must be an integer in [1, {len(names)}], got {n}")
-    if np.ptp(target) == 0:
+    unit_y, y_constant = _unit_deviations(target[:, None])
+    if y_constant[0]:
         raise ValueError("y is constant: its correlation with the sensors is undefined")
-    # Column 0 of the similarity matrix holds |r| between y and each sensor.
-    abs_r = similarity_matrix(np.column_stack([target, values]), method="pearson")[0, 1:]
+    unit, constant = _unit_deviations(values)
+    if constant.any():
+        warnings.warn(
+            f"constant sensor(s) {[names[i] for i in np.flatnonzero(constant)]}: correlation taken as 0",
+            UserWarning,
+            stacklevel=2,
+        )
+    abs_r = np.abs(unit.T @ unit_y[:, 0])
     order = np.argsort(-abs_r, kind="stable")
     return tuple(names[i] for i in order[: int(n)])
 

@@ -1,1 +1,24 @@
-# filled in later
+rule fit_predict:
+    input:
+        errors=f"{OUT}/assembled/errors.parquet",
+        temperatures=f"{OUT}/assembled/temperatures.parquet",
+        selection=f"{OUT}/selection/{{fold}}.json",
+    output:
+        metrics=f"{OUT}/models/{{fold}}/metrics.csv",
+        coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
+        kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
+        errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
+    params:
+        approaches=APPROACHES,
+        algorithms=ALGORITHMS,
+        models=config["models"],
+        selection=config["selection"],
+        decoupling=config["decoupling"],
+    log:
+        f"{LOGS}/models/{{fold}}.log",
+    benchmark:
+        f"{BENCH}/models/{{fold}}.tsv"
+    conda:
+        ENV
+    script:
+        "../scripts/fit_predict.py"

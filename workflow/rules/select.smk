@@ -1,1 +1,19 @@
-# filled in later
+rule select_sensitive_points:
+    input:
+        errors=f"{OUT}/assembled/errors.parquet",
+        temperatures=f"{OUT}/assembled/temperatures.parquet",
+    output:
+        selection=f"{OUT}/selection/{{fold}}.json",
+        table=f"{OUT}/selection/{{fold}}.csv",
+    params:
+        selection=config["selection"],
+        decoupling=config["decoupling"],
+        decoupled=DECOUPLED,
+    log:
+        f"{LOGS}/select/{{fold}}.log",
+    benchmark:
+        f"{BENCH}/select/{{fold}}.tsv"
+    conda:
+        ENV
+    script:
+        "../scripts/select.py"

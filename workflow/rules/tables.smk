@@ -1,1 +1,89 @@
-# filled in later
+rule collect_model_tables:
+    input:
+        metrics=expand(f"{OUT}/models/{{fold}}/metrics.csv", fold=FOLDS),
+        coefficients=expand(f"{OUT}/models/{{fold}}/coefficients.csv", fold=FOLDS),
+        kb=expand(f"{OUT}/models/{{fold}}/kb_predictions.csv", fold=FOLDS),
+        errors=expand(f"{OUT}/models/{{fold}}/error_predictions.csv", fold=FOLDS),
+        selection=expand(f"{OUT}/selection/{{fold}}.csv", fold=FOLDS),
+    output:
+        metrics=report(
+            f"{OUT}/tables/metrics.csv",
+            caption="../report/metrics.rst",
+            category="5. Prediction",
+            labels={"table": "metrics"},
+        ),
+        coefficients=report(
+            f"{OUT}/tables/coefficients.csv",
+            caption="../report/coefficients.rst",
+            category="4. Models",
+            labels={"table": "coefficients"},
+        ),
+        kb=f"{OUT}/tables/kb_predictions.csv",
+        errors=f"{OUT}/tables/error_predictions.csv",
+        selection=report(
+            f"{OUT}/tables/sensitive_points.csv",
+            caption="../report/sensitive_points.rst",
+            category="3. Sensitive points",
+            labels={"table": "sensitive points"},
+        ),
+    log:
+        f"{LOGS}/collect_model_tables.log",
+    benchmark:
+        f"{BENCH}/collect_model_tables.tsv"
+    conda:
+        ENV
+    script:
+        "../scripts/collect_tables.py"
+
+
+rule ambient_ranges:
+    input:
+        series=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
+        windows=expand(f"{OUT}/clean/{{run}}/windows.csv", run=RUNS),
+    output:
+        table=f"{OUT}/tables/ambient_ranges.csv",
+    params:
+        runs=RUNS,
+        sensor=config["ambient_sensor"],
+    log:
+        f"{LOGS}/ambient_ranges.log",
+    benchmark:
+        f"{BENCH}/ambient_ranges.tsv"
+    conda:
+        ENV
+    script:
+        "../scripts/ambient_ranges.py"
+
+
+rule paper_comparison:
+    input:
+        summary=f"{OUT}/tables/dataset_summary.csv",
+        ambient=f"{OUT}/tables/ambient_ranges.csv",
+        kb=f"{OUT}/tables/table5_slope_intercept.csv",
+        metrics=f"{OUT}/tables/metrics.csv",
+        coefficients=f"{OUT}/tables/coefficients.csv",
+        selection=f"{OUT}/tables/sensitive_points.csv",
+        predictions=f"{OUT}/tables/error_predictions.csv",
+        errors=f"{OUT}/assembled/errors.parquet",
+        paper=PAPER_FILES,
+    output:
+        csv=report(
+            f"{OUT}/tables/paper_comparison.csv",
+            caption="../report/paper_comparison.rst",
+            category="6. Audit against the paper",
+            labels={"table": "paper comparison"},
+        ),
+        markdown=f"{OUT}/tables/paper_comparison.md",
+    params:
+        paper_fold=config["paper_fold"],
+        dataset_name=DATASET.name,
+        simulated=SIMULATED,
+        paper_dir="data/paper",
+    log:
+        f"{LOGS}/paper_comparison.log",
+    benchmark:
+        f"{BENCH}/paper_comparison.tsv"
+    conda:
+        ENV
+    script:
+        "../scripts/paper_comparison.py"

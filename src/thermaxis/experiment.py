@@ -1,0 +1,402 @@
+"""One configuration on one leave-one-condition-out fold: select, fit, predict, score.
+
+This module is the single implementation shared by the main workflow (one fold at a
+time) and the sweep (hundreds of configurations in one process): selection results
+are computed once per fold and selection setting and reused by every algorithm.
+
+Leakage rule: everything fitted (sensitive points when ``scope='training'``, scalers,
+hyper-parameter searches, regressions) sees only the training runs. The held-out
+run contributes its temperatures (relative ones to its own first measurement) at
+prediction time and its measured errors only to the metrics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+
+from .decouple import decouple_measurement
+from .evaluate import prediction_metrics
+from .models import DecoupledAxisModel, PointwiseAxisModel, relative_temperatures
+from .selection import SensitivePoints, common_points, rank_by_correlation, select_sensitive_points
+
+__all__ = [
+    "SelectionSettings",
+    "ModelSettings",
+    "FoldSelection",
+    "FoldResult",
+    "training_kb",
+    "select_for_fold",
+    "evaluate_configuration",
+    "selection_table",
+    "settings_from_config",
+    "selection_settings_from_config",
+    "model_settings_from_config",
+    "selection_to_dict",
+    "selection_from_dict",
+]
+
+META = ("run", "measurement", "time_min")
+
+
+@dataclass(frozen=True)
+class SelectionSettings:
+    method: str = "fuzzy_grey"  # fuzzy_grey | correlation | all | fixed
+    scope: str = "training"  # training | all
+    n_clusters: int = 3
+    similarity: str = "pearson"
+    grade: str = "deng"
+    rho: float = 0.5
+    normalisation: str = "minmax"
+    pointwise_common: int = 3
+    fixed: tuple = ()  # ((target, (sensor, ...)), ...) for method "fixed"
+    degree: int = 1  # the decoupling whose k and b the selection grades against
+
+    def fixed_for(self, target: str) -> tuple[str, ...]:
+        mapping = dict(self.fixed)
+        if target not in mapping:
+            raise ValueError(f"config selection.fixed: no sensor list for {target!r} (method 'fixed' needs k, b and pointwise)")
+        return tuple(mapping[target])
+
+
+@dataclass(frozen=True)
+class ModelSettings:
+    ridge_alpha: float = 1.0
+    pls_components: int = 2
+    svr_kernel: str = "rbf"
+    svr_grid: tuple = (("C", (0.1, 1.0, 10.0, 100.0)), ("epsilon", (0.01, 0.1)), ("gamma", ("scale", 0.1)))
+    interval_level: float = 0.95
+    random_state: int = 0
+
+    def params_for(self, algorithm: str) -> dict | None:
+        if algorithm == "ridge":
+            return {"alpha": self.ridge_alpha}
+        if algorithm == "pls":
+            return {"n_components": self.pls_components}
+        if algorithm == "svr":
+            return {"kernel": self.svr_kernel}
+        return None
+
+    def grid(self) -> dict:
+        return {name: list(values) for name, values in self.svr_grid}
+
+
+def selection_settings_from_config(config: Mapping) -> SelectionSettings:
+    s = config["selection"]
+    return SelectionSettings(
+        method=s["method"],
+        scope=s["scope"],
+        n_clusters=int(s["n_clusters"]),
+        similarity=s["similarity"],
+        grade=s["grade"],
+        rho=float(s["rho"]),
+        normalisation=s["normalisation"],
+        pointwise_common=int(s["pointwise_common"]),
+        fixed=tuple(sorted((k, tuple(v)) for k, v in s.get("fixed", {}).items())),
+        degree=int(config["decoupling"]["degree"]),
+    )
+
+
+def model_settings_from_config(config: Mapping) -> ModelSettings:
+    m = config["models"]
+    grid = m["svr_grid"]
+    return ModelSettings(
+        ridge_alpha=float(m["ridge_alpha"]),
+        pls_components=int(m["pls_components"]),
+        svr_kernel=m["svr_kernel"],
+        svr_grid=tuple((name, tuple(grid[name])) for name in ("C", "epsilon", "gamma")),
+        interval_level=float(m["interval_level"]),
+        random_state=int(m["random_state"]),
+    )
+
+
+def settings_from_config(config: Mapping) -> tuple[SelectionSettings, ModelSettings]:
+    return selection_settings_from_config(config), model_settings_from_config(config)
+
+
+@dataclass(frozen=True)
+class FoldSelection:
+    """Sensitive points of one fold: for k, for b, per position, and the pointwise common set."""
+
+    fold: str
+    k: SensitivePoints | None
+    b: SensitivePoints | None
+    per_position: Mapping[float, SensitivePoints] = field(default_factory=dict)
+    pointwise: tuple[str, ...] = ()
+
+    @property
+    def k_sensors(self) -> tuple[str, ...]:
+        return self.k.selected if self.k is not None else ()
+
+    @property
+    def b_sensors(self) -> tuple[str, ...]:
+        return self.b.selected if self.b is not None else ()
+
+
+def sensor_columns(X: pd.DataFrame) -> list[str]:
+    return [c for c in X.columns if c not in META]
+
+
+def training_kb(X: pd.DataFrame, Y: pd.DataFrame, degree: int = 1) -> pd.DataFrame:
+    """Decoupled k and b of every row (the selection's targets)."""
+    positions = np.asarray(Y.columns, dtype=float)
+    origin = float(positions[0])
+    rows = []
+    for i in range(len(Y)):
+        values = Y.iloc[i].to_numpy(dtype=float)
+        ok = ~np.isnan(values)
+        fit = decouple_measurement(positions[ok], values[ok], degree=degree, origin_mm=origin)
+        rows.append((fit.k_um_per_m, fit.b_um))
+    return pd.DataFrame(rows, columns=["k_um_per_m", "b_um"], index=Y.index)
+
+
+def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, target: str) -> SensitivePoints:
+    if method == "fuzzy_grey":
+        return select_sensitive_points(
+            T,
+            y,
+            n_clusters=s.n_clusters,
+            similarity=s.similarity,
+            grade=s.grade,
+            rho=s.rho,
+            normalisation=s.normalisation,
+        )
+    if method == "correlation":
+        chosen = rank_by_correlation(T, y, s.n_clusters)
+        return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades={}, eta=float("nan"))
+    if method == "all":
+        names = tuple(T.columns)
+        return SensitivePoints(clusters=(names,), selected=names, grades={}, eta=float("nan"))
+    if method == "fixed":
+        chosen = s.fixed_for(target)
+        unknown = [c for c in chosen if c not in T.columns]
+        if unknown:
+            raise ValueError(f"config selection.fixed.{target}: unknown sensor {unknown[0]!r} (dataset has {', '.join(T.columns)})")
+        return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades={}, eta=float("nan"))
+    raise ValueError(f"config selection.method: unknown method {method!r}")
+
+
+def select_for_fold(X: pd.DataFrame, Y: pd.DataFrame, fold: str, settings: SelectionSettings, decoupled: bool = True) -> FoldSelection:
+    """Sensitive points for k (absolute temperatures), b and each position (relative ones).
+
+    With ``scope='training'`` the held-out run (``fold``) is removed first, so the
+    choice of inputs cannot depend on the condition being predicted.
+    """
+    if settings.scope == "training":
+        keep = (X["run"] != fold).to_numpy()
+        X, Y = X.loc[keep], Y.loc[keep]
+    sensors = sensor_columns(X)
+    absolute = X[sensors]
+    relative = relative_temperatures(X)[sensors]
+    k_points = b_points = None
+    if decoupled:
+        kb = training_kb(X, Y, degree=settings.degree)
+        k_points = _points(settings.method, absolute, kb["k_um_per_m"].to_numpy(), settings, "k")
+        b_points = _points(settings.method, relative, kb["b_um"].to_numpy(), settings, "b")
+    per_position = {}
+    if settings.method == "fixed":
+        common = settings.fixed_for("pointwise")
+        _points("fixed", relative, np.zeros(len(relative)), settings, "pointwise")
+    else:
+        for position in Y.columns:
+            y = Y[position].to_numpy(dtype=float)
+            ok = ~np.isnan(y)
+            per_position[float(position)] = _points(settings.method, relative.loc[ok], y[ok], settings, "pointwise")
+        common = common_points(
+            [p.selected for p in per_position.values()], settings.pointwise_common, order=sensors
+        )
+    return FoldSelection(fold=fold, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common))
+
+
+def selection_table(selection: FoldSelection) -> pd.DataFrame:
+    """Tables 3 and 6 in long form: fold, target, position_mm, sensor, cluster, selected, grade."""
+    rows = []
+
+    def add(target, position, points: SensitivePoints):
+        for c, cluster in enumerate(points.clusters, start=1):
+            for sensor in cluster:
+                rows.append(
+                    (selection.fold, target, position, sensor, c, sensor in points.selected, points.grades.get(sensor, np.nan))
+                )
+
+    if selection.k is not None:
+        add("k", np.nan, selection.k)
+    if selection.b is not None:
+        add("b", np.nan, selection.b)
+    for position, points in selection.per_position.items():
+        add("error", position, points)
+    for sensor in selection.pointwise:
+        rows.append((selection.fold, "pointwise_common", np.nan, sensor, 0, True, np.nan))
+    return pd.DataFrame(rows, columns=["fold", "target", "position_mm", "sensor", "cluster", "selected", "grade"])
+
+
+@dataclass(frozen=True)
+class FoldResult:
+    metrics: pd.DataFrame
+    coefficients: pd.DataFrame
+    kb_predictions: pd.DataFrame
+    error_predictions: pd.DataFrame
+
+
+def _build_model(approach: str, algorithm: str, selection: FoldSelection, model: ModelSettings, degree: int):
+    common = dict(
+        algorithm=algorithm,
+        params=model.params_for(algorithm),
+        svr_grid=model.grid(),
+        random_state=model.random_state,
+    )
+    if approach == "decoupled":
+        return DecoupledAxisModel(k_sensors=selection.k_sensors, b_sensors=selection.b_sensors, degree=degree, **common)
+    if approach == "pointwise":
+        return PointwiseAxisModel(sensors=selection.pointwise, **common)
+    raise ValueError(f"unknown approach {approach!r} (expected decoupled or pointwise)")
+
+
+def evaluate_configuration(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    fold: str,
+    approach: str,
+    algorithm: str,
+    selection: FoldSelection,
+    model: ModelSettings = ModelSettings(),
+    degree: int = 1,
+) -> FoldResult:
+    """Fit on every run but ``fold``, predict ``fold`` from its temperatures, and score."""
+    test = (X["run"] == fold).to_numpy()
+    if not test.any():
+        raise ValueError(f"fold {fold!r}: no measurements of that run")
+    X_train, Y_train = X.loc[~test].reset_index(drop=True), Y.loc[~test].reset_index(drop=True)
+    X_test, Y_test = X.loc[test].reset_index(drop=True), Y.loc[test].reset_index(drop=True)
+    estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
+
+    predicted = np.asarray(estimator.predict(X_test), dtype=float)
+    measured = Y_test.to_numpy(dtype=float)
+    lower = upper = np.full_like(predicted, np.nan)
+    if algorithm == "gpr":
+        lower, upper = estimator.predict_interval(X_test, level=model.interval_level)
+
+    label = {"fold": fold, "approach": approach, "algorithm": algorithm}
+    metric_rows = [{**label, "target": "error", **prediction_metrics(measured, predicted)}]
+    kb_rows = []
+    if approach == "decoupled":
+        kb_measured = training_kb(X_test, Y_test, degree=degree)
+        kb_predicted = estimator.predict_kb(X_test)
+        kb_interval = _kb_interval(estimator, X_test, model.interval_level) if algorithm == "gpr" else None
+        for target, column in (("k", "k_um_per_m"), ("b", "b_um")):
+            m = kb_measured[column].to_numpy()
+            p = kb_predicted[column].to_numpy()
+            metric_rows.insert(len(metric_rows) - 1, {**label, "target": target, **prediction_metrics(m, p)})
+            lo, hi = kb_interval[column] if kb_interval is not None else (np.full_like(p, np.nan),) * 2
+            kb_rows.append(
+                pd.DataFrame(
+                    {
+                        **label,
+                        "run": fold,
+                        "measurement": X_test["measurement"].to_numpy(),
+                        "time_min": X_test["time_min"].to_numpy(),
+                        "target": target,
+                        "measured": m,
+                        "predicted": p,
+                        "lower": lo,
+                        "upper": hi,
+                    }
+                )
+            )
+    positions = np.asarray(Y.columns, dtype=float)
+    n, p = measured.shape
+    errors = pd.DataFrame(
+        {
+            **label,
+            "run": fold,
+            "measurement": np.repeat(X_test["measurement"].to_numpy(), p),
+            "time_min": np.repeat(X_test["time_min"].to_numpy(), p),
+            "position_mm": np.tile(positions, n),
+            "measured": measured.ravel(),
+            "predicted": predicted.ravel(),
+            "residual": (measured - predicted).ravel(),
+            "lower": np.asarray(lower, dtype=float).ravel(),
+            "upper": np.asarray(upper, dtype=float).ravel(),
+        }
+    )
+    coefficients = estimator.coefficients()
+    coefficients = coefficients.assign(**label)[
+        ["fold", "approach", "algorithm", "target", "position_mm", "term", "temperature", "value"]
+    ]
+    kb_frame = pd.concat(kb_rows, ignore_index=True) if kb_rows else _empty_kb()
+    return FoldResult(
+        metrics=pd.DataFrame(metric_rows),
+        coefficients=coefficients,
+        kb_predictions=kb_frame,
+        error_predictions=errors,
+    )
+
+
+def _kb_interval(estimator, X_test, level):
+    """Intervals of k and b from the GPR's own predictive standard deviations."""
+    from scipy.stats import norm
+
+    z = float(norm.ppf(0.5 + level / 2))
+    out = {}
+    frame = estimator.predict_kb(X_test, return_std=True)
+    for column in ("k_um_per_m", "b_um"):
+        mean = frame[column].to_numpy()
+        std = frame[f"{column}_std"].to_numpy()
+        out[column] = (mean - z * std, mean + z * std)
+    return out
+
+
+def _empty_kb() -> pd.DataFrame:
+    return pd.DataFrame(
+        columns=["fold", "approach", "algorithm", "run", "measurement", "time_min", "target", "measured", "predicted", "lower", "upper"]
+    )
+
+
+def with_selection(settings: SelectionSettings, **changes) -> SelectionSettings:
+    return replace(settings, **changes)
+
+
+def _points_to_dict(points: SensitivePoints | None):
+    if points is None:
+        return None
+    return {
+        "clusters": [list(c) for c in points.clusters],
+        "selected": list(points.selected),
+        "grades": {k: float(v) for k, v in sorted(points.grades.items())},
+        "eta": None if np.isnan(points.eta) else float(points.eta),
+    }
+
+
+def _points_from_dict(d) -> SensitivePoints | None:
+    if d is None:
+        return None
+    return SensitivePoints(
+        clusters=tuple(tuple(c) for c in d["clusters"]),
+        selected=tuple(d["selected"]),
+        grades=dict(d["grades"]),
+        eta=float("nan") if d["eta"] is None else float(d["eta"]),
+    )
+
+
+def selection_to_dict(selection: FoldSelection) -> dict:
+    """A JSON-ready form; floats of positions become strings so keys survive JSON."""
+    return {
+        "fold": selection.fold,
+        "k": _points_to_dict(selection.k),
+        "b": _points_to_dict(selection.b),
+        "per_position": {repr(float(p)): _points_to_dict(v) for p, v in sorted(selection.per_position.items())},
+        "pointwise": list(selection.pointwise),
+    }
+
+
+def selection_from_dict(d: dict) -> FoldSelection:
+    return FoldSelection(
+        fold=d["fold"],
+        k=_points_from_dict(d["k"]),
+        b=_points_from_dict(d["b"]),
+        per_position={float(p): _points_from_dict(v) for p, v in d["per_position"].items()},
+        pointwise=tuple(d["pointwise"]),
+    )

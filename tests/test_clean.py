@@ -1,0 +1,525 @@
+"""Tests of thermaxis.clean: one per fault class, on small series whose truth is known."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from thermaxis.clean import (
+    CleanedTemperatures,
+    ErrorCleaning,
+    TemperatureCleaning,
+    check_gaps,
+    clean_temperatures,
+    combine_passes,
+    estimate_clock_offset,
+    hampel_outliers,
+    temperatures_in_windows,
+)
+
+T0 = pd.Timestamp("2022-05-10T09:00:00")  # a whole multiple of 10 s since the epoch
+SETTINGS = TemperatureCleaning()
+
+
+def at(seconds) -> pd.DatetimeIndex:
+    return T0 + pd.to_timedelta(np.asarray(seconds, dtype=float), unit="s")
+
+
+def ramp(seconds):
+    """20 C rising 0.6 C per minute: linear, so linear interpolation reproduces it exactly."""
+    return 20.0 + 0.01 * np.asarray(seconds, dtype=float)
+
+
+def source(seconds, **columns) -> pd.DataFrame:
+    frame = pd.DataFrame({"time": at(seconds).astype("datetime64[ns]")})
+    for name, values in columns.items():
+        frame[name] = np.asarray(values, dtype=float)
+    return frame
+
+
+def grid_seconds(frame: pd.DataFrame) -> np.ndarray:
+    return ((frame["time"] - T0) / pd.Timedelta(seconds=1)).to_numpy()
+
+
+def qc_of(result: CleanedTemperatures, sensor: str) -> pd.Series:
+    return result.qc.set_index("sensor").loc[sensor]
+
+
+def clean(sources, offsets=None, **settings):
+    return clean_temperatures(sources, offsets or {}, TemperatureCleaning(**settings))
+
+
+# ----------------------------------------------------------------------------- grid and ramps
+
+
+def test_grid_is_aligned_to_whole_intervals_and_ramp_is_exact():
+    s = np.arange(3, 600, 10.0)  # samples 3 s off the grid
+    result = clean({"box": source(s, T1=ramp(s))})
+    t = grid_seconds(result.frame)
+    assert t[0] == 10 and t[-1] == 590  # ceil(3) and floor(593) to multiples of 10 s
+    assert np.all(np.diff(t) == 10)
+    assert result.frame["time"].dtype == "datetime64[ns]"
+    np.testing.assert_allclose(result.frame["T1"], ramp(t), atol=1e-9)
+    assert list(result.qc.columns[:2]) == ["sensor", "source"]
+
+
+def test_explicit_start_and_end_span_the_grid():
+    s = np.arange(0, 1000, 10.0)
+    result = clean_temperatures({"box": source(s, T1=ramp(s))}, {}, SETTINGS, start=at([95])[0], end=at([305])[0])
+    np.testing.assert_array_equal(grid_seconds(result.frame), np.arange(100, 301, 10))
+
+
+def test_irregular_sampling_with_lost_packets_is_resampled_exactly():
+    rng = np.random.default_rng(11)
+    s = np.cumsum(rng.uniform(20, 40, 200))  # wireless: ~30 s, irregular
+    lost = np.zeros(s.size, bool)
+    lost[[20, 21, 60, 130]] = True  # lost packets: 60-100 s holes, well below max_gap_s
+    result = clean({"nut": source(s[~lost], T11=ramp(s[~lost]))})
+    t = grid_seconds(result.frame)
+    np.testing.assert_allclose(result.frame["T11"], ramp(t), atol=1e-9)
+    qc = qc_of(result, "T11")
+    assert qc["n_raw"] == 196 and qc["n_long_gap"] == 0
+    # grid points inside the three holes (each longer than 1.5 x the median spacing)
+    kept = s[~lost]
+    holes = [(kept[i], kept[i + 1]) for i in np.flatnonzero(np.diff(kept) > 1.5 * np.median(np.diff(kept)))]
+    expected = sum(((t > a) & (t < b)).sum() for a, b in holes)
+    assert qc["n_interpolated"] == expected > 0
+
+
+def test_sources_at_different_rates_share_one_grid():
+    box_s = np.arange(0, 1200, 10.0)
+    hmi_s = np.arange(5, 1200, 60.0)
+    result = clean({"box": source(box_s, T1=ramp(box_s)), "hmi": source(hmi_s, T12=2 * ramp(hmi_s))})
+    t = grid_seconds(result.frame)
+    assert list(result.frame.columns) == ["time", "T1", "T12"]
+    inside = (t >= hmi_s[0]) & (t <= hmi_s[-1])
+    np.testing.assert_allclose(result.frame["T12"][inside], 2 * ramp(t[inside]), atol=1e-9)
+    assert result.qc.set_index("sensor")["source"].to_dict() == {"T1": "box", "T12": "hmi"}
+
+
+# ----------------------------------------------------------------------------- duplicates
+
+
+def test_exact_duplicate_rows_are_dropped_and_counted():
+    s = np.arange(0, 300, 10.0)
+    frame = source(s, T1=ramp(s), T2=ramp(s) + 1)
+    frame = pd.concat([frame, frame.iloc[[4, 9, 9]]]).sort_values("time", kind="stable", ignore_index=True)
+    result = clean({"box": frame})
+    t = grid_seconds(result.frame)
+    np.testing.assert_allclose(result.frame["T1"], ramp(t), atol=1e-9)
+    assert qc_of(result, "T1")["n_duplicates"] == 3
+    assert qc_of(result, "T1")["n_raw"] == s.size + 3
+    assert qc_of(result, "T1")["n_spikes"] == 0
+
+
+def test_repeated_timestamp_with_different_values_is_averaged():
+    s = np.array([0, 10, 20, 20, 30, 40.0])
+    values = np.array([20.0, 20.1, 20.1, 20.3, 20.4, 20.5])
+    result = clean({"box": source(s, T1=values)}, hampel_window=3)
+    assert result.frame["T1"].iloc[2] == pytest.approx(20.2)
+    assert qc_of(result, "T1")["n_duplicates"] == 1
+
+
+def test_open_circuit_value_at_a_repeated_timestamp_never_enters_the_mean():
+    s = np.array([0, 10, 20, 20, 30, 40.0])
+    values = np.array([20.0, 20.1, 850.0, 20.2, 20.3, 20.4])
+    result = clean({"box": source(s, T1=values)})
+    assert result.frame["T1"].iloc[2] == pytest.approx(20.2)
+    assert qc_of(result, "T1")["n_out_of_range"] == 1
+    assert qc_of(result, "T1")["n_duplicates"] == 0  # only one valid reading at 20 s
+
+
+# ----------------------------------------------------------------------------- clock offsets
+
+
+def test_given_clock_offset_is_added_to_the_timestamps():
+    true_s = np.arange(0, 1200, 60.0)
+    stamped = true_s - 7.0  # this clock runs 7 s behind: add +7 s
+    result = clean({"hmi": source(stamped, T12=ramp(true_s))}, {"hmi": 7.0})
+    t = grid_seconds(result.frame)
+    np.testing.assert_allclose(result.frame["T12"], ramp(t), atol=1e-9)
+    assert t[0] == 0
+    assert qc_of(result, "T12")["clock_offset_s"] == 7.0
+    assert not qc_of(result, "T12")["offset_estimated"]
+
+
+def warm_up(seconds):
+    """A machine start at 1000 s (10 C exponential rise) and a cooling at 5000 s."""
+    s = np.asarray(seconds, dtype=float)
+    rise = np.where(s > 1000, 10 * (1 - np.exp(-(s - 1000) / 600)), 0.0)
+    fall = np.where(s > 5000, -4 * (1 - np.exp(-(s - 5000) / 400)), 0.0)
+    return 25.0 + rise + fall
+
+
+@pytest.mark.parametrize("true_offset", [-23.0, 6.4, 41.0])
+def test_clock_offset_is_estimated_on_a_shared_transient(true_offset):
+    rng = np.random.default_rng(3)
+    ref_s = np.arange(0, 9600, 10.0)
+    reference = pd.Series(warm_up(ref_s) + rng.normal(0, 0.02, ref_s.size), index=at(ref_s))
+    true_s = np.arange(0, 9600, 10.0)
+    series = pd.Series(warm_up(true_s) + rng.normal(0, 0.02, true_s.size), index=at(true_s - true_offset))
+    assert estimate_clock_offset(series, reference, 120, 1.0) == pytest.approx(true_offset, abs=0.5)
+    # The same with the roles reversed (dense series, sparse reference): the sign flips.
+    sparse = reference.iloc[::6]
+    assert estimate_clock_offset(sparse, series, 120, 1.0) == pytest.approx(-true_offset, abs=1.0)
+
+
+def test_clock_offset_of_quantised_sparse_hmi_is_found_within_a_few_seconds():
+    rng = np.random.default_rng(5)
+    ref_s = np.arange(0, 9600, 10.0)
+    box = pd.DataFrame(
+        {"T7": warm_up(ref_s) + rng.normal(0, 0.02, ref_s.size), "T10": 30 + rng.normal(0, 0.02, ref_s.size)},
+        index=at(ref_s),
+    )
+    true_s = np.arange(13, 9600, 60.0)
+    hmi = pd.Series(np.round(warm_up(true_s), 1), index=at(true_s - 8.0))
+    assert estimate_clock_offset(hmi, box, 120, 1.0) == pytest.approx(8.0, abs=4.0)
+
+
+def test_clean_temperatures_estimates_offsets_against_the_reference_source():
+    rng = np.random.default_rng(7)
+    box_s = np.arange(0, 9600, 10.0)
+    box = source(box_s, T7=warm_up(box_s) + rng.normal(0, 0.02, box_s.size), T10=30 + 0 * box_s)
+    true_s = np.arange(0, 9600, 10.0)
+    hmi = source(true_s - 12.0, T12=warm_up(true_s) + rng.normal(0, 0.02, true_s.size))
+    # dataset.yaml gave +5 s; the residual +7 s is estimated on top.
+    result = clean({"box": box, "hmi": hmi}, {"hmi": 5.0}, estimate_clock_offsets=True)
+    qc = result.qc.set_index("sensor")
+    assert qc.loc["T12", "clock_offset_s"] == pytest.approx(12.0, abs=0.5)
+    assert qc.loc["T12", "offset_estimated"] and not qc.loc["T7", "offset_estimated"]
+    assert qc.loc["T7", "clock_offset_s"] == 0.0
+
+
+def test_clock_offset_estimation_needs_enough_overlap():
+    s = np.arange(0, 200, 10.0)
+    series = pd.Series(warm_up(s), index=at(s))
+    with pytest.raises(ValueError, match="overlap"):
+        estimate_clock_offset(series, series, 120, 1.0)
+
+
+# ----------------------------------------------------------------------------- spikes and limits
+
+
+def naive_hampel(x, window, threshold, min_deviation):
+    """Textbook Hampel filter, one window at a time (interior samples only)."""
+    half = window // 2
+    flags = np.zeros(x.size, bool)
+    for i in range(half, x.size - half):
+        w = x[i - half : i + half + 1]
+        med = np.median(w)
+        mad = np.median(np.abs(w - med))
+        flags[i] = abs(x[i] - med) > max(threshold * 1.4826 * mad, min_deviation)
+    return flags
+
+
+def test_vectorised_hampel_agrees_with_the_textbook_loop():
+    rng = np.random.default_rng(0)
+    x = np.cumsum(rng.normal(0, 0.05, 2000)) + rng.standard_t(2, 2000) * 0.05
+    got = hampel_outliers(x, 7, 3.0, 0.05)
+    want = naive_hampel(x, 7, 3.0, 0.05)
+    np.testing.assert_array_equal(got[3:-3], want[3:-3])
+    assert want.sum() > 10  # the comparison covers flagged samples
+
+
+def test_single_sample_spike_is_removed_and_replaced_by_interpolation():
+    s = np.arange(0, 600, 10.0)
+    values = ramp(s)
+    values[[17, 40]] += [3.0, -2.5]
+    values[0] += 4.0  # a spike on the very first sample is caught too
+    result = clean_temperatures({"box": source(s, T1=values)}, {}, SETTINGS, start=T0)
+    t = grid_seconds(result.frame)
+    assert t[0] == 0
+    np.testing.assert_allclose(result.frame["T1"].iloc[1:], ramp(t[1:]), atol=1e-9)
+    assert result.frame["T1"].iloc[0] == ramp(10)  # held from the first valid sample
+    qc = qc_of(result, "T1")
+    assert (qc["n_spikes"], qc["n_interpolated"], qc["n_edge_held"]) == (3, 2, 1)
+
+
+def test_open_circuit_values_are_removed():
+    s = np.arange(0, 600, 10.0)
+    values = ramp(s)
+    values[12], values[30] = 850.0, -200.0
+    result = clean({"box": source(s, T1=values)})
+    t = grid_seconds(result.frame)
+    np.testing.assert_allclose(result.frame["T1"], ramp(t), atol=1e-9)
+    qc = qc_of(result, "T1")
+    assert (qc["n_out_of_range"], qc["n_spikes"], qc["n_interpolated"]) == (2, 0, 2)
+
+
+def test_hmi_quantisation_is_not_mistaken_for_spikes():
+    s = np.arange(0, 7200, 60.0)
+    truth = warm_up(s + 800)  # flat, then a fast rise and its bend
+    result = clean({"hmi": source(s, T12=np.round(truth, 1))})
+    assert qc_of(result, "T12")["n_spikes"] == 0
+    # ... while a real spike in the same series is still caught.
+    spiky = np.round(truth, 1)
+    spiky[50] += 1.5
+    assert qc_of(clean({"hmi": source(s, T12=spiky)}), "T12")["n_spikes"] == 1
+
+
+def test_noisy_warm_up_has_no_false_spikes():
+    rng = np.random.default_rng(2)
+    s = np.arange(0, 9600, 10.0)
+    result = clean({"box": source(s, T1=warm_up(s) + rng.normal(0, 0.02, s.size))})
+    assert qc_of(result, "T1")["n_spikes"] == 0
+
+
+# ----------------------------------------------------------------------------- gaps
+
+
+def test_short_gap_is_interpolated_within_tolerance():
+    s = np.arange(0, 3600, 10.0)
+    truth = 25 + 2 * np.sin(2 * np.pi * s / 3600)  # a slow real oscillation
+    hole = (s > 1000) & (s < 1500)  # 500 s < max_gap_s = 600 s
+    result = clean({"box": source(s[~hole], T1=truth[~hole])})
+    t = grid_seconds(result.frame)
+    err = np.abs(result.frame["T1"].to_numpy() - (25 + 2 * np.sin(2 * np.pi * t / 3600)))
+    # chord error of a sine: amplitude * (2 pi / P)^2 * gap^2 / 8
+    bound = 2 * (2 * np.pi / 3600) ** 2 * 500**2 / 8
+    assert err.max() <= bound + 1e-12 and bound < 0.2
+    assert qc_of(result, "T1")["n_interpolated"] == 49  # 1010 ... 1490 s
+    assert result.gaps.empty
+    assert qc_of(result, "T1")["longest_gap_s"] == 500
+
+
+def test_long_gap_is_left_nan_and_reported():
+    s = np.arange(0, 3600, 10.0)
+    hole = (s > 1000) & (s < 1900)  # samples at 1000 and 1900 s: 900 s apart
+    result = clean({"box": source(s[~hole], T1=ramp(s[~hole]))})
+    t = grid_seconds(result.frame)
+    inside = (t > 1000) & (t < 1900)
+    assert result.frame["T1"][inside].isna().all()
+    np.testing.assert_allclose(result.frame["T1"][~inside], ramp(t[~inside]), atol=1e-9)
+    assert qc_of(result, "T1")["n_long_gap"] == inside.sum() == 89
+    assert qc_of(result, "T1")["n_interpolated"] == 0
+    gap = result.gaps.iloc[0]
+    assert len(result.gaps) == 1 and gap["sensor"] == "T1"
+    assert (gap["start"], gap["end"], gap["duration_s"]) == (at([1000])[0], at([1900])[0], 900.0)
+
+
+def test_sensor_starting_late_is_held_briefly_then_reported():
+    box_s = np.arange(0, 2000, 10.0)
+    nut_s = np.arange(25, 2000, 30.0)
+    result = clean({"box": source(box_s, T1=ramp(box_s)), "nut": source(nut_s, T11=ramp(nut_s))})
+    assert result.frame["T11"].iloc[:3].tolist() == [ramp(25)] * 3  # held for 25 s <= 300 s
+    assert result.frame["T11"].iloc[-2:].tolist() == [ramp(1975)] * 2  # and after its last sample
+    assert qc_of(result, "T11")["n_edge_held"] == 5
+    late = source(nut_s + 700, T11=ramp(nut_s + 700))  # first sample at 725 s > max_gap_s / 2
+    result = clean({"box": source(box_s, T1=ramp(box_s)), "nut": late})
+    t = grid_seconds(result.frame)
+    assert result.frame["T11"][t < 425].isna().all() and result.frame["T11"][(t >= 425) & (t < 725)].notna().all()
+    gap = result.gaps.iloc[0]
+    assert (gap["sensor"], gap["start"], gap["end"]) == ("T11", at([0])[0], at([725])[0])
+
+
+def windows_frame(*spans):
+    return pd.DataFrame(
+        {
+            "measurement": np.arange(1, len(spans) + 1),
+            "name": [f"m{i:02d}" for i in range(1, len(spans) + 1)],
+            "start": at([a for a, _ in spans]),
+            "end": at([b for _, b in spans]),
+        }
+    )
+
+
+def test_long_gap_overlapping_a_measurement_raises_unless_allowed():
+    gaps = pd.DataFrame(
+        {"sensor": ["T11"], "start": at([1000]), "end": at([1900]), "duration_s": [900.0]}
+    )
+    windows = windows_frame((0, 600), (1800, 2400), (3000, 3600))
+    with pytest.raises(ValueError, match=r"T11.*measurement 2 \(m02\)"):
+        check_gaps(gaps, windows)
+    warnings = check_gaps(gaps, windows, allow=True)
+    assert len(warnings) == 1 and "T11" in warnings[0] and "m02" in warnings[0]
+    # A gap that ends exactly when a measurement starts has a real sample there.
+    assert check_gaps(gaps, windows_frame((0, 600), (1900, 2400))) == []
+
+
+def test_gaps_of_clean_temperatures_feed_check_gaps():
+    s = np.arange(0, 3600, 10.0)
+    hole = (s > 1000) & (s < 1900)
+    result = clean({"box": source(s[~hole], T1=ramp(s[~hole]))})
+    with pytest.raises(ValueError, match="T1"):
+        check_gaps(result.gaps, windows_frame((1500, 1600)))
+    assert check_gaps(result.gaps, windows_frame((2000, 2600))) == []
+
+
+# ----------------------------------------------------------------------------- windows
+
+
+def test_window_mean_and_start_of_a_ramp_are_exact():
+    s = np.arange(0, 3600, 10.0)
+    frame = clean({"box": source(s, T1=ramp(s), T2=2 * ramp(s))}).frame
+    windows = windows_frame((103, 887), (1000, 1000), (2004, 2006))  # off-grid, empty, shorter than a step
+    mean = temperatures_in_windows(frame, windows, how="mean")
+    start = temperatures_in_windows(frame, windows, how="start")
+    mid = np.array([495.0, 1000.0, 2005.0])
+    np.testing.assert_allclose(mean["T1"], ramp(mid), atol=1e-9)
+    np.testing.assert_allclose(mean["T2"], 2 * ramp(mid), atol=1e-9)
+    np.testing.assert_allclose(start["T1"], ramp([103, 1000, 2004]), atol=1e-9)
+    assert list(mean.columns) == ["measurement", "start", "end", "T1", "T2"]
+    assert mean["measurement"].tolist() == [1, 2, 3]
+
+
+def test_window_mean_of_a_step_weights_by_time():
+    frame = pd.DataFrame({"time": at([0, 10, 20, 30, 40]), "T1": [0.0, 0.0, 10.0, 10.0, 10.0]})
+    # piecewise linear: 0 until 10 s, ramps to 10 at 20 s; mean over [0, 40] = (5*10 + 10*20) / 40
+    mean = temperatures_in_windows(frame, windows_frame((0, 40)))
+    assert mean["T1"].iloc[0] == pytest.approx(6.25)
+
+
+def test_window_mean_skips_a_nan_stretch_and_window_outside_raises():
+    frame = pd.DataFrame({"time": at([0, 10, 20, 30]), "T1": [1.0, 1.0, np.nan, 3.0]})
+    assert temperatures_in_windows(frame, windows_frame((0, 30)))["T1"].iloc[0] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="outside the temperature record"):
+        temperatures_in_windows(frame, windows_frame((20, 40)))
+    with pytest.raises(ValueError, match="how"):
+        temperatures_in_windows(frame, windows_frame((0, 10)), how="median")
+
+
+# ----------------------------------------------------------------------------- bad input
+
+
+def test_sensor_in_two_sources_raises():
+    s = np.arange(0, 100, 10.0)
+    with pytest.raises(ValueError, match="T1"):
+        clean({"box": source(s, T1=ramp(s)), "nut": source(s, T1=ramp(s))})
+
+
+def test_settings_are_validated():
+    with pytest.raises(ValueError, match="odd"):
+        TemperatureCleaning(hampel_window=6)
+    with pytest.raises(ValueError, match="limits_c"):
+        TemperatureCleaning(limits_c=(120.0, -20.0))
+    with pytest.raises(ValueError, match="direction"):
+        ErrorCleaning(direction="both")
+
+
+# ----------------------------------------------------------------------------- everything at once
+
+
+def test_all_faults_together_meet_the_acceptance_criterion():
+    """Within 0.1 C of the truth at >= 99 % of grid points inside the measurement windows."""
+    rng = np.random.default_rng(42)
+    duration = 3 * 3600.0
+    truth = {
+        "T1": lambda x: 25 + 3 * (1 - np.exp(-x / 2400)),
+        "T11": lambda x: 26 + 5 * (1 - np.exp(-x / 1800)),
+        "T12": lambda x: 30 + 12 * (1 - np.exp(-x / 1200)),
+    }
+    box_s = np.arange(0, duration, 10.0)
+    box = source(box_s, T1=truth["T1"](box_s) + rng.normal(0, 0.02, box_s.size))
+    box.loc[[100, 900], "T1"] += [4.0, -3.0]  # spikes
+    box.loc[1500, "T1"] = 850.0  # open circuit
+    box = pd.concat([box, box.iloc[[200, 201]]]).sort_values("time", kind="stable", ignore_index=True)
+    nut_s = np.cumsum(rng.uniform(22, 38, 400))
+    nut_s = nut_s[(nut_s < duration) & rng.uniform(size=nut_s.size).__ge__(0.05)]  # lost packets
+    nut_s = nut_s[(nut_s < 5000) | (nut_s > 5400)]  # a 400 s outage
+    nut = source(nut_s, T11=truth["T11"](nut_s) + rng.normal(0, 0.02, nut_s.size))
+    hmi_s = np.arange(0, duration, 60.0)
+    hmi = source(hmi_s - 6.0, T12=np.round(truth["T12"](hmi_s), 1))  # clock 6 s behind
+    result = clean({"box": box, "nut": nut, "hmi": hmi}, {"hmi": 6.0})
+
+    t = grid_seconds(result.frame)
+    in_window = np.zeros(t.size, bool)
+    for a in np.arange(0, duration - 600, 1200.0):
+        in_window |= (t >= a) & (t <= a + 600)
+    for sensor, f in truth.items():
+        err = np.abs(result.frame[sensor].to_numpy()[in_window] - f(t[in_window]))
+        assert np.mean(err <= 0.1) >= 0.99, sensor
+    qc = result.qc.set_index("sensor")
+    assert (qc.loc["T1", "n_spikes"], qc.loc["T1", "n_out_of_range"], qc.loc["T1", "n_duplicates"]) == (2, 1, 2)
+    assert qc.loc["T12", "n_spikes"] == 0 and result.gaps.empty
+
+
+# ----------------------------------------------------------------------------- errors
+
+
+def measurement(rows, direction=True):
+    frame = pd.DataFrame(rows, columns=["position_mm", "error_um", "direction"])
+    frame.insert(0, "time", at(np.arange(len(frame)) * 20.0))
+    return frame if direction else frame.drop(columns="direction")
+
+
+TARGETS = [185.0, 205.0, 225.0, 245.0, 265.0]
+
+
+def two_passes(forward, backward):
+    rows = [(p, e, "+") for p, e in zip(TARGETS, forward) if e is not None]
+    rows += [(p, e, "-") for p, e in zip(reversed(TARGETS), reversed(backward)) if e is not None]
+    return measurement(rows)
+
+
+def test_mean_of_both_passes():
+    m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
+    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning(), name="m01")
+    np.testing.assert_allclose(curve.to_numpy(), [0.5, -0.5, -1.5, -2.5, -3.0])
+    assert curve.index.tolist() == TARGETS and curve.index.name == "position_mm"
+    assert warnings == []
+
+
+@pytest.mark.parametrize("direction, expected", [("+", [0.0, -1.0, -2.0, -3.0, -4.0]), ("-", [1.0, 0.0, -1.0, -2.0, -2.0])])
+def test_one_direction(direction, expected):
+    m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
+    curve, _ = combine_passes(m, TARGETS, ErrorCleaning(direction=direction))
+    np.testing.assert_allclose(curve.to_numpy(), expected)
+
+
+def test_single_unlabelled_pass_is_used_as_is():
+    m = measurement([(p, -float(i), None) for i, p in enumerate(TARGETS)], direction=False)
+    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning(direction="mean"))
+    np.testing.assert_allclose(curve.to_numpy(), [0.0, -1.0, -2.0, -3.0, -4.0])
+    assert warnings == []
+
+
+def test_target_read_in_one_pass_only_keeps_that_reading_with_a_warning():
+    m = two_passes([0.0, -1.0, None, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
+    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning(), name="m03")
+    assert curve[225.0] == -1.0
+    assert len(warnings) == 1 and "m03" in warnings[0] and "225" in warnings[0]
+
+
+def test_missing_target_reading_is_dropped_with_a_warning():
+    m = two_passes([0.0, -1.0, None, -3.0, -4.0], [1.0, 0.0, None, -2.0, -2.0])
+    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.2), name="m03")
+    assert np.isnan(curve[225.0]) and curve.notna().sum() == 4
+    assert len(warnings) == 1 and "225" in warnings[0] and "no reading" in warnings[0]
+    # a NaN reading is as missing as an absent row
+    m.loc[m["position_mm"] == 245.0, "error_um"] = np.nan
+    with pytest.raises(ValueError, match="2 of 5"):
+        combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.2))
+
+
+def test_too_many_missing_targets_raise():
+    m = two_passes([0.0, None, None, -3.0, -4.0], [1.0, None, None, -2.0, -2.0])
+    with pytest.raises(ValueError, match=r"measurement m05: 2 of 5 targets"):
+        combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.2), name="m05")
+    curve, _ = combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.4), name="m05")
+    assert curve.isna().sum() == 2
+    # asking for a direction the measurement does not have leaves every target missing
+    forward_only = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [None] * 5)
+    with pytest.raises(ValueError, match="5 of 5"):
+        combine_passes(forward_only, TARGETS, ErrorCleaning(direction="-"))
+
+
+def test_conflicting_duplicate_position_raises():
+    m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
+    m = pd.concat([m, measurement([(205.0, -1.3, "+")])], ignore_index=True)
+    with pytest.raises(ValueError, match=r"m07.*205 mm.*\+ pass"):
+        combine_passes(m, TARGETS, ErrorCleaning(), name="m07")
+
+
+def test_exact_duplicate_rows_are_dropped_silently_and_counted():
+    m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
+    m = pd.concat([m, m.iloc[[1, 7]]], ignore_index=True)
+    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning())
+    np.testing.assert_allclose(curve.to_numpy(), [0.5, -0.5, -1.5, -2.5, -3.0])
+    assert warnings == [] and curve.attrs["n_duplicate_rows"] == 2
+
+
+def test_position_that_is_no_target_raises():
+    m = measurement([(185.0, 0.0, "+"), (500.0, 1.0, "+")])
+    with pytest.raises(ValueError, match="500 mm is not one of the targets"):
+        combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=1.0))

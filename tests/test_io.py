@@ -1,0 +1,242 @@
+"""The raw-data reader: valid datasets load; every bad input fails with ONE clear line."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+import yaml
+
+from thermaxis.io import DataError, load_dataset, read_run
+
+
+def one_line(excinfo) -> str:
+    message = str(excinfo.value)
+    assert "\n" not in message, message
+    return message
+
+
+def edit_yaml(path, change):
+    doc = yaml.safe_load(path.read_text())
+    change(doc)
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+
+
+def test_valid_dataset_loads(tiny_dataset):
+    ds = load_dataset(tiny_dataset)
+    assert ds.name == "tiny"
+    assert ds.simulated
+    assert ds.run_ids == ("R1", "R2")
+    assert ds.sensors == ("S1", "S2", "S3")
+    raw = read_run(ds, "R1")
+    assert list(raw.measurements) == ["M01", "M02", "M03", "M04"]
+    assert list(raw.sources["box"].columns) == ["time", "S1", "S2", "S3"]
+    # 4 positions x 2 passes
+    assert len(raw.measurements["M01"]) == 8
+
+
+def test_wrong_type_in_runs_sheet(tiny_dataset):
+    path = tiny_dataset / "runs.tsv"
+    path.write_text(path.read_text().replace("R2\t2\t2000", "R2\ttwo\t2000"))
+    with pytest.raises(DataError) as exc:
+        load_dataset(tiny_dataset)
+    msg = one_line(exc)
+    assert "runs.tsv" in msg and "line 3" in msg and "'condition'" in msg and "integer" in msg
+
+
+def test_negative_feed_violates_schema(tiny_dataset):
+    path = tiny_dataset / "runs.tsv"
+    path.write_text(path.read_text().replace("R2\t2\t2000", "R2\t2\t-5"))
+    with pytest.raises(DataError) as exc:
+        load_dataset(tiny_dataset)
+    msg = one_line(exc)
+    assert "runs.tsv" in msg and "feed_mm_min" in msg
+
+
+def test_missing_column_in_runs_sheet(tiny_dataset):
+    path = tiny_dataset / "runs.tsv"
+    lines = [line.split("\t") for line in path.read_text().splitlines()]
+    path.write_text("\n".join("\t".join(f[:2] + f[3:]) for f in lines) + "\n")
+    with pytest.raises(DataError) as exc:
+        load_dataset(tiny_dataset)
+    msg = one_line(exc)
+    assert "runs.tsv" in msg and "missing column 'feed_mm_min'" in msg
+
+
+def test_wrong_type_in_dataset_yaml(tiny_dataset):
+    edit_yaml(tiny_dataset / "dataset.yaml", lambda d: d["provenance"].update(kind="guessed"))
+    with pytest.raises(DataError) as exc:
+        load_dataset(tiny_dataset)
+    msg = one_line(exc)
+    assert "dataset.yaml" in msg and "provenance/kind" in msg and "guessed" in msg
+
+
+def test_missing_key_in_dataset_yaml(tiny_dataset):
+    edit_yaml(tiny_dataset / "dataset.yaml", lambda d: d.pop("sensors"))
+    with pytest.raises(DataError) as exc:
+        load_dataset(tiny_dataset)
+    assert "'sensors' is a required property" in one_line(exc)
+
+
+def test_sensor_with_undeclared_source(tiny_dataset):
+    edit_yaml(tiny_dataset / "dataset.yaml", lambda d: d["sensors"][0].update(source="nowhere"))
+    with pytest.raises(DataError) as exc:
+        load_dataset(tiny_dataset)
+    msg = one_line(exc)
+    assert "nowhere" in msg and "S1" in msg
+
+
+def test_run_without_folder(tiny_dataset):
+    shutil.rmtree(tiny_dataset / "R2")
+    with pytest.raises(DataError) as exc:
+        load_dataset(tiny_dataset)
+    msg = one_line(exc)
+    assert "runs.tsv" in msg and "'R2' has no folder" in msg
+
+
+def test_folder_not_in_runs_sheet(tiny_dataset):
+    shutil.copytree(tiny_dataset / "R2", tiny_dataset / "R3")
+    with pytest.raises(DataError) as exc:
+        load_dataset(tiny_dataset)
+    msg = one_line(exc)
+    assert "R3" in msg and "not listed" in msg
+
+
+def test_unknown_sensor_id(tiny_dataset):
+    path = tiny_dataset / "R1" / "temperatures" / "box.csv"
+    path.write_text(path.read_text().replace("S3", "S9", 1))
+    ds = load_dataset(tiny_dataset)
+    with pytest.raises(DataError) as exc:
+        read_run(ds, "R1")
+    msg = one_line(exc)
+    assert "box.csv" in msg and "'S9'" in msg and "unknown sensor" in msg
+
+
+def test_missing_sensor_column(tiny_dataset):
+    path = tiny_dataset / "R1" / "temperatures" / "box.csv"
+    lines = [line.rsplit(",", 1)[0] for line in path.read_text().splitlines()]
+    path.write_text("\n".join(lines) + "\n")
+    ds = load_dataset(tiny_dataset)
+    with pytest.raises(DataError) as exc:
+        read_run(ds, "R1")
+    assert "missing column 'S3'" in one_line(exc)
+
+
+def test_missing_temperature_file(tiny_dataset):
+    (tiny_dataset / "R1" / "temperatures" / "box.csv").unlink()
+    ds = load_dataset(tiny_dataset)
+    with pytest.raises(DataError) as exc:
+        read_run(ds, "R1")
+    msg = one_line(exc)
+    assert "box.csv" in msg and "file not found" in msg
+
+
+def test_unparseable_time(tiny_dataset):
+    path = tiny_dataset / "R1" / "errors" / "M02.csv"
+    lines = path.read_text().splitlines()
+    lines[3] = "yesterday noon" + lines[3][19:]
+    path.write_text("\n".join(lines) + "\n")
+    ds = load_dataset(tiny_dataset)
+    with pytest.raises(DataError) as exc:
+        read_run(ds, "R1")
+    msg = one_line(exc)
+    assert "M02.csv" in msg and "line 4" in msg and "ISO 8601" in msg and "yesterday noon" in msg
+
+
+def test_non_numeric_value(tiny_dataset):
+    path = tiny_dataset / "R2" / "temperatures" / "box.csv"
+    lines = path.read_text().splitlines()
+    fields = lines[10].split(",")
+    fields[2] = "warm"
+    lines[10] = ",".join(fields)
+    path.write_text("\n".join(lines) + "\n")
+    ds = load_dataset(tiny_dataset)
+    with pytest.raises(DataError) as exc:
+        read_run(ds, "R2")
+    msg = one_line(exc)
+    assert "box.csv" in msg and "line 11" in msg and "'S2'" in msg and "expected a number" in msg and "warm" in msg
+
+
+def test_empty_cell_is_a_missing_sample_not_an_error(tiny_dataset):
+    path = tiny_dataset / "R2" / "temperatures" / "box.csv"
+    lines = path.read_text().splitlines()
+    fields = lines[10].split(",")
+    fields[2] = ""
+    lines[10] = ",".join(fields)
+    path.write_text("\n".join(lines) + "\n")
+    raw = read_run(load_dataset(tiny_dataset), "R2")
+    assert np.isnan(raw.sources["box"]["S2"].iloc[9])
+
+
+def test_empty_file(tiny_dataset):
+    (tiny_dataset / "R1" / "errors" / "M03.csv").write_text("")
+    ds = load_dataset(tiny_dataset)
+    with pytest.raises(DataError) as exc:
+        read_run(ds, "R1")
+    msg = one_line(exc)
+    assert "M03.csv" in msg and "empty file" in msg
+
+
+def test_header_only_file(tiny_dataset):
+    (tiny_dataset / "R1" / "errors" / "M03.csv").write_text("time,position_mm,error_um,direction\n")
+    with pytest.raises(DataError) as exc:
+        read_run(load_dataset(tiny_dataset), "R1")
+    assert "no data rows" in one_line(exc)
+
+
+def test_time_going_backwards(tiny_dataset):
+    path = tiny_dataset / "R1" / "temperatures" / "box.csv"
+    lines = path.read_text().splitlines()
+    lines[20], lines[21] = lines[21], lines[20]
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataError) as exc:
+        read_run(load_dataset(tiny_dataset), "R1")
+    msg = one_line(exc)
+    assert "box.csv" in msg and "line 22" in msg and "backwards" in msg
+
+
+def test_same_position_twice_with_different_values(tiny_dataset):
+    path = tiny_dataset / "R1" / "errors" / "M01.csv"
+    lines = path.read_text().splitlines()
+    # Repeat the 2nd reading of the forward pass, later in time, with another value.
+    t, x, e, d = lines[2].split(",")
+    lines.insert(3, ",".join([t, x, str(float(e) + 1.0), d]))
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataError) as exc:
+        read_run(load_dataset(tiny_dataset), "R1")
+    msg = one_line(exc)
+    assert "M01.csv" in msg and "50 mm" in msg and "twice" in msg
+
+
+def test_missing_error_column(tiny_dataset):
+    path = tiny_dataset / "R1" / "errors" / "M01.csv"
+    path.write_text(path.read_text().replace("error_um", "err"))
+    with pytest.raises(DataError) as exc:
+        read_run(load_dataset(tiny_dataset), "R1")
+    assert "missing column 'error_um'" in one_line(exc)
+
+
+def test_bad_direction(tiny_dataset):
+    path = tiny_dataset / "R1" / "errors" / "M01.csv"
+    lines = path.read_text().splitlines()
+    lines[1] = lines[1][:-1] + "forward"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataError) as exc:
+        read_run(load_dataset(tiny_dataset), "R1")
+    assert "'direction'" in one_line(exc)
+
+
+def test_too_few_measurements(tiny_dataset):
+    ds = load_dataset(tiny_dataset)
+    with pytest.raises(DataError) as exc:
+        read_run(ds, "R1", min_measurements=5)
+    assert "at least 5" in one_line(exc)
+
+
+def test_measurements_ordered_by_time_not_name(tiny_dataset):
+    err = tiny_dataset / "R1" / "errors"
+    (err / "M01.csv").rename(err / "Z_first.csv")
+    raw = read_run(load_dataset(tiny_dataset), "R1")
+    assert list(raw.measurements)[0] == "Z_first"
+    assert raw.windows()["measurement"].tolist() == [1, 2, 3, 4]

@@ -1,0 +1,439 @@
+"""Tests of the figure library: every figure on several dataset shapes, the plotted
+numbers against values worked out by hand from the synthetic tables, byte-identical
+output, and the captions.
+
+The synthetic errors follow e(run r, measurement m, position x) = b_m + k_r * (x - x0) / 1000
+with b_m = -0.5 (m - 1) um and k_r = -(10 + r) um/m, so every plotted value is known
+in closed form.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
+from matplotlib.collections import PolyCollection  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
+
+from thermaxis import plotting as P  # noqa: E402
+
+STEP_MIN = 20.0
+
+
+def slope(r: int) -> float:
+    return -(10.0 + r)
+
+
+def intercept(m: int) -> float:
+    return -0.5 * (m - 1)
+
+
+def make_dataset(n_runs: int, positions, n_meas: int) -> dict:
+    """All tables the figure functions take, for runs R1..Rn (natural order differs from string order at R10)."""
+    positions = np.asarray(positions, dtype=float)
+    x0 = positions[0]
+    runs = [f"R{r + 1}" for r in range(n_runs)]
+    err_rows, kb_rows, amb_rows = [], [], []
+    for r, run in enumerate(runs):
+        for m in range(1, n_meas + 1):
+            t = STEP_MIN * (m - 1)
+            for x in positions:
+                e = intercept(m) + slope(r) * (x - x0) / 1000.0
+                err_rows.append(
+                    dict(run=run, condition=r + 1, measurement=m, time_min=t, position_mm=x,
+                         error_um=e, rezeroed_um=slope(r) * (x - x0) / 1000.0)
+                )
+            kb_rows.append(dict(run=run, measurement=m, time_min=t, k_um_per_m=slope(r), b_um=intercept(m), r2=1.0, rms_um=0.0))
+        for e_min in np.arange(-10.0, STEP_MIN * n_meas, 5.0):
+            amb_rows.append(dict(run=run, elapsed_min=e_min, temperature_c=30.0 - r + 0.01 * e_min))
+    errors = pd.DataFrame(err_rows)
+    kb = pd.DataFrame(kb_rows)
+
+    kb_pred_rows, err_pred_rows, metric_rows = [], [], []
+    models = [("decoupled", "mlr"), ("decoupled", "gpr"), (P.POINTWISE_APPROACH, "mlr")]
+    for approach, algorithm in models:
+        band = algorithm == "gpr"
+        for f, fold in enumerate(runs):
+            for row in kb[kb["run"] == fold].itertuples():
+                for target, value in (("k", row.k_um_per_m), ("b", row.b_um)):
+                    kb_pred_rows.append(dict(
+                        fold=fold, approach=approach, algorithm=algorithm, run=fold, measurement=row.measurement,
+                        time_min=row.time_min, target=target, measured=value, predicted=value + 0.25,
+                        lower=value - 0.5 if band else np.nan, upper=value + 1.0 if band else np.nan))
+            for row in errors[errors["run"] == fold].itertuples():
+                err_pred_rows.append(dict(
+                    fold=fold, approach=approach, algorithm=algorithm, run=fold, measurement=row.measurement,
+                    time_min=row.time_min, position_mm=row.position_mm, measured=row.error_um,
+                    predicted=row.error_um - 0.125, residual=0.125,
+                    lower=row.error_um - 1.0 if band else np.nan, upper=row.error_um + 1.0 if band else np.nan))
+            for target in ("k", "b", "error"):
+                metric_rows.append(dict(
+                    fold=fold, approach=approach, algorithm=algorithm, target=target,
+                    rmse=0.1 * (f + 1) + (0.01 if band else 0.0), max_abs=0.2 * (f + 1), mae=0.05,
+                    residual_min=-0.1, residual_max=0.1))
+
+    elapsed = np.arange(-10.0, STEP_MIN * n_meas, 2.5)
+    series = pd.DataFrame({"time": pd.Timestamp("2022-05-10T09:00:00") + pd.to_timedelta(elapsed, unit="min"),
+                           "elapsed_min": elapsed})
+    for i in range(3):
+        series[f"T{i + 1}"] = 20.0 + i + 0.05 * (i + 1) * elapsed
+    return dict(runs=runs, positions=positions, n_meas=n_meas, errors=errors, kb=kb, ambient=pd.DataFrame(amb_rows),
+                series=series, kb_pred=pd.DataFrame(kb_pred_rows), err_pred=pd.DataFrame(err_pred_rows),
+                metrics=pd.DataFrame(metric_rows))
+
+
+SHAPES = {
+    "tiny": (2, [0.0, 10.0, 20.0, 30.0], 3),
+    "one_run_three_positions_two_measurements": (1, [185.0, 315.0, 445.0], 2),
+    "five_runs": (5, np.arange(185.0, 446.0, 65.0), 3),
+    # More measurements and positions than a legend holds: the colour-bar path.
+    "many_lines": (2, np.arange(185.0, 446.0, 20.0), 12),
+}
+
+
+@pytest.fixture(scope="module", params=list(SHAPES), ids=list(SHAPES))
+def dataset(request):
+    return make_dataset(*SHAPES[request.param])
+
+
+@pytest.fixture(scope="module")
+def tiny():
+    return make_dataset(*SHAPES["tiny"])
+
+
+def all_figures(d: dict) -> dict:
+    first, last = d["runs"][0], d["runs"][-1]
+    return {
+        "fig2": lambda: P.fig2_positioning_error(d["errors"], first),
+        "fig3": lambda: P.fig3_ambient(d["ambient"]),
+        "fig5": lambda: P.fig5_unzeroed(d["errors"], first),
+        "fig6": lambda: P.fig6_error_vs_time(d["errors"], first),
+        "fig7": lambda: P.fig7_error_surface(d["errors"], first),
+        "fig8": lambda: P.fig8_rezeroed(d["errors"], first),
+        "fig9": lambda: P.fig9_other_runs(d["errors"], d["runs"]),
+        "fig10": lambda: P.fig10_temperature_rise(d["series"]),
+        "fig11": lambda: P.fig11_pointwise_prediction(d["err_pred"], last, "mlr"),
+        "fig12": lambda: P.fig12_slope_intercept(d["kb"]),
+        "kb_prediction": lambda: P.fig_kb_prediction(d["kb_pred"], last, "decoupled", "gpr"),
+        "error_prediction": lambda: P.fig_error_prediction(d["err_pred"], last, "decoupled", "gpr"),
+        "fold_comparison": lambda: P.fig_fold_comparison(d["metrics"]),
+    }
+
+
+def lines_of(ax):
+    """Data lines only: the zero reference lines drawn with axhline span axes coordinates."""
+    return [line for line in ax.get_lines() if line.get_label() and not line.get_label().startswith("_")]
+
+
+# ---------------------------------------------------------------------------- rendering
+
+
+def test_every_figure_renders_on_every_shape(dataset):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for name, make in all_figures(dataset).items():
+            fig = make()
+            assert isinstance(fig, Figure), name
+            FigureCanvasAgg(fig).draw()
+            assert fig.axes, name
+
+
+def test_figure_functions_leave_global_rcparams_alone(tiny):
+    before = dict(matplotlib.rcParams)
+    P.fig5_unzeroed(tiny["errors"], "R1")
+    assert dict(matplotlib.rcParams) == before
+
+
+# ---------------------------------------------------------------------------- determinism
+
+
+@pytest.mark.parametrize("name", ["fig5", "fig7", "error_prediction", "fold_comparison"])
+def test_save_figure_is_byte_identical_across_renders(tiny, tmp_path, name):
+    make = all_figures(tiny)[name]
+    outputs = []
+    for attempt in ("a", "b"):
+        paths = [tmp_path / attempt / f"{name}.{suffix}" for suffix in ("png", "pdf", "svg")]
+        P.save_figure(make(), paths)
+        outputs.append([p.read_bytes() for p in paths])
+    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs):
+        assert first, suffix
+        assert first == second, f"{name}.{suffix} differs between two renders"
+    svg = outputs[0][2].decode()
+    assert "<dc:date>" not in svg and "Matplotlib v" not in svg
+    assert b"CreationDate" not in outputs[0][1]
+
+
+def test_save_figure_rejects_an_unknown_suffix_before_writing(tiny, tmp_path):
+    fig = P.fig2_positioning_error(tiny["errors"], "R1")
+    with pytest.raises(ValueError, match="suffix"):
+        P.save_figure(fig, [tmp_path / "ok.png", tmp_path / "bad.jpg"])
+    assert not (tmp_path / "ok.png").exists()
+
+
+def test_save_figure_accepts_a_single_path_and_creates_folders(tiny, tmp_path):
+    target = tmp_path / "deep" / "fig2.png"
+    P.save_figure(P.fig2_positioning_error(tiny["errors"], "R1"), str(target))
+    assert target.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# ---------------------------------------------------------------------------- plotted values
+
+
+def test_fig2_draws_the_first_measurement(tiny):
+    (line,) = lines_of(P.fig2_positioning_error(tiny["errors"], "R2").axes[0])
+    # Measurement 1 of run index 1: b = 0, k = -11 um/m over x - 0 mm.
+    np.testing.assert_allclose(line.get_xdata(), [0.0, 10.0, 20.0, 30.0])
+    np.testing.assert_allclose(line.get_ydata(), [0.0, -0.11, -0.22, -0.33])
+
+
+def test_fig5_one_curve_per_measurement_labelled_by_time(tiny):
+    ax = P.fig5_unzeroed(tiny["errors"], "R1").axes[0]
+    lines = lines_of(ax)
+    assert [line.get_label() for line in lines] == ["0 min", "20 min", "40 min"]
+    # Measurement 3 of run index 0: b = -1.0, k = -10 um/m.
+    np.testing.assert_allclose(lines[2].get_ydata(), [-1.0, -1.1, -1.2, -1.3])
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["0 min", "20 min", "40 min"]
+
+
+def test_fig5_many_measurements_get_a_colour_bar_instead_of_a_legend():
+    d = make_dataset(*SHAPES["many_lines"])
+    fig = P.fig5_unzeroed(d["errors"], "R1")
+    ax = fig.axes[0]
+    assert ax.get_legend() is None
+    assert len(lines_of(ax)) == 12
+    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == P.TIME_LABEL
+
+
+def test_fig6_one_curve_per_position_against_time(tiny):
+    lines = lines_of(P.fig6_error_vs_time(tiny["errors"], "R1").axes[0])
+    assert [line.get_label() for line in lines] == ["0 mm", "10 mm", "20 mm", "30 mm"]
+    np.testing.assert_allclose(lines[0].get_xdata(), [0.0, 20.0, 40.0])
+    # At the first position the error is the intercept b_m alone.
+    np.testing.assert_allclose(lines[0].get_ydata(), [0.0, -0.5, -1.0])
+    np.testing.assert_allclose(lines[3].get_ydata(), [-0.3, -0.8, -1.3])
+
+
+def _quads(fig):
+    FigureCanvasAgg(fig).draw()  # 3-D polygons get their projected paths when drawn
+    collections = [c for c in fig.axes[0].collections if isinstance(c, Poly3DCollection)]
+    return sum(len(c.get_paths()) for c in collections)
+
+
+def test_fig7_fills_one_cell_per_pair_of_neighbouring_measurements_and_positions(tiny):
+    # 3 measurements x 4 positions -> 2 x 3 cells.
+    assert _quads(P.fig7_error_surface(tiny["errors"], "R1")) == 6
+
+
+def test_fig7_leaves_cells_with_a_missing_reading_open(tiny):
+    errors = tiny["errors"].copy()
+    hole = (errors["run"] == "R1") & (errors["measurement"] == 2) & (errors["position_mm"] == 10.0)
+    errors.loc[hole, "error_um"] = np.nan
+    # The middle measurement's second position touches 4 of the 6 cells.
+    assert _quads(P.fig7_error_surface(errors, "R1")) == 2
+
+
+def test_fig7_single_measurement_draws_the_curve_without_cells(tiny):
+    errors = tiny["errors"][tiny["errors"]["measurement"] == 1]
+    fig = P.fig7_error_surface(errors, "R1")
+    assert _quads(fig) == 0
+    assert len(fig.axes[0].get_lines()) == 1
+
+
+def test_fig8_plots_rezeroed_values_starting_at_zero(tiny):
+    lines = lines_of(P.fig8_rezeroed(tiny["errors"], "R2").axes[0])
+    assert len(lines) == 3
+    for line in lines:
+        assert line.get_ydata()[0] == 0.0
+        # Re-zeroing removes b_m: every measurement shows k * (x - x0) only.
+        np.testing.assert_allclose(line.get_ydata(), [0.0, -0.11, -0.22, -0.33])
+
+
+def test_fig9_one_labelled_panel_per_run_in_a_grid():
+    d = make_dataset(*SHAPES["five_runs"])
+    fig = P.fig9_other_runs(d["errors"], ["R2", "R3", "R4", "R5", "R1"])
+    panels = [ax for ax in fig.axes if ax.get_title(loc="left")]
+    assert [ax.get_title(loc="left") for ax in panels] == ["(a) Run R2", "(b) Run R3", "(c) Run R4", "(d) Run R5", "(e) Run R1"]
+    # Two columns: five panels take three rows and the sixth slot is removed.
+    assert len(fig.axes) == 5
+    assert {ax.get_subplotspec().rowspan.start for ax in panels} == {0, 1, 2}
+
+
+def test_panel_labels_continue_after_z():
+    assert [P._panel_label(i) for i in (0, 1, 25, 26, 27, 51, 52)] == ["(a)", "(b)", "(z)", "(aa)", "(ab)", "(az)", "(ba)"]
+
+
+def test_fig10_rise_is_zero_at_elapsed_zero(tiny):
+    lines = lines_of(P.fig10_temperature_rise(tiny["series"]).axes[0])
+    assert [line.get_label() for line in lines] == ["T1", "T2", "T3"]
+    for i, line in enumerate(lines):
+        x, y = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
+        assert y[x == 0.0] == pytest.approx([0.0], abs=1e-12)
+        # T_i = 20 + i + 0.05 (i + 1) t, so the rise at t = 100 min is 5 (i + 1) degrees C.
+        assert y[x == 100.0] == pytest.approx([5.0 * (i + 1)])
+
+
+def test_fig10_interpolates_the_reference_when_no_sample_is_at_zero(tiny):
+    series = tiny["series"].copy()
+    series.loc[series["elapsed_min"] == 0.0, "T2"] = np.nan
+    (line,) = lines_of(P.fig10_temperature_rise(series, sensors=["T2"]).axes[0])
+    x, y = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
+    assert 0.0 not in x
+    # T2 is linear, so the interpolated reference is its value at 0 and the rise stays 0.1 t.
+    np.testing.assert_allclose(y, 0.1 * x)
+
+
+def test_fig10_rejects_an_unknown_sensor(tiny):
+    with pytest.raises(ValueError, match="T99"):
+        P.fig10_temperature_rise(tiny["series"], sensors=["T1", "T99"])
+
+
+def test_fig12_k_on_top_and_b_below_one_line_per_run(tiny):
+    ax_k, ax_b = P.fig12_slope_intercept(tiny["kb"]).axes
+    k_lines, b_lines = lines_of(ax_k), lines_of(ax_b)
+    assert [line.get_label() for line in k_lines] == ["Run R1", "Run R2"]
+    np.testing.assert_allclose(k_lines[1].get_ydata(), [-11.0, -11.0, -11.0])
+    np.testing.assert_allclose(b_lines[0].get_ydata(), [0.0, -0.5, -1.0])
+    np.testing.assert_allclose(b_lines[0].get_xdata(), [1, 2, 3])
+
+
+def test_fig12_orders_runs_naturally():
+    kb = pd.DataFrame(dict(run=["E10", "E2", "E10", "E2"], measurement=[1, 1, 2, 2], k_um_per_m=[1.0, 2.0, 3.0, 4.0], b_um=0.0))
+    ax_k = P.fig12_slope_intercept(kb).axes[0]
+    assert [line.get_label() for line in lines_of(ax_k)] == ["Run E2", "Run E10"]
+
+
+def _bands(ax):
+    return [c for c in ax.collections if isinstance(c, PolyCollection)]
+
+
+def test_kb_prediction_shades_the_interval_only_when_given(tiny):
+    fig = P.fig_kb_prediction(tiny["kb_pred"], "R2", "decoupled", "gpr")
+    ax_k, ax_b = fig.axes
+    measured, predicted = lines_of(ax_k)
+    np.testing.assert_allclose(measured.get_ydata(), [-11.0, -11.0, -11.0])
+    np.testing.assert_allclose(predicted.get_ydata(), [-10.75, -10.75, -10.75])
+    assert predicted.get_label() == "Predicted (GPR)"
+    assert len(_bands(ax_k)) == 1 and len(_bands(ax_b)) == 1
+    no_band = P.fig_kb_prediction(tiny["kb_pred"], "R2", "decoupled", "mlr")
+    assert all(not _bands(ax) for ax in no_band.axes)
+
+
+def test_error_prediction_draws_measured_predicted_and_residual(tiny):
+    fig = P.fig_error_prediction(tiny["err_pred"], "R1", "decoupled", "mlr")
+    ax_curve, ax_res = fig.axes[:2]
+    curves = ax_curve.get_lines()
+    assert len(curves) == 2 * 3  # measured + predicted per measurement
+    np.testing.assert_allclose(curves[0].get_ydata(), [0.0, -0.1, -0.2, -0.3])
+    np.testing.assert_allclose(curves[1].get_ydata(), [-0.125, -0.225, -0.325, -0.425])
+    residuals = lines_of(ax_res)
+    assert len(residuals) == 3
+    assert all(np.allclose(line.get_ydata(), 0.125) for line in residuals)
+
+
+def test_fig11_selects_the_pointwise_approach(tiny):
+    err_pred = tiny["err_pred"].copy()
+    pointwise = err_pred["approach"] == P.POINTWISE_APPROACH
+    err_pred.loc[pointwise, "residual"] = 0.75
+    ax_res = P.fig11_pointwise_prediction(err_pred, "R1", "mlr").axes[1]
+    assert all(np.allclose(line.get_ydata(), 0.75) for line in lines_of(ax_res))
+
+
+def test_fold_comparison_bar_heights_are_the_metrics(tiny):
+    fig = P.fig_fold_comparison(tiny["metrics"])
+    ax_rmse, ax_max = fig.axes
+    # Pairs sorted: (decoupled, gpr), (decoupled, mlr), (pointwise, mlr); folds R1, R2.
+    heights = [p.get_height() for p in ax_rmse.patches]
+    np.testing.assert_allclose(heights, [0.11, 0.21, 0.1, 0.2, 0.1, 0.2])
+    np.testing.assert_allclose([p.get_height() for p in ax_max.patches], [0.2, 0.4] * 3)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels == ["decoupled, GPR", "decoupled, MLR", "point-by-point, MLR"]
+
+
+def test_fold_comparison_leaves_a_gap_for_a_missing_pair(tiny):
+    metrics = tiny["metrics"]
+    drop = (metrics["fold"] == "R2") & (metrics["algorithm"] == "gpr")
+    ax_rmse = P.fig_fold_comparison(metrics[~drop]).axes[0]
+    assert len(ax_rmse.patches) == 5
+
+
+# ---------------------------------------------------------------------------- bad input
+
+
+def test_unknown_run_names_the_available_runs(tiny):
+    with pytest.raises(ValueError, match=r"run='R9'.*R1, R2"):
+        P.fig5_unzeroed(tiny["errors"], "R9")
+
+
+def test_missing_column_is_named(tiny):
+    with pytest.raises(ValueError, match="rezeroed_um"):
+        P.fig8_rezeroed(tiny["errors"].drop(columns="rezeroed_um"), "R1")
+
+
+def test_unknown_fold_is_named(tiny):
+    with pytest.raises(ValueError, match="fold='R7'"):
+        P.fig_kb_prediction(tiny["kb_pred"], "R7", "decoupled", "mlr")
+
+
+def test_fig9_needs_a_run(tiny):
+    with pytest.raises(ValueError, match="at least one run"):
+        P.fig9_other_runs(tiny["errors"], [])
+
+
+# ---------------------------------------------------------------------------- captions
+
+CAPTION_DETAILS = {
+    "fig2": dict(run="E1"),
+    "fig3": {},
+    "fig5": dict(run="E1"),
+    "fig6": dict(run="E1"),
+    "fig7": dict(run="E1"),
+    "fig8": dict(run="E1"),
+    "fig9": dict(runs=["E2", "E3", "E4"]),
+    "fig10": dict(run="E1"),
+    "fig11": dict(fold="E4", algorithm="mlr"),
+    "fig12": {},
+    "fig14": dict(fold="E4", approach="decoupled", algorithm="mlr"),
+    "fig15": dict(fold="E4", approach="decoupled", algorithm="mlr"),
+    "fig16": dict(fold="E4", approach="decoupled", algorithm="svr"),
+    "fig17": dict(fold="E4", approach="decoupled", algorithm="svr"),
+    "kb_prediction": dict(fold="E4", approach="decoupled", algorithm="gpr"),
+    "error_prediction": dict(fold="E4", approach="decoupled", algorithm="gpr"),
+    "fold_comparison": dict(target="error"),
+}
+PHRASE = "Simulated data (thermal twin), not the paper's measurements."
+
+
+@pytest.mark.parametrize("figure_id", list(CAPTION_DETAILS))
+@pytest.mark.parametrize("simulated", [True, False])
+def test_caption_has_the_simulated_phrase_iff_simulated(figure_id, simulated):
+    caption = P.figure_caption(figure_id, "twin", simulated, **CAPTION_DETAILS[figure_id])
+    assert (PHRASE in caption) is simulated
+    assert "twin" in caption and "{" not in caption
+
+
+def test_caption_fills_details_and_names_the_paper_figure():
+    caption = P.figure_caption("fig9", "lab", False, runs=["E2", "E3"])
+    assert "runs E2, E3" in caption and "paper's Fig. 9." in caption
+    assert P.figure_caption("fig16", "lab", False, fold="E4", approach="decoupled", algorithm="svr").count("SVR") == 1
+
+
+@pytest.mark.parametrize(
+    "args, kwargs, match",
+    [
+        (("fig99", "twin", True), {}, "unknown figure id"),
+        (("fig5", "twin", True), {}, "missing \\['run'\\]"),
+        (("fig5", "twin", True), dict(run="E1", rn="E1"), "unexpected \\['rn'\\]"),
+        (("fig3", "", True), {}, "dataset_name"),
+    ],
+)
+def test_caption_rejects_bad_requests(args, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        P.figure_caption(*args, **kwargs)

@@ -1,0 +1,26 @@
+import pandas as pd
+
+from thermaxis.audit import ReproducedTables, comparison_markdown, paper_comparison
+from thermaxis.paper import published_values
+from thermaxis.runner import run_script, write_csv, write_text
+
+
+def main(snakemake):
+    i, p = snakemake.input, snakemake.params
+    tables = ReproducedTables(
+        runs=pd.read_csv(i.summary),
+        ambient=pd.read_csv(i.ambient),
+        kb=pd.read_csv(i.kb),
+        metrics=pd.read_csv(i.metrics),
+        coefficients=pd.read_csv(i.coefficients),
+        sensitive_points=pd.read_csv(i.selection),
+        error_predictions=pd.read_csv(i.predictions),
+        errors=pd.read_parquet(i.errors),
+        paper_fold=p.paper_fold,
+    )
+    comparison = paper_comparison(published_values(p.paper_dir), tables, p.dataset_name, p.simulated)
+    write_csv(comparison, snakemake.output.csv, float_format="%.4f")
+    write_text(comparison_markdown(comparison, p.dataset_name, p.simulated, p.paper_fold), snakemake.output.markdown)
+
+
+run_script(main, snakemake)
