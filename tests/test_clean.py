@@ -123,9 +123,9 @@ def test_repeated_timestamp_with_different_values_is_averaged():
 
 def test_open_circuit_value_at_a_repeated_timestamp_never_enters_the_mean():
     s = np.array([0, 10, 20, 20, 30, 40.0])
-    values = np.array([20.0, 20.1, 850.0, 20.2, 20.3, 20.4])
+    values = np.array([20.0, 20.1, 850.0, 20.25, 20.3, 20.4])
     result = clean({"box": source(s, T1=values)})
-    assert result.frame["T1"].iloc[2] == pytest.approx(20.2)
+    assert result.frame["T1"].iloc[2] == pytest.approx(20.25)  # the valid reading, not an interpolation
     assert qc_of(result, "T1")["n_out_of_range"] == 1
     assert qc_of(result, "T1")["n_duplicates"] == 0  # only one valid reading at 20 s
 
@@ -191,11 +191,17 @@ def test_clean_temperatures_estimates_offsets_against_the_reference_source():
     assert qc.loc["T7", "clock_offset_s"] == 0.0
 
 
-def test_clock_offset_estimation_needs_enough_overlap():
+def test_clock_offset_estimation_refuses_without_overlap_or_shared_transient():
     s = np.arange(0, 200, 10.0)
     series = pd.Series(warm_up(s), index=at(s))
     with pytest.raises(ValueError, match="overlap"):
         estimate_clock_offset(series, series, 120, 1.0)
+    rng = np.random.default_rng(9)
+    s = np.arange(0, 7200, 10.0)
+    a = pd.Series(ramp(s) + rng.normal(0, 0.02, s.size), index=at(s))
+    b = pd.Series(ramp(s) + rng.normal(0, 0.02, s.size), index=at(s + 30))
+    with pytest.raises(ValueError, match="no shared transient"):
+        estimate_clock_offset(a, b, 120, 1.0)
 
 
 # ----------------------------------------------------------------------------- spikes and limits
@@ -460,7 +466,9 @@ def test_mean_of_both_passes():
     assert warnings == []
 
 
-@pytest.mark.parametrize("direction, expected", [("+", [0.0, -1.0, -2.0, -3.0, -4.0]), ("-", [1.0, 0.0, -1.0, -2.0, -2.0])])
+@pytest.mark.parametrize(
+    "direction, expected", [("+", [0.0, -1.0, -2.0, -3.0, -4.0]), ("-", [1.0, 0.0, -1.0, -2.0, -2.0])]
+)
 def test_one_direction(direction, expected):
     m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
     curve, _ = combine_passes(m, TARGETS, ErrorCleaning(direction=direction))
@@ -498,10 +506,16 @@ def test_too_many_missing_targets_raise():
         combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.2), name="m05")
     curve, _ = combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.4), name="m05")
     assert curve.isna().sum() == 2
-    # asking for a direction the measurement does not have leaves every target missing
+
+
+def test_measurement_with_one_direction_only():
+    # what thermaxis.io makes of a file without a direction column: every row "+"
     forward_only = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [None] * 5)
-    with pytest.raises(ValueError, match="5 of 5"):
-        combine_passes(forward_only, TARGETS, ErrorCleaning(direction="-"))
+    curve, warnings = combine_passes(forward_only, TARGETS, ErrorCleaning(direction="mean"))
+    np.testing.assert_allclose(curve.to_numpy(), [0.0, -1.0, -2.0, -3.0, -4.0])
+    assert warnings == []
+    with pytest.raises(ValueError, match=r"m02: no - pass"):
+        combine_passes(forward_only, TARGETS, ErrorCleaning(direction="-"), name="m02")
 
 
 def test_conflicting_duplicate_position_raises():

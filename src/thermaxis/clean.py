@@ -55,6 +55,8 @@ __all__ = [
     "ErrorCleaning",
     "MAD_TO_SIGMA",
     "GAP_FACTOR",
+    "QC_COLUMNS",
+    "GAP_COLUMNS",
     "hampel_outliers",
     "estimate_clock_offset",
     "clean_temperatures",
@@ -70,6 +72,12 @@ MAD_TO_SIGMA = 1.4826
 # interpolated in the QC table.  1.5 tolerates the jitter of irregular (wireless) sampling.
 GAP_FACTOR = 1.5
 _NS = 1_000_000_000
+# Clock-offset estimation: at most this many samples per correlation (a slow thermal
+# signal needs no more), and only this many sensor pairs searched over all lags.
+_MAX_LAG_SAMPLES = 2000
+_SEARCHED_PAIRS = 32
+# Below this peak correlation the series share no transient and the lag is noise.
+_MIN_PEAK_CORRELATION = 0.5
 # Positions closer than this are the same target (readings are logged to 1e-3 mm at best).
 _POSITION_TOL_MM = 1e-6
 
@@ -94,8 +102,10 @@ GAP_COLUMNS = ["sensor", "start", "end", "duration_s"]
 class TemperatureCleaning:
     """Settings of :func:`clean_temperatures`; defaults mirror ``config/config.yaml``.
 
-    ``offset_step_s`` is the time step on which clock offsets are estimated (and so,
-    before sub-step refinement, their resolution).
+    With ``estimate_clock_offsets`` every source but ``reference_source`` (default:
+    the source with most sensors) gets the offset :func:`estimate_clock_offset` finds
+    *after* its given offset is applied, added to it; ``max_offset_s`` bounds the
+    search and ``offset_step_s`` is its lag step (refined below one step).
     """
 
     interval_s: float = 10.0
@@ -255,6 +265,8 @@ def _lag_correlation(sparse_t, sparse_v, dense_t, dense_v, lags_s: np.ndarray, s
     td = (dense_t - dense_t[0]) / _NS
     keep = (t >= span) & (t <= td[-1] - span)  # the same samples at every lag
     t, v = t[keep], sparse_v[keep]
+    stride = max(1, -(-t.size // _MAX_LAG_SAMPLES))
+    t, v = t[::stride], v[::stride]
     if t.size < 4:
         return np.full(lags_s.size, np.nan)
     a = _detrend(t, v)
@@ -272,30 +284,44 @@ def _lag_correlation(sparse_t, sparse_v, dense_t, dense_v, lags_s: np.ndarray, s
     return out
 
 
-def _best_offset(series_t, series_v, reference, max_offset_s: float, step_s: float):
-    """(offset_s, peak correlation) of one series against the best of several references.
+def _pair_correlation(series, reference, lags_s: np.ndarray) -> np.ndarray:
+    (s_t, s_v), (r_t, r_v) = series, reference
+    if s_t.size < 4 or r_t.size < 4:
+        return np.full(lags_s.size, np.nan)
+    if np.median(np.diff(s_t)) >= np.median(np.diff(r_t)):
+        return _lag_correlation(s_t, s_v, r_t, r_v, lags_s, +1)
+    return _lag_correlation(r_t, r_v, s_t, s_v, lags_s, -1)
 
-    ``reference`` is a list of (t_ns, v) pairs of valid samples.  The offset L moves
-    the series' times to ``t + L``; the series is compared with the reference at the
-    sparser of the two's own sample times.
+
+def _best_offset(series, reference, max_offset_s: float, step_s: float):
+    """(offset_s, peak correlation) of the best-matching (series, reference) pair.
+
+    ``series`` and ``reference`` are lists of (t_ns, v) pairs of valid samples; all
+    series share one clock.  The offset L moves the series' times to ``t + L``.  Pairs
+    are ranked by their correlation at lag 0 and only the best few are searched over
+    all lags, which keeps 64 x 64 sensors affordable.
     """
     max_lag = int(np.ceil(max_offset_s / step_s))
     lags = np.arange(-max_lag, max_lag + 1) * step_s
+    pairs = [(s, r) for s in series for r in reference]
+    if len(pairs) > _SEARCHED_PAIRS:
+        at_zero = np.array([_pair_correlation(s, r, np.zeros(1))[0] for s, r in pairs])
+        order = np.argsort(-np.nan_to_num(at_zero, nan=-np.inf), kind="stable")
+        pairs = [pairs[i] for i in order[:_SEARCHED_PAIRS]]
     best_peak, best_corr = -np.inf, None
-    for ref_t, ref_v in reference:
-        if series_t.size < 4 or ref_t.size < 4:
-            continue
-        series_sparser = np.median(np.diff(series_t)) >= np.median(np.diff(ref_t))
-        if series_sparser:
-            corr = _lag_correlation(series_t, series_v, ref_t, ref_v, lags, +1)
-        else:
-            corr = _lag_correlation(ref_t, ref_v, series_t, series_v, lags, -1)
+    for s, r in pairs:
+        corr = _pair_correlation(s, r, lags)
         if np.isfinite(corr).any() and np.nanmax(corr) > best_peak:
             best_peak, best_corr = float(np.nanmax(corr)), corr
     if best_corr is None:
         raise ValueError(
             "cannot estimate a clock offset: the series overlap too little for a search of "
             f"+/-{max_offset_s:g} s or do not vary"
+        )
+    if best_peak < _MIN_PEAK_CORRELATION:
+        raise ValueError(
+            f"cannot estimate a clock offset: best correlation {best_peak:.2f} < {_MIN_PEAK_CORRELATION} "
+            "(no shared transient; give the offset in dataset.yaml instead)"
         )
     j = int(np.nanargmax(best_corr))
     if j in (0, best_corr.size - 1):
@@ -361,8 +387,7 @@ def estimate_clock_offset(series, reference, max_offset_s: float = 120.0, step_s
     """
     if not isinstance(series, pd.Series):
         raise ValueError("estimate_clock_offset expects series as a pd.Series indexed by time")
-    ((s_t, s_v),) = _valid_samples(series)
-    offset, _ = _best_offset(s_t, s_v, _valid_samples(reference), max_offset_s, step_s)
+    offset, _ = _best_offset(_valid_samples(series), _valid_samples(reference), max_offset_s, step_s)
     return offset
 
 
@@ -448,16 +473,14 @@ def _estimate_offsets(natives: list[_Native], sources: Sequence[str], settings: 
     for source in sources:
         if source == reference:
             continue
-        # The sensor of this source that correlates best with any reference sensor
-        # decides: sensors of one source share one clock.
-        best_offset, best_peak = 0.0, -np.inf
-        for native in by_source[source]:
-            try:
-                offset, peak = _best_offset(native.t, native.v, ref, settings.max_offset_s, settings.offset_step_s)
-            except ValueError as exc:
-                raise ValueError(f"source {source!r} sensor {native.sensor!r}: {exc}") from None
-            if peak > best_peak:
-                best_offset, best_peak = offset, peak
+        # Sensors of one source share one clock: the pair of this source's and the
+        # reference's sensors that match best decides.
+        try:
+            best_offset, _ = _best_offset(
+                [(n.t, n.v) for n in by_source[source]], ref, settings.max_offset_s, settings.offset_step_s
+            )
+        except ValueError as exc:
+            raise ValueError(f"source {source!r}: {exc}") from None
         shift = int(round(best_offset * _NS))
         for native in by_source[source]:
             native.t = native.t + shift
@@ -484,9 +507,8 @@ def _onto_grid(native: _Native, grid: np.ndarray, max_gap_s: float):
     max_gap = max_gap_s * _NS
     n = t.size
     if n == 0:
-        gap = [(int(grid[0]), int(grid[-1]))]
-        return np.full(grid.size, np.nan), dict(n_interpolated=0, n_edge_held=0, n_long_gap=grid.size,
-                                                longest_gap_s=np.nan), gap
+        counts = dict(n_interpolated=0, n_edge_held=0, n_long_gap=int(grid.size), longest_gap_s=np.nan)
+        return np.full(grid.size, np.nan), counts, [(int(grid[0]), int(grid[-1]))]
     origin = t[0]
     y = np.interp((grid - origin) / _NS, (t - origin) / _NS, v)  # holds the end values outside
     left = np.searchsorted(t, grid, side="right") - 1  # last sample <= grid point
@@ -503,8 +525,11 @@ def _onto_grid(native: _Native, grid: np.ndarray, max_gap_s: float):
     typical = np.median(steps) if steps.size else np.inf
     interpolated = inside & ~long_gap & (spacing > GAP_FACTOR * typical)
 
-    gaps = [(int(t[i]), int(t[i + 1])) for i in np.flatnonzero(steps > max_gap)
-            if t[i] < grid[-1] and t[i + 1] > grid[0]]
+    gaps = [
+        (int(t[i]), int(t[i + 1]))
+        for i in np.flatnonzero(steps > max_gap)
+        if t[i] < grid[-1] and t[i + 1] > grid[0]
+    ]
     if t[0] - grid[0] > max_gap / 2:
         gaps.insert(0, (int(grid[0]), int(t[0])))
     if grid[-1] - t[-1] > max_gap / 2:
@@ -676,8 +701,9 @@ def _window_mean(grid_ns: np.ndarray, values: np.ndarray, start: int, end: int) 
         return _interp_at(grid_ns, values, np.array([start]))[0]
     inner = (grid_ns > start) & (grid_ns < end)
     t = np.concatenate([[start], grid_ns[inner], [end]])
-    v = np.vstack([_interp_at(grid_ns, values, np.array([start])), values[inner],
-                   _interp_at(grid_ns, values, np.array([end]))])
+    v = np.vstack(
+        [_interp_at(grid_ns, values, np.array([start])), values[inner], _interp_at(grid_ns, values, np.array([end]))]
+    )
     width = np.diff(t).astype(float)[:, None]
     segment = 0.5 * (v[:-1] + v[1:])
     ok = np.isfinite(segment)
@@ -781,8 +807,9 @@ def combine_passes(
     Parameters
     ----------
     measurement : columns ``position_mm``, ``error_um`` (NaN = no reading), optional
-        ``time`` and ``direction`` ("+" / "-"; absent or all empty = a single pass,
-        used whatever ``settings.direction`` asks for).
+        ``time`` and ``direction`` ("+" / "-").  Without directions (absent or all
+        empty) the rows are one pass, used whatever ``settings.direction`` asks for;
+        with one direction only, "mean" uses that pass and the other one is an error.
     targets : the target positions, mm.
     settings : :class:`ErrorCleaning`.
     name : the measurement's name for messages (e.g. its file).
@@ -799,7 +826,8 @@ def combine_passes(
     ------
     ValueError
         A position that is no target, the same position twice in one pass with
-        different errors, or more than ``max_missing_fraction`` of targets missing.
+        different errors, the requested direction absent, or more than
+        ``max_missing_fraction`` of targets missing.
     """
     label = f"measurement {name}" if name else "measurement"
     targets = np.asarray(targets, dtype=float)
@@ -816,10 +844,16 @@ def combine_passes(
     passes = {d: _pass_at_targets(rows, targets, label, d) for d, rows in _passes(measurement, label).items()}
 
     warnings: list[str] = []
-    if "single" in passes:
-        combined = passes["single"]
-    elif settings.direction in ("+", "-"):
-        combined = passes.get(settings.direction, np.full(targets.size, np.nan))
+    if settings.direction in ("+", "-") and "single" not in passes:
+        if settings.direction not in passes:
+            (other,) = passes
+            raise ValueError(
+                f"{label}: no {settings.direction} pass (only {other}); expected errors.direction 'mean' or {other!r}"
+            )
+        combined = passes[settings.direction]
+    elif len(passes) == 1:
+        # One pass only (unlabelled, or every row in one direction): nothing to average.
+        (combined,) = passes.values()
     else:
         forward = passes.get("+", np.full(targets.size, np.nan))
         backward = passes.get("-", np.full(targets.size, np.nan))

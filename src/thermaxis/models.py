@@ -251,6 +251,9 @@ def linear_terms(fitted_estimator, feature_names: Sequence[str]) -> dict[str, fl
     if not isinstance(_final_regressor(fitted_estimator), (LinearRegression, Ridge, PLSRegression)):
         return None
     names = list(feature_names)
+    n_inputs = fitted_estimator.named_steps["standardise"].n_features_in_
+    if len(names) != n_inputs:
+        raise ValueError(f"got {len(names)} feature names for a model with {n_inputs} inputs")
     probes = np.vstack([np.zeros(len(names)), np.eye(len(names))])
     values = np.asarray(fitted_estimator.predict(probes), dtype=float).ravel()
     const = float(values[0])

@@ -43,8 +43,8 @@ from matplotlib.colors import ListedColormap, Normalize  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
-from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 __all__ = [
     "STYLE",
@@ -166,7 +166,9 @@ def _styled(func):
 def _require_columns(table: pd.DataFrame, columns: Iterable[str], name: str) -> None:
     missing = [c for c in columns if c not in table.columns]
     if missing:
-        raise ValueError(f"{name} table lacks column(s) {', '.join(missing)}; it has {', '.join(map(str, table.columns))}")
+        raise ValueError(
+            f"{name} table lacks column(s) {', '.join(missing)}; it has {', '.join(map(str, table.columns))}"
+        )
 
 
 def _natural_key(value) -> tuple:
@@ -216,13 +218,18 @@ def _panel_label(index: int) -> str:
     return f"({letters})"
 
 
-def _add_legend(ax, n_entries: int, loc: str = "best", **kwargs) -> None:
-    """Inside the axes at ``loc`` for a few entries, outside on the right for many."""
+def _add_legend(ax, n_entries: int) -> None:
+    """Inside the axes for a few entries, outside on the right for many."""
     if n_entries <= MAX_INSIDE_LEGEND:
-        ax.legend(loc=loc, **kwargs)
+        ax.legend(loc="best")
     else:
-        ncol = math.ceil(n_entries / 16)
-        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, ncol=ncol, **kwargs)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, ncol=math.ceil(n_entries / 16))
+
+
+def _top_legend(fig: Figure, ax) -> None:
+    """Legend of ``ax`` above the axes, where it can hide no data whatever the curves do."""
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 4))
 
 
 def _ordered_norm(values: Sequence[float]) -> Normalize:
@@ -233,13 +240,13 @@ def _ordered_norm(values: Sequence[float]) -> Normalize:
     return Normalize(float(finite.min()), float(finite.max()))
 
 
-def _ordered_key(fig: Figure, ax, norm: Normalize, n_lines: int, quantity_label: str, axes_for_bar=None) -> None:
+def _ordered_key(fig: Figure, ax, norm: Normalize, n_lines: int, quantity_label: str) -> None:
     """Legend for a few ordered lines, a colour bar for many."""
     if n_lines <= MAX_LEGEND_ENTRIES:
         _add_legend(ax, n_lines)
     else:
         mappable = ScalarMappable(norm=norm, cmap=ORDERED_CMAP)
-        bar = fig.colorbar(mappable, ax=ax if axes_for_bar is None else axes_for_bar, pad=0.02, aspect=30)
+        bar = fig.colorbar(mappable, ax=ax, pad=0.02, aspect=30)
         bar.set_label(quantity_label)
 
 
@@ -252,8 +259,8 @@ def _time_label(minutes: float) -> str:
     return f"{minutes:.0f} min" if np.isfinite(minutes) else "time unknown"
 
 
-def _curves_by_measurement(fig: Figure, ax, run_errors: pd.DataFrame, value_column: str, key: bool = True) -> None:
-    """One error curve per measurement, coloured by its time, on ``ax``."""
+def _curves_by_measurement(fig: Figure, ax, run_errors: pd.DataFrame, value_column: str) -> None:
+    """One error curve per measurement, coloured by its time, with a legend or colour bar."""
     times = _measurement_times(run_errors)
     norm = _ordered_norm(times.to_numpy())
     for i, (measurement, group) in enumerate(run_errors.groupby("measurement", sort=True)):
@@ -267,8 +274,7 @@ def _curves_by_measurement(fig: Figure, ax, run_errors: pd.DataFrame, value_colu
             label=_time_label(t),
         )
     ax.set_xlabel(POSITION_LABEL)
-    if key:
-        _ordered_key(fig, ax, norm, len(times), TIME_LABEL)
+    _ordered_key(fig, ax, norm, len(times), TIME_LABEL)
 
 
 _ERRORS_COLUMNS = ("run", "measurement", "time_min", "position_mm", "error_um")
@@ -303,7 +309,12 @@ def fig2_positioning_error(errors: pd.DataFrame, run) -> Figure:
     curve = first.groupby("position_mm")["error_um"].mean().sort_index()
     fig = _new_figure(SINGLE_COLUMN_IN, 2.4)
     ax = fig.subplots()
-    ax.plot(curve.index.to_numpy(dtype=float), curve.to_numpy(dtype=float), label=f"Run {run}, first measurement", **_categorical_style(0))
+    ax.plot(
+        curve.index.to_numpy(dtype=float),
+        curve.to_numpy(dtype=float),
+        label=f"Run {run}, first measurement",
+        **_categorical_style(0),
+    )
     ax.set_xlabel(POSITION_LABEL)
     ax.set_ylabel(ERROR_LABEL)
     _add_legend(ax, 1)
@@ -341,8 +352,7 @@ def fig3_ambient(ambient: pd.DataFrame) -> Figure:
         )
     ax.set_xlabel(TIME_LABEL)
     ax.set_ylabel("Ambient temperature (°C)")
-    # An explicit corner: 'best' would scan every sample of long series.
-    _add_legend(ax, len(runs), loc="upper right")
+    _top_legend(fig, ax)
     return fig
 
 
@@ -446,7 +456,9 @@ def fig7_error_surface(errors: pd.DataFrame, run) -> Figure:
     matplotlib.figure.Figure
     """
     run_errors = _run_errors(errors, run)
-    grid = run_errors.pivot_table(index="measurement", columns="position_mm", values="error_um", aggfunc="mean", dropna=False)
+    grid = run_errors.pivot_table(
+        index="measurement", columns="position_mm", values="error_um", aggfunc="mean", dropna=False
+    )
     grid = grid.sort_index().sort_index(axis=1)
     times = _measurement_times(run_errors).reindex(grid.index).to_numpy(dtype=float)
     positions = grid.columns.to_numpy(dtype=float)
@@ -549,7 +561,7 @@ def fig9_other_runs(errors: pd.DataFrame, runs: Sequence) -> Figure:
         _curves_by_measurement(fig, ax, run_errors, "error_um")
         ax.set_ylabel(ERROR_LABEL)
         ax.set_title(f"{_panel_label(i)} Run {run}", loc="left")
-    for ax in axes[len(runs):]:
+    for ax in axes[len(runs) :]:
         ax.remove()
     return fig
 
@@ -575,14 +587,18 @@ def fig10_temperature_rise(series: pd.DataFrame, sensors: Sequence[str] | None =
     matplotlib.figure.Figure
     """
     _require_columns(series, ("elapsed_min",), "series")
-    available = [c for c in series.columns if c not in ("time", "elapsed_min")]
+    available = [
+        c for c in series.columns if c not in ("time", "elapsed_min") and pd.api.types.is_numeric_dtype(series[c])
+    ]
     if sensors is None:
         sensors = available
     else:
         sensors = [sensors] if isinstance(sensors, str) else list(sensors)
         unknown = [s for s in sensors if s not in available]
         if unknown:
-            raise ValueError(f"series table has no sensor column(s) {', '.join(unknown)}; available: {', '.join(available)}")
+            raise ValueError(
+                f"series table has no sensor column(s) {', '.join(unknown)}; available: {', '.join(available)}"
+            )
     elapsed = series["elapsed_min"].to_numpy(dtype=float)
     order = np.argsort(elapsed, kind="stable")
     elapsed = elapsed[order]
@@ -595,14 +611,20 @@ def fig10_temperature_rise(series: pd.DataFrame, sensors: Sequence[str] | None =
         if not ok.any():
             continue
         reference = np.interp(0.0, elapsed[ok], values[ok])
-        ax.plot(elapsed[ok], values[ok] - reference, markevery=_markevery(int(ok.sum())), label=str(sensor), **_categorical_style(i))
+        ax.plot(
+            elapsed[ok],
+            values[ok] - reference,
+            markevery=_markevery(int(ok.sum())),
+            label=str(sensor),
+            **_categorical_style(i),
+        )
         drawn += 1
     if drawn == 0:
         raise ValueError("series table has no finite sample in any requested sensor; expected at least one")
     ax.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
     ax.set_xlabel(TIME_LABEL)
     ax.set_ylabel("Temperature rise (°C)")
-    _add_legend(ax, drawn, loc="upper left")
+    _top_legend(fig, ax)
     return fig
 
 
@@ -634,7 +656,7 @@ def fig12_slope_intercept(kb: pd.DataFrame) -> Figure:
     ax_b.set_ylabel("Intercept b (µm)")
     ax_b.set_xlabel("Measurement")
     ax_b.xaxis.set_major_locator(MaxNLocator(integer=True))
-    _add_legend(ax_k, len(runs))
+    _top_legend(fig, ax_k)
     return fig
 
 
@@ -643,10 +665,24 @@ def _prediction_columns(n_runs: int) -> float:
 
 
 def _has_band(rows: pd.DataFrame) -> bool:
-    return bool(np.isfinite(rows["lower"].to_numpy(dtype=float)).any() and np.isfinite(rows["upper"].to_numpy(dtype=float)).any())
+    return bool(
+        np.isfinite(rows["lower"].to_numpy(dtype=float)).any()
+        and np.isfinite(rows["upper"].to_numpy(dtype=float)).any()
+    )
 
 
-_KB_PRED_COLUMNS = ("fold", "approach", "algorithm", "run", "measurement", "target", "measured", "predicted", "lower", "upper")
+_KB_PRED_COLUMNS = (
+    "fold",
+    "approach",
+    "algorithm",
+    "run",
+    "measurement",
+    "target",
+    "measured",
+    "predicted",
+    "lower",
+    "upper",
+)
 _KB_TARGETS = (("k", "Slope k (µm/m)"), ("b", "Intercept b (µm)"))
 
 
@@ -681,20 +717,46 @@ def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str
             part = rows[(rows["run"] == run) & (rows["target"] == target)].sort_values("measurement", kind="stable")
             m = part["measurement"].to_numpy(dtype=float)
             if _has_band(part):
-                ax.fill_between(m, part["lower"].to_numpy(dtype=float), part["upper"].to_numpy(dtype=float),
-                                color=CATEGORICAL_COLORS[1], alpha=0.25, linewidth=0, label="Prediction interval")
+                ax.fill_between(
+                    m,
+                    part["lower"].to_numpy(dtype=float),
+                    part["upper"].to_numpy(dtype=float),
+                    color=CATEGORICAL_COLORS[1],
+                    alpha=0.25,
+                    linewidth=0,
+                    label="Prediction interval",
+                )
             ax.plot(m, part["measured"].to_numpy(dtype=float), label="Measured", **_categorical_style(0))
-            ax.plot(m, part["predicted"].to_numpy(dtype=float), linestyle="--", label=f"Predicted ({_display(algorithm)})", **_categorical_style(1))
+            ax.plot(
+                m,
+                part["predicted"].to_numpy(dtype=float),
+                linestyle="--",
+                label=f"Predicted ({_display(algorithm)})",
+                **_categorical_style(1),
+            )
             ax.set_ylabel(label if col == 0 else "")
             ax.xaxis.set_major_locator(MaxNLocator(integer=True))
             if row == 0:
                 ax.set_title(f"Held-out run {run}", loc="left")
-                _add_legend(ax, 3)
+                ax.legend(loc="best")
         axes[-1, col].set_xlabel("Measurement")
     return fig
 
 
-_ERR_PRED_COLUMNS = ("fold", "approach", "algorithm", "run", "measurement", "time_min", "position_mm", "measured", "predicted", "residual", "lower", "upper")
+_ERR_PRED_COLUMNS = (
+    "fold",
+    "approach",
+    "algorithm",
+    "run",
+    "measurement",
+    "time_min",
+    "position_mm",
+    "measured",
+    "predicted",
+    "residual",
+    "lower",
+    "upper",
+)
 
 
 @_styled
@@ -734,8 +796,14 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
             color = ORDERED_CMAP(norm(t))
             marker = MARKERS[i % len(MARKERS)]
             if _has_band(group):
-                ax_curve.fill_between(x, group["lower"].to_numpy(dtype=float), group["upper"].to_numpy(dtype=float),
-                                      color=color, alpha=0.15, linewidth=0)
+                ax_curve.fill_between(
+                    x,
+                    group["lower"].to_numpy(dtype=float),
+                    group["upper"].to_numpy(dtype=float),
+                    color=color,
+                    alpha=0.15,
+                    linewidth=0,
+                )
             ax_curve.plot(x, group["measured"].to_numpy(dtype=float), color=color, marker=marker)
             ax_curve.plot(x, group["predicted"].to_numpy(dtype=float), color=color, linestyle="--")
             ax_res.plot(x, group["residual"].to_numpy(dtype=float), color=color, marker=marker, label=_time_label(t))
@@ -756,7 +824,9 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
 
 
 @_styled
-def fig11_pointwise_prediction(err_pred: pd.DataFrame, fold, algorithm: str, approach: str = POINTWISE_APPROACH) -> Figure:
+def fig11_pointwise_prediction(
+    err_pred: pd.DataFrame, fold, algorithm: str, approach: str = POINTWISE_APPROACH
+) -> Figure:
     """Point-by-point prediction of the held-out run(s): curves and residuals (the paper's Fig. 11).
 
     The same drawing as :func:`fig_error_prediction` for the point-by-point approach,
@@ -802,7 +872,10 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     _require_columns(metrics, ("fold", "approach", "algorithm", "target", "rmse", "max_abs"), "metrics")
     rows = _select(metrics, "metrics", target=target)
     folds = _natural_sorted(rows["fold"])
-    pairs = sorted({(str(a), str(g)) for a, g in zip(rows["approach"], rows["algorithm"])}, key=lambda p: (_natural_key(p[0]), _natural_key(p[1])))
+    pairs = sorted(
+        {(str(a), str(g)) for a, g in zip(rows["approach"], rows["algorithm"])},
+        key=lambda p: (_natural_key(p[0]), _natural_key(p[1])),
+    )
     unit = _METRIC_UNITS.get(str(target))
     suffix = f" ({unit})" if unit else ""
     width = SINGLE_COLUMN_IN if len(folds) * len(pairs) <= 12 else DOUBLE_COLUMN_IN
@@ -818,8 +891,15 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
             by_fold = pair_rows.groupby("fold")[column].mean()
             heights = np.array([by_fold.get(f, np.nan) for f in folds], dtype=float)
             keep = np.isfinite(heights)
-            ax.bar(offsets[keep], heights[keep], width=bar_width, color=CATEGORICAL_COLORS[j % len(CATEGORICAL_COLORS)],
-                   edgecolor="0.2", linewidth=0.4, label=f"{_display(approach)}, {_display(algorithm)}")
+            ax.bar(
+                offsets[keep],
+                heights[keep],
+                width=bar_width,
+                color=CATEGORICAL_COLORS[j % len(CATEGORICAL_COLORS)],
+                edgecolor="0.2",
+                linewidth=0.4,
+                label=f"{_display(approach)}, {_display(algorithm)}",
+            )
     ax_rmse.set_ylabel(f"RMSE{suffix}")
     ax_max.set_ylabel(f"Max |residual|{suffix}")
     ax_max.set_xticks(centres, [str(f) for f in folds])
@@ -827,8 +907,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     for ax in (ax_rmse, ax_max):
         ax.grid(axis="x", visible=False)
         ax.set_axisbelow(True)
-    # Above both panels: inside, the legend would hide bars.
-    fig.legend(*ax_rmse.get_legend_handles_labels(), loc="outside upper center", ncol=min(len(pairs), 4))
+    _top_legend(fig, ax_rmse)
     return fig
 
 
@@ -872,29 +951,58 @@ def save_figure(fig: Figure, paths) -> None:
 
 # figure id -> (the paper's figure, caption body with {detail} placeholders)
 _CAPTIONS: dict[str, tuple[str | None, str]] = {
-    "fig2": ("2", "Positioning error of the axis in the first measurement of run {run}, before the axis warms up "
-                  "(forward and backward passes combined)."),
+    "fig2": (
+        "2",
+        "Positioning error of the axis in the first measurement of run {run}, before the axis warms up "
+        "(forward and backward passes combined).",
+    ),
     "fig3": ("3", "Ambient temperature of every run against the time since the run's first measurement."),
-    "fig5": ("5", "Unzeroed thermal positioning error of run {run}: one curve per measurement, labelled by the time "
-                  "since the first measurement; the interferometer is zeroed only before the first measurement."),
-    "fig6": ("6", "Unzeroed thermal positioning error of run {run} at every target position against the time since "
-                  "the first measurement."),
+    "fig5": (
+        "5",
+        "Unzeroed thermal positioning error of run {run}: one curve per measurement, labelled by the time "
+        "since the first measurement; the interferometer is zeroed only before the first measurement.",
+    ),
+    "fig6": (
+        "6",
+        "Unzeroed thermal positioning error of run {run} at every target position against the time since "
+        "the first measurement.",
+    ),
     "fig7": ("7", "Unzeroed thermal positioning error of run {run} over position and time."),
-    "fig8": ("8", "Re-zeroed thermal positioning error of run {run}: each measurement minus its own reading at the "
-                  "first position, which hides the drift between measurements and leaves the expansion along the stroke."),
+    "fig8": (
+        "8",
+        "Re-zeroed thermal positioning error of run {run}: each measurement minus its own reading at the "
+        "first position, which hides the drift between measurements and leaves the expansion along the stroke.",
+    ),
     "fig9": ("9", "Unzeroed thermal positioning error of runs {runs}, one panel per run, one curve per measurement."),
-    "fig10": ("10", "Temperature rise of the sensors of run {run} relative to their values at the start of the first "
-                    "measurement."),
-    "fig11": ("11", "Point-by-point prediction ({algorithm}) of the held-out run(s) of fold {fold}: measured (solid) and "
-                    "predicted (dashed) errors of every measurement, and the residuals (measured minus predicted)."),
-    "fig12": ("12", "Slope k (top) and intercept b (bottom) of the decoupled error line of every measurement, one "
-                    "line per run."),
-    "fig14": ("14", "Measured and predicted slope k and intercept b of the held-out run(s) of fold {fold} "
-                    "({approach} approach, {algorithm})."),
-    "fig15": ("15", "Measured (solid) and predicted (dashed) thermal positioning error of the held-out run(s) of fold "
-                    "{fold} ({approach} approach, {algorithm}) and the residuals (measured minus predicted)."),
-    "fold_comparison": (None, "Prediction accuracy of every fold (held-out run), approach and algorithm: RMSE (top) "
-                              "and maximum absolute residual (bottom) of the {target}."),
+    "fig10": (
+        "10",
+        "Temperature rise of the sensors of run {run} relative to their values at the start of the first "
+        "measurement.",
+    ),
+    "fig11": (
+        "11",
+        "Point-by-point prediction ({algorithm}) of the held-out run(s) of fold {fold}: measured (solid) and "
+        "predicted (dashed) errors of every measurement, and the residuals (measured minus predicted).",
+    ),
+    "fig12": (
+        "12",
+        "Slope k (top) and intercept b (bottom) of the decoupled error line of every measurement, one line per run.",
+    ),
+    "fig14": (
+        "14",
+        "Measured and predicted slope k and intercept b of the held-out run(s) of fold {fold} "
+        "({approach} approach, {algorithm}).",
+    ),
+    "fig15": (
+        "15",
+        "Measured (solid) and predicted (dashed) thermal positioning error of the held-out run(s) of fold "
+        "{fold} ({approach} approach, {algorithm}) and the residuals (measured minus predicted).",
+    ),
+    "fold_comparison": (
+        None,
+        "Prediction accuracy of every fold (held-out run), approach and algorithm: RMSE (top) "
+        "and maximum absolute residual (bottom) of the {target}.",
+    ),
 }
 # The paper repeats Figs. 14/15 for SVR as Figs. 16/17; the library draws both with one function.
 _CAPTIONS["fig16"] = ("16", _CAPTIONS["fig14"][1])
@@ -903,7 +1011,12 @@ _CAPTIONS["kb_prediction"] = ("14/16", _CAPTIONS["fig14"][1])
 _CAPTIONS["error_prediction"] = ("15/17", _CAPTIONS["fig15"][1])
 
 
-def _detail_text(value) -> str:
+_TARGET_NAMES = {"k": "slope k", "b": "intercept b", "error": "thermal positioning error"}
+
+
+def _detail_text(key: str, value) -> str:
+    if key == "target":
+        return _TARGET_NAMES.get(str(value), str(value))
     if isinstance(value, (list, tuple)):
         return ", ".join(_display(v) for v in value)
     return _display(value)
@@ -939,10 +1052,8 @@ def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details
     missing = sorted(needed - details.keys())
     extra = sorted(details.keys() - needed)
     if missing or extra:
-        raise ValueError(
-            f"caption {figure_id} needs details {sorted(needed)}; missing {missing}, unexpected {extra}"
-        )
-    parts = [body.format(**{k: _detail_text(v) for k, v in details.items()})]
+        raise ValueError(f"caption {figure_id} needs details {sorted(needed)}; missing {missing}, unexpected {extra}")
+    parts = [body.format(**{k: _detail_text(k, v) for k, v in details.items()})]
     if paper_figure is not None:
         parts.append(f"Counterpart of the paper's Fig. {paper_figure}.")
     parts.append(f"Dataset: {dataset_name}.")

@@ -1,7 +1,9 @@
 rule assemble:
     input:
         errors=expand(f"{OUT}/clean/{{run}}/errors.parquet", run=RUNS),
-        temperatures=expand(f"{OUT}/clean/{{run}}/measurement_temperatures.parquet", run=RUNS),
+        temperatures=expand(
+            f"{OUT}/clean/{{run}}/measurement_temperatures.parquet", run=RUNS
+        ),
         qc=expand(f"{OUT}/clean/{{run}}/qc.csv", run=RUNS),
     output:
         errors=f"{OUT}/assembled/errors.parquet",

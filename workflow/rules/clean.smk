@@ -9,15 +9,15 @@ rule clean_run:
         errors=f"{OUT}/clean/{{run}}/errors.parquet",
         temperatures=f"{OUT}/clean/{{run}}/measurement_temperatures.parquet",
         windows=f"{OUT}/clean/{{run}}/windows.csv",
-    params:
-        dataset=str(DATASET.root),
-        temperatures=config["temperatures"],
-        errors=config["errors"],
     log:
         f"{LOGS}/clean/{{run}}.log",
     benchmark:
         f"{BENCH}/clean/{{run}}.tsv"
     conda:
         ENV
+    params:
+        dataset=lambda w, input: os.path.dirname(input.sheets[0]),
+        temperatures=config["temperatures"],
+        errors=config["errors"],
     script:
         "../scripts/clean_run.py"

@@ -1,7 +1,10 @@
+import os
 import sys
 from pathlib import Path
 
 from thermaxis.io import DataError, load_dataset
+from thermaxis.plotting import figure_caption
+from thermaxis.summary import data_statement
 
 # The dataset is validated when the workflow is parsed, so a bad sheet or a
 # missing run folder stops everything with one line before any job starts.
@@ -20,6 +23,9 @@ FOLDS = list(config["folds"]) or RUNS
 ALGORITHMS = list(config["models"]["algorithms"])
 FIG_FORMATS = list(config["figures"]["formats"])
 FIG_RUN = config["figures"]["run"] or RUNS[0]
+OTHER_RUNS = [r for r in RUNS if r != FIG_RUN]
+DATA_STATEMENT = data_statement(DATASET.name, SIMULATED)
+FIG_ALGORITHMS = [a for a in config["figures"]["algorithms"] if a in ALGORITHMS]
 PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
 
 
@@ -29,7 +35,9 @@ def _count_positions():
 
     files = sorted((DATASET.root / RUNS[0] / "errors").glob("*.csv"))
     if not files:
-        sys.exit(f"thermaxis error: {DATASET.root / RUNS[0] / 'errors'}: no measurement files")
+        sys.exit(
+            f"thermaxis error: {DATASET.root / RUNS[0] / 'errors'}: no measurement files"
+        )
     return pd.read_csv(files[0], usecols=["position_mm"])["position_mm"].nunique()
 
 
@@ -45,12 +53,18 @@ if not DECOUPLED:
 
 for _fold in FOLDS:
     if _fold not in RUNS:
-        sys.exit(f"thermaxis error: config folds: {_fold!r} is not a run of {DATASET.root / 'runs.tsv'}")
+        sys.exit(
+            f"thermaxis error: config folds: {_fold!r} is not a run of {DATASET.root / 'runs.tsv'}"
+        )
 if FIG_RUN not in RUNS:
-    sys.exit(f"thermaxis error: config figures.run: {FIG_RUN!r} is not a run of {DATASET.root / 'runs.tsv'}")
+    sys.exit(
+        f"thermaxis error: config figures.run: {FIG_RUN!r} is not a run of {DATASET.root / 'runs.tsv'}"
+    )
 
 
 wildcard_constraints:
+    approach="decoupled|pointwise",
+    algorithm="mlr|svr|ridge|pls|gpr",
     run="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
     fold="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
 
@@ -69,8 +83,49 @@ def figure_paths(stem):
     return [f"{OUT}/figures/{stem}.{ext}" for ext in FIG_FORMATS]
 
 
+def prediction_caption(kind, wildcards):
+    """Figs. 11/14-17 share two drawings; the caption names the paper's figure it mirrors."""
+    figure_id = kind
+    if kind == "error_prediction" and wildcards.approach == "pointwise":
+        figure_id = "fig11"
+        details = dict(fold=wildcards.fold, algorithm=wildcards.algorithm)
+    else:
+        details = dict(fold=wildcards.fold, approach=wildcards.approach, algorithm=wildcards.algorithm)
+    return figure_caption(figure_id, DATASET.name, SIMULATED, **details)
+
+
+def data_figures():
+    names = [
+        "fig2_positioning_error",
+        "fig3_ambient",
+        "fig5_unzeroed",
+        "fig6_error_vs_time",
+        "fig7_error_surface",
+        "fig8_rezeroed",
+        "fig10_temperature_rise",
+    ]
+    if OTHER_RUNS:
+        names.append("fig9_other_runs")
+    if DECOUPLED:
+        names.append("fig12_slope_intercept")
+    return [p for name in names for p in figure_paths(name)]
+
+
+def prediction_figures():
+    paths = figure_paths("fold_comparison")
+    for fold in FOLDS:
+        for algorithm in FIG_ALGORITHMS:
+            for approach in APPROACHES:
+                paths += figure_paths(f"error_prediction_{fold}_{approach}_{algorithm}")
+            if DECOUPLED:
+                paths += figure_paths(f"kb_prediction_{fold}_decoupled_{algorithm}")
+    return paths
+
+
 def all_outputs():
     return [
+        *data_figures(),
+        *prediction_figures(),
         f"{OUT}/tables/dataset_summary.csv",
         f"{OUT}/assembled/errors.parquet",
         f"{OUT}/tables/cleaning_qc.csv",

@@ -3,13 +3,13 @@ rule dataset_summary:
         sheets=dataset_sheets(),
     output:
         table=f"{OUT}/tables/dataset_summary.csv",
-    params:
-        dataset=str(DATASET.root),
     log:
         f"{LOGS}/dataset_summary.log",
     benchmark:
         f"{BENCH}/dataset_summary.tsv"
     conda:
         ENV
+    params:
+        dataset=lambda w, input: os.path.dirname(input.sheets[0]),
     script:
         "../scripts/dataset_summary.py"

@@ -8,17 +8,17 @@ rule fit_predict:
         coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
         kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
         errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
-    params:
-        approaches=APPROACHES,
-        algorithms=ALGORITHMS,
-        models=config["models"],
-        selection=config["selection"],
-        decoupling=config["decoupling"],
     log:
         f"{LOGS}/models/{{fold}}.log",
     benchmark:
         f"{BENCH}/models/{{fold}}.tsv"
     conda:
         ENV
+    params:
+        approaches=APPROACHES,
+        algorithms=ALGORITHMS,
+        models=config["models"],
+        selection=config["selection"],
+        decoupling=config["decoupling"],
     script:
         "../scripts/fit_predict.py"

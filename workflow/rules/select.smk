@@ -5,15 +5,15 @@ rule select_sensitive_points:
     output:
         selection=f"{OUT}/selection/{{fold}}.json",
         table=f"{OUT}/selection/{{fold}}.csv",
-    params:
-        selection=config["selection"],
-        decoupling=config["decoupling"],
-        decoupled=DECOUPLED,
     log:
         f"{LOGS}/select/{{fold}}.log",
     benchmark:
         f"{BENCH}/select/{{fold}}.tsv"
     conda:
         ENV
+    params:
+        selection=config["selection"],
+        decoupling=config["decoupling"],
+        decoupled=DECOUPLED,
     script:
         "../scripts/select.py"

@@ -26,6 +26,8 @@ rule collect_model_tables:
             category="3. Sensitive points",
             labels={"table": "sensitive points"},
         ),
+    params:
+        provenance=DATA_STATEMENT,
     log:
         f"{LOGS}/collect_model_tables.log",
     benchmark:
@@ -42,15 +44,15 @@ rule ambient_ranges:
         windows=expand(f"{OUT}/clean/{{run}}/windows.csv", run=RUNS),
     output:
         table=f"{OUT}/tables/ambient_ranges.csv",
-    params:
-        runs=RUNS,
-        sensor=config["ambient_sensor"],
     log:
         f"{LOGS}/ambient_ranges.log",
     benchmark:
         f"{BENCH}/ambient_ranges.tsv"
     conda:
         ENV
+    params:
+        runs=RUNS,
+        sensor=config["ambient_sensor"],
     script:
         "../scripts/ambient_ranges.py"
 
@@ -74,16 +76,17 @@ rule paper_comparison:
             labels={"table": "paper comparison"},
         ),
         markdown=f"{OUT}/tables/paper_comparison.md",
-    params:
-        paper_fold=config["paper_fold"],
-        dataset_name=DATASET.name,
-        simulated=SIMULATED,
-        paper_dir="data/paper",
     log:
         f"{LOGS}/paper_comparison.log",
     benchmark:
         f"{BENCH}/paper_comparison.tsv"
     conda:
         ENV
+    params:
+        paper_fold=config["paper_fold"],
+        provenance=DATA_STATEMENT,
+        dataset_name=DATASET.name,
+        simulated=SIMULATED,
+        paper_dir=lambda w, input: os.path.dirname(input.paper[0]),
     script:
         "../scripts/paper_comparison.py"
