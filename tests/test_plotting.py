@@ -502,3 +502,28 @@ def test_caption_fills_details_and_names_the_paper_figure():
 def test_caption_rejects_bad_requests(args, kwargs, match):
     with pytest.raises(ValueError, match=match):
         P.figure_caption(*args, **kwargs)
+
+
+# ---------------------------------------------------------------------------- provenance and ids
+
+
+@pytest.mark.parametrize("name", ["fig5", "fig7"])
+def test_stamp_provenance_adds_the_note_once(tiny, name):
+    fig = P.stamp_provenance(all_figures(tiny)[name]())
+    texts = [t.get_text() for t in fig.texts]  # a supxlabel is one of them too
+    assert texts.count(PHRASE) == 1
+    FigureCanvasAgg(fig).draw()
+
+
+def test_save_figure_dpi_sets_the_png_size(tiny, tmp_path):
+    from PIL import Image
+
+    P.save_figure(P.fig2_positioning_error(tiny["errors"], "R1"), tmp_path / "f.png", dpi=100)
+    # fig2 is 3.5 in x 2.4 in.
+    assert Image.open(tmp_path / "f.png").size == (350, 240)
+
+
+def test_integer_ids_match_their_text_form(tiny):
+    kb_pred = tiny["kb_pred"].assign(fold=tiny["kb_pred"]["fold"].str[1:].astype(int))
+    fig = P.fig_kb_prediction(kb_pred, "2", "decoupled", "mlr")
+    np.testing.assert_allclose(lines_of(fig.axes[0])[0].get_ydata(), [-11.0, -11.0, -11.0])

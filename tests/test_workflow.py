@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -47,7 +48,15 @@ def run_snakemake(work: Path, *args, check=True) -> subprocess.CompletedProcess:
 
 
 def tiny_config(work: Path, dataset: Path, **extra) -> Path:
-    config = {"dataset": str(dataset), "ambient_sensor": "S1", "selection": {"n_clusters": 2}}
+    # Two algorithms and one figure algorithm keep the end-to-end runs short; the
+    # full algorithm set is exercised by the unit tests and `make results`.
+    config = {
+        "dataset": str(dataset),
+        "ambient_sensor": "S1",
+        "selection": {"n_clusters": 2},
+        "models": {"algorithms": ["mlr", "svr"], "svr_grid": {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}},
+        "figures": {"algorithms": ["mlr"]},
+    }
     config.update(extra)
     path = work / "test_config.yaml"
     path.write_text(yaml.safe_dump(config))
@@ -99,7 +108,7 @@ def test_metrics_cover_every_fold_approach_algorithm(finished_run):
     metrics = pd.read_csv(work / "results" / "lines" / "tables" / "metrics.csv")
     assert list(metrics.columns) == ["fold", "approach", "algorithm", "target", "rmse", "max_abs", "mae", "residual_min", "residual_max"]
     combos = set(zip(metrics["fold"], metrics["approach"], metrics["algorithm"]))
-    assert combos == {(f, a, g) for f in ("R1", "R2", "R3") for a in ("decoupled", "pointwise") for g in ("mlr", "svr", "ridge", "pls", "gpr")}
+    assert combos == {(f, a, g) for f in ("R1", "R2", "R3") for a in ("decoupled", "pointwise") for g in ("mlr", "svr")}
     decoupled = metrics[metrics["approach"] == "decoupled"]
     assert set(decoupled["target"]) == {"k", "b", "error"}
     assert (metrics["rmse"] <= metrics["max_abs"] + 1e-12).all()
@@ -171,10 +180,10 @@ def test_plot_option_reruns_only_figure_rules(finished_run):
     work, _, config = finished_run
     changed = work / "changed_config.yaml"
     doc = yaml.safe_load(config.read_text())
-    doc["figures"] = {"dpi": 150}
+    doc["figures"] = {**doc["figures"], "dpi": 150}
     changed.write_text(yaml.safe_dump(doc))
-    proc = run_snakemake(work, "--configfile", str(changed), "-n", "--quiet", "rules")
-    lines = [line.split()[0] for line in proc.stdout.splitlines() if line.strip() and not line.startswith(("job", "-", "total", "Job", "host"))]
-    rules = {r for r in lines if not r.isdigit()}
+    proc = run_snakemake(work, "--configfile", str(changed), "-n")
+    rules = set(re.findall(r"^(?:local)?rule (\w+):", proc.stdout + proc.stderr, flags=re.M))
     assert rules, proc.stdout
-    assert all(r.startswith("fig") or r in ("all", "index") for r in rules), rules
+    assert all(r.startswith("fig") or r == "all" for r in rules), rules
+    assert "fig5_unzeroed" in rules

@@ -12,6 +12,7 @@ prediction time and its measured errors only to the metrics.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import Mapping
 
@@ -205,9 +206,16 @@ def select_for_fold(X: pd.DataFrame, Y: pd.DataFrame, fold: str, settings: Selec
             y = Y[position].to_numpy(dtype=float)
             ok = ~np.isnan(y)
             per_position[float(position)] = _points(settings.method, relative.loc[ok], y[ok], settings, "pointwise")
-        common = common_points(
-            [p.selected for p in per_position.values()], settings.pointwise_common, order=sensors
-        )
+        chosen = [p.selected for p in per_position.values()]
+        distinct = len({sensor for points in chosen for sensor in points})
+        n_common = min(settings.pointwise_common, distinct)
+        if n_common < settings.pointwise_common:
+            warnings.warn(
+                f"fold {fold}: only {distinct} distinct sensors were selected over the positions; "
+                f"the point-by-point common set has {n_common} instead of {settings.pointwise_common}",
+                stacklevel=2,
+            )
+        common = common_points(chosen, n_common, order=sensors)
     return FoldSelection(fold=fold, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common))
 
 

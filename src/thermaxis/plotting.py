@@ -65,6 +65,7 @@ __all__ = [
     "fig_kb_prediction",
     "fig_error_prediction",
     "fig_fold_comparison",
+    "stamp_provenance",
     "save_figure",
     "figure_caption",
 ]
@@ -185,7 +186,9 @@ def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
     """Rows where every column equals the given value; a ValueError names the choices when none match."""
     out = table
     for column, value in equals.items():
-        hit = out[out[column] == value]
+        # Also match by text: ids that come from Snakemake wildcards are strings even
+        # when the CSV reader turned the column into integers.
+        hit = out[(out[column] == value) | (out[column].astype(str) == str(value))]
         if hit.empty:
             choices = ", ".join(map(str, _natural_sorted(out[column]))) or "none"
             raise ValueError(f"{name} table has no rows with {column}={value!r}; available: {choices}")
@@ -914,7 +917,36 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
 # --------------------------------------------------------------------------- output
 
 
-def save_figure(fig: Figure, paths) -> None:
+@_styled
+def stamp_provenance(fig: Figure, note: str = SIMULATED_NOTE) -> Figure:
+    """Print a small provenance note (default :data:`SIMULATED_NOTE`) in the figure's bottom-right corner.
+
+    On figures with constrained layout the note is the figure's ``supxlabel``, so the
+    layout makes room for it instead of letting it cover the x labels.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure from one of the ``fig*`` functions (changed in place).
+    note : str, optional
+        The text.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig``, for chaining.
+    """
+    if not note:
+        raise ValueError("provenance note is empty; expected a sentence such as SIMULATED_NOTE")
+    style = dict(fontsize=5.5, color="0.35", fontstyle="italic", ha="right")
+    if fig.get_layout_engine() is not None:
+        fig.supxlabel(note, x=0.995, **style)
+    else:
+        fig.text(0.995, 0.005, note, va="bottom", **style)
+    return fig
+
+
+def save_figure(fig: Figure, paths, dpi: float | None = None) -> None:
     """Write ``fig`` to every path (format from the suffix: png, pdf or svg), then close it.
 
     The output bytes depend only on the figure: timestamps and software versions are
@@ -927,6 +959,8 @@ def save_figure(fig: Figure, paths) -> None:
         The figure, as returned by one of the ``fig*`` functions.
     paths : str or os.PathLike or iterable of them
         Output files.
+    dpi : float, optional
+        Resolution of raster output; default ``STYLE["savefig.dpi"]`` (300).
     """
     if isinstance(paths, (str, Path)) or not isinstance(paths, Iterable):
         paths = [paths]
@@ -942,7 +976,7 @@ def save_figure(fig: Figure, paths) -> None:
             for path in paths:
                 fmt = path.suffix.lower().lstrip(".")
                 path.parent.mkdir(parents=True, exist_ok=True)
-                fig.savefig(path, format=fmt, metadata=_SAVE_METADATA[fmt])
+                fig.savefig(path, format=fmt, metadata=_SAVE_METADATA[fmt], dpi=dpi or STYLE["savefig.dpi"])
     finally:
         plt.close(fig)
 

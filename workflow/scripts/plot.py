@@ -46,7 +46,6 @@ def main(snakemake):
     fig = DRAW[snakemake.rule](snakemake)
     if snakemake.params.simulated:
         plotting.stamp_provenance(fig, plotting.SIMULATED_NOTE)
-    fig.set_dpi(snakemake.params.dpi)
     plotting.save_figure(fig, snakemake.output.figures, dpi=snakemake.params.dpi)
 
 
