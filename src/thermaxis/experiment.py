@@ -180,11 +180,21 @@ def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, t
     raise ValueError(f"config selection.method: unknown method {method!r}")
 
 
-def select_for_fold(X: pd.DataFrame, Y: pd.DataFrame, fold: str, settings: SelectionSettings, decoupled: bool = True) -> FoldSelection:
+def select_for_fold(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    fold: str,
+    settings: SelectionSettings,
+    decoupled: bool = True,
+    pointwise: bool = True,
+) -> FoldSelection:
     """Sensitive points for k (absolute temperatures), b and each position (relative ones).
 
     With ``scope='training'`` the held-out run (``fold``) is removed first, so the
     choice of inputs cannot depend on the condition being predicted.
+    ``pointwise=False`` skips the per-position selection (empty ``per_position`` and
+    ``pointwise``): the sweep selects k and b once per decoupling degree, but the
+    point-by-point points, which do not depend on the degree, only once.
     """
     if settings.scope == "training":
         keep = (X["run"] != fold).to_numpy()
@@ -198,7 +208,9 @@ def select_for_fold(X: pd.DataFrame, Y: pd.DataFrame, fold: str, settings: Selec
         k_points = _points(settings.method, absolute, kb["k_um_per_m"].to_numpy(), settings, "k")
         b_points = _points(settings.method, relative, kb["b_um"].to_numpy(), settings, "b")
     per_position = {}
-    if settings.method == "fixed":
+    if not pointwise:
+        common = ()
+    elif settings.method == "fixed":
         common = settings.fixed_for("pointwise")
         _points("fixed", relative, np.zeros(len(relative)), settings, "pointwise")
     else:

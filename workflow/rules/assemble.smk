@@ -8,12 +8,19 @@ rule assemble:
     output:
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
-        qc=f"{OUT}/tables/cleaning_qc.csv",
+        qc=report(
+            f"{OUT}/tables/cleaning_qc.csv",
+            caption="../report/cleaning_qc.rst",
+            category="1. Dataset",
+            labels={"table": "cleaning QC"},
+        ),
     log:
         f"{LOGS}/assemble.log",
     benchmark:
         f"{BENCH}/assemble.tsv"
     conda:
         ENV
+    params:
+        provenance=DATA_STATEMENT,
     script:
         "../scripts/assemble.py"

@@ -90,7 +90,11 @@ def prediction_caption(kind, wildcards):
         figure_id = "fig11"
         details = dict(fold=wildcards.fold, algorithm=wildcards.algorithm)
     else:
-        details = dict(fold=wildcards.fold, approach=wildcards.approach, algorithm=wildcards.algorithm)
+        details = dict(
+            fold=wildcards.fold,
+            approach=wildcards.approach,
+            algorithm=wildcards.algorithm,
+        )
     return figure_caption(figure_id, DATASET.name, SIMULATED, **details)
 
 
@@ -132,4 +136,5 @@ def all_outputs():
         f"{OUT}/tables/metrics.csv",
         f"{OUT}/tables/paper_comparison.csv",
         *([f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else []),
+        *report_outputs(),
     ]

@@ -3,7 +3,12 @@ rule decouple:
         errors=f"{OUT}/assembled/errors.parquet",
         paper="data/paper/table5_slope_intercept.csv",
     output:
-        table=f"{OUT}/tables/table5_slope_intercept.csv",
+        table=report(
+            f"{OUT}/tables/table5_slope_intercept.csv",
+            caption="../report/table5.rst",
+            category="3. Decoupling",
+            labels={"table": "Table 5"},
+        ),
         markdown=f"{OUT}/tables/table5_slope_intercept.md",
         coefficients=f"{OUT}/decoupled/polynomial_coefficients.csv",
     log:
@@ -14,6 +19,7 @@ rule decouple:
         ENV
     params:
         degree=config["decoupling"]["degree"],
+        provenance=DATA_STATEMENT,
         simulated=SIMULATED,
         dataset_name=DATASET.name,
         paper_dir=lambda w, input: os.path.dirname(input.paper),

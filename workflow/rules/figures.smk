@@ -12,18 +12,18 @@ rule fig2_positioning_error:
             category="2. Errors and temperatures",
             labels={"figure": "Fig. 2", "run": FIG_RUN},
         ),
-    params:
-        run=FIG_RUN,
-        caption=figure_caption("fig2", DATASET.name, SIMULATED, run=FIG_RUN),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fig2.log",
     benchmark:
         f"{BENCH}/figures/fig2.tsv"
     conda:
         ENV
+    params:
+        run=FIG_RUN,
+        caption=figure_caption("fig2", DATASET.name, SIMULATED, run=FIG_RUN),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -38,6 +38,12 @@ rule fig3_ambient:
             category="2. Errors and temperatures",
             labels={"figure": "Fig. 3", "run": "all"},
         ),
+    log:
+        f"{LOGS}/figures/fig3.log",
+    benchmark:
+        f"{BENCH}/figures/fig3.tsv"
+    conda:
+        ENV
     params:
         runs=RUNS,
         sensor=config["ambient_sensor"],
@@ -45,12 +51,6 @@ rule fig3_ambient:
         simulated=SIMULATED,
         dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
-    log:
-        f"{LOGS}/figures/fig3.log",
-    benchmark:
-        f"{BENCH}/figures/fig3.tsv"
-    conda:
-        ENV
     script:
         "../scripts/plot.py"
 
@@ -65,18 +65,18 @@ rule fig5_unzeroed:
             category="2. Errors and temperatures",
             labels={"figure": "Fig. 5", "run": FIG_RUN},
         ),
-    params:
-        run=FIG_RUN,
-        caption=figure_caption("fig5", DATASET.name, SIMULATED, run=FIG_RUN),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fig5.log",
     benchmark:
         f"{BENCH}/figures/fig5.tsv"
     conda:
         ENV
+    params:
+        run=FIG_RUN,
+        caption=figure_caption("fig5", DATASET.name, SIMULATED, run=FIG_RUN),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -91,18 +91,18 @@ rule fig6_error_vs_time:
             category="2. Errors and temperatures",
             labels={"figure": "Fig. 6", "run": FIG_RUN},
         ),
-    params:
-        run=FIG_RUN,
-        caption=figure_caption("fig6", DATASET.name, SIMULATED, run=FIG_RUN),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fig6.log",
     benchmark:
         f"{BENCH}/figures/fig6.tsv"
     conda:
         ENV
+    params:
+        run=FIG_RUN,
+        caption=figure_caption("fig6", DATASET.name, SIMULATED, run=FIG_RUN),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -117,18 +117,18 @@ rule fig7_error_surface:
             category="2. Errors and temperatures",
             labels={"figure": "Fig. 7", "run": FIG_RUN},
         ),
-    params:
-        run=FIG_RUN,
-        caption=figure_caption("fig7", DATASET.name, SIMULATED, run=FIG_RUN),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fig7.log",
     benchmark:
         f"{BENCH}/figures/fig7.tsv"
     conda:
         ENV
+    params:
+        run=FIG_RUN,
+        caption=figure_caption("fig7", DATASET.name, SIMULATED, run=FIG_RUN),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -143,18 +143,18 @@ rule fig8_rezeroed:
             category="2. Errors and temperatures",
             labels={"figure": "Fig. 8", "run": FIG_RUN},
         ),
-    params:
-        run=FIG_RUN,
-        caption=figure_caption("fig8", DATASET.name, SIMULATED, run=FIG_RUN),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fig8.log",
     benchmark:
         f"{BENCH}/figures/fig8.tsv"
     conda:
         ENV
+    params:
+        run=FIG_RUN,
+        caption=figure_caption("fig8", DATASET.name, SIMULATED, run=FIG_RUN),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -169,18 +169,18 @@ rule fig9_other_runs:
             category="2. Errors and temperatures",
             labels={"figure": "Fig. 9", "run": "others"},
         ),
-    params:
-        runs=OTHER_RUNS,
-        caption=figure_caption("fig9", DATASET.name, SIMULATED, runs=OTHER_RUNS),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fig9.log",
     benchmark:
         f"{BENCH}/figures/fig9.tsv"
     conda:
         ENV
+    params:
+        runs=OTHER_RUNS,
+        caption=figure_caption("fig9", DATASET.name, SIMULATED, runs=OTHER_RUNS),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -195,18 +195,18 @@ rule fig10_temperature_rise:
             category="2. Errors and temperatures",
             labels={"figure": "Fig. 10", "run": FIG_RUN},
         ),
-    params:
-        run=FIG_RUN,
-        caption=figure_caption("fig10", DATASET.name, SIMULATED, run=FIG_RUN),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fig10.log",
     benchmark:
         f"{BENCH}/figures/fig10.tsv"
     conda:
         ENV
+    params:
+        run=FIG_RUN,
+        caption=figure_caption("fig10", DATASET.name, SIMULATED, run=FIG_RUN),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -221,17 +221,17 @@ rule fig12_slope_intercept:
             category="3. Decoupling",
             labels={"figure": "Fig. 12", "run": "all"},
         ),
-    params:
-        caption=figure_caption("fig12", DATASET.name, SIMULATED),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fig12.log",
     benchmark:
         f"{BENCH}/figures/fig12.tsv"
     conda:
         ENV
+    params:
+        caption=figure_caption("fig12", DATASET.name, SIMULATED),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -252,17 +252,17 @@ rule fig_kb_prediction:
                 "algorithm": "{algorithm}",
             },
         ),
-    params:
-        caption=lambda w: prediction_caption("kb_prediction", w),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/kb_prediction_{{fold}}_{{approach}}_{{algorithm}}.log",
     benchmark:
         f"{BENCH}/figures/kb_prediction_{{fold}}_{{approach}}_{{algorithm}}.tsv"
     conda:
         ENV
+    params:
+        caption=lambda w: prediction_caption("kb_prediction", w),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -283,17 +283,17 @@ rule fig_error_prediction:
                 "algorithm": "{algorithm}",
             },
         ),
-    params:
-        caption=lambda w: prediction_caption("error_prediction", w),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/error_prediction_{{fold}}_{{approach}}_{{algorithm}}.log",
     benchmark:
         f"{BENCH}/figures/error_prediction_{{fold}}_{{approach}}_{{algorithm}}.tsv"
     conda:
         ENV
+    params:
+        caption=lambda w: prediction_caption("error_prediction", w),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
 
@@ -308,16 +308,18 @@ rule fig_fold_comparison:
             category="5. Prediction",
             labels={"figure": "fold comparison", "fold": "all"},
         ),
-    params:
-        caption=figure_caption("fold_comparison", DATASET.name, SIMULATED, target="error"),
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
-        dpi=config["figures"]["dpi"],
     log:
         f"{LOGS}/figures/fold_comparison.log",
     benchmark:
         f"{BENCH}/figures/fold_comparison.tsv"
     conda:
         ENV
+    params:
+        caption=figure_caption(
+            "fold_comparison", DATASET.name, SIMULATED, target="error"
+        ),
+        simulated=SIMULATED,
+        dataset_name=DATASET.name,
+        dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"

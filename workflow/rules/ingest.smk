@@ -2,7 +2,12 @@ rule dataset_summary:
     input:
         sheets=dataset_sheets(),
     output:
-        table=f"{OUT}/tables/dataset_summary.csv",
+        table=report(
+            f"{OUT}/tables/dataset_summary.csv",
+            caption="../report/dataset_summary.rst",
+            category="1. Dataset",
+            labels={"table": "dataset summary"},
+        ),
     log:
         f"{LOGS}/dataset_summary.log",
     benchmark:
@@ -11,5 +16,6 @@ rule dataset_summary:
         ENV
     params:
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
+        provenance=DATA_STATEMENT,
     script:
         "../scripts/dataset_summary.py"

@@ -18,22 +18,32 @@ rule collect_model_tables:
             category="4. Models",
             labels={"table": "coefficients"},
         ),
-        kb=f"{OUT}/tables/kb_predictions.csv",
-        errors=f"{OUT}/tables/error_predictions.csv",
+        kb=report(
+            f"{OUT}/tables/kb_predictions.csv",
+            caption="../report/kb_predictions.rst",
+            category="5. Prediction",
+            labels={"table": "k and b predictions"},
+        ),
+        errors=report(
+            f"{OUT}/tables/error_predictions.csv",
+            caption="../report/error_predictions.rst",
+            category="5. Prediction",
+            labels={"table": "error predictions"},
+        ),
         selection=report(
             f"{OUT}/tables/sensitive_points.csv",
             caption="../report/sensitive_points.rst",
             category="3. Sensitive points",
             labels={"table": "sensitive points"},
         ),
-    params:
-        provenance=DATA_STATEMENT,
     log:
         f"{LOGS}/collect_model_tables.log",
     benchmark:
         f"{BENCH}/collect_model_tables.tsv"
     conda:
         ENV
+    params:
+        provenance=DATA_STATEMENT,
     script:
         "../scripts/collect_tables.py"
 
@@ -43,7 +53,12 @@ rule ambient_ranges:
         series=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
         windows=expand(f"{OUT}/clean/{{run}}/windows.csv", run=RUNS),
     output:
-        table=f"{OUT}/tables/ambient_ranges.csv",
+        table=report(
+            f"{OUT}/tables/ambient_ranges.csv",
+            caption="../report/ambient_ranges.rst",
+            category="1. Dataset",
+            labels={"table": "ambient ranges (Table 1)"},
+        ),
     log:
         f"{LOGS}/ambient_ranges.log",
     benchmark:
@@ -52,6 +67,7 @@ rule ambient_ranges:
         ENV
     params:
         runs=RUNS,
+        provenance=DATA_STATEMENT,
         sensor=config["ambient_sensor"],
     script:
         "../scripts/ambient_ranges.py"

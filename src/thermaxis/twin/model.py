@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from . import conditions as cond
-from .network import NODES, Discretised, discretise, simulate
+from .network import NODES, discretise, simulate
 
 __all__ = [
     "PARAMS_PATH",
@@ -41,37 +41,80 @@ __all__ = [
     "TwinParams",
     "load_params",
     "save_params",
+    "FreeParameter",
+    "CAPACITY_NODES",
+    "DRIFT_NODES",
+    "REFERENCE_NODE",
+    "INITIAL_GROUPS",
+    "parameter_bounds",
+    "capacity_scale",
     "heat_inputs",
     "RunState",
+    "initial_state",
+    "simulate_timeline",
     "simulate_run",
+    "thermal_slope",
+    "drift",
+    "geometric_error",
     "positioning_error",
 ]
 
 PARAMS_PATH = Path(__file__).resolve().parent.parent / "twin_params.json"
 
-#: Global free parameters: name -> (lower bound, upper bound, meaning).
-GLOBAL_PARAMETERS: dict[str, tuple[float, float, str]] = {
-    "nut_heat_W_per_m_min": (0.0, 5.0, "friction heat of the ball-screw nut per m/min of feed"),
-    "bearing_heat_W_per_m_min": (0.0, 5.0, "friction heat of the fixed-end bearings per m/min"),
-    "slider_heat_W_per_m_min": (0.0, 5.0, "friction heat of the four guide carriages per m/min"),
-    "motor_heat_W_per_m_min": (0.0, 10.0, "servo motor losses per m/min (reversals, viscous)"),
-    "motor_standstill_W": (0.0, 40.0, "motor and brake losses with the drive enabled, at standstill"),
-    "screw_gain_um_per_m_K": (0.0, 11.5, "effective expansion of the preloaded screw"),
-    "reference_gain_um_per_m_K": (0.0, 11.5, "interferometer material normalisation (bed sensor)"),
-    "geometric_slope_um_per_m": (-300.0, 300.0, "slope of the geometric error at 20 degC"),
-    "drift_bearing_seat_um_per_K": (-20.0, 20.0, "table drift per K of the bearing seat"),
-    "drift_bed_inner_um_per_K": (-20.0, 20.0, "table drift per K of the bed core"),
-    "drift_bed_outer_um_per_K": (-20.0, 20.0, "table drift per K of the bed's outer walls"),
+
+@dataclass(frozen=True)
+class FreeParameter:
+    """A calibrated quantity: bounds, a weak prior (centre, width) and its meaning."""
+
+    lower: float
+    upper: float
+    prior: float
+    prior_width: float  # inf = no prior
+    meaning: str
+
+
+_NO_PRIOR = float("inf")
+
+#: Global free parameters.  The priors only keep the fit physical where Table 5 does
+#: not pin a parameter down; they are wide compared with the fitted departures.
+GLOBAL_PARAMETERS: dict[str, FreeParameter] = {
+    "nut_heat_W_per_m_min": FreeParameter(0.0, 6.0, 1.5, 1.5, "friction heat of the ball-screw nut per m/min of feed"),
+    "bearing_heat_W_per_m_min": FreeParameter(0.0, 6.0, 1.0, 1.5, "friction heat of the fixed-end bearings per m/min"),
+    "slider_heat_W_per_m_min": FreeParameter(0.0, 6.0, 1.0, 1.5, "friction heat of the four guide carriages per m/min"),
+    "motor_heat_W_per_m_min": FreeParameter(0.0, 12.0, 2.0, 3.0, "servo motor losses per m/min (reversals, viscous)"),
+    "motor_standstill_W": FreeParameter(0.0, 40.0, 10.0, 10.0, "motor losses with the drive enabled, at standstill"),
+    "screw_gain_um_per_m_K": FreeParameter(3.0, 11.5, 9.0, 3.0, "effective expansion of the preloaded screw"),
+    "reference_gain_um_per_m_K": FreeParameter(3.0, 12.0, 10.0, 3.0, "interferometer material normalisation (bed sensor)"),
+    "geometric_slope_um_per_m": FreeParameter(-300.0, 300.0, 0.0, _NO_PRIOR, "slope of the geometric error at 20 degC"),
+    "drift_bearing_seat_um_per_K": FreeParameter(-3.0, 3.0, 0.0, 1.5, "table drift per K of the bearing seat"),
+    "drift_bed_inner_um_per_K": FreeParameter(-12.0, 12.0, 0.0, 6.0, "table drift per K of the bed core"),
+    "drift_bed_outer_um_per_K": FreeParameter(-12.0, 12.0, 0.0, 6.0, "table drift per K of the bed's outer walls"),
+    "drift_sliders_um_per_K": FreeParameter(-3.5, 3.5, 0.0, 1.5, "table drift per K of the carriages/table"),
+    "drift_nut_um_per_K": FreeParameter(-1.5, 1.5, 0.0, 0.75, "table drift per K of the nut housing"),
+    "log_capacity_screw_core": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the screw core's heat capacity"),
+    "log_capacity_bearing_seat": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the bearing seat's heat capacity"),
+    "log_capacity_motor": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the motor's heat capacity"),
+    "log_capacity_sliders": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the carriages' heat capacity"),
+    "log_capacity_nut": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the nut's heat capacity"),
+    "log_capacity_bed_outer": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the bed walls' heat capacity"),
 }
+#: Nodes whose capacity is calibrated (``log_capacity_<node>``).
+CAPACITY_NODES: tuple[str, ...] = tuple(
+    name.removeprefix("log_capacity_") for name in GLOBAL_PARAMETERS if name.startswith("log_capacity_")
+)
+#: Nodes that carry the position-independent drift (``drift_<node>_um_per_K``).
+DRIFT_NODES: tuple[str, ...] = ("bearing_seat", "bed_inner", "bed_outer", "sliders", "nut")
+#: The node under the interferometer's material sensor (normalisation reference).
+REFERENCE_NODE = "bed_inner"
 
 #: Per-run initial temperatures, K above the workshop air at the log start.
-INITIAL_PARAMETERS: dict[str, tuple[float, float, str]] = {
-    "screw_offset_K": (-3.0, 3.0, "ball screw, nut and sleeve"),
-    "drive_offset_K": (-3.0, 3.0, "bearing seat, motor and sliders"),
-    "bed_inner_offset_K": (-3.0, 3.0, "the bed's core"),
-    "bed_outer_offset_K": (-3.0, 3.0, "the bed's outer walls"),
+INITIAL_PARAMETERS: dict[str, FreeParameter] = {
+    "screw_offset_K": FreeParameter(-3.0, 3.0, 0.0, 1.0, "ball screw, nut and sleeve"),
+    "drive_offset_K": FreeParameter(-3.0, 3.0, 0.0, 1.0, "bearing seat, motor and sliders"),
+    "bed_inner_offset_K": FreeParameter(-3.0, 3.0, 0.0, 1.0, "the bed's core"),
+    "bed_outer_offset_K": FreeParameter(-3.0, 3.0, 0.0, 1.0, "the bed's outer walls"),
 }
-_INITIAL_GROUPS: dict[str, tuple[str, ...]] = {
+INITIAL_GROUPS: dict[str, tuple[str, ...]] = {
     "screw_offset_K": ("screw_core", "nut", "sleeve"),
     "drive_offset_K": ("bearing_seat", "motor", "sliders"),
     "bed_inner_offset_K": ("bed_inner",),
@@ -83,7 +126,7 @@ X_FIXED_MM = 40.0
 #: Periodic pitch error of the screw: amplitude (um), period (mm) and phase at X = 0.
 PITCH_AMPLITUDE_UM = 0.25
 PITCH_PERIOD_MM = 130.0
-PITCH_PHASE_RAD = 0.6
+PITCH_PHASE_RAD = 2.3
 #: Temperature at which the geometric error is defined (and the laser normalises to).
 REFERENCE_C = 20.0
 STEP_S = 10.0
@@ -115,9 +158,13 @@ class TwinParams:
 
 
 def parameter_bounds(runs: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
-    lo = [b[0] for b in GLOBAL_PARAMETERS.values()] + [b[0] for _ in runs for b in INITIAL_PARAMETERS.values()]
-    hi = [b[1] for b in GLOBAL_PARAMETERS.values()] + [b[1] for _ in runs for b in INITIAL_PARAMETERS.values()]
-    return np.array(lo), np.array(hi)
+    free = list(GLOBAL_PARAMETERS.values()) + [p for _ in runs for p in INITIAL_PARAMETERS.values()]
+    return np.array([p.lower for p in free]), np.array([p.upper for p in free])
+
+
+def capacity_scale(values: dict[str, float]) -> dict[str, float]:
+    """Multiplicative capacity factors from the ``log_capacity_<node>`` parameters."""
+    return {node: float(np.exp(values[f"log_capacity_{node}"])) for node in CAPACITY_NODES}
 
 
 def load_params(path: Path | str = PARAMS_PATH) -> TwinParams:
@@ -160,68 +207,61 @@ def heat_inputs(values: dict[str, float], feed_mm_min: float, motion: np.ndarray
 class RunState:
     """Simulated hidden temperatures of one run on its grid (s from M1)."""
 
-    condition: cond.Condition
     timeline: cond.Timeline
-    grid_s: np.ndarray
     nodes: np.ndarray  # (n_grid, n_nodes)
     ambient: np.ndarray  # (n_grid,)
+
+    @property
+    def grid_s(self) -> np.ndarray:
+        return self.timeline.grid_s
 
     def node(self, name: str, t_s) -> np.ndarray:
         return np.interp(t_s, self.grid_s, self.nodes[:, NODES.index(name)])
 
 
-_DISC_CACHE: dict[float, Discretised] = {}
+def initial_state(params: TwinParams, run: str, ambient_c: float) -> np.ndarray:
+    """Node temperatures at the log start: the air plus the run's group offsets."""
+    initial = np.full(len(NODES), float(ambient_c))
+    for name, members in INITIAL_GROUPS.items():
+        for node in members:
+            initial[NODES.index(node)] += params.initial[run][name]
+    return initial
 
 
-def _disc(step_s: float) -> Discretised:
-    if step_s not in _DISC_CACHE:
-        _DISC_CACHE[step_s] = discretise(step_s)
-    return _DISC_CACHE[step_s]
+def simulate_timeline(
+    values: dict[str, float],
+    tl: cond.Timeline,
+    ambient,
+    feed_mm_min: float,
+    initial: np.ndarray,
+) -> RunState:
+    """Integrate the network over a timeline; ``ambient(t_s)`` gives the air temperature."""
+    step_s = float(tl.grid_s[1] - tl.grid_s[0])
+    mid = 0.5 * (tl.grid_s[:-1] + tl.grid_s[1:])
+    q = heat_inputs(values, feed_mm_min, cond.motion_fraction(tl, step_s), cond.servo_fraction(tl, step_s))
+    inputs = np.column_stack([ambient(mid), q])
+    nodes = simulate(discretise(step_s, capacity_scale(values)), initial, inputs)
+    return RunState(timeline=tl, nodes=nodes, ambient=ambient(tl.grid_s))
 
 
 def simulate_run(condition: cond.Condition, params: TwinParams, step_s: float = STEP_S) -> RunState:
-    """Integrate the network over the run's log window."""
+    """Integrate the network over one paper run's log window."""
     tl = cond.timeline(condition, step_s)
-    grid = tl.grid_s
-    mid = 0.5 * (grid[:-1] + grid[1:])
-    ambient_mid = cond.ambient_at(condition, mid)
-    q = heat_inputs(
-        params.values,
-        condition.feed_mm_min,
-        cond.motion_fraction(tl, step_s),
-        cond.servo_fraction(tl, step_s),
-    )
-    inputs = np.column_stack([ambient_mid, q])
-    a0 = float(cond.ambient_at(condition, grid[:1])[0])
-    initial = np.full(len(NODES), a0)
-    offsets = params.initial[condition.run]
-    for name, members in _INITIAL_GROUPS.items():
-        for node in members:
-            initial[NODES.index(node)] += offsets[name]
-    nodes = simulate(_disc(step_s), initial, inputs)
-    return RunState(
-        condition=condition,
-        timeline=tl,
-        grid_s=grid,
-        nodes=nodes,
-        ambient=cond.ambient_at(condition, grid),
-    )
+    ambient = lambda t: cond.ambient_at(condition, t)  # noqa: E731
+    initial = initial_state(params, condition.run, float(ambient(tl.grid_s[:1])[0]))
+    return simulate_timeline(params.values, tl, ambient, condition.feed_mm_min, initial)
 
 
 def thermal_slope(values: dict[str, float], state: RunState, t_s) -> np.ndarray:
     """k_th(t), um/m: screw expansion minus the laser's material normalisation."""
     return values["screw_gain_um_per_m_K"] * (state.node("screw_core", t_s) - REFERENCE_C) - values[
         "reference_gain_um_per_m_K"
-    ] * (state.node("bed_inner", t_s) - REFERENCE_C)
+    ] * (state.node(REFERENCE_NODE, t_s) - REFERENCE_C)
 
 
 def drift(values: dict[str, float], state: RunState, t_s) -> np.ndarray:
     """d(t), um: position-independent drift of the table against the optics."""
-    return -(
-        values["drift_bearing_seat_um_per_K"] * state.node("bearing_seat", t_s)
-        + values["drift_bed_inner_um_per_K"] * state.node("bed_inner", t_s)
-        + values["drift_bed_outer_um_per_K"] * state.node("bed_outer", t_s)
-    )
+    return -sum(values[f"drift_{node}_um_per_K"] * state.node(node, t_s) for node in DRIFT_NODES)
 
 
 def geometric_error(values: dict[str, float], x_mm) -> np.ndarray:

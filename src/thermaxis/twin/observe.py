@@ -1,0 +1,143 @@
+"""What the instruments see: the 12 temperature sensors and the laser interferometer.
+
+Sensors are NOT the network's nodes: each PT100 sits on a surface that mixes a node
+with its neighbour or the air, reads it through its own first-order lag (magnetic
+mount, air boundary layer) and adds a calibration offset (class B tolerance) and noise.
+The interferometer reads the positioning error of :mod:`thermaxis.twin.model` relative
+to its datum, with reversal error, per-reading noise and a per-measurement scale error
+of the XL-80 class (+-0.5 um/m: air-compensation error).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+from . import conditions as cond
+from .model import RunState, positioning_error
+from .network import NODES
+
+__all__ = [
+    "Sensor",
+    "SENSORS",
+    "SOURCES",
+    "sensor_signal",
+    "lagged",
+    "INTERFEROMETER",
+    "Readings",
+    "interferometer_readings",
+]
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """One PT100 of the paper's Table 2 and how it couples to the network."""
+
+    id: str
+    location: str
+    source: str
+    weights: dict[str, float]  # node (or "ambient") -> weight, summing to 1
+    lag_s: float  # first-order time constant of the mounted sensor
+    offset_c: float  # calibration offset (PT100 class B: +-0.3 degC at 0 degC)
+    noise_c: float  # white noise of the acquisition chain (1 sigma)
+
+
+SENSORS: tuple[Sensor, ...] = (
+    # The sleeve covers the screw; its left end is near the motor-side bearing seat.
+    Sensor("T1", "screw sleeve, left", "box", {"sleeve": 0.75, "bearing_seat": 0.15, "ambient": 0.10}, 90.0, 0.06, 0.008),
+    Sensor("T2", "screw sleeve, right", "box", {"sleeve": 0.80, "ambient": 0.20}, 90.0, -0.04, 0.008),
+    Sensor("T3", "screw sleeve, front", "box", {"sleeve": 0.85, "nut": 0.05, "ambient": 0.10}, 90.0, 0.09, 0.008),
+    Sensor("T4", "left slider", "box", {"sliders": 0.85, "nut": 0.10, "ambient": 0.05}, 60.0, -0.07, 0.008),
+    Sensor("T5", "right slider", "box", {"sliders": 0.85, "bed_inner": 0.10, "ambient": 0.05}, 60.0, 0.03, 0.008),
+    Sensor("T6", "bearing seat near motor", "box", {"bearing_seat": 0.90, "motor": 0.05, "ambient": 0.05}, 60.0, 0.05, 0.008),
+    # The shell sees the winding through the stator and loses heat to the air.
+    Sensor("T7", "motor shell, top", "box", {"motor": 0.60, "ambient": 0.40}, 60.0, -0.10, 0.008),
+    Sensor("T8", "bed, inner side", "box", {"bed_inner": 0.95, "ambient": 0.05}, 60.0, 0.02, 0.008),
+    Sensor("T9", "bed, outer side", "box", {"bed_outer": 0.85, "ambient": 0.15}, 60.0, -0.06, 0.008),
+    Sensor("T10", "ambient", "box", {"ambient": 1.0}, 120.0, 0.08, 0.010),
+    Sensor("T11", "nut", "wireless", {"nut": 0.90, "sliders": 0.10}, 45.0, 0.15, 0.030),
+    # The HMI reads the motor's own winding sensor: fast, but a coarser thermistor.
+    Sensor("T12", "motor (internal)", "hmi", {"motor": 1.0}, 20.0, -0.30, 0.040),
+)
+
+#: The HMI's clock runs this many seconds behind the box (reference) clock.
+HMI_CLOCK_OFFSET_S = 7.0
+#: Acquisition sources: (name, clock note, clock offset in s to ADD to reach the box clock).
+SOURCES: tuple[tuple[str, str, float], ...] = (
+    ("box", "reference clock (acquisition box, synchronised with the interferometer PC)", 0.0),
+    ("wireless", "gateway clock, synchronised with the box; irregular ~30 s packets", 0.0),
+    ("hmi", f"CNC HMI clock, runs {HMI_CLOCK_OFFSET_S:g} s behind the box clock", HMI_CLOCK_OFFSET_S),
+)
+#: Wireless packets: nominal period and uniform jitter (s); HMI polling period (s).
+WIRELESS_PERIOD_S = 30.0
+WIRELESS_JITTER_S = 4.0
+HMI_PERIOD_S = 60.0
+
+
+def sensor_signal(sensor: Sensor, state: RunState) -> np.ndarray:
+    """The temperature at the sensor's mounting surface on the run grid (no lag)."""
+    out = np.zeros(state.grid_s.size)
+    for name, w in sensor.weights.items():
+        out += w * (state.ambient if name == "ambient" else state.nodes[:, NODES.index(name)])
+    return out
+
+
+def lagged(signal: np.ndarray, step_s: float, lag_s: float) -> np.ndarray:
+    """Exact first-order lag of a piecewise-linear signal sampled every ``step_s``.
+
+    Starts in equilibrium with the first sample (the sensors were mounted long before).
+    """
+    a = np.exp(-step_s / lag_s)
+    # y[n] = a y[n-1] + c0 x[n-1] + c1 x[n]: ramp-invariant discretisation.
+    c1 = 1.0 - lag_s / step_s * (1.0 - a)
+    c0 = (1.0 - a) - c1
+    y = np.empty_like(signal)
+    y[0] = signal[0]
+    rest, _ = lfilter([c1, c0], [1.0, -a], signal[1:], zi=[a * signal[0] + c0 * signal[0]])
+    y[1:] = rest
+    return y
+
+
+@dataclass(frozen=True)
+class InterferometerSpec:
+    """Error-side instrument constants (documented, not calibrated)."""
+
+    reading_noise_um: float = 0.05  # repeatability of one capture (vibration, dead path)
+    scale_error_um_per_m: float = 0.15  # 1 sigma of the per-measurement air-compensation error
+    scale_error_limit_um_per_m: float = 0.5  # XL-80 linear accuracy bound
+    reversal_um: float = -0.2  # backlash of the preloaded nut: the backward pass reads lower
+
+
+INTERFEROMETER = InterferometerSpec()
+
+
+@dataclass(frozen=True)
+class Readings:
+    """One measurement's captures: forward then backward pass."""
+
+    time_s: np.ndarray
+    position_mm: np.ndarray
+    direction: np.ndarray  # "+" or "-"
+    error_um: np.ndarray  # as read (datum, reversal, noise)
+    true_um: np.ndarray  # noise-free, reversal-free, relative to the same datum
+
+
+def interferometer_readings(
+    values: dict[str, float], state: RunState, start_s: float, datum_um: float, rng: np.random.Generator
+) -> Readings:
+    """The 28 captures of one measurement starting at ``start_s``.
+
+    ``datum_um`` is the error E(185, t_zero) the interferometer was zeroed at.
+    """
+    spec = INTERFEROMETER
+    forward_t, backward_t = cond.reading_times(start_s)
+    x = np.concatenate([cond.TARGETS_MM, cond.TARGETS_MM[::-1]])
+    t = np.concatenate([forward_t, backward_t])
+    direction = np.array(["+"] * forward_t.size + ["-"] * backward_t.size)
+    true = positioning_error(values, state, x, t) - datum_um
+    scale = float(np.clip(rng.normal(0.0, spec.scale_error_um_per_m), -spec.scale_error_limit_um_per_m, spec.scale_error_limit_um_per_m))
+    noise = rng.normal(0.0, spec.reading_noise_um, x.size)
+    read = true + scale * (x - cond.FIRST_TARGET_MM) / 1000.0 + noise + np.where(direction == "-", spec.reversal_um, 0.0)
+    return Readings(time_s=t, position_mm=x, direction=direction, error_um=read, true_um=true)

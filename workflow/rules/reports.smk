@@ -1,0 +1,220 @@
+# Reports: parametrised notebooks executed by papermill and turned into
+# self-contained HTML, the dataset's provenance record and the index page.
+# Constants and helpers (and why provenance does not rerun every report): reports_common.smk.
+
+
+include: "reports_common.smk"
+
+
+rule provenance:
+    input:
+        sheets=dataset_sheets(),
+        data=dataset_files(),
+    output:
+        f"{OUT}/provenance.json",
+    log:
+        f"{LOGS}/provenance.log",
+    benchmark:
+        f"{BENCH}/provenance.tsv"
+    conda:
+        ENV
+    params:
+        config_json=json.dumps(config, sort_keys=True),
+        dataset=lambda w, input: os.path.dirname(input.sheets[0]),
+        repo=REPO,
+        git=GIT_STATE,
+    script:
+        "../scripts/provenance.py"
+
+
+rule dataset_report:
+    input:
+        notebook="notebooks/dataset_report.ipynb",
+        library=library("reporting", "provenance"),
+        sheets=dataset_sheets(),
+        summary=f"{OUT}/tables/dataset_summary.csv",
+        qc=f"{OUT}/tables/cleaning_qc.csv",
+        gaps=expand(f"{OUT}/clean/{{run}}/gaps.csv", run=RUNS),
+        errors=f"{OUT}/assembled/errors.parquet",
+        temperatures=f"{OUT}/assembled/temperatures.parquet",
+        figures=[f["path"] for f in dataset_report_figures().values()],
+    output:
+        notebook=f"{REPORTS}/dataset_report.ipynb",
+        html=report(
+            f"{REPORTS}/dataset_report.html",
+            caption="../report/notebook_report.rst",
+            category="7. Reports",
+            labels={"report": "dataset"},
+        ),
+    log:
+        f"{LOGS}/reports/dataset_report.log",
+    benchmark:
+        f"{BENCH}/reports/dataset_report.tsv"
+    conda:
+        ENV
+    params:
+        title=f"Dataset report: {DATASET.name}",
+        statement=DATA_STATEMENT,
+        parameters=lambda w, input: notebook_parameters(
+            input,
+            sections(*DATA_SECTIONS, "figures"),
+            figures=dataset_report_figures(),
+        ),
+    shell:
+        RUN_NOTEBOOK
+
+
+rule condition_report:
+    input:
+        notebook="notebooks/condition_report.ipynb",
+        library=library("reporting", "provenance", "plotting"),
+        summary=f"{OUT}/tables/dataset_summary.csv",
+        errors=f"{OUT}/clean/{{run}}/errors.parquet",
+        temperatures=f"{OUT}/clean/{{run}}/measurement_temperatures.parquet",
+        series=f"{OUT}/clean/{{run}}/temperatures.parquet",
+        qc=f"{OUT}/clean/{{run}}/qc.csv",
+        gaps=f"{OUT}/clean/{{run}}/gaps.csv",
+        windows=f"{OUT}/clean/{{run}}/windows.csv",
+        kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
+    output:
+        notebook=f"{REPORTS}/condition_{{run}}.ipynb",
+        html=report(
+            f"{REPORTS}/condition_{{run}}.html",
+            caption="../report/notebook_report.rst",
+            category="7. Reports",
+            subcategory="Conditions",
+            labels={"report": "condition", "run": "{run}"},
+        ),
+    log:
+        f"{LOGS}/reports/condition_{{run}}.log",
+    benchmark:
+        f"{BENCH}/reports/condition_{{run}}.tsv"
+    conda:
+        ENV
+    params:
+        title=lambda w: f"Condition report: run {w.run} ({DATASET.name})",
+        statement=DATA_STATEMENT,
+        parameters=lambda w, input: notebook_parameters(
+            input,
+            sections(*DATA_SECTIONS),
+            run=w.run,
+            captions=condition_captions(w),
+        ),
+    shell:
+        RUN_NOTEBOOK
+
+
+rule model_report:
+    input:
+        notebook="notebooks/model_report.ipynb",
+        library=library("reporting", "provenance", "plotting"),
+        selection=f"{OUT}/selection/{{fold}}.csv",
+        selection_json=f"{OUT}/selection/{{fold}}.json",
+        metrics=f"{OUT}/models/{{fold}}/metrics.csv",
+        coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
+        kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
+        errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
+    output:
+        notebook=f"{REPORTS}/model_{{fold}}_{{approach}}_{{algorithm}}.ipynb",
+        html=report(
+            f"{REPORTS}/model_{{fold}}_{{approach}}_{{algorithm}}.html",
+            caption="../report/notebook_report.rst",
+            category="7. Reports",
+            subcategory="Models: fold {fold}",
+            labels={
+                "report": "model",
+                "fold": "{fold}",
+                "approach": "{approach}",
+                "algorithm": "{algorithm}",
+            },
+        ),
+    log:
+        f"{LOGS}/reports/model_{{fold}}_{{approach}}_{{algorithm}}.log",
+    benchmark:
+        f"{BENCH}/reports/model_{{fold}}_{{approach}}_{{algorithm}}.tsv"
+    conda:
+        ENV
+    params:
+        title=lambda w: f"Model report: fold {w.fold}, {w.approach}, {w.algorithm} ({DATASET.name})",
+        statement=DATA_STATEMENT,
+        parameters=lambda w, input: notebook_parameters(
+            input,
+            sections(*DATA_SECTIONS, "selection", "models", "folds"),
+            fold=w.fold,
+            approach=w.approach,
+            algorithm=w.algorithm,
+            runs=RUNS,
+            captions={
+                kind: prediction_caption(kind, w)
+                for kind in ("kb_prediction", "error_prediction")
+            },
+        ),
+    shell:
+        RUN_NOTEBOOK
+
+
+rule paper_report:
+    input:
+        notebook="notebooks/paper_report.ipynb",
+        library=library("reporting", "provenance", "paper"),
+        sheets=dataset_sheets(),
+        summary=f"{OUT}/tables/dataset_summary.csv",
+        ambient=f"{OUT}/tables/ambient_ranges.csv",
+        kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
+        metrics=f"{OUT}/tables/metrics.csv",
+        coefficients=f"{OUT}/tables/coefficients.csv",
+        sensitive_points=f"{OUT}/tables/sensitive_points.csv",
+        comparison=f"{OUT}/tables/paper_comparison.csv",
+        paper=PAPER_FILES,
+        figures=[f["path"] for f in paper_report_figures().values()],
+    output:
+        notebook=f"{REPORTS}/paper_report.ipynb",
+        html=report(
+            f"{REPORTS}/paper_report.html",
+            caption="../report/notebook_report.rst",
+            category="7. Reports",
+            labels={"report": "paper"},
+        ),
+    log:
+        f"{LOGS}/reports/paper_report.log",
+    benchmark:
+        f"{BENCH}/reports/paper_report.tsv"
+    conda:
+        ENV
+    params:
+        title=f"Paper report: Xu et al. reproduced on {DATASET.name}",
+        statement=DATA_STATEMENT,
+        parameters=lambda w, input: notebook_parameters(
+            input,
+            {k: v for k, v in config.items() if k not in ("reports", "sweep")},
+            paper_fold=config["paper_fold"],
+            fold=REPORT_FOLD,
+            algorithms=PAPER_ALGORITHMS,
+            approaches=APPROACHES,
+            paper_dir=os.path.dirname(PAPER_FILES[0]) if PAPER_FILES else "data/paper",
+            figures=paper_report_figures(),
+        ),
+    shell:
+        RUN_NOTEBOOK
+
+
+rule index:
+    input:
+        provenance=f"{OUT}/provenance.json",
+        linked=index_inputs(),
+    output:
+        f"{OUT}/index.html",
+    log:
+        f"{LOGS}/index.log",
+    benchmark:
+        f"{BENCH}/index.tsv"
+    conda:
+        ENV
+    params:
+        dataset_name=DATASET.name,
+        simulated=SIMULATED,
+        statement=DATA_STATEMENT,
+        sections=index_sections(),
+        sweep=f"{OUT}/sweep/sweep_report.html",
+    script:
+        "../scripts/index.py"

@@ -1,0 +1,249 @@
+# Reports: parametrised notebooks executed by papermill and turned into self-contained
+# HTML, the dataset's provenance record and an index page. The notebooks only read
+# tables the workflow wrote; they recompute nothing.
+#
+# Provenance and reruns: provenance.json (the whole configuration, the raw-data
+# manifest, the git commit and dirty flag, versions, run time) is rewritten when the
+# raw files, the configuration or the git state change, and only the index reads it.
+# Each notebook records its own provenance when it runs, hashing only the
+# configuration sections its inputs depend on, so changing selection.n_clusters
+# reruns the model and paper reports but leaves the dataset and condition reports
+# alone. The run time is the only field that differs between two builds from the
+# same inputs; SOURCE_DATE_EPOCH fixes it.
+import json
+from types import SimpleNamespace
+
+import thermaxis
+from thermaxis.provenance import git_state
+
+REPORTS = f"{OUT}/reports"
+REPORT_ALGORITHMS = [
+    a for a in config["reports"]["model_algorithms"] if a in ALGORITHMS
+]
+# A path inside the repository, relative so the executed notebooks do not depend on
+# where the work folder is; git follows the symlinks of a test work folder.
+REPO = os.path.relpath(str(workflow.current_basedir))
+GIT_STATE = git_state(str(workflow.current_basedir))
+EMBED_FORMAT = next((f for f in ("png", "svg") if f in FIG_FORMATS), FIG_FORMATS[0])
+# The paper predicts its last condition; a dataset without that run shows its last fold.
+REPORT_FOLD = config["paper_fold"] if config["paper_fold"] in FOLDS else FOLDS[-1]
+PAPER_ALGORITHMS = [a for a in ("mlr", "svr") if a in FIG_ALGORITHMS]
+# papermill executes each notebook in a python3 kernel that must start within 2 min;
+# no cell may take over 10 min. One process runs papermill and the HTML conversion
+# (src/thermaxis/reporting.py says why).
+RUN_NOTEBOOK = (
+    "python -m thermaxis.reporting run {input.notebook:q} {output.notebook:q} {output.html:q}"
+    " --kernel python3 --start-timeout 120 --execution-timeout 600"
+    " --title {params.title:q} --parameters {params.parameters:q} > {log:q} 2>&1"
+)
+DATA_SECTIONS = ("dataset", "ambient_sensor", "temperatures", "errors", "decoupling")
+
+
+def library(*modules):
+    """Library modules a notebook imports: inputs, so editing them reruns the report."""
+    root = Path(thermaxis.__file__).parent
+    return [str(root / f"{module}.py") for module in modules]
+
+
+def dataset_files():
+    """Every file of the dataset but its two sheets: what provenance.json hashes."""
+    sheets = set(dataset_sheets())
+    files = (str(p) for p in DATASET.root.rglob("*") if p.is_file())
+    return sorted(f for f in files if f not in sheets)
+
+
+def sections(*names):
+    return {name: config[name] for name in names if name in config}
+
+
+def notebook_parameters(input, sections_used, **values):
+    """The notebook's parameters as JSON: every input but the notebook and the library, and ``values``."""
+    inputs = {k: v for k, v in input.items() if k not in ("notebook", "library")}
+    return json.dumps(
+        dict(
+            dataset_name=DATASET.name,
+            simulated=SIMULATED,
+            statement=DATA_STATEMENT,
+            dataset_root=config["dataset"],
+            repo=REPO,
+            config=sections_used,
+            inputs=inputs,
+            **values,
+        ),
+        sort_keys=True,
+    )
+
+
+def embedded(stem, figure_id, **details):
+    """A workflow figure for a report: the file to embed and its caption."""
+    return {
+        "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
+        "caption": figure_caption(figure_id, DATASET.name, SIMULATED, **details),
+    }
+
+
+def dataset_report_figures():
+    figures = {
+        "fig3_ambient": embedded("fig3_ambient", "fig3"),
+        "fig5_unzeroed": embedded("fig5_unzeroed", "fig5", run=FIG_RUN),
+    }
+    if OTHER_RUNS:
+        figures["fig9_other_runs"] = embedded(
+            "fig9_other_runs", "fig9", runs=OTHER_RUNS
+        )
+    if DECOUPLED:
+        figures["fig12_slope_intercept"] = embedded("fig12_slope_intercept", "fig12")
+    return figures
+
+
+def paper_report_figures():
+    figures = {
+        "fig2_positioning_error": embedded(
+            "fig2_positioning_error", "fig2", run=FIG_RUN
+        ),
+        **dataset_report_figures(),
+        "fig6_error_vs_time": embedded("fig6_error_vs_time", "fig6", run=FIG_RUN),
+        "fig7_error_surface": embedded("fig7_error_surface", "fig7", run=FIG_RUN),
+        "fig8_rezeroed": embedded("fig8_rezeroed", "fig8", run=FIG_RUN),
+        "fig10_temperature_rise": embedded(
+            "fig10_temperature_rise", "fig10", run=FIG_RUN
+        ),
+        "fold_comparison": embedded(
+            "fold_comparison", "fold_comparison", target="error"
+        ),
+    }
+    for algorithm in PAPER_ALGORITHMS:
+        for approach in APPROACHES:
+            stem = f"error_prediction_{REPORT_FOLD}_{approach}_{algorithm}"
+            w = SimpleNamespace(
+                fold=REPORT_FOLD, approach=approach, algorithm=algorithm
+            )
+            figures[stem] = {
+                "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
+                "caption": prediction_caption("error_prediction", w),
+            }
+        if DECOUPLED:
+            stem = f"kb_prediction_{REPORT_FOLD}_decoupled_{algorithm}"
+            w = SimpleNamespace(
+                fold=REPORT_FOLD, approach="decoupled", algorithm=algorithm
+            )
+            figures[stem] = {
+                "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
+                "caption": prediction_caption("kb_prediction", w),
+            }
+    return figures
+
+
+def condition_captions(wildcards):
+    """Captions of the figures a condition report draws for its run."""
+    return {
+        f: figure_caption(f, DATASET.name, SIMULATED, run=wildcards.run)
+        for f in ("fig5", "fig6", "fig8", "fig10")
+    }
+
+
+def condition_reports():
+    return expand(f"{REPORTS}/condition_{{run}}.html", run=RUNS)
+
+
+def model_reports():
+    return expand(
+        f"{REPORTS}/model_{{fold}}_{{approach}}_{{algorithm}}.html",
+        fold=FOLDS,
+        approach=APPROACHES,
+        algorithm=REPORT_ALGORITHMS,
+    )
+
+
+def report_html():
+    return [
+        f"{REPORTS}/paper_report.html",
+        f"{REPORTS}/dataset_report.html",
+        *condition_reports(),
+        *model_reports(),
+    ]
+
+
+def linked_tables():
+    tables = [
+        "dataset_summary.csv",
+        "cleaning_qc.csv",
+        "ambient_ranges.csv",
+        *(
+            ["table5_slope_intercept.csv", "table5_slope_intercept.md"]
+            if DECOUPLED
+            else []
+        ),
+        "sensitive_points.csv",
+        "metrics.csv",
+        "coefficients.csv",
+        "kb_predictions.csv",
+        "error_predictions.csv",
+        "paper_comparison.csv",
+        "paper_comparison.md",
+    ]
+    return [f"{OUT}/tables/{name}" for name in tables]
+
+
+def index_sections():
+    """What the index links, in order: (title, intro, rows of (label, [(text, path)]))."""
+    reports = [
+        (
+            "The paper, figure by figure and table by table",
+            [("paper report", f"{REPORTS}/paper_report.html")],
+        ),
+        (
+            "Dataset: runs, sensors, cleaning",
+            [("dataset report", f"{REPORTS}/dataset_report.html")],
+        ),
+    ]
+    reports += [
+        (f"Run {run}", [("condition report", f"{REPORTS}/condition_{run}.html")])
+        for run in RUNS
+    ]
+    models = [
+        (
+            f"Fold {fold} (held-out run), {approach}",
+            [
+                (algorithm, f"{REPORTS}/model_{fold}_{approach}_{algorithm}.html")
+                for algorithm in REPORT_ALGORITHMS
+            ],
+        )
+        for fold in FOLDS
+        for approach in APPROACHES
+        if REPORT_ALGORITHMS
+    ]
+    stems = list(
+        dict.fromkeys(Path(p).stem for p in data_figures() + prediction_figures())
+    )
+    figures = [
+        (stem, [(ext, f"{OUT}/figures/{stem}.{ext}") for ext in FIG_FORMATS])
+        for stem in stems
+    ]
+    tables = [(Path(p).name, [(Path(p).suffix[1:], p)]) for p in linked_tables()]
+    return [
+        ("Reports", "", reports),
+        (
+            "Model reports",
+            "Sensitive points, coefficients, predictions and metrics of one fold, approach and "
+            f"algorithm (config `reports.model_algorithms`: {', '.join(REPORT_ALGORITHMS)}).",
+            models,
+        ),
+        ("Figures", "", figures),
+        ("Tables", "", tables),
+    ]
+
+
+def index_inputs():
+    return sorted(
+        {
+            path
+            for _, _, rows in index_sections()
+            for _, links in rows
+            for _, path in links
+        }
+    )
+
+
+def report_outputs():
+    return [f"{OUT}/provenance.json", f"{OUT}/index.html", *report_html()]

@@ -1,0 +1,216 @@
+# The sweep (`make sweep`, i.e. `snakemake sweep`): every configuration of config `sweep`
+# on every leave-one-condition-out fold. Not part of `rule all`: the default run stays fast.
+#
+# Batches, not one job per configuration: each batch is one process that reads the
+# assembled tables once and evaluates its share of the grid with the library function
+# the main workflow uses (thermaxis.experiment.evaluate_configuration). There is one
+# batch per core given (or config sweep.batches); the batch count is part of the batch
+# files' path, so a run with another core count does not mix shares of two plans.
+import json
+import sys
+
+from thermaxis.sweep import batch_count, grid_from_config, plan_units
+
+SWEEP = f"{OUT}/sweep"
+SWEEP_GRID = grid_from_config(config["sweep"])
+SWEEP_FOLDS = list(config["sweep"]["folds"]) or RUNS
+SWEEP_UNITS, SWEEP_SKIPPED = plan_units(SWEEP_GRID, SWEEP_FOLDS, DATASET.sensors)
+
+
+def _cores_given():
+    """Cores of this Snakemake run; 1 when none were given (--lint, some dry runs)."""
+    try:
+        return int(workflow.cores)
+    except Exception:
+        return 1
+
+
+SWEEP_BATCHES = batch_count(
+    config["sweep"]["batches"], _cores_given(), len(SWEEP_UNITS)
+)
+SWEEP_FORMATS = FIG_FORMATS
+SWEEP_BATCH_FILES = expand(
+    f"{SWEEP}/batches/{SWEEP_BATCHES}/{{batch}}.parquet", batch=range(SWEEP_BATCHES)
+)
+SWEEP_PAPERMILL = (
+    "papermill {input.notebook:q} {output.notebook:q} -k python3 --no-progress-bar"
+    " --start-timeout 120 --execution-timeout 600 -y {params.parameters:q} > {log:q} 2>&1"
+    " && python -m thermaxis.reporting html {output.notebook:q} {output.html:q}"
+    " --title {params.title:q} >> {log:q} 2>&1"
+)
+
+for _fold in SWEEP_FOLDS:
+    if _fold not in RUNS:
+        sys.exit(
+            f"thermaxis error: config sweep.folds: {_fold!r} is not a run of {DATASET.root / 'runs.tsv'}"
+        )
+if not SWEEP_UNITS:
+    sys.exit(
+        "thermaxis error: config sweep: no selection setting fits the dataset "
+        f"({'; '.join(SWEEP_SKIPPED)})"
+    )
+
+
+def sweep_figures(stem):
+    return [f"{SWEEP}/figures/{stem}.{ext}" for ext in SWEEP_FORMATS]
+
+
+def sweep_report_parameters(input):
+    """papermill parameters as JSON (valid YAML for `papermill -y`)."""
+    embed = next((f for f in ("png", "svg") if f in SWEEP_FORMATS), None)
+    figures = {
+        stem: (f"{SWEEP}/figures/{stem}.{embed}" if embed else "")
+        for stem in ("sweep_heatmap", "sweep_factor_effects")
+    }
+    return json.dumps(
+        dict(
+            dataset_name=DATASET.name,
+            simulated=SIMULATED,
+            statement=DATA_STATEMENT,
+            summary=input.summary,
+            ranking=input.ranking,
+            effects=input.effects,
+            benchmarks=list(input.benchmarks),
+            figures=figures,
+            grid=config["sweep"],
+            folds=SWEEP_FOLDS,
+            skipped=SWEEP_SKIPPED,
+            selection=config["selection"],
+            degree=config["decoupling"]["degree"],
+            svr_grid=config["models"]["svr_grid"],
+        ),
+        sort_keys=True,
+    )
+
+
+wildcard_constraints:
+    batch=r"\d+",
+
+
+rule sweep_batch:
+    input:
+        errors=f"{OUT}/assembled/errors.parquet",
+        temperatures=f"{OUT}/assembled/temperatures.parquet",
+    output:
+        f"{SWEEP}/batches/{SWEEP_BATCHES}/{{batch}}.parquet",
+    log:
+        f"{LOGS}/sweep/batch_{SWEEP_BATCHES}_{{batch}}.log",
+    benchmark:
+        f"{BENCH}/sweep/batch_{SWEEP_BATCHES}_{{batch}}.tsv"
+    conda:
+        ENV
+    threads: 1
+    params:
+        sweep=config["sweep"],
+        selection=config["selection"],
+        decoupling=config["decoupling"],
+        models=config["models"],
+        folds=SWEEP_FOLDS,
+        sensors=list(DATASET.sensors),
+        n_batches=SWEEP_BATCHES,
+        decoupled=DECOUPLED,
+    script:
+        "../scripts/sweep_batch.py"
+
+
+rule sweep_collect:
+    input:
+        batches=SWEEP_BATCH_FILES,
+    output:
+        summary=f"{SWEEP}/summary.csv",
+        ranking=f"{SWEEP}/ranking.csv",
+        effects=f"{SWEEP}/factor_effects.csv",
+    log:
+        f"{LOGS}/sweep/collect.log",
+    benchmark:
+        f"{BENCH}/sweep/collect.tsv"
+    conda:
+        ENV
+    params:
+        selection=config["selection"],
+        degree=config["decoupling"]["degree"],
+    script:
+        "../scripts/sweep_collect.py"
+
+
+rule sweep_heatmap:
+    input:
+        ranking=f"{SWEEP}/ranking.csv",
+    output:
+        figures=sweep_figures("sweep_heatmap"),
+    log:
+        f"{LOGS}/sweep/heatmap.log",
+    benchmark:
+        f"{BENCH}/sweep/heatmap.tsv"
+    conda:
+        ENV
+    params:
+        selection=config["selection"],
+        degree=config["decoupling"]["degree"],
+        simulated=SIMULATED,
+        dpi=config["figures"]["dpi"],
+    script:
+        "../scripts/sweep_plot.py"
+
+
+rule sweep_factor_effects:
+    input:
+        ranking=f"{SWEEP}/ranking.csv",
+    output:
+        figures=sweep_figures("sweep_factor_effects"),
+    log:
+        f"{LOGS}/sweep/factor_effects.log",
+    benchmark:
+        f"{BENCH}/sweep/factor_effects.tsv"
+    conda:
+        ENV
+    params:
+        selection=config["selection"],
+        degree=config["decoupling"]["degree"],
+        simulated=SIMULATED,
+        dpi=config["figures"]["dpi"],
+    script:
+        "../scripts/sweep_plot.py"
+
+
+rule sweep_report:
+    input:
+        notebook="notebooks/sweep_report.ipynb",
+        summary=f"{SWEEP}/summary.csv",
+        ranking=f"{SWEEP}/ranking.csv",
+        effects=f"{SWEEP}/factor_effects.csv",
+        figures=sweep_figures("sweep_heatmap") + sweep_figures("sweep_factor_effects"),
+        benchmarks=expand(
+            f"{BENCH}/sweep/batch_{SWEEP_BATCHES}_{{batch}}.tsv",
+            batch=range(SWEEP_BATCHES),
+        ),
+    output:
+        notebook=f"{SWEEP}/sweep_report.ipynb",
+        html=report(
+            f"{SWEEP}/sweep_report.html",
+            caption="../report/notebook_report.rst",
+            category="8. Sweep",
+            labels={"report": "sweep"},
+        ),
+    log:
+        f"{LOGS}/sweep/report.log",
+    benchmark:
+        f"{BENCH}/sweep/report.tsv"
+    conda:
+        ENV
+    params:
+        title=f"Sweep report: {DATASET.name}",
+        statement=DATA_STATEMENT,
+        parameters=lambda w, input: sweep_report_parameters(input),
+    shell:
+        SWEEP_PAPERMILL
+
+
+rule sweep:
+    input:
+        f"{SWEEP}/summary.csv",
+        f"{SWEEP}/ranking.csv",
+        f"{SWEEP}/factor_effects.csv",
+        sweep_figures("sweep_heatmap"),
+        sweep_figures("sweep_factor_effects"),
+        f"{SWEEP}/sweep_report.html",

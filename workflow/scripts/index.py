@@ -1,0 +1,35 @@
+"""results/<dataset>/index.html: the data statement, then links to every report, figure and table."""
+
+import json
+import os
+
+from thermaxis.reporting import IndexRow, IndexSection, render_index
+from thermaxis.runner import run_script, write_text
+
+
+def main(snakemake):
+    p = snakemake.params
+    here = os.path.dirname(snakemake.output[0])
+
+    def rel(path):
+        return os.path.relpath(path, here).replace(os.sep, "/")
+
+    sections = [
+        IndexSection(
+            title=title,
+            intro=intro,
+            rows=tuple(IndexRow(label, tuple((text, rel(path)) for text, path in links)) for label, links in rows),
+        )
+        for title, intro, rows in p.sections
+    ]
+    # The sweep is optional and slow: linked when it was run, never a dependency.
+    if os.path.isfile(p.sweep):
+        sweep = IndexRow("sweep report", (("html", rel(p.sweep)),), "present when the index was built (`make sweep`)")
+        sections.insert(1, IndexSection(title="Sweep", rows=(sweep,)))
+    with open(snakemake.input.provenance, encoding="utf-8") as fh:
+        provenance = json.load(fh)
+    page = render_index(p.dataset_name, p.statement, p.simulated, sections, provenance)
+    write_text(page, snakemake.output[0])
+
+
+run_script(main, snakemake)

@@ -1,0 +1,18 @@
+"""The sweep's tables: every batch's rows (summary.csv), the ranking and the factor effects."""
+
+import pandas as pd
+
+from thermaxis import sweep
+from thermaxis.runner import run_script, write_csv
+
+
+def main(snakemake):
+    p = snakemake.params
+    summary = sweep.collect_summary(pd.read_parquet(path) for path in snakemake.input.batches)
+    ranking = sweep.rank_configurations(summary, p.selection, p.degree)
+    write_csv(summary, snakemake.output.summary, float_format="%.6f")
+    write_csv(ranking, snakemake.output.ranking, float_format="%.6f")
+    write_csv(sweep.factor_effects(ranking), snakemake.output.effects, float_format="%.6f")
+
+
+run_script(main, snakemake)
