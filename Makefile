@@ -59,11 +59,15 @@ twin-calibrate: env
 report: results
 	$(SNAKEMAKE) --report "results/twin/report.zip"
 
+# The index links the sweep report only if it exists when the index is built, so an
+# index that is already there is rebuilt after the sweep.
 sweep: env
 	$(SNAKEMAKE) sweep
+	if [ -f results/twin/index.html ]; then $(SNAKEMAKE) --forcerun index -- results/twin/index.html; fi
 
+# Many minutes (cold run, sweep, scale series up to 50 runs); e.g. BENCH_ARGS="--runs 5 10".
 bench: env
-	$(BIN)/python -m thermaxis.bench --out results/bench
+	$(BIN)/python -m thermaxis.bench --out results/bench $(BENCH_ARGS)
 
 clean:
 	rm -rf results logs benchmarks .snakemake

@@ -351,28 +351,64 @@ def _sensors_text(inputs: tuple) -> str:
 
 
 def _unit_selections(X, Y, unit: Unit, grid: SweepGrid, base, decoupled: bool) -> dict:
-    """The unit's selections: {degree: FoldSelection} for decoupled, {None: ...} for pointwise."""
+    """The unit's selections: {degree: FoldSelection} for decoupled, {None: ...} for pointwise.
+
+    A selection the data cannot support is kept as its one-line error message, so
+    only the configurations that need it fail.
+    """
     from .experiment import select_for_fold
 
     pairs = grid.approach_degrees(decoupled)
     degrees = sorted({d for _, d in pairs if d is not None})
     wants_pointwise = any(d is None for _, d in pairs)
-    out = {}
-    for i, degree in enumerate(degrees):
-        # The point-by-point points do not depend on the degree: selected with the first.
+    out: dict = {}
+    for degree in degrees:
+        # The point-by-point points do not depend on the degree: selected once, with
+        # the first degree whose selection succeeds.
+        with_pointwise = wants_pointwise and None not in out
         settings = unit.selection.settings(base, degree, grid.fixed)
-        out[degree] = select_for_fold(X, Y, unit.fold, settings, decoupled=True, pointwise=wants_pointwise and i == 0)
-    if wants_pointwise:
-        if degrees:
-            out[None] = out[degrees[0]]
-        else:
-            settings = unit.selection.settings(base, base.degree, grid.fixed)
+        try:
+            out[degree] = select_for_fold(X, Y, unit.fold, settings, decoupled=True, pointwise=with_pointwise)
+        except ValueError as exc:
+            out[degree] = f"selection failed: {str(exc).splitlines()[0]}"
+            continue
+        if with_pointwise:
+            out[None] = out[degree]
+    if wants_pointwise and None not in out:
+        settings = unit.selection.settings(base, base.degree, grid.fixed)
+        try:
             out[None] = select_for_fold(X, Y, unit.fold, settings, decoupled=False)
+        except ValueError as exc:
+            out[None] = f"selection failed: {str(exc).splitlines()[0]}"
     return out
 
 
-def _failed_rows(config: Configuration, fold: str, message: str) -> list[dict]:
-    return [{"config_id": config.config_id, **config.factors(), "fold": fold, "target": "error", "sensors": "", "status": message}]
+def _evaluate(X, Y, fold: str, config: Configuration, selection, model, degree: int) -> pd.DataFrame | str:
+    """The metrics of one evaluation, or its one-line error message."""
+    from .experiment import evaluate_configuration
+
+    try:
+        return evaluate_configuration(X, Y, fold, config.approach, config.algorithm, selection, model, degree=degree).metrics
+    except ValueError as exc:
+        return str(exc).splitlines()[0]
+
+
+def _config_rows(config: Configuration, fold: str, inputs: tuple, outcome, reused: bool = False, seconds: float = 0.0) -> list[dict]:
+    """Summary rows of one configuration on one fold, and its log line."""
+    label = {"config_id": config.config_id, **config.factors(), "fold": fold}
+    if isinstance(outcome, str):
+        log.warning("%s fold %s: failed: %s", config.config_id, fold, outcome)
+        return [{**label, "target": "error", "sensors": "", "status": outcome}]
+    error = outcome.loc[outcome["target"] == "error", "max_abs"].iloc[0]
+    log.info(
+        "%s fold %s: max|residual| %.4g um (%s, %.2f s)",
+        config.config_id, fold, error, "reused" if reused else "fitted", seconds,
+    )  # fmt: skip
+    sensors = _sensors_text(inputs)
+    return [
+        {**label, "target": r["target"], **{m: r[m] for m in METRICS}, "sensors": sensors, "status": "ok"}
+        for r in outcome.to_dict("records")
+    ]
 
 
 def run_batch(
@@ -410,53 +446,23 @@ def run_batch(
         evaluated on a fold (e.g. a selection the data cannot support) gives one row
         with NaN metrics and the reason in ``status``, instead of stopping the sweep.
     """
-    from .experiment import evaluate_configuration
-
     rows: list[dict] = []
-    done: dict[tuple, pd.DataFrame] = {}
+    done: dict[tuple, pd.DataFrame | str] = {}
     for unit in units:
-        configs = grid.unit_configurations(unit.selection, decoupled)
-        try:
-            selections = _unit_selections(X, Y, unit, grid, base_selection, decoupled)
-        except ValueError as exc:
-            message = f"selection failed: {str(exc).splitlines()[0]}"
-            log.warning("fold %s, %s: %s", unit.fold, unit.selection.label, message)
-            for config in configs:
-                rows += _failed_rows(config, unit.fold, message)
-                if progress is not None:
-                    progress.update()
-            continue
-        for config in configs:
+        selections = _unit_selections(X, Y, unit, grid, base_selection, decoupled)
+        for config in grid.unit_configurations(unit.selection, decoupled):
             selection = selections[config.degree]
-            inputs = _model_inputs_of(selection, config.approach)
-            key = (unit.fold, config.approach, config.algorithm, config.degree, inputs)
-            started = time.perf_counter()
-            reused = key in done
-            if not reused:
-                degree = config.degree if config.degree is not None else base_selection.degree
-                try:
-                    result = evaluate_configuration(
-                        X, Y, unit.fold, config.approach, config.algorithm, selection, model, degree=degree
-                    )
-                    done[key] = result.metrics
-                except ValueError as exc:
-                    done[key] = str(exc).splitlines()[0]
-            outcome = done[key]
-            if isinstance(outcome, str):
-                log.warning("%s fold %s: failed: %s", config.config_id, unit.fold, outcome)
-                rows += _failed_rows(config, unit.fold, outcome)
+            if isinstance(selection, str):
+                rows += _config_rows(config, unit.fold, (), selection)
             else:
-                label = {"config_id": config.config_id, **config.factors(), "fold": unit.fold}
-                for metric_row in outcome.to_dict("records"):
-                    rows.append(
-                        {**label, "target": metric_row["target"], **{m: metric_row[m] for m in METRICS},
-                         "sensors": _sensors_text(inputs), "status": "ok"}
-                    )
-                error = outcome.loc[outcome["target"] == "error", "max_abs"].iloc[0]
-                log.info(
-                    "%s fold %s: max|residual| %.4g um (%s, %.2f s)",
-                    config.config_id, unit.fold, error, "reused" if reused else "fitted", time.perf_counter() - started,
-                )  # fmt: skip
+                started = time.perf_counter()
+                inputs = _model_inputs_of(selection, config.approach)
+                key = (unit.fold, config.approach, config.algorithm, config.degree, inputs)
+                reused = key in done
+                if not reused:
+                    degree = config.degree if config.degree is not None else base_selection.degree
+                    done[key] = _evaluate(X, Y, unit.fold, config, selection, model, degree)
+                rows += _config_rows(config, unit.fold, inputs, done[key], reused, time.perf_counter() - started)
             if progress is not None:
                 progress.update()
     return _as_summary_frame(rows)

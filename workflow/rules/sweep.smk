@@ -17,18 +17,10 @@ SWEEP_FOLDS = list(config["sweep"]["folds"]) or RUNS
 SWEEP_UNITS, SWEEP_SKIPPED = plan_units(SWEEP_GRID, SWEEP_FOLDS, DATASET.sensors)
 
 
-def _cores_given():
-    """Cores of this Snakemake run; 1 when none were given (--lint, some dry runs)."""
-    try:
-        return int(workflow.cores)
-    except Exception:
-        return 1
-
-
+# One batch per core given (None without --cores: one batch).
 SWEEP_BATCHES = batch_count(
-    config["sweep"]["batches"], _cores_given(), len(SWEEP_UNITS)
+    config["sweep"]["batches"], workflow.resource_settings.cores, len(SWEEP_UNITS)
 )
-SWEEP_FORMATS = FIG_FORMATS
 SWEEP_BATCH_FILES = expand(
     f"{SWEEP}/batches/{SWEEP_BATCHES}/{{batch}}.parquet", batch=range(SWEEP_BATCHES)
 )
@@ -51,36 +43,25 @@ if not SWEEP_UNITS:
     )
 
 
-def sweep_figures(stem):
-    return [f"{SWEEP}/figures/{stem}.{ext}" for ext in SWEEP_FORMATS]
-
-
-def sweep_report_parameters(input):
-    """papermill parameters as JSON (valid YAML for `papermill -y`)."""
-    embed = next((f for f in ("png", "svg") if f in SWEEP_FORMATS), None)
-    figures = {
-        stem: (f"{SWEEP}/figures/{stem}.{embed}" if embed else "")
+SWEEP_HEATMAP = [f"{SWEEP}/figures/sweep_heatmap.{ext}" for ext in FIG_FORMATS]
+SWEEP_EFFECTS = [f"{SWEEP}/figures/sweep_factor_effects.{ext}" for ext in FIG_FORMATS]
+SWEEP_EMBED = next((f for f in ("png", "svg") if f in FIG_FORMATS), None)
+# papermill parameters of the report (JSON, valid YAML for `papermill -y`); the input
+# paths are added per job.
+SWEEP_REPORT = dict(
+    dataset_name=DATASET.name,
+    simulated=SIMULATED,
+    statement=DATA_STATEMENT,
+    figures={
+        stem: f"{SWEEP}/figures/{stem}.{SWEEP_EMBED}" if SWEEP_EMBED else ""
         for stem in ("sweep_heatmap", "sweep_factor_effects")
-    }
-    return json.dumps(
-        dict(
-            dataset_name=DATASET.name,
-            simulated=SIMULATED,
-            statement=DATA_STATEMENT,
-            summary=input.summary,
-            ranking=input.ranking,
-            effects=input.effects,
-            benchmarks=list(input.benchmarks),
-            figures=figures,
-            grid=config["sweep"],
-            folds=SWEEP_FOLDS,
-            skipped=SWEEP_SKIPPED,
-            selection=config["selection"],
-            degree=config["decoupling"]["degree"],
-            svr_grid=config["models"]["svr_grid"],
-        ),
-        sort_keys=True,
-    )
+    },
+    grid=config["sweep"],
+    folds=SWEEP_FOLDS,
+    skipped=SWEEP_SKIPPED,
+    selection=config["selection"],
+    degree=config["decoupling"]["degree"],
+)
 
 
 wildcard_constraints:
@@ -137,7 +118,7 @@ rule sweep_heatmap:
     input:
         ranking=f"{SWEEP}/ranking.csv",
     output:
-        figures=sweep_figures("sweep_heatmap"),
+        figures=SWEEP_HEATMAP,
     log:
         f"{LOGS}/sweep/heatmap.log",
     benchmark:
@@ -157,7 +138,7 @@ rule sweep_factor_effects:
     input:
         ranking=f"{SWEEP}/ranking.csv",
     output:
-        figures=sweep_figures("sweep_factor_effects"),
+        figures=SWEEP_EFFECTS,
     log:
         f"{LOGS}/sweep/factor_effects.log",
     benchmark:
@@ -179,7 +160,7 @@ rule sweep_report:
         summary=f"{SWEEP}/summary.csv",
         ranking=f"{SWEEP}/ranking.csv",
         effects=f"{SWEEP}/factor_effects.csv",
-        figures=sweep_figures("sweep_heatmap") + sweep_figures("sweep_factor_effects"),
+        figures=SWEEP_HEATMAP + SWEEP_EFFECTS,
         benchmarks=expand(
             f"{BENCH}/sweep/batch_{SWEEP_BATCHES}_{{batch}}.tsv",
             batch=range(SWEEP_BATCHES),
@@ -201,7 +182,14 @@ rule sweep_report:
     params:
         title=f"Sweep report: {DATASET.name}",
         statement=DATA_STATEMENT,
-        parameters=lambda w, input: sweep_report_parameters(input),
+        parameters=lambda w, input: json.dumps(
+            {
+                **SWEEP_REPORT,
+                **{k: input[k] for k in ("summary", "ranking", "effects")},
+                "benchmarks": list(input.benchmarks),
+            },
+            sort_keys=True,
+        ),
     shell:
         SWEEP_PAPERMILL
 
@@ -211,6 +199,6 @@ rule sweep:
         f"{SWEEP}/summary.csv",
         f"{SWEEP}/ranking.csv",
         f"{SWEEP}/factor_effects.csv",
-        sweep_figures("sweep_heatmap"),
-        sweep_figures("sweep_factor_effects"),
+        SWEEP_HEATMAP,
+        SWEEP_EFFECTS,
         f"{SWEEP}/sweep_report.html",

@@ -1,1 +1,34 @@
-"""Calibrated thermal twin of the paper's X axis (the embedded default dataset)."""
+"""Calibrated thermal twin of the paper's X axis: the embedded default dataset.
+
+``python -m thermaxis.twin generate`` writes ``data/raw/twin`` (and the ground truth)
+from the committed ``twin_params.json``; ``calibrate`` refits those parameters to the
+paper's Table 5; ``scale`` writes large benchmark datasets.  Modules:
+
+* :mod:`~thermaxis.twin.network` -- the lumped thermal network and its exact integration;
+* :mod:`~thermaxis.twin.conditions` -- the four experiments, timelines, workshop air;
+* :mod:`~thermaxis.twin.model` -- free parameters, heat inputs, the error model;
+* :mod:`~thermaxis.twin.observe` -- sensors and interferometer;
+* :mod:`~thermaxis.twin.faults` -- the real-log faults seeded into the raw files;
+* :mod:`~thermaxis.twin.fit` -- calibration against Table 5;
+* :mod:`~thermaxis.twin.generate`, :mod:`~thermaxis.twin.report` -- files and documents;
+* :mod:`~thermaxis.twin.scale` -- benchmark datasets.
+"""
+
+from .fit import PAPER_TABLE5, FitResult, calibrate
+from .generate import generate_dataset
+from .model import TwinParams, load_params, save_params
+from .report import measurement_lines
+from .scale import ScaleSpec, generate_scale
+
+__all__ = [
+    "PAPER_TABLE5",
+    "FitResult",
+    "calibrate",
+    "generate_dataset",
+    "TwinParams",
+    "load_params",
+    "save_params",
+    "measurement_lines",
+    "ScaleSpec",
+    "generate_scale",
+]

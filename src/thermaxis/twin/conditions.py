@@ -48,8 +48,8 @@ class Condition:
     """One experiment of the paper's Table 1, with the twin's fictitious calendar.
 
     ``ambient_knots`` are (minutes from M1, fraction of the Table 1 range): the workshop
-    air follows the piecewise-linear curve through them, so its minimum and maximum over
-    the log hit the published range exactly.  ``jitter_s`` shifts each measurement off
+    air follows the piecewise-linear curve through them, so over the log it spans the
+    published range (to within a few hundredths of a degree).  ``jitter_s`` shifts each measurement off
     the nominal 23-min grid (an operator is never exactly on time).
     """
 

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import conditions as cond
+
 __all__ = [
     "Spike",
     "SPIKES",
@@ -22,6 +24,7 @@ __all__ = [
     "WIRELESS_OUTAGE",
     "WIRELESS_LOSS_PROBABILITY",
     "MISSING_READING",
+    "measurement_at",
     "apply_box_faults",
 ]
 
@@ -34,7 +37,8 @@ class Spike:
     delta_c: float
 
 
-#: Single-sample spikes (electromagnetic interference from the drives).
+#: Single-sample spikes (electromagnetic interference from the drives).  E4's T1 spike
+#: falls inside measurement M07's window on purpose: a window mean must not take it.
 SPIKES: tuple[Spike, ...] = (
     Spike("E1", "T3", 57.5, +5.3),
     Spike("E2", "T8", 101.0, -3.9),
@@ -56,11 +60,22 @@ WIRELESS_LOSS_PROBABILITY = 0.05
 MISSING_READING = ("E3", 6, "+", 345.0)
 
 
+def measurement_at(run: str, minute: float) -> int | None:
+    """The measurement (1-based) whose window contains ``minute``, if any."""
+    condition = next(c for c in cond.CONDITIONS if c.run == run)
+    tl = cond.timeline(condition)
+    t = 60.0 * minute
+    inside = (tl.measurement_start_s <= t) & (t <= tl.measurement_end_s)
+    return int(np.flatnonzero(inside)[0]) + 1 if inside.any() else None
+
+
 def _row_at(time_min: np.ndarray, minute: float) -> int:
     return int(np.argmin(np.abs(time_min - minute)))
 
 
-def apply_box_faults(run: str, time_min: np.ndarray, values: dict[str, np.ndarray]) -> tuple[dict[str, np.ndarray], np.ndarray]:
+def apply_box_faults(
+    run: str, time_min: np.ndarray, values: dict[str, np.ndarray]
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Spikes and the open circuit in place of samples; then the duplicated rows.
 
     Returns the faulty columns and the row order (indices into the clean rows, with

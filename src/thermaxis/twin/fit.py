@@ -142,7 +142,9 @@ def _geometric_kb(values: dict[str, float]) -> tuple[float, float]:
     return float(k), float(b)
 
 
-def _kb_from_bases(params: mdl.TwinParams, problem: _Problem, bases: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def _kb_from_bases(
+    params: mdl.TwinParams, problem: _Problem, bases: np.ndarray
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     values = params.values
     operator = _decoupling_operator()
     k_geo, b_geo = _geometric_kb(values)
@@ -194,7 +196,9 @@ def _prior_residuals(x: np.ndarray, runs: tuple[str, ...]) -> np.ndarray:
     return (x - centre) / width
 
 
-def calibrate(start: mdl.TwinParams | None = None, step_s: float = mdl.STEP_S, max_evaluations: int = 4000) -> FitResult:
+def calibrate(
+    start: mdl.TwinParams | None = None, step_s: float = mdl.STEP_S, max_evaluations: int = 4000
+) -> FitResult:
     """Fit the free parameters to Table 5 (deterministic trust-region least squares).
 
     Parameters

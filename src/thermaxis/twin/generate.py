@@ -67,55 +67,70 @@ def _wireless_times(tl: cond.Timeline, rng: np.random.Generator) -> np.ndarray:
     return np.round(t[t < tl.log_end_s - 1.0], 3)
 
 
+def _sensor(sensor_id: str):
+    return next(s for s in SENSORS if s.id == sensor_id)
+
+
+def _box_log(run: str, grid: np.ndarray, truth: dict[str, np.ndarray], rng: np.random.Generator):
+    """T1-T10 every 10 s with noise, then the box's seeded faults."""
+    clean = {s.id: truth[s.id] + rng.normal(0.0, s.noise_c, grid.size) for s in SENSORS if s.source == "box"}
+    return faults.apply_box_faults(run, grid / 60.0, clean)
+
+
+def _wireless_log(run: str, tl: cond.Timeline, truth: np.ndarray, rng: np.random.Generator):
+    """T11 at irregular ~30 s packets, with lost packets and the outage."""
+    times = _wireless_times(tl, rng)
+    values = np.interp(times, tl.grid_s, truth) + rng.normal(0.0, _sensor("T11").noise_c, times.size)
+    keep = rng.uniform(size=times.size) >= faults.WIRELESS_LOSS_PROBABILITY
+    out_run, first_min, last_min = faults.WIRELESS_OUTAGE
+    if out_run == run:
+        keep &= ~((times >= 60.0 * first_min) & (times <= 60.0 * last_min))
+    return times[keep], values[keep]
+
+
+def _hmi_log(tl: cond.Timeline, truth: np.ndarray, rng: np.random.Generator):
+    """T12 polled every minute of the HMI's own (late) clock, quantised to 0.1 degC."""
+    first_stamp = np.ceil((tl.log_start_s - HMI_CLOCK_OFFSET_S) / HMI_PERIOD_S) * HMI_PERIOD_S
+    stamps = np.arange(first_stamp, tl.log_end_s - HMI_CLOCK_OFFSET_S, HMI_PERIOD_S)
+    true_time = stamps + HMI_CLOCK_OFFSET_S
+    noisy = np.interp(true_time, tl.grid_s, truth) + rng.normal(0.0, _sensor("T12").noise_c, stamps.size)
+    return stamps, np.round(noisy, 1)
+
+
+def _laser(params: mdl.TwinParams, state: mdl.RunState, rng: np.random.Generator):
+    """The 8 measurements as read, and the noise-free (time_min, k, b) of each."""
+    tl = state.timeline
+    datum_true = float(mdl.positioning_error(params.values, state, cond.FIRST_TARGET_MM, cond.ZERO_S))
+    # Zeroing captures one noisy reading: every later reading carries its noise.
+    datum_read = datum_true + rng.normal(0.0, INTERFEROMETER.reading_noise_um)
+    n = cond.TARGETS_MM.size
+    measurements, kb_truth = [], []
+    for start, end in zip(tl.measurement_start_s, tl.measurement_end_s):
+        readings = interferometer_readings(params.values, state, start, datum_read, rng)
+        true_rel = readings.true_um + datum_read - datum_true
+        pass_mean = 0.5 * (true_rel[:n] + true_rel[n:][::-1])
+        fit = decouple_measurement(cond.TARGETS_MM, pass_mean, origin_mm=cond.FIRST_TARGET_MM)
+        measurements.append(readings)
+        kb_truth.append((0.5 * (start + end) / 60.0, fit.k_um_per_m, fit.b_um))
+    return measurements, kb_truth
+
+
 def simulate_records(params: mdl.TwinParams) -> list[RunRecord]:
-    """Simulate all four runs: hidden state, sensors (clean and faulty) and readings."""
+    """Simulate all four runs: hidden state, sensors (clean and faulty) and readings.
+
+    Each instrument draws from its own seeded stream, so changing one never shifts
+    the noise of another.
+    """
     records = []
     for i, condition in enumerate(cond.CONDITIONS):
         state = mdl.simulate_run(condition, params)
         tl = state.timeline
-        grid = state.grid_s
-        step = float(grid[1] - grid[0])
-        truth = {
-            s.id: lagged(sensor_signal(s, state), step, s.lag_s) + s.offset_c for s in SENSORS
-        }
-        noise_rng = _run_rng(i, 1)
-        box_clean = {
-            s.id: truth[s.id] + noise_rng.normal(0.0, s.noise_c, grid.size) for s in SENSORS if s.source == "box"
-        }
-        box, rows = faults.apply_box_faults(condition.run, grid / 60.0, box_clean)
-
-        wireless_rng = _run_rng(i, 2)
-        t11 = next(s for s in SENSORS if s.id == "T11")
-        w_time = _wireless_times(tl, wireless_rng)
-        w_value = np.interp(w_time, grid, truth["T11"]) + wireless_rng.normal(0.0, t11.noise_c, w_time.size)
-        keep = wireless_rng.uniform(size=w_time.size) >= faults.WIRELESS_LOSS_PROBABILITY
-        out_run, first_min, last_min = faults.WIRELESS_OUTAGE
-        if out_run == condition.run:
-            keep &= ~((w_time >= 60.0 * first_min) & (w_time <= 60.0 * last_min))
-        w_time, w_value = w_time[keep], w_value[keep]
-
-        t12 = next(s for s in SENSORS if s.id == "T12")
-        hmi_rng = _run_rng(i, 3)
-        # The HMI logs on its own clock, on whole minutes of that clock.
-        first_stamp = np.ceil((tl.log_start_s - HMI_CLOCK_OFFSET_S) / HMI_PERIOD_S) * HMI_PERIOD_S
-        stamps = np.arange(first_stamp, tl.log_end_s - HMI_CLOCK_OFFSET_S, HMI_PERIOD_S)
-        true_time = stamps + HMI_CLOCK_OFFSET_S
-        hmi = np.round(
-            np.interp(true_time, grid, truth["T12"]) + hmi_rng.normal(0.0, t12.noise_c, stamps.size), 1
-        )
-
-        laser_rng = _run_rng(i, 4)
-        datum_true = float(mdl.positioning_error(params.values, state, cond.FIRST_TARGET_MM, cond.ZERO_S))
-        datum_read = datum_true + laser_rng.normal(0.0, INTERFEROMETER.reading_noise_um)
-        measurements, kb_truth = [], []
-        for start, end in zip(tl.measurement_start_s, tl.measurement_end_s):
-            readings = interferometer_readings(params.values, state, start, datum_read, laser_rng)
-            true_rel = readings.true_um + datum_read - datum_true
-            n = cond.TARGETS_MM.size
-            pass_mean = 0.5 * (true_rel[:n] + true_rel[n:][::-1])
-            fit = decouple_measurement(cond.TARGETS_MM, pass_mean, origin_mm=cond.FIRST_TARGET_MM)
-            measurements.append(readings)
-            kb_truth.append((0.5 * (start + end) / 60.0, fit.k_um_per_m, fit.b_um))
+        step = float(tl.grid_s[1] - tl.grid_s[0])
+        truth = {s.id: lagged(sensor_signal(s, state), step, s.lag_s) + s.offset_c for s in SENSORS}
+        box, rows = _box_log(condition.run, tl.grid_s, truth, _run_rng(i, 1))
+        w_time, w_value = _wireless_log(condition.run, tl, truth["T11"], _run_rng(i, 2))
+        stamps, hmi = _hmi_log(tl, truth["T12"], _run_rng(i, 3))
+        measurements, kb_truth = _laser(params, state, _run_rng(i, 4))
         records.append(
             RunRecord(
                 condition=condition,
@@ -186,7 +201,11 @@ def _write_truth(truth_root: Path, records: list[RunRecord], params: mdl.TwinPar
     for record in records:
         for m, (t_min, k, b) in enumerate(record.kb_truth, start=1):
             kb_rows.append((record.condition.run, str(m), format(t_min, ".3f"), format(k, ".4f"), format(b, ".4f")))
-    _write_csv(truth_root / "kb_truth.csv", ["run", "measurement", "time_min", "k_um_per_m", "b_um"], [list(col) for col in zip(*kb_rows)])
+    _write_csv(
+        truth_root / "kb_truth.csv",
+        ["run", "measurement", "time_min", "k_um_per_m", "b_um"],
+        [list(col) for col in zip(*kb_rows)],
+    )
     sensor_ids = [s.id for s in SENSORS]
     for record in records:
         c = record.condition
@@ -239,7 +258,9 @@ the start of M1.
 """
 
 
-def generate_dataset(out_dir: Path | str, truth_dir: Path | str, params: mdl.TwinParams | None = None) -> list[RunRecord]:
+def generate_dataset(
+    out_dir: Path | str, truth_dir: Path | str, params: mdl.TwinParams | None = None
+) -> list[RunRecord]:
     """Write the raw dataset and the ground truth; returns the simulated records."""
     from .report import write_calibration_report, write_dataset_docs
 
@@ -251,5 +272,5 @@ def generate_dataset(out_dir: Path | str, truth_dir: Path | str, params: mdl.Twi
         _write_run(out_dir, record)
     write_dataset_docs(out_dir)
     _write_truth(truth_dir, records, params)
-    write_calibration_report(out_dir)
+    write_calibration_report(out_dir, params)
     return records

@@ -1,19 +1,25 @@
 """Free parameters, the heat inputs and the noise-free positioning error of the twin.
 
-The positioning error read by the interferometer at target x (mm) and time t is
+Heat inputs (W) follow the feed v (m/min) while the axis reciprocates: nut, bearing
+and carriage friction and motor losses are each a coefficient times v; the motor also
+dissipates standstill losses from servo-on (5 min before M1).
+
+The positioning error at target x (mm) and time t is
 
     E(x, t) = g(x) + k_th(t) * (x - X_FIXED_MM) / 1000 + d(t)
 
 * g(x): geometric error, a slope ``geometric_slope_um_per_m`` and a small periodic
   pitch error (amplitude ``PITCH_AMPLITUDE_UM``, period ``PITCH_PERIOD_MM``);
-* k_th(t) = a_s (T_screw_core - 20) - a_r (T_bed_inner - 20): the screw's expansion
-  (the hidden core temperature, effective gain a_s; the preloaded screw absorbs part of
-  the free expansion 11.5 um/m/K) minus the interferometer's material normalisation to
-  20 degC with its material sensor on the bed (gain a_r).  Both are about the fixed
-  bearing at X_FIXED_MM, so the expansion also moves the first target a little;
-* d(t) = -(c_bs T_bearing_seat + c_bi T_bed_inner + c_bo T_bed_outer): drift of the
-  table against the laser optics, independent of position (the fixed bearing moving
-  with its seat, bed bending and the bed carrying the optics).
+* k_th(t) = a_s (T_screw_core - 20) - a_r (T_bed_inner - 20), um/m: the screw's
+  expansion driven by its HIDDEN core temperature (gain a_s <= 11.5 um/m/K of free
+  steel) minus the interferometer's material normalisation to 20 degC with its
+  material sensor on the bed (gain a_r).  Both act about the fixed bearing at
+  X_FIXED_MM, so the expansion also moves the first target a little.  Because
+  a_s != a_r, k depends on absolute temperatures, as the paper's Eq. 9 assumes;
+* d(t) = -sum_n c_n T_n(t) over bearing seat, bed core, bed walls, carriages and nut,
+  um: the drift of the table against the laser optics, independent of position (the
+  fixed bearing moving with its seat, the bed carrying the optics and bending, the
+  table and nut housing growing between nut and reflector).
 
 The interferometer is zeroed once, at the first target just before M1, so a reading is
 E(x, t) - E(185, t_zero) plus reversal error and noise (:mod:`thermaxis.twin.observe`).
@@ -84,7 +90,9 @@ GLOBAL_PARAMETERS: dict[str, FreeParameter] = {
     "motor_heat_W_per_m_min": FreeParameter(0.0, 12.0, 2.0, 3.0, "servo motor losses per m/min (reversals, viscous)"),
     "motor_standstill_W": FreeParameter(0.0, 40.0, 10.0, 10.0, "motor losses with the drive enabled, at standstill"),
     "screw_gain_um_per_m_K": FreeParameter(3.0, 11.5, 9.0, 3.0, "effective expansion of the preloaded screw"),
-    "reference_gain_um_per_m_K": FreeParameter(3.0, 12.0, 10.0, 3.0, "interferometer material normalisation (bed sensor)"),
+    "reference_gain_um_per_m_K": FreeParameter(
+        3.0, 12.0, 10.0, 3.0, "interferometer material normalisation (bed sensor)"
+    ),
     "geometric_slope_um_per_m": FreeParameter(-300.0, 300.0, 0.0, _NO_PRIOR, "slope of the geometric error at 20 degC"),
     "drift_bearing_seat_um_per_K": FreeParameter(-3.0, 3.0, 0.0, 1.5, "table drift per K of the bearing seat"),
     "drift_bed_inner_um_per_K": FreeParameter(-12.0, 12.0, 0.0, 6.0, "table drift per K of the bed core"),
@@ -124,9 +132,10 @@ INITIAL_GROUPS: dict[str, tuple[str, ...]] = {
 #: Machine coordinate of the screw's fixed bearing (motor end), mm.
 X_FIXED_MM = 40.0
 #: Periodic pitch error of the screw: amplitude (um), period (mm) and phase at X = 0.
+#: The phase is chosen so that the cold-state intercept (M1) is about 0, as in Table 5.
 PITCH_AMPLITUDE_UM = 0.25
 PITCH_PERIOD_MM = 130.0
-PITCH_PHASE_RAD = 2.3
+PITCH_PHASE_RAD = 1.4
 #: Temperature at which the geometric error is defined (and the laser normalises to).
 REFERENCE_C = 20.0
 STEP_S = 10.0
@@ -140,10 +149,10 @@ class TwinParams:
     initial: dict[str, dict[str, float]]
 
     def vector(self, runs: tuple[str, ...]) -> np.ndarray:
-        """Flatten in the order of :func:`parameter_names`."""
-        return np.array([self.values[n] for n in GLOBAL_PARAMETERS] + [
-            self.initial[r][n] for r in runs for n in INITIAL_PARAMETERS
-        ])
+        """Flatten: GLOBAL_PARAMETERS, then INITIAL_PARAMETERS run by run."""
+        return np.array(
+            [self.values[n] for n in GLOBAL_PARAMETERS] + [self.initial[r][n] for r in runs for n in INITIAL_PARAMETERS]
+        )
 
     @classmethod
     def from_vector(cls, x: np.ndarray, runs: tuple[str, ...]) -> "TwinParams":
@@ -158,6 +167,7 @@ class TwinParams:
 
 
 def parameter_bounds(runs: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper bounds in the order of :meth:`TwinParams.vector`."""
     free = list(GLOBAL_PARAMETERS.values()) + [p for _ in runs for p in INITIAL_PARAMETERS.values()]
     return np.array([p.lower for p in free]), np.array([p.upper for p in free])
 
@@ -171,10 +181,19 @@ def load_params(path: Path | str = PARAMS_PATH) -> TwinParams:
     """Read the committed fitted parameters."""
     with open(path, encoding="utf-8") as fh:
         raw = json.load(fh)
-    values = {name: float(raw["global"][name]) for name in GLOBAL_PARAMETERS}
-    initial = {
-        run: {name: float(v[name]) for name in INITIAL_PARAMETERS} for run, v in raw["initial_offset_K"].items()
-    }
+    try:
+        values = {name: float(raw["global"][name]) for name in GLOBAL_PARAMETERS}
+        initial = {
+            run: {name: float(v[name]) for name in INITIAL_PARAMETERS} for run, v in raw["initial_offset_K"].items()
+        }
+    except KeyError as exc:
+        raise ValueError(
+            f"{path}: missing {exc.args[0]!r} (expected 'global' with every twin parameter and "
+            "'initial_offset_K' per run; rerun `python -m thermaxis.twin calibrate`)"
+        ) from None
+    missing = [c.run for c in cond.CONDITIONS if c.run not in initial]
+    if missing:
+        raise ValueError(f"{path}: no initial offsets for run(s) {missing}; rerun `python -m thermaxis.twin calibrate`")
     return TwinParams(values=values, initial=initial)
 
 

@@ -39,24 +39,30 @@ NODES: tuple[str, ...] = (
     "sleeve",
 )
 
-#: Heat capacities [J/K] (steel/cast iron, c = 460 J/kg/K).
+#: Heat capacities [J/K] (steel/cast iron, c = 460 J/kg/K).  Several are EFFECTIVE
+#: capacities: a lumped node also stands for the mass that shares its temperature, so
+#: its value is larger than the bare part's.  The calibration multiplies some of them
+#: by a fitted factor (``log_capacity_<node>`` in :mod:`thermaxis.twin.model`).
 CAPACITY_J_PER_K: dict[str, float] = {
-    "screw_core": 6.5e4,  # dia. 40 mm x 1.6 m ball screw, ~20 kg
+    # Mean temperature over the threaded length of a dia. 40 mm screw (bare: 16 kg,
+    # 7 kJ/K) with the nut bracket and support ends that follow it; heat spreads along
+    # the screw slowly, which is what makes its mean temperature slow.
+    "screw_core": 6.5e4,
     "nut": 1.6e3,  # nut and flange, ~3.5 kg
-    "bearing_seat": 3.9e4,  # fixed-end bearing housing, ~15 kg
-    "sliders": 1.5e4,  # four carriages and the table skirt above them
-    "motor": 2.6e4,  # servo motor, ~15 kg
+    "bearing_seat": 3.9e4,  # fixed-end housing with the bed's end block it is bolted to
+    "sliders": 1.5e4,  # four carriages and the table skirt above them, ~30 kg
+    "motor": 2.6e4,  # servo motor with its flange, ~55 kg
     "bed_inner": 6.0e5,  # the bed's core around the guideways, ~1.3 t
-    "bed_outer": 1.0e5,  # the bed's outer walls, ~0.5 t
+    "bed_outer": 1.0e5,  # the bed's outer walls (the skin that follows the air), ~0.2 t
     "sleeve": 3.0e3,  # telescopic screw sleeve (cover), ~6 kg
 }
 
 #: Thermal conductances [W/K]; ``ambient`` is the workshop air.
 CONDUCTANCE_W_PER_K: dict[tuple[str, str], float] = {
-    ("screw_core", "nut"): 1.0,  # through the balls; only near the nut's stroke
+    ("screw_core", "nut"): 1.0,  # through the balls, only along the nut's short stroke
     ("screw_core", "bearing_seat"): 0.6,  # along the screw shank into the fixed end
-    ("screw_core", "sleeve"): 0.3,  # air gap under the cover
-    ("screw_core", "ambient"): 0.3,  # exposed screw, forced by the motion
+    ("screw_core", "sleeve"): 1.5,  # radiation and still air under the close-fitting cover
+    ("screw_core", "ambient"): 0.3,  # the covered screw barely sees the air
     ("nut", "sliders"): 2.0,  # through the table
     ("nut", "ambient"): 0.8,
     ("bearing_seat", "motor"): 2.5,  # motor flange and coupling
@@ -69,7 +75,7 @@ CONDUCTANCE_W_PER_K: dict[tuple[str, str], float] = {
     ("bed_inner", "ambient"): 5.0,  # through chip channels and openings
     ("bed_outer", "ambient"): 40.0,  # large painted walls
     ("sleeve", "bed_inner"): 1.0,
-    ("sleeve", "ambient"): 2.5,
+    ("sleeve", "ambient"): 1.0,  # the sleeve's outer face, sheltered under the table
 }
 
 
@@ -85,9 +91,7 @@ class Discretised:
     Bd: np.ndarray
 
 
-def _continuous(
-    capacity: dict[str, float], conductance: dict[tuple[str, str], float]
-) -> tuple[np.ndarray, np.ndarray]:
+def _continuous(capacity: dict[str, float], conductance: dict[tuple[str, str], float]) -> tuple[np.ndarray, np.ndarray]:
     n = len(NODES)
     index = {name: i for i, name in enumerate(NODES)}
     laplacian = np.zeros((n, n))

@@ -46,12 +46,22 @@ class Sensor:
 
 SENSORS: tuple[Sensor, ...] = (
     # The sleeve covers the screw; its left end is near the motor-side bearing seat.
-    Sensor("T1", "screw sleeve, left", "box", {"sleeve": 0.75, "bearing_seat": 0.15, "ambient": 0.10}, 90.0, 0.06, 0.008),
+    Sensor(
+        "T1", "screw sleeve, left", "box", {"sleeve": 0.75, "bearing_seat": 0.15, "ambient": 0.10}, 90.0, 0.06, 0.008
+    ),
     Sensor("T2", "screw sleeve, right", "box", {"sleeve": 0.80, "ambient": 0.20}, 90.0, -0.04, 0.008),
     Sensor("T3", "screw sleeve, front", "box", {"sleeve": 0.85, "nut": 0.05, "ambient": 0.10}, 90.0, 0.09, 0.008),
     Sensor("T4", "left slider", "box", {"sliders": 0.85, "nut": 0.10, "ambient": 0.05}, 60.0, -0.07, 0.008),
     Sensor("T5", "right slider", "box", {"sliders": 0.85, "bed_inner": 0.10, "ambient": 0.05}, 60.0, 0.03, 0.008),
-    Sensor("T6", "bearing seat near motor", "box", {"bearing_seat": 0.90, "motor": 0.05, "ambient": 0.05}, 60.0, 0.05, 0.008),
+    Sensor(
+        "T6",
+        "bearing seat near motor",
+        "box",
+        {"bearing_seat": 0.90, "motor": 0.05, "ambient": 0.05},
+        60.0,
+        0.05,
+        0.008,
+    ),
     # The shell sees the winding through the stator and loses heat to the air.
     Sensor("T7", "motor shell, top", "box", {"motor": 0.60, "ambient": 0.40}, 60.0, -0.10, 0.008),
     Sensor("T8", "bed, inner side", "box", {"bed_inner": 0.95, "ambient": 0.05}, 60.0, 0.02, 0.008),
@@ -104,10 +114,11 @@ def lagged(signal: np.ndarray, step_s: float, lag_s: float) -> np.ndarray:
 class InterferometerSpec:
     """Error-side instrument constants (documented, not calibrated)."""
 
-    reading_noise_um: float = 0.05  # repeatability of one capture (vibration, dead path)
-    scale_error_um_per_m: float = 0.15  # 1 sigma of the per-measurement air-compensation error
-    scale_error_limit_um_per_m: float = 0.5  # XL-80 linear accuracy bound
-    reversal_um: float = -0.2  # backlash of the preloaded nut: the backward pass reads lower
+    reading_noise_um: float = 0.03  # repeatability of one capture (vibration, dead path)
+    # Per-measurement air-compensation error, 1 sigma, clipped at the XL-80 class bound.
+    scale_error_um_per_m: float = 0.07
+    scale_error_limit_um_per_m: float = 0.5
+    reversal_um: float = -0.1  # lost motion of the preloaded nut: the backward pass reads lower
 
 
 INTERFEROMETER = InterferometerSpec()
@@ -137,7 +148,15 @@ def interferometer_readings(
     t = np.concatenate([forward_t, backward_t])
     direction = np.array(["+"] * forward_t.size + ["-"] * backward_t.size)
     true = positioning_error(values, state, x, t) - datum_um
-    scale = float(np.clip(rng.normal(0.0, spec.scale_error_um_per_m), -spec.scale_error_limit_um_per_m, spec.scale_error_limit_um_per_m))
+    scale = float(
+        np.clip(
+            rng.normal(0.0, spec.scale_error_um_per_m),
+            -spec.scale_error_limit_um_per_m,
+            spec.scale_error_limit_um_per_m,
+        )
+    )
     noise = rng.normal(0.0, spec.reading_noise_um, x.size)
-    read = true + scale * (x - cond.FIRST_TARGET_MM) / 1000.0 + noise + np.where(direction == "-", spec.reversal_um, 0.0)
+    read = (
+        true + scale * (x - cond.FIRST_TARGET_MM) / 1000.0 + noise + np.where(direction == "-", spec.reversal_um, 0.0)
+    )
     return Readings(time_s=t, position_mm=x, direction=direction, error_um=read, true_um=true)

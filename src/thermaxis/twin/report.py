@@ -11,10 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import yaml
 
 from ..decouple import decouple_measurement
 from . import conditions as cond
 from . import faults
+from . import model as mdl
 from .fit import PAPER_TABLE5, TOLERANCE_B, TOLERANCE_K
 from .observe import HMI_CLOCK_OFFSET_S, INTERFEROMETER, SENSORS, SOURCES, WIRELESS_JITTER_S, WIRELESS_PERIOD_S
 
@@ -59,7 +61,9 @@ def measurement_lines(root: Path | str) -> pd.DataFrame:
             by_pass = frame.pivot_table(index="position_mm", columns="direction", values="error_um", aggfunc="mean")
             complete = by_pass.dropna()
             curve = complete.mean(axis=1)
-            fit = decouple_measurement(curve.index.to_numpy(float), curve.to_numpy(float), origin_mm=cond.FIRST_TARGET_MM)
+            fit = decouple_measurement(
+                curve.index.to_numpy(float), curve.to_numpy(float), origin_mm=cond.FIRST_TARGET_MM
+            )
             start, end = frame["time"].iloc[0], frame["time"].iloc[-1]
             middle = start + (end - start) / 2
             rows.append(
@@ -89,8 +93,6 @@ def window_temperatures(root: Path | str, lines: pd.DataFrame) -> pd.DataFrame:
     limits are dropped, the HMI clock offset declared in dataset.yaml is applied, and
     the median ignores single-sample spikes and duplicated rows.
     """
-    import yaml
-
     root = Path(root)
     meta = yaml.safe_load((root / "dataset.yaml").read_text(encoding="utf-8"))
     offsets = {s["name"]: float(s.get("clock_offset_s", 0.0)) for s in meta["sources"]}
@@ -183,7 +185,8 @@ def _dataset_yaml() -> str:
         "  three acquisition sources and 8 unzeroed interferometer measurements per run.",
         "provenance:",
         "  kind: simulated",
-        "  citation: " + _yaml_quote(
+        "  citation: "
+        + _yaml_quote(
             "thermaxis.twin, calibrated to Xu K., Li G., Li Z., Wang Z., Miao E., Research on "
             "decoupling and step-by-step modelling of thermal positioning error of the linear "
             "axis, Chinese Journal of Scientific Instrument, DOI 10.19650/j.cnki.cjsi.J2209628 "
@@ -215,12 +218,16 @@ def _runs_tsv() -> str:
 
 
 def _readme() -> str:
+    def where(run: str, minute: float) -> str:
+        m = faults.measurement_at(run, minute)
+        return f" (inside M{m:02d}'s window)" if m else ""
+
     spikes = "\n".join(
-        f"| {s.run} | box | {s.sensor} | single-sample spike of {s.delta_c:+.1f} degC at {s.minute:g} min |"
+        f"| {s.run} | box | {s.sensor} | single-sample spike of {s.delta_c:+.1f} degC at {s.minute:g} min{where(s.run, s.minute)} |"
         for s in faults.SPIKES
     )
     dups = "\n".join(
-        f"| {run} | box | all | {n} row(s) from {minute:g} min written twice (identical time and values) |"
+        f"| {run} | box | all | {n} row(s) from {minute:g} min written twice (identical time and values){where(run, minute)} |"
         for run, minute, n in faults.DUPLICATED_ROWS
     )
     oc_run, oc_sensor, oc_min = faults.OPEN_CIRCUIT
@@ -272,16 +279,16 @@ per run, March 2022).
 | run | source | sensor | fault |
 |---|---|---|---|
 {spikes}
-| {oc_run} | box | {oc_sensor} | open circuit: one reading of {faults.OPEN_CIRCUIT_C:.3f} at {oc_min:g} min (out of the PT100 range) |
+| {oc_run} | box | {oc_sensor} | open circuit: one reading of {faults.OPEN_CIRCUIT_C:.3f} at {oc_min:g} min{where(oc_run, oc_min)} (out of the PT100 range) |
 {dups}
 | all | wireless | T11 | about {faults.WIRELESS_LOSS_PROBABILITY:.0%} of the packets lost (no row) |
 | {out_run} | wireless | T11 | link outage from {out_first:g} to {out_last:g} min (no rows) |
 | all | hmi | T12 | 60 s sampling, 0.1 degC quantisation, clock {HMI_CLOCK_OFFSET_S:g} s behind |
 | {miss_run} | errors | M{miss_meas:02d} | the capture at {miss_pos:g} mm of the `{miss_dir}` pass is missing |
 
-Times of the faults are minutes from the start of M1. None of them falls inside a
-measurement window except the HMI quantisation and the missing capture. The fault-free
-sensor temperatures and the noise-free k and b are in `data/twin_truth/` (tests only).
+Times of the faults are minutes from the start of M1 (rows nearest to that minute).
+The fault-free sensor temperatures and the noise-free k and b are in
+`data/twin_truth/` (tests only; the modelling code never reads them).
 """
 
 
@@ -320,7 +327,9 @@ def _figure(table: pd.DataFrame, path: Path) -> None:
     for run, group in table.groupby("run", sort=True):
         for ax, twin, paper in ((axes[0], "k_um_per_m", "k_paper"), (axes[1], "b_um", "b_paper")):
             ax.plot(group["time_min"], group[twin], "o-", color=colours.get(run, "k"), label=f"{run} twin")
-            ax.plot(group["time_min"], group[paper], "s--", mfc="none", color=colours.get(run, "k"), label=f"{run} paper")
+            ax.plot(
+                group["time_min"], group[paper], "s--", mfc="none", color=colours.get(run, "k"), label=f"{run} paper"
+            )
     axes[0].set_ylabel("slope k (um/m)")
     axes[1].set_ylabel("intercept b (um)")
     for ax in axes:
@@ -333,7 +342,29 @@ def _figure(table: pd.DataFrame, path: Path) -> None:
     plt.close(fig)
 
 
-def write_calibration_report(root: Path | str) -> pd.DataFrame:
+def _parameter_tables(params: mdl.TwinParams) -> str:
+    rows = "\n".join(
+        f"| `{name}` | {params.values[name]:.4g} | {p.lower:g} ... {p.upper:g} | {p.meaning} |"
+        for name, p in mdl.GLOBAL_PARAMETERS.items()
+    )
+    header = "| run | " + " | ".join(f"`{n}`" for n in mdl.INITIAL_PARAMETERS) + " |"
+    offsets = "\n".join(
+        f"| {run} | " + " | ".join(f"{params.initial[run][n]:+.2f}" for n in mdl.INITIAL_PARAMETERS) + " |"
+        for run in sorted(params.initial)
+    )
+    groups = "; ".join(f"`{n}`: {', '.join(nodes)}" for n, nodes in mdl.INITIAL_GROUPS.items())
+    return f"""| parameter | value | bounds | meaning |
+|---|---|---|---|
+{rows}
+
+Initial temperatures, K above the workshop air at the start of the log ({groups}):
+
+{header}
+|---|{"---|" * len(mdl.INITIAL_PARAMETERS)}
+{offsets}"""
+
+
+def write_calibration_report(root: Path | str, params: mdl.TwinParams) -> pd.DataFrame:
     """CALIBRATION.md and calibration.png from the raw files under ``root``."""
     root = Path(root)
     lines = measurement_lines(root)
@@ -392,7 +423,7 @@ time: middle of the measurement, minutes from the run's first reading.
 
 `python -m thermaxis.twin calibrate` (`make twin-calibrate`) refits the free parameters
 with `scipy.optimize.least_squares` (trust region, deterministic start at the priors'
-centres) on the NOISE-FREE model -- pass mean without reversal error or noise -- with
+centres) on the NOISE-FREE model -- pass mean with the reversal error, without noise -- with
 residuals scaled by the tolerances ({TOLERANCE_K} um/m, {TOLERANCE_B} um) plus weak priors
 that keep loosely determined parameters physical. It writes
 `src/thermaxis/twin_params.json` and regenerates this folder. The free parameters
@@ -403,6 +434,8 @@ drift gains (bearing seat, bed core, bed walls, carriages, nut), six effective-c
 factors, and per run four initial temperature offsets (a machine is rarely at
 equilibrium when a test starts). The workshop-air profiles, the network's conductances,
 the sensors and the instrument constants are fixed and documented in the code.
+
+{_parameter_tables(params)}
 
 ## Sanity check: the paper's decoupled MLR does not reproduce the twin
 

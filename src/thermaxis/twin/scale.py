@@ -134,7 +134,8 @@ def _run(spec: ScaleSpec, index: int, params: mdl.TwinParams, mixes, root: Path)
     columns: dict[str, np.ndarray | list] = {"time": _clock(t, index, unit)}
     for i, (weights, lag_s, offset) in enumerate(mixes):
         surface = sum(
-            w * (state.ambient if name == "ambient" else state.nodes[:, NODES.index(name)]) for name, w in weights.items()
+            w * (state.ambient if name == "ambient" else state.nodes[:, NODES.index(name)])
+            for name, w in weights.items()
         )
         slow = lagged(surface, STEP_S, lag_s)
         values = np.interp(t, tl.grid_s, slow) + offset + rng.normal(0.0, 0.01, n_rows)
@@ -177,7 +178,8 @@ def generate_scale(out_dir: Path | str, spec: ScaleSpec, params: mdl.TwinParams 
     mixes = _sensor_mix(np.random.default_rng([spec.seed, 10**6]), spec.sensors)
     rows = [_run(spec, i, params, mixes, root) for i in range(spec.runs)]
     runs_tsv = ["run\tcondition\tfeed_mm_min\tdescription"] + [
-        f"{run}\t{c}\t{feed:.0f}\tbenchmark run, {feed:.0f} mm/min reciprocating, random workshop air" for run, c, feed in rows
+        f"{run}\t{c}\t{feed:.0f}\tbenchmark run, {feed:.0f} mm/min reciprocating, random workshop air"
+        for run, c, feed in rows
     ]
     (root / "runs.tsv").write_text("\n".join(runs_tsv) + "\n", encoding="utf-8")
     sensors = "\n".join(

@@ -1,0 +1,533 @@
+"""Benchmarks of the workflow (``make bench``): wall time, CPU time and peak memory.
+
+``python -m thermaxis.bench --out results/bench`` measures, each in a scratch work
+folder (symlinks to the repository's Snakefile, config, workflow, notebooks and data,
+so the repository's own ``results/`` are never touched):
+
+* ``results_cold``: ``snakemake --cores N`` from nothing (the set-up, i.e. the
+  virtual environment, already exists), the same as ``make results``;
+* ``results_noop``: the same command again, with nothing to do;
+* ``results_model_param``: after changing one model parameter (``models.ridge_alpha``);
+* ``sweep_default``: ``snakemake sweep`` with the default grid (the assembled data exist);
+* ``scale_<n>``: the main pipeline up to the metrics table on twin-generated datasets of
+  n runs (``python -m thermaxis.twin scale``: 64 sensors, 100 positions, 8 h at 1 Hz).
+  These runs use MLR and hold out ONE run (``folds: [S001]``): the leave-one-out loop
+  over every run and the inner searches of SVR are quadratic in the runs by design,
+  so they would hide how the pipeline itself scales.  Generating a dataset is timed
+  separately (``scale_generate_<n>``) and is not part of the fit.
+
+Each command runs in its own process group.  Wall time is measured around it; CPU time
+(user + system) and the largest single process's peak RSS come from ``os.wait4``, which
+reports the whole process tree once it has been reaped; the peak RSS of the tree (all
+processes alive at the same time, summed) is sampled with psutil every 0.2 s when psutil
+is installed.  Results: ``bench.json`` and ``bench.md`` in ``--out``.  The figures are
+what this machine measured; the targets of the project are shown beside them, never
+asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+__all__ = [
+    "Measurement",
+    "ScaleFit",
+    "measure",
+    "fit_scaling",
+    "prepare_workdir",
+    "run_bench",
+    "bench_markdown",
+    "main",
+]
+
+REPO = Path(__file__).resolve().parents[2]
+SCALE_RUNS = (5, 10, 20, 50)
+SCALE_SHAPE = {"sensors": 64, "positions": 100, "hours": 8.0, "rate_hz": 1.0, "seed": 0}
+MIB = 1024.0 * 1024.0
+# Linux reports ru_maxrss in KiB, macOS in bytes.
+_MAXRSS_UNIT = 1.0 if sys.platform == "darwin" else 1024.0
+STEPS = ("results", "sweep", "scale")
+TARGETS = {
+    "results_cold": "cold full regeneration <= 30 s",
+    "results_noop": "no-op rerun <= 2 s",
+    "sweep_default": ">= 200 configurations x all folds <= 60 s",
+    "scale_50": "50 runs <= 5 min within 4 GiB",
+}
+
+
+# --------------------------------------------------------------------------- measuring
+
+
+@dataclass
+class Measurement:
+    """One timed command."""
+
+    name: str
+    description: str
+    command: list[str]
+    wall_s: float
+    cpu_s: float
+    peak_rss_mib: float
+    peak_tree_rss_mib: float | None
+    returncode: int
+    log: str
+    runs: int | None = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.returncode == 0
+
+
+class _TreeSampler(threading.Thread):
+    """Largest summed RSS of a process and its descendants, sampled."""
+
+    def __init__(self, pid: int, every_s: float = 0.2):
+        super().__init__(daemon=True)
+        self.pid, self.every_s = pid, every_s
+        self.peak_bytes = 0
+        self.available = True
+        self._stop_event = threading.Event()
+
+    def run(self) -> None:
+        try:
+            import psutil
+        except ImportError:
+            self.available = False
+            return
+        try:
+            root = psutil.Process(self.pid)
+        except psutil.Error:
+            return
+        while not self._stop_event.is_set():
+            total = 0
+            try:
+                for proc in [root, *root.children(recursive=True)]:
+                    try:
+                        total += proc.memory_info().rss
+                    except psutil.Error:
+                        pass
+            except psutil.Error:
+                break
+            self.peak_bytes = max(self.peak_bytes, total)
+            self._stop_event.wait(self.every_s)
+
+    def stop(self) -> None:
+        self._stop_event.set()
+        self.join(timeout=5)
+
+
+def measure(
+    name: str,
+    command: list[str],
+    cwd: Path,
+    log_path: Path,
+    description: str = "",
+    env: dict | None = None,
+    timeout_s: float | None = None,
+    runs: int | None = None,
+) -> Measurement:
+    """Run ``command`` in ``cwd`` and measure it; stdout and stderr go to ``log_path``.
+
+    Parameters
+    ----------
+    name, description : str
+        Identify the measurement in bench.json.
+    command : list of str
+    cwd : Path
+    log_path : Path
+        Created (with its folder); overwritten.
+    env : dict, optional
+        Environment of the command (default: this process's).
+    timeout_s : float, optional
+        The process group is terminated after this long; the measurement keeps the
+        time until then and a non-zero return code.
+    runs : int, optional
+        Number of runs of the dataset (scale series).
+
+    Returns
+    -------
+    Measurement
+        Wall time, CPU time (user + system of the whole process tree), the largest
+        single process's peak RSS and, with psutil, the sampled peak RSS of the tree.
+    """
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    with open(log_path, "wb") as log:
+        start = time.perf_counter()
+        proc = subprocess.Popen(command, cwd=cwd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        sampler = _TreeSampler(proc.pid)
+        sampler.start()
+        timer = None
+        if timeout_s:
+            timer = threading.Timer(timeout_s, _terminate_group, args=(proc.pid,))
+            timer.start()
+        # wait4, not Popen.wait: its rusage covers the child and every descendant it reaped.
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - start
+        if timer is not None:
+            timer.cancel()
+        sampler.stop()
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    return Measurement(
+        name=name,
+        description=description,
+        command=[str(c) for c in command],
+        wall_s=round(wall, 3),
+        cpu_s=round(usage.ru_utime + usage.ru_stime, 3),
+        peak_rss_mib=round(usage.ru_maxrss * _MAXRSS_UNIT / MIB, 1),
+        peak_tree_rss_mib=round(sampler.peak_bytes / MIB, 1) if sampler.available else None,
+        returncode=proc.returncode,
+        log=str(log_path),
+        runs=runs,
+    )
+
+
+def _terminate_group(pid: int) -> None:
+    try:
+        os.killpg(pid, signal.SIGTERM)
+    except ProcessLookupError:
+        pass
+
+
+# --------------------------------------------------------------------------- scaling
+
+
+@dataclass(frozen=True)
+class ScaleFit:
+    """Least-squares line of cost against runs, the cost per added run, the log-log exponent."""
+
+    intercept_s: float
+    slope_s_per_run: float
+    r2: float
+    marginal_s_per_run: list
+    exponent: float
+    statement: str
+
+
+def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
+    """Fit ``seconds = intercept + slope * runs`` and say how the cost grows.
+
+    The growth is judged from the marginal cost (seconds per added run between
+    consecutive sizes): constant means linear.  The log-log exponent of the raw times
+    is reported too, but a fixed start-up cost pulls it below 1, so it is not used
+    for the verdict.
+
+    Raises
+    ------
+    ValueError
+        With fewer than two distinct run counts.
+    """
+    order = np.argsort(np.asarray(runs, dtype=float), kind="stable")
+    x = np.asarray(runs, dtype=float)[order]
+    y = np.asarray(seconds, dtype=float)[order]
+    if x.size != y.size or np.unique(x).size < 2:
+        raise ValueError(f"scaling fit needs at least two distinct run counts, got runs={list(x)}")
+    slope, intercept = np.polyfit(x, y, 1)
+    residual = y - (intercept + slope * x)
+    total = np.sum((y - y.mean()) ** 2)
+    r2 = 1.0 - float(np.sum(residual**2) / total) if total > 0 else 1.0
+    exponent = float(np.polyfit(np.log(x), np.log(y), 1)[0]) if np.all(y > 0) else float("nan")
+    keep = np.diff(x) > 0
+    marginal = (np.diff(y)[keep] / np.diff(x)[keep]).tolist()
+    if len(marginal) < 2:
+        growth = "growth not judged: two sizes cannot show curvature"
+    else:
+        ratio = marginal[-1] / marginal[0] if marginal[0] > 0 else float("inf")
+        span = f"{min(marginal):.2f}-{max(marginal):.2f} s per added run"
+        if 1 / 1.3 <= ratio <= 1.3:
+            growth = f"cost grows linearly with the number of runs (marginal cost {span})"
+        elif ratio < 1 / 1.3:
+            growth = f"cost grows less than linearly: the marginal cost falls ({span})"
+        elif ratio <= 2.0:
+            growth = f"cost grows somewhat faster than linearly: the marginal cost rises ({span})"
+        else:
+            growth = f"cost grows clearly faster than linearly: the marginal cost rises ({span})"
+    statement = (
+        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run (least squares, R^2 = {r2:.3f}); "
+        f"{growth}; log-log exponent of the raw times {exponent:.2f}"
+    )
+    return ScaleFit(float(intercept), float(slope), r2, [round(v, 3) for v in marginal], exponent, statement)
+
+
+# --------------------------------------------------------------------------- the benchmark
+
+
+def prepare_workdir(root: Path, repo: Path = REPO) -> Path:
+    """A scratch work folder whose Snakefile, config, workflow, notebooks and data link to ``repo``."""
+    root.mkdir(parents=True, exist_ok=True)
+    for name in ("Snakefile", "config", "workflow", "notebooks", "data"):
+        target = root / name
+        if not target.exists():
+            os.symlink(repo / name, target)
+    return root
+
+
+def _environment() -> dict:
+    env = dict(os.environ)
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    env.setdefault("MPLBACKEND", "Agg")
+    env.setdefault("PYTHONHASHSEED", "0")
+    return env
+
+
+def _snakemake(cores: int, *args: str) -> list[str]:
+    return [str(Path(sys.executable).with_name("snakemake")), "--cores", str(cores), *args]
+
+
+def _machine() -> dict:
+    try:
+        usable = len(os.sched_getaffinity(0))
+    except AttributeError:
+        usable = os.cpu_count()
+    memory = None
+    try:
+        import psutil
+
+        memory = round(psutil.virtual_memory().total / MIB / 1024.0, 1)
+    except ImportError:
+        pass
+    return {
+        "cpu_count": os.cpu_count(),
+        "usable_cores": usable,
+        "memory_gib": memory,
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "load_average_at_start": [round(v, 2) for v in os.getloadavg()],
+    }
+
+
+def _git_commit(repo: Path) -> str | None:
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True, timeout=10)
+        return out.stdout.strip() or None
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+def _default_dataset_name(repo: Path) -> str:
+    config = yaml.safe_load((repo / "config" / "config.yaml").read_text(encoding="utf-8"))
+    meta = yaml.safe_load((repo / config["dataset"] / "dataset.yaml").read_text(encoding="utf-8"))
+    return meta["name"]
+
+
+def _sweep_size(work: Path, dataset_name: str) -> dict:
+    ranking = work / "results" / dataset_name / "sweep" / "ranking.csv"
+    if not ranking.is_file():
+        return {}
+    import pandas as pd
+
+    table = pd.read_csv(ranking)
+    return {"configurations": int(len(table)), "folds": int(table["n_folds"].max())}
+
+
+def run_bench(
+    out: Path,
+    cores: int,
+    runs=SCALE_RUNS,
+    steps=STEPS,
+    workdir: Path | None = None,
+    keep: bool = False,
+    timeout_s: float = 3600.0,
+    progress=print,
+) -> dict:
+    """Run the benchmark and return the bench.json document (also written to ``out``)."""
+    out.mkdir(parents=True, exist_ok=True)
+    scratch = Path(workdir) if workdir else Path(tempfile.mkdtemp(prefix="thermaxis-bench-"))
+    env = _environment()
+    logs = out / "logs"
+    doc = {
+        "machine": _machine(),
+        "git_commit": _git_commit(REPO),
+        "settings": {"cores": cores, "scale_runs": list(runs), "scale_shape": SCALE_SHAPE, "steps": list(steps)},
+        "measurements": [],
+    }
+    measurements: list[Measurement] = []
+
+    def record(m: Measurement) -> Measurement:
+        measurements.append(m)
+        status = "ok" if m.ok else f"FAILED (exit {m.returncode}, log {m.log})"
+        progress(f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, {m.peak_rss_mib:.0f} MiB peak; {status}")
+        return m
+
+    try:
+        if "results" in steps or "sweep" in steps:
+            work = prepare_workdir(scratch / "default")
+            dataset_name = _default_dataset_name(REPO)
+        if "results" in steps:
+            cold = record(measure("results_cold", _snakemake(cores), work, logs / "results_cold.log",
+                                  "snakemake --cores N on nothing (make results after set-up)", env, timeout_s))  # fmt: skip
+            record(measure("results_noop", _snakemake(cores), work, logs / "results_noop.log",
+                           "the same again: nothing to do", env, timeout_s))  # fmt: skip
+            base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
+            alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
+            (work / "bench_param.yaml").write_text(yaml.safe_dump({"models": {"ridge_alpha": alpha}}))
+            changed = record(measure("results_model_param",
+                                     _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
+                                     work, logs / "results_model_param.log",
+                                     f"after changing one model parameter (models.ridge_alpha -> {alpha:g})", env,
+                                     timeout_s))  # fmt: skip
+            for m in (cold, changed):
+                m.extra["jobs"] = _count_jobs(Path(m.log))
+        if "sweep" in steps:
+            m = record(measure("sweep_default", _snakemake(cores, "sweep"), work, logs / "sweep_default.log",
+                               "snakemake sweep, default grid (assembled data present)", env, timeout_s))  # fmt: skip
+            m.extra.update(_sweep_size(work, dataset_name))
+        if "scale" in steps:
+            for n in runs:
+                data = scratch / "scale" / f"data_{n}"
+                shutil.rmtree(data, ignore_errors=True)
+                generate = [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(data), "--runs", str(n),
+                            "--sensors", str(SCALE_SHAPE["sensors"]), "--positions", str(SCALE_SHAPE["positions"]),
+                            "--hours", str(SCALE_SHAPE["hours"]), "--rate-hz", str(SCALE_SHAPE["rate_hz"]),
+                            "--seed", str(SCALE_SHAPE["seed"])]  # fmt: skip
+                record(measure(f"scale_generate_{n}", generate, scratch, logs / f"scale_generate_{n}.log",
+                               f"python -m thermaxis.twin scale: {n} runs (not part of the fit)", env, timeout_s,
+                               runs=n))  # fmt: skip
+                work_n = prepare_workdir(scratch / "scale" / f"work_{n}")
+                override = {"dataset": str(data), "ambient_sensor": "T1", "models": {"algorithms": ["mlr"]},
+                            "folds": ["S001"], "paper_fold": "S001"}  # fmt: skip
+                (work_n / "bench_scale.yaml").write_text(yaml.safe_dump(override))
+                targets = ["results/twin_scale/tables/metrics.csv", "results/twin_scale/tables/table5_slope_intercept.csv"]
+                m = record(measure(f"scale_{n}",
+                                   _snakemake(cores, "--configfile", "config/config.yaml", "bench_scale.yaml", "--",
+                                              *targets),
+                                   work_n, logs / f"scale_{n}.log",
+                                   f"{n} runs: cleaning to metrics.csv and Table 5 (MLR, fold S001)", env, timeout_s,
+                                   runs=n))  # fmt: skip
+                m.extra["jobs"] = _count_jobs(Path(m.log))
+                if not keep:
+                    shutil.rmtree(data, ignore_errors=True)
+                    shutil.rmtree(work_n, ignore_errors=True)
+    finally:
+        if not keep and workdir is None:
+            shutil.rmtree(scratch, ignore_errors=True)
+    doc["machine"]["load_average_at_end"] = [round(v, 2) for v in os.getloadavg()]
+    doc["measurements"] = [{**asdict(m), "ok": m.ok} for m in measurements]
+    scale = [m for m in measurements if m.name.startswith("scale_") and not m.name.startswith("scale_generate") and m.ok]
+    if len({m.runs for m in scale}) >= 2:
+        doc["scale_fit"] = asdict(fit_scaling([m.runs for m in scale], [m.wall_s for m in scale]))
+        doc["scale_fit_cpu"] = asdict(fit_scaling([m.runs for m in scale], [m.cpu_s for m in scale], "CPU time"))
+    doc["targets"] = _targets(measurements)
+    (out / "bench.json").write_text(json.dumps(doc, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    (out / "bench.md").write_text(bench_markdown(doc), encoding="utf-8")
+    return doc
+
+
+def _count_jobs(log: Path) -> int | None:
+    """Jobs Snakemake ran, from its 'N of M steps' lines."""
+    if not log.is_file():
+        return None
+    done = [line for line in log.read_text(errors="replace").splitlines() if "steps (" in line and " of " in line]
+    if not done:
+        return 0
+    try:
+        return int(done[-1].split(" of ")[1].split()[0])
+    except (IndexError, ValueError):
+        return None
+
+
+def _targets(measurements: list[Measurement]) -> list[dict]:
+    by_name = {m.name: m for m in measurements}
+    rows = []
+
+    def add(name, met, measured):
+        rows.append({"target": TARGETS[name], "measured": measured, "met": met})
+
+    if "results_cold" in by_name:
+        m = by_name["results_cold"]
+        add("results_cold", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s")
+    if "results_noop" in by_name:
+        m = by_name["results_noop"]
+        add("results_noop", m.ok and m.wall_s <= 2.0, f"{m.wall_s:.1f} s")
+    if "sweep_default" in by_name:
+        m = by_name["sweep_default"]
+        n = m.extra.get("configurations", 0)
+        add("sweep_default", m.ok and n >= 200 and m.wall_s <= 60.0,
+            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s")  # fmt: skip
+    if "scale_50" in by_name:
+        m = by_name["scale_50"]
+        peak = m.peak_tree_rss_mib if m.peak_tree_rss_mib is not None else m.peak_rss_mib
+        add("scale_50", m.ok and m.wall_s <= 300.0 and peak <= 4096.0, f"{m.wall_s:.1f} s, peak {peak:.0f} MiB")
+    return rows
+
+
+def bench_markdown(doc: dict) -> str:
+    """bench.md: the machine, one row per measurement, the scaling statement, the targets."""
+    machine = doc["machine"]
+    lines = [
+        "# thermaxis benchmark",
+        "",
+        f"Machine: {machine['usable_cores']} usable cores ({machine['cpu_count']} CPUs), "
+        f"{machine.get('memory_gib')} GiB memory, {machine['platform']}, Python {machine['python']}. "
+        f"Snakemake ran with `--cores {doc['settings']['cores']}`. Load average at start "
+        f"{machine['load_average_at_start']}, at end {machine.get('load_average_at_end')} "
+        "(other work on the machine inflates wall times).",
+        "",
+        "| measurement | wall (s) | CPU (s) | peak RSS, largest process (MiB) | peak RSS, process tree (MiB) | jobs | ok | what |",
+        "|---|---:|---:|---:|---:|---:|---|---|",
+    ]
+    for m in doc["measurements"]:
+        tree = "" if m["peak_tree_rss_mib"] is None else f"{m['peak_tree_rss_mib']:.0f}"
+        jobs = m["extra"].get("jobs")
+        what = m["description"]
+        if "configurations" in m["extra"]:
+            what += f"; {m['extra']['configurations']} configurations x {m['extra']['folds']} folds"
+        lines.append(
+            f"| {m['name']} | {m['wall_s']:.1f} | {m['cpu_s']:.1f} | {m['peak_rss_mib']:.0f} | {tree} | "
+            f"{'' if jobs is None else jobs} | {'yes' if m['ok'] else 'NO'} | {what} |"
+        )
+    if "scale_fit" in doc:
+        lines += ["", f"Scaling of the scale series: {doc['scale_fit']['statement']}.",
+                  f"{doc['scale_fit_cpu']['statement']}."]  # fmt: skip
+    if doc.get("targets"):
+        lines += ["", "| target | measured | met |", "|---|---|---|"]
+        lines += [f"| {t['target']} | {t['measured']} | {'yes' if t['met'] else 'no'} |" for t in doc["targets"]]
+    lines += [
+        "",
+        "Scale runs: twin-generated datasets (64 sensors, 100 positions, 8 h at 1 Hz), main pipeline from "
+        "cleaning to `tables/metrics.csv` and Table 5 with MLR and one held-out run (S001); figures and "
+        "reports are not included. Peak RSS of the process tree is sampled every 0.2 s (psutil).",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- command line
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m thermaxis.bench", description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("results/bench"), help="folder of bench.json and bench.md")
+    parser.add_argument("--cores", type=int, default=None, help="cores given to Snakemake (default: all usable)")
+    parser.add_argument("--runs", type=int, nargs="+", default=list(SCALE_RUNS), help="runs of the scale datasets")
+    parser.add_argument("--steps", nargs="+", choices=STEPS, default=list(STEPS), help="what to measure")
+    parser.add_argument("--workdir", type=Path, default=None, help="scratch folder (default: a new temporary one)")
+    parser.add_argument("--keep", action="store_true", help="keep the scratch work folders and scale datasets")
+    parser.add_argument("--timeout-s", type=float, default=3600.0, help="stop any one measurement after this long")
+    args = parser.parse_args(argv)
+    cores = args.cores or _machine()["usable_cores"] or 1
+    if cores < 1 or any(n < 1 for n in args.runs):
+        print("thermaxis error: --cores and --runs must be positive integers", file=sys.stderr)
+        return 2
+    doc = run_bench(args.out, cores, args.runs, args.steps, args.workdir, args.keep, args.timeout_s,
+                    progress=lambda line: print(line, file=sys.stderr, flush=True))  # fmt: skip
+    print((args.out / "bench.md").read_text(encoding="utf-8"))
+    return 0 if all(m["ok"] for m in doc["measurements"]) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

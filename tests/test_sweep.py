@@ -1,0 +1,415 @@
+"""Tests of thermaxis.sweep and the `sweep` target of the workflow.
+
+Counts, partitions, rankings and factor effects are checked against numbers worked
+out by hand in the comments; the sweep's metrics are checked against the library
+function the main workflow calls and, end to end, against the main workflow's
+metrics.csv for the same configuration.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from threadpoolctl import threadpool_limits
+
+from conftest import REPO, write_dataset
+from thermaxis import experiment, sweep
+from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
+
+PAPER_FIXED = (("b", ("T2", "T7", "T11")), ("k", ("T1", "T6", "T12")), ("pointwise", ("T1", "T11", "T12")))
+TWELVE = [f"T{i}" for i in range(1, 13)]
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _single_blas_thread():
+    with threadpool_limits(limits=1):
+        yield
+
+
+# --------------------------------------------------------------------------- the grid
+
+
+def test_default_grid_counts_by_hand():
+    # fuzzy_grey: 5 cluster counts x 2 similarities x 2 grades = 20; correlation: 5;
+    # all: 1; fixed: 1 -> 27 selection settings. Approaches: decoupled at degrees 1-3
+    # plus pointwise = 4. Algorithms: 5. 27 x 4 x 5 = 540.
+    grid = sweep.SweepGrid(fixed=PAPER_FIXED)
+    specs, notes = grid.selection_specs(TWELVE)
+    assert (len(specs), notes) == (27, [])
+    configs = grid.configurations(TWELVE)
+    assert len(configs) == 540
+    assert len({c.config_id for c in configs}) == 540
+    # Without a decoupled branch only pointwise remains: 27 x 1 x 5.
+    assert len(grid.configurations(TWELVE, decoupled=False)) == 135
+
+
+def test_config_yaml_sweep_is_the_issue_grid():
+    from snakemake.utils import validate
+
+    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
+    validate(config, str(REPO / "workflow" / "schemas" / "config.schema.yaml"), set_default=True)
+    grid = sweep.grid_from_config(config["sweep"])
+    assert grid.n_clusters == (2, 3, 4, 5, 6) and grid.degrees == (1, 2, 3)
+    assert len(grid.configurations(TWELVE)) >= 200
+
+
+def test_schema_fills_defaults_and_rejects_bad_levels():
+    from snakemake.utils import validate
+
+    schema = str(REPO / "workflow" / "schemas" / "config.schema.yaml")
+    config = {"dataset": "x"}
+    validate(config, schema, set_default=True)
+    assert config["sweep"]["methods"] == ["fuzzy_grey", "correlation", "all", "fixed"]
+    assert config["sweep"]["batches"] == 0
+    assert sweep.svr_grid_for_sweep(config["sweep"], config["models"]) == {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}
+    config = {"dataset": "x", "sweep": {"svr_grid": "models"}}
+    validate(config, schema, set_default=True)
+    assert sweep.svr_grid_for_sweep(config["sweep"], config["models"]) == config["models"]["svr_grid"]
+    for bad in ({"degrees": [4]}, {"methods": ["lasso"]}, {"svr_grid": "mine"}, {"batches": -1}, {"colour": 1}):
+        with pytest.raises(Exception, match="sweep|valid"):
+            validate({"dataset": "x", "sweep": bad}, schema, set_default=True)
+
+
+def test_settings_the_dataset_cannot_support_are_left_out_with_a_note():
+    # Three sensors: only 2 and 3 clusters fit -> fuzzy 2 x 2 x 2 = 8, correlation 2,
+    # all 1; fixed names T1.. which the dataset lacks.
+    grid = sweep.SweepGrid(fixed=PAPER_FIXED)
+    specs, notes = grid.selection_specs(["S1", "S2", "S3"])
+    assert len(specs) == 11
+    assert len(notes) == 3 * 2 + 1
+    assert any("T1, T11, T12, T2, T6, T7" in n for n in notes)
+
+
+def test_spec_settings_apply_only_the_factors_of_the_method():
+    base = SelectionSettings(n_clusters=3, similarity="pearson", grade="deng")
+    s = sweep.SelectionSpec("correlation", 5).settings(base, 2)
+    assert (s.method, s.n_clusters, s.similarity, s.grade, s.degree) == ("correlation", 5, "pearson", "deng", 2)
+    f = sweep.SelectionSpec("fixed").settings(base, 1, PAPER_FIXED)
+    assert f.fixed_for("k") == ("T1", "T6", "T12")
+
+
+# --------------------------------------------------------------------------- batches
+
+
+def test_batches_cover_every_unit_once_in_contiguous_near_equal_shares():
+    units = [sweep.Unit(f"F{i}", sweep.SelectionSpec("all")) for i in range(10)]
+    shares = [sweep.batch_units(units, 4, b) for b in range(4)]
+    # 10 units in 4 shares: boundaries round(0, 2.5, 5, 7.5, 10) = 0, 2, 5, 8, 10.
+    assert [len(s) for s in shares] == [2, 3, 3, 2]
+    assert [u for s in shares for u in s] == units
+    with pytest.raises(ValueError, match="batch 4 does not exist"):
+        sweep.batch_units(units, 4, 4)
+
+
+def test_batch_count_follows_the_cores_unless_set():
+    assert sweep.batch_count(0, 2, 108) == 2
+    assert sweep.batch_count(0, 64, 10) == 10
+    assert sweep.batch_count(3, 2, 108) == 3
+    assert sweep.batch_count(0, None, 5) == 1
+    with pytest.raises(ValueError, match="sweep.batches"):
+        sweep.batch_count(-1, 2, 5)
+
+
+def test_progress_prints_whole_tqdm_like_lines():
+    ticks = iter([0.0, 1.0, 2.0, 3.0, 4.0, 4.0])
+    out = io.StringIO()
+    progress = sweep.Progress(4, "sweep batch 1/2", stream=out, every_s=10.0, clock=lambda: next(ticks))
+    for _ in range(4):
+        progress.update()
+    # Only the last update is printed (10 s never pass); 4 configurations in 4 s.
+    lines = out.getvalue().splitlines()
+    assert lines == ["sweep batch 1/2: 100%|####################| 4/4 [00:04<00:00, 1.0 config/s]"]
+
+
+# --------------------------------------------------------------------------- evaluation
+
+
+def _inputs(n_runs=3, n_measurements=6, seed=0):
+    """X, Y like model_inputs: four sensors, errors driven by two of them plus noise."""
+    rng = np.random.default_rng(seed)
+    rows, errors = [], []
+    positions = np.array([0.0, 50.0, 100.0, 150.0])
+    for r in range(n_runs):
+        for m in range(n_measurements):
+            t = 20.0 * m
+            temps = {
+                "S1": 20 + r + 2.0 * (1 - np.exp(-t / 60)) + rng.normal(0, 0.05),
+                "S2": 21 + 0.5 * r + 1.0 * (1 - np.exp(-t / 90)) + rng.normal(0, 0.05),
+                "S3": 22 - 0.3 * r + 0.2 * t / 100 + rng.normal(0, 0.05),
+                "S4": 20 + 0.8 * r + 1.5 * (1 - np.exp(-t / 30)) + rng.normal(0, 0.05),
+            }
+            rows.append({"run": f"R{r + 1}", "measurement": m + 1, "time_min": t, **temps})
+            k = -10 + 3 * (temps["S1"] - 20) - (temps["S3"] - 22)
+            b = -1.5 * (temps["S2"] - 21 - 0.5 * r)
+            errors.append(k * positions / 1000 + b + 0.02 * (positions / 100) ** 2 + rng.normal(0, 0.05, positions.size))
+    return pd.DataFrame(rows), pd.DataFrame(np.array(errors), columns=positions)
+
+
+def test_batch_rows_are_the_library_functions_metrics():
+    X, Y = _inputs()
+    grid = sweep.SweepGrid(methods=("fuzzy_grey",), n_clusters=(2,), similarities=("pearson",), grades=("deng",),
+                           degrees=(1,), algorithms=("mlr", "ridge"))  # fmt: skip
+    units, _ = sweep.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
+    base = SelectionSettings(pointwise_common=2)
+    rows = sweep.run_batch(X, Y, units, grid, base, ModelSettings())
+    # 1 unit x (decoupled d1 + pointwise) x 2 algorithms; decoupled has k, b, error rows.
+    assert len(rows) == 2 * 3 + 2 * 1
+    assert (rows["status"] == "ok").all()
+    selection = select_for_fold(X, Y, "R2", SelectionSettings(n_clusters=2, pointwise_common=2))
+    for approach in ("decoupled", "pointwise"):
+        expected = evaluate_configuration(X, Y, "R2", approach, "ridge", selection, ModelSettings()).metrics
+        got = rows[(rows["approach"] == approach) & (rows["algorithm"] == "ridge")]
+        pd.testing.assert_frame_equal(
+            got[["target", *sweep.METRICS]].reset_index(drop=True),
+            expected[["target", *sweep.METRICS]].reset_index(drop=True),
+        )
+
+
+def test_identical_model_inputs_are_evaluated_once(monkeypatch):
+    X, Y = _inputs()
+    calls = []
+    original = experiment.evaluate_configuration
+
+    def counting(*args, **kwargs):
+        calls.append(args[2:5])
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(experiment, "evaluate_configuration", counting)
+    # "all" puts every sensor in k and b, and its pointwise common set is the first
+    # pointwise_common (here 4 = all) sensors; "fixed" lists exactly the same sensors.
+    # So 2 settings x (decoupled d1 + pointwise) x 1 algorithm = 4 configurations,
+    # but only 2 distinct evaluations.
+    every = ("S1", "S2", "S3", "S4")
+    grid = sweep.SweepGrid(methods=("all", "fixed"), degrees=(1,), algorithms=("mlr",),
+                           fixed=(("b", every), ("k", every), ("pointwise", every)))  # fmt: skip
+    units, _ = sweep.plan_units(grid, ["R1"], list(every))
+    rows = sweep.run_batch(X, Y, units, grid, SelectionSettings(pointwise_common=4), ModelSettings())
+    assert len(calls) == 2
+    assert rows["config_id"].nunique() == 4
+    a = rows[rows["method"] == "all"][list(sweep.METRICS)].to_numpy()
+    f = rows[rows["method"] == "fixed"][list(sweep.METRICS)].to_numpy()
+    np.testing.assert_array_equal(a, f)
+
+
+def test_summary_does_not_depend_on_the_batch_count():
+    X, Y = _inputs()
+    grid = sweep.SweepGrid(methods=("fuzzy_grey", "correlation"), n_clusters=(2, 3), similarities=("pearson",),
+                           grades=("deng", "absolute"), degrees=(1, 2), algorithms=("mlr",))  # fmt: skip
+    units, _ = sweep.plan_units(grid, ["R1", "R2", "R3"], ["S1", "S2", "S3", "S4"])
+    base = SelectionSettings(pointwise_common=2)
+    one = sweep.collect_summary([sweep.run_batch(X, Y, units, grid, base, ModelSettings())])
+    parts = [sweep.run_batch(X, Y, sweep.batch_units(units, 3, b), grid, base, ModelSettings()) for b in range(3)]
+    pd.testing.assert_frame_equal(sweep.collect_summary(parts[::-1]), one)
+    # 3 folds x (2 fuzzy x 2 grades + 2 correlation) settings x (2 degrees + pointwise) x 1 algorithm.
+    assert one.groupby("config_id")["fold"].nunique().eq(3).all()
+    assert one["config_id"].nunique() == 6 * 3
+
+
+def test_a_configuration_the_data_cannot_support_is_recorded_not_fatal():
+    X, Y = _inputs()
+    # Degree 3 needs four targets per measurement: there are four, so make one NaN in
+    # every row of run R1 -> its decoupling fails for degree 3 only.
+    Y.loc[X["run"] == "R1", 50.0] = np.nan
+    grid = sweep.SweepGrid(methods=("all",), approaches=("decoupled",), degrees=(1, 3), algorithms=("mlr",))
+    units, _ = sweep.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
+    rows = sweep.run_batch(X, Y, units, grid, SelectionSettings(), ModelSettings())
+    by_degree = rows.groupby("degree")["status"].first()
+    assert by_degree.loc[1] == "ok"
+    assert by_degree.loc[3] != "ok" and rows.loc[rows["degree"] == 3, "max_abs"].isna().all()
+
+
+# --------------------------------------------------------------------------- ranking and effects
+
+
+def _summary_rows():
+    def row(config_id, method, algorithm, fold, max_abs, rmse):
+        return {"config_id": config_id, "method": method, "n_clusters": 3 if method == "fuzzy_grey" else None,
+                "similarity": "pearson" if method == "fuzzy_grey" else None,
+                "grade": "deng" if method == "fuzzy_grey" else None, "approach": "decoupled", "degree": 1,
+                "algorithm": algorithm, "fold": fold, "target": "error", "rmse": rmse, "max_abs": max_abs,
+                "mae": rmse, "residual_min": -max_abs, "residual_max": max_abs, "sensors": "", "status": "ok"}  # fmt: skip
+
+    rows = [
+        row("A", "fuzzy_grey", "mlr", "E1", 1.0, 0.5), row("A", "fuzzy_grey", "mlr", "E2", 3.0, 1.5),
+        row("B", "all", "mlr", "E1", 2.0, 1.0), row("B", "all", "mlr", "E2", 2.0, 1.0),
+        row("C", "all", "svr", "E1", 0.5, 0.2),
+        row("D", "all", "svr", "E1", 4.0, 2.0), row("D", "all", "svr", "E2", 6.0, 3.0),
+    ]  # fmt: skip
+    # A k row must not count: only the error curves rank configurations.
+    rows.append({**rows[0], "target": "k", "max_abs": 100.0})
+    frame = sweep._as_summary_frame(rows)
+    frame.loc[len(frame)] = {**rows[4], "fold": "E2", "status": "failed", "rmse": np.nan, "max_abs": np.nan}
+    return frame
+
+
+def test_ranking_by_mean_max_residual_incomplete_last_ties_by_id():
+    main = {"method": "fuzzy_grey", "n_clusters": 3, "similarity": "pearson", "grade": "deng"}
+    ranking = sweep.rank_configurations(_summary_rows(), main, 1)
+    # A: (1 + 3) / 2 = 2, B: (2 + 2) / 2 = 2 (tie -> id order), D: 5, C: one fold only -> last.
+    assert ranking["config_id"].tolist() == ["A", "B", "D", "C"]
+    assert ranking["rank"].tolist() == [1, 2, 3, 4]
+    assert ranking["mean_max_abs"].tolist()[:3] == [2.0, 2.0, 5.0]
+    assert ranking["worst_max_abs"].tolist()[:3] == [3.0, 2.0, 6.0]
+    assert ranking["mean_rmse"].tolist()[:3] == [1.0, 1.0, 2.5]
+    assert ranking["n_folds"].tolist() == [2, 2, 2, 1]
+    assert ranking["main_config"].tolist() == [True, False, False, False]
+
+
+def test_factor_effects_by_hand():
+    main = {"method": "fixed"}
+    ranking = sweep.rank_configurations(_summary_rows(), main, 1)
+    effects = sweep.factor_effects(ranking).set_index(["factor", "level"])
+    # Complete configurations: A (fuzzy_grey, mlr, 2), B (all, mlr, 2), D (all, svr, 5).
+    assert effects.loc[("method", "all"), ["n_configurations", "best", "median", "worst"]].tolist() == [2, 2.0, 3.5, 5.0]
+    assert effects.loc[("algorithm", "mlr"), "mean"] == 2.0
+    assert effects.loc[("algorithm", "svr"), "n_configurations"] == 1
+    # n_clusters applies to A only.
+    assert effects.loc["n_clusters"].index.tolist() == ["3"]
+    assert not ranking["main_config"].any()
+
+
+def test_heatmap_holds_the_other_factors_at_the_main_configuration():
+    rows = []
+    for n in (2, 3):
+        for similarity in ("pearson", "printed"):
+            for degree in (1, 2):
+                for algorithm in ("svr", "mlr"):
+                    value = n * 10 + (0 if similarity == "pearson" else 100) + degree + (0.5 if algorithm == "svr" else 0)
+                    rows.append({"method": "fuzzy_grey", "n_clusters": n, "similarity": similarity, "grade": "deng",
+                                 "approach": "decoupled", "degree": degree, "algorithm": algorithm,
+                                 "mean_max_abs": value})  # fmt: skip
+    ranking = pd.DataFrame(rows)
+    main = {"method": "fuzzy_grey", "n_clusters": 3, "similarity": "printed", "grade": "deng"}
+    table = sweep.heatmap_table(ranking, "decoupled", main, 2)
+    assert table.columns.tolist() == ["mlr", "svr"] and table.index.tolist() == [2, 3]
+    # printed (+100), degree 2 (+2): n=2 -> 122, n=3 -> 132; svr adds 0.5.
+    np.testing.assert_array_equal(table.to_numpy(), [[122.0, 122.5], [132.0, 132.5]])
+    assert table.attrs["held"] == "fuzzy_grey, printed, deng, degree 2"
+
+
+# --------------------------------------------------------------------------- end to end
+
+SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
+
+
+def _workdir(tmp_path: Path) -> Path:
+    work = tmp_path / "work"
+    (work / "data").mkdir(parents=True)
+    for name in ("Snakefile", "config", "workflow", "notebooks"):
+        os.symlink(REPO / name, work / name)
+    os.symlink(REPO / "data" / "paper", work / "data" / "paper")
+    return work
+
+
+def _snakemake(work: Path, *args) -> subprocess.CompletedProcess:
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONHASHSEED": "0"}
+    env["PATH"] = f"{Path(sys.executable).parent}:{env['PATH']}"
+    proc = subprocess.run([SNAKEMAKE, "--cores", "2", "--nolock", *args], cwd=work, capture_output=True, text=True,
+                          env=env, timeout=900)  # fmt: skip
+    assert proc.returncode == 0, f"snakemake failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}"
+    return proc
+
+
+@pytest.mark.slow
+def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_path):
+    dataset = write_dataset(tmp_path / "lines", runs=("R1", "R2", "R3"), sensors=("S1", "S2", "S3", "S4"),
+                            name="lines", n_measurements=5)  # fmt: skip
+    work = _workdir(tmp_path)
+    main_models = {"algorithms": ["mlr", "svr"], "svr_grid": {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}}
+    config = {
+        "dataset": str(dataset),
+        "ambient_sensor": "S1",
+        "selection": {"n_clusters": 2},
+        "models": main_models,
+        "sweep": {"methods": ["fuzzy_grey", "correlation"], "n_clusters": [2, 3], "similarity": ["pearson"],
+                  "grade": ["deng", "absolute"], "degrees": [1, 2], "algorithms": ["mlr", "svr"],
+                  "svr_grid": "models"},  # fmt: skip
+        "figures": {"formats": ["png"]},
+    }
+    path = work / "config.yaml"
+    path.write_text(yaml.safe_dump(config))
+    proc = _snakemake(work, "--configfile", str(path), "--", "results/lines/tables/metrics.csv", "sweep")
+    assert "sweep batch 2/2: 100%" in proc.stderr
+
+    out = work / "results" / "lines"
+    for name in ("summary.csv", "ranking.csv", "factor_effects.csv", "sweep_report.html",
+                 "figures/sweep_heatmap.png", "figures/sweep_factor_effects.png"):  # fmt: skip
+        assert (out / "sweep" / name).is_file(), name
+    summary = pd.read_csv(out / "sweep" / "summary.csv", dtype=str, keep_default_na=False)
+    # 3 folds x (fuzzy 2 x 2 + correlation 2 = 6 settings) x (2 degrees + pointwise) x 2 algorithms.
+    assert summary["config_id"].nunique() == 6 * 3 * 2
+    ours = summary[(summary["method"] == "fuzzy_grey") & (summary["n_clusters"] == "2")
+                   & (summary["similarity"] == "pearson") & (summary["grade"] == "deng")
+                   & summary["degree"].isin(["1", ""])]  # fmt: skip
+    keys = ["fold", "approach", "algorithm", "target"]
+    columns = [*keys, *sweep.METRICS]
+    theirs = pd.read_csv(out / "tables" / "metrics.csv", dtype=str, keep_default_na=False)
+    ours = ours[columns].sort_values(keys, ignore_index=True)
+    theirs = theirs[columns].sort_values(keys, ignore_index=True)
+    assert len(theirs) == 3 * (2 * 3 + 2 * 1)
+    pd.testing.assert_frame_equal(ours, theirs)
+
+    ranking = pd.read_csv(out / "sweep" / "ranking.csv")
+    assert ranking["main_config"].sum() == 2 * 2  # decoupled d1 + pointwise, mlr + svr
+    html = (out / "sweep" / "sweep_report.html").read_text()
+    assert "SIMULATED" in html and "Ranking" in html
+    rerun = _snakemake(work, "--configfile", str(path), "-n", "--", "sweep")
+    assert "Nothing to be done" in rerun.stdout + rerun.stderr
+
+
+# --------------------------------------------------------------------------- bench
+
+
+def test_scaling_fit_by_hand():
+    from thermaxis.bench import fit_scaling
+
+    # 5 s + 2 s per run exactly: slope 2, intercept 5, marginal 2 and 2 -> linear.
+    fit = fit_scaling([10, 5, 20], [25.0, 15.0, 45.0])
+    assert (round(fit.slope_s_per_run, 9), round(fit.intercept_s, 9), round(fit.r2, 9)) == (2.0, 5.0, 1.0)
+    assert fit.marginal_s_per_run == [2.0, 2.0] and "grows linearly" in fit.statement
+    # n^2: marginal costs (4-1)/1 = 3, (16-4)/2 = 6, (64-16)/4 = 12 -> ratio 4.
+    assert "clearly faster than linearly" in fit_scaling([1, 2, 4, 8], [1.0, 4.0, 16.0, 64.0]).statement
+    assert "not judged" in fit_scaling([2, 3], [19.0, 24.5]).statement
+    with pytest.raises(ValueError, match="two distinct run counts"):
+        fit_scaling([5, 5], [1.0, 2.0])
+
+
+def test_measure_counts_the_whole_process_tree(tmp_path):
+    from thermaxis.bench import measure
+
+    # A grandchild (python under sh) holds 300 MiB and spins 0.4 s of CPU.
+    script = (
+        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); t = time.process_time()\n"
+        "while time.process_time() - t < 0.4: pass"
+    )
+    command = ["sh", "-c", f'"{sys.executable}" -c "$0"; exit 3', script]
+    m = measure("probe", command, tmp_path, tmp_path / "logs" / "probe.log")
+    assert m.returncode == 3 and not m.ok
+    assert m.cpu_s >= 0.4 and m.wall_s >= m.cpu_s * 0.5
+    assert 300 <= m.peak_rss_mib < 600
+    assert m.peak_tree_rss_mib is None or m.peak_tree_rss_mib >= 250
+
+
+def test_bench_markdown_names_the_cores_and_the_targets():
+    from thermaxis.bench import bench_markdown
+
+    doc = {
+        "machine": {"usable_cores": 2, "cpu_count": 2, "memory_gib": 8.0, "platform": "Linux", "python": "3.11",
+                    "load_average_at_start": [0.1, 0.1, 0.1], "load_average_at_end": [0.2, 0.1, 0.1]},
+        "settings": {"cores": 2},
+        "measurements": [{"name": "results_noop", "wall_s": 1.5, "cpu_s": 1.2, "peak_rss_mib": 200.0,
+                          "peak_tree_rss_mib": 210.0, "extra": {"jobs": 0}, "ok": True, "description": "again"}],
+        "targets": [{"target": "no-op rerun <= 2 s", "measured": "1.5 s", "met": True}],
+    }  # fmt: skip
+    text = bench_markdown(doc)
+    assert "2 usable cores" in text and "--cores 2" in text
+    assert "| results_noop | 1.5 | 1.2 | 200 | 210 | 0 | yes | again |" in text
+    assert "| no-op rerun <= 2 s | 1.5 s | yes |" in text

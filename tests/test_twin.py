@@ -1,0 +1,258 @@
+"""The thermal twin: byte-identical regeneration, calibration, seeded faults, scale, isolation.
+
+Reference numbers (Table 1, Table 5) are typed in here from the paper, not taken from
+the twin; k and b are recomputed with numpy.polyfit, not with the pipeline's code.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from conftest import REPO
+from thermaxis.io import load_dataset, read_run
+from thermaxis.twin import ScaleSpec, generate_dataset, generate_scale
+from thermaxis.twin.network import CONDUCTANCE_W_PER_K, NODES, discretise, simulate
+from thermaxis.twin.observe import lagged
+
+RAW = REPO / "data" / "raw" / "twin"
+TRUTH = REPO / "data" / "twin_truth"
+RUNS = ("E1", "E2", "E3", "E4")
+
+# The paper's Table 5 (k um/m, b um), typed from the article.
+TABLE5_K = {
+    "E1": [-9.8, -9.0, -8.8, -8.6, -8.2, -7.7, -7.5, -6.6],
+    "E2": [-23.7, -22.1, -22.1, -21.7, -21.5, -20.4, -19.6, -18.7],
+    "E3": [-22.9, -22.1, -21.8, -21.3, -20.5, -20.1, -18.3, -18.0],
+    "E4": [-13.5, -12.8, -12.6, -11.9, -11.0, -10.0, -8.8, -7.3],
+}
+TABLE5_B = {
+    "E1": [0.1, -1.1, -1.8, -2.3, -2.6, -2.9, -3.4, -4.0],
+    "E2": [-0.2, -1.2, -1.4, -1.7, -3.2, -5.1, -6.9, -8.7],
+    "E3": [0.2, -1.1, -1.8, -2.5, -2.8, -3.0, -3.4, -3.2],
+    "E4": [-0.1, -1.1, -1.7, -2.5, -3.4, -4.0, -4.7, -5.5],
+}
+# Table 1: workshop air range per experiment (degC).
+TABLE1_AMBIENT = {"E1": (30.4, 31.6), "E2": (30.1, 31.2), "E3": (27.4, 28.3), "E4": (28.8, 30.5)}
+
+
+def _files(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def _measurements(run: str) -> list[pd.DataFrame]:
+    frames = [pd.read_csv(p, parse_dates=["time"]) for p in sorted((RAW / run / "errors").glob("*.csv"))]
+    return sorted(frames, key=lambda f: f["time"].iloc[0])
+
+
+def _polyfit_line(frame: pd.DataFrame) -> tuple[float, float, float]:
+    """k (um/m), b (um at 185 mm) and R^2 of the pass-mean curve, targets in both passes only."""
+    wide = frame.pivot(index="position_mm", columns="direction", values="error_um").dropna()
+    x_m = (wide.index.to_numpy(float) - 185.0) / 1000.0
+    y = wide.mean(axis=1).to_numpy()
+    slope, intercept = np.polyfit(x_m, y, 1)
+    fitted = slope * x_m + intercept
+    r2 = 1.0 - np.sum((y - fitted) ** 2) / np.sum((y - y.mean()) ** 2)
+    return float(slope), float(intercept), float(r2)
+
+
+@pytest.fixture(scope="module")
+def raw_lines() -> pd.DataFrame:
+    rows = []
+    for run in RUNS:
+        for m, frame in enumerate(_measurements(run), start=1):
+            k, b, r2 = _polyfit_line(frame)
+            rows.append((run, m, k, b, r2, TABLE5_K[run][m - 1], TABLE5_B[run][m - 1]))
+    return pd.DataFrame(rows, columns=["run", "measurement", "k", "b", "r2", "k_paper", "b_paper"])
+
+
+def test_generate_regenerates_the_committed_files_byte_for_byte(tmp_path):
+    generate_dataset(tmp_path / "raw", tmp_path / "truth")
+    for committed, fresh in ((RAW, tmp_path / "raw"), (TRUTH, tmp_path / "truth")):
+        want, got = _files(committed), _files(fresh)
+        assert sorted(got) == sorted(want), f"file sets differ under {committed}"
+        changed = [name for name in want if want[name] != got[name]]
+        assert not changed, f"regenerated files differ from the committed ones: {changed[:5]}"
+
+
+def test_calibration_rms_against_table5_from_the_raw_files(raw_lines):
+    dk = raw_lines["k"] - raw_lines["k_paper"]
+    db = raw_lines["b"] - raw_lines["b_paper"]
+    assert len(raw_lines) == 32
+    assert np.sqrt(np.mean(dk**2)) <= 0.5
+    assert np.sqrt(np.mean(db**2)) <= 0.3
+
+
+def test_calibration_report_states_the_figures_recomputed_here(raw_lines):
+    text = (RAW / "CALIBRATION.md").read_text(encoding="utf-8")
+    rms_k = np.sqrt(np.mean((raw_lines["k"] - raw_lines["k_paper"]) ** 2))
+    rms_b = np.sqrt(np.mean((raw_lines["b"] - raw_lines["b_paper"]) ** 2))
+    reported_k = float(re.search(r"RMS difference of k \| ([0-9.]+) um/m", text).group(1))
+    reported_b = float(re.search(r"RMS difference of b \| ([0-9.]+) um", text).group(1))
+    assert reported_k == pytest.approx(rms_k, abs=1e-3)
+    assert reported_b == pytest.approx(rms_b, abs=1e-3)
+    assert (RAW / "calibration.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_error_curves_are_strongly_but_not_perfectly_linear(raw_lines):
+    assert raw_lines["r2"].min() > 0.85
+    assert raw_lines["r2"].max() < 0.9999
+    assert raw_lines["r2"].median() > 0.95
+
+
+def test_noise_free_truth_agrees_with_the_raw_files_within_instrument_noise(raw_lines):
+    truth = pd.read_csv(TRUTH / "kb_truth.csv")
+    merged = raw_lines.merge(truth, on=["run", "measurement"])
+    assert len(merged) == 32
+    assert (merged["k"] - merged["k_um_per_m"]).abs().max() <= 0.3
+    # The pass mean keeps half the 0.1 um reversal error that the truth leaves out.
+    assert (merged["b"] - merged["b_um"]).abs().max() <= 0.15
+
+
+def test_dataset_follows_the_documented_layout():
+    dataset = load_dataset(RAW)
+    assert dataset.run_ids == RUNS
+    assert dataset.simulated
+    meta = yaml.safe_load((RAW / "dataset.yaml").read_text(encoding="utf-8"))
+    assert meta["name"] == "twin" and meta["axis"]["name"] == "X"
+    assert len(meta["provenance"]["description"]) > 200
+    sources = {s["name"]: s for s in meta["sources"]}
+    assert set(sources) == {"box", "wireless", "hmi"}
+    assert 3 <= sources["hmi"]["clock_offset_s"] <= 30
+    locations = {s["id"]: (s["location"], s["source"]) for s in meta["sensors"]}
+    assert [f"T{i}" for i in range(1, 13)] == list(locations)
+    assert locations["T6"] == ("bearing seat near motor", "box")
+    assert locations["T11"][1] == "wireless" and locations["T12"][1] == "hmi"
+    runs = pd.read_csv(RAW / "runs.tsv", sep="\t")
+    assert runs["feed_mm_min"].tolist() == [2000, 4000, 6000, 8000]
+    for run in RUNS:
+        raw = read_run(dataset, run)
+        assert len(raw.measurements) == 8
+
+
+def test_ambient_spans_table1_within_0_2_degrees_and_falls_with_cooling():
+    for run, (lo, hi) in TABLE1_AMBIENT.items():
+        hidden = pd.read_csv(TRUTH / f"{run}_hidden.csv")
+        t10 = pd.read_csv(RAW / run / "temperatures" / "box.csv")["T10"]
+        for series in (hidden["ambient"], t10):
+            assert abs(series.min() - lo) <= 0.2 and abs(series.max() - hi) <= 0.2, run
+        if run in ("E3", "E4"):
+            late = hidden.loc[hidden["minute"] > 150, "ambient"]
+            assert hidden["ambient"].max() - late.max() >= 0.5, f"{run}: air does not fall with the cooling"
+
+
+def test_box_log_has_duplicated_rows_spikes_and_an_open_circuit():
+    duplicated, spikes, open_circuit = 0, 0, 0
+    for run in RUNS:
+        box = pd.read_csv(RAW / run / "temperatures" / "box.csv", parse_dates=["time"])
+        duplicated += int(box.duplicated().sum())
+        steps = box["time"].drop_duplicates().diff().dropna().dt.total_seconds()
+        assert (steps == 10).all(), f"{run}: box is not on a 10 s grid"
+        values = box.drop(columns="time").drop_duplicates()
+        open_circuit += int((values > 120).to_numpy().sum())
+        plausible = values.where(values < 120)
+        neighbours = 0.5 * (plausible.shift(1) + plausible.shift(-1))
+        spikes += int(((plausible - neighbours).abs() > 2.0).to_numpy().sum())
+    assert duplicated >= 2
+    assert open_circuit == 1
+    assert spikes >= 3
+
+
+def test_wireless_nut_sensor_is_irregular_with_losses_and_one_long_outage():
+    longest = {}
+    for run in RUNS:
+        log = pd.read_csv(RAW / run / "temperatures" / "wireless.csv", parse_dates=["time"])
+        steps = log["time"].diff().dropna().dt.total_seconds()
+        assert 25 <= steps.median() <= 35, run
+        assert steps.std() > 1.0, f"{run}: wireless packets are not irregular"
+        longest[run] = steps.max()
+    # Lost packets leave 60-90 s holes; one outage lasts several minutes.
+    assert sum(gap >= 5 * 60 for gap in longest.values()) == 1
+    assert sum(gap >= 55 for gap in longest.values()) >= 3
+
+
+def test_hmi_motor_sensor_is_per_minute_and_quantised_to_0_1():
+    for run in RUNS:
+        log = pd.read_csv(RAW / run / "temperatures" / "hmi.csv", parse_dates=["time"])
+        steps = log["time"].diff().dropna().dt.total_seconds()
+        assert (steps == 60).all()
+        tenths = log["T12"].to_numpy() * 10.0
+        assert np.allclose(tenths, np.round(tenths), atol=1e-9)
+
+
+def test_one_measurement_misses_one_target_reading():
+    incomplete = []
+    for run in RUNS:
+        for m, frame in enumerate(_measurements(run), start=1):
+            per_pass = frame.groupby("direction")["position_mm"].apply(set)
+            assert set(per_pass.index) == {"+", "-"}
+            if len(frame) != 28:
+                incomplete.append((run, m, per_pass["-"] ^ per_pass["+"]))
+    assert len(incomplete) == 1
+    assert len(incomplete[0][2]) == 1
+
+
+def test_lag_is_exact_for_a_ramp():
+    tau, step = 60.0, 10.0
+    t = np.arange(0.0, 600.0 + step, step)
+    got = lagged(0.01 * t, step, tau)
+    # Analytic response of a first-order lag to a ramp from equilibrium.
+    want = 0.01 * (t - tau * (1.0 - np.exp(-t / tau)))
+    assert np.allclose(got, want, atol=1e-12)
+
+
+def test_network_steady_state_balances_the_heat_input():
+    disc = discretise(10.0)
+    n = len(NODES)
+    u = np.zeros(1 + n)
+    u[0] = 25.0
+    u[1 + NODES.index("nut")] = 12.0  # W
+    # Fixed point of one exact step = the continuous steady state.
+    final = np.linalg.solve(np.eye(n) - disc.Ad, disc.Bd @ u)
+    # Steady state: all 12 W leave through the conductances to the air.
+    to_air = sum(g * (final[NODES.index(a)] - 25.0) for (a, b), g in CONDUCTANCE_W_PER_K.items() if b == "ambient")
+    assert to_air == pytest.approx(12.0, rel=1e-9)
+    assert (final > 25.0).all()
+    # Without heat every node relaxes to the air.
+    cold = simulate(disc, np.full(n, 30.0), np.tile(np.r_[25.0, np.zeros(n)], (50000, 1)))[-1]
+    assert np.allclose(cold, 25.0, atol=1e-6)
+
+
+def test_scale_generator_writes_the_requested_shape(tmp_path):
+    spec = ScaleSpec(runs=2, sensors=5, positions=4, hours=0.5, rate_hz=0.2, seed=3)
+    generate_scale(tmp_path, spec)
+    dataset = load_dataset(tmp_path)
+    assert dataset.run_ids == ("S001", "S002")
+    assert dataset.sensors == ("T1", "T2", "T3", "T4", "T5")
+    for run in dataset.run_ids:
+        box = pd.read_csv(tmp_path / run / "temperatures" / "box.csv")
+        assert list(box.columns) == ["time", "T1", "T2", "T3", "T4", "T5"]
+        assert len(box) == 0.5 * 3600 * 0.2
+        raw = read_run(dataset, run)
+        assert len(raw.measurements) >= 1
+        for frame in raw.measurements.values():
+            assert len(frame) == 2 * 4
+            assert sorted(frame["position_mm"].unique()) == [185.0, 271.667, 358.333, 445.0]
+
+
+def test_scale_generator_rejects_an_impossible_shape(tmp_path):
+    with pytest.raises(ValueError, match="positions"):
+        generate_scale(tmp_path, ScaleSpec(runs=1, sensors=2, positions=1, hours=1.0, rate_hz=1.0))
+
+
+def test_no_modelling_code_reads_the_ground_truth():
+    roots = [REPO / "src" / "thermaxis", REPO / "workflow", REPO / "notebooks"]
+    twin_module = REPO / "src" / "thermaxis" / "twin"
+    offenders = []
+    for root in roots:
+        for path in sorted(root.rglob("*")):
+            if not path.is_file() or twin_module in path.parents or path.suffix in {".pyc", ".png"}:
+                continue
+            if "twin_truth" in path.read_text(encoding="utf-8", errors="ignore"):
+                offenders.append(str(path.relative_to(REPO)))
+    assert not offenders, f"modelling code mentions the twin's ground truth: {offenders}"
