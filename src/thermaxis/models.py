@@ -300,7 +300,7 @@ def _check_X(X, sensors: Sequence[str]) -> None:
         raise ValueError("X has duplicate (run, measurement) rows; expected one row per measurement")
 
 
-def _positions_of(X: pd.DataFrame, Y) -> np.ndarray:
+def _positions_of(X: pd.DataFrame, Y, min_positions: int = 2) -> np.ndarray:
     if not isinstance(Y, pd.DataFrame):
         raise ValueError(f"Y must be a pandas DataFrame, got {type(Y).__name__}")
     if len(Y) != len(X):
@@ -311,8 +311,10 @@ def _positions_of(X: pd.DataFrame, Y) -> np.ndarray:
         positions = np.asarray(Y.columns, dtype=float)
     except (TypeError, ValueError) as exc:
         raise ValueError("Y's columns must be target positions in mm (numbers)") from exc
-    if positions.size < 2 or np.any(np.diff(positions) <= 0):
-        raise ValueError("Y's columns must be at least two target positions in strictly ascending order")
+    if positions.size < min_positions or np.any(np.diff(positions) <= 0):
+        raise ValueError(
+            f"Y's columns must be at least {min_positions} target position(s) in strictly ascending order"
+        )
     return positions
 
 
@@ -615,7 +617,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         """Fit one regression per position on relative temperatures."""
         _check_algorithm(self.algorithm)
         _check_X(X, self.sensors)
-        self.positions_mm_ = _positions_of(X, Y)
+        self.positions_mm_ = _positions_of(X, Y, min_positions=1)
         features = _features(X, self.sensors, "relative")
         groups = X["run"].to_numpy()
         errors = Y.to_numpy(dtype=float)

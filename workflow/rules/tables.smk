@@ -77,7 +77,7 @@ rule paper_comparison:
     input:
         summary=f"{OUT}/tables/dataset_summary.csv",
         ambient=f"{OUT}/tables/ambient_ranges.csv",
-        kb=f"{OUT}/tables/table5_slope_intercept.csv",
+        kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
         metrics=f"{OUT}/tables/metrics.csv",
         coefficients=f"{OUT}/tables/coefficients.csv",
         selection=f"{OUT}/tables/sensitive_points.csv",

@@ -10,7 +10,8 @@ def main(snakemake):
     tables = ReproducedTables(
         runs=pd.read_csv(i.summary),
         ambient=pd.read_csv(i.ambient),
-        kb=pd.read_csv(i.kb),
+        # A single-position dataset has no decoupled k and b: the Table 5 items stay empty.
+        kb=pd.read_csv(i.kb[0]) if i.kb else pd.DataFrame(columns=["run", "measurement", "k_um_per_m", "b_um"]),
         metrics=pd.read_csv(i.metrics),
         coefficients=pd.read_csv(i.coefficients),
         sensitive_points=pd.read_csv(i.selection),
