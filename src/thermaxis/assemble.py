@@ -8,6 +8,7 @@ is kept beside it only to show what re-zeroing hides.
 
 from __future__ import annotations
 
+import re
 import warnings
 from dataclasses import dataclass, field
 
@@ -169,7 +170,8 @@ def model_inputs(errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None)
     """
     wide = temperatures.pivot_table(index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True)
     if sensors is None:
-        sensors = list(wide.columns)
+        # Natural order (T2 before T10), so clusters and tables read like the paper's.
+        sensors = sorted(wide.columns, key=natural_key)
     times = errors.groupby(["run", "measurement"], sort=True)["time_min"].first()
     Y = unzeroed_matrix(errors)
     index = Y.index.intersection(wide.index)
@@ -183,6 +185,11 @@ def model_inputs(errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None)
     Y.columns = [float(c) for c in Y.columns]
     Y.columns.name = None
     return X, Y
+
+
+def natural_key(name: str) -> tuple:
+    """Sort key that orders embedded numbers numerically: T2 < T10."""
+    return tuple(int(part) if part.isdigit() else part for part in re.split(r"(\d+)", str(name)))
 
 
 def warn_all(notes) -> None:
