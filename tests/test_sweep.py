@@ -371,12 +371,19 @@ def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_p
 def test_scaling_fit_by_hand():
     from thermaxis.bench import fit_scaling
 
-    # 5 s + 2 s per run exactly: slope 2, intercept 5, marginal 2 and 2 -> linear.
+    # 5 s + 2 s per run exactly: slope 2, intercept 5, marginal 2 and 2, no quadratic term.
     fit = fit_scaling([10, 5, 20], [25.0, 15.0, 45.0])
     assert (round(fit.slope_s_per_run, 9), round(fit.intercept_s, 9), round(fit.r2, 9)) == (2.0, 5.0, 1.0)
-    assert fit.marginal_s_per_run == [2.0, 2.0] and "grows linearly" in fit.statement
-    # n^2: marginal costs (4-1)/1 = 3, (16-4)/2 = 6, (64-16)/4 = 12 -> ratio 4.
-    assert "clearly faster than linearly" in fit_scaling([1, 2, 4, 8], [1.0, 4.0, 16.0, 64.0]).statement
+    assert fit.marginal_s_per_run == [2.0, 2.0] and abs(fit.quadratic_share) < 1e-9
+    assert "grows linearly" in fit.statement
+    # Pure n^2: the parabola is n^2 itself, so its quadratic term is all of the cost at
+    # n = 8; marginal costs (4-1)/1 = 3, (16-4)/2 = 6, (64-16)/4 = 12.
+    quadratic = fit_scaling([1, 2, 4, 8], [1.0, 4.0, 16.0, 64.0])
+    assert round(quadratic.quadratic_share, 9) == 1.0 and quadratic.marginal_s_per_run == [3.0, 6.0, 12.0]
+    assert "about quadratically" in quadratic.statement
+    # 10 s + n + 0.1 n^2 at n = 10: the quadratic term is 10 of 30 s -> share 1/3.
+    some = fit_scaling([2, 5, 10], [10 + n + 0.1 * n * n for n in (2, 5, 10)])
+    assert round(some.quadratic_share, 9) == round(1 / 3, 9) and "somewhat faster" in some.statement
     assert "not judged" in fit_scaling([2, 3], [19.0, 24.5]).statement
     with pytest.raises(ValueError, match="two distinct run counts"):
         fit_scaling([5, 5], [1.0, 2.0])

@@ -38,7 +38,7 @@ import sys
 import tempfile
 import threading
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +51,8 @@ __all__ = [
     "fit_scaling",
     "prepare_workdir",
     "run_bench",
+    "finish",
+    "render",
     "bench_markdown",
     "main",
 ]
@@ -209,23 +211,24 @@ def _terminate_group(pid: int) -> None:
 
 @dataclass(frozen=True)
 class ScaleFit:
-    """Least-squares line of cost against runs, the cost per added run, the log-log exponent."""
+    """Least-squares line of cost against runs, and how far the cost bends away from it."""
 
     intercept_s: float
     slope_s_per_run: float
     r2: float
     marginal_s_per_run: list
-    exponent: float
+    quadratic_share: float
     statement: str
 
 
 def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
     """Fit ``seconds = intercept + slope * runs`` and say how the cost grows.
 
-    The growth is judged from the marginal cost (seconds per added run between
-    consecutive sizes): constant means linear.  The log-log exponent of the raw times
-    is reported too, but a fixed start-up cost pulls it below 1, so it is not used
-    for the verdict.
+    The verdict comes from a least-squares parabola through the same points: the share
+    of its quadratic term in the cost at the largest size (0 for a straight line, 1 for
+    pure ``runs**2``).  Below 0.2 in size the growth is called linear.  The marginal
+    costs (seconds per added run between consecutive sizes) are reported as well; the
+    first of them is noisy because small datasets leave cores idle.
 
     Raises
     ------
@@ -241,27 +244,29 @@ def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
     residual = y - (intercept + slope * x)
     total = np.sum((y - y.mean()) ** 2)
     r2 = 1.0 - float(np.sum(residual**2) / total) if total > 0 else 1.0
-    exponent = float(np.polyfit(np.log(x), np.log(y), 1)[0]) if np.all(y > 0) else float("nan")
     keep = np.diff(x) > 0
-    marginal = (np.diff(y)[keep] / np.diff(x)[keep]).tolist()
-    if len(marginal) < 2:
+    marginal = [round(float(v), 3) for v in np.diff(y)[keep] / np.diff(x)[keep]]
+    share = float("nan")
+    if np.unique(x).size < 3:
         growth = "growth not judged: two sizes cannot show curvature"
     else:
-        ratio = marginal[-1] / marginal[0] if marginal[0] > 0 else float("inf")
-        span = f"{min(marginal):.2f}-{max(marginal):.2f} s per added run"
-        if 1 / 1.3 <= ratio <= 1.3:
-            growth = f"cost grows linearly with the number of runs (marginal cost {span})"
-        elif ratio < 1 / 1.3:
-            growth = f"cost grows less than linearly: the marginal cost falls ({span})"
-        elif ratio <= 2.0:
-            growth = f"cost grows somewhat faster than linearly: the marginal cost rises ({span})"
+        c2, c1, c0 = np.polyfit(x, y, 2)
+        top = x[-1]
+        share = float(c2 * top**2 / (c0 + c1 * top + c2 * top**2))
+        if share < -0.2:
+            growth = "cost grows less than linearly with the number of runs"
+        elif share < 0.2:
+            growth = "cost grows linearly with the number of runs"
+        elif share < 0.5:
+            growth = "cost grows somewhat faster than linearly with the number of runs"
         else:
-            growth = f"cost grows clearly faster than linearly: the marginal cost rises ({span})"
+            growth = "cost grows about quadratically (or faster) with the number of runs"
+        growth += f" (quadratic share at {top:g} runs {share:.2f})"
     statement = (
-        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run (least squares, R^2 = {r2:.3f}); "
-        f"{growth}; log-log exponent of the raw times {exponent:.2f}"
+        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run (least squares, R^2 = {r2:.3f}); {growth}; "
+        f"marginal cost {', '.join(f'{v:.2f}' for v in marginal)} s per added run"
     )
-    return ScaleFit(float(intercept), float(slope), r2, [round(v, 3) for v in marginal], exponent, statement)
+    return ScaleFit(float(intercept), float(slope), r2, marginal, share, statement)
 
 
 # --------------------------------------------------------------------------- the benchmark
@@ -359,6 +364,7 @@ def run_bench(
     measurements: list[Measurement] = []
 
     def record(m: Measurement) -> Measurement:
+        _add_jobs(m)
         measurements.append(m)
         status = "ok" if m.ok else f"FAILED (exit {m.returncode}, log {m.log})"
         progress(f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, {m.peak_rss_mib:.0f} MiB peak; {status}")
@@ -369,20 +375,18 @@ def run_bench(
             work = prepare_workdir(scratch / "default")
             dataset_name = _default_dataset_name(REPO)
         if "results" in steps:
-            cold = record(measure("results_cold", _snakemake(cores), work, logs / "results_cold.log",
+            record(measure("results_cold", _snakemake(cores), work, logs / "results_cold.log",
                                   "snakemake --cores N on nothing (make results after set-up)", env, timeout_s))  # fmt: skip
             record(measure("results_noop", _snakemake(cores), work, logs / "results_noop.log",
                            "the same again: nothing to do", env, timeout_s))  # fmt: skip
             base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
             alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
             (work / "bench_param.yaml").write_text(yaml.safe_dump({"models": {"ridge_alpha": alpha}}))
-            changed = record(measure("results_model_param",
+            record(measure("results_model_param",
                                      _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
                                      work, logs / "results_model_param.log",
                                      f"after changing one model parameter (models.ridge_alpha -> {alpha:g})", env,
                                      timeout_s))  # fmt: skip
-            for m in (cold, changed):
-                m.extra["jobs"] = _count_jobs(Path(m.log))
         if "sweep" in steps:
             m = record(measure("sweep_default", _snakemake(cores, "sweep"), work, logs / "sweep_default.log",
                                "snakemake sweep, default grid (assembled data present)", env, timeout_s))  # fmt: skip
@@ -409,7 +413,6 @@ def run_bench(
                                    work_n, logs / f"scale_{n}.log",
                                    f"{n} runs: cleaning to metrics.csv and Table 5 (MLR, fold S001)", env, timeout_s,
                                    runs=n))  # fmt: skip
-                m.extra["jobs"] = _count_jobs(Path(m.log))
                 if not keep:
                     shutil.rmtree(data, ignore_errors=True)
                     shutil.rmtree(work_n, ignore_errors=True)
@@ -417,15 +420,41 @@ def run_bench(
         if not keep and workdir is None:
             shutil.rmtree(scratch, ignore_errors=True)
     doc["machine"]["load_average_at_end"] = [round(v, 2) for v in os.getloadavg()]
+    return finish(doc, measurements, out)
+
+
+def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
+    """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and bench.md."""
     doc["measurements"] = [{**asdict(m), "ok": m.ok} for m in measurements]
     scale = [m for m in measurements if m.name.startswith("scale_") and not m.name.startswith("scale_generate") and m.ok]
+    doc.pop("scale_fit", None)
+    doc.pop("scale_fit_cpu", None)
     if len({m.runs for m in scale}) >= 2:
         doc["scale_fit"] = asdict(fit_scaling([m.runs for m in scale], [m.wall_s for m in scale]))
         doc["scale_fit_cpu"] = asdict(fit_scaling([m.runs for m in scale], [m.cpu_s for m in scale], "CPU time"))
     doc["targets"] = _targets(measurements)
+    out.mkdir(parents=True, exist_ok=True)
     (out / "bench.json").write_text(json.dumps(doc, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     (out / "bench.md").write_text(bench_markdown(doc), encoding="utf-8")
     return doc
+
+
+def render(out: Path) -> dict:
+    """Re-derive the fits, targets and bench.md from an existing ``out/bench.json`` (nothing is rerun)."""
+    path = out / "bench.json"
+    if not path.is_file():
+        raise ValueError(f"{path}: not found; run the benchmark first")
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    names = {f.name for f in fields(Measurement)}
+    measurements = [Measurement(**{k: v for k, v in d.items() if k in names}) for d in doc["measurements"]]
+    for m in measurements:
+        _add_jobs(m)
+    return finish(doc, measurements, out)
+
+
+def _add_jobs(m: Measurement) -> None:
+    if Path(m.command[0]).name == "snakemake" and "jobs" not in m.extra:
+        m.extra["jobs"] = _count_jobs(Path(m.log))
 
 
 def _count_jobs(log: Path) -> int | None:
@@ -518,7 +547,16 @@ def main(argv=None) -> int:
     parser.add_argument("--workdir", type=Path, default=None, help="scratch folder (default: a new temporary one)")
     parser.add_argument("--keep", action="store_true", help="keep the scratch work folders and scale datasets")
     parser.add_argument("--timeout-s", type=float, default=3600.0, help="stop any one measurement after this long")
+    parser.add_argument("--render-only", action="store_true", help="rewrite bench.md from --out/bench.json, rerun nothing")
     args = parser.parse_args(argv)
+    if args.render_only:
+        try:
+            render(args.out)
+        except ValueError as exc:
+            print(f"thermaxis error: {exc}", file=sys.stderr)
+            return 2
+        print((args.out / "bench.md").read_text(encoding="utf-8"))
+        return 0
     cores = args.cores or _machine()["usable_cores"] or 1
     if cores < 1 or any(n < 1 for n in args.runs):
         print("thermaxis error: --cores and --runs must be positive integers", file=sys.stderr)

@@ -6,8 +6,8 @@ degree and algorithm.  Each is evaluated on every fold by
 :func:`thermaxis.experiment.evaluate_configuration`, the function the main workflow's
 ``fit_predict`` rule calls: the sweep has no model code of its own.
 
-Why it is fast
---------------
+How the cost is kept down
+-------------------------
 * Start-up and imports are paid per *batch*, not per configuration: a batch is one
   process that reads the assembled tables once and works through its share of the
   grid.
@@ -15,7 +15,7 @@ Why it is fast
   points are selected once per decoupling degree and shared by every approach and
   algorithm; a unit lives in exactly one batch, so no selection is computed twice.
 * Many selection settings pick the same sensors (the point-by-point common set has
-  three sensors whatever the cluster count).  An evaluation depends on the selection
+  ``selection.pointwise_common`` sensors whatever the cluster count).  An evaluation depends on the selection
   only through the sensors its model uses, so within a batch the metrics of an
   identical (fold, approach, algorithm, degree, sensors) evaluation are reused.
   Units are cut into batches in fold order, which keeps a fold's units together.
