@@ -210,6 +210,9 @@ def select_for_fold(
     per_position = {}
     if not pointwise:
         common = ()
+    elif settings.method == "all":
+        # Every sensor ties under "all": the common set is every sensor, not the first n.
+        common = tuple(sensors)
     elif settings.method == "fixed":
         common = settings.fixed_for("pointwise")
         _points("fixed", relative, np.zeros(len(relative)), settings, "pointwise")

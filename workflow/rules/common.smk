@@ -3,13 +3,20 @@ import sys
 from pathlib import Path
 
 from thermaxis.io import DataError, load_dataset
-from thermaxis.plotting import figure_caption
+from thermaxis.captions import figure_caption
 from thermaxis.summary import data_statement
+
+
+envvars:
+    "PATH",
+
 
 # Shell rules call `python`: make it the interpreter running Snakemake (the project's
 # venv) even when Snakemake was started by path without activating it. Under
 # --sdm conda the rule's environment is activated later and still comes first.
-os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
+os.environ["PATH"] = (
+    os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
+)
 
 # The dataset is validated when the workflow is parsed, so a bad sheet or a
 # missing run folder stops everything with one line before any job starts.
