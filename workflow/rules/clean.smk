@@ -1,5 +1,6 @@
 rule clean_run:
     input:
+        code=lib("io", "clean", "assemble"),
         sheets=dataset_sheets(),
         raw=lambda wc: raw_files(wc.run),
     output:

@@ -2,6 +2,7 @@ import os
 import sys
 from pathlib import Path
 
+import thermaxis
 from thermaxis.io import DataError, load_dataset
 from thermaxis.captions import figure_caption
 from thermaxis.summary import data_statement
@@ -79,6 +80,14 @@ wildcard_constraints:
     algorithm="mlr|svr|ridge|pls|gpr",
     run="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
     fold="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
+
+
+LIB = Path(thermaxis.__file__).resolve().parent
+
+
+def lib(*modules):
+    """Library modules as inputs: editing a method reruns its results."""
+    return [str(LIB / f"{module}.py") for module in modules]
 
 
 def raw_files(run):

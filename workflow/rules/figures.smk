@@ -4,6 +4,7 @@
 
 rule fig2_positioning_error:
     input:
+        code=lib("plotting", "captions"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -30,6 +31,7 @@ rule fig2_positioning_error:
 
 rule fig3_ambient:
     input:
+        code=lib("plotting", "captions"),
         series=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
     output:
         figures=report(
@@ -57,6 +59,7 @@ rule fig3_ambient:
 
 rule fig5_unzeroed:
     input:
+        code=lib("plotting", "captions"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -83,6 +86,7 @@ rule fig5_unzeroed:
 
 rule fig6_error_vs_time:
     input:
+        code=lib("plotting", "captions"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -109,6 +113,7 @@ rule fig6_error_vs_time:
 
 rule fig7_error_surface:
     input:
+        code=lib("plotting", "captions"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -135,6 +140,7 @@ rule fig7_error_surface:
 
 rule fig8_rezeroed:
     input:
+        code=lib("plotting", "captions"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -161,6 +167,7 @@ rule fig8_rezeroed:
 
 rule fig9_other_runs:
     input:
+        code=lib("plotting", "captions"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -187,6 +194,7 @@ rule fig9_other_runs:
 
 rule fig10_temperature_rise:
     input:
+        code=lib("plotting", "captions"),
         series=f"{OUT}/clean/{FIG_RUN}/temperatures.parquet",
     output:
         figures=report(
@@ -213,6 +221,7 @@ rule fig10_temperature_rise:
 
 rule fig12_slope_intercept:
     input:
+        code=lib("plotting", "captions"),
         kb=f"{OUT}/tables/table5_slope_intercept.csv",
     output:
         figures=report(
@@ -238,6 +247,7 @@ rule fig12_slope_intercept:
 
 rule fig_kb_prediction:
     input:
+        code=lib("plotting", "captions"),
         kb=f"{OUT}/tables/kb_predictions.csv",
     output:
         figures=report(
@@ -269,6 +279,7 @@ rule fig_kb_prediction:
 
 rule fig_error_prediction:
     input:
+        code=lib("plotting", "captions"),
         errors=f"{OUT}/tables/error_predictions.csv",
     output:
         figures=report(
@@ -300,6 +311,7 @@ rule fig_error_prediction:
 
 rule fig_fold_comparison:
     input:
+        code=lib("plotting", "captions"),
         metrics=f"{OUT}/tables/metrics.csv",
     output:
         figures=report(

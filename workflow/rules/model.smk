@@ -1,5 +1,6 @@
 rule fit_predict:
     input:
+        code=lib("models", "evaluate", "experiment", "assemble", "decouple"),
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         selection=f"{OUT}/selection/{{fold}}.json",

@@ -75,6 +75,7 @@ rule ambient_ranges:
 
 rule paper_comparison:
     input:
+        code=lib("audit", "paper"),
         summary=f"{OUT}/tables/dataset_summary.csv",
         ambient=f"{OUT}/tables/ambient_ranges.csv",
         kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
