@@ -1,6 +1,7 @@
 """One batch of the sweep: its share of (fold x selection setting) units, every approach and algorithm."""
 
 import pandas as pd
+import sklearn
 from threadpoolctl import threadpool_limits
 
 from thermaxis import sweep
@@ -21,7 +22,9 @@ def main(snakemake):
     total = sum(len(grid.unit_configurations(u.selection, p.decoupled)) for u in mine)
     progress = sweep.Progress(total, f"sweep batch {batch + 1}/{p.n_batches}")
     # Batches already occupy every core: BLAS threads would only compete with them.
-    with threadpool_limits(limits=1):
+    # The inputs were validated when assembled; scikit-learn's per-call re-checks cost
+    # ~20% of a point-by-point SVR evaluation and change no number.
+    with threadpool_limits(limits=1), sklearn.config_context(assume_finite=True, skip_parameter_validation=True):
         rows = sweep.run_batch(X, Y, mine, grid, selection, model, decoupled=p.decoupled, progress=progress)
     write_parquet(rows, snakemake.output[0])
 
