@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
+from conftest import set_csv_cell
 from thermaxis.io import DataError, load_dataset, read_run
 
 
@@ -145,12 +146,7 @@ def test_unparseable_time(tiny_dataset):
 
 
 def test_non_numeric_value(tiny_dataset):
-    path = tiny_dataset / "R2" / "temperatures" / "box.csv"
-    lines = path.read_text().splitlines()
-    fields = lines[10].split(",")
-    fields[2] = "warm"
-    lines[10] = ",".join(fields)
-    path.write_text("\n".join(lines) + "\n")
+    set_csv_cell(tiny_dataset / "R2" / "temperatures" / "box.csv", 10, 2, "warm")
     ds = load_dataset(tiny_dataset)
     with pytest.raises(DataError) as exc:
         read_run(ds, "R2")
@@ -159,12 +155,7 @@ def test_non_numeric_value(tiny_dataset):
 
 
 def test_empty_cell_is_a_missing_sample_not_an_error(tiny_dataset):
-    path = tiny_dataset / "R2" / "temperatures" / "box.csv"
-    lines = path.read_text().splitlines()
-    fields = lines[10].split(",")
-    fields[2] = ""
-    lines[10] = ",".join(fields)
-    path.write_text("\n".join(lines) + "\n")
+    set_csv_cell(tiny_dataset / "R2" / "temperatures" / "box.csv", 10, 2, "")
     raw = read_run(load_dataset(tiny_dataset), "R2")
     assert np.isnan(raw.sources["box"]["S2"].iloc[9])
 

@@ -21,13 +21,10 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import REPO, write_dataset
+from conftest import FIXED_EPOCH, REPO, run_snakemake, snakemake_env, workflow_workdir, write_dataset
 from thermaxis import provenance, reporting
 
 NOTEBOOKS = ("dataset_report", "condition_report", "model_report", "paper_report")
-SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
-# 2023-11-14T22:13:20Z: a fixed run time makes two builds comparable byte for byte.
-EPOCH = "1700000000"
 
 
 # --------------------------------------------------------------------------- notebooks
@@ -87,7 +84,7 @@ def test_config_hash_ignores_key_order():
 def test_run_time_honours_source_date_epoch(monkeypatch):
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "0")
     assert provenance.run_time() == "1970-01-01T00:00:00Z"
-    monkeypatch.setenv("SOURCE_DATE_EPOCH", EPOCH)
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", FIXED_EPOCH)
     assert provenance.run_time() == "2023-11-14T22:13:20Z"
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
     with pytest.raises(ValueError, match="SOURCE_DATE_EPOCH"):
@@ -232,17 +229,7 @@ _BUILD: dict[str, Built] = {}
 
 
 def snakemake(built: Built, *args, check=True) -> subprocess.CompletedProcess:
-    proc = subprocess.run(
-        [SNAKEMAKE, "--cores", "2", "--nolock", "--configfile", str(built.config), *args],
-        cwd=built.work,
-        capture_output=True,
-        text=True,
-        env=built.env,
-        timeout=900,
-    )
-    if check and proc.returncode != 0:
-        raise AssertionError(f"snakemake failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}")
-    return proc
+    return run_snakemake(built.work, "--configfile", str(built.config), *args, check=check, env=built.env)
 
 
 def build_reports(tmp_path_factory) -> Built:
@@ -250,11 +237,7 @@ def build_reports(tmp_path_factory) -> Built:
     if "built" not in _BUILD:
         tmp = tmp_path_factory.mktemp("reports")
         dataset = write_dataset(tmp / "rep", runs=("R1", "R2"), name="rep")
-        work = tmp / "work"
-        (work / "data").mkdir(parents=True)
-        for name in ("Snakefile", "config", "workflow", "notebooks"):
-            os.symlink(REPO / name, work / name)
-        os.symlink(REPO / "data" / "paper", work / "data" / "paper")
+        work = workflow_workdir(tmp)
         config = work / "reports_config.yaml"
         config.write_text(
             yaml.safe_dump(
@@ -270,8 +253,7 @@ def build_reports(tmp_path_factory) -> Built:
                 }
             )
         )
-        env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONHASHSEED": "0", "SOURCE_DATE_EPOCH": EPOCH}
-        env["PATH"] = f"{Path(sys.executable).parent}:{env['PATH']}"
+        env = snakemake_env()
         built = Built(work=work, out=work / "results" / "rep", dataset=dataset, config=config, env=env)
         snakemake(built)
         _BUILD["built"] = built
@@ -393,14 +375,7 @@ def test_changing_n_clusters_reruns_only_the_affected_reports(built):
     doc = yaml.safe_load(built.config.read_text())
     doc["selection"]["n_clusters"] = 3
     changed.write_text(yaml.safe_dump(doc))
-    proc = subprocess.run(
-        [SNAKEMAKE, "--cores", "2", "--nolock", "-n", "--configfile", str(changed)],
-        cwd=built.work,
-        capture_output=True,
-        text=True,
-        env=built.env,
-        timeout=300,
-    )
+    proc = run_snakemake(built.work, "-n", "--configfile", str(changed), check=False, env=built.env, timeout=300)
     rules = planned_rules(proc)
     assert {"select_sensitive_points", "model_report", "paper_report", "provenance", "index"} <= rules, rules
     assert not rules & {"dataset_report", "condition_report", "clean_run", "assemble", "fig5_unzeroed"}, rules

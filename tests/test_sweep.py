@@ -9,10 +9,7 @@ metrics.csv for the same configuration.
 from __future__ import annotations
 
 import io
-import os
-import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -20,7 +17,7 @@ import pytest
 import yaml
 from threadpoolctl import threadpool_limits
 
-from conftest import REPO, write_dataset
+from conftest import REPO, run_snakemake, workflow_workdir, write_dataset
 from thermaxis import experiment, sweep
 from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
 
@@ -297,32 +294,11 @@ def test_heatmap_holds_the_other_factors_at_the_main_configuration():
 
 # --------------------------------------------------------------------------- end to end
 
-SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
-
-
-def _workdir(tmp_path: Path) -> Path:
-    work = tmp_path / "work"
-    (work / "data").mkdir(parents=True)
-    for name in ("Snakefile", "config", "workflow", "notebooks"):
-        os.symlink(REPO / name, work / name)
-    os.symlink(REPO / "data" / "paper", work / "data" / "paper")
-    return work
-
-
-def _snakemake(work: Path, *args) -> subprocess.CompletedProcess:
-    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONHASHSEED": "0"}
-    env["PATH"] = f"{Path(sys.executable).parent}:{env['PATH']}"
-    proc = subprocess.run([SNAKEMAKE, "--cores", "2", "--nolock", *args], cwd=work, capture_output=True, text=True,
-                          env=env, timeout=900)  # fmt: skip
-    assert proc.returncode == 0, f"snakemake failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}"
-    return proc
-
-
 @pytest.mark.slow
 def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_path):
     dataset = write_dataset(tmp_path / "lines", runs=("R1", "R2", "R3"), sensors=("S1", "S2", "S3", "S4"),
                             name="lines", n_measurements=5)  # fmt: skip
-    work = _workdir(tmp_path)
+    work = workflow_workdir(tmp_path)
     main_models = {"algorithms": ["mlr", "svr"], "svr_grid": {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}}
     config = {
         "dataset": str(dataset),
@@ -336,7 +312,7 @@ def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_p
     }
     path = work / "config.yaml"
     path.write_text(yaml.safe_dump(config))
-    proc = _snakemake(work, "--configfile", str(path), "--", "results/lines/tables/metrics.csv", "sweep")
+    proc = run_snakemake(work, "--configfile", str(path), "--", "results/lines/tables/metrics.csv", "sweep")
     assert "sweep batch 2/2: 100%" in proc.stderr
 
     out = work / "results" / "lines"
@@ -361,7 +337,7 @@ def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_p
     assert ranking["main_config"].sum() == 2 * 2  # decoupled d1 + pointwise, mlr + svr
     html = (out / "sweep" / "sweep_report.html").read_text()
     assert "SIMULATED" in html and "Ranking" in html
-    rerun = _snakemake(work, "--configfile", str(path), "-n", "--", "sweep")
+    rerun = run_snakemake(work, "--configfile", str(path), "-n", "--", "sweep")
     assert "Nothing to be done" in rerun.stdout + rerun.stderr
 
 

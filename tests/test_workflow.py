@@ -3,10 +3,7 @@
 from __future__ import annotations
 
 import hashlib
-import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,40 +11,10 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import REPO, write_dataset
+from conftest import run_snakemake, set_csv_cell, write_dataset
+from conftest import workflow_workdir as workdir
 
 pytestmark = pytest.mark.slow
-
-SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
-
-
-def workdir(tmp_path: Path) -> Path:
-    """A scratch copy of the workflow's entry points (symlinks), so results stay in tmp."""
-    work = tmp_path / "work"
-    (work / "data").mkdir(parents=True)
-    for name in ("Snakefile", "config", "workflow", "notebooks"):
-        os.symlink(REPO / name, work / name)
-    os.symlink(REPO / "data" / "paper", work / "data" / "paper")
-    return work
-
-
-def run_snakemake(work: Path, *args, check=True) -> subprocess.CompletedProcess:
-    # SOURCE_DATE_EPOCH pins the run time recorded in provenance and reports, the one
-    # field that is otherwise meant to differ between runs.
-    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONHASHSEED": "0", "SOURCE_DATE_EPOCH": "1700000000"}
-    env["PATH"] = f"{Path(sys.executable).parent}:{env['PATH']}"
-    proc = subprocess.run(
-        [SNAKEMAKE, "--cores", "2", "--nolock", *args],
-        cwd=work,
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=900,
-    )
-    if check and proc.returncode != 0:
-        raise AssertionError(f"snakemake failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}")
-    return proc
-
 
 def tiny_config(work: Path, dataset: Path, **extra) -> Path:
     # Two algorithms and one figure algorithm keep the end-to-end runs short; the
@@ -126,11 +93,7 @@ def test_noop_rerun_has_nothing_to_do(finished_run):
 def test_bad_input_stops_with_one_line_and_leaves_no_output(tmp_path):
     dataset = write_dataset(tmp_path / "bad", name="bad")
     path = dataset / "R2" / "errors" / "M02.csv"
-    lines = path.read_text().splitlines()
-    fields = lines[3].split(",")
-    fields[2] = "n/a"
-    lines[3] = ",".join(fields)
-    path.write_text("\n".join(lines) + "\n")
+    set_csv_cell(path, 3, 2, "n/a")
     work = workdir(tmp_path)
     proc = run_snakemake(work, "--configfile", str(tiny_config(work, dataset)), check=False)
     assert proc.returncode != 0

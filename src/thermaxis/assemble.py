@@ -8,14 +8,13 @@ is kept beside it only to show what re-zeroing hides.
 
 from __future__ import annotations
 
-import re
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from . import clean
+from .captions import natural_key
 from .io import DataError, Dataset, RawRun
 
 __all__ = [
@@ -26,11 +25,8 @@ __all__ = [
     "tidy_temperatures",
     "unzeroed_matrix",
     "model_inputs",
-    "MINUTE",
+    "natural_key",
 ]
-
-MINUTE = np.timedelta64(60, "s")
-
 
 @dataclass(frozen=True)
 class RunTables:
@@ -66,14 +62,18 @@ def _targets(raw: RawRun) -> np.ndarray:
     return np.unique(positions)
 
 
+def minutes_since_first(times, windows: pd.DataFrame):
+    """Minutes since the start of the run's first measurement (the paper's time axis)."""
+    return (times - windows["start"].iloc[0]) / pd.Timedelta(minutes=1)
+
+
 def tidy_errors(run: str, condition: int, windows: pd.DataFrame, combined: list[pd.Series]) -> pd.DataFrame:
     """Unzeroed errors (passes combined) plus the re-zeroed view, one row per reading."""
-    t0 = windows["start"].iloc[0]
     rows = []
     for (_, w), curve in zip(windows.iterrows(), combined):
         first = curve.dropna()
         origin = first.iloc[0] if len(first) else np.nan
-        time_min = (w["start"] - t0) / pd.Timedelta(minutes=1)
+        time_min = minutes_since_first(w["start"], windows)
         for position, value in curve.items():
             rows.append((run, condition, int(w["measurement"]), time_min, float(position), value, value - origin))
     return pd.DataFrame(
@@ -84,8 +84,7 @@ def tidy_errors(run: str, condition: int, windows: pd.DataFrame, combined: list[
 
 def tidy_temperatures(run: str, condition: int, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
     """Absolute temperatures per measurement and their rise since the run's first measurement."""
-    t0 = windows["start"].iloc[0]
-    time_min = ((windows["start"] - t0) / pd.Timedelta(minutes=1)).to_numpy()
+    time_min = minutes_since_first(windows["start"], windows).to_numpy()
     sensors = [c for c in at_measurements.columns if c not in ("measurement", "start", "end")]
     frames = []
     for sensor in sensors:
@@ -138,7 +137,7 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
         raise DataError(f"{dataset.root / run / 'temperatures'}: sensor {sensor!r} has no usable reading during a measurement")
 
     series = cleaned.frame.copy()
-    series.insert(1, "elapsed_min", (series["time"] - windows["start"].iloc[0]) / pd.Timedelta(minutes=1))
+    series.insert(1, "elapsed_min", minutes_since_first(series["time"], windows))
     return RunTables(
         run=run,
         series=series,
@@ -185,13 +184,3 @@ def model_inputs(errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None)
     Y.columns = [float(c) for c in Y.columns]
     Y.columns.name = None
     return X, Y
-
-
-def natural_key(name: str) -> tuple:
-    """Sort key that orders embedded numbers numerically: T2 < T10."""
-    return tuple(int(part) if part.isdigit() else part for part in re.split(r"(\d+)", str(name)))
-
-
-def warn_all(notes) -> None:
-    for note in notes:
-        warnings.warn(note, stacklevel=2)

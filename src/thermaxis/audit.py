@@ -9,6 +9,8 @@ with them.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pandas as pd
 
@@ -17,19 +19,19 @@ from .summary import data_statement, markdown_table
 __all__ = ["ReproducedTables", "paper_comparison", "comparison_markdown"]
 
 
+@dataclass(frozen=True, kw_only=True)
 class ReproducedTables:
     """The workflow tables the audit reads (all tidy DataFrames)."""
 
-    def __init__(self, *, runs, ambient, kb, metrics, coefficients, sensitive_points, error_predictions, errors, paper_fold):
-        self.runs = runs
-        self.ambient = ambient  # run, ambient_min_c, ambient_max_c
-        self.kb = kb
-        self.metrics = metrics
-        self.coefficients = coefficients
-        self.sensitive_points = sensitive_points
-        self.error_predictions = error_predictions
-        self.errors = errors
-        self.paper_fold = paper_fold
+    runs: pd.DataFrame
+    ambient: pd.DataFrame  # run, ambient_min_c, ambient_max_c
+    kb: pd.DataFrame
+    metrics: pd.DataFrame
+    coefficients: pd.DataFrame
+    sensitive_points: pd.DataFrame
+    error_predictions: pd.DataFrame
+    errors: pd.DataFrame
+    paper_fold: str
 
 
 def _one(frame: pd.DataFrame, column: str) -> float:

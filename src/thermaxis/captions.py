@@ -1,4 +1,4 @@
-"""Figure captions and display names, kept free of matplotlib.
+"""Figure captions, display names and the natural order of labels, kept free of matplotlib.
 
 The workflow builds every caption when it is parsed (for Snakemake's report), so this
 module must import in milliseconds; :mod:`thermaxis.plotting` re-exports it.
@@ -6,9 +6,16 @@ module must import in milliseconds; :mod:`thermaxis.plotting` re-exports it.
 
 from __future__ import annotations
 
+import re
 import string
 
-__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption"]
+__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption", "natural_key"]
+
+def natural_key(value) -> tuple:
+    """Sort 'E2' before 'E10' and 'T2' before 'T10': embedded numbers compare numerically."""
+    parts = re.split(r"(\d+)", str(value))
+    return tuple((0, int(p), "") if p.isdigit() else (1, 0, p) for p in parts)
+
 
 SIMULATED_NOTE = "Simulated data (thermal twin), not the paper's measurements."
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DecoupledFit", "decouple_measurement", "compose_curve", "MM_PER_M"]
+__all__ = ["DecoupledFit", "decouple_measurement", "decouple_curves", "decouple_table", "compose_curve", "MM_PER_M"]
 
 MM_PER_M = 1000.0
 
@@ -77,6 +77,27 @@ def decouple_measurement(
         coefficients=tuple(float(c) for c in coef),
         origin_mm=origin,
     )
+
+
+def decouple_curves(position_mm, errors, degree: int = 1, origin_mm: float | None = None, labels=None) -> list[DecoupledFit]:
+    """Decouple each row of an (n_measurements, n_positions) error matrix.
+
+    Missing readings (NaN, or any non-finite value) are left out of their row's fit; ``origin_mm`` defaults to
+    the first position, so every row's b refers to the same target. ``labels`` name
+    the rows in the error raised when one cannot be fitted.
+    """
+    x = np.asarray(position_mm, dtype=float)
+    matrix = np.asarray(errors, dtype=float)
+    origin = float(x[0]) if origin_mm is None else float(origin_mm)
+    fits = []
+    for i, row in enumerate(matrix):
+        valid = np.isfinite(row)
+        try:
+            fits.append(decouple_measurement(x[valid], row[valid], degree=degree, origin_mm=origin))
+        except ValueError as exc:
+            label = labels[i] if labels is not None else f"row {i}"
+            raise ValueError(f"{label}: {exc}") from exc
+    return fits
 
 
 def compose_curve(k_um_per_m, b_um, position_mm, origin_mm: float) -> np.ndarray:

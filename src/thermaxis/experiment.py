@@ -13,18 +13,19 @@ prediction time and its measured errors only to the metrics.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
 import pandas as pd
 
-from .decouple import decouple_measurement
+from .decouple import decouple_curves
 from .evaluate import prediction_metrics
 from .models import DecoupledAxisModel, PointwiseAxisModel, relative_temperatures
 from .selection import SensitivePoints, common_points, rank_by_correlation, select_sensitive_points
 
 __all__ = [
+    "SORT_KEYS",
     "SelectionSettings",
     "ModelSettings",
     "FoldSelection",
@@ -41,6 +42,15 @@ __all__ = [
 ]
 
 META = ("run", "measurement", "time_min")
+
+# Row order of the result tables, per fold and collected over folds (deterministic files).
+SORT_KEYS = {
+    "metrics": ["fold", "approach", "algorithm", "target"],
+    "coefficients": ["fold", "approach", "algorithm", "target", "position_mm", "temperature", "term"],
+    "kb_predictions": ["fold", "approach", "algorithm", "target", "measurement"],
+    "error_predictions": ["fold", "approach", "algorithm", "measurement", "position_mm"],
+    "selection": ["fold", "target", "position_mm", "cluster", "sensor"],
+}
 
 
 @dataclass(frozen=True)
@@ -143,15 +153,10 @@ def sensor_columns(X: pd.DataFrame) -> list[str]:
 
 def training_kb(X: pd.DataFrame, Y: pd.DataFrame, degree: int = 1) -> pd.DataFrame:
     """Decoupled k and b of every row (the selection's targets)."""
-    positions = np.asarray(Y.columns, dtype=float)
-    origin = float(positions[0])
-    rows = []
-    for i in range(len(Y)):
-        values = Y.iloc[i].to_numpy(dtype=float)
-        ok = ~np.isnan(values)
-        fit = decouple_measurement(positions[ok], values[ok], degree=degree, origin_mm=origin)
-        rows.append((fit.k_um_per_m, fit.b_um))
-    return pd.DataFrame(rows, columns=["k_um_per_m", "b_um"], index=Y.index)
+    fits = decouple_curves(np.asarray(Y.columns, dtype=float), Y.to_numpy(dtype=float), degree=degree)
+    return pd.DataFrame(
+        [(fit.k_um_per_m, fit.b_um) for fit in fits], columns=["k_um_per_m", "b_um"], index=Y.index
+    )
 
 
 def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, target: str) -> SensitivePoints:
@@ -303,7 +308,7 @@ def evaluate_configuration(
         lower, upper = estimator.predict_interval(X_test, level=model.interval_level)
 
     label = {"fold": fold, "approach": approach, "algorithm": algorithm}
-    metric_rows = [{**label, "target": "error", **prediction_metrics(measured, predicted)}]
+    metric_rows = []
     kb_rows = []
     if approach == "decoupled":
         kb_measured = training_kb(X_test, Y_test, degree=degree)
@@ -312,7 +317,7 @@ def evaluate_configuration(
         for target, column in (("k", "k_um_per_m"), ("b", "b_um")):
             m = kb_measured[column].to_numpy()
             p = kb_predicted[column].to_numpy()
-            metric_rows.insert(len(metric_rows) - 1, {**label, "target": target, **prediction_metrics(m, p)})
+            metric_rows.append({**label, "target": target, **prediction_metrics(m, p)})
             lo, hi = kb_interval[column] if kb_interval is not None else (np.full_like(p, np.nan),) * 2
             kb_rows.append(
                 pd.DataFrame(
@@ -329,6 +334,7 @@ def evaluate_configuration(
                     }
                 )
             )
+    metric_rows.append({**label, "target": "error", **prediction_metrics(measured, predicted)})
     positions = np.asarray(Y.columns, dtype=float)
     n, p = measured.shape
     errors = pd.DataFrame(
@@ -376,10 +382,6 @@ def _empty_kb() -> pd.DataFrame:
     return pd.DataFrame(
         columns=["fold", "approach", "algorithm", "run", "measurement", "time_min", "target", "measured", "predicted", "lower", "upper"]
     )
-
-
-def with_selection(settings: SelectionSettings, **changes) -> SelectionSettings:
-    return replace(settings, **changes)
 
 
 def _points_to_dict(points: SensitivePoints | None):

@@ -42,7 +42,7 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
 
-from thermaxis.decouple import MM_PER_M, decouple_measurement
+from thermaxis.decouple import MM_PER_M, decouple_curves
 
 __all__ = [
     "ALGORITHMS",
@@ -456,16 +456,12 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         return targets
 
     def _decouple(self, X: pd.DataFrame, Y: pd.DataFrame) -> pd.DataFrame:
-        errors = Y.to_numpy(dtype=float)
+        labels = [f"run {run} measurement {measurement}" for run, measurement in zip(X["run"], X["measurement"])]
+        fits = decouple_curves(
+            self.positions_mm_, Y.to_numpy(dtype=float), self.degree, origin_mm=self.origin_mm_, labels=labels
+        )
         rows = []
-        for i, (run, measurement) in enumerate(zip(X["run"], X["measurement"])):
-            valid = np.isfinite(errors[i])
-            try:
-                fit = decouple_measurement(
-                    self.positions_mm_[valid], errors[i, valid], self.degree, origin_mm=self.origin_mm_
-                )
-            except ValueError as exc:
-                raise ValueError(f"run {run} measurement {measurement}: {exc}") from exc
+        for run, measurement, fit in zip(X["run"], X["measurement"], fits):
             row = {"run": run, "measurement": measurement, "k_um_per_m": fit.k_um_per_m, "b_um": fit.b_um}
             for p in range(2, self.degree + 1):
                 row[_KB_COLUMNS[f"c{p}"]] = fit.coefficients[p]

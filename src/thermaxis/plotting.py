@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import functools
 import math
-import re
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
@@ -45,7 +44,7 @@ from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from .captions import DISPLAY_NAMES, SIMULATED_NOTE, _display, figure_caption  # noqa: E402,F401
+from .captions import DISPLAY_NAMES, SIMULATED_NOTE, _display, figure_caption, natural_key  # noqa: E402,F401
 
 __all__ = [
     "STYLE",
@@ -160,14 +159,8 @@ def _require_columns(table: pd.DataFrame, columns: Iterable[str], name: str) -> 
         )
 
 
-def _natural_key(value) -> tuple:
-    """Sort 'E2' before 'E10' and numbers numerically, so run and fold order reads naturally."""
-    parts = re.split(r"(\d+)", str(value))
-    return tuple((0, int(p), "") if p.isdigit() else (1, 0, p) for p in parts)
-
-
 def _natural_sorted(values: Iterable) -> list:
-    return sorted(pd.unique(pd.Series(list(values))), key=_natural_key)
+    return sorted(pd.unique(pd.Series(list(values))), key=natural_key)
 
 
 def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
@@ -865,7 +858,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     folds = _natural_sorted(rows["fold"])
     pairs = sorted(
         {(str(a), str(g)) for a, g in zip(rows["approach"], rows["algorithm"])},
-        key=lambda p: (_natural_key(p[0]), _natural_key(p[1])),
+        key=lambda p: (natural_key(p[0]), natural_key(p[1])),
     )
     unit = _METRIC_UNITS.get(str(target))
     suffix = f" ({unit})" if unit else ""

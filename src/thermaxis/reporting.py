@@ -35,8 +35,9 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
+
+from .summary import format_cell
 
 __all__ = [
     "REPORT_CSS",
@@ -180,13 +181,7 @@ def provenance_html(record: dict, full_record_href: str | None = "../provenance.
 
 
 def _cell_text(value, float_format: str) -> str:
-    if isinstance(value, (bool, np.bool_)):
-        return str(bool(value))
-    if pd.isna(value):
-        return ""
-    if isinstance(value, (float, np.floating)):
-        return float_format % value
-    return html.escape(str(value))
+    return html.escape(format_cell(value, float_format))
 
 
 def table_html(frame: pd.DataFrame, float_format: str = "%.3f", caption: str | None = None, max_rows: int | None = None) -> str:

@@ -9,7 +9,7 @@ import pandas as pd
 
 from .io import Dataset
 
-__all__ = ["dataset_summary", "markdown_table", "table5_markdown", "data_statement"]
+__all__ = ["dataset_summary", "format_cell", "markdown_table", "table5_markdown", "data_statement"]
 
 
 def data_statement(dataset_name: str, simulated: bool) -> str:
@@ -44,22 +44,27 @@ def dataset_summary(dataset: Dataset) -> pd.DataFrame:
     return pd.DataFrame(rows).sort_values("run", ignore_index=True)
 
 
-def _cell(value, float_format: str) -> str:
+def format_cell(value, float_format: str) -> str:
+    """One table cell as text: floats in ``float_format``, missing values blank."""
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    if pd.isna(value):
+        return ""
     if isinstance(value, (float, np.floating)):
-        return "" if np.isnan(value) else float_format % value
+        return float_format % value
     return str(value)
 
 
 def markdown_table(frame: pd.DataFrame, float_format: str = "%.2f") -> str:
     header = "| " + " | ".join(map(str, frame.columns)) + " |"
     rule = "|" + "|".join("---" for _ in frame.columns) + "|"
-    body = ["| " + " | ".join(_cell(v, float_format) for v in row) + " |" for row in frame.itertuples(index=False)]
+    body = ["| " + " | ".join(format_cell(v, float_format) for v in row) + " |" for row in frame.itertuples(index=False)]
     return "\n".join([header, rule, *body]) + "\n"
 
 
 def table5_markdown(kb: pd.DataFrame, dataset_name: str, simulated: bool, paper_dir=None) -> str:
     """Table 5 as Markdown; for the twin, the paper's published k and b beside it."""
-    lines = [f"# Table 5: slope k and intercept b of every measurement", "", data_statement(dataset_name, simulated), ""]
+    lines = ["# Table 5: slope k and intercept b of every measurement", "", data_statement(dataset_name, simulated), ""]
     table = kb[["run", "measurement", "time_min", "k_um_per_m", "b_um", "r2", "rms_um"]].copy()
     paper_file = Path(paper_dir) / "table5_slope_intercept.csv" if paper_dir else None
     if simulated and dataset_name == "twin" and paper_file is not None and paper_file.is_file():

@@ -7,8 +7,8 @@ rule fit_predict:
     output:
         metrics=f"{OUT}/models/{{fold}}/metrics.csv",
         coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
-        kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
-        errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
+        kb_predictions=f"{OUT}/models/{{fold}}/kb_predictions.csv",
+        error_predictions=f"{OUT}/models/{{fold}}/error_predictions.csv",
     log:
         f"{LOGS}/models/{{fold}}.log",
     benchmark:

@@ -2,8 +2,10 @@ rule collect_model_tables:
     input:
         metrics=expand(f"{OUT}/models/{{fold}}/metrics.csv", fold=FOLDS),
         coefficients=expand(f"{OUT}/models/{{fold}}/coefficients.csv", fold=FOLDS),
-        kb=expand(f"{OUT}/models/{{fold}}/kb_predictions.csv", fold=FOLDS),
-        errors=expand(f"{OUT}/models/{{fold}}/error_predictions.csv", fold=FOLDS),
+        kb_predictions=expand(f"{OUT}/models/{{fold}}/kb_predictions.csv", fold=FOLDS),
+        error_predictions=expand(
+            f"{OUT}/models/{{fold}}/error_predictions.csv", fold=FOLDS
+        ),
         selection=expand(f"{OUT}/selection/{{fold}}.csv", fold=FOLDS),
     output:
         metrics=report(
@@ -18,13 +20,13 @@ rule collect_model_tables:
             category="4. Models",
             labels={"table": "coefficients"},
         ),
-        kb=report(
+        kb_predictions=report(
             f"{OUT}/tables/kb_predictions.csv",
             caption="../report/kb_predictions.rst",
             category="5. Prediction",
             labels={"table": "k and b predictions"},
         ),
-        errors=report(
+        error_predictions=report(
             f"{OUT}/tables/error_predictions.csv",
             caption="../report/error_predictions.rst",
             category="5. Prediction",

@@ -4,7 +4,7 @@ import logging
 import pandas as pd
 
 from thermaxis.assemble import model_inputs
-from thermaxis.experiment import evaluate_configuration, selection_from_dict, settings_from_config
+from thermaxis.experiment import SORT_KEYS, evaluate_configuration, selection_from_dict, settings_from_config
 from thermaxis.runner import run_script, write_csv
 
 
@@ -26,17 +26,10 @@ def main(snakemake):
                     X, Y, fold, approach, algorithm, selection, model_settings, degree=selection_settings.degree
                 )
             )
-    order = {
-        "metrics": ["fold", "approach", "algorithm", "target"],
-        "coefficients": ["fold", "approach", "algorithm", "target", "position_mm", "temperature", "term"],
-        "kb_predictions": ["fold", "approach", "algorithm", "target", "measurement"],
-        "error_predictions": ["fold", "approach", "algorithm", "measurement", "position_mm"],
-    }
-    out = snakemake.output
-    paths = {"metrics": out.metrics, "coefficients": out.coefficients, "kb_predictions": out.kb, "error_predictions": out.errors}
-    for name, path in paths.items():
+    for name in ("metrics", "coefficients", "kb_predictions", "error_predictions"):
         frame = pd.concat([getattr(r, name) for r in results], ignore_index=True)
-        write_csv(frame.sort_values(order[name], kind="stable", ignore_index=True), path, float_format="%.6f")
+        frame = frame.sort_values(SORT_KEYS[name], kind="stable", ignore_index=True)
+        write_csv(frame, snakemake.output[name], float_format="%.6f")
 
 
 run_script(main, snakemake)
