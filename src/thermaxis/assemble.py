@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from . import clean
-from .captions import natural_key
+from .naming import natural_key
 from .io import DataError, Dataset, RawRun
 
 __all__ = [
@@ -25,6 +25,8 @@ __all__ = [
     "tidy_temperatures",
     "unzeroed_matrix",
     "model_inputs",
+    "check_common_targets",
+    "tidy_signals",
     "natural_key",
 ]
 
@@ -37,6 +39,8 @@ class RunTables:
     errors: pd.DataFrame  # tidy, one row per measurement x position
     temperatures: pd.DataFrame  # tidy, one row per measurement x sensor
     windows: pd.DataFrame
+    signals: pd.DataFrame  # tidy, one row per measurement x operating signal (may be empty)
+    signal_series: pd.DataFrame  # time, elapsed_min and each operating signal on the grid
     notes: tuple[str, ...] = field(default=())
 
 
@@ -67,7 +71,7 @@ def minutes_since_first(times, windows: pd.DataFrame):
     return (times - windows["start"].iloc[0]) / pd.Timedelta(minutes=1)
 
 
-def tidy_errors(run: str, condition: int, windows: pd.DataFrame, combined: list[pd.Series]) -> pd.DataFrame:
+def tidy_errors(run: str, condition: str, windows: pd.DataFrame, combined: list[pd.Series]) -> pd.DataFrame:
     """Unzeroed errors (passes combined) plus the re-zeroed view, one row per reading."""
     rows = []
     for (_, w), curve in zip(windows.iterrows(), combined):
@@ -82,7 +86,30 @@ def tidy_errors(run: str, condition: int, windows: pd.DataFrame, combined: list[
     )
 
 
-def tidy_temperatures(run: str, condition: int, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
+SIGNAL_COLUMNS = ["run", "condition", "measurement", "time_min", "signal", "value"]
+
+
+def tidy_signals(run: str, condition: str, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
+    """Operating signals (window means) per measurement, one row per measurement x signal."""
+    time_min = minutes_since_first(windows["start"], windows).to_numpy()
+    signals = [c for c in at_measurements.columns if c not in ("measurement", "start", "end")]
+    frames = [
+        pd.DataFrame(
+            {
+                "run": run,
+                "condition": condition,
+                "measurement": windows["measurement"].to_numpy(dtype=int),
+                "time_min": time_min,
+                "signal": signal,
+                "value": at_measurements[signal].to_numpy(dtype=float),
+            }
+        )
+        for signal in signals
+    ]
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=SIGNAL_COLUMNS)
+
+
+def tidy_temperatures(run: str, condition: str, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
     """Absolute temperatures per measurement and their rise since the run's first measurement."""
     time_min = minutes_since_first(windows["start"], windows).to_numpy()
     sensors = [c for c in at_measurements.columns if c not in ("measurement", "start", "end")]
@@ -124,20 +151,40 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
     margin = pd.Timedelta(seconds=max(60.0, 3 * t_settings.interval_s))
     start = windows["start"].min() - margin
     end = windows["end"].max() + margin
-    cleaned = clean.clean_temperatures(raw.sources, dataset.clock_offsets_s(), t_settings, start=start, end=end)
-    gap_notes = clean.check_gaps(
-        cleaned.gaps, windows, allow=bool(config["temperatures"]["allow_long_gaps"])
-    )
+    temp_dir = dataset.root / run / "temperatures"
+    try:
+        cleaned = clean.clean_temperatures(raw.sources, dataset.clock_offsets_s(), t_settings, start=start, end=end)
+        gap_notes = clean.check_gaps(
+            cleaned.gaps,
+            windows,
+            allow=bool(config["temperatures"]["allow_long_gaps"]),
+            files={s: temp_dir / f"{source}.csv" for source in raw.sources for s in dataset.sensors_of(source)},
+            max_gap_s=t_settings.max_gap_s,
+        )
+    except ValueError as exc:
+        raise DataError(f"run {run!r}: {exc}") from None
     notes.extend(f"{run}: {n}" for n in gap_notes)
-    at_measurements = clean.temperatures_in_windows(cleaned.frame, windows, how=config["temperatures"]["window"])
+    how = config["temperatures"]["window"]
+    at_measurements = clean.temperatures_in_windows(cleaned.frame, windows, how=how)
     sensors = [s for s in dataset.sensors if s in at_measurements.columns]
-    missing = at_measurements[sensors].isna().any()
-    if missing.any() and not config["temperatures"]["allow_long_gaps"]:
-        sensor = missing[missing].index[0]
-        raise DataError(f"{dataset.root / run / 'temperatures'}: sensor {sensor!r} has no usable reading during a measurement")
+    missing = at_measurements[sensors].isna()
+    if missing.any().any():
+        sensor = missing.any()[missing.any()].index[0]
+        window = windows.loc[missing[sensor].to_numpy()].iloc[0]
+        source = next(src for src in raw.sources if sensor in dataset.sensors_of(src))
+        raise DataError(
+            f"{temp_dir / f'{source}.csv'}: sensor {sensor!r} of run {run!r} has no usable reading during measurement "
+            f"{window['measurement']} ({window['name']}, {window['start']} to {window['end']}); "
+            "expected readings within temperatures.max_gap_s of every measurement (raise max_gap_s, or drop the sensor "
+            "from dataset.yaml)"
+        )
+    signal_frame = clean.signals_on_grid(raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"])
+    signal_values = clean.temperatures_in_windows(signal_frame, windows, how=how)
 
     series = cleaned.frame.copy()
     series.insert(1, "elapsed_min", minutes_since_first(series["time"], windows))
+    signal_series = signal_frame.copy()
+    signal_series.insert(1, "elapsed_min", series["elapsed_min"].to_numpy())
     return RunTables(
         run=run,
         series=series,
@@ -146,6 +193,8 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
         errors=tidy_errors(run, condition, windows, combined),
         temperatures=tidy_temperatures(run, condition, windows, at_measurements[sensors]),
         windows=_with_run(windows, run),
+        signals=tidy_signals(run, condition, windows, signal_values.drop(columns=["start", "end"])),
+        signal_series=signal_series,
         notes=tuple(notes),
     )
 
@@ -157,15 +206,45 @@ def _with_run(frame: pd.DataFrame, run: str) -> pd.DataFrame:
 
 
 def unzeroed_matrix(errors: pd.DataFrame, value: str = "error_um") -> pd.DataFrame:
-    """Measurement x position matrix of one run (rows (run, measurement), columns position_mm)."""
-    return errors.pivot_table(index=["run", "measurement"], columns="position_mm", values=value, dropna=False, sort=True)
+    """Measurement x position matrix (rows (run, measurement), columns position_mm).
+
+    Only the (run, measurement) pairs that exist get a row, so runs of different
+    lengths stay as long as they are; a target a measurement lacks is NaN.
+    """
+    matrix = errors.set_index(["run", "measurement", "position_mm"])[value].unstack("position_mm")
+    return matrix.sort_index(axis=0).sort_index(axis=1)
 
 
-def model_inputs(errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None) -> tuple[pd.DataFrame, pd.DataFrame]:
+def check_common_targets(errors: pd.DataFrame, where) -> None:
+    """Every run must read the same targets: a model of the stroke needs one set of positions."""
+    targets = {run: tuple(np.unique(g["position_mm"].to_numpy(dtype=float))) for run, g in errors.groupby("run", sort=False)}
+    runs = sorted(targets, key=natural_key)
+    first = targets[runs[0]]
+    for run in runs[1:]:
+        if targets[run] != first:
+            extra = sorted(set(targets[run]) ^ set(first))
+            raise DataError(
+                f"{where(run)}: run {run!r} reads targets {_positions_text(targets[run])} but run {runs[0]!r} reads "
+                f"{_positions_text(first)} (they differ at {_positions_text(extra)} mm); expected the same targets in "
+                "every run"
+            )
+
+
+def _positions_text(values) -> str:
+    values = list(values)
+    shown = ", ".join(f"{v:g}" for v in values[:6])
+    return f"[{shown}{', ...' if len(values) > 6 else ''}]"
+
+
+def model_inputs(
+    errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None, signals: pd.DataFrame | None = None
+) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The estimators' view: X (run, measurement, time_min, absolute temperature per sensor) and Y.
 
     Relative temperatures are NOT passed: the models derive them from each run's own
     first measurement, so a held-out run can never borrow another run's start.
+    ``signals`` (the tidy operating-signal table) adds one column per signal after the
+    sensors, for models asked to use them as inputs.
     """
     wide = temperatures.pivot_table(index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True)
     if sensors is None:
@@ -177,7 +256,11 @@ def model_inputs(errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None)
     if len(index) != len(Y.index):
         missing = Y.index.difference(wide.index)[0]
         raise DataError(f"assembled tables: run {missing[0]!r} measurement {missing[1]} has errors but no temperatures")
-    X = wide.loc[index, list(sensors)].reset_index()
+    X = wide.loc[index, list(sensors)]
+    if signals is not None and len(signals):
+        signal_wide = signals.pivot_table(index=["run", "measurement"], columns="signal", values="value", sort=True)
+        X = X.join(signal_wide.reindex(index)[sorted(signal_wide.columns, key=natural_key)])
+    X = X.reset_index()
     X.insert(2, "time_min", times.loc[index].to_numpy())
     X.columns.name = None
     Y = Y.loc[index].reset_index(drop=True)

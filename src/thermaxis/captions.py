@@ -6,15 +6,11 @@ module must import in milliseconds; :mod:`thermaxis.plotting` re-exports it.
 
 from __future__ import annotations
 
-import re
 import string
 
-__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption", "natural_key"]
+from .naming import natural_key
 
-def natural_key(value) -> tuple:
-    """Sort 'E2' before 'E10' and 'T2' before 'T10': embedded numbers compare numerically."""
-    parts = re.split(r"(\d+)", str(value))
-    return tuple((0, int(p), "") if p.isdigit() else (1, 0, p) for p in parts)
+__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption", "natural_key"]
 
 
 SIMULATED_NOTE = "Simulated data (thermal twin), not the paper's measurements."

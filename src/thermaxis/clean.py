@@ -49,6 +49,8 @@ import numpy as np
 import pandas as pd
 from numpy.lib.stride_tricks import sliding_window_view
 
+from .naming import sort_naturally
+
 __all__ = [
     "TemperatureCleaning",
     "CleanedTemperatures",
@@ -61,6 +63,7 @@ __all__ = [
     "estimate_clock_offset",
     "clean_temperatures",
     "check_gaps",
+    "signals_on_grid",
     "temperatures_in_windows",
     "combine_passes",
 ]
@@ -78,6 +81,8 @@ _MAX_LAG_SAMPLES = 2000
 _SEARCHED_PAIRS = 32
 # Below this peak correlation the series share no transient and the lag is noise.
 _MIN_PEAK_CORRELATION = 0.5
+# Relative tolerance of threshold comparisons: a tie must not flip on float rounding.
+_TIE_RTOL = 1e-9
 # Positions closer than this are the same target (readings are logged to 1e-3 mm at best).
 _POSITION_TOL_MM = 1e-6
 
@@ -95,7 +100,9 @@ QC_COLUMNS = [
     "clock_offset_s",
     "offset_estimated",
 ]
-GAP_COLUMNS = ["sensor", "start", "end", "duration_s"]
+GAP_COLUMNS = ["sensor", "start", "end", "duration_s", "kind"]
+# Where a gap lies: between two samples, or before a sensor's first / after its last sample.
+GAP_KINDS = ("interior", "record start", "record end")
 
 
 @dataclass(frozen=True)
@@ -208,22 +215,27 @@ def hampel_outliers(values, window: int = 7, threshold: float = 4.0, min_deviati
 
     Notes
     -----
-    The ends are padded by mirroring, so the first and last samples get full windows;
-    a spike at the very end is then seen twice in its own window, which still leaves
-    the median robust for ``window >= 5``.  Vectorised with a sliding-window view and
-    ``np.partition`` (exact window medians, no Python loop over samples).
+    A sample within ``window // 2`` of an end is judged against the nearest FULL
+    window (the first or last ``window`` samples), never a mirrored one: mirroring a
+    steady ramp folds it into a peak, so its first and last samples would look like
+    spikes.  Deviations within a relative 1e-9 of the limit count as equal to it, so a
+    reading exactly ``min_deviation`` away is never flagged by a rounding error
+    (0.1 C steps give 0.20000000000000284 for 0.2).  Vectorised with a sliding-window
+    view and ``np.partition`` (exact window medians, no Python loop over samples).
     """
     x = np.asarray(values, dtype=float)
     if window < 3 or window % 2 == 0:
         raise ValueError(f"Hampel window must be an odd number of samples >= 3, got {window}")
     half = window // 2
-    if x.size <= half:
+    if x.size < window:
         return np.zeros(x.shape, dtype=bool)
-    windows = sliding_window_view(np.pad(x, half, mode="reflect"), window)
+    windows = sliding_window_view(x, window)
     median = np.partition(windows, half, axis=1)[:, half]
     mad = np.partition(np.abs(windows - median[:, None]), half, axis=1)[:, half]
-    limit = np.maximum(threshold * MAD_TO_SIGMA * mad, min_deviation)
-    return np.abs(x - median) > limit
+    # Window i is centred on sample i + half; the ends borrow the first and last window.
+    centre = np.clip(np.arange(x.size) - half, 0, windows.shape[0] - 1)
+    limit = np.maximum(threshold * MAD_TO_SIGMA * mad[centre], min_deviation)
+    return np.abs(x - median[centre]) > limit * (1.0 + _TIE_RTOL)
 
 
 # ----------------------------------------------------------------------------- clock offsets
@@ -508,7 +520,7 @@ def _onto_grid(native: _Native, grid: np.ndarray, max_gap_s: float):
     n = t.size
     if n == 0:
         counts = dict(n_interpolated=0, n_edge_held=0, n_long_gap=int(grid.size), longest_gap_s=np.nan)
-        return np.full(grid.size, np.nan), counts, [(int(grid[0]), int(grid[-1]))]
+        return np.full(grid.size, np.nan), counts, [(int(grid[0]), int(grid[-1]), "interior")]
     origin = t[0]
     y = np.interp((grid - origin) / _NS, (t - origin) / _NS, v)  # holds the end values outside
     left = np.searchsorted(t, grid, side="right") - 1  # last sample <= grid point
@@ -526,14 +538,14 @@ def _onto_grid(native: _Native, grid: np.ndarray, max_gap_s: float):
     interpolated = inside & ~long_gap & (spacing > GAP_FACTOR * typical)
 
     gaps = [
-        (int(t[i]), int(t[i + 1]))
+        (int(t[i]), int(t[i + 1]), "interior")
         for i in np.flatnonzero(steps > max_gap)
         if t[i] < grid[-1] and t[i + 1] > grid[0]
     ]
     if t[0] - grid[0] > max_gap / 2:
-        gaps.insert(0, (int(grid[0]), int(t[0])))
+        gaps.insert(0, (int(grid[0]), int(t[0]), "record start"))
     if grid[-1] - t[-1] > max_gap / 2:
-        gaps.append((int(t[-1]), int(grid[-1])))
+        gaps.append((int(t[-1]), int(grid[-1]), "record end"))
     counts = dict(
         n_interpolated=int(interpolated.sum()),
         n_edge_held=int(((before | after) & ~edge_far).sum()),
@@ -614,7 +626,7 @@ def clean_temperatures(
                 offset_estimated=native.offset_estimated,
             )
         )
-        gap_rows.extend((native.sensor, a, b, (b - a) / _NS) for a, b in gaps)
+        gap_rows.extend((native.sensor, a, b, (b - a) / _NS, kind) for a, b, kind in gaps)
     gaps = pd.DataFrame(gap_rows, columns=GAP_COLUMNS)
     gaps["start"] = gaps["start"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
     gaps["end"] = gaps["end"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
@@ -622,8 +634,31 @@ def clean_temperatures(
     return CleanedTemperatures(
         frame=pd.DataFrame(columns),
         qc=pd.DataFrame(qc_rows, columns=QC_COLUMNS),
-        gaps=gaps.sort_values(["start", "sensor"], kind="stable", ignore_index=True),
+        gaps=sort_naturally(gaps, ["start", "sensor"]),
     )
+
+
+def signals_on_grid(
+    signals: Mapping[str, pd.DataFrame], clock_offsets_s: Mapping[str, float], grid_times
+) -> pd.DataFrame:
+    """Operating signals on the temperature grid, each held at its last logged value.
+
+    Signals are set points or programme states (a spindle speed, a feed), not physical
+    quantities with noise: no limits and no spike filter apply, and a step stays a
+    step instead of being smeared into a ramp.  Before a signal's first sample it is
+    NaN.
+    """
+    grid = _as_ns(grid_times)
+    columns = {"time": grid.astype("datetime64[ns]")}
+    for name, frame in signals.items():
+        t = _as_ns(frame["time"]) + int(round(float(clock_offsets_s.get(name, 0.0)) * _NS))
+        for signal in (c for c in frame.columns if c != "time"):
+            v = frame[signal].to_numpy(dtype=float)
+            ok = np.isfinite(v)
+            ts, vs = t[ok], v[ok]
+            last = np.searchsorted(ts, grid, side="right") - 1
+            columns[signal] = np.where(last >= 0, vs[np.clip(last, 0, None)] if vs.size else np.nan, np.nan)
+    return pd.DataFrame(columns)
 
 
 # ----------------------------------------------------------------------------- windows
@@ -645,7 +680,29 @@ def _check_windows(windows: pd.DataFrame) -> None:
         raise ValueError("measurement windows: a window ends before it starts; expected start <= end")
 
 
-def check_gaps(gaps: pd.DataFrame, windows: pd.DataFrame, allow: bool = False) -> list[str]:
+def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float | None) -> str:
+    """What a gap is, in the words a user can act on."""
+    limit = f" (max_gap_s {max_gap_s:g})" if max_gap_s is not None else ""
+    if gap.get("kind", "interior") == "record start":
+        return (
+            f"has no reading before {_iso(end_ns)}: its record starts too late{limit}; a value is held at most "
+            "max_gap_s / 2 before a sensor's first sample"
+        )
+    if gap.get("kind", "interior") == "record end":
+        return (
+            f"has no reading after {_iso(start_ns)}: its record ends too early{limit}; a value is held at most "
+            "max_gap_s / 2 after a sensor's last sample"
+        )
+    return f"has a {gap['duration_s']:.0f} s gap ({_iso(start_ns)} to {_iso(end_ns)}) longer than max_gap_s{limit}"
+
+
+def check_gaps(
+    gaps: pd.DataFrame,
+    windows: pd.DataFrame,
+    allow: bool = False,
+    files: Mapping[str, object] | None = None,
+    max_gap_s: float | None = None,
+) -> list[str]:
     """Long temperature gaps that overlap a measurement window.
 
     Parameters
@@ -654,6 +711,8 @@ def check_gaps(gaps: pd.DataFrame, windows: pd.DataFrame, allow: bool = False) -
     windows : one row per measurement: ``measurement``, ``start``, ``end`` (optionally
         ``name``).
     allow : when False an overlap is an error; when True it is returned as a warning.
+    files : sensor -> the file its readings came from, named in the messages.
+    max_gap_s : the limit in force, named in the messages.
 
     Returns
     -------
@@ -664,9 +723,11 @@ def check_gaps(gaps: pd.DataFrame, windows: pd.DataFrame, allow: bool = False) -
     Raises
     ------
     ValueError
-        Naming the sensor, the gap and the measurement, for the first overlap.
+        Naming the file, the sensor, the gap (interior, or the record's start or end)
+        and the measurement, for the first overlap.
     """
     _check_windows(windows)
+    files = files or {}
     g_start, g_end = _as_ns(gaps["start"]), _as_ns(gaps["end"])
     w_start, w_end = _as_ns(windows["start"]), _as_ns(windows["end"])
     # Strict inequalities: a gap ending exactly at a window's start has a real sample there.
@@ -674,13 +735,17 @@ def check_gaps(gaps: pd.DataFrame, windows: pd.DataFrame, allow: bool = False) -
     messages = []
     for i, j in zip(*np.nonzero(hits)):
         gap, window = gaps.iloc[i], windows.iloc[j]
+        where = f"{files[gap['sensor']]}: " if gap["sensor"] in files else ""
         messages.append(
-            f"sensor {gap['sensor']} has a {gap['duration_s']:.0f} s gap ({_iso(g_start[i])} to {_iso(g_end[i])}) "
-            f"longer than max_gap_s during measurement {_window_label(window)}"
+            f"{where}sensor {gap['sensor']} {_gap_text(gap, g_start[i], g_end[i], max_gap_s)}, during measurement "
+            f"{_window_label(window)} ({_iso(w_start[j])} to {_iso(w_end[j])})"
         )
     if messages and not allow:
         more = f" (and {len(messages) - 1} more)" if len(messages) > 1 else ""
-        raise ValueError(f"{messages[0]}{more}; set allow_long_gaps to accept it")
+        raise ValueError(
+            f"{messages[0]}{more}; expected readings throughout every measurement: raise temperatures.max_gap_s, "
+            "or set temperatures.allow_long_gaps to average what the window has"
+        )
     return messages
 
 

@@ -81,6 +81,7 @@ class ModelSettings:
     svr_grid: tuple = (("C", (0.1, 1.0, 10.0, 100.0)), ("epsilon", (0.01, 0.1)), ("gamma", ("scale", 0.1)))
     interval_level: float = 0.95
     random_state: int = 0
+    signals: tuple[str, ...] = ()  # operating signals added to every model's inputs
 
     def params_for(self, algorithm: str) -> dict | None:
         if algorithm == "ridge":
@@ -121,6 +122,7 @@ def model_settings_from_config(config: Mapping) -> ModelSettings:
         svr_grid=tuple((name, tuple(grid[name])) for name in ("C", "epsilon", "gamma")),
         interval_level=float(m["interval_level"]),
         random_state=int(m["random_state"]),
+        signals=tuple(m.get("signals", ())),
     )
 
 
@@ -172,7 +174,7 @@ def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, t
         )
     if method == "correlation":
         chosen = rank_by_correlation(T, y, s.n_clusters)
-        return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades={}, eta=float("nan"))
+        return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades=_abs_correlation(T, y), eta=float("nan"))
     if method == "all":
         names = tuple(T.columns)
         return SensitivePoints(clusters=(names,), selected=names, grades={}, eta=float("nan"))
@@ -183,6 +185,25 @@ def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, t
             raise ValueError(f"config selection.fixed.{target}: unknown sensor {unknown[0]!r} (dataset has {', '.join(T.columns)})")
         return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades={}, eta=float("nan"))
     raise ValueError(f"config selection.method: unknown method {method!r}")
+
+
+def _abs_correlation(T: pd.DataFrame, y: np.ndarray) -> dict[str, float]:
+    """|Pearson r| of every sensor with y (0 for a constant sensor): the correlation ranking's scores."""
+    values = T.to_numpy(dtype=float)
+    centred = values - values.mean(axis=0)
+    yc = np.asarray(y, dtype=float) - np.mean(y)
+    denominator = np.sqrt((centred**2).sum(axis=0) * (yc @ yc))
+    r = np.divide(np.abs(centred.T @ yc), denominator, out=np.zeros(values.shape[1]), where=denominator > 0)
+    return {str(name): float(v) for name, v in zip(T.columns, r)}
+
+
+def _mean_scores(points: list[SensitivePoints]) -> dict[str, float]:
+    """Each sensor's mean grade over the positions: the selection's own ranking for tie-breaks."""
+    totals: dict[str, float] = {}
+    for p in points:
+        for sensor, grade in p.grades.items():
+            totals[sensor] = totals.get(sensor, 0.0) + float(grade)
+    return {sensor: total / len(points) for sensor, total in totals.items()}
 
 
 def select_for_fold(
@@ -235,7 +256,7 @@ def select_for_fold(
                 f"the point-by-point common set has {n_common} instead of {settings.pointwise_common}",
                 stacklevel=2,
             )
-        common = common_points(chosen, n_common, order=sensors)
+        common = common_points(chosen, n_common, order=sensors, scores=_mean_scores(list(per_position.values())))
     return FoldSelection(fold=fold, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common))
 
 
@@ -275,6 +296,7 @@ def _build_model(approach: str, algorithm: str, selection: FoldSelection, model:
         params=model.params_for(algorithm),
         svr_grid=model.grid(),
         random_state=model.random_state,
+        signals=model.signals,
     )
     if approach == "decoupled":
         return DecoupledAxisModel(k_sensors=selection.k_sensors, b_sensors=selection.b_sensors, degree=degree, **common)

@@ -19,6 +19,8 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from .naming import natural_key
+
 __all__ = [
     "DataError",
     "Dataset",
@@ -27,12 +29,19 @@ __all__ = [
     "read_run",
     "read_temperature_source",
     "read_measurement",
+    "read_measurements",
+    "read_measurements_of",
     "SCHEMA_DIR",
+    "NAME_PATTERN",
 ]
 
 SCHEMA_DIR = Path(__file__).with_name("schemas")
-RUN_COLUMNS = ("run", "condition", "feed_mm_min", "description")
+# Names that become folder or file names: no separators, no leading dot or dash.
+NAME_PATTERN = r"[A-Za-z0-9_][A-Za-z0-9_.-]*"
+RUN_COLUMNS = ("run", "condition", "description")
 ERROR_COLUMNS = ("time", "position_mm", "error_um")
+# One file per run holding every measurement, told apart by this column.
+MEASUREMENT_COLUMN = "measurement"
 
 
 class DataError(ValueError):
@@ -72,8 +81,38 @@ class Dataset:
     def run_ids(self) -> tuple[str, ...]:
         return tuple(self.runs["run"])
 
+    @property
+    def reproduces(self) -> str | None:
+        """The publication whose experiment this dataset reproduces (e.g. ``xu2023``), if any."""
+        return self.meta.get("reproduces")
+
+    @property
+    def ambient_sensor(self) -> str | None:
+        return self.meta.get("ambient_sensor")
+
+    @property
+    def temperature_kind(self) -> str:
+        """``absolute`` (degrees C) or ``rise`` (degrees C above the logger's own reference)."""
+        return self.meta.get("temperature_kind", "absolute")
+
+    @property
+    def signals(self) -> tuple[str, ...]:
+        """Operating signals (spindle speed, feed programme, ...) logged over time like temperatures."""
+        return tuple(s["id"] for s in self.meta.get("signals", ()))
+
+    def signal_units(self) -> dict[str, str]:
+        return {s["id"]: s["unit"] for s in self.meta.get("signals", ())}
+
+    @property
+    def descriptors(self) -> tuple[str, ...]:
+        """Optional numeric columns of runs.tsv describing each run's operating condition."""
+        return tuple(c for c in self.runs.columns if c not in RUN_COLUMNS and pd.api.types.is_float_dtype(self.runs[c]))
+
     def sensors_of(self, source: str) -> tuple[str, ...]:
         return tuple(s["id"] for s in self.meta["sensors"] if s["source"] == source)
+
+    def signals_of(self, source: str) -> tuple[str, ...]:
+        return tuple(s["id"] for s in self.meta.get("signals", ()) if s["source"] == source)
 
     @property
     def sources(self) -> tuple[str, ...]:
@@ -82,8 +121,8 @@ class Dataset:
     def clock_offsets_s(self) -> dict[str, float]:
         return {s["name"]: float(s.get("clock_offset_s", 0.0)) for s in self.meta["sources"]}
 
-    def condition_of(self, run: str) -> int:
-        return int(self.runs.loc[self.runs["run"] == run, "condition"].iloc[0])
+    def condition_of(self, run: str) -> str:
+        return str(self.runs.loc[self.runs["run"] == run, "condition"].iloc[0])
 
 
 def _read_yaml(path: Path) -> dict:
@@ -110,13 +149,21 @@ def _validate_meta(path: Path, meta: dict) -> None:
     dup = sorted({i for i in ids if ids.count(i) > 1})
     if dup:
         raise DataError(f"{path}: sensors: sensor id {dup[0]!r} declared more than once")
+    signals = [s["id"] for s in meta.get("signals", ())]
+    clash = sorted(set(signals) & set(ids) | {i for i in signals if signals.count(i) > 1})
+    if clash:
+        raise DataError(f"{path}: signals: id {clash[0]!r} declared more than once (sensor and signal ids share one namespace)")
     sources = {s["name"] for s in meta["sources"]}
-    for i, sensor in enumerate(meta["sensors"]):
-        if sensor["source"] not in sources:
-            raise DataError(
-                f"{path}: sensors/{i}: source {sensor['source']!r} of sensor {sensor['id']!r} "
-                f"is not one of the declared sources {sorted(sources)}"
-            )
+    for kind, items in (("sensors", meta["sensors"]), ("signals", meta.get("signals", ()))):
+        for i, item in enumerate(items):
+            if item["source"] not in sources:
+                raise DataError(
+                    f"{path}: {kind}/{i}: source {item['source']!r} of {item['id']!r} "
+                    f"is not one of the declared sources {sorted(sources)}"
+                )
+    ambient = meta.get("ambient_sensor")
+    if ambient is not None and ambient not in ids:
+        raise DataError(f"{path}: ambient_sensor: {ambient!r} is not a declared sensor id (expected one of {', '.join(ids)})")
 
 
 def _coerce_cell(value: str, kind: str):
@@ -125,6 +172,22 @@ def _coerce_cell(value: str, kind: str):
     if kind == "number":
         return float(value)
     return value
+
+
+def _numeric_descriptors(runs: pd.DataFrame, path: Path) -> pd.DataFrame:
+    """Optional columns whose every filled cell is a number become numeric (empty = NaN)."""
+    for column in runs.columns:
+        if column in RUN_COLUMNS:
+            continue
+        cells = runs[column].astype(str).str.strip()
+        numbers = pd.to_numeric(cells.where(cells != "", None), errors="coerce")
+        if (numbers.notna() | (cells == "")).all() and numbers.notna().any():
+            infinite = ~np.isfinite(numbers.fillna(0.0).to_numpy(dtype=float))
+            if infinite.any():
+                i = int(np.flatnonzero(infinite)[0])
+                raise DataError(f"{path}: run {runs['run'].iloc[i]!r}, column {column!r}: expected a finite number, got {cells.iloc[i]!r}")
+            runs[column] = numbers.astype(float)
+    return runs
 
 
 def _read_runs(path: Path) -> pd.DataFrame:
@@ -151,6 +214,8 @@ def _read_runs(path: Path) -> pd.DataFrame:
         record = {}
         for name, cell in zip(header, row):
             kind = schema["properties"].get(name, {}).get("type", "string")
+            if name not in RUN_COLUMNS and not cell.strip():
+                continue  # an optional column left empty for this run
             try:
                 record[name] = _coerce_cell(cell.strip(), kind)
             except ValueError:
@@ -163,11 +228,12 @@ def _read_runs(path: Path) -> pd.DataFrame:
             column = err.absolute_path[0] if err.absolute_path else ""
             raise DataError(f"{path}: line {lineno}, column {column!r}: {err.message}")
         records.append(record)
-    runs = pd.DataFrame.from_records(records)
+    runs = pd.DataFrame.from_records(records, columns=header)
     dup = runs["run"][runs["run"].duplicated()]
     if len(dup):
         raise DataError(f"{path}: run {dup.iloc[0]!r} listed more than once")
-    return runs.sort_values("run", kind="stable").reset_index(drop=True)
+    runs = _numeric_descriptors(runs, path)
+    return runs.sort_values("run", kind="stable", key=lambda c: c.map(natural_key)).reset_index(drop=True)
 
 
 def load_dataset(root) -> Dataset:
@@ -188,7 +254,7 @@ def load_dataset(root) -> Dataset:
             raise DataError(f"{root / 'runs.tsv'}: run {run!r} has no folder {root / run}")
     for child in sorted(root.iterdir()):
         if child.is_dir() and not child.name.startswith(".") and child.name not in listed:
-            if (child / "errors").is_dir() or (child / "temperatures").is_dir():
+            if (child / "errors").is_dir() or (child / "errors.csv").exists() or (child / "temperatures").is_dir():
                 raise DataError(f"{child}: run folder is not listed in {root / 'runs.tsv'}")
     sensors = tuple(s["id"] for s in meta["sensors"])
     return Dataset(root=root, meta=meta, runs=runs, sensors=sensors)
@@ -244,20 +310,20 @@ def _check_time_order(path: Path, time: pd.Series) -> None:
         )
 
 
-def read_temperature_source(path, expected_sensors, known_sensors) -> pd.DataFrame:
-    """One source's log: ``time`` + one float column per sensor (NaN = missing)."""
+def read_temperature_source(path, expected_sensors, known_sensors, kind: str = "sensor") -> pd.DataFrame:
+    """One source's log: ``time`` + one float column per sensor (or signal; NaN = missing)."""
     path = Path(path)
     frame = _read_csv(path)
     if "time" not in frame.columns:
-        raise DataError(f"{path}: missing column 'time' (expected time + one column per sensor)")
-    sensors = [c for c in frame.columns if c != "time"]
-    for column in sensors:
+        raise DataError(f"{path}: missing column 'time' (expected time + one column per {kind})")
+    columns = [c for c in frame.columns if c != "time"]
+    for column in columns:
         if column not in known_sensors:
-            raise DataError(f"{path}: column {column!r}: unknown sensor id (not declared in dataset.yaml)")
+            raise DataError(f"{path}: column {column!r}: unknown {kind} id (not declared in dataset.yaml)")
         if column not in expected_sensors:
-            raise DataError(f"{path}: column {column!r}: sensor is declared for another source in dataset.yaml")
+            raise DataError(f"{path}: column {column!r}: {kind} is declared for another source in dataset.yaml")
     for sensor in expected_sensors:
-        if sensor not in sensors:
+        if sensor not in columns:
             raise DataError(f"{path}: missing column {sensor!r} (declared for this source in dataset.yaml)")
     out = pd.DataFrame({"time": _parse_time(path, frame["time"])})
     _check_time_order(path, out["time"])
@@ -266,13 +332,8 @@ def read_temperature_source(path, expected_sensors, known_sensors) -> pd.DataFra
     return out
 
 
-def read_measurement(path) -> pd.DataFrame:
-    """One interferometer measurement: time, position_mm, error_um, direction."""
-    path = Path(path)
-    frame = _read_csv(path)
-    for column in ERROR_COLUMNS:
-        if column not in frame.columns:
-            raise DataError(f"{path}: missing column {column!r} (expected {', '.join(ERROR_COLUMNS)}[, direction])")
+def _parse_readings(path: Path, frame: pd.DataFrame) -> pd.DataFrame:
+    """time, position_mm, error_um, direction of validated interferometer readings."""
     out = pd.DataFrame(
         {
             "time": _parse_time(path, frame["time"]),
@@ -280,7 +341,6 @@ def read_measurement(path) -> pd.DataFrame:
             "error_um": _parse_numbers(path, frame, "error_um", allow_empty=False),
         }
     )
-    _check_time_order(path, out["time"])
     if "direction" in frame.columns:
         direction = frame["direction"].str.strip()
         bad = ~direction.isin(["+", "-"])
@@ -290,11 +350,57 @@ def read_measurement(path) -> pd.DataFrame:
         out["direction"] = direction.to_numpy(dtype=object)
     else:
         out["direction"] = "+"
+    return out
+
+
+def _require_error_columns(path: Path, frame: pd.DataFrame, columns) -> None:
+    for column in columns:
+        if column not in frame.columns:
+            raise DataError(f"{path}: missing column {column!r} (expected {', '.join(columns)}[, direction])")
+
+
+def read_measurement(path) -> pd.DataFrame:
+    """One interferometer measurement: time, position_mm, error_um, direction."""
+    path = Path(path)
+    frame = _read_csv(path)
+    _require_error_columns(path, frame, ERROR_COLUMNS)
+    out = _parse_readings(path, frame)
+    _check_time_order(path, out["time"])
     _check_repeated_positions(path, out)
     return out
 
 
-def _check_repeated_positions(path: Path, frame: pd.DataFrame) -> None:
+def read_measurements(path) -> dict[str, pd.DataFrame]:
+    """Every measurement of a run from ONE file, told apart by its ``measurement`` column.
+
+    Readings of one measurement must not go back in time; measurements may interleave
+    only in the sense that the file is grouped by label, in any order.
+    """
+    path = Path(path)
+    frame = _read_csv(path)
+    _require_error_columns(path, frame, (MEASUREMENT_COLUMN, *ERROR_COLUMNS))
+    labels = frame[MEASUREMENT_COLUMN].str.strip()
+    bad = ~labels.str.fullmatch(NAME_PATTERN)
+    if bad.any():
+        i = int(np.flatnonzero(bad.to_numpy())[0])
+        raise DataError(
+            f"{path}: line {i + 2}, column {MEASUREMENT_COLUMN!r}: expected a measurement name matching "
+            f"{NAME_PATTERN}, got {frame[MEASUREMENT_COLUMN].iloc[i]!r}"
+        )
+    readings = _parse_readings(path, frame)
+    out = {}
+    for label in dict.fromkeys(labels):
+        rows = readings[(labels == label).to_numpy()]
+        back = np.flatnonzero(np.diff(rows["time"].to_numpy().astype("int64")) < 0)
+        if back.size:
+            line = int(rows.index[back[0] + 1]) + 2
+            raise DataError(f"{path}: line {line}, column 'time': time goes backwards within measurement {label!r}")
+        _check_repeated_positions(path, rows.reset_index(drop=True), f"measurement {label!r}: ")
+        out[label] = rows.reset_index(drop=True)
+    return out
+
+
+def _check_repeated_positions(path: Path, frame: pd.DataFrame, where: str = "") -> None:
     """Exact repeats are harmless logging duplicates; conflicting ones are not."""
     grouped = frame.groupby(["direction", "position_mm"], sort=True)["error_um"]
     spread = grouped.max() - grouped.min()
@@ -305,7 +411,7 @@ def _check_repeated_positions(path: Path, frame: pd.DataFrame) -> None:
             (frame["direction"] == direction) & (frame["position_mm"] == position), "error_um"
         ].tolist()
         raise DataError(
-            f"{path}: column 'position_mm': position {position:g} mm appears twice in the {direction!s} pass "
+            f"{path}: {where}column 'position_mm': position {position:g} mm appears twice in the {direction!s} pass "
             f"with different errors {values} (expected one reading per target and pass)"
         )
 
@@ -315,6 +421,8 @@ class RawRun:
     run: str
     sources: Mapping[str, pd.DataFrame]
     measurements: Mapping[str, pd.DataFrame]  # ordered by first reading's time
+    signals: Mapping[str, pd.DataFrame] = field(default_factory=dict)
+    error_source: Path | None = None  # the file or folder the measurements came from
 
     def windows(self) -> pd.DataFrame:
         """Measurement number, name and time window (first to last reading)."""
@@ -325,27 +433,53 @@ class RawRun:
         return pd.DataFrame(rows, columns=["measurement", "name", "start", "end"])
 
 
-def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
+def _read_logs(folder: Path, dataset: Dataset, kind: str) -> dict[str, pd.DataFrame]:
+    """Per-source logs of a run's sensors (``temperatures/``) or signals (``signals/``)."""
+    of = dataset.sensors_of if kind == "sensor" else dataset.signals_of
+    known = set(dataset.sensors if kind == "sensor" else dataset.signals)
+    logs = {}
+    for source in dataset.sources:
+        expected = of(source)
+        if expected:
+            logs[source] = read_temperature_source(folder / f"{source}.csv", expected, known, kind)
+    if folder.is_dir():
+        for extra in sorted(folder.glob("*.csv")):
+            if not of(extra.stem):
+                raise DataError(f"{extra}: no {kind} of dataset.yaml is logged by source {extra.stem!r}")
+    return logs
+
+
+def read_measurements_of(dataset: Dataset, run: str, min_measurements: int = 1) -> tuple[dict[str, pd.DataFrame], Path]:
+    """A run's measurements, ordered by their first reading's time, and the file or folder they came from.
+
+    Measurements come either from ``<run>/errors/<measurement>.csv`` (one file each) or
+    from ``<run>/errors.csv`` with a ``measurement`` column (one file for the run).
+    """
     folder = dataset.root / run
-    temp_dir = folder / "temperatures"
+    err_dir, err_file = folder / "errors", folder / "errors.csv"
+    if err_dir.is_dir() and err_file.exists():
+        raise DataError(f"{err_file}: the run also has a folder {err_dir}; expected one of the two layouts")
+    if err_file.exists():
+        measurements = read_measurements(err_file)
+        source = err_file
+    elif err_dir.is_dir():
+        files = sorted(err_dir.glob("*.csv"))
+        measurements = {f.stem: read_measurement(f) for f in files}
+        source = err_dir
+    else:
+        raise DataError(f"{err_dir}: folder not found (expected one CSV per interferometer measurement, or {err_file})")
+    if len(measurements) < min_measurements:
+        raise DataError(f"{source}: {len(measurements)} measurement(s), expected at least {min_measurements}")
+    ordered = dict(sorted(measurements.items(), key=lambda kv: (kv[1]["time"].iloc[0], natural_key(kv[0]))))
+    return ordered, source
+
+
+def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
+    """Every log of one run: temperatures, operating signals and measurements."""
+    temp_dir = dataset.root / run / "temperatures"
     if not temp_dir.is_dir():
         raise DataError(f"{temp_dir}: folder not found (expected one CSV per temperature source)")
-    known = set(dataset.sensors)
-    sources = {}
-    for source in dataset.sources:
-        expected = dataset.sensors_of(source)
-        if not expected:
-            continue
-        sources[source] = read_temperature_source(temp_dir / f"{source}.csv", expected, known)
-    for extra in sorted(temp_dir.glob("*.csv")):
-        if extra.stem not in dataset.sources:
-            raise DataError(f"{extra}: unknown temperature source {extra.stem!r} (not declared in dataset.yaml)")
-    err_dir = folder / "errors"
-    if not err_dir.is_dir():
-        raise DataError(f"{err_dir}: folder not found (expected one CSV per interferometer measurement)")
-    files = sorted(err_dir.glob("*.csv"))
-    if len(files) < min_measurements:
-        raise DataError(f"{err_dir}: {len(files)} measurement file(s), expected at least {min_measurements}")
-    measurements = {f.stem: read_measurement(f) for f in files}
-    ordered = dict(sorted(measurements.items(), key=lambda kv: (kv[1]["time"].iloc[0], kv[0])))
-    return RawRun(run=run, sources=sources, measurements=ordered)
+    sources = _read_logs(temp_dir, dataset, "sensor")
+    signals = _read_logs(dataset.root / run / "signals", dataset, "signal") if dataset.signals else {}
+    measurements, source = read_measurements_of(dataset, run, min_measurements)
+    return RawRun(run=run, sources=sources, measurements=measurements, signals=signals, error_source=source)

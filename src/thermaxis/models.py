@@ -348,10 +348,15 @@ def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None)
     return pd.DataFrame(values, index=X.index, columns=sensors)
 
 
-def _features(X: pd.DataFrame, sensors: Sequence[str], temperature: str) -> np.ndarray:
+def _features(X: pd.DataFrame, sensors: Sequence[str], temperature: str, signals: Sequence[str] = ()) -> np.ndarray:
+    """Temperatures of the given kind, then operating signals as logged (a speed has no 'rise')."""
     if temperature == "absolute":
-        return X[list(sensors)].to_numpy(dtype=float)
-    return relative_temperatures(X, sensors).to_numpy(dtype=float)
+        values = X[list(sensors)].to_numpy(dtype=float)
+    else:
+        values = relative_temperatures(X, sensors).to_numpy(dtype=float)
+    if signals:
+        values = np.hstack([values, X[list(signals)].to_numpy(dtype=float)])
+    return values
 
 
 def _fit_one(features, target, groups, algorithm, params, svr_grid, random_state):
@@ -365,7 +370,7 @@ def _fit_one(features, target, groups, algorithm, params, svr_grid, random_state
     return model.fit(features, target), None
 
 
-def _coefficient_rows(target, position_mm, temperature, terms: dict | None) -> list[dict]:
+def _coefficient_rows(target, position_mm, temperature, terms: dict | None, signals: Sequence[str] = ()) -> list[dict]:
     if terms is None:
         return []
     return [
@@ -373,7 +378,7 @@ def _coefficient_rows(target, position_mm, temperature, terms: dict | None) -> l
             "target": target,
             "position_mm": position_mm,
             "term": term,
-            "temperature": temperature,
+            "temperature": "signal" if term in signals else temperature,
             "value": value,
         }
         for term, value in terms.items()
@@ -415,6 +420,9 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
     degree : {1, 2, 3}
         Decoupling polynomial degree; 1 is the paper's straight line.
     random_state : int
+    signals : tuple of str
+        Operating signals (columns of X, e.g. a spindle speed) added as inputs to every
+        coefficient's regression, as logged.
 
     Attributes
     ----------
@@ -440,6 +448,7 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         svr_grid=None,
         degree=1,
         random_state=0,
+        signals=(),
     ):
         self.k_sensors = k_sensors
         self.b_sensors = b_sensors
@@ -448,6 +457,7 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         self.svr_grid = svr_grid
         self.degree = degree
         self.random_state = random_state
+        self.signals = signals
 
     def _targets(self) -> list[tuple[str, tuple[str, ...], str]]:
         """(target, sensors, temperature kind) per modelled coefficient."""
@@ -474,14 +484,14 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         _check_algorithm(self.algorithm)
         if self.degree not in (1, 2, 3):
             raise ValueError(f"decoupling degree must be 1, 2 or 3, got {self.degree}")
-        _check_X(X, (*self.k_sensors, *self.b_sensors))
+        _check_X(X, (*self.k_sensors, *self.b_sensors, *self.signals))
         self.positions_mm_ = _positions_of(X, Y)
         self.origin_mm_ = float(self.positions_mm_[0])
         self.kb_ = self._decouple(X, Y)
         groups = X["run"].to_numpy()
         self.estimators_, self.svr_params_ = {}, {}
         for target, sensors, temperature in self._targets():
-            features = _features(X, sensors, temperature)
+            features = _features(X, sensors, temperature, self.signals)
             y = self.kb_[_KB_COLUMNS[target]].to_numpy(dtype=float)
             model, chosen = _fit_one(
                 features, y, groups, self.algorithm, self.params, self.svr_grid, self.random_state
@@ -510,10 +520,10 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         """
         if return_std and self.algorithm != "gpr":
             raise NotImplementedError("predictive standard deviations are only available for algorithm 'gpr'")
-        _check_X(X, (*self.k_sensors, *self.b_sensors))
+        _check_X(X, (*self.k_sensors, *self.b_sensors, *self.signals))
         means, stds = {}, {}
         for target, sensors, temperature in self._targets():
-            features = _features(X, sensors, temperature)
+            features = _features(X, sensors, temperature, self.signals)
             column = _KB_COLUMNS[target]
             if return_std:
                 means[column], stds[f"{column}_std"] = predict_with_std(self.estimators_[target], features)
@@ -570,8 +580,8 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         """
         rows = []
         for target, sensors, temperature in self._targets():
-            terms = linear_terms(self.estimators_[target], sensors)
-            rows += _coefficient_rows(target, np.nan, temperature, terms)
+            terms = linear_terms(self.estimators_[target], (*sensors, *self.signals))
+            rows += _coefficient_rows(target, np.nan, temperature, terms, self.signals)
         return _coefficient_frame(rows)
 
 
@@ -588,7 +598,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
     ----------
     sensors : tuple of str
         Sensitive points used for every position (the paper: T1, T11, T12).
-    algorithm, params, svr_grid, random_state
+    algorithm, params, svr_grid, random_state, signals
         As for :class:`DecoupledAxisModel`.
 
     Attributes
@@ -601,20 +611,21 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
     """
 
     def __init__(
-        self, sensors=("T1", "T11", "T12"), algorithm="mlr", params=None, svr_grid=None, random_state=0
+        self, sensors=("T1", "T11", "T12"), algorithm="mlr", params=None, svr_grid=None, random_state=0, signals=()
     ):
         self.sensors = sensors
         self.algorithm = algorithm
         self.params = params
         self.svr_grid = svr_grid
         self.random_state = random_state
+        self.signals = signals
 
     def fit(self, X: pd.DataFrame, Y: pd.DataFrame) -> PointwiseAxisModel:
         """Fit one regression per position on relative temperatures."""
         _check_algorithm(self.algorithm)
-        _check_X(X, self.sensors)
+        _check_X(X, (*self.sensors, *self.signals))
         self.positions_mm_ = _positions_of(X, Y, min_positions=1)
-        features = _features(X, self.sensors, "relative")
+        features = _features(X, self.sensors, "relative", self.signals)
         groups = X["run"].to_numpy()
         errors = Y.to_numpy(dtype=float)
         self.estimators_, self.svr_params_ = [], {}
@@ -640,8 +651,8 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
 
     def predict(self, X: pd.DataFrame) -> np.ndarray:
         """Predicted errors, shape (n rows, n positions) in um."""
-        _check_X(X, self.sensors)
-        features = _features(X, self.sensors, "relative")
+        _check_X(X, (*self.sensors, *self.signals))
+        features = _features(X, self.sensors, "relative", self.signals)
         return np.column_stack([np.asarray(m.predict(features)).ravel() for m in self.estimators_])
 
     def predict_interval(self, X: pd.DataFrame, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
@@ -649,8 +660,8 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         if self.algorithm != "gpr":
             raise NotImplementedError("prediction intervals are only available for algorithm 'gpr'")
         z = _z_score(level)
-        _check_X(X, self.sensors)
-        features = _features(X, self.sensors, "relative")
+        _check_X(X, (*self.sensors, *self.signals))
+        features = _features(X, self.sensors, "relative", self.signals)
         mean, std = zip(*(predict_with_std(m, features) for m in self.estimators_))
         mean, std = np.column_stack(mean), np.column_stack(std)
         return mean - z * std, mean + z * std
@@ -659,6 +670,6 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         """Fitted terms per position in um and um per degree C (Eq. 8); no rows for svr/gpr."""
         rows = []
         for position, model in zip(self.positions_mm_, self.estimators_):
-            terms = linear_terms(model, self.sensors)
-            rows += _coefficient_rows("error", float(position), "relative", terms)
+            terms = linear_terms(model, (*self.sensors, *self.signals))
+            rows += _coefficient_rows("error", float(position), "relative", terms, self.signals)
         return _coefficient_frame(rows)

@@ -243,8 +243,33 @@ def _time_label(minutes: float) -> str:
     return f"{minutes:.0f} min" if np.isfinite(minutes) else "time unknown"
 
 
+def single_position(table: pd.DataFrame) -> bool:
+    """A table of one target position: its curves are drawn against time, not position."""
+    return table["position_mm"].nunique() == 1
+
+
+def _series_in_time(ax, run_errors: pd.DataFrame, value_column: str) -> None:
+    """A single-position run: its value at each measurement against time."""
+    curve = run_errors.groupby("measurement").agg(time_min=("time_min", "min"), value=(value_column, "mean"))
+    curve = curve.sort_values("time_min", kind="stable")
+    ax.plot(
+        curve["time_min"].to_numpy(dtype=float),
+        curve["value"].to_numpy(dtype=float),
+        markevery=_markevery(len(curve)),
+        **_categorical_style(0),
+    )
+    ax.set_xlabel(TIME_LABEL)
+
+
 def _curves_by_measurement(fig: Figure, ax, run_errors: pd.DataFrame, value_column: str) -> None:
-    """One error curve per measurement, coloured by its time, with a legend or colour bar."""
+    """One error curve per measurement, coloured by its time, with a legend or colour bar.
+
+    With a single target position there is no curve along the stroke: the values are
+    drawn against time instead.
+    """
+    if single_position(run_errors):
+        _series_in_time(ax, run_errors, value_column)
+        return
     times = _measurement_times(run_errors)
     norm = _ordered_norm(times.to_numpy())
     for i, (measurement, group) in enumerate(run_errors.groupby("measurement", sort=True)):
@@ -551,7 +576,12 @@ def fig9_other_runs(errors: pd.DataFrame, runs: Sequence) -> Figure:
 
 
 @_styled
-def fig10_temperature_rise(series: pd.DataFrame, sensors: Sequence[str] | None = None) -> Figure:
+def fig10_temperature_rise(
+    series: pd.DataFrame,
+    sensors: Sequence[str] | None = None,
+    signals: pd.DataFrame | None = None,
+    units: dict | None = None,
+) -> Figure:
     """Temperature rise of a run's sensors relative to the start of its first measurement (Fig. 10).
 
     The reference of each sensor is its value at ``elapsed_min == 0``, linearly
@@ -565,12 +595,18 @@ def fig10_temperature_rise(series: pd.DataFrame, sensors: Sequence[str] | None =
         One run's cleaned series: ``time``, ``elapsed_min`` and one float column per sensor.
     sensors : sequence of str, optional
         Sensors to draw, in this order; default every sensor column in table order.
+    signals : pandas.DataFrame, optional
+        The run's operating signals on the same time base (``elapsed_min`` and one
+        column per signal); when it has any, they are drawn in a panel below.
+    units : dict, optional
+        Unit of each signal, for the panel's axis label.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
     _require_columns(series, ("elapsed_min",), "series")
+    signal_names = [] if signals is None else [c for c in signals.columns if c not in ("time", "elapsed_min")]
     available = [
         c for c in series.columns if c not in ("time", "elapsed_min") and pd.api.types.is_numeric_dtype(series[c])
     ]
@@ -586,8 +622,13 @@ def fig10_temperature_rise(series: pd.DataFrame, sensors: Sequence[str] | None =
     elapsed = series["elapsed_min"].to_numpy(dtype=float)
     order = np.argsort(elapsed, kind="stable")
     elapsed = elapsed[order]
-    fig = _new_figure(SINGLE_COLUMN_IN, 2.6)
-    ax = fig.subplots()
+    if signal_names:
+        fig = _new_figure(SINGLE_COLUMN_IN, 3.8)
+        ax, ax_signal = fig.subplots(2, 1, sharex=True, height_ratios=(3, 1.3))
+        _signal_panel(ax_signal, signals, signal_names, units or {})
+    else:
+        fig = _new_figure(SINGLE_COLUMN_IN, 2.6)
+        ax = fig.subplots()
     drawn = 0
     for i, sensor in enumerate(sensors):
         values = series[sensor].to_numpy(dtype=float)[order]
@@ -606,10 +647,22 @@ def fig10_temperature_rise(series: pd.DataFrame, sensors: Sequence[str] | None =
     if drawn == 0:
         raise ValueError("series table has no finite sample in any requested sensor; expected at least one")
     ax.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
-    ax.set_xlabel(TIME_LABEL)
+    if not signal_names:
+        ax.set_xlabel(TIME_LABEL)
     ax.set_ylabel("Temperature rise (°C)")
     _top_legend(fig, ax)
     return fig
+
+
+def _signal_panel(ax, signals: pd.DataFrame, names: Sequence[str], units: dict) -> None:
+    """Operating signals (held values, so drawn as steps) against elapsed time."""
+    elapsed = signals["elapsed_min"].to_numpy(dtype=float)
+    for i, name in enumerate(names):
+        unit = f" ({units[name]})" if units.get(name) else ""
+        ax.step(elapsed, signals[name].to_numpy(dtype=float), where="post", color=CATEGORICAL_COLORS[i % len(CATEGORICAL_COLORS)], label=f"{name}{unit}")
+    ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel("Operating signal")
+    ax.legend(loc="best")
 
 
 @_styled
@@ -768,6 +821,11 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
     runs = _natural_sorted(rows["run"])
     fig = _new_figure(_prediction_columns(len(runs)), 4.0)
     axes = fig.subplots(2, len(runs), sharex="col", squeeze=False, height_ratios=(3, 2))
+    if single_position(rows):
+        for col, run in enumerate(runs):
+            _prediction_in_time(axes[0, col], axes[1, col], rows[rows["run"] == run], algorithm, first=col == 0)
+            axes[0, col].set_title(f"Held-out run {run}", loc="left")
+        return fig
     for col, run in enumerate(runs):
         ax_curve, ax_res = axes[0, col], axes[1, col]
         run_rows = rows[rows["run"] == run]
@@ -805,6 +863,38 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
         ax_curve.legend(handles=handles, loc="best")
         _ordered_key(fig, ax_res, norm, len(times), TIME_LABEL)
     return fig
+
+
+def _prediction_in_time(ax_value, ax_res, rows: pd.DataFrame, algorithm: str, first: bool) -> None:
+    """Single-position prediction: measured and predicted error, and the residual, against time."""
+    rows = rows.sort_values("time_min", kind="stable")
+    t = rows["time_min"].to_numpy(dtype=float)
+    if _has_band(rows):
+        ax_value.fill_between(
+            t,
+            rows["lower"].to_numpy(dtype=float),
+            rows["upper"].to_numpy(dtype=float),
+            color=CATEGORICAL_COLORS[1],
+            alpha=0.25,
+            linewidth=0,
+            label="Prediction interval",
+        )
+    every = _markevery(len(rows))
+    ax_value.plot(t, rows["measured"].to_numpy(dtype=float), label="Measured", markevery=every, **_categorical_style(0))
+    ax_value.plot(
+        t,
+        rows["predicted"].to_numpy(dtype=float),
+        linestyle="--",
+        label=f"Predicted ({_display(algorithm)})",
+        markevery=every,
+        **_categorical_style(1),
+    )
+    ax_res.plot(t, rows["residual"].to_numpy(dtype=float), markevery=every, **_categorical_style(2))
+    ax_res.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
+    ax_value.set_ylabel(ERROR_LABEL if first else "")
+    ax_res.set_ylabel("Residual (µm)" if first else "")
+    ax_res.set_xlabel(TIME_LABEL)
+    ax_value.legend(loc="best")
 
 
 @_styled
@@ -886,7 +976,10 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
             )
     ax_rmse.set_ylabel(f"RMSE{suffix}")
     ax_max.set_ylabel(f"Max |residual|{suffix}")
-    ax_max.set_xticks(centres, [str(f) for f in folds])
+    labels = [str(f) for f in folds]
+    # Long run names or many folds would overlap side by side: slant them.
+    slanted = sum(len(label) for label in labels) > 40 or max(map(len, labels)) > 6
+    ax_max.set_xticks(centres, labels, rotation=30 if slanted else 0, ha="right" if slanted else "center")
     ax_max.set_xlabel("Fold (held-out run)")
     for ax in (ax_rmse, ax_max):
         ax.grid(axis="x", visible=False)

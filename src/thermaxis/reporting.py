@@ -37,6 +37,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from .naming import sort_naturally
 from .summary import format_cell
 
 __all__ = [
@@ -297,7 +298,7 @@ def cleaning_repairs(qc: pd.DataFrame) -> pd.DataFrame:
         raise ValueError(f"cleaning QC table lacks column(s) {', '.join(missing)}; expected the columns of tables/cleaning_qc.csv")
     table = qc[["run", "sensor", "source", *_REPAIR_COLUMNS]].copy()
     table["repaired"] = table[list(_REPAIR_COLUMNS)].sum(axis=1)
-    return table[table["repaired"] > 0].sort_values(["run", "sensor"], kind="stable", ignore_index=True)
+    return sort_naturally(table[table["repaired"] > 0], ["run", "sensor"])
 
 
 def temperature_overview(temperatures: pd.DataFrame) -> pd.DataFrame:
@@ -306,7 +307,7 @@ def temperature_overview(temperatures: pd.DataFrame) -> pd.DataFrame:
     ``temperatures`` is ``assembled/temperatures.parquet`` (or a run's
     ``measurement_temperatures.parquet``): run, measurement, sensor, absolute_c, relative_c.
     """
-    t = temperatures.sort_values(["run", "sensor", "measurement"], kind="stable")
+    t = sort_naturally(temperatures, ["run", "sensor", "measurement"])
     grouped = t.groupby(["run", "sensor"], sort=True)
     return pd.DataFrame(
         {
@@ -316,7 +317,7 @@ def temperature_overview(temperatures: pd.DataFrame) -> pd.DataFrame:
             "max_c": grouped["absolute_c"].max(),
             "max_rise_c": grouped["relative_c"].max(),
         }
-    ).reset_index()
+    ).reset_index().pipe(sort_naturally, ["run", "sensor"])
 
 
 def error_overview(errors: pd.DataFrame) -> pd.DataFrame:
@@ -482,7 +483,20 @@ class IndexSection:
     intro: str = ""
 
 
-def render_index(dataset_name: str, statement: str, simulated: bool, sections, provenance: dict | None = None) -> str:
+PAPER_HEADLINE = (
+    "Reproduction of Xu et al., decoupling and step-by-step modelling of the thermal positioning error of a "
+    "linear axis."
+)
+
+
+def render_index(
+    dataset_name: str,
+    statement: str,
+    simulated: bool,
+    sections,
+    provenance: dict | None = None,
+    headline: str = PAPER_HEADLINE,
+) -> str:
     """The dataset's ``index.html``: the data statement, then every section's links.
 
     Parameters
@@ -495,6 +509,9 @@ def render_index(dataset_name: str, statement: str, simulated: bool, sections, p
         Links are written as given (relative to the index page); empty sections are left out.
     provenance : dict, optional
         The dataset's provenance record, shown in a table at the end.
+    headline : str
+        What the page is about, under its title: the paper for a dataset that
+        reproduces it, else the dataset's own title or description.
 
     Returns
     -------
@@ -512,8 +529,7 @@ def render_index(dataset_name: str, statement: str, simulated: bool, sections, p
         "</head><body>",
         f'<header class="tx-banner {"tx-simulated" if simulated else "tx-measured"}">'
         f"<h1>thermaxis results: {html.escape(dataset_name)}</h1>"
-        '<p class="tx-subtitle">Reproduction of Xu et al., decoupling and step-by-step modelling of the '
-        "thermal positioning error of a linear axis.</p>"
+        f'<p class="tx-subtitle">{html.escape(headline)}</p>'
         f"{statement_html(statement, simulated)}</header>",
     ]
     for section in sections:

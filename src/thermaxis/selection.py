@@ -25,7 +25,7 @@ functions deal with sensor names.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -570,7 +570,10 @@ def rank_by_correlation(X: pd.DataFrame, y, n: int) -> tuple[str, ...]:
 
 
 def common_points(
-    selections: Sequence[Sequence[str]], n: int, order: Sequence[str] | None = None
+    selections: Sequence[Sequence[str]],
+    n: int,
+    order: Sequence[str] | None = None,
+    scores: Mapping[str, float] | None = None,
 ) -> tuple[str, ...]:
     """The n sensors chosen most often across selections (the paper's Table 3 rule).
 
@@ -582,16 +585,21 @@ def common_points(
     n : int
         Number of sensors to return, at most the number of distinct sensors.
     order : sequence of str, optional
-        Tie-break order, normally the sensor column order.  Defaults to the
+        Last tie-break, normally the sensor column order.  Defaults to the
         order of first appearance in ``selections``.  Must contain every
         selected sensor.
+    scores : mapping of str to float, optional
+        The selection's own ranking of each sensor (e.g. its mean grey relational
+        grade or |r| over the positions); larger is better.  Equal counts are
+        ordered by decreasing score first, so with one position (every count 1)
+        the common set is the selection's best-ranked sensors, not the first
+        ones by name.
 
     Returns
     -------
     tuple of str
-        Ranked by decreasing count; equal counts are ordered by position in
-        ``order``.  The tie-break is deterministic but arbitrary: when it
-        decides the last place, the data do not.
+        Ranked by decreasing count, then decreasing score, then position in
+        ``order``.
     """
     counts: dict[str, int] = {}
     first_seen: list[str] = []
@@ -610,5 +618,7 @@ def common_points(
         raise ValueError(f"order lacks selected sensor(s) {missing}; pass the full sensor column order")
     if isinstance(n, bool) or int(n) != n or not (1 <= n <= len(counts)):
         raise ValueError(f"n must be an integer in [1, {len(counts)}] (distinct sensors selected), got {n}")
-    ranked = sorted(counts, key=lambda s: (-counts[s], position[s]))
+    score = {sensor: float((scores or {}).get(sensor, 0.0)) for sensor in counts}
+    score = {sensor: value if np.isfinite(value) else 0.0 for sensor, value in score.items()}
+    ranked = sorted(counts, key=lambda s: (-counts[s], -score[s], position[s]))
     return tuple(ranked[: int(n)])

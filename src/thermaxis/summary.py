@@ -8,40 +8,42 @@ import numpy as np
 import pandas as pd
 
 from .io import Dataset
+from .naming import sort_naturally
 
 __all__ = ["dataset_summary", "format_cell", "markdown_table", "table5_markdown", "data_statement"]
 
 
-def data_statement(dataset_name: str, simulated: bool) -> str:
+def data_statement(dataset_name: str, simulated: bool, citation: str = "") -> str:
     """The sentence every report and caption carries about where the numbers come from."""
     if simulated:
         return (
             f"Dataset `{dataset_name}`: SIMULATED data (thermal twin calibrated to the paper's Table 5), "
             "not the paper's measurements."
         )
-    return f"Dataset `{dataset_name}`: measured data."
+    source = f" Source: {citation.strip()}" if citation.strip() else ""
+    return f"Dataset `{dataset_name}`: MEASURED data.{source}"
 
 
-def dataset_summary(dataset: Dataset) -> pd.DataFrame:
-    """One row per run: condition, feed, and how many measurements and sensors it has."""
+def dataset_summary(dataset: Dataset, n_measurements: dict[str, int]) -> pd.DataFrame:
+    """One row per run: condition, operating descriptors, and how many measurements and sensors it has."""
     rows = []
     for _, run in dataset.runs.iterrows():
-        folder = dataset.root / run["run"]
-        measurements = sorted((folder / "errors").glob("*.csv"))
         rows.append(
             {
                 "dataset": dataset.name,
                 "provenance": dataset.meta["provenance"]["kind"],
                 "run": run["run"],
-                "condition": int(run["condition"]),
-                "feed_mm_min": float(run["feed_mm_min"]),
-                "n_measurements": len(measurements),
+                "condition": str(run["condition"]),
+                **{column: float(run[column]) for column in dataset.descriptors},
+                "n_measurements": int(n_measurements[run["run"]]),
                 "n_sensors": len(dataset.sensors),
+                "n_signals": len(dataset.signals),
                 "n_sources": len(dataset.sources),
+                "temperature_kind": dataset.temperature_kind,
                 "description": run["description"],
             }
         )
-    return pd.DataFrame(rows).sort_values("run", ignore_index=True)
+    return sort_naturally(pd.DataFrame(rows), ["run"])
 
 
 def format_cell(value, float_format: str) -> str:

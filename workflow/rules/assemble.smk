@@ -4,10 +4,13 @@ rule assemble:
         temperatures=expand(
             f"{OUT}/clean/{{run}}/measurement_temperatures.parquet", run=RUNS
         ),
+        signals=expand(f"{OUT}/clean/{{run}}/measurement_signals.parquet", run=RUNS),
         qc=expand(f"{OUT}/clean/{{run}}/qc.csv", run=RUNS),
+        code=lib("assemble", "naming"),
     output:
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
+        signals=f"{OUT}/assembled/signals.parquet",
         qc=report(
             f"{OUT}/tables/cleaning_qc.csv",
             caption="../report/cleaning_qc.rst",
@@ -22,5 +25,6 @@ rule assemble:
         ENV
     params:
         provenance=DATA_STATEMENT,
+        dataset=str(DATASET.root),
     script:
         "../scripts/assemble.py"

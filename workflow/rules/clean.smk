@@ -1,6 +1,6 @@
 rule clean_run:
     input:
-        code=lib("io", "clean", "assemble"),
+        code=lib("io", "clean", "assemble", "naming"),
         sheets=dataset_sheets(),
         raw=lambda wc: raw_files(wc.run),
     output:
@@ -10,6 +10,8 @@ rule clean_run:
         errors=f"{OUT}/clean/{{run}}/errors.parquet",
         temperatures=f"{OUT}/clean/{{run}}/measurement_temperatures.parquet",
         windows=f"{OUT}/clean/{{run}}/windows.csv",
+        signals=f"{OUT}/clean/{{run}}/measurement_signals.parquet",
+        signal_series=f"{OUT}/clean/{{run}}/signals.parquet",
     log:
         f"{LOGS}/clean/{{run}}.log",
     benchmark:

@@ -6,6 +6,7 @@ import thermaxis
 from thermaxis.io import DataError, load_dataset
 from thermaxis.captions import figure_caption
 from thermaxis.summary import data_statement
+from thermaxis.reporting import PAPER_HEADLINE
 
 
 envvars:
@@ -19,12 +20,20 @@ os.environ["PATH"] = (
     os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
 )
 
+# One dataset per Snakemake run: --config dataset=<folder>, else the first of `datasets`
+# (`make results` runs each listed dataset in turn).
+config["dataset"] = config["dataset"] or config["datasets"][0]
+
 # The dataset is validated when the workflow is parsed, so a bad sheet or a
 # missing run folder stops everything with one line before any job starts.
 try:
     DATASET = load_dataset(config["dataset"])
 except DataError as exc:
     sys.exit(f"thermaxis error: {exc}")
+
+
+def _fail(message):
+    sys.exit(f"thermaxis error: {message}")
 
 RUNS = list(DATASET.run_ids)
 OUT = f"results/{DATASET.name}"
@@ -37,21 +46,31 @@ ALGORITHMS = list(config["models"]["algorithms"])
 FIG_FORMATS = list(config["figures"]["formats"])
 FIG_RUN = config["figures"]["run"] or RUNS[0]
 OTHER_RUNS = [r for r in RUNS if r != FIG_RUN]
-DATA_STATEMENT = data_statement(DATASET.name, SIMULATED)
+DATA_STATEMENT = data_statement(
+    DATASET.name, SIMULATED, DATASET.meta["provenance"].get("citation", "")
+)
+# The paper's audit and report belong only to a dataset that reproduces the paper.
+PAPER = DATASET.reproduces == "xu2023"
+AMBIENT = config.get("ambient_sensor") or DATASET.ambient_sensor
+HEADLINE = (
+    PAPER_HEADLINE
+    if PAPER
+    else DATASET.meta.get("title", DATASET.meta["description"].strip().split("\n")[0])
+)
+SIGNALS = list(DATASET.signals)
 FIG_ALGORITHMS = [a for a in config["figures"]["algorithms"] if a in ALGORITHMS]
 PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
 
 
 def _count_positions():
     """Targets of the first run's first measurement, read once at parse time."""
-    import pandas as pd
+    from thermaxis.io import read_measurements_of
 
-    files = sorted((DATASET.root / RUNS[0] / "errors").glob("*.csv"))
-    if not files:
-        sys.exit(
-            f"thermaxis error: {DATASET.root / RUNS[0] / 'errors'}: no measurement files"
-        )
-    return pd.read_csv(files[0], usecols=["position_mm"])["position_mm"].nunique()
+    try:
+        first = next(iter(read_measurements_of(DATASET, RUNS[0])[0].values()))
+    except DataError as exc:
+        _fail(exc)
+    return first["position_mm"].nunique()
 
 
 # With one target there is no line to decouple: the point-by-point branch runs alone.
@@ -70,8 +89,36 @@ for _fold in FOLDS:
             f"thermaxis error: config folds: {_fold!r} is not a run of {DATASET.root / 'runs.tsv'}"
         )
 if FIG_RUN not in RUNS:
-    sys.exit(
-        f"thermaxis error: config figures.run: {FIG_RUN!r} is not a run of {DATASET.root / 'runs.tsv'}"
+    _fail(
+        f"config figures.run: {FIG_RUN!r} is not a run of {DATASET.root / 'runs.tsv'}"
+    )
+if PAPER and config["paper_fold"] not in RUNS:
+    _fail(
+        f"config paper_fold: {config['paper_fold']!r} is not a run of {DATASET.root / 'runs.tsv'} "
+        f"(the paper's held-out run; expected one of {', '.join(RUNS)})"
+    )
+if AMBIENT is not None and AMBIENT not in DATASET.sensors:
+    _fail(
+        f"config ambient_sensor: {AMBIENT!r} is not a sensor of {DATASET.root / 'dataset.yaml'} "
+        f"(expected one of {', '.join(DATASET.sensors)})"
+    )
+if AMBIENT is None:
+    print(
+        f"thermaxis: dataset {DATASET.name!r} declares no ambient_sensor; the ambient figure (Fig. 3) and "
+        "ambient table are left out",
+        file=sys.stderr,
+    )
+for _signal in config["models"]["signals"]:
+    if _signal not in SIGNALS:
+        _fail(
+            f"config models.signals: {_signal!r} is not an operating signal of {DATASET.root / 'dataset.yaml'} "
+            f"(it declares {', '.join(SIGNALS) or 'none'})"
+        )
+if DATASET.temperature_kind == "rise":
+    print(
+        f"thermaxis: dataset {DATASET.name!r} logs temperature rises, not absolute temperatures; "
+        "the slope model k uses the logged rises in their place",
+        file=sys.stderr,
     )
 
 
@@ -120,19 +167,20 @@ def prediction_caption(kind, wildcards):
 
 
 def data_figures():
-    names = [
-        "fig2_positioning_error",
-        "fig3_ambient",
-        "fig5_unzeroed",
-        "fig6_error_vs_time",
-        "fig7_error_surface",
-        "fig8_rezeroed",
-        "fig10_temperature_rise",
-    ]
+    # Figures along the stroke (2, 7, 8) need several positions; the others are drawn
+    # against time when there is one.
+    names = ["fig5_unzeroed", "fig6_error_vs_time", "fig10_temperature_rise"]
+    if AMBIENT:
+        names.append("fig3_ambient")
     if OTHER_RUNS:
         names.append("fig9_other_runs")
     if DECOUPLED:
-        names.append("fig12_slope_intercept")
+        names += [
+            "fig2_positioning_error",
+            "fig7_error_surface",
+            "fig8_rezeroed",
+            "fig12_slope_intercept",
+        ]
     return [p for name in names for p in figure_paths(name)]
 
 
@@ -155,7 +203,7 @@ def all_outputs():
         f"{OUT}/assembled/errors.parquet",
         f"{OUT}/tables/cleaning_qc.csv",
         f"{OUT}/tables/metrics.csv",
-        f"{OUT}/tables/paper_comparison.csv",
+        *([f"{OUT}/tables/paper_comparison.csv"] if PAPER else []),
         *([f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else []),
         *report_outputs(),
     ]

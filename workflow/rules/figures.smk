@@ -48,7 +48,7 @@ rule fig3_ambient:
         ENV
     params:
         runs=RUNS,
-        sensor=config["ambient_sensor"],
+        sensor=AMBIENT,
         caption=figure_caption("fig3", DATASET.name, SIMULATED),
         simulated=SIMULATED,
         dataset_name=DATASET.name,
@@ -196,6 +196,7 @@ rule fig10_temperature_rise:
     input:
         code=lib("plotting", "captions"),
         series=f"{OUT}/clean/{FIG_RUN}/temperatures.parquet",
+        signals=f"{OUT}/clean/{FIG_RUN}/signals.parquet",
     output:
         figures=report(
             figure_paths("fig10_temperature_rise"),
@@ -212,6 +213,7 @@ rule fig10_temperature_rise:
     params:
         run=FIG_RUN,
         caption=figure_caption("fig10", DATASET.name, SIMULATED, run=FIG_RUN),
+        signal_units=DATASET.signal_units(),
         simulated=SIMULATED,
         dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],

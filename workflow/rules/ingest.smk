@@ -1,6 +1,8 @@
 rule dataset_summary:
     input:
         sheets=dataset_sheets(),
+        windows=expand(f"{OUT}/clean/{{run}}/windows.csv", run=RUNS),
+        code=lib("summary", "io", "naming"),
     output:
         table=report(
             f"{OUT}/tables/dataset_summary.csv",
@@ -17,5 +19,6 @@ rule dataset_summary:
     params:
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         provenance=DATA_STATEMENT,
+        runs=RUNS,
     script:
         "../scripts/dataset_summary.py"

@@ -3,6 +3,7 @@ rule fit_predict:
         code=lib("models", "evaluate", "experiment", "assemble", "decouple"),
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
+        signals=f"{OUT}/assembled/signals.parquet",
         selection=f"{OUT}/selection/{{fold}}.json",
     output:
         metrics=f"{OUT}/models/{{fold}}/metrics.csv",

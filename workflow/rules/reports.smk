@@ -216,5 +216,6 @@ rule index:
         statement=DATA_STATEMENT,
         sections=index_sections(),
         sweep=f"{OUT}/sweep/sweep_report.html",
+        headline=HEADLINE,
     script:
         "../scripts/index.py"

@@ -26,7 +26,9 @@ REPO = os.path.relpath(str(workflow.current_basedir))
 GIT_STATE = git_state(str(workflow.current_basedir))
 EMBED_FORMAT = next((f for f in ("png", "svg") if f in FIG_FORMATS), FIG_FORMATS[0])
 # The paper predicts its last condition; a dataset without that run shows its last fold.
-REPORT_FOLD = config["paper_fold"] if config["paper_fold"] in FOLDS else FOLDS[-1]
+REPORT_FOLD = (
+    config["paper_fold"] if PAPER and config["paper_fold"] in FOLDS else FOLDS[-1]
+)
 PAPER_ALGORITHMS = [a for a in ("mlr", "svr") if a in FIG_ALGORITHMS]
 # papermill executes each notebook in a python3 kernel that must start within 2 min;
 # no cell may take over 10 min. One process runs papermill and the HTML conversion
@@ -83,10 +85,9 @@ def embedded(stem, figure_id, **details):
 
 
 def dataset_report_figures():
-    figures = {
-        "fig3_ambient": embedded("fig3_ambient", "fig3"),
-        "fig5_unzeroed": embedded("fig5_unzeroed", "fig5", run=FIG_RUN),
-    }
+    figures = {"fig5_unzeroed": embedded("fig5_unzeroed", "fig5", run=FIG_RUN)}
+    if AMBIENT:
+        figures["fig3_ambient"] = embedded("fig3_ambient", "fig3")
     if OTHER_RUNS:
         figures["fig9_other_runs"] = embedded(
             "fig9_other_runs", "fig9", runs=OTHER_RUNS
@@ -157,7 +158,7 @@ def model_reports():
 
 def report_html():
     return [
-        f"{REPORTS}/paper_report.html",
+        *([f"{REPORTS}/paper_report.html"] if PAPER else []),
         f"{REPORTS}/dataset_report.html",
         *condition_reports(),
         *model_reports(),
@@ -168,7 +169,7 @@ def linked_tables():
     tables = [
         "dataset_summary.csv",
         "cleaning_qc.csv",
-        "ambient_ranges.csv",
+        *(["ambient_ranges.csv"] if AMBIENT else []),
         *(
             ["table5_slope_intercept.csv", "table5_slope_intercept.md"]
             if DECOUPLED
@@ -179,8 +180,7 @@ def linked_tables():
         "coefficients.csv",
         "kb_predictions.csv",
         "error_predictions.csv",
-        "paper_comparison.csv",
-        "paper_comparison.md",
+        *(["paper_comparison.csv", "paper_comparison.md"] if PAPER else []),
     ]
     return [f"{OUT}/tables/{name}" for name in tables]
 
@@ -191,7 +191,8 @@ def index_sections():
         (
             "The paper, figure by figure and table by table",
             [("paper report", f"{REPORTS}/paper_report.html")],
-        ),
+        )
+    ] * PAPER + [
         (
             "Dataset: runs, sensors, cleaning",
             [("dataset report", f"{REPORTS}/dataset_report.html")],

@@ -70,7 +70,7 @@ rule ambient_ranges:
     params:
         runs=RUNS,
         provenance=DATA_STATEMENT,
-        sensor=config["ambient_sensor"],
+        sensor=AMBIENT,
     script:
         "../scripts/ambient_ranges.py"
 

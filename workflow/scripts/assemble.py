@@ -1,5 +1,7 @@
 import pandas as pd
 
+from thermaxis.assemble import check_common_targets
+from thermaxis.naming import sort_naturally
 from thermaxis.runner import run_script, write_csv, write_parquet
 
 
@@ -8,13 +10,14 @@ def main(snakemake):
         return pd.concat([reader(p) for p in paths], ignore_index=True)
 
     errors = concat(snakemake.input.errors, pd.read_parquet)
+    check_common_targets(errors, lambda run: f"{snakemake.params.dataset}/{run}")
     temperatures = concat(snakemake.input.temperatures, pd.read_parquet)
+    signals = concat(snakemake.input.signals, pd.read_parquet)
     qc = concat(snakemake.input.qc, pd.read_csv)
-    write_parquet(errors.sort_values(["run", "measurement", "position_mm"], ignore_index=True), snakemake.output.errors)
-    write_parquet(
-        temperatures.sort_values(["run", "measurement", "sensor"], ignore_index=True), snakemake.output.temperatures
-    )
-    write_csv(qc.sort_values(["run", "sensor"], ignore_index=True), snakemake.output.qc)
+    write_parquet(sort_naturally(errors, ["run", "measurement", "position_mm"]), snakemake.output.errors)
+    write_parquet(sort_naturally(temperatures, ["run", "measurement", "sensor"]), snakemake.output.temperatures)
+    write_parquet(sort_naturally(signals, ["run", "measurement", "signal"]), snakemake.output.signals)
+    write_csv(sort_naturally(qc, ["run", "sensor"]), snakemake.output.qc)
 
 
 run_script(main, snakemake)

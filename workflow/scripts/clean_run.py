@@ -20,6 +20,8 @@ def main(snakemake):
     write_parquet(tables.errors, out.errors)
     write_parquet(tables.temperatures, out.temperatures)
     write_csv(tables.windows, out.windows)
+    write_parquet(tables.signals, out.signals)
+    write_parquet(tables.signal_series, out.signal_series)
 
 
 run_script(main, snakemake)

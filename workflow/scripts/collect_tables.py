@@ -1,13 +1,14 @@
 import pandas as pd
 
 from thermaxis.experiment import SORT_KEYS
+from thermaxis.naming import sort_naturally
 from thermaxis.runner import run_script, write_csv
 
 
 def main(snakemake):
     for name, keys in SORT_KEYS.items():
         frames = [pd.read_csv(p) for p in snakemake.input[name]]
-        frame = pd.concat(frames, ignore_index=True).sort_values(keys, kind="stable", ignore_index=True)
+        frame = sort_naturally(pd.concat(frames, ignore_index=True), keys)
         write_csv(frame, snakemake.output[name], float_format="%.6f")
 
 

@@ -1,3 +1,5 @@
+import pandas as pd
+
 from thermaxis.io import load_dataset
 from thermaxis.runner import run_script, write_csv
 from thermaxis.summary import dataset_summary
@@ -5,7 +7,8 @@ from thermaxis.summary import dataset_summary
 
 def main(snakemake):
     dataset = load_dataset(snakemake.params.dataset)
-    write_csv(dataset_summary(dataset), snakemake.output.table)
+    counts = {run: len(pd.read_csv(path)) for run, path in zip(snakemake.params.runs, snakemake.input.windows)}
+    write_csv(dataset_summary(dataset, counts), snakemake.output.table)
 
 
 run_script(main, snakemake)

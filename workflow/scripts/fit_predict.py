@@ -5,11 +5,16 @@ import pandas as pd
 
 from thermaxis.assemble import model_inputs
 from thermaxis.experiment import SORT_KEYS, evaluate_configuration, selection_from_dict, settings_from_config
+from thermaxis.naming import sort_naturally
 from thermaxis.runner import run_script, write_csv
 
 
 def main(snakemake):
-    X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
+    X, Y = model_inputs(
+        pd.read_parquet(snakemake.input.errors),
+        pd.read_parquet(snakemake.input.temperatures),
+        signals=pd.read_parquet(snakemake.input.signals),
+    )
     with open(snakemake.input.selection, encoding="utf-8") as fh:
         selection = selection_from_dict(json.load(fh))
     p = snakemake.params
@@ -28,7 +33,7 @@ def main(snakemake):
             )
     for name in ("metrics", "coefficients", "kb_predictions", "error_predictions"):
         frame = pd.concat([getattr(r, name) for r in results], ignore_index=True)
-        frame = frame.sort_values(SORT_KEYS[name], kind="stable", ignore_index=True)
+        frame = sort_naturally(frame, SORT_KEYS[name])
         write_csv(frame, snakemake.output[name], float_format="%.6f")
 
 

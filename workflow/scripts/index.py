@@ -28,7 +28,7 @@ def main(snakemake):
         sections.insert(1, IndexSection(title="Sweep", rows=(sweep,)))
     with open(snakemake.input.provenance, encoding="utf-8") as fh:
         provenance = json.load(fh)
-    page = render_index(p.dataset_name, p.statement, p.simulated, sections, provenance)
+    page = render_index(p.dataset_name, p.statement, p.simulated, sections, provenance, headline=p.headline)
     write_text(page, snakemake.output[0])
 
 

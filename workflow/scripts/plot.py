@@ -30,7 +30,9 @@ DRAW = {
     "fig7_error_surface": lambda s: plotting.fig7_error_surface(_errors(s), s.params.run),
     "fig8_rezeroed": lambda s: plotting.fig8_rezeroed(_errors(s), s.params.run),
     "fig9_other_runs": lambda s: plotting.fig9_other_runs(_errors(s), s.params.runs),
-    "fig10_temperature_rise": lambda s: plotting.fig10_temperature_rise(pd.read_parquet(s.input.series)),
+    "fig10_temperature_rise": lambda s: plotting.fig10_temperature_rise(
+        pd.read_parquet(s.input.series), signals=pd.read_parquet(s.input.signals), units=s.params.signal_units
+    ),
     "fig12_slope_intercept": lambda s: plotting.fig12_slope_intercept(pd.read_csv(s.input.kb)),
     "fig_kb_prediction": lambda s: plotting.fig_kb_prediction(
         pd.read_csv(s.input.kb), s.wildcards.fold, s.wildcards.approach, s.wildcards.algorithm

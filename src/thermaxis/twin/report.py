@@ -179,6 +179,9 @@ def _dataset_yaml() -> str:
     lines = [
         "# Written by `python -m thermaxis.twin generate` -- do not edit by hand.",
         "name: twin",
+        "reproduces: xu2023",
+        "ambient_sensor: T10",
+        "temperature_kind: absolute",
         "description: >-",
         "  Thermal twin of the X axis in Xu et al.: four runs E1-E4 (the paper's experiments",
         "  1-4, reciprocating at 2000, 4000, 6000 and 8000 mm/min), 12 temperature sensors from",
