@@ -12,10 +12,11 @@ export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
 
-.PHONY: env results test lint fmt clean twin twin-calibrate report sweep bench help
+.PHONY: env results import test lint fmt clean twin twin-calibrate report sweep bench help
 
 help:
-	@echo "make results   set up .venv if needed, run the whole workflow on the embedded (simulated) data"
+	@echo "make results   set up .venv if needed, run the whole workflow on every embedded dataset (simulated twin, measured fl_thermal)"
+	@echo "make import    re-import data/raw/fl_thermal from the public record with data/import/fl_thermal.yaml"
 	@echo "make test      set up .venv if needed, run the test suite"
 	@echo "make lint      snakemake --lint and snakefmt --check"
 	@echo "make twin      regenerate data/raw/twin (byte-identical) from the committed twin parameters"
@@ -37,8 +38,17 @@ env:
 		echo "$$want" > "$(STAMP)"; \
 	fi
 
+# Every dataset of config `datasets` (config/config.yaml), one Snakemake run each.
 results: env
-	$(SNAKEMAKE)
+	@$(BIN)/python -c "from thermaxis.config import load_config; print('\n'.join(load_config()['datasets']))" \
+	| while IFS= read -r ds; do \
+		echo "== $$ds"; \
+		$(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
+	done
+
+# Re-import the embedded measured dataset from its public source (shared/realdata).
+import: env
+	$(BIN)/python -m thermaxis.importer data/import/fl_thermal.yaml --out data/raw/fl_thermal
 
 test: env
 	$(BIN)/python -m pytest

@@ -74,7 +74,8 @@ def write_dataset(
 ) -> Path:
     """Write a small, fault-free dataset.
 
-    ``curve(run_index, measurement_index, positions) -> errors`` gives the error of
+    ``n_measurements`` is one count for every run, or one count per run (runs of
+    unequal length).  ``curve(run_index, measurement_index, positions) -> errors`` gives the error of
     each measurement; ``temperature(run_index, sensor_index, minutes) -> degC`` the
     sensor logs (sampled every 10 s). Defaults: exact lines and smooth ramps.
     """
@@ -101,8 +102,9 @@ def write_dataset(
         lines.append(f"{run}\t{i}\t{1000 * i}\trun {run}")
     (root / "runs.tsv").write_text("\n".join(lines) + "\n")
     t0 = pd.Timestamp("2022-05-10T09:00:00")
-    total = interval_min * (n_measurements - 1) + 10
-    for r, run in enumerate(runs):
+    counts = [n_measurements] * len(runs) if np.ndim(n_measurements) == 0 else list(n_measurements)
+    for r, (run, n_run) in enumerate(zip(runs, counts)):
+        total = interval_min * (n_run - 1) + 10
         (root / run / "temperatures").mkdir(parents=True, exist_ok=True)
         (root / run / "errors").mkdir(parents=True, exist_ok=True)
         seconds = np.arange(-300, total * 60 + 300, 10.0)
@@ -110,7 +112,7 @@ def write_dataset(
         for s, sensor in enumerate(sensors):
             frame[sensor] = temperature(r, s, seconds / 60.0)
         frame.to_csv(root / run / "temperatures" / "box.csv", index=False, float_format="%.6f")
-        for m in range(n_measurements):
+        for m in range(n_run):
             start = t0 + pd.Timedelta(minutes=interval_min * m)
             err = curve(r, m, positions)
             rows = []

@@ -179,7 +179,7 @@ def _numeric_descriptors(runs: pd.DataFrame, path: Path) -> pd.DataFrame:
     for column in runs.columns:
         if column in RUN_COLUMNS:
             continue
-        cells = runs[column].astype(str).str.strip()
+        cells = runs[column].where(runs[column].notna(), "").astype(str).str.strip()
         numbers = pd.to_numeric(cells.where(cells != "", None), errors="coerce")
         if (numbers.notna() | (cells == "")).all() and numbers.notna().any():
             infinite = ~np.isfinite(numbers.fillna(0.0).to_numpy(dtype=float))

@@ -1,0 +1,164 @@
+"""Measured data: cleaning that keeps real trends, gap messages, the table importer, the embedded record."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from thermaxis.assemble import clean_and_assemble_run, model_inputs
+from thermaxis.clean import TemperatureCleaning, check_gaps, clean_temperatures, hampel_outliers
+from thermaxis.config import load_config
+from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
+from thermaxis.importer import import_dataset, measurements_of
+from thermaxis.io import DataError, load_dataset, read_run
+
+REPO = Path(__file__).resolve().parents[2]
+FL_THERMAL = REPO / "data" / "raw" / "fl_thermal"
+
+
+def test_hampel_keeps_both_ends_of_a_noisy_ramp():
+    rng = np.random.default_rng(7)
+    ramp = np.linspace(20.0, 32.0, 400) + rng.normal(0.0, 0.01, 400)
+    assert not hampel_outliers(ramp, window=7, threshold=4.0, min_deviation=0.0).any()
+
+
+def test_hampel_still_flags_a_spike_at_the_end():
+    values = np.array([20.0, 20.1, 20.2, 20.3, 20.4, 20.5, 20.6, 20.7, 25.0])
+    assert hampel_outliers(values, 7, 4.0, 0.2).tolist() == [False] * 8 + [True]
+
+
+def test_hampel_threshold_tie_is_not_a_spike():
+    # 0.1 C quantised readings: 20.6 is exactly 0.2 from the window median 20.4, the minimum deviation.
+    values = np.array([20.4, 20.4, 20.4, 20.6, 20.4, 20.4, 20.4])
+    assert float(abs(values[3] - 20.4)) > 0.2  # the rounding the comparison must forgive
+    assert not hampel_outliers(values, 7, 4.0, 0.2).any()
+
+
+def _log(minutes, values):
+    t0 = pd.Timestamp("2024-01-01T00:00:00")
+    return pd.DataFrame({"time": t0 + pd.to_timedelta(np.asarray(minutes, float), unit="min"), "T1": values})
+
+
+def test_a_record_that_ends_early_is_named_as_such_with_its_file():
+    # The sensor stops at minute 50; a measurement runs from 58 to 59 min: 9 min after the
+    # last sample, more than max_gap_s / 2 = 5 min, though less than max_gap_s = 10 min.
+    minutes = np.arange(0.0, 50.5, 0.5)
+    cleaned = clean_temperatures(
+        {"box": _log(minutes, 20.0 + 0.01 * minutes)},
+        {},
+        TemperatureCleaning(interval_s=30.0, max_gap_s=600.0),
+        start="2024-01-01T00:00:00",
+        end="2024-01-01T01:00:00",
+    )
+    assert cleaned.gaps["kind"].tolist() == ["record end"]
+    windows = pd.DataFrame(
+        {"measurement": [1], "start": [pd.Timestamp("2024-01-01T00:58:00")], "end": [pd.Timestamp("2024-01-01T00:59:00")]}
+    )
+    with pytest.raises(ValueError) as info:
+        check_gaps(cleaned.gaps, windows, files={"T1": "data/raw/x/R1/temperatures/box.csv"}, max_gap_s=600.0)
+    message = str(info.value)
+    assert message.startswith("data/raw/x/R1/temperatures/box.csv: sensor T1 has no reading after 2024-01-01T00:50:00")
+    assert "record ends too early" in message and "max_gap_s / 2" in message and "measurement 1" in message
+
+
+def _wide_record(path: Path) -> Path:
+    """A 3-block record every 60 s: rest 5 min, run 10 min, rest 5 min, ..., with a known error."""
+    seconds = np.arange(0, 3 * 20 * 60, 60.0)
+    phase = (seconds // 60) % 20
+    rpm = np.where((phase >= 5) & (phase < 15), 1000.0 * (1 + seconds // 1200), 0.0)
+    table = pd.DataFrame(
+        {
+            "t (s)": seconds,
+            "speed": rpm,
+            "temp A": 20.0 + seconds / 600.0,
+            "temp B": 21.0 + np.sin(seconds / 500.0),
+            "disp": 3.0 + seconds / 100.0,  # zeroed once at 3.0 um, 0.01 um/s
+        }
+    )
+    table.to_csv(path, index=False)
+    return path
+
+
+def _mapping(tmp_path: Path, **changes) -> Path:
+    mapping = {
+        "name": "wide",
+        "source": "wide.csv",
+        "description": "A generated wide record.",
+        "provenance": {"kind": "measured", "citation": "tests", "licence": "CC0"},
+        "axis": {"name": "Z"},
+        "time": {"column": "t (s)", "start": "2030-01-01T00:00:00"},
+        "sensors": [{"column": "temp A", "id": "TA"}, {"column": "temp B", "id": "TB"}],
+        "signals": [{"column": "speed", "id": "spindle_rpm", "unit": "rpm"}],
+        "errors": {"columns": [{"column": "disp", "position_mm": 0}], "every_s": 300, "rereference": "run_start"},
+        "split": {"by": "signal", "signal": "spindle_rpm", "rest": 0},
+        "runs": [{"name": f"B{i}", "condition": f"{1000 * i} rpm", "description": "block"} for i in (1, 2, 3)],
+        **changes,
+    }
+    _wide_record(tmp_path / "wide.csv")
+    path = tmp_path / "wide.yaml"
+    path.write_text(yaml.safe_dump(mapping, allow_unicode=True))
+    return path
+
+
+def test_importer_splits_by_signal_rereferences_and_states_its_assumptions(tmp_path):
+    out = import_dataset(_mapping(tmp_path), tmp_path / "raw" / "wide")
+    dataset = load_dataset(out)
+    assert dataset.run_ids == ("B1", "B2", "B3")
+    # Run 1 keeps the record's start (0 s); runs 2 and 3 start at their first active sample: 1500 s and 2700 s.
+    errors = pd.read_csv(out / "B2" / "errors.csv")
+    assert errors["time"].iloc[0] == "2030-01-01T00:25:00"
+    # Re-referenced to the run's first sample, 0.01 um/s: measurements every 300 s are 0, 3, 6, ... um.
+    np.testing.assert_allclose(errors["error_um"].to_numpy(), 3.0 * np.arange(len(errors)))
+    assert len(errors) == 4  # 1500 .. 2640 s: samples at 1500, 1800, 2100, 2400
+    description = dataset.meta["description"]
+    assert "invented by the import" in description and "re-referenced" in description
+    assert dataset.signals == ("spindle_rpm",)
+    raw = read_run(dataset, "B2")
+    assert raw.signals["logger"]["spindle_rpm"].max() == 2000.0
+
+
+def test_importer_refuses_a_wrong_run_count_and_leaves_nothing(tmp_path):
+    mapping = _mapping(tmp_path, runs=[{"name": "B1", "condition": "a", "description": "x"}])
+    with pytest.raises(DataError, match="found 3 run\\(s\\) but the mapping lists 1"):
+        import_dataset(mapping, tmp_path / "raw" / "wide")
+    assert not (tmp_path / "raw").exists() or not any((tmp_path / "raw").iterdir())
+
+
+def test_importer_names_a_missing_column(tmp_path):
+    mapping = _mapping(tmp_path, sensors=[{"column": "temp C", "id": "TC"}])
+    with pytest.raises(DataError, match=r"wide.csv: missing column 'temp C'"):
+        import_dataset(mapping, tmp_path / "raw" / "wide")
+
+
+def test_measurements_are_the_first_samples_at_each_interval():
+    rows = pd.DataFrame({"_t": [100.0, 115.0, 130.0, 400.0, 405.0, 700.0]})
+    assert measurements_of(rows, 300.0)["_t"].tolist() == [100.0, 400.0, 700.0]
+
+
+@pytest.mark.skipif(not FL_THERMAL.is_dir(), reason="data/raw/fl_thermal is not imported")
+def test_fl_thermal_pointwise_mlr_equals_plain_least_squares():
+    """The embedded measured record: held-out run R6, all 16 sensors plus a constant, by numpy."""
+    dataset = load_dataset(FL_THERMAL)
+    config = load_config()
+    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), config) for run in dataset.run_ids]
+    X, Y = model_inputs(
+        pd.concat([t.errors for t in tables], ignore_index=True),
+        pd.concat([t.temperatures for t in tables], ignore_index=True),
+    )
+    sensors = tuple(c for c in X.columns if c.startswith("T"))
+    assert len(sensors) == 16 and Y.shape[1] == 1
+    fold = "R6_variable"
+    selection = select_for_fold(X, Y, fold, SelectionSettings(method="all"), decoupled=False)
+    result = evaluate_configuration(X, Y, fold, "pointwise", "mlr", selection, ModelSettings())
+
+    first = X.sort_values("measurement").groupby("run")[list(sensors)].transform("first").loc[X.index]
+    T = X[list(sensors)].to_numpy(float) - first.to_numpy(float)
+    train = (X["run"] != fold).to_numpy()
+    A = np.column_stack([np.ones(train.sum()), T[train]])
+    coef, *_ = np.linalg.lstsq(A, Y.to_numpy(float)[train, 0], rcond=None)
+    expected = np.column_stack([np.ones((~train).sum()), T[~train]]) @ coef
+    np.testing.assert_allclose(result.error_predictions["predicted"].to_numpy(), expected, atol=1e-6)

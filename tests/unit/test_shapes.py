@@ -1,0 +1,133 @@
+"""Datasets of other shapes than the paper's: unequal runs, one position, many positions, two and many runs.
+
+Each test writes a small dataset in the documented layout, runs the library's own
+chain (read -> clean -> assemble -> model inputs -> a leave-one-run-out fit) and
+checks the numbers against an independent computation (plain numpy least squares,
+or counts worked out by hand).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import write_dataset
+
+from thermaxis.assemble import check_common_targets, clean_and_assemble_run, model_inputs
+from thermaxis.config import load_config
+from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
+from thermaxis.io import DataError, load_dataset, read_run
+
+CONFIG = load_config()
+
+
+def assembled(root):
+    dataset = load_dataset(root)
+    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), CONFIG) for run in dataset.run_ids]
+    errors = pd.concat([t.errors for t in tables], ignore_index=True)
+    temperatures = pd.concat([t.temperatures for t in tables], ignore_index=True)
+    return errors, temperatures
+
+
+def relative(X, sensors):
+    """Temperatures minus each run's first measurement, computed directly."""
+    first = X.sort_values("measurement").groupby("run")[list(sensors)].transform("first").loc[X.index]
+    return X[list(sensors)].to_numpy(float) - first.to_numpy(float)
+
+
+def numpy_pointwise(X, Y, fold, sensors):
+    """Point-by-point MLR by plain least squares, fitted on every run but ``fold``."""
+    train = (X["run"] != fold).to_numpy()
+    T = relative(X, sensors)
+    A = np.column_stack([np.ones(train.sum()), T[train]])
+    out = np.empty((int((~train).sum()), Y.shape[1]))
+    for j in range(Y.shape[1]):
+        coef, *_ = np.linalg.lstsq(A, Y.to_numpy(float)[train, j], rcond=None)
+        out[:, j] = np.column_stack([np.ones(out.shape[0]), T[~train]]) @ coef
+    return out
+
+
+@pytest.mark.parametrize(
+    "runs, counts, positions",
+    [
+        (("A", "B"), (5, 3), (0.0, 50.0, 100.0)),  # two runs of unequal length
+        (("R1", "R2", "R3"), (4, 7, 2), (0.0,)),  # one position, unequal runs
+        (tuple(f"run_{i:02d}" for i in range(1, 8)), (3, 4, 5, 3, 6, 4, 3), (0.0, 100.0)),  # many runs
+        (("A", "B", "C"), (3, 3, 4), tuple(np.linspace(0.0, 900.0, 46))),  # many positions
+    ],
+)
+def test_shapes_assemble_and_predict_like_numpy(tmp_path, runs, counts, positions):
+    root = write_dataset(tmp_path / "ds", runs=runs, n_measurements=counts, positions=positions, two_passes=False)
+    errors, temperatures = assembled(root)
+    X, Y = model_inputs(errors, temperatures)
+    # One row per measurement that exists: no padding to the longest run.
+    assert len(X) == sum(counts)
+    assert X.groupby("run").size().to_dict() == dict(zip(runs, counts))
+    assert Y.shape == (sum(counts), len(positions))
+    sensors = ("S1", "S2")
+    selection = select_for_fold(X, Y, runs[-1], SelectionSettings(method="fixed", fixed=(("pointwise", sensors), ("k", sensors), ("b", sensors))), decoupled=False)
+    result = evaluate_configuration(X, Y, runs[-1], "pointwise", "mlr", selection, ModelSettings())
+    predicted = result.error_predictions["predicted"].to_numpy().reshape(counts[-1], len(positions))
+    np.testing.assert_allclose(predicted, numpy_pointwise(X, Y, runs[-1], sensors), atol=1e-6)
+
+
+def test_runs_with_different_targets_are_refused_naming_the_run(tmp_path):
+    a = write_dataset(tmp_path / "a", runs=("A",), positions=(0.0, 50.0, 100.0))
+    b = write_dataset(tmp_path / "b", runs=("B",), positions=(0.0, 50.0, 120.0))
+    errors = pd.concat([assembled(a)[0], assembled(b)[0]], ignore_index=True)
+    with pytest.raises(DataError, match=r"^data/B: run 'B' reads targets \[0, 50, 120\] but run 'A' reads \[0, 50, 100\]"):
+        check_common_targets(errors, lambda run: f"data/{run}")
+
+
+def test_single_position_common_set_follows_the_ranking_not_the_names(tmp_path):
+    """One position, five sensors; the error follows Z9 best, then Z1: the common set must be (Z9, Z1)."""
+
+    def temperature(r, s, minutes):
+        # Z9 (s=4) is the error's driver, Z1 (s=0) a noisy copy, the rest unrelated wiggles.
+        base = (1.0 + r) * (1.0 - np.exp(-minutes / 40.0))
+        return 20.0 + np.where(s == 4, base, 0.0) + np.where(s == 0, base + 0.05 * np.sin(minutes), 0.0) + (
+            0.0 if s in (0, 4) else 0.3 * np.sin(minutes / (7.0 + s))
+        )
+
+    def curve(r, m, x):
+        return np.full(x.shape, -2.0 * (1.0 + r) * (1.0 - np.exp(-20.0 * m / 40.0)))
+
+    root = write_dataset(
+        tmp_path / "one",
+        runs=("R1", "R2", "R3"),
+        sensors=("Z1", "A2", "B3", "C4", "Z9"),
+        positions=(0.0,),
+        n_measurements=6,
+        curve=curve,
+        temperature=temperature,
+        two_passes=False,
+    )
+    X, Y = model_inputs(*assembled(root))
+    settings = SelectionSettings(method="correlation", n_clusters=4, pointwise_common=2)
+    selection = select_for_fold(X, Y, "R3", settings, decoupled=False)
+    assert selection.pointwise == ("Z9", "Z1")
+
+
+def test_errors_in_one_file_per_run_read_like_one_file_per_measurement(tmp_path):
+    root = write_dataset(tmp_path / "ds", runs=("A", "B"), n_measurements=(3, 2))
+    dataset = load_dataset(root)
+    before = read_run(dataset, "A").measurements
+    frames = []
+    for f in sorted((root / "A" / "errors").glob("*.csv")):
+        frames.append(pd.read_csv(f, dtype=str).assign(measurement=f.stem))
+        f.unlink()
+    (root / "A" / "errors").rmdir()
+    pd.concat(frames).to_csv(root / "A" / "errors.csv", index=False)
+    after = read_run(dataset, "A").measurements
+    assert list(after) == list(before) == ["M01", "M02", "M03"]
+    for name in before:
+        pd.testing.assert_frame_equal(after[name], before[name])
+
+
+def test_condition_is_a_label_and_feed_optional(tmp_path):
+    root = write_dataset(tmp_path / "ds", runs=("A", "B"))
+    (root / "runs.tsv").write_text("run\tcondition\tspindle_rpm\tdescription\nA\tcold start\t1500\tx\nB\twarm\t\ty\n")
+    dataset = load_dataset(root)
+    assert dataset.condition_of("A") == "cold start"
+    assert dataset.descriptors == ("spindle_rpm",)
+    assert dataset.runs["spindle_rpm"].tolist()[0] == 1500.0 and np.isnan(dataset.runs["spindle_rpm"].tolist()[1])
