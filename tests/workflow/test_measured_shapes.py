@@ -1,0 +1,85 @@
+"""The workflow on a measured-like dataset the twin does not resemble.
+
+Three runs of unequal length with long names, one target position, no ambient sensor,
+an operating signal, one errors.csv per run: the workflow must run end to end to its
+tables and figures, draw against time, and make no paper audit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from conftest import run_snakemake, workflow_workdir, write_dataset
+
+pytestmark = pytest.mark.slow
+
+RUNS = ("cold_start_morning_1250rpm", "warm_afternoon_2500rpm", "night_cooldown_variable")
+
+
+def _measured_like(root):
+    def curve(r, m, x):
+        return np.full(x.shape, -1.5 * (1 + r) * (1 - np.exp(-m / 8.0)))
+
+    write_dataset(root, runs=RUNS, n_measurements=(9, 14, 6), positions=(0.0,), curve=curve, two_passes=False, kind="measured")
+    meta = yaml.safe_load((root / "dataset.yaml").read_text())
+    meta["signals"] = [{"id": "spindle_rpm", "unit": "rpm", "source": "box"}]
+    (root / "dataset.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    (root / "runs.tsv").write_text(
+        "run\tcondition\tdescription\n" + "".join(f"{r}\t{r.split('_')[-1]}\trun {r}\n" for r in RUNS)
+    )
+    for i, run in enumerate(RUNS):
+        folder = root / run
+        frames = []
+        for f in sorted((folder / "errors").glob("*.csv")):
+            frames.append(pd.read_csv(f, dtype=str).assign(measurement=f.stem))
+            f.unlink()
+        (folder / "errors").rmdir()
+        pd.concat(frames).to_csv(folder / "errors.csv", index=False)
+        log = pd.read_csv(folder / "temperatures" / "box.csv", usecols=["time"])
+        (folder / "signals").mkdir()
+        log.assign(spindle_rpm=np.where(np.arange(len(log)) < len(log) // 2, 1250.0 * (i + 1), 0.0)).to_csv(
+            folder / "signals" / "box.csv", index=False
+        )
+    return root
+
+
+def test_single_position_unequal_runs_end_to_end(tmp_path):
+    work = workflow_workdir(tmp_path)
+    _measured_like(work / "data" / "measured")
+    out = work / "results" / "tiny"
+    targets = [
+        f"results/tiny/{p}"
+        for p in (
+            "tables/metrics.csv",
+            "tables/sensitive_points.csv",
+            "figures/fig5_unzeroed.png",
+            "figures/fig9_other_runs.png",
+            "figures/fig10_temperature_rise.png",
+            "figures/fold_comparison.png",
+            f"figures/error_prediction_{RUNS[1]}_pointwise_mlr.png",
+        )
+    ]
+    run_snakemake(
+        work,
+        "--config",
+        "dataset=data/measured",
+        "models={algorithms: [mlr], signals: [spindle_rpm]}",
+        "figures={algorithms: [mlr]}",
+        "--",
+        *targets,
+    )
+    metrics = pd.read_csv(out / "tables" / "metrics.csv")
+    assert set(metrics["approach"]) == {"pointwise"}
+    assert sorted(metrics["fold"]) == sorted(RUNS)
+    predictions = pd.read_csv(out / "models" / RUNS[1] / "error_predictions.csv")
+    assert len(predictions) == 14  # every measurement of the 14-measurement run, none padded
+    coefficients = pd.read_csv(out / "models" / RUNS[1] / "coefficients.csv")
+    assert "spindle_rpm" in set(coefficients["term"])
+    for target in targets:
+        assert (work / target).stat().st_size > 0
+    assert not (out / "tables" / "paper_comparison.csv").exists()
+    dry = run_snakemake(work, "-n", "--config", "dataset=data/measured")
+    assert "paper_comparison" not in dry.stdout and "fig3_ambient" not in dry.stdout
+    assert "fig8_rezeroed" not in dry.stdout and "fig7_error_surface" not in dry.stdout
