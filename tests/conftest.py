@@ -71,6 +71,7 @@ def write_dataset(
     name="tiny",
     kind="simulated",
     two_passes=True,
+    reproduces=None,
 ) -> Path:
     """Write a small, fault-free dataset.
 
@@ -92,6 +93,7 @@ def write_dataset(
         "name": name,
         "description": "Tiny test dataset.",
         "provenance": {"kind": kind, "citation": "tests"},
+        **({"reproduces": reproduces} if reproduces else {}),
         "axis": {"name": "X"},
         "sensors": [{"id": s, "location": f"loc {s}", "source": "box"} for s in sensors],
         "sources": [{"name": "box", "clock_note": "reference", "clock_offset_s": 0}],

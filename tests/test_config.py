@@ -8,7 +8,8 @@ from thermaxis.config import load_config, validate_config
 
 def test_default_config_is_valid_and_is_the_papers_protocol():
     config = load_config()
-    assert config["dataset"] == "data/raw/twin"
+    assert config["datasets"] == ["data/raw/twin", "data/raw/fl_thermal"]
+    assert config["dataset"] == "data/raw/twin"  # the first listed, when none is named
     assert config["selection"]["n_clusters"] == 3
     assert config["selection"]["rho"] == 0.5
     assert config["decoupling"]["degree"] == 1

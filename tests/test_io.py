@@ -39,11 +39,11 @@ def test_valid_dataset_loads(tiny_dataset):
 
 def test_wrong_type_in_runs_sheet(tiny_dataset):
     path = tiny_dataset / "runs.tsv"
-    path.write_text(path.read_text().replace("R2\t2\t2000", "R2\ttwo\t2000"))
+    path.write_text(path.read_text().replace("R2\t2\t2000", "R2\t2\tfast"))
     with pytest.raises(DataError) as exc:
         load_dataset(tiny_dataset)
     msg = one_line(exc)
-    assert "runs.tsv" in msg and "line 3" in msg and "'condition'" in msg and "integer" in msg
+    assert "runs.tsv" in msg and "line 3" in msg and "'feed_mm_min'" in msg and "a number" in msg
 
 
 def test_negative_feed_violates_schema(tiny_dataset):
@@ -58,11 +58,11 @@ def test_negative_feed_violates_schema(tiny_dataset):
 def test_missing_column_in_runs_sheet(tiny_dataset):
     path = tiny_dataset / "runs.tsv"
     lines = [line.split("\t") for line in path.read_text().splitlines()]
-    path.write_text("\n".join("\t".join(f[:2] + f[3:]) for f in lines) + "\n")
+    path.write_text("\n".join("\t".join(f[:1] + f[2:]) for f in lines) + "\n")
     with pytest.raises(DataError) as exc:
         load_dataset(tiny_dataset)
     msg = one_line(exc)
-    assert "runs.tsv" in msg and "missing column 'feed_mm_min'" in msg
+    assert "runs.tsv" in msg and "missing column 'condition'" in msg
 
 
 def test_wrong_type_in_dataset_yaml(tiny_dataset):

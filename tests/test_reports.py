@@ -236,7 +236,7 @@ def build_reports(tmp_path_factory) -> Built:
     """The workflow on a small simulated dataset, once per test session (the browser test reuses it)."""
     if "built" not in _BUILD:
         tmp = tmp_path_factory.mktemp("reports")
-        dataset = write_dataset(tmp / "rep", runs=("R1", "R2"), name="rep")
+        dataset = write_dataset(tmp / "rep", runs=("R1", "R2"), name="rep", reproduces="xu2023")
         work = workflow_workdir(tmp)
         config = work / "reports_config.yaml"
         config.write_text(
@@ -247,6 +247,7 @@ def build_reports(tmp_path_factory) -> Built:
                     "selection": {"n_clusters": 2},
                     # One fold, one algorithm: every kind of report, as few notebooks as possible.
                     "folds": ["R2"],
+                    "paper_fold": "R2",
                     "models": {"algorithms": ["mlr"]},
                     "figures": {"algorithms": ["mlr"], "formats": ["png"], "dpi": 80},
                     "reports": {"model_algorithms": ["mlr"]},

@@ -102,7 +102,7 @@ QC_COLUMNS = [
 ]
 GAP_COLUMNS = ["sensor", "start", "end", "duration_s", "kind"]
 # Where a gap lies: between two samples, or before a sensor's first / after its last sample.
-GAP_KINDS = ("interior", "record start", "record end")
+GAP_KINDS = ("interior", "record start", "record end", "no readings")
 
 
 @dataclass(frozen=True)
@@ -520,7 +520,7 @@ def _onto_grid(native: _Native, grid: np.ndarray, max_gap_s: float):
     n = t.size
     if n == 0:
         counts = dict(n_interpolated=0, n_edge_held=0, n_long_gap=int(grid.size), longest_gap_s=np.nan)
-        return np.full(grid.size, np.nan), counts, [(int(grid[0]), int(grid[-1]), "interior")]
+        return np.full(grid.size, np.nan), counts, [(int(grid[0]), int(grid[-1]), "no readings")]
     origin = t[0]
     y = np.interp((grid - origin) / _NS, (t - origin) / _NS, v)  # holds the end values outside
     left = np.searchsorted(t, grid, side="right") - 1  # last sample <= grid point
@@ -645,8 +645,9 @@ def signals_on_grid(
 
     Signals are set points or programme states (a spindle speed, a feed), not physical
     quantities with noise: no limits and no spike filter apply, and a step stays a
-    step instead of being smeared into a ramp.  Before a signal's first sample it is
-    NaN.
+    step instead of being smeared into a ramp.  Before a signal's first sample it
+    takes that sample's value: the grid starts a margin before the first measurement,
+    which may be the record's first sample.
     """
     grid = _as_ns(grid_times)
     columns = {"time": grid.astype("datetime64[ns]")}
@@ -656,8 +657,8 @@ def signals_on_grid(
             v = frame[signal].to_numpy(dtype=float)
             ok = np.isfinite(v)
             ts, vs = t[ok], v[ok]
-            last = np.searchsorted(ts, grid, side="right") - 1
-            columns[signal] = np.where(last >= 0, vs[np.clip(last, 0, None)] if vs.size else np.nan, np.nan)
+            last = np.clip(np.searchsorted(ts, grid, side="right") - 1, 0, None)
+            columns[signal] = vs[last] if vs.size else np.full(grid.size, np.nan)
     return pd.DataFrame(columns)
 
 
@@ -683,6 +684,8 @@ def _check_windows(windows: pd.DataFrame) -> None:
 def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float | None) -> str:
     """What a gap is, in the words a user can act on."""
     limit = f" (max_gap_s {max_gap_s:g})" if max_gap_s is not None else ""
+    if gap.get("kind", "interior") == "no readings":
+        return "has no valid reading at all (empty, or every value out of range or a spike)"
     if gap.get("kind", "interior") == "record start":
         return (
             f"has no reading before {_iso(end_ns)}: its record starts too late{limit}; a value is held at most "

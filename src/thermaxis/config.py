@@ -13,7 +13,7 @@ from pathlib import Path
 import jsonschema
 import yaml
 
-__all__ = ["CONFIG_SCHEMA", "load_config", "validate_config", "merge"]
+__all__ = ["CONFIG_SCHEMA", "load_config", "validate_config", "merge", "dataset_of"]
 
 REPO = Path(__file__).resolve().parents[2]
 CONFIG_SCHEMA = REPO / "workflow" / "schemas" / "config.schema.yaml"
@@ -48,7 +48,13 @@ def validate_config(config: dict, schema_path=CONFIG_SCHEMA) -> dict:
     if errors:
         where = "/".join(map(str, errors[0].absolute_path)) or "top level"
         raise ValueError(f"config {where}: {errors[0].message}")
+    filled["dataset"] = dataset_of(filled)
     return filled
+
+
+def dataset_of(config: dict) -> str:
+    """The dataset folder of one run: ``dataset`` if given, else the first of ``datasets``."""
+    return config.get("dataset") or config["datasets"][0]
 
 
 def load_config(*paths, overrides: dict | None = None) -> dict:

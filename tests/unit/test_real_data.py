@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from thermaxis.assemble import clean_and_assemble_run, model_inputs
-from thermaxis.clean import TemperatureCleaning, check_gaps, clean_temperatures, hampel_outliers
+from thermaxis.clean import TemperatureCleaning, check_gaps, clean_temperatures, hampel_outliers, signals_on_grid
 from thermaxis.config import load_config
 from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
 from thermaxis.importer import import_dataset, measurements_of
@@ -162,3 +162,12 @@ def test_fl_thermal_pointwise_mlr_equals_plain_least_squares():
     coef, *_ = np.linalg.lstsq(A, Y.to_numpy(float)[train, 0], rcond=None)
     expected = np.column_stack([np.ones((~train).sum()), T[~train]]) @ coef
     np.testing.assert_allclose(result.error_predictions["predicted"].to_numpy(), expected, atol=1e-6)
+
+
+def test_signals_are_held_as_steps_on_the_grid():
+    t0 = pd.Timestamp("2024-01-01T00:00:00")
+    log = pd.DataFrame({"time": t0 + pd.to_timedelta([0, 95, 200], unit="s"), "rpm": [0.0, 3000.0, 0.0]})
+    grid = t0 + pd.to_timedelta(np.arange(-20, 240, 20), unit="s")
+    held = signals_on_grid({"plc": log}, {}, grid)
+    # Before the first sample: its value; from 95 s to 200 s: 3000; no ramp in between.
+    assert held["rpm"].tolist() == [0, 0, 0, 0, 0, 0, 3000, 3000, 3000, 3000, 3000, 0, 0]

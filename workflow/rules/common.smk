@@ -3,6 +3,7 @@ import sys
 from pathlib import Path
 
 import thermaxis
+from thermaxis.config import dataset_of
 from thermaxis.io import DataError, load_dataset
 from thermaxis.captions import figure_caption
 from thermaxis.summary import data_statement
@@ -22,7 +23,7 @@ os.environ["PATH"] = (
 
 # One dataset per Snakemake run: --config dataset=<folder>, else the first of `datasets`
 # (`make results` runs each listed dataset in turn).
-config["dataset"] = config["dataset"] or config["datasets"][0]
+config["dataset"] = dataset_of(config)
 
 # The dataset is validated when the workflow is parsed, so a bad sheet or a
 # missing run folder stops everything with one line before any job starts.
@@ -34,6 +35,7 @@ except DataError as exc:
 
 def _fail(message):
     sys.exit(f"thermaxis error: {message}")
+
 
 RUNS = list(DATASET.run_ids)
 OUT = f"results/{DATASET.name}"
