@@ -6,7 +6,7 @@ rule assemble:
         ),
         signals=expand(f"{OUT}/clean/{{run}}/measurement_signals.parquet", run=RUNS),
         qc=expand(f"{OUT}/clean/{{run}}/qc.csv", run=RUNS),
-        code=lib("assemble", "naming"),
+        code=code_of("assemble.py"),
     output:
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",

@@ -1,6 +1,6 @@
 rule clean_run:
     input:
-        code=lib("io", "clean", "assemble", "naming"),
+        code=code_of("clean_run.py"),
         sheets=dataset_sheets(),
         raw=lambda wc: raw_files(wc.run),
     output:

@@ -2,8 +2,8 @@ import os
 import sys
 from pathlib import Path
 
-import thermaxis
 from thermaxis.config import dataset_of
+from thermaxis.deps import library_modules
 from thermaxis.io import DataError, load_dataset
 from thermaxis.captions import figure_caption
 from thermaxis.summary import data_statement
@@ -131,12 +131,15 @@ wildcard_constraints:
     fold="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
 
 
-LIB = Path(thermaxis.__file__).resolve().parent
+SCRIPTS = Path(workflow.current_basedir).parent / "scripts"
 
 
-def lib(*modules):
-    """Library modules as inputs: editing a method reruns its results."""
-    return [str(LIB / f"{module}.py") for module in modules]
+def code_of(entry):
+    """Library modules a script (in workflow/scripts) or a notebook imports, directly or not.
+
+    They are inputs of the rule that runs it, so editing a method reruns its results.
+    """
+    return library_modules(entry if entry.endswith(".ipynb") else SCRIPTS / entry)
 
 
 def raw_files(run):

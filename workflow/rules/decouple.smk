@@ -1,6 +1,6 @@
 rule decouple:
     input:
-        code=lib("decouple", "summary"),
+        code=code_of("decouple.py"),
         errors=f"{OUT}/assembled/errors.parquet",
         paper="data/paper/table5_slope_intercept.csv",
     output:

@@ -4,7 +4,7 @@
 
 rule fig2_positioning_error:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -31,7 +31,7 @@ rule fig2_positioning_error:
 
 rule fig3_ambient:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         series=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
     output:
         figures=report(
@@ -59,7 +59,7 @@ rule fig3_ambient:
 
 rule fig5_unzeroed:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -86,7 +86,7 @@ rule fig5_unzeroed:
 
 rule fig6_error_vs_time:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -113,7 +113,7 @@ rule fig6_error_vs_time:
 
 rule fig7_error_surface:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -140,7 +140,7 @@ rule fig7_error_surface:
 
 rule fig8_rezeroed:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -167,7 +167,7 @@ rule fig8_rezeroed:
 
 rule fig9_other_runs:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         errors=f"{OUT}/assembled/errors.parquet",
     output:
         figures=report(
@@ -194,7 +194,7 @@ rule fig9_other_runs:
 
 rule fig10_temperature_rise:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         series=f"{OUT}/clean/{FIG_RUN}/temperatures.parquet",
         signals=f"{OUT}/clean/{FIG_RUN}/signals.parquet",
     output:
@@ -223,7 +223,7 @@ rule fig10_temperature_rise:
 
 rule fig12_slope_intercept:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         kb=f"{OUT}/tables/table5_slope_intercept.csv",
     output:
         figures=report(
@@ -249,7 +249,7 @@ rule fig12_slope_intercept:
 
 rule fig_kb_prediction:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         kb=f"{OUT}/tables/kb_predictions.csv",
     output:
         figures=report(
@@ -281,7 +281,7 @@ rule fig_kb_prediction:
 
 rule fig_error_prediction:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         errors=f"{OUT}/tables/error_predictions.csv",
     output:
         figures=report(
@@ -313,7 +313,7 @@ rule fig_error_prediction:
 
 rule fig_fold_comparison:
     input:
-        code=lib("plotting", "captions"),
+        code=code_of("plot.py"),
         metrics=f"{OUT}/tables/metrics.csv",
     output:
         figures=report(

@@ -2,7 +2,7 @@ rule dataset_summary:
     input:
         sheets=dataset_sheets(),
         windows=expand(f"{OUT}/clean/{{run}}/windows.csv", run=RUNS),
-        code=lib("summary", "io", "naming"),
+        code=code_of("dataset_summary.py"),
     output:
         table=report(
             f"{OUT}/tables/dataset_summary.csv",

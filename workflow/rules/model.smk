@@ -1,6 +1,6 @@
 rule fit_predict:
     input:
-        code=lib("models", "evaluate", "experiment", "assemble", "decouple"),
+        code=code_of("fit_predict.py"),
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         signals=f"{OUT}/assembled/signals.parquet",

@@ -8,6 +8,7 @@ include: "reports_common.smk"
 
 rule provenance:
     input:
+        code=code_of("provenance.py"),
         sheets=dataset_sheets(),
         data=dataset_files(),
     output:
@@ -30,7 +31,7 @@ rule provenance:
 rule dataset_report:
     input:
         notebook="notebooks/dataset_report.ipynb",
-        library=library("reporting", "provenance"),
+        library=code_of("notebooks/dataset_report.ipynb"),
         sheets=dataset_sheets(),
         summary=f"{OUT}/tables/dataset_summary.csv",
         qc=f"{OUT}/tables/cleaning_qc.csv",
@@ -67,7 +68,7 @@ rule dataset_report:
 rule condition_report:
     input:
         notebook="notebooks/condition_report.ipynb",
-        library=library("reporting", "provenance", "plotting"),
+        library=code_of("notebooks/condition_report.ipynb"),
         summary=f"{OUT}/tables/dataset_summary.csv",
         errors=f"{OUT}/clean/{{run}}/errors.parquet",
         temperatures=f"{OUT}/clean/{{run}}/measurement_temperatures.parquet",
@@ -107,7 +108,7 @@ rule condition_report:
 rule model_report:
     input:
         notebook="notebooks/model_report.ipynb",
-        library=library("reporting", "provenance", "plotting"),
+        library=code_of("notebooks/model_report.ipynb"),
         selection=f"{OUT}/selection/{{fold}}.csv",
         selection_json=f"{OUT}/selection/{{fold}}.json",
         metrics=f"{OUT}/models/{{fold}}/metrics.csv",
@@ -156,7 +157,7 @@ rule model_report:
 rule paper_report:
     input:
         notebook="notebooks/paper_report.ipynb",
-        library=library("reporting", "provenance", "paper"),
+        library=code_of("notebooks/paper_report.ipynb"),
         sheets=dataset_sheets(),
         summary=f"{OUT}/tables/dataset_summary.csv",
         ambient=f"{OUT}/tables/ambient_ranges.csv",
@@ -200,6 +201,7 @@ rule paper_report:
 
 rule index:
     input:
+        code=code_of("index.py"),
         provenance=f"{OUT}/provenance.json",
         linked=index_inputs(),
     output:

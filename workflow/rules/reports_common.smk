@@ -13,7 +13,6 @@
 import json
 from types import SimpleNamespace
 
-import thermaxis
 from thermaxis.provenance import git_state
 
 REPORTS = f"{OUT}/reports"
@@ -39,12 +38,6 @@ RUN_NOTEBOOK = (
     " --title {params.title:q} --parameters {params.parameters:q} > {log:q} 2>&1"
 )
 DATA_SECTIONS = ("dataset", "ambient_sensor", "temperatures", "errors", "decoupling")
-
-
-def library(*modules):
-    """Library modules a notebook imports: inputs, so editing them reruns the report."""
-    root = Path(thermaxis.__file__).parent
-    return [str(root / f"{module}.py") for module in modules]
 
 
 def dataset_files():

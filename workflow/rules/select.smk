@@ -1,6 +1,6 @@
 rule select_sensitive_points:
     input:
-        code=lib("selection", "experiment", "assemble", "decouple"),
+        code=code_of("select.py"),
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
     output:

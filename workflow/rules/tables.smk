@@ -1,5 +1,6 @@
 rule collect_model_tables:
     input:
+        code=code_of("collect_tables.py"),
         metrics=expand(f"{OUT}/models/{{fold}}/metrics.csv", fold=FOLDS),
         coefficients=expand(f"{OUT}/models/{{fold}}/coefficients.csv", fold=FOLDS),
         kb_predictions=expand(f"{OUT}/models/{{fold}}/kb_predictions.csv", fold=FOLDS),
@@ -52,6 +53,7 @@ rule collect_model_tables:
 
 rule ambient_ranges:
     input:
+        code=code_of("ambient_ranges.py"),
         series=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
         windows=expand(f"{OUT}/clean/{{run}}/windows.csv", run=RUNS),
     output:
@@ -77,7 +79,7 @@ rule ambient_ranges:
 
 rule paper_comparison:
     input:
-        code=lib("audit", "paper"),
+        code=code_of("paper_comparison.py"),
         summary=f"{OUT}/tables/dataset_summary.csv",
         ambient=f"{OUT}/tables/ambient_ranges.csv",
         kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
