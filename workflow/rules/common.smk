@@ -157,5 +157,6 @@ def all_outputs():
         f"{OUT}/tables/metrics.csv",
         f"{OUT}/tables/paper_comparison.csv",
         *([f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else []),
+        *compensation_outputs(),
         *report_outputs(),
     ]
