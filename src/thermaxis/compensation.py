@@ -392,11 +392,15 @@ class Compensator:
         self,
         temperatures: Mapping[str, float],
         reference: Mapping[str, float],
-        previous: Mapping[str, float] | None = None,
-        dt_s: float | None = None,
+        time_s: float = 0.0,
+        last: Mapping[str, tuple[float, float]] | None = None,
         ages_s: Mapping[str, float] | None = None,
     ) -> tuple[str, ...]:
-        """Why this sample must not be used (empty when it is good); one reason per fault."""
+        """Why this sample must not be used (empty when it is good); one reason per fault.
+
+        ``last`` holds each sensor's previous plausible reading as (time [s], value): the
+        rate is measured against it, so one wild sample does not also fail the next one.
+        """
         f = self.fallback
         lo, hi = f.plausible_c
         reasons = []
@@ -410,8 +414,8 @@ class Compensator:
                 reasons.append(f"{sensor}: stale, last update {age:g} s ago (limit {f.max_sensor_age_s:g} s)")
             elif not lo <= value <= hi:
                 reasons.append(f"{sensor}: implausible {value:g} C (plausible {lo:g} ... {hi:g} C)")
-            elif previous is not None and dt_s and math.isfinite(previous.get(sensor, math.nan)):
-                rate = abs(value - previous[sensor]) / dt_s * 60.0
+            elif last and sensor in last and time_s > last[sensor][0]:
+                rate = abs(value - last[sensor][1]) / (time_s - last[sensor][0]) * 60.0
                 if rate > f.max_rate_c_per_min:
                     reasons.append(f"{sensor}: changes {rate:.3g} C/min (limit {f.max_rate_c_per_min:g} C/min)")
             if not (math.isfinite(ref) and lo <= ref <= hi):
@@ -429,6 +433,16 @@ class Compensator:
                 )
         return tuple(reasons)
 
+    def _plausible_readings(self, time_s: float, sample: Mapping[str, float], ages: Mapping[str, float]) -> dict:
+        lo, hi = self.fallback.plausible_c
+        return {
+            s: (time_s, sample[s])
+            for s in self.sensors
+            if math.isfinite(sample.get(s, math.nan))
+            and lo <= sample[s] <= hi
+            and ages.get(s, 0.0) <= self.fallback.max_sensor_age_s
+        }
+
     def run(
         self,
         times_s: Sequence[float],
@@ -440,12 +454,12 @@ class Compensator:
         f = self.fallback
         good = _zero_parameters(self.p0_mm, self.offset_only, self.positions_mm.size)
         fault_since = None
-        previous, previous_time = None, None
+        last: dict[str, tuple[float, float]] = {}
         steps = []
         for i, (time_s, sample) in enumerate(zip(times_s, temperatures)):
-            dt = None if previous_time is None else float(time_s) - previous_time
-            reasons = self.faults(sample, reference, previous, dt, ages_s[i] if ages_s is not None else None)
-            previous, previous_time = sample, float(time_s)
+            ages = ages_s[i] if ages_s is not None else {}
+            reasons = self.faults(sample, reference, float(time_s), last, ages)
+            last.update(self._plausible_readings(float(time_s), sample, ages))
             if not reasons:
                 good = self.parameters(sample, reference)
                 fault_since = None

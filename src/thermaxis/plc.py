@@ -23,14 +23,6 @@ from .compensation import CONVENTION, TENTHS_UM_PER_MM, UM_PER_MM
 
 __all__ = ["structured_text", "st_real"]
 
-# Bits of nReasons (also listed in the block's header).
-REASON_BITS = {
-    "missing": 1,  # aValid FALSE or older than MAX_AGE
-    "implausible": 2,  # temperature or reference outside PLAUSIBLE_MIN..MAX
-    "rate": 4,  # faster than MAX_RATE since the previous call
-    "range": 8,  # model input beyond the training range by more than RANGE_MARGIN
-}
-
 
 def st_real(value: float) -> str:
     """An LREAL literal that reads back as exactly ``value`` (IEC 61131-3 needs the decimal point)."""
@@ -138,7 +130,9 @@ VAR CONSTANT
 END_VAR
 VAR
     aPrevious : ARRAY[1..{n_s}] OF LREAL;
-    bHavePrevious : BOOL := FALSE;
+    aSince : ARRAY[1..{n_s}] OF LREAL;
+    aHavePrevious : ARRAY[1..{n_s}] OF BOOL;
+    bPlausible : BOOL;
     fGoodOffset : LREAL := 0.0;
     fGoodCoefficient : LREAL := 0.0;
     fFaultTime : LREAL := 0.0;
@@ -154,19 +148,32 @@ END_VAR
 
 nReasons := 0;
 FOR i := 1 TO N_SENSORS DO
+    IF aHavePrevious[i] THEN
+        aSince[i] := aSince[i] + fDeltaTime;
+    END_IF
+    bPlausible := FALSE;
     IF (NOT aValid[i]) OR (aAge[i] > MAX_AGE) THEN
         nReasons := nReasons OR 1;
     ELSIF (aTemperature[i] < PLAUSIBLE_MIN) OR (aTemperature[i] > PLAUSIBLE_MAX) THEN
         nReasons := nReasons OR 2;
-    ELSIF bHavePrevious AND (fDeltaTime > 0.0) AND (ABS(aTemperature[i] - aPrevious[i]) / fDeltaTime * 60.0 > MAX_RATE) THEN
-        nReasons := nReasons OR 4;
+    ELSE
+        bPlausible := TRUE;
+        IF aHavePrevious[i] AND (aSince[i] > 0.0) THEN
+            IF ABS(aTemperature[i] - aPrevious[i]) / aSince[i] * 60.0 > MAX_RATE THEN
+                nReasons := nReasons OR 4;
+            END_IF
+        END_IF
     END_IF
     IF (aReference[i] < PLAUSIBLE_MIN) OR (aReference[i] > PLAUSIBLE_MAX) THEN
         nReasons := nReasons OR 2;
     END_IF
-    aPrevious[i] := aTemperature[i];
+    (* The rate is measured against the last plausible reading, so one wild sample does not fail the next. *)
+    IF bPlausible THEN
+        aPrevious[i] := aTemperature[i];
+        aSince[i] := 0.0;
+        aHavePrevious[i] := TRUE;
+    END_IF
 END_FOR
-bHavePrevious := TRUE;
 
 IF nReasons = 0 THEN
     FOR j := 1 TO N_INPUTS DO
