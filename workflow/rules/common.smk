@@ -147,6 +147,16 @@ def prediction_figures():
     return paths
 
 
+def compensation_outputs():
+    """model.json, the tables, the ST block (affine models only) and a drift figure per fold (compensation.smk)."""
+    paths = [f"{COMP}/model.json", *(f"{COMP}/{name}.csv" for name in COMP_TABLES)]
+    if COMP_ALGORITHM in ("mlr", "ridge", "pls"):
+        paths.append(f"{COMP}/ThermalCompensation.st")
+    for fold in FOLDS:
+        paths += figure_paths(f"compensation_drift_{fold}")
+    return paths
+
+
 def all_outputs():
     return [
         *data_figures(),

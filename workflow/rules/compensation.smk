@@ -25,15 +25,6 @@ COMP_PARAMS = dict(
 )
 
 
-def compensation_outputs():
-    paths = [f"{COMP}/model.json", *(f"{COMP}/{name}.csv" for name in COMP_TABLES)]
-    if COMP_ALGORITHM in ("mlr", "ridge", "pls"):
-        paths.append(f"{COMP}/ThermalCompensation.st")
-    for fold in FOLDS:
-        paths += figure_paths(f"compensation_drift_{fold}")
-    return paths
-
-
 rule compensation_model:
     input:
         code=lib("compensation", "models", "experiment", "selection", "decouple"),
@@ -89,8 +80,8 @@ rule compensation_fold:
         sheets=dataset_sheets(),
         raw=lambda w: raw_files(w.fold),
     output:
-        model=f"{COMP}/folds/{{fold}}/model.json",
         **{name: f"{COMP}/folds/{{fold}}/{name}.csv" for name in COMP_TABLES},
+        model=f"{COMP}/folds/{{fold}}/model.json",
     log:
         f"{LOGS}/compensation/{{fold}}.log",
     benchmark:
@@ -109,11 +100,11 @@ rule compensation_fold:
 
 rule compensation_collect:
     input:
-        code=lib("compensation"),
         **{
             name: expand(f"{COMP}/folds/{{fold}}/{name}.csv", fold=FOLDS)
             for name in COMP_TABLES
         },
+        code=lib("compensation"),
     output:
         **{
             name: report(
