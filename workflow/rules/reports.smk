@@ -107,13 +107,22 @@ rule condition_report:
 rule model_report:
     input:
         notebook="notebooks/model_report.ipynb",
-        library=library("reporting", "provenance", "plotting"),
+        library=library("reporting", "provenance", "plotting", "compensation_figures"),
         selection=f"{OUT}/selection/{{fold}}.csv",
         selection_json=f"{OUT}/selection/{{fold}}.json",
         metrics=f"{OUT}/models/{{fold}}/metrics.csv",
         coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
         kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
         errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
+        # The compensation section belongs to the report of the compensated model.
+        compensation=lambda w: (
+            [
+                f"{COMP}/folds/{w.fold}/{n}.csv"
+                for n in ("summary", "iso230_2", "siemens_840d", "twincat")
+            ]
+            if (w.approach, w.algorithm) == (COMP_APPROACH, COMP_ALGORITHM)
+            else []
+        ),
     output:
         notebook=f"{REPORTS}/model_{{fold}}_{{approach}}_{{algorithm}}.ipynb",
         html=report(
@@ -139,7 +148,7 @@ rule model_report:
         statement=DATA_STATEMENT,
         parameters=lambda w, input: notebook_parameters(
             input,
-            sections(*DATA_SECTIONS, "selection", "models", "folds"),
+            sections(*DATA_SECTIONS, "selection", "models", "folds", "compensation"),
             fold=w.fold,
             approach=w.approach,
             algorithm=w.algorithm,
