@@ -64,6 +64,7 @@ __all__ = [
     "twincat",
     "validate_model",
     "fit_axis_model",
+    "fit_model_record",
     "held_out_accuracy",
     "run_states",
     "pass_deviations",
@@ -513,6 +514,21 @@ def fit_axis_model(X: pd.DataFrame, Y: pd.DataFrame, approach: str, algorithm: s
     from .experiment import _build_model
 
     return _build_model(approach, algorithm, selection, model_settings, degree).fit(X, Y)
+
+
+def fit_model_record(X: pd.DataFrame, Y: pd.DataFrame, selection, approach: str, config: Mapping, **about) -> dict:
+    """Fit the configured model on X, Y and return its ``model.json`` record.
+
+    ``config`` holds the sections selection, decoupling, models and compensation;
+    ``about`` adds descriptive keys. The record names the runs it was fitted on.
+    """
+    from .experiment import settings_from_config as model_settings_from_config
+
+    selection_settings, model_settings = model_settings_from_config(config)
+    settings = settings_from_config(config)
+    estimator = fit_axis_model(X, Y, approach, settings.algorithm, selection, model_settings, selection_settings.degree)
+    trained_on = sorted(X["run"].unique().tolist())
+    return model_record(estimator, approach, settings.algorithm, X, settings.fallback, trained_on=trained_on, **about)
 
 
 def held_out_accuracy(metrics: pd.DataFrame, approach: str, algorithm: str) -> list[dict]:

@@ -15,13 +15,11 @@ if COMP_ALGORITHM not in ALGORITHMS:
     )
 COMP_PARAMS = dict(
     approach=COMP_APPROACH,
-    compensation=COMPENSATION,
-    selection=config["selection"],
-    decoupling=config["decoupling"],
-    models=config["models"],
-    statement=DATA_STATEMENT,
-    dataset_name=DATASET.name,
-    simulated=SIMULATED,
+    sections={
+        name: config[name]
+        for name in ("selection", "decoupling", "models", "compensation")
+    },
+    about=dict(dataset=DATASET.name, simulated=SIMULATED, statement=DATA_STATEMENT),
 )
 
 

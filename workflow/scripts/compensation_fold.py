@@ -7,7 +7,7 @@ import pandas as pd
 
 from thermaxis import compensation
 from thermaxis.assemble import model_inputs
-from thermaxis.experiment import selection_from_dict, settings_from_config
+from thermaxis.experiment import selection_from_dict
 from thermaxis.io import load_dataset, read_run
 from thermaxis.runner import run_script, write_csv, write_text
 
@@ -18,25 +18,14 @@ def main(snakemake):
     X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
     with open(snakemake.input.selection, encoding="utf-8") as fh:
         selection = selection_from_dict(json.load(fh))
-    selection_settings, model_settings = settings_from_config(
-        {"selection": p.selection, "decoupling": p.decoupling, "models": p.models}
-    )
-    settings = compensation.settings_from_config({"compensation": p.compensation})
     train = (X["run"] != fold).to_numpy()
-    X_train, Y_train = X.loc[train].reset_index(drop=True), Y.loc[train].reset_index(drop=True)
-    estimator = compensation.fit_axis_model(
-        X_train, Y_train, p.approach, settings.algorithm, selection, model_settings, selection_settings.degree
-    )
-    record = compensation.model_record(
-        estimator,
+    record = compensation.fit_model_record(
+        X.loc[train].reset_index(drop=True),
+        Y.loc[train].reset_index(drop=True),
+        selection,
         p.approach,
-        settings.algorithm,
-        X_train,
-        settings.fallback,
-        dataset=p.dataset_name,
-        simulated=bool(p.simulated),
-        statement=p.statement,
-        trained_on=sorted(X_train["run"].unique().tolist()),
+        p.sections,
+        **p.about,
     )
     text = json.dumps(record, indent=1) + "\n"
     write_text(text, snakemake.output.model)
