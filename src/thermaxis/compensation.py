@@ -330,8 +330,8 @@ class Compensator:
     PLC would cycle by cycle.
     """
 
-    def __init__(self, model: Mapping, fallback: FallbackSettings | None = None):
-        validate_model(model)
+    def __init__(self, model: Mapping, fallback: FallbackSettings | None = None, where: str = "model.json"):
+        validate_model(model, where)
         self.model = model
         self.inputs = [(i["sensor"], i["temperature"]) for i in model["inputs"]]
         self.sensors = tuple(model["sensors"])
@@ -350,8 +350,7 @@ class Compensator:
             model = json.loads(path.read_text(encoding="utf-8"))
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: line {exc.lineno}: not valid JSON ({exc.msg})") from exc
-        validate_model(model, where=str(path))
-        return cls(model, fallback)
+        return cls(model, fallback, where=str(path))
 
     def _input_row(self, temperatures: Mapping[str, float], reference: Mapping[str, float]) -> np.ndarray:
         return np.array(
