@@ -2,15 +2,16 @@
 
 The block is written from ``model.json`` alone: the same constants the
 :class:`thermaxis.compensation.Compensator` uses, printed with ``repr`` precision so a
-parser reads back the very same doubles. It implements affine models (mlr, ridge,
-pls): for them the compensation depends on temperature differences only,
+parser reads back the very same doubles. Each model input is a sensor's temperature
+(absolute) or its rise since homing (relative); each regression's change is its value
+at the current inputs minus its value at the reference inputs. Affine models (mlr,
+ridge, pls) need only
 
-    change_r = sum_j COEFF[r, j] * (T[sensor j] - T_ref[sensor j])
+    change_r = sum_j COEFF[r, j] * (input_j - input_j at the reference)
 
-for absolute and relative inputs alike (the constants cancel), and the exported line is
-b = sum_r LINE_B[r] * change_r [um], k = sum_r LINE_K[r] * change_r [um/m]. Kernel
-models (SVR, GPR) are not affine; their compensation runs in
-:class:`~thermaxis.compensation.Compensator` and :func:`structured_text` refuses them.
+(the constants cancel); kernel models (SVR, GPR) evaluate their RBF expansion twice.
+The exported line is b = sum_r LINE_B[r] * change_r [um], k = sum_r LINE_K[r] * change_r
+[um/m], and the TwinCAT values follow from the compensation = -change convention.
 """
 
 from __future__ import annotations
@@ -43,25 +44,84 @@ def _bools(values) -> str:
     return "[" + ", ".join("TRUE" if v else "FALSE" for v in values) + "]"
 
 
-def _coefficient_matrix(model: Mapping) -> np.ndarray:
-    regressions = model["regressions"]
-    non_affine = [r for r in regressions if r["form"] != "affine"]
-    if non_affine:
-        raise ValueError(
-            f"ThermalCompensation.st: algorithm {model['algorithm']!r} is not affine; the Structured Text export "
-            "supports mlr, ridge and pls (kernel models run in thermaxis.compensation.Compensator)"
-        )
-    matrix = np.zeros((len(regressions), len(model["inputs"])))
-    for r, record in enumerate(regressions):
+def _affine_constants(model: Mapping) -> str:
+    matrix = np.zeros((len(model["regressions"]), len(model["inputs"])))
+    for r, record in enumerate(model["regressions"]):
         matrix[r, record["inputs"]] = record["coefficients"]
-    return matrix
+    return f"    COEFF : ARRAY[1..{matrix.shape[0]}, 1..{matrix.shape[1]}] OF LREAL := {_array(matrix.ravel())};\n"
+
+
+AFFINE_CHANGES = """    FOR r := 1 TO N_REGRESSIONS DO
+        aChange[r] := 0.0;
+        FOR j := 1 TO N_INPUTS DO
+            aChange[r] := aChange[r] + COEFF[r, j] * (aInputNow[j] - aInputRef[j]);
+        END_FOR
+    END_FOR
+"""
+
+
+def _rbf_constants(r: int, record: Mapping) -> str:
+    centres = np.asarray(record["centres"], dtype=float)
+    n_c, n_j = centres.shape
+    name = f"R{r}_"
+    return (
+        f"    {name}INPUTS : ARRAY[1..{n_j}] OF INT := [{', '.join(str(i + 1) for i in record['inputs'])}];\n"
+        f"    {name}MEAN : ARRAY[1..{n_j}] OF LREAL := {_array(record['input_mean'])};\n"
+        f"    {name}SCALE : ARRAY[1..{n_j}] OF LREAL := {_array(record['input_scale'])};\n"
+        f"    {name}CENTRES : ARRAY[1..{n_c}, 1..{n_j}] OF LREAL := {_array(centres.ravel())};\n"
+        f"    {name}WEIGHTS : ARRAY[1..{n_c}] OF LREAL := {_array(record['weights'])};\n"
+        f"    {name}GAMMA : LREAL := {st_real(record['gamma'])};\n"
+        f"    {name}OFFSET : LREAL := {st_real(record['offset'])};\n"
+        f"    {name}TARGET_MEAN : LREAL := {st_real(record['target_mean'])};\n"
+        f"    {name}TARGET_SCALE : LREAL := {st_real(record['target_scale'])};\n"
+    )
+
+
+def _rbf_change(r: int, record: Mapping) -> str:
+    n_c, n_j = np.asarray(record["centres"], dtype=float).shape
+    name = f"R{r}_"
+    return f"""    (* regression {r} ({record['target']}): RBF expansion at the current (pass 0) and reference (pass 1) inputs *)
+    FOR nPass := 0 TO 1 DO
+        fSum := 0.0;
+        FOR nCentre := 1 TO {n_c} DO
+            fDistance := 0.0;
+            FOR j := 1 TO {n_j} DO
+                IF nPass = 0 THEN
+                    fInput := aInputNow[{name}INPUTS[j]];
+                ELSE
+                    fInput := aInputRef[{name}INPUTS[j]];
+                END_IF
+                fZ := (fInput - {name}MEAN[j]) / {name}SCALE[j] - {name}CENTRES[nCentre, j];
+                fDistance := fDistance + fZ * fZ;
+            END_FOR
+            fSum := fSum + {name}WEIGHTS[nCentre] * EXP(-{name}GAMMA * fDistance);
+        END_FOR
+        fValue := (fSum + {name}OFFSET) * {name}TARGET_SCALE + {name}TARGET_MEAN;
+        IF nPass = 0 THEN
+            aChange[{r}] := fValue;
+        ELSE
+            aChange[{r}] := aChange[{r}] - fValue;
+        END_IF
+    END_FOR
+"""
+
+
+def _regressions(model: Mapping) -> tuple[str, str]:
+    """The constants and the statements computing aChange, for affine or RBF regressions."""
+    forms = {record["form"] for record in model["regressions"]}
+    if forms == {"affine"}:
+        return _affine_constants(model), AFFINE_CHANGES
+    if forms == {"rbf"}:
+        records = list(enumerate(model["regressions"], start=1))
+        return "".join(_rbf_constants(r, x) for r, x in records), "".join(_rbf_change(r, x) for r, x in records)
+    raise ValueError(f"model.json: regressions mix the forms {sorted(forms)}; expected one form per model")
 
 
 def structured_text(model: Mapping, statement: str) -> str:
     """The function block ``ThermalCompensation`` for one ``model.json`` record."""
     sensors = list(model["sensors"])
     inputs = model["inputs"]
-    matrix = _coefficient_matrix(model)
+    constants, changes = _regressions(model)
     weights = np.asarray(model["line_weights"], dtype=float)
     f = model["fallback"]
     n_s, n_i, n_r = len(sensors), len(inputs), len(model["regressions"])
@@ -114,8 +174,7 @@ VAR CONSTANT
     INPUT_RELATIVE : ARRAY[1..{n_i}] OF BOOL := {_bools(i['temperature'] == 'relative' for i in inputs)};
     INPUT_MIN : ARRAY[1..{n_i}] OF LREAL := {_array(i['training_min_c'] for i in inputs)};
     INPUT_MAX : ARRAY[1..{n_i}] OF LREAL := {_array(i['training_max_c'] for i in inputs)};
-    COEFF : ARRAY[1..{n_r}, 1..{n_i}] OF LREAL := {_array(matrix.ravel())};
-    LINE_B : ARRAY[1..{n_r}] OF LREAL := {_array(weights[0])};
+{constants}    LINE_B : ARRAY[1..{n_r}] OF LREAL := {_array(weights[0])};
     LINE_K : ARRAY[1..{n_r}] OF LREAL := {_array(weights[1])};
     P0_MM : LREAL := {st_real(p0)};
     TENTHS_UM_PER_MM : LREAL := {st_real(TENTHS_UM_PER_MM)};
@@ -137,8 +196,16 @@ VAR
     fGoodCoefficient : LREAL := 0.0;
     fFaultTime : LREAL := 0.0;
     fScale : LREAL;
+    aInputNow : ARRAY[1..{n_i}] OF LREAL;
+    aInputRef : ARRAY[1..{n_i}] OF LREAL;
+    aChange : ARRAY[1..{n_r}] OF LREAL;
     fInput : LREAL;
-    fChange : LREAL;
+    fZ : LREAL;
+    fDistance : LREAL;
+    fSum : LREAL;
+    fValue : LREAL;
+    nPass : INT;
+    nCentre : INT;
     fB : LREAL;
     fK : LREAL;
     i : INT;
@@ -175,28 +242,24 @@ FOR i := 1 TO N_SENSORS DO
     END_IF
 END_FOR
 
-IF nReasons = 0 THEN
-    FOR j := 1 TO N_INPUTS DO
-        fInput := aTemperature[INPUT_SENSOR[j]];
-        IF INPUT_RELATIVE[j] THEN
-            fInput := fInput - aReference[INPUT_SENSOR[j]];
-        END_IF
-        IF (fInput < INPUT_MIN[j] - RANGE_MARGIN) OR (fInput > INPUT_MAX[j] + RANGE_MARGIN) THEN
-            nReasons := nReasons OR 8;
-        END_IF
-    END_FOR
-END_IF
+FOR j := 1 TO N_INPUTS DO
+    aInputNow[j] := aTemperature[INPUT_SENSOR[j]];
+    aInputRef[j] := aReference[INPUT_SENSOR[j]];
+    IF INPUT_RELATIVE[j] THEN
+        aInputNow[j] := aInputNow[j] - aReference[INPUT_SENSOR[j]];
+        aInputRef[j] := 0.0;
+    END_IF
+    IF (nReasons = 0) AND ((aInputNow[j] < INPUT_MIN[j] - RANGE_MARGIN) OR (aInputNow[j] > INPUT_MAX[j] + RANGE_MARGIN)) THEN
+        nReasons := nReasons OR 8;
+    END_IF
+END_FOR
 
 IF nReasons = 0 THEN
-    fB := 0.0;
+{changes}    fB := 0.0;
     fK := 0.0;
     FOR r := 1 TO N_REGRESSIONS DO
-        fChange := 0.0;
-        FOR j := 1 TO N_INPUTS DO
-            fChange := fChange + COEFF[r, j] * (aTemperature[INPUT_SENSOR[j]] - aReference[INPUT_SENSOR[j]]);
-        END_FOR
-        fB := fB + LINE_B[r] * fChange;
-        fK := fK + LINE_K[r] * fChange;
+        fB := fB + LINE_B[r] * aChange[r];
+        fK := fK + LINE_K[r] * aChange[r];
     END_FOR
     fGoodOffset := -fB * TENTHS_UM_PER_UM;
     fGoodCoefficient := -fK;

@@ -17,15 +17,17 @@ TARGETS = np.array([185.0 + 20.0 * i for i in range(14)])
 RAMP = FallbackSettings(1.5, (-10.0, 90.0), 0.25, 30.0, "ramp_to_zero", 20.0)
 
 
-def exact_runs():
-    """k = -300 + 13 T1 [um/m] on absolute T1, b = -0.5 - 11 dT2 [um] on T2's rise: noise-free."""
+def exact_runs(wobble_um: float = 0.0):
+    """k = -300 + 13 T1 [um/m] on absolute T1, b = -0.5 - 11 dT2 [um] on T2's rise; noise-free unless wobbled."""
     rows, curves = [], []
     for r in range(3):
         for m in range(6):
             t1 = 28.0 + r + 0.8 * m + 0.3 * m * m
             rise = 0.5 * m + 0.05 * r * m
             rows.append({"run": f"R{r}", "measurement": m + 1, "time_min": 20.0 * m, "T1": t1, "T2": 25.0 + 0.4 * r + rise})
-            curves.append((-300.0 + 13.0 * t1) * (TARGETS - 185.0) / 1000.0 - 0.5 - 11.0 * rise)
+            k = -300.0 + 13.0 * t1 + 10.0 * wobble_um * np.cos(5.0 * m + r)
+            b = -0.5 - 11.0 * rise + wobble_um * np.sin(7.0 * m + 3.0 * r)
+            curves.append(k * (TARGETS - 185.0) / 1000.0 + b)
     return pd.DataFrame(rows), pd.DataFrame(curves, columns=TARGETS)
 
 
@@ -76,8 +78,13 @@ def exported():
 def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray) -> dict:
     """The block's arithmetic on its own constants: P-AXIS-00272/273/274."""
     sensor = np.asarray(c["INPUT_SENSOR"]) - 1
-    coeff = np.asarray(c["COEFF"]).reshape(c["N_REGRESSIONS"], c["N_INPUTS"])
-    change = coeff @ (temperatures[sensor] - reference[sensor])
+    relative = np.asarray(c["INPUT_RELATIVE"])
+    now = np.where(relative, temperatures[sensor] - reference[sensor], temperatures[sensor])
+    ref = np.where(relative, 0.0, reference[sensor])
+    if "COEFF" in c:
+        change = np.asarray(c["COEFF"]).reshape(c["N_REGRESSIONS"], c["N_INPUTS"]) @ (now - ref)
+    else:
+        change = np.array([rbf(c, r, now) - rbf(c, r, ref) for r in range(1, c["N_REGRESSIONS"] + 1)])
     b = np.dot(c["LINE_B"], change)
     k = np.dot(c["LINE_K"], change)
     return {
@@ -85,6 +92,16 @@ def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray) -> dict
         "P-AXIS-00273": -b * c["TENTHS_UM_PER_UM"],
         "P-AXIS-00274": -k,
     }
+
+
+def rbf(c: dict, r: int, inputs: np.ndarray) -> float:
+    """Regression r of a kernel block: (sum_i w_i exp(-gamma |z - z_i|^2) + offset) * scale + mean."""
+    name = f"R{r}_"
+    chosen = np.asarray(c[name + "INPUTS"]) - 1
+    z = (inputs[chosen] - np.asarray(c[name + "MEAN"])) / np.asarray(c[name + "SCALE"])
+    centres = np.asarray(c[name + "CENTRES"]).reshape(-1, chosen.size)
+    kernel = np.exp(-c[name + "GAMMA"] * ((z - centres) ** 2).sum(axis=1))
+    return (kernel @ np.asarray(c[name + "WEIGHTS"]) + c[name + "OFFSET"]) * c[name + "TARGET_SCALE"] + c[name + "TARGET_MEAN"]
 
 
 def test_constants_read_back_exactly(exported):
@@ -129,12 +146,21 @@ def test_single_position_block_has_no_slope():
     assert c["LINE_K"] == [0.0] and c["LINE_B"] == [1.0] and c["P0_MM"] == TARGETS[3]
 
 
-def test_kernel_models_are_refused():
-    X, Y = exact_runs()
-    grid = {"C": [1.0], "epsilon": [0.1], "gamma": ["scale"]}
-    estimator = DecoupledAxisModel(("T1",), ("T2",), algorithm="svr", svr_grid=grid).fit(X, Y)
-    with pytest.raises(ValueError, match="not affine"):
-        structured_text(model_record(estimator, "decoupled", "svr", X, RAMP), "SIMULATED")
+@pytest.mark.parametrize("algorithm", ["svr", "gpr"])
+def test_kernel_blocks_equal_compensator(algorithm):
+    # A little scatter keeps the GPR's weights moderate (noise-free data would drive them to ~1e6).
+    X, Y = exact_runs(wobble_um=0.3)
+    grid = {"C": [10.0], "epsilon": [0.05], "gamma": ["scale"]}
+    estimator = DecoupledAxisModel(("T1",), ("T2",), algorithm=algorithm, svr_grid=grid).fit(X, Y)
+    model = model_record(estimator, "decoupled", algorithm, X, RAMP)
+    comp = Compensator(model)
+    c = parsed_constants(structured_text(model, "SIMULATED"))
+    assert "COEFF" not in c and c["R1_GAMMA"] == model["regressions"][0]["gamma"]
+    for now, ref in (((32.0, 26.5), (30.0, 25.0)), ((29.25, 24.1), (30.5, 25.3))):
+        expected = {row[0]: row[2] for row in twincat(comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref))))}
+        got = st_twincat(c, np.array(now), np.array(ref))
+        assert got == pytest.approx(expected, abs=1e-9)
+        assert abs(got["P-AXIS-00274"]) > 1.0  # a real slope, not an empty model
 
 
 def test_literals_keep_every_bit():

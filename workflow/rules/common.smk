@@ -148,10 +148,9 @@ def prediction_figures():
 
 
 def compensation_outputs():
-    """model.json, the tables, the ST block (affine models only) and a drift figure per fold (compensation.smk)."""
-    paths = [f"{COMP}/model.json", *(f"{COMP}/{name}.csv" for name in COMP_TABLES)]
-    if COMP_ALGORITHM in ("mlr", "ridge", "pls"):
-        paths.append(f"{COMP}/ThermalCompensation.st")
+    """model.json, the ST block, the tables and a drift figure per fold (compensation.smk)."""
+    paths = [f"{COMP}/model.json", f"{COMP}/ThermalCompensation.st"]
+    paths += [f"{COMP}/{name}.csv" for name in COMP_TABLES]
     for fold in FOLDS:
         paths += figure_paths(f"compensation_drift_{fold}")
     return paths
