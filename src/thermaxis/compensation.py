@@ -112,7 +112,8 @@ class FallbackSettings:
 
 @dataclass(frozen=True)
 class CompensationSettings:
-    approach: str
+    """The configured algorithm and fallback; the approach is the workflow's (pointwise for one target)."""
+
     algorithm: str
     fallback: FallbackSettings
 
@@ -120,7 +121,6 @@ class CompensationSettings:
 def settings_from_config(config: Mapping) -> CompensationSettings:
     c = config["compensation"]
     return CompensationSettings(
-        approach=c["approach"],
         algorithm=c["algorithm"],
         fallback=FallbackSettings(
             range_margin_c=float(c["range_margin_c"]),
@@ -348,6 +348,8 @@ class Compensator:
         path = Path(path)
         try:
             model = json.loads(path.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise ValueError(f"{path}: cannot read the model ({exc.strerror})") from exc
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: line {exc.lineno}: not valid JSON ({exc.msg})") from exc
         return cls(model, fallback, where=str(path))

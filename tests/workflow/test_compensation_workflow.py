@@ -99,3 +99,13 @@ def test_single_position_dataset_exports_an_offset_only(tmp_path):
     assert set(siemens["parameter"]) == {"SD43900"}
     twincat = pd.read_csv(out / "twincat.csv", comment="#")
     assert (twincat.loc[twincat["parameter"] == "P-AXIS-00274", "value"] == 0).all()
+
+
+def test_compensation_algorithm_outside_the_fitted_ones_stops_with_one_line(tmp_path):
+    dataset = write_dataset(tmp_path / "tiny", name="tiny")
+    work = workflow_workdir(tmp_path)
+    config = write_config(work, dataset, "config.yaml", compensation={"algorithm": "gpr"})
+    proc = run_snakemake(work, "-n", "--configfile", str(config), check=False)
+    assert proc.returncode != 0
+    line = "thermaxis error: config compensation.algorithm: 'gpr' is not one of models.algorithms (mlr)"
+    assert line in proc.stderr
