@@ -379,11 +379,12 @@ class Compensator:
         """K0 [mm], tan(beta) [-], P0 [mm] of the compensation (= -predicted change) in one state."""
         changes = self.regression_changes(temperatures, reference)
         b_um, k_um_per_m = self.weights @ changes
-        curve = -(self.basis @ changes)
+        curve = -(self.basis @ changes) + 0.0
         line = -(b_um + k_um_per_m * (self.positions_mm - self.p0_mm) / MM_PER_M)
+        # + 0.0 turns -0.0 (no change negated) into 0.0, which controllers and readers expect.
         return ControllerParameters(
-            k0_mm=float(-b_um / UM_PER_MM),
-            tan_beta=float(-k_um_per_m / (UM_PER_MM * MM_PER_M)),
+            k0_mm=float(-b_um / UM_PER_MM) + 0.0,
+            tan_beta=float(-k_um_per_m / (UM_PER_MM * MM_PER_M)) + 0.0,
             p0_mm=self.p0_mm,
             curve_um=tuple(float(v) for v in curve),
             line_gap_um=float(np.max(np.abs(curve - line))),

@@ -247,3 +247,29 @@ def test_residuals_and_summary_by_hand():
     siemens = tables["siemens_840d"].set_index(["measurement", "parameter"])
     assert siemens.loc[(2, "SD43910"), "value"] == pytest.approx(-1e-5)
     assert tables["twincat"].set_index(["measurement", "parameter"]).loc[(2, "P-AXIS-00273"), "register"] == 10
+
+
+def test_pass_deviations_split_the_passes_per_measurement():
+    from thermaxis.compensation import pass_deviations
+    from thermaxis.io import RawRun
+
+    def measurement(start, up, down):
+        times = pd.date_range(start, periods=4, freq="5s")
+        return pd.DataFrame(
+            {
+                "time": times,
+                "position_mm": [0.0, 100.0, 100.0, 0.0],
+                "error_um": [up[0], up[1], down[1], down[0]],
+                "direction": ["+", "+", "-", "-"],
+            }
+        )
+
+    raw = RawRun(
+        run="R",
+        sources={},
+        measurements={"M1": measurement("2022-01-01T09:00", (0.0, 2.0), (0.5, 1.5)), "M2": measurement("2022-01-01T09:20", (1.0, 3.0), (1.5, 2.5))},
+    )
+    out = pass_deviations(raw, [0.0, 100.0], max_missing_fraction=0.2)
+    np.testing.assert_array_equal(out[1]["+"], [0.0, 2.0])
+    np.testing.assert_array_equal(out[1]["-"], [0.5, 1.5])
+    np.testing.assert_array_equal(out[2]["-"], [1.5, 2.5])
