@@ -25,7 +25,9 @@ COMP_PARAMS = dict(
 
 rule compensation_model:
     input:
-        code=lib("compensation", "models", "experiment", "selection", "decouple", "assemble"),
+        code=lib(
+            "compensation", "models", "experiment", "selection", "decouple", "assemble"
+        ),
         schema="workflow/schemas/compensation_model.schema.json",
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
@@ -69,7 +71,9 @@ rule compensation_plc:
 
 rule compensation_fold:
     input:
-        code=lib("compensation", "iso230", "models", "experiment", "assemble", "clean", "io"),
+        code=lib(
+            "compensation", "iso230", "models", "experiment", "assemble", "clean", "io"
+        ),
         schema="workflow/schemas/compensation_model.schema.json",
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
