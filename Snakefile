@@ -24,6 +24,7 @@ include: "workflow/rules/select.smk"
 include: "workflow/rules/model.smk"
 include: "workflow/rules/tables.smk"
 include: "workflow/rules/figures.smk"
+include: "workflow/rules/compensation.smk"
 include: "workflow/rules/reports.smk"
 include: "workflow/rules/sweep.smk"
 

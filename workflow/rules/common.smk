@@ -200,6 +200,15 @@ def prediction_figures():
     return paths
 
 
+def compensation_outputs():
+    """model.json, the ST block, the tables and a drift figure per fold (compensation.smk)."""
+    paths = [f"{COMP}/model.json", f"{COMP}/ThermalCompensation.st"]
+    paths += [f"{COMP}/{name}.csv" for name in COMP_TABLES]
+    for fold in FOLDS:
+        paths += figure_paths(f"compensation_drift_{fold}")
+    return paths
+
+
 def all_outputs():
     return [
         *data_figures(),
@@ -210,5 +219,6 @@ def all_outputs():
         f"{OUT}/tables/metrics.csv",
         *([f"{OUT}/tables/paper_comparison.csv"] if PAPER else []),
         *([f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else []),
+        *compensation_outputs(),
         *report_outputs(),
     ]

@@ -115,6 +115,15 @@ rule model_report:
         coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
         kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
         errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
+        # The compensation section belongs to the report of the compensated model.
+        compensation=lambda w: (
+            [
+                f"{COMP}/folds/{w.fold}/{n}.csv"
+                for n in ("summary", "iso230_2", "siemens_840d", "twincat")
+            ]
+            if (w.approach, w.algorithm) == (COMP_APPROACH, COMP_ALGORITHM)
+            else []
+        ),
     output:
         notebook=f"{REPORTS}/model_{{fold}}_{{approach}}_{{algorithm}}.ipynb",
         html=report(
@@ -140,7 +149,7 @@ rule model_report:
         statement=DATA_STATEMENT,
         parameters=lambda w, input: notebook_parameters(
             input,
-            sections(*DATA_SECTIONS, "selection", "models", "folds"),
+            sections(*DATA_SECTIONS, "selection", "models", "folds", "compensation"),
             fold=w.fold,
             approach=w.approach,
             algorithm=w.algorithm,

@@ -215,6 +215,9 @@ def index_sections():
         for stem in stems
     ]
     tables = [(Path(p).name, [(Path(p).suffix[1:], p)]) for p in linked_tables()]
+    compensation = {}
+    for p in compensation_outputs():
+        compensation.setdefault(Path(p).stem, []).append((Path(p).suffix[1:], p))
     return [
         ("Reports", "", reports),
         (
@@ -225,6 +228,13 @@ def index_sections():
         ),
         ("Figures", "", figures),
         ("Tables", "", tables),
+        (
+            "Compensation",
+            f"The {COMP_APPROACH} {COMP_ALGORITHM} model fitted on all runs (model.json), the controller "
+            "exports of each fold's model on its held-out run, the error left after compensating, and the "
+            "thermal-drift figures (README: Compensating a machine).",
+            list(compensation.items()),
+        ),
     ]
 
 

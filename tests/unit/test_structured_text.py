@@ -1,0 +1,169 @@
+"""The generated Structured Text block, read back by a real IEC 61131-3 parser (blark).
+
+The constants are taken from blark's parse tree, evaluated, and the TwinCAT values they
+encode are computed from them with plain numpy; they must equal Compensator's to 1e-9.
+"""
+
+import numpy as np
+import pandas as pd
+import pytest
+from blark.parse import parse_source_code
+
+from thermaxis.compensation import CONVENTION, Compensator, FallbackSettings, model_record, twincat
+from thermaxis.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.plc import st_real, structured_text
+
+TARGETS = np.array([185.0 + 20.0 * i for i in range(14)])
+RAMP = FallbackSettings(1.5, (-10.0, 90.0), 0.25, 30.0, "ramp_to_zero", 20.0)
+
+
+def exact_runs(wobble_um: float = 0.0):
+    """k = -300 + 13 T1 [um/m] on absolute T1, b = -0.5 - 11 dT2 [um] on T2's rise; noise-free unless wobbled."""
+    rows, curves = [], []
+    for r in range(3):
+        for m in range(6):
+            t1 = 28.0 + r + 0.8 * m + 0.3 * m * m
+            rise = 0.5 * m + 0.05 * r * m
+            rows.append({"run": f"R{r}", "measurement": m + 1, "time_min": 20.0 * m, "T1": t1, "T2": 25.0 + 0.4 * r + rise})
+            k = -300.0 + 13.0 * t1 + 10.0 * wobble_um * np.cos(5.0 * m + r)
+            b = -0.5 - 11.0 * rise + wobble_um * np.sin(7.0 * m + 3.0 * r)
+            curves.append(k * (TARGETS - 185.0) / 1000.0 + b)
+    return pd.DataFrame(rows), pd.DataFrame(curves, columns=TARGETS)
+
+
+def value_of(node):
+    """An initial value from blark's tree: literals, unary minus, (nested) array initialisers."""
+    kind = type(node).__name__
+    if kind == "Integer":
+        return int(str(node.value))
+    if kind == "Real":
+        return float(str(node.value))
+    if kind == "Boolean":
+        return str(node.value).upper() == "TRUE"
+    if kind == "UnaryOperation" and str(node.op) == "-":
+        return -value_of(node.expr)
+    if kind == "ArrayInitialization":
+        out = []
+        for element in node.elements:
+            value = value_of(element.element)
+            count = 1 if element.count is None else int(str(element.count))
+            out += (value if isinstance(value, list) else [value]) * count
+        return out
+    raise AssertionError(f"unexpected constant expression {node!r}")
+
+
+def parsed_constants(source: str) -> dict:
+    result = parse_source_code(source)
+    assert result.exception is None, result.exception
+    (block,) = result.transform().items
+    assert str(block.name) == "ThermalCompensation"
+    constants = {}
+    for declarations in block.declarations:
+        if "constant" in str(getattr(declarations, "attrs", "")).lower():
+            for item in declarations.items:
+                for variable in item.variables:
+                    constants[str(variable)] = value_of(item.init.value)
+    return constants
+
+
+@pytest.fixture(scope="module")
+def exported():
+    X, Y = exact_runs()
+    estimator = DecoupledAxisModel(("T1",), ("T2",), algorithm="mlr").fit(X, Y)
+    model = model_record(estimator, "decoupled", "mlr", X, RAMP, dataset="exact")
+    source = structured_text(model, "SIMULATED test data.")
+    return model, Compensator(model), source, parsed_constants(source)
+
+
+def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray) -> dict:
+    """The block's arithmetic on its own constants: P-AXIS-00272/273/274."""
+    sensor = np.asarray(c["INPUT_SENSOR"]) - 1
+    relative = np.asarray(c["INPUT_RELATIVE"])
+    now = np.where(relative, temperatures[sensor] - reference[sensor], temperatures[sensor])
+    ref = np.where(relative, 0.0, reference[sensor])
+    if "COEFF" in c:
+        change = np.asarray(c["COEFF"]).reshape(c["N_REGRESSIONS"], c["N_INPUTS"]) @ (now - ref)
+    else:
+        change = np.array([rbf(c, r, now) - rbf(c, r, ref) for r in range(1, c["N_REGRESSIONS"] + 1)])
+    b = np.dot(c["LINE_B"], change)
+    k = np.dot(c["LINE_K"], change)
+    return {
+        "P-AXIS-00272": c["P0_MM"] * c["TENTHS_UM_PER_MM"],
+        "P-AXIS-00273": -b * c["TENTHS_UM_PER_UM"],
+        "P-AXIS-00274": -k,
+    }
+
+
+def rbf(c: dict, r: int, inputs: np.ndarray) -> float:
+    """Regression r of a kernel block: (sum_i w_i exp(-gamma |z - z_i|^2) + offset) * scale + mean."""
+    name = f"R{r}_"
+    chosen = np.asarray(c[name + "INPUTS"]) - 1
+    z = (inputs[chosen] - np.asarray(c[name + "MEAN"])) / np.asarray(c[name + "SCALE"])
+    centres = np.asarray(c[name + "CENTRES"]).reshape(-1, chosen.size)
+    kernel = np.exp(-c[name + "GAMMA"] * ((z - centres) ** 2).sum(axis=1))
+    return (kernel @ np.asarray(c[name + "WEIGHTS"]) + c[name + "OFFSET"]) * c[name + "TARGET_SCALE"] + c[name + "TARGET_MEAN"]
+
+
+def test_constants_read_back_exactly(exported):
+    model, _, _, c = exported
+    assert c["N_SENSORS"] == 2 and c["N_INPUTS"] == 2 and c["N_REGRESSIONS"] == 2
+    assert c["INPUT_SENSOR"] == [1, 2] and c["INPUT_RELATIVE"] == [False, True]
+    assert c["INPUT_MIN"] == [i["training_min_c"] for i in model["inputs"]]
+    assert c["INPUT_MAX"] == [i["training_max_c"] for i in model["inputs"]]
+    assert c["LINE_B"] + c["LINE_K"] == [w for row in model["line_weights"] for w in row]
+    assert c["P0_MM"] == 185.0
+    assert (c["RANGE_MARGIN"], c["PLAUSIBLE_MIN"], c["PLAUSIBLE_MAX"], c["MAX_RATE"], c["MAX_AGE"]) == (1.5, -10.0, 90.0, 0.25, 30.0)
+    assert c["POLICY_RAMP"] is True and c["RAMP_TIME"] == 1200.0
+
+
+@pytest.mark.parametrize(
+    "now, ref",
+    [((32.0, 26.5), (30.0, 25.0)), ((29.25, 24.1), (30.5, 25.3)), ((30.0, 25.0), (30.0, 25.0))],
+)
+def test_st_values_equal_compensator(exported, now, ref):
+    _, comp, _, c = exported
+    expected = {row[0]: row[2] for row in twincat(comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref))))}
+    got = st_twincat(c, np.array(now), np.array(ref))
+    for parameter, value in expected.items():
+        assert got[parameter] == pytest.approx(value, abs=1e-9), parameter
+
+
+def test_hand_worked_signs(exported):
+    # T1 30 -> 32: k rises 26 um/m; T2 rises 1.5: b falls 16.5 um. Compensation = -change:
+    # offset_0 = +16.5 um = 165 (0.1 um), coefficient = -26 um/m, position_0 = 185 mm = 1850000 (0.1 um).
+    _, _, source, c = exported
+    got = st_twincat(c, np.array([32.0, 26.5]), np.array([30.0, 25.0]))
+    assert got == pytest.approx({"P-AXIS-00272": 1_850_000.0, "P-AXIS-00273": 165.0, "P-AXIS-00274": -26.0}, abs=1e-6)
+    assert CONVENTION in source and "P-AXIS-00273 temp_comp_offset_0 [0.1 um]" in source
+    assert "SIMULATED" in source
+
+
+def test_single_position_block_has_no_slope():
+    X, Y = exact_runs()
+    Y = Y[[TARGETS[3]]]
+    estimator = PointwiseAxisModel(("T2",), algorithm="mlr").fit(X, Y)
+    c = parsed_constants(structured_text(model_record(estimator, "pointwise", "mlr", X, RAMP), "SIMULATED"))
+    assert c["LINE_K"] == [0.0] and c["LINE_B"] == [1.0] and c["P0_MM"] == TARGETS[3]
+
+
+@pytest.mark.parametrize("algorithm", ["svr", "gpr"])
+def test_kernel_blocks_equal_compensator(algorithm):
+    # A little scatter keeps the GPR's weights moderate (noise-free data would drive them to ~1e6).
+    X, Y = exact_runs(wobble_um=0.3)
+    grid = {"C": [10.0], "epsilon": [0.05], "gamma": ["scale"]}
+    estimator = DecoupledAxisModel(("T1",), ("T2",), algorithm=algorithm, svr_grid=grid).fit(X, Y)
+    model = model_record(estimator, "decoupled", algorithm, X, RAMP)
+    comp = Compensator(model)
+    c = parsed_constants(structured_text(model, "SIMULATED"))
+    assert "COEFF" not in c and c["R1_GAMMA"] == model["regressions"][0]["gamma"]
+    for now, ref in (((32.0, 26.5), (30.0, 25.0)), ((29.25, 24.1), (30.5, 25.3))):
+        expected = {row[0]: row[2] for row in twincat(comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref))))}
+        got = st_twincat(c, np.array(now), np.array(ref))
+        assert got == pytest.approx(expected, abs=1e-9)
+        assert abs(got["P-AXIS-00274"]) > 1.0  # a real slope, not an empty model
+
+
+def test_literals_keep_every_bit():
+    for value in (1e-05, -7.417, 0.1 + 0.2, 185.0, -2.5e-300):
+        text = st_real(value)
+        assert "." in text.split("E")[0] and float(text) == value

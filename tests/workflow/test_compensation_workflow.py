@@ -1,0 +1,111 @@
+"""End-to-end: the compensation rules on tiny datasets, and what a config change reruns."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from conftest import run_snakemake, workflow_workdir, write_dataset
+
+pytestmark = pytest.mark.slow
+
+TABLES = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
+
+
+def write_config(work: Path, dataset: Path, name: str, **extra) -> Path:
+    config = {
+        "dataset": str(dataset),
+        "ambient_sensor": "S1",
+        "selection": {"n_clusters": 2},
+        "models": {"algorithms": ["mlr"]},
+        "figures": {"algorithms": ["mlr"], "formats": ["png"]},
+        "reports": {"model_algorithms": ["mlr"]},
+        **extra,
+    }
+    path = work / name
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+def targets(name: str, runs) -> list[str]:
+    out = f"results/{name}/compensation"
+    return [f"{out}/{table}.csv" for table in TABLES] + [f"results/{name}/figures/compensation_drift_{run}.png" for run in runs]
+
+
+def planned_rules(proc) -> set[str]:
+    return set(re.findall(r"^(?:local)?rule (\w+):", proc.stdout + proc.stderr, flags=re.M))
+
+
+@pytest.fixture(scope="module")
+def lines_run(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("compensation")
+    runs = ("R1", "R2", "R3")
+    dataset = write_dataset(tmp / "lines", runs=runs, name="lines", n_measurements=5)
+    work = workflow_workdir(tmp)
+    config = write_config(work, dataset, "config.yaml")
+    wanted = targets("lines", runs) + ["results/lines/compensation/ThermalCompensation.st"]
+    run_snakemake(work, *wanted, "--configfile", str(config))
+    return work, config, wanted
+
+
+def test_outputs_carry_their_conventions(lines_run):
+    work, _, _ = lines_run
+    out = work / "results" / "lines" / "compensation"
+    model = json.loads((out / "model.json").read_text())
+    assert model["trained_on"] == ["R1", "R2", "R3"] and model["simulated"] is True
+    assert {row["fold"] for row in model["held_out_accuracy"]} == {"R1", "R2", "R3"}
+    for table in TABLES:
+        text = (out / f"{table}.csv").read_text()
+        assert text.startswith("# thermaxis compensation") and "compensation c = -(predicted e" in text
+        assert "SIMULATED" in text.splitlines()[1]
+    summary = pd.read_csv(out / "summary.csv", comment="#")
+    assert sorted(summary["fold"].unique()) == ["R1", "R2", "R3"] and len(summary) == 15
+    siemens = pd.read_csv(out / "siemens_840d.csv", comment="#")
+    assert set(siemens["parameter"]) == {"SD43900", "SD43910", "SD43920"}
+    # The reference state (first measurement of a run) needs no temperature compensation.
+    first = siemens[(siemens["measurement"] == 1) & (siemens["parameter"] != "SD43920")]
+    assert (first["value"] == 0).all()
+    assert "END_FUNCTION_BLOCK" in (out / "ThermalCompensation.st").read_text()
+
+
+def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run):
+    work, config, wanted = lines_run
+    doc = yaml.safe_load(config.read_text())
+    model_change = work / "model_change.yaml"
+    model_change.write_text(yaml.safe_dump({**doc, "models": {**doc["models"], "random_state": 7}}))
+    rules = planned_rules(run_snakemake(work, *wanted, "-n", "--configfile", str(model_change)))
+    assert {"compensation_model", "compensation_fold", "compensation_collect", "compensation_plc"} <= rules, rules
+
+    figure_change = work / "figure_change.yaml"
+    figure_change.write_text(yaml.safe_dump({**doc, "figures": {**doc["figures"], "dpi": 120}}))
+    rules = planned_rules(run_snakemake(work, *wanted, "-n", "--configfile", str(figure_change)))
+    assert rules == {"fig_compensation_drift"}, rules
+
+
+def test_single_position_dataset_exports_an_offset_only(tmp_path):
+    runs = ("R1", "R2", "R3")
+    dataset = write_dataset(tmp_path / "spot", runs=runs, positions=(120.0,), name="spot", n_measurements=4)
+    work = workflow_workdir(tmp_path)
+    config = write_config(work, dataset, "config.yaml")
+    run_snakemake(work, *targets("spot", runs), "--configfile", str(config))
+    out = work / "results" / "spot" / "compensation"
+    assert json.loads((out / "model.json").read_text())["approach"] == "pointwise"
+    siemens = pd.read_csv(out / "siemens_840d.csv", comment="#")
+    assert set(siemens["parameter"]) == {"SD43900"}
+    twincat = pd.read_csv(out / "twincat.csv", comment="#")
+    assert (twincat.loc[twincat["parameter"] == "P-AXIS-00274", "value"] == 0).all()
+
+
+def test_compensation_algorithm_outside_the_fitted_ones_stops_with_one_line(tmp_path):
+    dataset = write_dataset(tmp_path / "tiny", name="tiny")
+    work = workflow_workdir(tmp_path)
+    config = write_config(work, dataset, "config.yaml", compensation={"algorithm": "gpr"})
+    proc = run_snakemake(work, "-n", "--configfile", str(config), check=False)
+    assert proc.returncode != 0
+    line = "thermaxis error: config compensation.algorithm: 'gpr' is not one of models.algorithms (mlr)"
+    assert line in proc.stderr

@@ -1,0 +1,46 @@
+"""Fit the configured model on every run and write model.json (the deployable compensation)."""
+
+import json
+from dataclasses import replace
+from importlib.metadata import version
+
+import pandas as pd
+
+from thermaxis import compensation
+from thermaxis.assemble import model_inputs
+from thermaxis.experiment import select_for_fold, selection_settings_from_config
+from thermaxis.runner import run_script, write_text
+
+
+def main(snakemake):
+    p = snakemake.params
+    X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
+    # The deployed model sees every run, its sensitive points too.
+    selection = select_for_fold(
+        X,
+        Y,
+        "all runs",
+        replace(selection_settings_from_config(p.sections), scope="all"),
+        decoupled=p.approach == "decoupled",
+        pointwise=p.approach == "pointwise",
+    )
+    metrics = pd.read_csv(snakemake.input.metrics)
+    record = compensation.fit_model_record(
+        X,
+        Y,
+        selection,
+        p.approach,
+        p.sections,
+        **p.about,
+        held_out_accuracy=compensation.held_out_accuracy(metrics, p.approach, p.sections["compensation"]["algorithm"]),
+        provenance={
+            "citation": p.citation,
+            "packages": {name: version(name) for name in ("thermaxis", "scikit-learn", "numpy")},
+            "settings": p.sections,
+        },
+    )
+    compensation.validate_model(record, where=snakemake.output.model)
+    write_text(json.dumps(record, indent=1) + "\n", snakemake.output.model)
+
+
+run_script(main, snakemake)

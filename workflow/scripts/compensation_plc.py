@@ -1,0 +1,13 @@
+"""Write the IEC 61131-3 Structured Text block of model.json."""
+
+from thermaxis.compensation import Compensator
+from thermaxis.plc import structured_text
+from thermaxis.runner import run_script, write_text
+
+
+def main(snakemake):
+    model = Compensator.from_json(snakemake.input.model).model
+    write_text(structured_text(model, snakemake.params.statement), snakemake.output.st)
+
+
+run_script(main, snakemake)
