@@ -53,8 +53,8 @@ def _measurements(run: str) -> list[pd.DataFrame]:
 
 
 def _polyfit_line(frame: pd.DataFrame) -> tuple[float, float, float]:
-    """k (um/m), b (um at 185 mm) and R^2 of the pass-mean curve, targets in both passes only."""
-    wide = frame.pivot(index="position_mm", columns="direction", values="error_um").dropna()
+    """k (um/m), b (um at 185 mm) and R^2 of the pass-mean curve (a target read in one pass keeps that reading)."""
+    wide = frame.pivot(index="position_mm", columns="direction", values="error_um")
     x_m = (wide.index.to_numpy(float) - 185.0) / 1000.0
     y = wide.mean(axis=1).to_numpy()
     slope, intercept = np.polyfit(x_m, y, 1)

@@ -1,7 +1,9 @@
 """The first half of the chain on the simulated twin, checked against the twin's truth.
 
 Tests may read data/twin_truth/ (the modelling code never does): cleaning must recover
-the fault-free sensor temperatures, and decoupling the noise-free k and b.
+the fault-free sensor temperatures, and decoupling the noise-free k and b. The paper's
+printed models (Eq. 8, Eq. 9) are checked on the temperatures the pipeline assembles,
+never on the truth files.
 """
 
 from __future__ import annotations
@@ -100,9 +102,9 @@ EQ8 = {
     225.0: (-1.131, {"T1": -7.237, "T11": -2.548, "T12": 1.001}),
     445.0: (-4.544, {"T1": -4.908, "T11": 2.436, "T12": -1.032}),
 }
-# The paper's held-out errors of these models (Table 7: decoupled MLR; Table 4:
-# point-by-point MLR), the bounds of the check.
-TABLE7_K, TABLE7_B, TABLE4_ERROR = 2.6, 0.5, 1.6
+# The paper's held-out RMSE of its decoupled MLR (Table 7: k, b, error), the bounds of
+# the checks (issue 14); each run may miss by twice as much.
+TABLE7_K, TABLE7_B, TABLE7_ERROR = 2.6, 0.5, 0.6
 
 
 @pytest.fixture(scope="module")
@@ -154,6 +156,6 @@ def test_papers_eq8_reproduces_the_twins_errors_at_the_printed_positions(assembl
     for run, frame in X.groupby("run", sort=True):
         measured = Y.loc[frame.index]
         miss[run] = [_apply(EQ8[x], frame, relative=True) - measured[x].to_numpy() for x in EQ8]
-    assert _rms([np.concatenate(v) for v in miss.values()]) <= TABLE4_ERROR
+    assert _rms([np.concatenate(v) for v in miss.values()]) <= TABLE7_ERROR, {r: _rms(v) for r, v in miss.items()}
     for run, values in miss.items():
-        assert _rms(values) <= 2 * TABLE4_ERROR, run
+        assert _rms(values) <= 2 * TABLE7_ERROR, run

@@ -49,11 +49,6 @@ class PublishedTargets:
     bound_b_um: float
     bound_error_um: float
 
-    @property
-    def sensors(self) -> tuple[str, ...]:
-        models = (self.k, self.b, *self.pointwise.values())
-        return tuple(sorted({s for m in models for s in m.coef}, key=lambda s: int(s[1:])))
-
 
 def _model(rows) -> PublishedModel:
     const = float(rows.loc[rows["term"] == "const", "value"].iloc[0])
