@@ -2,14 +2,15 @@
 
 ``python -m thermaxis.twin generate`` writes ``data/raw/twin`` (and the ground truth)
 from the committed ``twin_params.json``; ``calibrate`` refits those parameters to the
-paper's Table 5; ``scale`` writes large benchmark datasets.  Modules:
+paper's Table 5, Eq. 8 and Eq. 9; ``scale`` writes large benchmark datasets.  Modules:
 
 * :mod:`~thermaxis.twin.network` -- the lumped thermal network and its exact integration;
 * :mod:`~thermaxis.twin.conditions` -- the four experiments, timelines, workshop air;
 * :mod:`~thermaxis.twin.model` -- free parameters, heat inputs, the error model;
 * :mod:`~thermaxis.twin.observe` -- sensors and interferometer;
 * :mod:`~thermaxis.twin.faults` -- the real-log faults seeded into the raw files;
-* :mod:`~thermaxis.twin.fit` -- calibration against Table 5;
+* :mod:`~thermaxis.twin.published` -- the paper's fitted models as calibration targets;
+* :mod:`~thermaxis.twin.fit` -- calibration against Table 5, Eq. 8 and Eq. 9;
 * :mod:`~thermaxis.twin.generate`, :mod:`~thermaxis.twin.report` -- files and documents;
 * :mod:`~thermaxis.twin.scale` -- benchmark datasets.
 """
@@ -17,7 +18,7 @@ paper's Table 5; ``scale`` writes large benchmark datasets.  Modules:
 from .fit import PAPER_TABLE5, FitResult, calibrate
 from .generate import generate_dataset
 from .model import TwinParams, load_params, save_params
-from .report import measurement_lines
+from .report import pipeline_view
 from .scale import ScaleSpec, generate_scale
 
 __all__ = [
@@ -28,7 +29,7 @@ __all__ = [
     "TwinParams",
     "load_params",
     "save_params",
-    "measurement_lines",
+    "pipeline_view",
     "ScaleSpec",
     "generate_scale",
 ]

@@ -18,7 +18,7 @@ def _parser() -> argparse.ArgumentParser:
     gen = sub.add_parser("generate", help="write the embedded dataset and its ground truth from twin_params.json")
     gen.add_argument("--out", type=Path, default=DEFAULT_OUT)
     gen.add_argument("--truth", type=Path, default=DEFAULT_TRUTH)
-    cal = sub.add_parser("calibrate", help="refit twin_params.json to Table 5, then regenerate")
+    cal = sub.add_parser("calibrate", help="refit twin_params.json to the published targets, then regenerate")
     cal.add_argument("--out", type=Path, default=DEFAULT_OUT)
     cal.add_argument("--truth", type=Path, default=DEFAULT_TRUTH)
     cal.add_argument("--params", type=Path, default=mdl.PARAMS_PATH)
@@ -46,18 +46,13 @@ def main(argv: list[str] | None = None) -> int:
         result = calibrate()
         summary = {
             "method": "scipy.optimize.least_squares on the noise-free model, start at the priors",
-            "rms_k_um_per_m": round(result.rms_k, 4),
-            "max_k_um_per_m": round(result.max_k, 4),
-            "rms_b_um": round(result.rms_b, 4),
-            "max_b_um": round(result.max_b, 4),
+            **{f"rms_{name}": round(value, 4) for name, value in result.rms.items()},
             "evaluations": result.evaluations,
         }
         mdl.save_params(result.params, args.params, summary)
         generate_dataset(args.out, args.truth, mdl.load_params(args.params))
-        print(
-            f"calibrated (noise-free): RMS k {result.rms_k:.3f} um/m, RMS b {result.rms_b:.3f} um; "
-            f"wrote {args.params} and regenerated {args.out}"
-        )
+        figures = ", ".join(f"{name} {value:.3f}" for name, value in result.rms.items())
+        print(f"calibrated (noise-free RMS): {figures}; wrote {args.params} and regenerated {args.out}")
     else:
         from .scale import ScaleSpec, generate_scale
 

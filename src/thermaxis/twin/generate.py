@@ -22,6 +22,7 @@ from .observe import (
     INTERFEROMETER,
     SENSORS,
     WIRELESS_JITTER_S,
+    calibrated_sensors,
     WIRELESS_PERIOD_S,
     interferometer_readings,
     lagged,
@@ -122,11 +123,12 @@ def simulate_records(params: mdl.TwinParams) -> list[RunRecord]:
     the noise of another.
     """
     records = []
+    sensors = calibrated_sensors(params.values)
     for i, condition in enumerate(cond.CONDITIONS):
         state = mdl.simulate_run(condition, params)
         tl = state.timeline
         step = float(tl.grid_s[1] - tl.grid_s[0])
-        truth = {s.id: lagged(sensor_signal(s, state), step, s.lag_s) + s.offset_c for s in SENSORS}
+        truth = {s.id: lagged(sensor_signal(s, state), step, s.lag_s) + s.offset_c for s in sensors}
         box, rows = _box_log(condition.run, tl.grid_s, truth, _run_rng(i, 1))
         w_time, w_value = _wireless_log(condition.run, tl, truth["T11"], _run_rng(i, 2))
         stamps, hmi = _hmi_log(tl, truth["T12"], _run_rng(i, 3))

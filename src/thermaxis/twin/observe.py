@@ -10,18 +10,19 @@ of the XL-80 class (+-0.5 um/m: air-compensation error).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.signal import lfilter
 
 from . import conditions as cond
-from .model import RunState, positioning_error
+from .model import MOUNTING_DESIGN, MOUNTING_SURFACES, RunState, mounting, positioning_error
 from .network import NODES
 
 __all__ = [
     "Sensor",
     "SENSORS",
+    "calibrated_sensors",
     "SOURCES",
     "sensor_signal",
     "lagged",
@@ -44,33 +45,40 @@ class Sensor:
     noise_c: float  # white noise of the acquisition chain (1 sigma)
 
 
+def _designed(sensor_id: str, location: str, source: str, lag_s: float, noise_c: float) -> Sensor:
+    weights, offset = MOUNTING_DESIGN[sensor_id]
+    return Sensor(sensor_id, location, source, weights, lag_s, offset, noise_c)
+
+
 SENSORS: tuple[Sensor, ...] = (
-    # The sleeve covers the screw; its left end is near the motor-side bearing seat.
-    Sensor(
-        "T1", "screw sleeve, left", "box", {"sleeve": 0.75, "bearing_seat": 0.15, "ambient": 0.10}, 90.0, 0.06, 0.008
-    ),
-    Sensor("T2", "screw sleeve, right", "box", {"sleeve": 0.80, "ambient": 0.20}, 90.0, -0.04, 0.008),
+    # Mountings of T1, T2, T6, T7, T11 and T12 are calibrated (model.MOUNTING_SURFACES):
+    # these entries hold their design estimate, calibrated_sensors() the fitted one.
+    _designed("T1", "screw sleeve, left", "box", 90.0, 0.008),
+    _designed("T2", "screw sleeve, right", "box", 90.0, 0.008),
     Sensor("T3", "screw sleeve, front", "box", {"sleeve": 0.85, "nut": 0.05, "ambient": 0.10}, 90.0, 0.09, 0.008),
     Sensor("T4", "left slider", "box", {"sliders": 0.85, "nut": 0.10, "ambient": 0.05}, 60.0, -0.07, 0.008),
     Sensor("T5", "right slider", "box", {"sliders": 0.85, "bed_inner": 0.10, "ambient": 0.05}, 60.0, 0.03, 0.008),
-    Sensor(
-        "T6",
-        "bearing seat near motor",
-        "box",
-        {"bearing_seat": 0.90, "motor": 0.05, "ambient": 0.05},
-        60.0,
-        0.05,
-        0.008,
-    ),
+    _designed("T6", "bearing seat near motor", "box", 60.0, 0.008),
     # The shell sees the winding through the stator and loses heat to the air.
-    Sensor("T7", "motor shell, top", "box", {"motor": 0.60, "ambient": 0.40}, 60.0, -0.10, 0.008),
+    _designed("T7", "motor shell, top", "box", 60.0, 0.008),
     Sensor("T8", "bed, inner side", "box", {"bed_inner": 0.95, "ambient": 0.05}, 60.0, 0.02, 0.008),
     Sensor("T9", "bed, outer side", "box", {"bed_outer": 0.85, "ambient": 0.15}, 60.0, -0.06, 0.008),
     Sensor("T10", "ambient", "box", {"ambient": 1.0}, 120.0, 0.08, 0.010),
-    Sensor("T11", "nut", "wireless", {"nut": 0.90, "sliders": 0.10}, 45.0, 0.15, 0.030),
+    _designed("T11", "nut", "wireless", 45.0, 0.030),
     # The HMI reads the motor's own winding sensor: fast, but a coarser thermistor.
-    Sensor("T12", "motor (internal)", "hmi", {"motor": 1.0}, 20.0, -0.30, 0.040),
+    _designed("T12", "motor (internal)", "hmi", 20.0, 0.040),
 )
+
+
+def calibrated_sensors(values: dict[str, float]) -> tuple[Sensor, ...]:
+    """The sensors with the fitted mountings and offsets of ``values`` in place of the design."""
+    out = []
+    for sensor in SENSORS:
+        if sensor.id in MOUNTING_SURFACES:
+            weights, offset = mounting(values, sensor.id)
+            sensor = replace(sensor, weights=weights, offset_c=offset)
+        out.append(sensor)
+    return tuple(out)
 
 #: The HMI's clock runs this many seconds behind the box (reference) clock.
 HMI_CLOCK_OFFSET_S = 7.0
@@ -95,7 +103,7 @@ def sensor_signal(sensor: Sensor, state: RunState) -> np.ndarray:
 
 
 def lagged(signal: np.ndarray, step_s: float, lag_s: float) -> np.ndarray:
-    """Exact first-order lag of a piecewise-linear signal sampled every ``step_s``.
+    """Exact first-order lag of a piecewise-linear signal sampled every ``step_s`` (along axis 0).
 
     Starts in equilibrium with the first sample (the sensors were mounted long before).
     """
@@ -105,7 +113,7 @@ def lagged(signal: np.ndarray, step_s: float, lag_s: float) -> np.ndarray:
     c0 = (1.0 - a) - c1
     y = np.empty_like(signal)
     y[0] = signal[0]
-    rest, _ = lfilter([c1, c0], [1.0, -a], signal[1:], zi=[a * signal[0] + c0 * signal[0]])
+    rest, _ = lfilter([c1, c0], [1.0, -a], signal[1:], axis=0, zi=((a + c0) * signal[0])[None])
     y[1:] = rest
     return y
 

@@ -1,153 +1,40 @@
 """Dataset documents (dataset.yaml, runs.tsv, README.md) and the calibration report.
 
-The calibration report is computed from the RAW files just written, the way the
-pipeline will read them: both passes combined by their mean, a target missing from one
-pass dropped, then :func:`thermaxis.decouple.decouple_measurement` with origin 185 mm.
+The calibration report is computed from the RAW files just written, by the pipeline's
+own library with the default configuration: :func:`thermaxis.assemble.clean_and_assemble_run`
+(cleaning, pass mean, window-mean temperatures), :func:`thermaxis.decouple.decouple_table`
+(k and b, origin 185 mm) and, for the held-out fold E4, the workflow's
+:func:`thermaxis.experiment.select_for_fold` and :func:`~thermaxis.experiment.evaluate_configuration`.
+The held-out results are reported, never fitted to.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import yaml
 
-from ..decouple import decouple_measurement
+from ..assemble import clean_and_assemble_run, model_inputs
+from ..config import load_config
+from ..decouple import decouple_table
+from ..experiment import evaluate_configuration, select_for_fold, settings_from_config
+from ..io import load_dataset, read_run
+from ..paper import load_table
 from . import conditions as cond
 from . import faults
 from . import model as mdl
-from .fit import PAPER_TABLE5, TOLERANCE_B, TOLERANCE_K
+from .fit import PAPER_TABLE5, RunObservables, acceptance_bounds, objective_weights, target_residuals
 from .observe import HMI_CLOCK_OFFSET_S, INTERFEROMETER, SENSORS, SOURCES, WIRELESS_JITTER_S, WIRELESS_PERIOD_S
+from .published import PublishedTargets, published_targets
 
 __all__ = [
-    "measurement_lines",
-    "window_temperatures",
-    "paper_mlr_check",
+    "PipelineView",
+    "pipeline_view",
     "write_dataset_docs",
     "write_calibration_report",
 ]
-
-LIMITS_C = (-20.0, 120.0)
-
-
-def _runs(root: Path) -> pd.DataFrame:
-    return pd.read_csv(root / "runs.tsv", sep="\t", dtype={"run": str})
-
-
-def _measurement_files(run_dir: Path) -> list[tuple[str, pd.DataFrame]]:
-    files = []
-    for path in sorted((run_dir / "errors").glob("*.csv")):
-        frame = pd.read_csv(path, dtype={"direction": str})
-        frame["time"] = pd.to_datetime(frame["time"], format="ISO8601")
-        files.append((path.stem, frame))
-    # Measurements are ordered by their first reading, not by file name.
-    return sorted(files, key=lambda item: item[1]["time"].iloc[0])
-
-
-def measurement_lines(root: Path | str) -> pd.DataFrame:
-    """Decoupled k and b of every measurement of a raw dataset (pass mean, origin 185 mm).
-
-    Returns one row per measurement: run, measurement, name, start, end, time_min
-    (middle, minutes from the run's first reading), n_targets, k_um_per_m, b_um, r2,
-    rms_um, and the pass-mean curve (positions, errors) for later use.
-    """
-    root = Path(root)
-    rows = []
-    for run in _runs(root)["run"]:
-        measurements = _measurement_files(root / run)
-        run_start = measurements[0][1]["time"].iloc[0]
-        for number, (name, frame) in enumerate(measurements, start=1):
-            by_pass = frame.pivot_table(index="position_mm", columns="direction", values="error_um", aggfunc="mean")
-            complete = by_pass.dropna()
-            curve = complete.mean(axis=1)
-            fit = decouple_measurement(
-                curve.index.to_numpy(float), curve.to_numpy(float), origin_mm=cond.FIRST_TARGET_MM
-            )
-            start, end = frame["time"].iloc[0], frame["time"].iloc[-1]
-            middle = start + (end - start) / 2
-            rows.append(
-                {
-                    "run": run,
-                    "measurement": number,
-                    "name": name,
-                    "start": start,
-                    "end": end,
-                    "time_min": (middle - run_start).total_seconds() / 60.0,
-                    "n_targets": int(curve.size),
-                    "k_um_per_m": fit.k_um_per_m,
-                    "b_um": fit.b_um,
-                    "r2": fit.r2,
-                    "rms_um": fit.rms_um,
-                    "positions": curve.index.to_numpy(float),
-                    "errors": curve.to_numpy(float),
-                }
-            )
-    return pd.DataFrame(rows)
-
-
-def window_temperatures(root: Path | str, lines: pd.DataFrame) -> pd.DataFrame:
-    """Each sensor's median over each measurement window, from the raw logs.
-
-    A deliberately crude stand-in for the cleaning stage: readings outside the PT100
-    limits are dropped, the HMI clock offset declared in dataset.yaml is applied, and
-    the median ignores single-sample spikes and duplicated rows.
-    """
-    root = Path(root)
-    meta = yaml.safe_load((root / "dataset.yaml").read_text(encoding="utf-8"))
-    offsets = {s["name"]: float(s.get("clock_offset_s", 0.0)) for s in meta["sources"]}
-    out = []
-    for run, group in lines.groupby("run", sort=False):
-        logs = []
-        for source, offset in offsets.items():
-            frame = pd.read_csv(root / run / "temperatures" / f"{source}.csv")
-            frame["time"] = pd.to_datetime(frame["time"], format="ISO8601") + pd.to_timedelta(offset, unit="s")
-            logs.append(frame.melt(id_vars="time", var_name="sensor", value_name="value"))
-        log = pd.concat(logs, ignore_index=True).dropna()
-        log = log[(log["value"] > LIMITS_C[0]) & (log["value"] < LIMITS_C[1])]
-        for _, row in group.iterrows():
-            inside = log[(log["time"] >= row["start"]) & (log["time"] <= row["end"])]
-            medians = inside.groupby("sensor")["value"].median()
-            out.append({"run": run, "measurement": row["measurement"], **medians.to_dict()})
-    return pd.DataFrame(out)
-
-
-def _least_squares(X: np.ndarray, y: np.ndarray) -> np.ndarray:
-    design = np.column_stack([np.ones(len(X)), X])
-    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
-    return coef
-
-
-def paper_mlr_check(lines: pd.DataFrame, temps: pd.DataFrame, train=("E1", "E2", "E3"), test="E4") -> dict:
-    """The paper's decoupled MLR (Eq. 9) refitted on the twin: train E1-E3, predict E4.
-
-    k on absolute T1, T6, T12; b on T2, T7, T11 relative to the run's first
-    measurement; plain least squares.  Returns RMSE of k, b and of the error curve.
-    """
-    data = lines.merge(temps, on=["run", "measurement"])
-    k_inputs, b_inputs = ["T1", "T6", "T12"], ["T2", "T7", "T11"]
-    relative = data[b_inputs] - data.groupby("run")[b_inputs].transform("first")
-    is_train = data["run"].isin(train).to_numpy()
-    is_test = (data["run"] == test).to_numpy()
-    k_coef = _least_squares(data.loc[is_train, k_inputs].to_numpy(), data.loc[is_train, "k_um_per_m"].to_numpy())
-    b_coef = _least_squares(relative[is_train].to_numpy(), data.loc[is_train, "b_um"].to_numpy())
-    k_pred = k_coef[0] + data.loc[is_test, k_inputs].to_numpy() @ k_coef[1:]
-    b_pred = b_coef[0] + relative[is_test].to_numpy() @ b_coef[1:]
-    k_true = data.loc[is_test, "k_um_per_m"].to_numpy()
-    b_true = data.loc[is_test, "b_um"].to_numpy()
-    residuals = []
-    for (_, row), k, b in zip(data[is_test].iterrows(), k_pred, b_pred):
-        predicted = k * (row["positions"] - cond.FIRST_TARGET_MM) / 1000.0 + b
-        residuals.append(row["errors"] - predicted)
-    residuals = np.concatenate(residuals)
-    return {
-        "k_coef": k_coef,
-        "b_coef": b_coef,
-        "rmse_k": float(np.sqrt(np.mean((k_pred - k_true) ** 2))),
-        "rmse_b": float(np.sqrt(np.mean((b_pred - b_true) ** 2))),
-        "rmse_error": float(np.sqrt(np.mean(residuals**2))),
-        "max_abs_error": float(np.max(np.abs(residuals))),
-    }
 
 
 # --------------------------------------------------------------------------- documents
@@ -164,9 +51,11 @@ PROVENANCE = (
     "(geometric slope and pitch error, screw expansion proportional to position, "
     "position-independent drift of the structure, XL-80-class noise, reversal error) is "
     "read at 14 targets in a forward and a backward pass, 8 times per run, never "
-    "re-zeroed. Heat inputs, expansion and drift gains, some effective capacities and "
-    "each run's initial temperatures were fitted so that the decoupled k and b of the 32 "
-    "measurements match the paper's Table 5 (see CALIBRATION.md). The logs carry "
+    "re-zeroed. Heat inputs, expansion and drift gains, some effective capacities, each "
+    "run's initial temperatures and the mountings and offsets of the sensors the paper's "
+    "fitted models use were fitted so that the decoupled k and b of the 32 measurements "
+    "match the paper's Table 5 and the paper's Eq. 8 and Eq. 9, applied to the twin's "
+    "temperatures, give back its errors, k and b (see CALIBRATION.md). The logs carry "
     "realistic faults listed in README.md."
 )
 
@@ -193,7 +82,7 @@ def _dataset_yaml() -> str:
             "thermaxis.twin, calibrated to Xu K., Li G., Li Z., Wang Z., Miao E., Research on "
             "decoupling and step-by-step modelling of thermal positioning error of the linear "
             "axis, Chinese Journal of Scientific Instrument, DOI 10.19650/j.cnki.cjsi.J2209628 "
-            "(Tables 1, 2 and 5)"
+            "(Tables 1, 2 and 5, Eq. 8 and Eq. 9)"
         ),
         "  generator: python -m thermaxis.twin generate",
         "  description: " + _yaml_quote(PROVENANCE),
@@ -242,8 +131,8 @@ def _readme() -> str:
 **These are not measurements.** The paper's data are not public; this dataset is
 generated by `thermaxis.twin` (`make twin`, i.e. `python -m thermaxis.twin generate`)
 from the committed parameters `src/thermaxis/twin_params.json`, byte for byte. How
-the parameters were fitted to the paper's Table 5, and how close the twin comes, is in
-[CALIBRATION.md](CALIBRATION.md).
+the parameters were fitted to the paper's Table 5, Eq. 8 and Eq. 9, and how close the
+twin comes, is in [CALIBRATION.md](CALIBRATION.md).
 
 ## Runs
 
@@ -271,8 +160,11 @@ per run, March 2022).
 
 ## Instrument behaviour (not faults)
 
-- Sensors read their mounting surface through a first-order lag ({min(s.lag_s for s in SENSORS):g}-{max(s.lag_s for s in SENSORS):g} s), with a
-  fixed calibration offset (up to +-0.3 degC) and white noise.
+- Sensors read their mounting surface (a mix of the part they are clamped to, its
+  neighbours and the air) through a first-order lag ({min(s.lag_s for s in SENSORS):g}-{max(s.lag_s for s in SENSORS):g} s), with a
+  fixed calibration offset (within PT100 class B, +-{mdl.OFFSET_LIMIT_C:g} degC at 30 degC) and white noise.
+  The mountings of {", ".join(mdl.MOUNTING_SURFACES)} (the sensors of the paper's Eq. 8 and Eq. 9) are
+  calibrated (CALIBRATION.md).
 - The interferometer adds noise of {INTERFEROMETER.reading_noise_um:g} um per capture, a per-measurement
   scale error (air compensation, {INTERFEROMETER.scale_error_um_per_m:g} um/m 1 sigma, clipped to +-0.5 um/m) and
   a reversal error: the backward pass reads {abs(INTERFEROMETER.reversal_um):g} um lower.
@@ -305,13 +197,89 @@ def write_dataset_docs(root: Path | str) -> None:
 
 # --------------------------------------------------------------------------- calibration
 
+#: The held-out comparisons of the paper: (approach, algorithm, paper table).
+HELDOUT = (("decoupled", "mlr", 7), ("decoupled", "svr", 8), ("pointwise", "mlr", 4))
+#: The twin before issue 14 (calibrated to Table 5 only), fold E4 with the default
+#: configuration: ``snakemake results/twin/tables/metrics.csv`` at commit fac73bc.
+#: A record of that run for comparison; nothing is computed from it.
+PREVIOUS_TWIN_HELDOUT = {
+    ("decoupled", "mlr", "k"): (4.477, 7.785, 3.505),
+    ("decoupled", "mlr", "b"): (0.895, 1.606, 0.718),
+    ("decoupled", "mlr", "error"): (1.057, 1.877, 0.913),
+    ("decoupled", "svr", "k"): (7.288, 10.684, 7.137),
+    ("decoupled", "svr", "b"): (1.532, 2.554, 1.256),
+    ("decoupled", "svr", "error"): (2.273, 4.179, 1.946),
+    ("pointwise", "mlr", "error"): (2.527, 5.382, 2.152),
+}
+PREVIOUS_TWIN_SELECTION = {"k": "T3, T6, T11", "b": "T1, T9, T11", "pointwise": "T1, T7, T9"}
 
-def _rms(values: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(values))))
+
+@dataclass(frozen=True)
+class PipelineView:
+    """The twin as the pipeline assembles it (default configuration)."""
+
+    kb: pd.DataFrame  # run, measurement, time_min, k_um_per_m, b_um, r2, rms_um, n_targets
+    X: pd.DataFrame  # run, measurement, time_min, absolute temperature per sensor
+    Y: pd.DataFrame  # pass-mean unzeroed error per target (columns, mm)
+    ambient: pd.DataFrame  # run, min, max of the cleaned ambient sensor over the log
+    config: dict
+
+    def observables(self) -> dict[str, RunObservables]:
+        out = {}
+        for run, rows in self.X.groupby("run", sort=True):
+            kb = self.kb[self.kb["run"] == run]
+            out[run] = RunObservables(
+                k=kb["k_um_per_m"].to_numpy(),
+                b=kb["b_um"].to_numpy(),
+                curve=self.Y.loc[rows.index].to_numpy(dtype=float),
+                temperatures={s: rows[s].to_numpy() for s in rows.columns if s not in ("run", "measurement", "time_min")},
+            )
+        return out
 
 
-def _comparison(lines: pd.DataFrame) -> pd.DataFrame:
-    out = lines.drop(columns=["positions", "errors"]).copy()
+def pipeline_view(root: Path | str) -> PipelineView:
+    """Clean, assemble and decouple the raw dataset under ``root`` with the default config."""
+    config = load_config()
+    dataset = load_dataset(root)
+    # The ambient sensor is the dataset's own declaration unless the config overrides it.
+    config["ambient_sensor"] = config.get("ambient_sensor") or dataset.ambient_sensor
+    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), config) for run in dataset.run_ids]
+    errors = pd.concat([t.errors for t in tables], ignore_index=True)
+    kb, _ = decouple_table(errors)
+    kb["n_targets"] = errors.dropna(subset=["error_um"]).groupby(["run", "measurement"]).size().to_numpy()
+    X, Y = model_inputs(errors, pd.concat([t.temperatures for t in tables], ignore_index=True))
+    sensor = config["ambient_sensor"]
+    ambient = pd.DataFrame(
+        [(t.run, t.series[sensor].min(), t.series[sensor].max()) for t in tables], columns=["run", "min", "max"]
+    )
+    return PipelineView(kb=kb, X=X, Y=Y, ambient=ambient, config=config)
+
+
+def heldout_results(view: PipelineView) -> tuple[pd.DataFrame, dict[str, str]]:
+    """The paper's fold (train on the other runs, predict it) as the workflow runs it."""
+    fold = view.config["paper_fold"]
+    selection_settings, model_settings = settings_from_config(view.config)
+    selection = select_for_fold(view.X, view.Y, fold, selection_settings)
+    metrics = pd.concat(
+        [
+            evaluate_configuration(
+                view.X, view.Y, fold, approach, algorithm, selection, model_settings, degree=selection_settings.degree
+            ).metrics
+            for approach, algorithm, _ in HELDOUT
+        ],
+        ignore_index=True,
+    )
+    chosen = {"k": selection.k_sensors, "b": selection.b_sensors, "pointwise": selection.pointwise}
+    return metrics, {name: ", ".join(sensors) for name, sensors in chosen.items()}
+
+
+def _rms(values) -> float:
+    values = np.ravel(np.asarray(values, dtype=float))
+    return float(np.sqrt(np.nanmean(np.square(values))))
+
+
+def _comparison(kb: pd.DataFrame) -> pd.DataFrame:
+    out = kb.copy()
     out["k_paper"] = [PAPER_TABLE5[r][0][m - 1] for r, m in zip(out["run"], out["measurement"])]
     out["b_paper"] = [PAPER_TABLE5[r][1][m - 1] for r, m in zip(out["run"], out["measurement"])]
     out["dk"] = out["k_um_per_m"] - out["k_paper"]
@@ -319,36 +287,51 @@ def _comparison(lines: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def _figure(table: pd.DataFrame, path: Path) -> None:
+def _figure(table: pd.DataFrame, eq9: dict[str, dict[str, np.ndarray]], path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     colours = {"E1": "tab:blue", "E2": "tab:orange", "E3": "tab:green", "E4": "tab:red"}
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), dpi=100)
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7), dpi=100, sharex=True)
     for run, group in table.groupby("run", sort=True):
-        for ax, twin, paper in ((axes[0], "k_um_per_m", "k_paper"), (axes[1], "b_um", "b_paper")):
-            ax.plot(group["time_min"], group[twin], "o-", color=colours.get(run, "k"), label=f"{run} twin")
-            ax.plot(
-                group["time_min"], group[paper], "s--", mfc="none", color=colours.get(run, "k"), label=f"{run} paper"
+        colour = colours.get(run, "k")
+        for col, (twin, paper, key) in enumerate((("k_um_per_m", "k_paper", "eq9_k"), ("b_um", "b_paper", "eq9_b"))):
+            axes[0, col].plot(group["time_min"], group[twin], "o-", color=colour, label=f"{run} twin")
+            axes[0, col].plot(group["time_min"], group[paper], "s--", mfc="none", color=colour, label=f"{run} Table 5")
+            axes[1, col].plot(group["time_min"], group[twin], "o-", color=colour, label=f"{run} twin")
+            axes[1, col].plot(
+                group["time_min"], group[twin] + eq9[run][key], "^:", mfc="none", color=colour, label=f"{run} Eq. 9"
             )
-    axes[0].set_ylabel("slope k (um/m)")
-    axes[1].set_ylabel("intercept b (um)")
-    for ax in axes:
-        ax.set_xlabel("time from M1 (min)")
+    for row, what in enumerate(("Table 5", "Eq. 9 on the twin's temperatures")):
+        axes[row, 0].set_ylabel(f"slope k (um/m)\nvs {what}")
+        axes[row, 1].set_ylabel(f"intercept b (um)\nvs {what}")
+        axes[row, 0].legend(ncol=2, fontsize=6)
+    for ax in axes.ravel():
         ax.grid(alpha=0.3)
-    axes[0].legend(ncol=2, fontsize=7)
-    fig.suptitle("Twin (raw files, pass mean) vs the paper's Table 5")
+    for ax in axes[1]:
+        ax.set_xlabel("time from M1 (min)")
+    fig.suptitle("SIMULATED twin (raw files through the pipeline) vs the paper")
     fig.tight_layout()
     fig.savefig(path, metadata={"Software": None})
     plt.close(fig)
 
 
 def _parameter_tables(params: mdl.TwinParams) -> str:
+    physical = [n for n in mdl.GLOBAL_PARAMETERS if not n.startswith(("mount_", "offset_"))]
     rows = "\n".join(
-        f"| `{name}` | {params.values[name]:.4g} | {p.lower:g} ... {p.upper:g} | {p.meaning} |"
-        for name, p in mdl.GLOBAL_PARAMETERS.items()
+        f"| `{name}` | {params.values[name]:.4g} | {mdl.GLOBAL_PARAMETERS[name].lower:g} ... "
+        f"{mdl.GLOBAL_PARAMETERS[name].upper:g} | {mdl.GLOBAL_PARAMETERS[name].meaning} |"
+        for name in physical
+    )
+    mountings = "\n".join(
+        f"| {sensor} | {next(s.location for s in SENSORS if s.id == sensor)} | "
+        + ", ".join(f"{name} {w:.2f}" for name, w in mdl.mounting(params.values, sensor)[0].items())
+        + f" | {mdl.mounting(params.values, sensor)[1]:+.2f} | "
+        + ", ".join(f"{name} {w:.2f}" for name, w in mdl.MOUNTING_DESIGN[sensor][0].items())
+        + f" | {mdl.MOUNTING_DESIGN[sensor][1]:+.2f} |"
+        for sensor in mdl.MOUNTING_SURFACES
     )
     header = "| run | " + " | ".join(f"`{n}`" for n in mdl.INITIAL_PARAMETERS) + " |"
     offsets = "\n".join(
@@ -360,6 +343,14 @@ def _parameter_tables(params: mdl.TwinParams) -> str:
 |---|---|---|---|
 {rows}
 
+Sensor mountings (weights of the surfaces each sensor reads, summing to 1, and the
+calibration offset, bounded by PT100 class B at 30 degC, +-{mdl.OFFSET_LIMIT_C} degC), fitted
+beside the design estimate they started from (the priors' centres):
+
+| sensor | location | fitted weights | fitted offset degC | design weights | design offset degC |
+|---|---|---|---|---|---|
+{mountings}
+
 Initial temperatures, K above the workshop air at the start of the log ({groups}):
 
 {header}
@@ -367,88 +358,271 @@ Initial temperatures, K above the workshop air at the start of the log ({groups}
 {offsets}"""
 
 
+def _target_rows(residuals: dict, targets: PublishedTargets) -> str:
+    pointwise = ", ".join(f"{x:g}" for x in targets.pointwise)
+    # label, unit, and whether each run must also stay within twice the bound
+    described = {
+        "table5_k": ("Table 5 slope k (twin minus paper)", "um/m", False),
+        "table5_b": ("Table 5 intercept b (twin minus paper)", "um", False),
+        "eq9_k": ("Eq. 9 k on the twin's absolute T1, T6, T12 minus the twin's k", "um/m", True),
+        "eq9_b": ("Eq. 9 b on the twin's relative T2, T7, T11 minus the twin's b", "um", True),
+        "eq8": (f"Eq. 8 at {pointwise} mm on relative T1, T11, T12 minus the twin's error there", "um", True),
+    }
+    bounds, weights = acceptance_bounds(targets), objective_weights(targets)
+    rows = []
+    for name, (label, unit, per_run) in described.items():
+        bound = bounds[name]
+        overall = _rms([r[name] for r in residuals.values()])
+        by_run = {run: _rms(r[name]) for run, r in residuals.items()}
+        worst = max(by_run, key=by_run.get)
+        met = overall <= bound and (not per_run or by_run[worst] <= 2 * bound)
+        limit = f"RMS <= {bound:g}" + (f", each run <= {2 * bound:g}" if per_run else "")
+        rows.append(
+            f"| {label} | {1.0 / weights[name]:.3g} ({weights[name]:g} {unit}) | {limit} {unit} | "
+            f"{overall:.3f} | {worst} {by_run[worst]:.3f} | {'yes' if met else '**no**'} |"
+        )
+    return "\n".join(rows)
+
+
+def _per_run_rows(residuals: dict) -> str:
+    names = ("table5_k", "table5_b", "eq9_k", "eq9_b", "eq8")
+    return "\n".join(
+        f"| {run} | " + " | ".join(f"{_rms(r[name]):.3f}" for name in names) + " |" for run, r in residuals.items()
+    )
+
+
+def _ambient_rows(view: PipelineView) -> str:
+    table1 = load_table("table1").set_index("run")
+    rows = []
+    for r in view.ambient.itertuples():
+        lo, hi = table1.loc[r.run, "ambient_min_c"], table1.loc[r.run, "ambient_max_c"]
+        worst = max(abs(r.min - lo), abs(r.max - hi))
+        rows.append(f"| {r.run} | {lo:.1f} ... {hi:.1f} | {r.min:.2f} ... {r.max:.2f} | {worst:.2f} | {'yes' if worst <= 0.2 else '**no**'} |")
+    return "\n".join(rows)
+
+
+def _rise_table(view: PipelineView) -> tuple[str, str]:
+    sensors = [c for c in view.X.columns if c not in ("run", "measurement", "time_min")]
+    rise = view.X.groupby("run", sort=True)[sensors].agg(lambda t: t.iloc[-1] - t.iloc[0]).T
+    header = "| sensor | location | " + " | ".join(rise.columns) + " |\n|---|---|" + "---|" * len(rise.columns)
+    location = {s.id: s.location for s in SENSORS}
+    rows = "\n".join(
+        f"| {sensor} | {location.get(sensor, '')} | " + " | ".join(f"{v:+.2f}" for v in rise.loc[sensor]) + " |"
+        for sensor in rise.index
+    )
+    ambient = view.config["ambient_sensor"]
+    machine = rise.drop(index=ambient)
+    first = machine.columns[0]
+    similarity = ", ".join(
+        f"{run} {machine[first].corr(machine[run], method='spearman'):.2f}" for run in machine.columns[1:]
+    )
+    ranking = ", ".join(machine[first].sort_values(ascending=False).index[:4])
+    return f"{header}\n{rows}", (
+        f"Rank correlation (Spearman) of the rises of the machine's sensors (all but the ambient {ambient}) "
+        f"with {first}'s: {similarity}. In {first} the largest rises are {ranking}."
+    )
+
+
+def _heldout_rows(metrics: pd.DataFrame) -> str:
+    paper = load_table("prediction_metrics").set_index(["table", "approach", "algorithm", "target"])
+    rows = []
+    for approach, algorithm, table in HELDOUT:
+        for target in ("k", "b", "error") if approach == "decoupled" else ("error",):
+            new = metrics[
+                (metrics["approach"] == approach) & (metrics["algorithm"] == algorithm) & (metrics["target"] == target)
+            ].iloc[0]
+            old = PREVIOUS_TWIN_HELDOUT[(approach, algorithm, target)]
+            pub = paper.loc[(table, approach, algorithm, target)]
+            rows.append(
+                f"| {approach} {algorithm.upper()} | {target} | {table} | {pub['rmse']:.1f} / {pub['max_abs']:.1f} / {pub['mae']:.1f} | "
+                f"{new['rmse']:.2f} / {new['max_abs']:.2f} / {new['mae']:.2f} | {old[0]:.2f} / {old[1]:.2f} / {old[2]:.2f} |"
+            )
+    return "\n".join(rows)
+
+
+def _conclusions(metrics: pd.DataFrame) -> str:
+    error = metrics[metrics["target"] == "error"].set_index(["approach", "algorithm"])["rmse"]
+    decoupled = error[("decoupled", "mlr")] < error[("pointwise", "mlr")]
+    svr = error[("decoupled", "svr")] < error[("decoupled", "mlr")]
+    return (
+        f"On the new twin, decoupled MLR {'beats' if decoupled else 'does not beat'} point-by-point MLR "
+        f"(error RMSE {error[('decoupled', 'mlr')]:.2f} vs {error[('pointwise', 'mlr')]:.2f} um), and SVR "
+        f"{'beats' if svr else 'does not beat'} MLR in the decoupled model "
+        f"({error[('decoupled', 'svr')]:.2f} vs {error[('decoupled', 'mlr')]:.2f} um)."
+    )
+
+
+def _first_measurement_floor(targets: PublishedTargets) -> str:
+    """What Eq. 8 and Eq. 9's b must miss at M1, where every relative temperature is 0."""
+    last = max(targets.pointwise)
+    lever = (last - cond.FIRST_TARGET_MM) / 1000.0
+    const = targets.pointwise[last].const
+    miss = {run: const - (b[0] + lever * k[0]) for run, (k, b) in PAPER_TABLE5.items()}
+    miss_b = {run: targets.b.const - b[0] for run, (_, b) in PAPER_TABLE5.items()}
+    return (
+        f"At each run's first measurement every relative temperature is 0, so Eq. 8 predicts its constant, "
+        f"{const:g} um at {last:g} mm, for every run, while Table 5 puts the error there (b + k * {lever:g} m) at "
+        + ", ".join(f"{run} {const - m:.2f}" for run, m in miss.items())
+        + " um: a miss of "
+        + ", ".join(f"{m:+.2f}" for m in miss.values())
+        + f" um that no temperature field can remove (RMS over the four first measurements {_rms(list(miss.values())):.2f} um). "
+        f"Likewise Eq. 9 gives b = {targets.b.const:g} um at every first measurement, Table 5 "
+        + ", ".join(f"{PAPER_TABLE5[r][1][0]:g}" for r in miss_b)
+        + " um. "
+        + _start_gap(targets)
+    )
+
+
+def _table4_tension(residuals: dict, targets: PublishedTargets, fold: str) -> str:
+    """The printed Eq. 8 on the held-out run: the paper's Table 4 against the acceptance bound."""
+    table4 = load_table("prediction_metrics").set_index(["table", "approach", "algorithm", "target"])
+    published = table4.loc[(4, "pointwise", "mlr", "error")]
+    held_out = residuals[fold]["eq8"]
+    return (
+        f"The printed Eq. 8 was fitted on the other runs and, by the paper's Table 4, predicts {fold} with an "
+        f"error RMSE of {published['rmse']:g} um (max {published['max_abs']:g} um) over the 14 positions, whereas "
+        f"the acceptance asks it to match every run, {fold} included, within {2 * targets.bound_error_um:g} um RMS "
+        f"at the printed positions; the twin's {fold} misses by {_rms(held_out):.2f} um RMS (max "
+        f"{np.nanmax(np.abs(held_out)):.2f} um) there: faithful to the bound, closer than Table 4 says the "
+        "paper's own axis was."
+    )
+
+
+def _start_gap(targets: PublishedTargets) -> str:
+    """How far from a uniform machine Eq. 9 puts E2's start against E1's."""
+    table1 = load_table("table1").set_index("run")
+    dk = PAPER_TABLE5["E2"][0][0] - PAPER_TABLE5["E1"][0][0]
+    gain = sum(targets.k.coef.values())
+    air = table1.loc["E2", "ambient_min_c"] - table1.loc["E1", "ambient_min_c"]
+    return (
+        f"E1 and E2 start in nearly the same air (Table 1 minima {air:+.1f} degC apart), yet Table 5's first "
+        f"slopes differ by {dk:+.1f} um/m; Eq. 9's coefficients sum to {gain:.3f} um/m/K, so a machine at one "
+        f"uniform temperature would have to start {dk / gain:+.2f} K apart. The twin meets this with the "
+        "motor, the screw and the bed far from the air at the start of E1 and E2 (initial offsets below)."
+    )
+
+
 def write_calibration_report(root: Path | str, params: mdl.TwinParams) -> pd.DataFrame:
     """CALIBRATION.md and calibration.png from the raw files under ``root``."""
     root = Path(root)
-    lines = measurement_lines(root)
-    table = _comparison(lines)
-    mlr = paper_mlr_check(lines, window_temperatures(root, lines))
-    _figure(table, root / "calibration.png")
+    view = pipeline_view(root)
+    targets = published_targets()
+    residuals = target_residuals(view.observables(), targets)
+    table = _comparison(view.kb)
+    metrics, selected = heldout_results(view)
+    _figure(table, residuals, root / "calibration.png")
     rows = "\n".join(
         f"| {r.run} | {r.measurement} | {r.time_min:.1f} | {r.n_targets} | {r.k_um_per_m:.2f} | {r.k_paper:.1f} | "
         f"{r.dk:+.2f} | {r.b_um:.2f} | {r.b_paper:.1f} | {r.db:+.2f} | {r.r2:.3f} | {r.rms_um:.3f} |"
         for r in table.itertuples()
     )
-    rms_k, rms_b = _rms(table["dk"]), _rms(table["db"])
-    max_k, max_b = float(table["dk"].abs().max()), float(table["db"].abs().max())
+    rises, rise_note = _rise_table(view)
     miss_run, miss_meas, miss_dir, miss_pos = faults.MISSING_READING
     text = f"""\
-# Calibration of the twin against the paper's Table 5
+# Calibration of the twin against the paper's published fits and tables
 
-Written by `python -m thermaxis.twin generate` (and `calibrate`) from the RAW files of
-this folder -- faults included -- exactly as the pipeline will see them:
+**SIMULATED data.** Every figure below is computed by `python -m thermaxis.twin generate`
+(and `calibrate`) from the RAW files of this folder -- faults included -- with the
+pipeline's own library and default configuration (`config/config.yaml`): cleaning and
+window-mean temperatures (`thermaxis.assemble.clean_and_assemble_run`), pass-mean errors
+({miss_run} M{miss_meas:02d} has no `{miss_dir}` capture at {miss_pos:g} mm: the pipeline keeps the other pass's reading there),
+and the least-squares line of each measurement, k in um/m and b in um at 185 mm
+(`thermaxis.decouple.decouple_table`, the paper's Eq. 6).
 
-1. each `errors/Mxx.csv` is one measurement, ordered by its first reading;
-2. the forward and backward passes are combined by their mean per target; a target
-   missing from one pass is dropped ({miss_run} M{miss_meas:02d} has no `{miss_dir}` capture at
-   {miss_pos:g} mm, so it is decoupled on 13 targets). No other cleaning is needed on the
-   error side, and the temperature cleaning stage does not exist yet (k and b do not
-   use temperatures);
-3. `thermaxis.decouple.decouple_measurement(position_mm, error_um, origin_mm=185)`:
-   least-squares line, k in um/m, b in um at 185 mm (the paper's Eq. 6).
+## Targets
 
-## Result
+The calibration objective is the sum of squares of every target's residuals divided by
+its tolerance (weight = 1 / tolerance), plus weak priors. Its targets are the paper's
+published fits and tables only; the pipeline's held-out results (below) are outcomes.
 
-| figure | twin vs Table 5 | acceptance |
-|---|---|---|
-| RMS difference of k | {rms_k:.3f} um/m | <= {TOLERANCE_K} um/m |
-| max difference of k | {max_k:.3f} um/m | reported |
-| RMS difference of b | {rms_b:.3f} um | <= {TOLERANCE_B} um |
-| max difference of b | {max_b:.3f} um | reported |
+| target | weight (tolerance) | acceptance | achieved RMS, all 32 measurements | worst run | met |
+|---|---|---|---|---|---|
+{_target_rows(residuals, targets)}
 
-Linearity of the error curves (as in the paper, strongly but not perfectly linear):
-R^2 of the line {table['r2'].min():.3f} ... {table['r2'].max():.3f} (median {table['r2'].median():.3f}),
-residual RMS {table['rms_um'].min():.3f} ... {table['rms_um'].max():.3f} um (median {table['rms_um'].median():.3f} um).
-The departures come from the screw's periodic pitch error, the interferometer noise
-and the drift during the three minutes of a measurement.
+Eq. 8 is printed for 185, 205, 225 and 445 mm only (the other rows are elided in the
+paper); its tolerance is the paper's Table 7 error RMSE, as the issue asks; the
+paper's own point-by-point prediction error (Table 4) is 1.6 um. Where targets compete
+the objective weights them tighter than their acceptance (`thermaxis.twin.fit.OBJECTIVE_FACTOR`):
+weighted at the acceptance bounds, Eq. 8 and Eq. 9 pull Table 5's intercepts to an RMS
+of 0.36-0.40 um, and Table 5 then pushes Eq. 9's b just past its bound. The achieved values are measured on the
+raw files (with noise and faults); the fit itself sees the noise-free model.
+
+Per run, RMS of each target's residuals:
+
+| run | Table 5 k | Table 5 b | Eq. 9 k | Eq. 9 b | Eq. 8 |
+|---|---|---|---|---|---|
+{_per_run_rows(residuals)}
+
+**Table 1** (workshop air; met by the air profiles of `thermaxis.twin.conditions`, not
+fitted): range of the cleaned ambient sensor `{view.config['ambient_sensor']}` over each log.
+
+| run | Table 1 degC | twin degC | largest miss degC | within 0.2 degC |
+|---|---|---|---|---|
+{_ambient_rows(view)}
+
+**Fig. 10 and the text on temperature rises.** The paper's text says only that the
+temperatures of experiments 2-4 follow the trends of Fig. 10 (experiment 1) except the
+ambient one, and that the ambient falls in experiments 3 and 4 (cooling switched on).
+Fig. 10's curves are not in the text available to us, so no number was transcribed
+from it and no rise enters the objective; the rises of the twin (last minus first
+measurement, degC) are shown for comparison with the figure:
+
+{rises}
+
+{rise_note}
 
 ![twin vs paper](calibration.png)
 
+## What the published statements imply together
+
+{_first_measurement_floor(targets)}
+
+{_table4_tension(residuals, targets, view.config['paper_fold'])}
+
+## Held-out results of the pipeline (fold {view.config['paper_fold']}, default configuration)
+
+Computed here with the workflow's own selection and models
+(`thermaxis.experiment.select_for_fold`, `evaluate_configuration`; the same numbers as
+`snakemake results/twin/tables/metrics.csv`). RMSE / max |residual| / MAE:
+
+| model | target | paper table | paper | new twin | previous twin (Table 5 only) |
+|---|---|---|---|---|---|
+{_heldout_rows(metrics)}
+
+Sensitive points the default configuration selects on the training runs: k {selected['k']};
+b {selected['b']}; point-by-point common set {selected['pointwise']} (previous twin: k
+{PREVIOUS_TWIN_SELECTION['k']}; b {PREVIOUS_TWIN_SELECTION['b']}; point-by-point {PREVIOUS_TWIN_SELECTION['pointwise']}; the paper: k T1, T6, T12; b T2, T7, T11;
+point-by-point T1, T11, T12). {_conclusions(metrics)}
+
 ## Per measurement
 
-time: middle of the measurement, minutes from the run's first reading.
+time: start of the measurement, minutes from the start of M1.
 
 | run | meas | time min | targets | k twin | k paper | dk | b twin | b paper | db | R^2 | resid RMS um |
 |---|---|---|---|---|---|---|---|---|---|---|---|
 {rows}
 
+Linearity of the error curves (as in the paper, strongly but not perfectly linear):
+R^2 of the line {table['r2'].min():.3f} ... {table['r2'].max():.3f} (median {table['r2'].median():.3f}),
+residual RMS {table['rms_um'].min():.3f} ... {table['rms_um'].max():.3f} um (median {table['rms_um'].median():.3f} um).
+
 ## How the parameters were fitted
 
 `python -m thermaxis.twin calibrate` (`make twin-calibrate`) refits the free parameters
 with `scipy.optimize.least_squares` (trust region, deterministic start at the priors'
-centres) on the NOISE-FREE model -- pass mean with the reversal error, without noise -- with
-residuals scaled by the tolerances ({TOLERANCE_K} um/m, {TOLERANCE_B} um) plus weak priors
-that keep loosely determined parameters physical. It writes
-`src/thermaxis/twin_params.json` and regenerates this folder. The free parameters
-(documented in `thermaxis.twin.model`): five heat-input coefficients (nut, bearings,
-carriages, motor per m/min of feed; motor standstill losses), the screw's expansion
-gain and the interferometer's material-normalisation gain, the geometric slope, five
-drift gains (bearing seat, bed core, bed walls, carriages, nut), six effective-capacity
-factors, and per run four initial temperature offsets (a machine is rarely at
-equilibrium when a test starts). The workshop-air profiles, the network's conductances,
-the sensors and the instrument constants are fixed and documented in the code.
+centres) on the NOISE-FREE model -- pass mean with the reversal error, sensor
+temperatures averaged over each measurement's readings, without noise -- against the
+targets above. It writes `src/thermaxis/twin_params.json` and regenerates this folder.
+The free parameters (documented in `thermaxis.twin.model`): five heat-input
+coefficients, the screw's expansion gain and the interferometer's
+material-normalisation gain, the geometric slope, five drift gains, six
+effective-capacity factors, the mountings and calibration offsets of the six sensors
+the paper's Eq. 8 and Eq. 9 use, and per run {len(mdl.INITIAL_PARAMETERS)} initial temperature offsets (a
+machine is rarely at equilibrium when a test starts). The workshop-air profiles, the
+network's conductances, the other sensors and the instrument constants are fixed and
+documented in the code.
 
 {_parameter_tables(params)}
-
-## Sanity check: the paper's decoupled MLR does not reproduce the twin
-
-The paper's Eq. 9 structure refitted on this dataset (k on absolute T1, T6, T12; b on
-T2, T7, T11 relative to the run's first measurement; temperatures = median of each
-raw log over the measurement window, open circuit dropped; plain least squares), trained
-on E1-E3 and predicting E4: RMSE k = {mlr['rmse_k']:.2f} um/m, RMSE b = {mlr['rmse_b']:.2f} um,
-RMSE of the error curve = {mlr['rmse_error']:.2f} um (max |residual| {mlr['max_abs_error']:.2f} um).
-The paper reports 2.6 um/m, 0.5 um and 0.6 um (Table 7). The sensors lag, are noisy
-and do not see the screw core, so no regression on them is exact.
 """
     (root / "CALIBRATION.md").write_text(text, encoding="utf-8")
     return table
