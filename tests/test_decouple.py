@@ -49,8 +49,10 @@ def test_quadratic_degree_recovers_curvature():
 
 
 def test_compose_curve_is_eq7():
-    curves = compose_curve([10.0, -20.0], [1.0, 0.0], [185.0, 445.0], origin_mm=185.0)
+    # Rows (b, k): k = 10 um/m over the 0.26 m stroke adds 2.6 um; (b, k, c2) adds c2 * 0.26**2.
+    curves = compose_curve([[1.0, 10.0], [0.0, -20.0]], [185.0, 445.0], origin_mm=185.0)
     np.testing.assert_allclose(curves, [[1.0, 1.0 + 2.6], [0.0, -5.2]])
+    np.testing.assert_allclose(compose_curve([0.0, 0.0, 100.0], [185.0, 445.0], 185.0), [[0.0, 100.0 * 0.0676]])
 
 
 def test_rejects_too_few_positions():

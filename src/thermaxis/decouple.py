@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DecoupledFit", "decouple_measurement", "decouple_curves", "decouple_table", "compose_curve", "MM_PER_M"]
+__all__ = ["DecoupledFit", "decouple_measurement", "decouple_curves", "decouple_table", "compose_curve", "stroke_powers", "MM_PER_M"]
 
 MM_PER_M = 1000.0
 
@@ -34,7 +34,9 @@ class DecoupledFit:
     origin_mm: float
 
 
-def _design(shifted_m: np.ndarray, degree: int) -> np.ndarray:
+def stroke_powers(position_mm, origin_mm: float, degree: int) -> np.ndarray:
+    """(p, degree + 1): powers 0..degree of the shifted stroke in metres, Eq. 6's design matrix."""
+    shifted_m = (np.asarray(position_mm, dtype=float) - origin_mm) / MM_PER_M
     return np.vander(shifted_m, degree + 1, increasing=True)
 
 
@@ -58,8 +60,7 @@ def decouple_measurement(
             f"decoupling of degree {degree} needs at least {degree + 1} distinct positions, got {np.unique(x).size}"
         )
     origin = float(np.min(x)) if origin_mm is None else float(origin_mm)
-    shifted_m = (x - origin) / MM_PER_M
-    design = _design(shifted_m, degree)
+    design = stroke_powers(x, origin, degree)
     coef, *_ = np.linalg.lstsq(design, y, rcond=None)
     fitted = design @ coef
     residual = y - fitted
@@ -100,15 +101,14 @@ def decouple_curves(position_mm, errors, degree: int = 1, origin_mm: float | Non
     return fits
 
 
-def compose_curve(k_um_per_m, b_um, position_mm, origin_mm: float) -> np.ndarray:
-    """The paper's Eq. 7, y = k x + b, on the shifted stroke.
+def compose_curve(coefficients, position_mm, origin_mm: float) -> np.ndarray:
+    """The paper's Eq. 7, y = k x + b (and its curved forms), on the shifted stroke.
 
-    Broadcasts: k and b of shape (n,) with positions of shape (p,) give (n, p).
+    ``coefficients`` are rows of ascending powers (b, k, c2, c3) as in
+    :class:`DecoupledFit`; shape (n, degree + 1) gives curves of shape (n, p).
     """
-    k = np.asarray(k_um_per_m, dtype=float)
-    b = np.asarray(b_um, dtype=float)
-    shifted_m = (np.asarray(position_mm, dtype=float) - origin_mm) / MM_PER_M
-    return k[..., None] * shifted_m + b[..., None]
+    coefficients = np.atleast_2d(np.asarray(coefficients, dtype=float))
+    return coefficients @ stroke_powers(position_mm, origin_mm, coefficients.shape[1] - 1).T
 
 
 def decouple_table(errors, degree: int = 1):

@@ -19,9 +19,8 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from .decouple import decouple_curves
 from .evaluate import prediction_metrics
-from .models import DecoupledAxisModel, PointwiseAxisModel, relative_temperatures
+from .models import DecoupledAxisModel, PointwiseAxisModel, decouple_rows, relative_temperatures
 from .selection import SensitivePoints, common_points, rank_by_correlation, select_sensitive_points
 
 __all__ = [
@@ -30,7 +29,6 @@ __all__ = [
     "ModelSettings",
     "FoldSelection",
     "FoldResult",
-    "training_kb",
     "select_for_fold",
     "evaluate_configuration",
     "selection_table",
@@ -153,14 +151,6 @@ def sensor_columns(X: pd.DataFrame) -> list[str]:
     return [c for c in X.columns if c not in META]
 
 
-def training_kb(X: pd.DataFrame, Y: pd.DataFrame, degree: int = 1) -> pd.DataFrame:
-    """Decoupled k and b of every row (the selection's targets)."""
-    fits = decouple_curves(np.asarray(Y.columns, dtype=float), Y.to_numpy(dtype=float), degree=degree)
-    return pd.DataFrame(
-        [(fit.k_um_per_m, fit.b_um) for fit in fits], columns=["k_um_per_m", "b_um"], index=Y.index
-    )
-
-
 def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, target: str) -> SensitivePoints:
     if method == "fuzzy_grey":
         return select_sensitive_points(
@@ -230,7 +220,7 @@ def select_for_fold(
     relative = relative_temperatures(X)[sensors]
     k_points = b_points = None
     if decoupled:
-        kb = training_kb(X, Y, degree=settings.degree)
+        kb = decouple_rows(X, Y, degree=settings.degree)
         k_points = _points(settings.method, absolute, kb["k_um_per_m"].to_numpy(), settings, "k")
         b_points = _points(settings.method, relative, kb["b_um"].to_numpy(), settings, "b")
     per_position = {}
@@ -333,9 +323,9 @@ def evaluate_configuration(
     metric_rows = []
     kb_rows = []
     if approach == "decoupled":
-        kb_measured = training_kb(X_test, Y_test, degree=degree)
+        kb_measured = decouple_rows(X_test, Y_test, degree=degree)
         kb_predicted = estimator.predict_kb(X_test)
-        kb_interval = _kb_interval(estimator, X_test, model.interval_level) if algorithm == "gpr" else None
+        kb_interval = estimator.predict_kb_interval(X_test, model.interval_level) if algorithm == "gpr" else None
         for target, column in (("k", "k_um_per_m"), ("b", "b_um")):
             m = kb_measured[column].to_numpy()
             p = kb_predicted[column].to_numpy()
@@ -384,20 +374,6 @@ def evaluate_configuration(
         kb_predictions=kb_frame,
         error_predictions=errors,
     )
-
-
-def _kb_interval(estimator, X_test, level):
-    """Intervals of k and b from the GPR's own predictive standard deviations."""
-    from scipy.stats import norm
-
-    z = float(norm.ppf(0.5 + level / 2))
-    out = {}
-    frame = estimator.predict_kb(X_test, return_std=True)
-    for column in ("k_um_per_m", "b_um"):
-        mean = frame[column].to_numpy()
-        std = frame[f"{column}_std"].to_numpy()
-        out[column] = (mean - z * std, mean + z * std)
-    return out
 
 
 def _empty_kb() -> pd.DataFrame:

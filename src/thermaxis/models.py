@@ -42,7 +42,7 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
 
-from thermaxis.decouple import MM_PER_M, decouple_curves
+from thermaxis.decouple import compose_curve, decouple_curves, stroke_powers
 
 __all__ = [
     "ALGORITHMS",
@@ -54,6 +54,7 @@ __all__ = [
     "linear_terms",
     "predict_with_std",
     "relative_temperatures",
+    "decouple_rows",
     "DecoupledAxisModel",
     "PointwiseAxisModel",
 ]
@@ -399,6 +400,25 @@ def _z_score(level: float) -> float:
 # --------------------------------------------------------------------------- decoupled
 
 
+def decouple_rows(X: pd.DataFrame, Y: pd.DataFrame, degree: int = 1) -> pd.DataFrame:
+    """Decoupling of every row of Y (Eq. 6): run, measurement, k_um_per_m, b_um (c2, c3), r2, rms_um.
+
+    The origin is Y's first position, so b means the same for every measurement.
+    """
+    positions = np.asarray(Y.columns, dtype=float)
+    labels = [f"run {run} measurement {measurement}" for run, measurement in zip(X["run"], X["measurement"])]
+    fits = decouple_curves(positions, Y.to_numpy(dtype=float), degree, origin_mm=float(positions[0]), labels=labels)
+    rows = []
+    for run, measurement, fit in zip(X["run"], X["measurement"], fits):
+        row = {"run": run, "measurement": measurement, "k_um_per_m": fit.k_um_per_m, "b_um": fit.b_um}
+        for p in range(2, degree + 1):
+            row[_KB_COLUMNS[f"c{p}"]] = fit.coefficients[p]
+        row.update(r2=fit.r2, rms_um=fit.rms_um)
+        rows.append(row)
+    return pd.DataFrame(rows, index=X.index)
+
+
+
 class DecoupledAxisModel(RegressorMixin, BaseEstimator):
     """Step-by-step model (Eq. 9): k from absolute, b from relative temperatures.
 
@@ -465,20 +485,6 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         targets += [(f"c{p}", tuple(self.k_sensors), "absolute") for p in range(2, self.degree + 1)]
         return targets
 
-    def _decouple(self, X: pd.DataFrame, Y: pd.DataFrame) -> pd.DataFrame:
-        labels = [f"run {run} measurement {measurement}" for run, measurement in zip(X["run"], X["measurement"])]
-        fits = decouple_curves(
-            self.positions_mm_, Y.to_numpy(dtype=float), self.degree, origin_mm=self.origin_mm_, labels=labels
-        )
-        rows = []
-        for run, measurement, fit in zip(X["run"], X["measurement"], fits):
-            row = {"run": run, "measurement": measurement, "k_um_per_m": fit.k_um_per_m, "b_um": fit.b_um}
-            for p in range(2, self.degree + 1):
-                row[_KB_COLUMNS[f"c{p}"]] = fit.coefficients[p]
-            row.update(r2=fit.r2, rms_um=fit.rms_um)
-            rows.append(row)
-        return pd.DataFrame(rows, index=X.index)
-
     def fit(self, X: pd.DataFrame, Y: pd.DataFrame) -> DecoupledAxisModel:
         """Decouple every training measurement and regress its coefficients on temperature."""
         _check_algorithm(self.algorithm)
@@ -487,7 +493,7 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         _check_X(X, (*self.k_sensors, *self.b_sensors, *self.signals))
         self.positions_mm_ = _positions_of(X, Y)
         self.origin_mm_ = float(self.positions_mm_[0])
-        self.kb_ = self._decouple(X, Y)
+        self.kb_ = decouple_rows(X, Y, self.degree)
         groups = X["run"].to_numpy()
         self.estimators_, self.svr_params_ = {}, {}
         for target, sensors, temperature in self._targets():
@@ -531,18 +537,20 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
                 means[column] = np.asarray(self.estimators_[target].predict(features)).ravel()
         return pd.DataFrame({**means, **stds}, index=X.index)
 
-    def _shifted_powers(self) -> np.ndarray:
-        """(degree + 1, p): powers 0..degree of the shifted stroke in metres."""
-        shifted_m = (self.positions_mm_ - self.origin_mm_) / MM_PER_M
-        return np.vander(shifted_m, self.degree + 1, increasing=True).T
-
     def predict(self, X: pd.DataFrame) -> np.ndarray:
         """Predicted error curves, shape (n rows, n positions) in um."""
         kb = self.predict_kb(X)
         coefficients = np.column_stack(
             [kb["b_um"], kb["k_um_per_m"], *(kb[_KB_COLUMNS[f"c{p}"]] for p in range(2, self.degree + 1))]
         )
-        return coefficients @ self._shifted_powers()
+        return compose_curve(coefficients, self.positions_mm_, self.origin_mm_)
+
+    def predict_kb_interval(self, X: pd.DataFrame, level: float = 0.95) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Gaussian interval of each decoupling coefficient (gpr only): column -> (lower, upper)."""
+        z = _z_score(level)
+        kb = self.predict_kb(X, return_std=True)
+        columns = [c for c in kb.columns if not c.endswith("_std")]
+        return {c: (kb[c].to_numpy() - z * kb[f"{c}_std"].to_numpy(), kb[c].to_numpy() + z * kb[f"{c}_std"].to_numpy()) for c in columns}
 
     def predict_interval(self, X: pd.DataFrame, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
         """Pointwise prediction interval of the error curves (gpr only).
@@ -563,7 +571,7 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         columns = [_KB_COLUMNS[t] for t in ("b", "k", "c2", "c3")[: self.degree + 1]]
         means = kb[columns].to_numpy()
         stds = kb[[f"{c}_std" for c in columns]].to_numpy()
-        powers = self._shifted_powers()
+        powers = stroke_powers(self.positions_mm_, self.origin_mm_, self.degree).T
         centre = means @ powers
         half = z * np.sqrt(stds**2 @ powers**2)
         return centre - half, centre + half
