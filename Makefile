@@ -77,7 +77,7 @@ sweep: env
 
 # Many minutes (cold run, sweep, scale series up to 50 runs); e.g. BENCH_ARGS="--runs 5 10".
 bench: env
-	$(BIN)/python -m thermaxis.bench --out results/bench $(BENCH_ARGS)
+	$(BIN)/python -m tools.bench --out results/bench $(BENCH_ARGS)
 
 clean:
 	rm -rf results logs benchmarks .snakemake

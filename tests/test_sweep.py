@@ -345,7 +345,7 @@ def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_p
 
 
 def test_scaling_fit_by_hand():
-    from thermaxis.bench import fit_scaling
+    from tools.bench import fit_scaling
 
     # 5 s + 2 s per run exactly: slope 2, intercept 5, marginal 2 and 2, no quadratic term.
     fit = fit_scaling([10, 5, 20], [25.0, 15.0, 45.0])
@@ -366,7 +366,7 @@ def test_scaling_fit_by_hand():
 
 
 def test_measure_counts_the_whole_process_tree(tmp_path):
-    from thermaxis.bench import measure
+    from tools.bench import measure
 
     # A grandchild (python under sh) holds 300 MiB and spins 0.4 s of CPU.
     script = (
@@ -382,7 +382,7 @@ def test_measure_counts_the_whole_process_tree(tmp_path):
 
 
 def test_bench_markdown_names_the_cores_and_the_targets():
-    from thermaxis.bench import bench_markdown
+    from tools.bench import bench_markdown
 
     doc = {
         "machine": {"usable_cores": 2, "cpu_count": 2, "memory_gib": 8.0, "platform": "Linux", "python": "3.11",

@@ -64,18 +64,19 @@ def markdown_table(frame: pd.DataFrame, float_format: str = "%.2f") -> str:
     return "\n".join([header, rule, *body]) + "\n"
 
 
-def table5_markdown(kb: pd.DataFrame, dataset_name: str, simulated: bool, paper_dir=None) -> str:
-    """Table 5 as Markdown; for the twin, the paper's published k and b beside it."""
-    lines = ["# Table 5: slope k and intercept b of every measurement", "", data_statement(dataset_name, simulated), ""]
+def table5_markdown(kb: pd.DataFrame, statement: str, paper_dir=None) -> str:
+    """Table 5 as Markdown, under the data statement; ``paper_dir`` (a dataset that
+    reproduces the paper) puts the paper's published k and b beside it."""
+    lines = ["# Table 5: slope k and intercept b of every measurement", "", statement, ""]
     table = kb[["run", "measurement", "time_min", "k_um_per_m", "b_um", "r2", "rms_um"]].copy()
     paper_file = Path(paper_dir) / "table5_slope_intercept.csv" if paper_dir else None
-    if simulated and dataset_name == "twin" and paper_file is not None and paper_file.is_file():
+    if paper_file is not None and paper_file.is_file():
         paper = pd.read_csv(paper_file).rename(columns={"k_um_per_m": "paper_k", "b_um": "paper_b"})
         table = table.merge(paper[["run", "measurement", "paper_k", "paper_b"]], on=["run", "measurement"], how="left")
         table["diff_k"] = table["k_um_per_m"] - table["paper_k"]
         table["diff_b"] = table["b_um"] - table["paper_b"]
         lines.append(
-            "The paper's Table 5 is shown beside the twin's values (the twin is calibrated to it; "
+            "The paper's Table 5 is shown beside this dataset's values ("
             f"RMS difference k {np.sqrt(np.nanmean(table['diff_k'] ** 2)):.2f} um/m, "
             f"b {np.sqrt(np.nanmean(table['diff_b'] ** 2)):.2f} um)."
         )

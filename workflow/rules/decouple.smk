@@ -21,8 +21,7 @@ rule decouple:
     params:
         degree=config["decoupling"]["degree"],
         provenance=DATA_STATEMENT,
-        simulated=SIMULATED,
-        dataset_name=DATASET.name,
+        paper=PAPER,
         paper_dir=lambda w, input: os.path.dirname(input.paper),
     script:
         "../scripts/decouple.py"

@@ -23,7 +23,6 @@ rule fig2_positioning_error:
         run=FIG_RUN,
         caption=figure_caption("fig2", DATASET.name, SIMULATED, run=FIG_RUN),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -51,7 +50,6 @@ rule fig3_ambient:
         sensor=AMBIENT,
         caption=figure_caption("fig3", DATASET.name, SIMULATED),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -78,7 +76,6 @@ rule fig5_unzeroed:
         run=FIG_RUN,
         caption=figure_caption("fig5", DATASET.name, SIMULATED, run=FIG_RUN),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -105,7 +102,6 @@ rule fig6_error_vs_time:
         run=FIG_RUN,
         caption=figure_caption("fig6", DATASET.name, SIMULATED, run=FIG_RUN),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -132,7 +128,6 @@ rule fig7_error_surface:
         run=FIG_RUN,
         caption=figure_caption("fig7", DATASET.name, SIMULATED, run=FIG_RUN),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -159,7 +154,6 @@ rule fig8_rezeroed:
         run=FIG_RUN,
         caption=figure_caption("fig8", DATASET.name, SIMULATED, run=FIG_RUN),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -186,7 +180,6 @@ rule fig9_other_runs:
         runs=OTHER_RUNS,
         caption=figure_caption("fig9", DATASET.name, SIMULATED, runs=OTHER_RUNS),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -215,7 +208,6 @@ rule fig10_temperature_rise:
         caption=figure_caption("fig10", DATASET.name, SIMULATED, run=FIG_RUN),
         signal_units=DATASET.signal_units(),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -241,7 +233,6 @@ rule fig12_slope_intercept:
     params:
         caption=figure_caption("fig12", DATASET.name, SIMULATED),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -273,7 +264,6 @@ rule fig_kb_prediction:
     params:
         caption=lambda w: prediction_caption("kb_prediction", w),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -305,7 +295,6 @@ rule fig_error_prediction:
     params:
         caption=lambda w: prediction_caption("error_prediction", w),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"
@@ -333,7 +322,6 @@ rule fig_fold_comparison:
             "fold_comparison", DATASET.name, SIMULATED, target="error"
         ),
         simulated=SIMULATED,
-        dataset_name=DATASET.name,
         dpi=config["figures"]["dpi"],
     script:
         "../scripts/plot.py"

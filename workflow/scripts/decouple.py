@@ -10,12 +10,8 @@ def main(snakemake):
     kb, coefficients = decouple_table(errors, degree=snakemake.params.degree)
     write_csv(kb, snakemake.output.table, float_format="%.4f")
     write_csv(coefficients, snakemake.output.coefficients, float_format="%.6g")
-    markdown = table5_markdown(
-        kb,
-        dataset_name=snakemake.params.dataset_name,
-        simulated=snakemake.params.simulated,
-        paper_dir=snakemake.params.paper_dir,
-    )
+    paper_dir = snakemake.params.paper_dir if snakemake.params.paper else None
+    markdown = table5_markdown(kb, snakemake.params.provenance, paper_dir=paper_dir)
     write_text(markdown, snakemake.output.markdown)
 
 

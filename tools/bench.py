@@ -1,6 +1,6 @@
 """Benchmarks of the workflow (``make bench``): wall time, CPU time and peak memory.
 
-``python -m thermaxis.bench --out results/bench`` measures, each in a scratch work
+``python -m tools.bench --out results/bench`` measures, each in a scratch work
 folder (symlinks to the repository's Snakefile, config, workflow, notebooks and data,
 so the repository's own ``results/`` are never touched):
 
@@ -539,7 +539,7 @@ def bench_markdown(doc: dict) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m thermaxis.bench", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m tools.bench", description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("results/bench"), help="folder of bench.json and bench.md")
     parser.add_argument("--cores", type=int, default=None, help="cores given to Snakemake (default: all usable)")
     parser.add_argument("--runs", type=int, nargs="+", default=list(SCALE_RUNS), help="runs of the scale datasets")
