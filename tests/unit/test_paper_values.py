@@ -17,7 +17,7 @@ import pytest
 
 from thermaxis import paper
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = Path(__file__).resolve().parents[2]
 SHARED_PAPER = REPO_ROOT.parent / "shared" / "paper"
 DIGEST = SHARED_PAPER / "DIGEST.md"
 FULL_TEXT = SHARED_PAPER / "000_298bf3df7931147d.txt"

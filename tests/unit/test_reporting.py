@@ -1,4 +1,4 @@
-"""Reports: clean notebooks, provenance, HTML helpers, and the report rules end to end."""
+"""Reports, unit level: notebooks committed clean, provenance records, HTML helpers."""
 
 from __future__ import annotations
 
@@ -9,19 +9,14 @@ import os
 import re
 import shutil
 import subprocess
-import sys
-from dataclasses import dataclass
 from datetime import datetime, timezone
-from pathlib import Path
-from urllib.parse import unquote, urlparse
 
 import thermaxis  # noqa: F401  first: nbformat's jsonschema import is seconds faster (thermaxis/__init__.py)
 import nbformat
 import pandas as pd
 import pytest
-import yaml
 
-from conftest import FIXED_EPOCH, REPO, run_snakemake, snakemake_env, workflow_workdir, write_dataset
+from conftest import FIXED_EPOCH, REPO
 from thermaxis import provenance, reporting
 
 NOTEBOOKS = ("dataset_report", "condition_report", "model_report", "paper_report")
@@ -211,172 +206,3 @@ def test_index_page_links_and_states_the_data():
     assert page.index("SIMULATED DATA") < page.index("<h2>Reports</h2>")
     assert "<h2>Empty</h2>" not in page
     assert reporting.remote_loads(page) == []
-
-
-# --------------------------------------------------------------------------- end to end
-
-
-@dataclass(frozen=True)
-class Built:
-    work: Path
-    out: Path
-    dataset: Path
-    config: Path
-    env: dict
-
-
-_BUILD: dict[str, Built] = {}
-
-
-def snakemake(built: Built, *args, check=True) -> subprocess.CompletedProcess:
-    return run_snakemake(built.work, "--configfile", str(built.config), *args, check=check, env=built.env)
-
-
-def build_reports(tmp_path_factory) -> Built:
-    """The workflow on a small simulated dataset, once per test session (the browser test reuses it)."""
-    if "built" not in _BUILD:
-        tmp = tmp_path_factory.mktemp("reports")
-        dataset = write_dataset(tmp / "rep", runs=("R1", "R2"), name="rep", reproduces="xu2023")
-        work = workflow_workdir(tmp)
-        config = work / "reports_config.yaml"
-        config.write_text(
-            yaml.safe_dump(
-                {
-                    "dataset": str(dataset),
-                    "ambient_sensor": "S1",
-                    "selection": {"n_clusters": 2},
-                    # One fold, one algorithm: every kind of report, as few notebooks as possible.
-                    "folds": ["R2"],
-                    "paper_fold": "R2",
-                    "models": {"algorithms": ["mlr"]},
-                    "figures": {"algorithms": ["mlr"], "formats": ["png"], "dpi": 80},
-                    "reports": {"model_algorithms": ["mlr"]},
-                }
-            )
-        )
-        env = snakemake_env()
-        built = Built(work=work, out=work / "results" / "rep", dataset=dataset, config=config, env=env)
-        snakemake(built)
-        _BUILD["built"] = built
-    return _BUILD["built"]
-
-
-@pytest.fixture(scope="session")
-def built(tmp_path_factory):
-    return build_reports(tmp_path_factory)
-
-
-def report_pages(out: Path) -> list[Path]:
-    names = ["paper_report", "dataset_report", "condition_R1", "condition_R2"]
-    names += [f"model_R2_{approach}_mlr" for approach in ("decoupled", "pointwise")]
-    return [out / "reports" / f"{n}.html" for n in names]
-
-
-@pytest.mark.slow
-def test_every_report_and_the_index_are_built(built):
-    for page in report_pages(built.out):
-        assert page.is_file(), page
-        assert page.with_suffix(".ipynb").is_file(), page
-    assert (built.out / "index.html").is_file()
-    assert sorted(p.name for p in (built.out / "reports").glob("model_*.html")) == [
-        "model_R2_decoupled_mlr.html",
-        "model_R2_pointwise_mlr.html",
-    ]
-
-
-@pytest.mark.slow
-def test_first_screen_says_the_data_are_simulated(built):
-    for page in report_pages(built.out):
-        text = page.read_text(encoding="utf-8")
-        body = text[text.index("<body") :]
-        first_content = min(body.find(tag) for tag in ("<table", "<img", "<h2") if tag in body)
-        banner = body.index('class="tx-banner')
-        assert banner < first_content, page.name
-        first_screen = body[banner:first_content]
-        assert "SIMULATED DATA" in first_screen and "Dataset <code>rep</code>: SIMULATED data" in first_screen, page.name
-
-
-@pytest.mark.slow
-def test_pages_load_nothing_from_the_network(built):
-    remote = r"""\s*=\s*["']?\s*(?:https?:)?//"""
-    patterns = {
-        "remote src": re.compile(r"\bsrc" + remote, re.I),
-        "remote stylesheet": re.compile(r"<link\b[^>]*\bhref" + remote, re.I),
-        "remote CSS url()": re.compile(r"""url\(\s*["']?\s*(?:https?:)?//""", re.I),
-        "CSS import": re.compile(r"@import", re.I),
-        "image not embedded": re.compile(r"""<img\b[^>]*\bsrc\s*=\s*(?!["']?data:)""", re.I),
-    }
-    for page in [*report_pages(built.out), built.out / "index.html"]:
-        text = page.read_text(encoding="utf-8")
-        for what, pattern in patterns.items():
-            assert not pattern.search(text), (page.name, what, pattern.search(text).group(0))
-        assert "<script src" not in text, page.name
-
-
-@pytest.mark.slow
-def test_executed_notebooks_keep_outputs_but_no_time_stamps(built):
-    for page in report_pages(built.out):
-        nb = nbformat.read(page.with_suffix(".ipynb"), as_version=4)
-        assert "start_time" not in nb.metadata["papermill"]
-        assert all("execution" not in c.metadata for c in nb.cells)
-        assert any(c.get("outputs") for c in nb.cells if c.cell_type == "code")
-        injected = [c for c in nb.cells if "injected-parameters" in c.metadata.get("tags", [])]
-        assert [c.id for c in injected] == ["injected-parameters"]
-
-
-@pytest.mark.slow
-def test_provenance_json_records_code_config_data_and_software(built):
-    record = json.loads((built.out / "provenance.json").read_text(encoding="utf-8"))
-    assert set(provenance.REQUIRED_KEYS) <= set(record)
-    files = record["data"]["files"]
-    on_disk = sorted(p.relative_to(built.dataset).as_posix() for p in built.dataset.rglob("*") if p.is_file())
-    assert sorted(files) == on_disk
-    assert files["runs.tsv"] == hashlib.sha256((built.dataset / "runs.tsv").read_bytes()).hexdigest()
-    assert files["R2/errors/M03.csv"] == hashlib.sha256((built.dataset / "R2/errors/M03.csv").read_bytes()).hexdigest()
-    assert record["config"]["selection"]["n_clusters"] == 2
-    canonical = json.dumps(record["config"], sort_keys=True, separators=(",", ":")).encode()
-    assert record["config_sha256"] == hashlib.sha256(canonical).hexdigest()
-    assert record["run_time"] == "2023-11-14T22:13:20Z"
-    assert record["python"]["version"] == ".".join(map(str, sys.version_info[:3]))
-    if shutil.which("git"):
-        head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True, text=True)
-        if head.returncode == 0:
-            assert record["git"]["commit"] == head.stdout.strip()
-
-
-@pytest.mark.slow
-def test_index_links_every_report_figure_and_table(built):
-    index = built.out / "index.html"
-    hrefs = re.findall(r'<a href="([^"]+)"', index.read_text(encoding="utf-8"))
-    targets = {(index.parent / unquote(urlparse(h).path)).resolve() for h in hrefs}
-    assert all(t.is_file() for t in targets), [str(t) for t in targets if not t.is_file()]
-    expected = {p.resolve() for p in report_pages(built.out)}
-    expected |= {p.resolve() for p in (built.out / "figures").iterdir()}
-    expected |= {(built.out / "tables" / n).resolve() for n in ("metrics.csv", "paper_comparison.md", "table5_slope_intercept.csv")}
-    assert expected <= targets, sorted(str(p) for p in expected - targets)
-    assert (built.out / "provenance.json").resolve() in targets
-
-
-def planned_rules(proc: subprocess.CompletedProcess) -> set[str]:
-    return set(re.findall(r"^(?:local)?rule (\w+):", proc.stdout + proc.stderr, flags=re.M)) - {"all"}
-
-
-@pytest.mark.slow
-def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built):
-    assert planned_rules(snakemake(built, "-n")) == set()
-    page = built.out / "reports" / "dataset_report.html"
-    before = page.read_bytes(), page.with_suffix(".ipynb").read_bytes()
-    snakemake(built, "--forcerun", "dataset_report", "--until", "dataset_report")
-    assert (page.read_bytes(), page.with_suffix(".ipynb").read_bytes()) == before
-
-
-@pytest.mark.slow
-def test_changing_n_clusters_reruns_only_the_affected_reports(built):
-    changed = built.work / "n_clusters_3.yaml"
-    doc = yaml.safe_load(built.config.read_text())
-    doc["selection"]["n_clusters"] = 3
-    changed.write_text(yaml.safe_dump(doc))
-    proc = run_snakemake(built.work, "-n", "--configfile", str(changed), check=False, env=built.env, timeout=300)
-    rules = planned_rules(proc)
-    assert {"select_sensitive_points", "model_report", "paper_report", "provenance", "index"} <= rules, rules
-    assert not rules & {"dataset_report", "condition_report", "clean_run", "assemble", "fig5_unzeroed"}, rules

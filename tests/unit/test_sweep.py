@@ -1,4 +1,4 @@
-"""Tests of thermaxis.sweep and the `sweep` target of the workflow.
+"""Tests of thermaxis.sweep (the `sweep` target end to end: tests/workflow/test_sweep_workflow.py).
 
 Counts, partitions, rankings and factor effects are checked against numbers worked
 out by hand in the comments; the sweep's metrics are checked against the library
@@ -17,7 +17,7 @@ import pytest
 import yaml
 from threadpoolctl import threadpool_limits
 
-from conftest import REPO, run_snakemake, workflow_workdir, write_dataset
+from conftest import REPO
 from thermaxis import experiment, sweep
 from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
 
@@ -290,55 +290,6 @@ def test_heatmap_holds_the_other_factors_at_the_main_configuration():
     # printed (+100), degree 2 (+2): n=2 -> 122, n=3 -> 132; svr adds 0.5.
     np.testing.assert_array_equal(table.to_numpy(), [[122.0, 122.5], [132.0, 132.5]])
     assert table.attrs["held"] == "fuzzy_grey, printed, deng, degree 2"
-
-
-# --------------------------------------------------------------------------- end to end
-
-@pytest.mark.slow
-def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_path):
-    dataset = write_dataset(tmp_path / "lines", runs=("R1", "R2", "R3"), sensors=("S1", "S2", "S3", "S4"),
-                            name="lines", n_measurements=5)  # fmt: skip
-    work = workflow_workdir(tmp_path)
-    main_models = {"algorithms": ["mlr", "svr"], "svr_grid": {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}}
-    config = {
-        "dataset": str(dataset),
-        "ambient_sensor": "S1",
-        "selection": {"n_clusters": 2},
-        "models": main_models,
-        "sweep": {"methods": ["fuzzy_grey", "correlation"], "n_clusters": [2, 3], "similarity": ["pearson"],
-                  "grade": ["deng", "absolute"], "degrees": [1, 2], "algorithms": ["mlr", "svr"],
-                  "svr_grid": "models"},  # fmt: skip
-        "figures": {"formats": ["png"]},
-    }
-    path = work / "config.yaml"
-    path.write_text(yaml.safe_dump(config))
-    proc = run_snakemake(work, "--configfile", str(path), "--", "results/lines/tables/metrics.csv", "sweep")
-    assert "sweep batch 2/2: 100%" in proc.stderr
-
-    out = work / "results" / "lines"
-    for name in ("summary.csv", "ranking.csv", "factor_effects.csv", "sweep_report.html",
-                 "figures/sweep_heatmap.png", "figures/sweep_factor_effects.png"):  # fmt: skip
-        assert (out / "sweep" / name).is_file(), name
-    summary = pd.read_csv(out / "sweep" / "summary.csv", dtype=str, keep_default_na=False)
-    # 3 folds x (fuzzy 2 x 2 + correlation 2 = 6 settings) x (2 degrees + pointwise) x 2 algorithms.
-    assert summary["config_id"].nunique() == 6 * 3 * 2
-    ours = summary[(summary["method"] == "fuzzy_grey") & (summary["n_clusters"] == "2")
-                   & (summary["similarity"] == "pearson") & (summary["grade"] == "deng")
-                   & summary["degree"].isin(["1", ""])]  # fmt: skip
-    keys = ["fold", "approach", "algorithm", "target"]
-    columns = [*keys, *sweep.METRICS]
-    theirs = pd.read_csv(out / "tables" / "metrics.csv", dtype=str, keep_default_na=False)
-    ours = ours[columns].sort_values(keys, ignore_index=True)
-    theirs = theirs[columns].sort_values(keys, ignore_index=True)
-    assert len(theirs) == 3 * (2 * 3 + 2 * 1)
-    pd.testing.assert_frame_equal(ours, theirs)
-
-    ranking = pd.read_csv(out / "sweep" / "ranking.csv")
-    assert ranking["main_config"].sum() == 2 * 2  # decoupled d1 + pointwise, mlr + svr
-    html = (out / "sweep" / "sweep_report.html").read_text()
-    assert "SIMULATED" in html and "Ranking" in html
-    rerun = run_snakemake(work, "--configfile", str(path), "-n", "--", "sweep")
-    assert "Nothing to be done" in rerun.stdout + rerun.stderr
 
 
 # --------------------------------------------------------------------------- bench

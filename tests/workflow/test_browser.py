@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from test_reports import build_reports
+from conftest import build_reports
 
 pytestmark = [pytest.mark.slow, pytest.mark.browser]
 

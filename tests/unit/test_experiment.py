@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from test_models import EQ9_B, EQ9_K, POSITIONS, eq9_errors, synthetic_temperatures
+from conftest import EQ9_B, EQ9_K, POSITIONS, eq9_errors, synthetic_temperatures
 from thermaxis.experiment import (
     ModelSettings,
     SelectionSettings,
