@@ -63,6 +63,7 @@ rule ambient_ranges:
             category="1. Dataset",
             labels={"table": "ambient ranges (Table 1)"},
         ),
+        series=f"{OUT}/tables/ambient_series.parquet",
     log:
         f"{LOGS}/ambient_ranges.log",
     benchmark:
