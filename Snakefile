@@ -32,3 +32,6 @@ rule all:
     default_target: True
     input:
         all_outputs(),
+
+
+check_outputs_inside(workflow.rules)

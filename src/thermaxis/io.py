@@ -19,6 +19,8 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from . import guard
+
 __all__ = [
     "DataError",
     "Dataset",
@@ -87,15 +89,9 @@ class Dataset:
 
 
 def _read_yaml(path: Path) -> dict:
-    if not path.is_file():
+    if not path.exists():
         raise DataError(f"{path}: file not found (every dataset needs dataset.yaml)")
-    try:
-        with open(path, encoding="utf-8") as fh:
-            doc = yaml.safe_load(fh)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f"line {mark.line + 1}: " if mark is not None else ""
-        raise DataError(f"{path}: {line}not valid YAML ({getattr(exc, 'problem', exc)})") from None
+    doc = guard.load_yaml(path)
     if not isinstance(doc, dict):
         raise DataError(f"{path}: expected a mapping at top level, got {type(doc).__name__}")
     return doc
@@ -122,15 +118,18 @@ def _validate_meta(path: Path, meta: dict) -> None:
 def _coerce_cell(value: str, kind: str):
     if kind == "integer":
         return int(value)
+    if kind == "number" and not np.isfinite(float(value)):
+        raise ValueError(value)
     if kind == "number":
         return float(value)
     return value
 
 
 def _read_runs(path: Path) -> pd.DataFrame:
-    if not path.is_file():
+    if not path.exists():
         raise DataError(f"{path}: file not found (every dataset needs runs.tsv)")
-    with open(path, encoding="utf-8", newline="") as fh:
+    guard.sniff_delimited(path, "\t", guard.MAX_SHEET_BYTES)
+    with open(path, encoding="utf-8-sig", newline="") as fh:
         rows = list(csv.reader(fh, delimiter="\t"))
     if not rows:
         raise DataError(f"{path}: empty file, expected a tab-separated header {' '.join(RUN_COLUMNS)}")
@@ -155,7 +154,7 @@ def _read_runs(path: Path) -> pd.DataFrame:
                 record[name] = _coerce_cell(cell.strip(), kind)
             except ValueError:
                 raise DataError(
-                    f"{path}: line {lineno}, column {name!r}: expected {'an integer' if kind == 'integer' else 'a number'}, got {cell!r}"
+                    f"{path}: line {lineno}, column {name!r}: expected {'an integer' if kind == 'integer' else 'a finite number'}, got {cell!r}"
                 ) from None
         errors = list(validator.iter_errors(record))
         if errors:
@@ -195,14 +194,15 @@ def load_dataset(root) -> Dataset:
 
 
 def _read_csv(path: Path) -> pd.DataFrame:
-    if not path.is_file():
-        raise DataError(f"{path}: file not found")
-    if path.stat().st_size == 0:
+    if guard.check_regular_file(path, what="data file") == 0:
         raise DataError(f"{path}: empty file, expected a header and data rows")
+    guard.sniff_delimited(path, ",")
     try:
         frame = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
     except pd.errors.EmptyDataError:
         raise DataError(f"{path}: empty file, expected a header and data rows") from None
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: byte {exc.start} of the file is not UTF-8; expected UTF-8 text") from None
     except pd.errors.ParserError as exc:
         raise DataError(f"{path}: not a valid CSV file ({str(exc).splitlines()[0]})") from None
     frame.columns = [str(c).strip() for c in frame.columns]
@@ -212,6 +212,7 @@ def _read_csv(path: Path) -> pd.DataFrame:
 
 
 def _parse_time(path: Path, values: pd.Series) -> pd.Series:
+    guard.check_time_zones(path, values)
     parsed = pd.to_datetime(values, format="ISO8601", errors="coerce")
     bad = parsed.isna().to_numpy()
     if bad.any():
@@ -226,7 +227,7 @@ def _parse_numbers(path: Path, frame: pd.DataFrame, column: str, allow_empty: bo
     raw = frame[column].str.strip()
     empty = raw == ""
     numbers = pd.to_numeric(raw.where(~empty, None), errors="coerce").to_numpy(dtype=float)
-    bad = np.isnan(numbers) & ~empty.to_numpy()
+    bad = ~np.isfinite(numbers) & ~empty.to_numpy()
     if not allow_empty:
         bad |= empty.to_numpy()
     if bad.any():
@@ -330,13 +331,15 @@ def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
     temp_dir = folder / "temperatures"
     if not temp_dir.is_dir():
         raise DataError(f"{temp_dir}: folder not found (expected one CSV per temperature source)")
+    guard.check_inside(folder, dataset.root, what="run folder")
     known = set(dataset.sensors)
     sources = {}
     for source in dataset.sources:
         expected = dataset.sensors_of(source)
         if not expected:
             continue
-        sources[source] = read_temperature_source(temp_dir / f"{source}.csv", expected, known)
+        path = guard.check_inside(temp_dir / f"{source}.csv", dataset.root, what="temperature file")
+        sources[source] = read_temperature_source(path, expected, known)
     for extra in sorted(temp_dir.glob("*.csv")):
         if extra.stem not in dataset.sources:
             raise DataError(f"{extra}: unknown temperature source {extra.stem!r} (not declared in dataset.yaml)")
@@ -346,6 +349,9 @@ def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
     files = sorted(err_dir.glob("*.csv"))
     if len(files) < min_measurements:
         raise DataError(f"{err_dir}: {len(files)} measurement file(s), expected at least {min_measurements}")
+    for f in files:
+        guard.check_name(f.stem, "measurement", f)
+        guard.check_inside(f, dataset.root, what="measurement file")
     measurements = {f.stem: read_measurement(f) for f in files}
     ordered = dict(sorted(measurements.items(), key=lambda kv: (kv[1]["time"].iloc[0], kv[0])))
     return RawRun(run=run, sources=sources, measurements=ordered)

@@ -3,7 +3,8 @@ import sys
 from pathlib import Path
 
 import thermaxis
-from thermaxis.io import DataError, load_dataset
+from thermaxis import guard
+from thermaxis.io import DataError, load_dataset, read_measurement
 from thermaxis.captions import figure_caption
 from thermaxis.summary import data_statement
 
@@ -23,11 +24,12 @@ os.environ["PATH"] = (
 # missing run folder stops everything with one line before any job starts.
 try:
     DATASET = load_dataset(config["dataset"])
+    guard.check_dataset_shape(DATASET, config)
 except DataError as exc:
     sys.exit(f"thermaxis error: {exc}")
 
 RUNS = list(DATASET.run_ids)
-OUT = f"results/{DATASET.name}"
+OUT = str(guard.check_inside(f"results/{DATASET.name}", "results", what="results folder"))
 LOGS = f"logs/{DATASET.name}"
 BENCH = f"benchmarks/{DATASET.name}"
 ENV = "../../envs/thermaxis.yaml"
@@ -43,15 +45,20 @@ PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
 
 
 def _count_positions():
-    """Targets of the first run's first measurement, read once at parse time."""
-    import pandas as pd
+    """Targets of the first run's first measurement, read once at parse time.
 
+    The one data file read before any job: size-checked, regular, and fully
+    validated, so a bad file stops the parse with one line, never a traceback or a hang.
+    """
     files = sorted((DATASET.root / RUNS[0] / "errors").glob("*.csv"))
     if not files:
         sys.exit(
             f"thermaxis error: {DATASET.root / RUNS[0] / 'errors'}: no measurement files"
         )
-    return pd.read_csv(files[0], usecols=["position_mm"])["position_mm"].nunique()
+    try:
+        return read_measurement(files[0])["position_mm"].nunique()
+    except DataError as exc:
+        sys.exit(f"thermaxis error: {exc}")
 
 
 # With one target there is no line to decouple: the point-by-point branch runs alone.
@@ -159,3 +166,14 @@ def all_outputs():
         *([f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else []),
         *report_outputs(),
     ]
+
+
+def check_outputs_inside(rules):
+    """Every output, log and benchmark of every rule stays in this dataset's folders."""
+    for rule in rules:
+        paths = [*rule.output, *rule.log, *([rule.benchmark] if rule.benchmark else [])]
+        for path in paths:
+            try:
+                guard.check_within(str(path), (OUT, LOGS, BENCH), f"rule {rule.name}")
+            except DataError as exc:
+                sys.exit(f"thermaxis error: {exc}")

@@ -1,6 +1,7 @@
 import logging
 
 from thermaxis.assemble import clean_and_assemble_run
+from thermaxis.guard import check_run_plausibility
 from thermaxis.io import load_dataset, read_run
 from thermaxis.runner import run_script, write_csv, write_parquet
 
@@ -9,9 +10,12 @@ def main(snakemake):
     config = {"temperatures": snakemake.params.temperatures, "errors": snakemake.params.errors}
     dataset = load_dataset(snakemake.params.dataset)
     raw = read_run(dataset, snakemake.wildcards.run)
+    notes = check_run_plausibility(
+        dataset, raw, config["errors"]["max_abs_error_um"], config["temperatures"]["plausible_median_c"]
+    )
     tables = clean_and_assemble_run(dataset, raw, config)
     log = logging.getLogger("thermaxis")
-    for note in tables.notes:
+    for note in [*notes, *tables.notes]:
         log.warning(note)
     out = snakemake.output
     write_parquet(tables.series, out.series)

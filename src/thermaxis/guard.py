@@ -1,0 +1,328 @@
+"""Defences against hostile or broken datasets (issue 13).
+
+Datasets are untrusted input; config files and the workflow are trusted code (README,
+"Security and trust").  Everything here turns a dataset that could escape the results
+folder, hang the workflow, exhaust memory or slip an implausible value into a model
+into ONE line naming the file, the line or column and what was expected
+(:class:`thermaxis.io.DataError`).  Checks run before a file is parsed: a FIFO is
+never opened, a YAML alias is never expanded, a file's size is known before it is read.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import stat
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import yaml
+
+__all__ = [
+    "NAME_PATTERN",
+    "MAX_SHEET_BYTES",
+    "MAX_DATA_BYTES",
+    "check_name",
+    "check_regular_file",
+    "check_inside",
+    "check_within",
+    "check_dataset_shape",
+    "check_run_plausibility",
+    "load_yaml",
+    "sniff_delimited",
+    "check_time_zones",
+    "check_error_readings",
+    "sensor_median_warnings",
+    "informative_sensors",
+]
+
+# Starts with a letter, digit or underscore: no dot-only names ("." or ".."), no hidden
+# files, no leading dash that a tool could read as an option; no separators at all.
+NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,127}$"
+_NAME = re.compile(NAME_PATTERN)
+# dataset.yaml and runs.tsv are small by nature; a 1 MiB sheet is already absurd.
+MAX_SHEET_BYTES = 1 << 20
+# The largest legitimate log seen (2 million rows at 1 Hz of 12 sensors) is ~150 MB.
+MAX_DATA_BYTES = 2 << 30
+_SNIFF_BYTES = 1 << 16
+_BOMS = (
+    (b"\xff\xfe\x00\x00", "UTF-32"),
+    (b"\x00\x00\xfe\xff", "UTF-32"),
+    (b"\xff\xfe", "UTF-16"),
+    (b"\xfe\xff", "UTF-16"),
+)
+_DELIMITER_NAMES = {",": "comma", "\t": "tab", ";": "semicolon", "|": "pipe"}
+_DECIMAL_COMMA = re.compile(r"(?:^|[;,\t])\s*-?\d+,\d+\s*(?:$|[;\t])")
+_TIME_ZONE = re.compile(r"(?:Z|[+-]\d\d(?::?\d\d)?)\s*$", re.IGNORECASE)
+
+
+def _error(path, message: str) -> ValueError:
+    # io imports this module at load time, so its error class is looked up on use.
+    from .io import DataError
+
+    return DataError(f"{path}: {message}")
+
+
+def check_name(value, what: str, where) -> str:
+    """A dataset, run, source, sensor or measurement name that is safe as a path part."""
+    if not isinstance(value, str) or not _NAME.match(value):
+        raise _error(
+            where,
+            f"{what} {value!r} is not a safe name (expected letters, digits, '_', '.', '-', "
+            "starting with a letter, digit or '_', at most 128 characters)",
+        )
+    return value
+
+
+def check_regular_file(path, max_bytes: int = MAX_DATA_BYTES, what: str = "file") -> int:
+    """Size of ``path`` if it is a regular file within the limit; never opens it."""
+    path = Path(path)
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise _error(path, f"{what} not found") from None
+    except OSError as exc:
+        raise _error(path, f"cannot be read ({exc.strerror})") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise _error(path, f"not a regular file ({_file_kind(info.st_mode)}); expected a {what}")
+    if info.st_size > max_bytes:
+        raise _error(path, f"{info.st_size} bytes, larger than the limit of {max_bytes} bytes for a {what}")
+    return info.st_size
+
+
+def _file_kind(mode: int) -> str:
+    kinds = (
+        (stat.S_ISDIR, "a directory"),
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISSOCK, "a socket"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+    )
+    return next((name for test, name in kinds if test(mode)), "a special file")
+
+
+def check_inside(path, root, what: str = "path") -> Path:
+    """``path`` itself, after checking that it resolves inside ``root`` (symlinks followed)."""
+    resolved, base = Path(os.path.realpath(path)), Path(os.path.realpath(root))
+    if resolved != base and base not in resolved.parents:
+        raise _error(path, f"{what} resolves to {resolved}, outside {base}")
+    return Path(path)
+
+
+def check_within(path: str, roots, what: str) -> str:
+    """A path pattern (wildcards allowed) that stays below one of ``roots`` once normalised."""
+    normal = os.path.normpath(path)
+    if os.path.isabs(normal) or not any(normal.startswith(os.path.normpath(r) + os.sep) for r in roots):
+        raise _error(what, f"output {path!r} is outside {', '.join(roots)}")
+    return path
+
+
+def check_dataset_shape(dataset, config) -> None:
+    """Dataset-level needs of the workflow, named before any job starts.
+
+    Counts measurement files by listing the run folders; nothing is read.
+    """
+    runs_sheet = dataset.root / "runs.tsv"
+    if len(dataset.run_ids) < 2:
+        raise _error(
+            runs_sheet,
+            f"{len(dataset.run_ids)} run listed; leave-one-condition-out needs at least 2 runs",
+        )
+    counts = {run: len(list((dataset.root / run / "errors").glob("*.csv"))) for run in dataset.run_ids}
+    if max(counts.values()) < 2:
+        raise _error(
+            dataset.root,
+            "one measurement per run; the drift (intercept b) and every model need at least 2 measurements "
+            "in a run (expected several measurements while the axis heats up)",
+        )
+    selection = config["selection"]
+    n_sensors = len(dataset.sensors)
+    if selection["method"] in ("fuzzy_grey", "correlation") and selection["n_clusters"] > n_sensors:
+        raise _error(
+            "config selection.n_clusters",
+            f"{selection['n_clusters']} clusters but {dataset.root / 'dataset.yaml'} declares {n_sensors} "
+            f"sensors (expected at most {n_sensors})",
+        )
+
+
+def check_run_plausibility(dataset, raw, max_abs_error_um: float, median_c) -> list[str]:
+    """Refuse implausible interferometer readings; warnings for implausible sensor medians."""
+    folder = dataset.root / raw.run
+    for name, measurement in raw.measurements.items():
+        check_error_readings(folder / "errors" / f"{name}.csv", measurement["error_um"].to_numpy(), max_abs_error_um)
+    notes = []
+    for source, frame in raw.sources.items():
+        medians = frame.drop(columns="time").median().to_dict()
+        notes += sensor_median_warnings(medians, *median_c, where=str(folder / "temperatures" / f"{source}.csv"))
+    return notes
+
+
+class _GuardedLoader(yaml.SafeLoader):
+    """Safe loading without aliases (no alias bombs) and without duplicate keys.
+
+    A repeated key would silently replace the first (a second ``name:`` sends the
+    results elsewhere), so it is refused with both line numbers.
+    """
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            event = self.peek_event()
+            raise yaml.composer.ComposerError(
+                None, None, f"found alias *{event.anchor}; anchors and aliases are not allowed", event.start_mark
+            )
+        return super().compose_node(parent, index)
+
+    def construct_mapping(self, node, deep=False):
+        seen: dict = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            try:
+                first = seen.setdefault(key, key_node.start_mark.line + 1)
+            except TypeError:
+                continue  # unhashable: the base class names it
+            if first != key_node.start_mark.line + 1:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r} (first on line {first})", key_node.start_mark
+                )
+        return super().construct_mapping(node, deep)
+
+
+def load_yaml(path, max_bytes: int = MAX_SHEET_BYTES):
+    """The one loader for dataset sheets: bounded, regular file, UTF-8, guarded YAML."""
+    path = Path(path)
+    check_regular_file(path, max_bytes, what="YAML file")
+    text = _decode(path, path.read_bytes())
+    try:
+        doc = yaml.load(text, Loader=_GuardedLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        line = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+        raise _error(path, f"{line}not valid YAML ({getattr(exc, 'problem', None) or exc})") from None
+    except RecursionError:
+        raise _error(path, "YAML nested too deeply (expected a flat mapping of metadata)") from None
+    _check_finite(path, doc, [])
+    return doc
+
+
+def _check_finite(path: Path, node, where: list) -> None:
+    """A .inf or .nan anywhere in the sheet (an offset, a target) would poison every number after it."""
+    if isinstance(node, float) and not math.isfinite(node):
+        raise _error(path, f"{'/'.join(map(str, where)) or 'top level'}: expected a finite number, got {node}")
+    children = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+    for key, child in children:
+        _check_finite(path, child, [*where, key])
+
+
+def _decode(path: Path, data: bytes) -> str:
+    for bom, encoding in _BOMS:
+        if data.startswith(bom):
+            raise _error(path, f"looks {encoding}-encoded (byte-order mark); expected UTF-8")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise _error(path, f"line {line}: byte 0x{data[exc.start]:02x} is not UTF-8; expected UTF-8 text") from None
+
+
+def sniff_delimited(path, delimiter: str, max_bytes: int = MAX_DATA_BYTES) -> None:
+    """Refuse a delimited file that is not what the layout documents, and say what it looks like.
+
+    Checks the head of the file only (the parser checks the rest): encoding, the
+    delimiter of the header, and whether data rows split into more fields than the
+    header because of decimal commas.
+    """
+    path = Path(path)
+    check_regular_file(path, max_bytes, what="data file")
+    with open(path, "rb") as fh:
+        head = fh.read(_SNIFF_BYTES)
+    # A multi-byte character may be cut at the end of the sniffed head.
+    text = _decode(path, head if len(head) < _SNIFF_BYTES else head[: head.rfind(b"\n") + 1] or head)
+    lines = text.splitlines()
+    if not lines or not lines[0].strip():
+        raise _error(path, "line 1: empty header; expected a header row")
+    expected = _DELIMITER_NAMES[delimiter]
+    header = lines[0]
+    if delimiter not in header:
+        for other, name in _DELIMITER_NAMES.items():
+            if other != delimiter and other in header:
+                raise _error(path, f"line 1: looks {name}-separated; expected {expected}-separated columns")
+    n_fields = header.count(delimiter) + 1
+    for lineno, line in enumerate(lines[1:20], start=2):
+        if not line.strip():
+            continue
+        fields = line.count(delimiter) + 1
+        if fields > n_fields and _DECIMAL_COMMA.search(line):
+            raise _error(
+                path,
+                f"line {lineno}: {fields} fields but the header has {n_fields}; looks like decimal commas "
+                "(expected '.' as the decimal mark)",
+            )
+
+
+def check_time_zones(path, values: pd.Series, column: str = "time") -> None:
+    """Times carry no zone (one zone per dataset); name the first that does."""
+    zoned = values.astype(str).str.contains(_TIME_ZONE).to_numpy()
+    if zoned.any():
+        i = int(np.flatnonzero(zoned)[0])
+        raise _error(
+            path,
+            f"line {i + 2}, column {column!r}: expected a time without a time zone (one zone per dataset), "
+            f"got {values.iloc[i]!r}",
+        )
+
+
+def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float) -> None:
+    """Interferometer errors are finite and within ``max_abs_um`` (row i is file line i + 2)."""
+    errors_um = np.asarray(errors_um, dtype=float)
+    bad = ~np.isfinite(errors_um) | (np.abs(errors_um) > max_abs_um)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise _error(
+            path,
+            f"line {i + 2}, column 'error_um': {errors_um[i]:g} um is beyond the plausible "
+            f"±{max_abs_um:g} um (config errors.max_abs_error_um)",
+        )
+
+
+def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: str) -> list[str]:
+    """One warning per sensor whose median temperature is implausible for a machine structure."""
+    notes = []
+    for sensor, median in sorted(medians.items()):
+        if math.isfinite(median) and not (low_c <= median <= high_c):
+            celsius = (median - 32.0) * 5.0 / 9.0
+            notes.append(
+                f"{where}: sensor {sensor}: median {median:.1f} °C is outside the plausible {low_c:g}-{high_c:g} °C "
+                f"of a machine structure (config temperatures.plausible_median_c); if it is in °F, "
+                f"that is {celsius:.1f} °C: expected °C"
+            )
+    return notes
+
+
+def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str) -> list[str]:
+    """Sensors that vary over the samples; a constant one is named and left out.
+
+    A constant series has no correlation with anything (the fuzzy relation would hold
+    NaN), so it cannot be selected; a fixed sensitive point that is constant is an error.
+    """
+    if len(temperatures) < 2:
+        raise _error(where, f"{len(temperatures)} training measurement; selection and models need at least 2")
+    spread = temperatures.max() - temperatures.min()
+    constant = [str(s) for s in temperatures.columns if not spread[s] > 0]
+    fixed_constant = [s for s in constant if s in fixed]
+    if fixed_constant:
+        raise _error(
+            "config selection.fixed",
+            f"sensor {fixed_constant[0]} is constant over the training measurements; "
+            "expected a sensor whose temperature varies",
+        )
+    if len(constant) == len(temperatures.columns):
+        raise _error(where, "every sensor is constant over the training measurements; expected temperatures that vary")
+    for sensor in constant:
+        warnings.warn(
+            f"{where}: sensor {sensor} is constant over the training measurements; left out of the selection",
+            stacklevel=2,
+        )
+    return [str(s) for s in temperatures.columns if str(s) not in constant]
