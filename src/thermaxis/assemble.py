@@ -125,9 +125,10 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
     start = windows["start"].min() - margin
     end = windows["end"].max() + margin
     cleaned = clean.clean_temperatures(raw.sources, dataset.clock_offsets_s(), t_settings, start=start, end=end)
-    gap_notes = clean.check_gaps(
-        cleaned.gaps, windows, allow=bool(config["temperatures"]["allow_long_gaps"])
-    )
+    try:
+        gap_notes = clean.check_gaps(cleaned.gaps, windows, allow=bool(config["temperatures"]["allow_long_gaps"]))
+    except ValueError as exc:
+        raise DataError(f"{dataset.root / run / 'temperatures'}: {exc}") from None
     notes.extend(f"{run}: {n}" for n in gap_notes)
     at_measurements = clean.temperatures_in_windows(cleaned.frame, windows, how=config["temperatures"]["window"])
     sensors = [s for s in dataset.sensors if s in at_measurements.columns]

@@ -31,6 +31,7 @@ __all__ = [
     "check_within",
     "check_dataset_shape",
     "check_run_plausibility",
+    "check_same_targets",
     "load_yaml",
     "sniff_delimited",
     "check_time_zones",
@@ -55,7 +56,7 @@ _BOMS = (
     (b"\xfe\xff", "UTF-16"),
 )
 _DELIMITER_NAMES = {",": "comma", "\t": "tab", ";": "semicolon", "|": "pipe"}
-_DECIMAL_COMMA = re.compile(r"(?:^|[;,\t])\s*-?\d+,\d+\s*(?:$|[;\t])")
+_DECIMAL_COMMA = re.compile(r"\d,\d")
 _TIME_ZONE = re.compile(r"(?:Z|[+-]\d\d(?::?\d\d)?)\s*$", re.IGNORECASE)
 
 
@@ -148,16 +149,46 @@ def check_dataset_shape(dataset, config) -> None:
         )
 
 
-def check_run_plausibility(dataset, raw, max_abs_error_um: float, median_c) -> list[str]:
-    """Refuse implausible interferometer readings; warnings for implausible sensor medians."""
+def check_run_plausibility(dataset, raw, config) -> list[str]:
+    """Refuse implausible readings or a grid step longer than the run; warn of implausible medians."""
     folder = dataset.root / raw.run
     for name, measurement in raw.measurements.items():
-        check_error_readings(folder / "errors" / f"{name}.csv", measurement["error_um"].to_numpy(), max_abs_error_um)
+        check_error_readings(
+            folder / "errors" / f"{name}.csv", measurement["error_um"].to_numpy(), config["errors"]["max_abs_error_um"]
+        )
+    windows = raw.windows()
+    span_s = (windows["end"].max() - windows["start"].min()).total_seconds()
+    interval_s = config["temperatures"]["interval_s"]
+    if interval_s > span_s:
+        raise _error(
+            "config temperatures.interval_s",
+            f"{interval_s:g} s is longer than run {raw.run} lasts ({span_s:g} s from its first to its last reading); "
+            "expected a grid step well below the time between measurements",
+        )
+    median_c = config["temperatures"]["plausible_median_c"]
     notes = []
     for source, frame in raw.sources.items():
         medians = frame.drop(columns="time").median().to_dict()
         notes += sensor_median_warnings(medians, *median_c, where=str(folder / "temperatures" / f"{source}.csv"))
     return notes
+
+
+def check_same_targets(errors: pd.DataFrame, dataset_root) -> None:
+    """Every run reads the same target positions, or the runs cannot share one model."""
+    targets = errors.groupby("run", sort=True)["position_mm"].unique()
+    first_run = targets.index[0]
+    reference = np.sort(targets.iloc[0])
+    for run, positions in targets.items():
+        positions = np.sort(positions)
+        if positions.shape != reference.shape or not np.allclose(positions, reference, rtol=0, atol=1e-6):
+            extra = np.setdiff1d(positions, reference)
+            lacking = np.setdiff1d(reference, positions)
+            detail = f"{extra[0]:g} mm is not a target of run {first_run}" if extra.size else f"{lacking[0]:g} mm is never read"
+            raise _error(
+                Path(dataset_root) / run / "errors",
+                f"run {run} reads {positions.size} target positions, run {first_run} {reference.size} "
+                f"({detail}); expected the same targets in every run",
+            )
 
 
 class _GuardedLoader(yaml.SafeLoader):
@@ -254,12 +285,10 @@ def sniff_delimited(path, delimiter: str, max_bytes: int = MAX_DATA_BYTES) -> No
         if not line.strip():
             continue
         fields = line.count(delimiter) + 1
-        if fields > n_fields and _DECIMAL_COMMA.search(line):
-            raise _error(
-                path,
-                f"line {lineno}: {fields} fields but the header has {n_fields}; looks like decimal commas "
-                "(expected '.' as the decimal mark)",
-            )
+        if fields > n_fields and '"' not in line:
+            # The parser would quietly take the surplus leading fields as an index.
+            hint = "; looks like decimal commas (expected '.' as the decimal mark)" if _DECIMAL_COMMA.search(line) else ""
+            raise _error(path, f"line {lineno}: {fields} {expected}-separated fields but the header has {n_fields}{hint}")
 
 
 def check_time_zones(path, values: pd.Series, column: str = "time") -> None:

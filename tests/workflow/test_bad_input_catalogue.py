@@ -278,8 +278,11 @@ CASES = [
     Case("error_time_bad", lambda ds, w: _cell(ds / E2_M03, 4, "time", "yesterday"), "column 'time': expected an ISO 8601 time", E2_M03, 4, "clean:E2"),
     Case("error_time_backwards", lambda ds, w: _cell(ds / E2_M03, 4, "time", "2000-01-01T00:00:00"), "time goes backwards", E2_M03, 4, "clean:E2"),
     Case("error_mixed_time_zones", lambda ds, w: _cell(ds / E2_M03, 4, "time", _lines(ds / E2_M03)[3].split(",")[0] + "+02:00"), "expected a time without a time zone", E2_M03, 4, "clean:E2"),
-    Case("error_time_zone_z", lambda ds, w: _column(ds / E2_M03, "position_mm", lambda v: f"{v:g}") or _text(ds / E2_M03, ",", "Z,"), "expected a time without a time zone", E2_M03, 1 + 1, "clean:E2"),
+    Case("error_time_zone_z", lambda ds, w: _cell(ds / E2_M03, 2, "time", _lines(ds / E2_M03)[1].split(",")[0] + "Z"), "expected a time without a time zone", E2_M03, 2, "clean:E2"),
     Case("error_direction_bad", lambda ds, w: _cell(ds / E2_M03, 4, "direction", "forward"), "column 'direction': expected '+' or '-'", E2_M03, 4, "clean:E2"),
+    Case("error_conflicting_repeat", lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03) + [_lines(ds / E2_M03)[-1].replace(",+", ",-").rsplit(",", 2)[0] + ",9.9,+"]), "appears twice", E2_M03, target="clean:E2"),
+    Case("error_extra_field", lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03)[:3] + [_lines(ds / E2_M03)[3] + ",x"] + _lines(ds / E2_M03)[4:]), "line 4: 5 comma-separated fields but the header has 4", E2_M03, 4, "clean:E2"),
+    Case("error_positions_differ", lambda ds, w: [_column(p, "position_mm", lambda v: f"{v + 1:g}") for p in (ds / "E2/errors").glob("*.csv")], "expected the same targets in every run", "E2/errors", target="assemble"),
     Case("error_decimal_comma", lambda ds, w: _column(ds / E2_M03, "error_um", lambda v: f"{v:.3f}".replace(".", ",")), "looks like decimal commas", E2_M03, 2, "clean:E2"),
     Case("error_semicolon", lambda ds, w: _write_lines(ds / E2_M03, [l.replace(",", ";") for l in _lines(ds / E2_M03)]), "looks semicolon-separated", E2_M03, 1, "clean:E2"),
     Case("error_utf16", lambda ds, w: (ds / E2_M03).write_bytes((ds / E2_M03).read_text().encode("utf-16")), "looks UTF-16-encoded", E2_M03, target="clean:E2"),
@@ -324,7 +327,8 @@ CASES = [
     Case(
         "temp_long_gap",
         lambda ds, w: _write_lines(ds / E2_BOX, _lines(ds / E2_BOX)[:200] + _lines(ds / E2_BOX)[500:]),
-        "re:E2.*(gap|no usable reading)",
+        "longer than max_gap_s",
+        "E2/temperatures",
         target="clean:E2",
     ),
     # ---- dataset-level and config -------------------------------------------------------
@@ -371,6 +375,7 @@ def _targets(case: Case, name: str) -> list[str]:
         "summary": [f"{out}/tables/dataset_summary.csv"],
         "clean": [f"{out}/clean/{arg}/qc.csv"],
         "select": [f"{out}/selection/{arg}.json"],
+        "assemble": [f"{out}/assembled/errors.parquet"],
     }[kind]
 
 

@@ -22,5 +22,6 @@ rule assemble:
         ENV
     params:
         provenance=DATA_STATEMENT,
+        dataset=str(DATASET.root),
     script:
         "../scripts/assemble.py"

@@ -10,9 +10,7 @@ def main(snakemake):
     config = {"temperatures": snakemake.params.temperatures, "errors": snakemake.params.errors}
     dataset = load_dataset(snakemake.params.dataset)
     raw = read_run(dataset, snakemake.wildcards.run)
-    notes = check_run_plausibility(
-        dataset, raw, config["errors"]["max_abs_error_um"], config["temperatures"]["plausible_median_c"]
-    )
+    notes = check_run_plausibility(dataset, raw, config)
     tables = clean_and_assemble_run(dataset, raw, config)
     log = logging.getLogger("thermaxis")
     for note in [*notes, *tables.notes]:
