@@ -37,8 +37,10 @@ env:
 		echo "$$want" > "$(STAMP)"; \
 	fi
 
+# After any interruption this completes the run: incomplete outputs are made again and
+# a dead run's lock is cleared; a Snakemake still running here is left alone (README).
 results: env
-	$(SNAKEMAKE)
+	$(BIN)/python -m thermaxis.resume $(SNAKEMAKE)
 
 test: env
 	$(BIN)/python -m pytest
