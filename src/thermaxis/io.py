@@ -116,6 +116,8 @@ def _validate_meta(path: Path, meta: dict) -> None:
 
 
 def _coerce_cell(value: str, kind: str):
+    if kind == "integer" and abs(int(value)) >= 2**63:
+        raise ValueError(value)  # beyond every table's 64-bit integers
     if kind == "integer":
         return int(value)
     if kind == "number" and not np.isfinite(float(value)):
