@@ -56,8 +56,10 @@ _BOMS = (
     (b"\xfe\xff", "UTF-16"),
 )
 _DELIMITER_NAMES = {",": "comma", "\t": "tab", ";": "semicolon", "|": "pipe"}
-_DECIMAL_COMMA = re.compile(r"\d,\d")
-_TIME_ZONE = re.compile(r"(?:Z|[+-]\d\d(?::?\d\d)?)\s*$", re.IGNORECASE)
+_INTEGER_PART = re.compile(r"^\s*[-+]?\d+$")
+_FRACTION_PART = re.compile(r"^\d+\s*$")
+# A zone follows the clock time: "...T09:10:00Z", "... 09:10:00.5+02:00", "...T09:10-0500".
+_TIME_ZONE = re.compile(r"[T\s]\d{1,2}:\d{2}(?::\d{2}(?:\.\d*)?)?\s*(?:Z|[+-]\d{2}(?::?\d{2})?)\s*$", re.IGNORECASE)
 
 
 def _error(path, message: str) -> ValueError:
@@ -280,15 +282,43 @@ def sniff_delimited(path, delimiter: str, max_bytes: int = MAX_DATA_BYTES) -> No
         for other, name in _DELIMITER_NAMES.items():
             if other != delimiter and other in header:
                 raise _error(path, f"line 1: looks {name}-separated; expected {expected}-separated columns")
-    n_fields = header.count(delimiter) + 1
-    for lineno, line in enumerate(lines[1:20], start=2):
-        if not line.strip():
-            continue
-        fields = line.count(delimiter) + 1
-        if fields > n_fields and '"' not in line:
-            # The parser would quietly take the surplus leading fields as an index.
-            hint = "; looks like decimal commas (expected '.' as the decimal mark)" if _DECIMAL_COMMA.search(line) else ""
-            raise _error(path, f"line {lineno}: {fields} {expected}-separated fields but the header has {n_fields}{hint}")
+    names = [name.strip().strip('"') for name in header.split(delimiter)]
+    for k, name in enumerate(names):
+        if not name:
+            raise _error(path, f"line 1: column {k + 1} has no name; expected a name for every column")
+        if name in names[:k]:
+            raise _error(path, f"line 1: column {name!r} appears twice; expected each column once")
+    _check_field_counts(path, lines[1:20], delimiter, len(names))
+
+
+def _check_field_counts(path: Path, rows: list[str], delimiter: str, n_fields: int) -> None:
+    """Surplus fields would quietly become the parser's index; name them instead.
+
+    Decimal commas add fields to EVERY row of numbers, a stray field to one row only.
+    """
+    counted = [(lineno, row.split(delimiter)) for lineno, row in enumerate(rows, start=2) if row.strip()]
+    surplus = [(lineno, fields) for lineno, fields in counted if len(fields) > n_fields and '"' not in "".join(fields)]
+    if not surplus:
+        return
+    lineno, fields = surplus[0]
+    decimal = delimiter == "," and len(surplus) == len(counted) and all(
+        _decimal_splits(row) >= len(row) - n_fields for _, row in surplus
+    )
+    hint = "; looks like decimal commas (expected '.' as the decimal mark)" if decimal else ""
+    raise _error(
+        path, f"line {lineno}: {len(fields)} {_DELIMITER_NAMES[delimiter]}-separated fields but the header has {n_fields}{hint}"
+    )
+
+
+def _decimal_splits(fields: list[str]) -> int:
+    """Adjacent fields that read as one number split at a decimal comma ("-0", "2751")."""
+    count, k = 0, 0
+    while k + 1 < len(fields):
+        if _INTEGER_PART.match(fields[k]) and _FRACTION_PART.match(fields[k + 1]):
+            count, k = count + 1, k + 2
+        else:
+            k += 1
+    return count
 
 
 def check_time_zones(path, values: pd.Series, column: str = "time") -> None:

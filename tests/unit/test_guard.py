@@ -104,19 +104,23 @@ def test_size_limit_is_checked_before_reading(tmp_path):
 @pytest.mark.parametrize(
     "content, delimiter, message",
     [
-        (b"time;position_mm;error_um\n2022-01-01T00:00:00;1;2\n", ",", "line 1: looks semicolon-separated; expected comma-separated"),
-        (b"run,condition\nE1,1\n", "\t", "line 1: looks comma-separated; expected tab-separated"),
-        (b"time,T1,T2\n2022-01-01T00:00:00,20,5,21,0\n", ",", "line 2: 5 comma-separated fields but the header has 3; looks like decimal commas"),
+        (b"time;position_mm;error_um\n2022-01-01T00:00:00;1;2\n", ",", "line 1: looks semicolon-separated; expected comma-separated columns"),
+        (b"run,condition\nE1,1\n", "\t", "line 1: looks comma-separated; expected tab-separated columns"),
+        (b"time,T1,T2\n2022-01-01T00:00:00,20,5,21,0\n", ",", "line 2: 5 comma-separated fields but the header has 3; looks like decimal commas (expected '.' as the decimal mark)"),
         (b"time,T1\n2022-01-01T00:00:00,20,x\n", ",", "line 2: 3 comma-separated fields but the header has 2"),
+        (b"time,T1\n2022-01-01T00:00:00,20\n2022-01-01T00:00:10,20,5\n", ",", "line 3: 3 comma-separated fields but the header has 2"),
+        (b"time,T1,T1\n", ",", "line 1: column 'T1' appears twice; expected each column once"),
+        (b"time,,T1\n", ",", "line 1: column 2 has no name; expected a name for every column"),
         ("time,T1\n".encode("utf-16"), ",", "looks UTF-16-encoded (byte-order mark); expected UTF-8"),
-        (b"time,T1\nx,\xff\n", ",", "line 2: byte 0xff is not UTF-8"),
-        (b"\n", ",", "line 1: empty header"),
+        (b"time,T1\nx,\xff\n", ",", "line 2: byte 0xff is not UTF-8; expected UTF-8 text"),
+        (b"\n", ",", "line 1: empty header; expected a header row"),
     ],
 )
 def test_sniffing_names_what_the_file_looks_like(tmp_path, content, delimiter, message):
     path = tmp_path / "f.csv"
     path.write_bytes(content)
-    with pytest.raises(DataError, match=re.escape(f"{path}: {message}")):
+    # The whole message, so a decimal-comma hint where it does not belong fails.
+    with pytest.raises(DataError, match=re.escape(f"{path}: {message}") + "$"):
         guard.sniff_delimited(path, delimiter)
 
 

@@ -8,7 +8,8 @@ output and without a file written outside ``results/<dataset>/``, ``logs/`` and
 ``benchmarks/``. Legitimate oddities must pass, implausible values must warn.
 
 With ``THERMAXIS_CATALOGUE=<folder>`` each case also writes its message there;
-``python tests/workflow/test_bad_input_catalogue.py <folder> CATALOGUE.md`` lists them.
+``PYTHONPATH=tests python tests/workflow/test_bad_input_catalogue.py <folder> tests/workflow/CATALOGUE.md``
+lists them.
 """
 
 from __future__ import annotations
@@ -220,6 +221,7 @@ CASES = [
     Case("yaml_undeclared_source", lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(source="nowhere")), "is not one of the declared sources", "dataset.yaml"),
     Case("yaml_bad_kind", lambda ds, w: _meta(ds, lambda m: m["provenance"].update(kind="guessed")), "provenance/kind", "dataset.yaml"),
     Case("yaml_clock_offset_inf", lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s=float("inf"))), "sources/0/clock_offset_s: expected a finite number", "dataset.yaml"),
+    Case("yaml_clock_offset_huge", lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s=1e12)), "sources/0/clock_offset_s: 1000000000000.0 is greater than the maximum", "dataset.yaml"),
     Case("yaml_clock_offset_text", lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s="ten")), "sources/0/clock_offset_s", "dataset.yaml"),
     Case(
         "yaml_list_property",
@@ -246,7 +248,7 @@ CASES = [
     Case("runs_condition_text", lambda ds, w: _runs_row(ds, "E2", "condition", "two"), "column 'condition': expected an integer", "runs.tsv", 3),
     Case("runs_missing_column", lambda ds, w: _write_lines(ds / "runs.tsv", ["\t".join(l.split("\t")[:2] + l.split("\t")[3:]) for l in _lines(ds / "runs.tsv")]), "missing column 'feed_mm_min'", "runs.tsv"),
     Case("runs_duplicate_run", lambda ds, w: _write_lines(ds / "runs.tsv", _lines(ds / "runs.tsv") + [_lines(ds / "runs.tsv")[1]]), "listed more than once", "runs.tsv"),
-    Case("runs_field_count", lambda ds, w: _write_lines(ds / "runs.tsv", _lines(ds / "runs.tsv")[:2] + [_lines(ds / "runs.tsv")[2] + "\textra"]), "expected 4 tab-separated fields, got 5", "runs.tsv", 3),
+    Case("runs_field_count", lambda ds, w: _write_lines(ds / "runs.tsv", _lines(ds / "runs.tsv")[:2] + [_lines(ds / "runs.tsv")[2] + "\textra"]), "line 3: 5 tab-separated fields but the header has 4", "runs.tsv", 3),
     Case("runs_unlisted_folder", lambda ds, w: shutil.copytree(TWIN / "E3", ds / "E3"), "run folder is not listed", "E3"),
     Case("runs_missing_folder", lambda ds, w: shutil.rmtree(ds / "E2"), "run 'E2' has no folder", "runs.tsv"),
     Case("runs_empty", lambda ds, w: (ds / "runs.tsv").write_text(""), "line 1: empty header", "runs.tsv"),
@@ -284,7 +286,7 @@ CASES = [
     Case("error_time_zone_z", lambda ds, w: _cell(ds / E2_M03, 2, "time", _lines(ds / E2_M03)[1].split(",")[0] + "Z"), "expected a time without a time zone", E2_M03, 2, "clean:E2"),
     Case("error_direction_bad", lambda ds, w: _cell(ds / E2_M03, 4, "direction", "forward"), "column 'direction': expected '+' or '-'", E2_M03, 4, "clean:E2"),
     Case("error_conflicting_repeat", lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03) + [_lines(ds / E2_M03)[-1].replace(",+", ",-").rsplit(",", 2)[0] + ",9.9,+"]), "appears twice", E2_M03, target="clean:E2"),
-    Case("error_extra_field", lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03)[:3] + [_lines(ds / E2_M03)[3] + ",x"] + _lines(ds / E2_M03)[4:]), "line 4: 5 comma-separated fields but the header has 4", E2_M03, 4, "clean:E2"),
+    Case("error_extra_field", lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03)[:3] + [_lines(ds / E2_M03)[3] + ",x"] + _lines(ds / E2_M03)[4:]), "re:line 4: 5 comma-separated fields but the header has 4$", E2_M03, 4, "clean:E2"),
     Case("error_positions_differ", lambda ds, w: [_column(p, "position_mm", lambda v: f"{v + 1:g}") for p in (ds / "E2/errors").glob("*.csv")], "expected the same targets in every run", "E2/errors", target="assemble"),
     Case("error_decimal_comma", lambda ds, w: _column(ds / E2_M03, "error_um", lambda v: f"{v:.3f}".replace(".", ",")), "looks like decimal commas", E2_M03, 2, "clean:E2"),
     Case("error_semicolon", lambda ds, w: _write_lines(ds / E2_M03, [l.replace(",", ";") for l in _lines(ds / E2_M03)]), "looks semicolon-separated", E2_M03, 1, "clean:E2"),
@@ -307,6 +309,10 @@ CASES = [
     Case("temp_value_inf", lambda ds, w: _cell(ds / E2_BOX, 7, "T3", "inf"), "line 7, column 'T3': expected a number, got 'inf'", E2_BOX, 7, "clean:E2"),
     Case("temp_mixed_time_zones", lambda ds, w: _cell(ds / E2_BOX, 9, "time", _lines(ds / E2_BOX)[8].split(",")[0] + "Z"), "expected a time without a time zone", E2_BOX, 9, "clean:E2"),
     Case("temp_sensor_all_empty", lambda ds, w: _column(ds / E2_BOX, "T3", lambda v: ""), "T3", "E2/temperatures", target="clean:E2"),
+    Case("temp_duplicate_column", lambda ds, w: _text(ds / E2_BOX, ",T3,", ",T2,"), "line 1: column 'T2' appears twice", E2_BOX, 1, "clean:E2"),
+    Case("temp_unnamed_column", lambda ds, w: _text(ds / E2_BOX, ",T3,", ",,"), "line 1: column 4 has no name", E2_BOX, 1, "clean:E2"),
+    Case("temp_folder_missing", lambda ds, w: shutil.rmtree(ds / "E2/temperatures"), "folder not found", "E2/temperatures", target="clean:E2"),
+    Case("temp_date_only_times", lambda ds, w: _cell(ds / E2_HMI, 3, "time", "2022-03-15"), "line 3, column 'time': time goes backwards", E2_HMI, 3, "clean:E2"),
     Case("temp_fifo", lambda ds, w: _fifo(ds / E2_HMI), "not a regular file (a FIFO)", E2_HMI, target="clean:E2"),
     Case("temp_missing_source", lambda ds, w: (ds / E2_HMI).unlink(), "data file not found", E2_HMI, target="clean:E2"),
     Case("temp_unknown_source", lambda ds, w: shutil.copy(ds / E2_HMI, ds / "E2/temperatures/cnc.csv"), "unknown temperature source 'cnc'", "E2/temperatures/cnc.csv", target="clean:E2"),
