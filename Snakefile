@@ -34,4 +34,9 @@ rule all:
         all_outputs(),
 
 
-check_outputs_inside(workflow.rules)
+# Every output, log and benchmark stays in this dataset's folders (names are checked
+# too, but a rule edited later must not be able to write elsewhere either).
+try:
+    guard.check_rule_outputs(workflow.rules, (OUT, LOGS, BENCH))
+except DataError as exc:
+    sys.exit(f"thermaxis error: {exc}")

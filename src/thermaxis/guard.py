@@ -29,6 +29,7 @@ __all__ = [
     "check_regular_file",
     "check_inside",
     "check_within",
+    "check_rule_outputs",
     "check_dataset_shape",
     "check_run_plausibility",
     "check_same_targets",
@@ -121,6 +122,13 @@ def check_within(path: str, roots, what: str) -> str:
     if os.path.isabs(normal) or not any(normal.startswith(os.path.normpath(r) + os.sep) for r in roots):
         raise _error(what, f"output {path!r} is outside {', '.join(roots)}")
     return path
+
+
+def check_rule_outputs(rules, roots) -> None:
+    """Every output, log and benchmark pattern of every Snakemake rule stays below ``roots``."""
+    for rule in rules:
+        for path in [*rule.output, *rule.log, *([rule.benchmark] if rule.benchmark else [])]:
+            check_within(str(path), roots, f"rule {rule.name}")
 
 
 def check_dataset_shape(dataset, config) -> None:

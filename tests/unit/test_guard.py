@@ -198,3 +198,14 @@ def test_runs_with_different_targets_are_named():
 )
 def test_format_cell_takes_free_form_properties(value, text):
     assert format_cell(value, "%.2f") == text
+
+
+def test_a_rule_writing_outside_the_dataset_folders_is_named():
+    from types import SimpleNamespace
+
+    inside = SimpleNamespace(name="clean_run", output=["results/x/clean/{run}/qc.csv"], log=["logs/x/clean/{run}.log"], benchmark="benchmarks/x/c.tsv")
+    escaping = SimpleNamespace(name="leak", output=["results/x/a.csv"], log=["logs/x/../leak.log"], benchmark=None)
+    roots = ("results/x", "logs/x", "benchmarks/x")
+    guard.check_rule_outputs([inside], roots)
+    with pytest.raises(DataError, match=re.escape("rule leak: output 'logs/x/../leak.log' is outside results/x, logs/x, benchmarks/x")):
+        guard.check_rule_outputs([inside, escaping], roots)

@@ -29,7 +29,9 @@ except DataError as exc:
     sys.exit(f"thermaxis error: {exc}")
 
 RUNS = list(DATASET.run_ids)
-OUT = str(guard.check_inside(f"results/{DATASET.name}", "results", what="results folder"))
+OUT = str(
+    guard.check_inside(f"results/{DATASET.name}", "results", what="results folder")
+)
 LOGS = f"logs/{DATASET.name}"
 BENCH = f"benchmarks/{DATASET.name}"
 ENV = "../../envs/thermaxis.yaml"
@@ -166,14 +168,3 @@ def all_outputs():
         *([f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else []),
         *report_outputs(),
     ]
-
-
-def check_outputs_inside(rules):
-    """Every output, log and benchmark of every rule stays in this dataset's folders."""
-    for rule in rules:
-        paths = [*rule.output, *rule.log, *([rule.benchmark] if rule.benchmark else [])]
-        for path in paths:
-            try:
-                guard.check_within(str(path), (OUT, LOGS, BENCH), f"rule {rule.name}")
-            except DataError as exc:
-                sys.exit(f"thermaxis error: {exc}")
