@@ -332,26 +332,28 @@ def _decimal_splits(fields: list[str]) -> int:
 def check_time_zones(path, values: pd.Series, column: str = "time") -> None:
     """Times carry no zone (one zone per dataset); name the first that does."""
     zoned = values.astype(str).str.contains(_TIME_ZONE).to_numpy()
-    if zoned.any():
-        i = int(np.flatnonzero(zoned)[0])
-        raise _error(
-            path,
-            f"line {i + 2}, column {column!r}: expected a time without a time zone (one zone per dataset), "
-            f"got {values.iloc[i]!r}",
-        )
+    _refuse_first_row(
+        path, zoned, column, lambda i: f"expected a time without a time zone (one zone per dataset), got {values.iloc[i]!r}"
+    )
 
 
 def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float) -> None:
     """Interferometer errors are finite and within ``max_abs_um`` (row i is file line i + 2)."""
     errors_um = np.asarray(errors_um, dtype=float)
     bad = ~np.isfinite(errors_um) | (np.abs(errors_um) > max_abs_um)
+    _refuse_first_row(
+        path,
+        bad,
+        "error_um",
+        lambda i: f"{errors_um[i]:g} um is beyond the plausible ±{max_abs_um:g} um (config errors.max_abs_error_um)",
+    )
+
+
+def _refuse_first_row(path, bad: np.ndarray, column: str, what) -> None:
+    """The first flagged row as a file line (row i is line i + 2: the header is line 1)."""
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise _error(
-            path,
-            f"line {i + 2}, column 'error_um': {errors_um[i]:g} um is beyond the plausible "
-            f"±{max_abs_um:g} um (config errors.max_abs_error_um)",
-        )
+        raise _error(path, f"line {i + 2}, column {column!r}: {what(i)}")
 
 
 def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: str) -> list[str]:

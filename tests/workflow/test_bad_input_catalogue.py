@@ -114,6 +114,12 @@ def _runs_row(ds: Path, run: str, column: str, value: str) -> None:
     _write_lines(ds / "runs.tsv", lines)
 
 
+def _link_outside(ds: Path, rel: str) -> None:
+    """Replace a file or folder of the dataset by a symlink to the twin's (outside the dataset)."""
+    shutil.rmtree(ds / rel) if (ds / rel).is_dir() else (ds / rel).unlink()
+    os.symlink(TWIN / rel, ds / rel)
+
+
 def _rename_run(ds: Path, old: str, new: str) -> None:
     _runs_row(ds, old, "run", new)
 
@@ -122,10 +128,6 @@ E1_M01 = "E1/errors/M01.csv"
 E2_M03 = "E2/errors/M03.csv"
 E2_BOX = "E2/temperatures/box.csv"
 E2_HMI = "E2/temperatures/hmi.csv"
-
-
-def _e(ds, rel):
-    return ds / rel
 
 
 BILLION_LAUGHS = "a: &a [x, x, x, x, x, x, x, x, x]\n" + "".join(
@@ -169,27 +171,9 @@ CASES = [
         "E2/errors/.M09.csv",
         target="clean:E2",
     ),
-    Case(
-        "measurement_symlink_outside",
-        lambda ds, w: (_e(ds, E2_M03).unlink(), os.symlink(TWIN / "E3/errors/M03.csv", ds / E2_M03)),
-        "outside",
-        E2_M03,
-        target="clean:E2",
-    ),
-    Case(
-        "temperature_symlink_outside",
-        lambda ds, w: (_e(ds, E2_HMI).unlink(), os.symlink(TWIN / "E3/temperatures/hmi.csv", ds / E2_HMI)),
-        "outside",
-        E2_HMI,
-        target="clean:E2",
-    ),
-    Case(
-        "run_folder_symlink_outside",
-        lambda ds, w: (shutil.rmtree(ds / "E2"), os.symlink(TWIN / "E2", ds / "E2")),
-        "run folder resolves to",
-        "E2",
-        target="clean:E2",
-    ),
+    Case("measurement_symlink_outside", lambda ds, w: _link_outside(ds, E2_M03), "measurement file resolves to", E2_M03, target="clean:E2"),
+    Case("temperature_symlink_outside", lambda ds, w: _link_outside(ds, E2_HMI), "temperature file resolves to", E2_HMI, target="clean:E2"),
+    Case("run_folder_symlink_outside", lambda ds, w: _link_outside(ds, "E2"), "run folder resolves to", "E2", target="clean:E2"),
     # ---- dataset.yaml ------------------------------------------------------------------
     Case("yaml_duplicate_key", _dataset_with("name: elsewhere\n"), "duplicate key 'name' (first on line 2)", "dataset.yaml"),
     Case("yaml_alias_bomb", lambda ds, w: _yaml_text(ds, BILLION_LAUGHS), "aliases are not allowed", "dataset.yaml", 2),
