@@ -134,8 +134,16 @@ def check_rule_outputs(rules, roots) -> None:
 def check_dataset_shape(dataset, config) -> None:
     """Dataset-level needs of the workflow, named before any job starts.
 
-    Counts measurement files by listing the run folders; nothing is read.
+    Lists and stats the run folders' data files (safe names, regular files of bounded
+    size, inside the dataset) and counts the measurements; nothing is read.
     """
+    for run in dataset.run_ids:
+        check_inside(dataset.root / run, dataset.root, what="run folder")
+        for path in sorted((dataset.root / run / "errors").glob("*.csv")):
+            check_name(path.stem, "measurement", path)
+        for path in sorted([*(dataset.root / run).glob("errors/*.csv"), *(dataset.root / run).glob("temperatures/*.csv")]):
+            check_inside(path, dataset.root, what="data file")
+            check_regular_file(path, what="data file")
     runs_sheet = dataset.root / "runs.tsv"
     if len(dataset.run_ids) < 2:
         raise _error(
@@ -167,6 +175,14 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
             folder / "errors" / f"{name}.csv", measurement["error_um"].to_numpy(), config["errors"]["max_abs_error_um"]
         )
     windows = raw.windows()
+    overlapping = np.flatnonzero(windows["start"].to_numpy()[1:] < windows["end"].to_numpy()[:-1])
+    if overlapping.size:
+        earlier, later = windows.iloc[overlapping[0]], windows.iloc[overlapping[0] + 1]
+        raise _error(
+            folder / "errors" / f"{later['name']}.csv",
+            f"readings from {later['start']} overlap measurement {earlier['name']} ({earlier['start']} to "
+            f"{earlier['end']}); expected one measurement at a time (a copied file?)",
+        )
     span_s = (windows["end"].max() - windows["start"].min()).total_seconds()
     interval_s = config["temperatures"]["interval_s"]
     if interval_s > span_s:
@@ -361,10 +377,11 @@ def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: st
     notes = []
     for sensor, median in sorted(medians.items()):
         if math.isfinite(median) and not (low_c <= median <= high_c):
-            celsius = (median - 32.0) * 5.0 / 9.0
+            # Above 200 a kelvin reading is likelier than a Fahrenheit one.
+            unit, celsius = ("kelvin", median - 273.15) if median > 200 else ("°F", (median - 32.0) * 5.0 / 9.0)
             notes.append(
                 f"{where}: sensor {sensor}: median {median:.1f} °C is outside the plausible {low_c:g}-{high_c:g} °C "
-                f"of a machine structure (config temperatures.plausible_median_c); if it is in °F, "
+                f"of a machine structure (config temperatures.plausible_median_c); if it is in {unit}, "
                 f"that is {celsius:.1f} °C: expected °C"
             )
     return notes

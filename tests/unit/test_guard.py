@@ -156,13 +156,17 @@ def test_error_readings_beyond_the_bound_name_the_line():
         guard.check_error_readings("M.csv", np.array([np.inf]), 1000.0)
 
 
-def test_fahrenheit_hint_converts_the_median():
-    # 86 °F = 30 °C exactly; 4 °C and 61 °C are outside [5, 60], 5 and 60 are inside.
-    notes = guard.sensor_median_warnings({"T1": 86.0, "T2": 5.0, "T3": 60.0, "T4": 4.0, "T5": float("nan")}, 5, 60, "box.csv")
-    assert len(notes) == 2
+def test_fahrenheit_and_kelvin_hints_convert_the_median():
+    # 86 °F = 30 °C exactly; 4 °C is outside [5, 60], 5 and 60 are inside.
+    notes = guard.sensor_median_warnings(
+        {"T1": 86.0, "T2": 5.0, "T3": 60.0, "T4": 4.0, "T5": float("nan"), "T6": 300.0}, 5, 60, "box.csv"
+    )
+    assert len(notes) == 3
     assert notes[0].startswith("box.csv: sensor T1: median 86.0 °C is outside the plausible 5-60 °C")
     assert "that is 30.0 °C" in notes[0]
     assert notes[1].startswith("box.csv: sensor T4: median 4.0 °C")
+    # 300 K = 26.85 °C.
+    assert "if it is in kelvin, that is 26.9 °C" in notes[2]
 
 
 def test_constant_sensor_is_left_out_with_a_warning():

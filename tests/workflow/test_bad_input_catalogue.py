@@ -277,6 +277,10 @@ CASES = [
     Case("error_utf16", lambda ds, w: (ds / E2_M03).write_bytes((ds / E2_M03).read_text().encode("utf-16")), "looks UTF-16-encoded", E2_M03, target="clean:E2"),
     Case("error_fifo", lambda ds, w: _fifo(ds / E2_M03), "not a regular file (a FIFO)", E2_M03, target="clean:E2"),
     Case("error_directory", lambda ds, w: (ds / "E2/errors/M09.csv").mkdir(), "not a regular file (a directory)", "E2/errors/M09.csv", target="clean:E2"),
+    Case("error_copied_measurement", lambda ds, w: shutil.copy(ds / E2_M03, ds / "E2/errors/M09.csv"), "overlap measurement M03", "E2/errors/M09.csv", target="clean:E2"),
+    Case("error_symlink_loop", lambda ds, w: os.symlink("M09.csv", ds / "E2/errors/M09.csv"), "cannot be read", "E2/errors/M09.csv"),
+    Case("error_dangling_symlink", lambda ds, w: os.symlink("nowhere.csv", ds / "E2/errors/M09.csv"), "data file not found", "E2/errors/M09.csv"),
+    Case("error_device", lambda ds, w: os.symlink("/dev/zero", ds / "E2/errors/M09.csv"), "outside", "E2/errors/M09.csv"),
     Case("error_no_files", lambda ds, w: [p.unlink() for p in (ds / "E2/errors").glob("*.csv")], "0 measurement file(s)", "E2/errors", target="clean:E2"),
     Case(
         "one_measurement_per_run",
@@ -317,6 +321,14 @@ CASES = [
         E2_BOX,
         target="clean:E2",
         fails=False,
+    ),
+    Case(
+        "temp_kelvin",
+        lambda ds, w: _column(ds / E2_BOX, "T4", lambda v: f"{v + 273.15:.3f}"),
+        # Beyond temperatures.limits_c every reading is an open circuit; the warning explains why.
+        "sensor T4 has a 9950 s gap",
+        "E2/temperatures",
+        target="clean:E2",
     ),
     Case(
         "temp_long_gap",

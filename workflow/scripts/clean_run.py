@@ -10,10 +10,12 @@ def main(snakemake):
     config = {"temperatures": snakemake.params.temperatures, "errors": snakemake.params.errors}
     dataset = load_dataset(snakemake.params.dataset)
     raw = read_run(dataset, snakemake.wildcards.run)
-    notes = check_run_plausibility(dataset, raw, config)
-    tables = clean_and_assemble_run(dataset, raw, config)
     log = logging.getLogger("thermaxis")
-    for note in [*notes, *tables.notes]:
+    # Before cleaning, which may stop on what these warnings explain (°F or kelvin readings).
+    for note in check_run_plausibility(dataset, raw, config):
+        log.warning(note)
+    tables = clean_and_assemble_run(dataset, raw, config)
+    for note in tables.notes:
         log.warning(note)
     out = snakemake.output
     write_parquet(tables.series, out.series)
