@@ -1,7 +1,10 @@
 # thermaxis: thermal positioning error of a linear axis, from raw runs to the paper's
 # figures and tables (Xu et al., decoupling and step-by-step modelling).
+import sys
+
 import thermaxis  # first: keeps jsonschema imports fast (see thermaxis/__init__.py)
 from snakemake.utils import min_version, validate
+from thermaxis.config import validate_config
 
 min_version("9.0")
 
@@ -9,6 +12,11 @@ min_version("9.0")
 configfile: "config/config.yaml"
 
 
+# The same schema twice: first for one line naming the key, then for Snakemake's defaults.
+try:
+    validate_config(config)
+except ValueError as exc:
+    sys.exit(f"thermaxis error: {exc}")
 validate(config, "workflow/schemas/config.schema.yaml", set_default=True)
 
 

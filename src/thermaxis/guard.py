@@ -192,6 +192,8 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
             "expected a grid step well below the time between measurements",
         )
     median_c = config["temperatures"]["plausible_median_c"]
+    if not median_c[0] < median_c[1]:
+        raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got {median_c}")
     notes = []
     for source, frame in raw.sources.items():
         medians = frame.drop(columns="time").median().to_dict()

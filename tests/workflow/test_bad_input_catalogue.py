@@ -340,6 +340,11 @@ CASES = [
     # ---- dataset-level and config -------------------------------------------------------
     Case("config_n_clusters_too_many", lambda ds, w: None, "config selection.n_clusters: 50 clusters", config={"selection": {"n_clusters": 50}}),
     Case("config_huge_interval", lambda ds, w: None, "config temperatures.interval_s", target="clean:E2", config={"temperatures": {"interval_s": 1e12}}),
+    Case("config_degree_out_of_range", lambda ds, w: None, "config decoupling/degree: 7 is greater than the maximum of 3", config={"decoupling": {"degree": 7}}),
+    Case("config_unknown_key", lambda ds, w: None, "config top level: Additional properties are not allowed ('bogus' was unexpected)", config={"bogus": 1}),
+    Case("config_wrong_type", lambda ds, w: None, "config selection/n_clusters: 'three' is not of type 'integer'", config={"selection": {"n_clusters": "three"}}),
+    Case("config_limits_reversed", lambda ds, w: None, "limits_c must be (low, high) with low < high", target="clean:E2", config={"temperatures": {"limits_c": [120, -20]}}),
+    Case("config_median_reversed", lambda ds, w: None, "config temperatures.plausible_median_c: expected [low, high]", target="clean:E2", config={"temperatures": {"plausible_median_c": [60, 5]}}),
     Case("config_dataset_missing", lambda ds, w: shutil.rmtree(ds), "dataset folder not found", ""),
     Case("config_unknown_fold", lambda ds, w: None, "config folds: 'E9'", config={"folds": ["E9"]}),
     Case(
