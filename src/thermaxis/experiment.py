@@ -20,8 +20,8 @@ import numpy as np
 import pandas as pd
 
 from .decouple import decouple_curves
-from .guard import informative_sensors
 from .evaluate import prediction_metrics
+from .guard import informative_sensors
 from .models import DecoupledAxisModel, PointwiseAxisModel, relative_temperatures
 from .selection import SensitivePoints, common_points, rank_by_correlation, select_sensitive_points
 

@@ -72,7 +72,8 @@ def _error(path, message: str) -> ValueError:
 
 def check_name(value, what: str, where) -> str:
     """A dataset, run, source, sensor or measurement name that is safe as a path part."""
-    if not isinstance(value, str) or not _NAME.match(value):
+    # fullmatch: "$" alone would let a trailing newline through.
+    if not isinstance(value, str) or not _NAME.fullmatch(value):
         raise _error(
             where,
             f"{what} {value!r} is not a safe name (expected letters, digits, '_', '.', '-', "
@@ -137,7 +138,15 @@ def check_dataset_shape(dataset, config) -> None:
     Lists and stats the run folders' data files (safe names, regular files of bounded
     size, inside the dataset) and counts the measurements; nothing is read.
     """
+    # The schemas' patterns again, strictly (a JSON-schema "$" accepts a trailing newline).
+    sheet = dataset.root / "dataset.yaml"
+    check_name(dataset.name, "dataset name", sheet)
+    for name in dataset.sensors:
+        check_name(name, "sensor", sheet)
+    for name in dataset.sources:
+        check_name(name, "source", sheet)
     for run in dataset.run_ids:
+        check_name(run, "run", dataset.root / "runs.tsv")
         check_inside(dataset.root / run, dataset.root, what="run folder")
         for path in sorted((dataset.root / run / "errors").glob("*.csv")):
             check_name(path.stem, "measurement", path)

@@ -116,14 +116,16 @@ def _validate_meta(path: Path, meta: dict) -> None:
 
 
 def _coerce_cell(value: str, kind: str):
-    if kind == "integer" and abs(int(value)) >= 2**63:
-        raise ValueError(value)  # beyond every table's 64-bit integers
     if kind == "integer":
-        return int(value)
-    if kind == "number" and not np.isfinite(float(value)):
-        raise ValueError(value)
+        number = int(value)
+        if abs(number) >= 2**63:
+            raise ValueError(value)  # beyond every table's 64-bit integers
+        return number
     if kind == "number":
-        return float(value)
+        number = float(value)
+        if not np.isfinite(number):
+            raise ValueError(value)
+        return number
     return value
 
 
@@ -204,7 +206,7 @@ def _read_csv(path: Path) -> pd.DataFrame:
     except pd.errors.EmptyDataError:
         raise DataError(f"{path}: empty file, expected a header and data rows") from None
     except UnicodeDecodeError as exc:
-        raise DataError(f"{path}: byte {exc.start} of the file is not UTF-8; expected UTF-8 text") from None
+        raise DataError(f"{path}: byte 0x{exc.object[exc.start]:02x} is not UTF-8; expected UTF-8 text") from None
     except pd.errors.ParserError as exc:
         raise DataError(f"{path}: not a valid CSV file ({str(exc).splitlines()[0]})") from None
     frame.columns = [str(c).strip() for c in frame.columns]

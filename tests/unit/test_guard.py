@@ -19,7 +19,7 @@ from thermaxis.summary import format_cell
 REPO = Path(__file__).resolve().parents[2]
 
 
-@pytest.mark.parametrize("name", ["..", ".", "...", "a/b", "a\\b", "-rf", "", ".hidden", "x" * 129, "a b", "é"])
+@pytest.mark.parametrize("name", ["..", ".", "...", "a/b", "a\\b", "-rf", "", ".hidden", "x" * 129, "a b", "é", "E1\n"])
 def test_unsafe_names_are_refused(name):
     with pytest.raises(DataError, match="is not a safe name"):
         guard.check_name(name, "run", "runs.tsv")
