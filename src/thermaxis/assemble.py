@@ -116,7 +116,8 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
     targets = _targets(raw)
     combined = []
     for name, measurement in raw.measurements.items():
-        curve, warns = clean.combine_passes(measurement, targets, e_settings, name=f"{run}/errors/{name}.csv")
+        label = str(dataset.root / run / "errors" / f"{name}.csv")
+        curve, warns = clean.combine_passes(measurement, targets, e_settings, name=label)
         notes.extend(warns)
         combined.append(curve)
 

@@ -36,6 +36,7 @@ __all__ = [
     "load_yaml",
     "sniff_delimited",
     "check_time_zones",
+    "check_time_range",
     "check_error_readings",
     "sensor_median_warnings",
     "informative_sensors",
@@ -50,6 +51,8 @@ MAX_SHEET_BYTES = 1 << 20
 # The largest legitimate log seen (2 million rows at 1 Hz of 12 sensors) is ~150 MB.
 MAX_DATA_BYTES = 2 << 30
 _SNIFF_BYTES = 1 << 16
+# No linear axis is a kilometre long: beyond this a position is a unit or logging fault.
+MAX_ABS_POSITION_MM = 1e6
 _BOMS = (
     (b"\xff\xfe\x00\x00", "UTF-32"),
     (b"\x00\x00\xfe\xff", "UTF-32"),
@@ -183,6 +186,13 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
         check_error_readings(
             folder / "errors" / f"{name}.csv", measurement["error_um"].to_numpy(), config["errors"]["max_abs_error_um"]
         )
+    for name, measurement in raw.measurements.items():
+        _refuse_first_row(
+            folder / "errors" / f"{name}.csv",
+            np.abs(measurement["position_mm"].to_numpy()) > MAX_ABS_POSITION_MM,
+            "position_mm",
+            lambda i: f"expected a position within ±{MAX_ABS_POSITION_MM:g} mm, got {measurement['position_mm'].iloc[i]:g}",
+        )
     windows = raw.windows()
     overlapping = np.flatnonzero(windows["start"].to_numpy()[1:] < windows["end"].to_numpy()[:-1])
     if overlapping.size:
@@ -205,7 +215,8 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
         raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got {median_c}")
     notes = []
     for source, frame in raw.sources.items():
-        medians = frame.drop(columns="time").median().to_dict()
+        with np.errstate(over="ignore"):  # the median of two readings near 1e308 is inf: still implausible
+            medians = frame.drop(columns="time").median().to_dict()
         notes += sensor_median_warnings(medians, *median_c, where=str(folder / "temperatures" / f"{source}.csv"))
     return notes
 
@@ -364,6 +375,14 @@ def check_time_zones(path, values: pd.Series, column: str = "time") -> None:
     )
 
 
+def check_time_range(path, parsed: pd.Series, values: pd.Series, column: str = "time") -> None:
+    """Times the nanosecond clock of the tables can hold (pandas: 1677-09-21 to 2262-04-11)."""
+    years = parsed.dt.year.to_numpy()
+    _refuse_first_row(
+        path, (years < 1678) | (years > 2261), column, lambda i: f"expected a time between 1678 and 2261, got {values.iloc[i]!r}"
+    )
+
+
 def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float) -> None:
     """Interferometer errors are finite and within ``max_abs_um`` (row i is file line i + 2)."""
     errors_um = np.asarray(errors_um, dtype=float)
@@ -387,7 +406,7 @@ def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: st
     """One warning per sensor whose median temperature is implausible for a machine structure."""
     notes = []
     for sensor, median in sorted(medians.items()):
-        if math.isfinite(median) and not (low_c <= median <= high_c):
+        if not math.isnan(median) and not (low_c <= median <= high_c):
             # Above 200 a kelvin reading is likelier than a Fahrenheit one.
             unit, celsius = ("kelvin", median - 273.15) if median > 200 else ("°F", (median - 32.0) * 5.0 / 9.0)
             notes.append(

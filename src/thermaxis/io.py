@@ -224,6 +224,7 @@ def _parse_time(path: Path, values: pd.Series) -> pd.Series:
         raise DataError(f"{path}: line {i + 2}, column 'time': expected an ISO 8601 time, got {values.iloc[i]!r}")
     if getattr(parsed.dt, "tz", None) is not None:
         raise DataError(f"{path}: column 'time': expected times without a time zone (one zone per dataset)")
+    guard.check_time_range(path, parsed, values)
     return parsed.astype("datetime64[ns]")
 
 
