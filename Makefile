@@ -38,12 +38,14 @@ env:
 		echo "$$want" > "$(STAMP)"; \
 	fi
 
-# Every dataset of config `datasets` (config/config.yaml), one Snakemake run each.
+# Every dataset of config `datasets` (config/config.yaml), one Snakemake run each. After
+# any interruption this completes the run: incomplete outputs are made again and a dead
+# run's lock is cleared; a Snakemake still running here is left alone (README).
 results: env
 	@$(BIN)/python -c "from thermaxis.config import load_config; print('\n'.join(load_config()['datasets']))" \
 	| while IFS= read -r ds; do \
 		echo "== $$ds"; \
-		$(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
+		$(BIN)/python -m thermaxis.resume $(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
 	done
 
 # Re-import the embedded measured dataset from its public source (shared/realdata).

@@ -1,7 +1,10 @@
 # thermaxis: thermal positioning error of a linear axis, from raw runs to the paper's
 # figures and tables (Xu et al., decoupling and step-by-step modelling).
+import sys
+
 import thermaxis  # first: keeps jsonschema imports fast (see thermaxis/__init__.py)
 from snakemake.utils import min_version, validate
+from thermaxis.config import validate_config
 
 min_version("9.0")
 
@@ -9,6 +12,11 @@ min_version("9.0")
 configfile: "config/config.yaml"
 
 
+# The same schema twice: first for one line naming the key, then for Snakemake's defaults.
+try:
+    validate_config(config)
+except ValueError as exc:
+    sys.exit(f"thermaxis error: {exc}")
 validate(config, "workflow/schemas/config.schema.yaml", set_default=True)
 
 
@@ -33,3 +41,11 @@ rule all:
     default_target: True
     input:
         all_outputs(),
+
+
+# Every output, log and benchmark stays in this dataset's folders (names are checked
+# too, but a rule edited later must not be able to write elsewhere either).
+try:
+    guard.check_rule_outputs(workflow.rules, (OUT, LOGS, BENCH))
+except DataError as exc:
+    sys.exit(f"thermaxis error: {exc}")

@@ -25,7 +25,6 @@ __all__ = [
     "tidy_temperatures",
     "unzeroed_matrix",
     "model_inputs",
-    "check_common_targets",
     "tidy_signals",
     "natural_key",
 ]
@@ -143,7 +142,8 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
     targets = _targets(raw)
     combined = []
     for name, measurement in raw.measurements.items():
-        curve, warns = clean.combine_passes(measurement, targets, e_settings, name=f"{run}/errors/{name}.csv")
+        label = str(dataset.root / run / "errors" / f"{name}.csv")
+        curve, warns = clean.combine_passes(measurement, targets, e_settings, name=label)
         notes.extend(warns)
         combined.append(curve)
 
@@ -154,6 +154,9 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
     temp_dir = dataset.root / run / "temperatures"
     try:
         cleaned = clean.clean_temperatures(raw.sources, dataset.clock_offsets_s(), t_settings, start=start, end=end)
+    except ValueError as exc:
+        raise DataError(f"{temp_dir}: {exc}") from None
+    try:
         gap_notes = clean.check_gaps(
             cleaned.gaps,
             windows,
@@ -162,7 +165,7 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
             max_gap_s=t_settings.max_gap_s,
         )
     except ValueError as exc:
-        raise DataError(f"run {run!r}: {exc}") from None
+        raise DataError(str(exc)) from None  # the message starts with the sensor's file
     notes.extend(f"{run}: {n}" for n in gap_notes)
     how = config["temperatures"]["window"]
     at_measurements = clean.temperatures_in_windows(cleaned.frame, windows, how=how)
@@ -213,27 +216,6 @@ def unzeroed_matrix(errors: pd.DataFrame, value: str = "error_um") -> pd.DataFra
     """
     matrix = errors.set_index(["run", "measurement", "position_mm"])[value].unstack("position_mm")
     return matrix.sort_index(axis=0).sort_index(axis=1)
-
-
-def check_common_targets(errors: pd.DataFrame, where) -> None:
-    """Every run must read the same targets: a model of the stroke needs one set of positions."""
-    targets = {run: tuple(np.unique(g["position_mm"].to_numpy(dtype=float))) for run, g in errors.groupby("run", sort=False)}
-    runs = sorted(targets, key=natural_key)
-    first = targets[runs[0]]
-    for run in runs[1:]:
-        if targets[run] != first:
-            extra = sorted(set(targets[run]) ^ set(first))
-            raise DataError(
-                f"{where(run)}: run {run!r} reads targets {_positions_text(targets[run])} but run {runs[0]!r} reads "
-                f"{_positions_text(first)} (they differ at {_positions_text(extra)} mm); expected the same targets in "
-                "every run"
-            )
-
-
-def _positions_text(values) -> str:
-    values = list(values)
-    shown = ", ".join(f"{v:g}" for v in values[:6])
-    return f"[{shown}{', ...' if len(values) > 6 else ''}]"
 
 
 def model_inputs(

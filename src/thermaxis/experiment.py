@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from .evaluate import prediction_metrics
+from .guard import informative_sensors
 from .models import DecoupledAxisModel, PointwiseAxisModel, decouple_rows, relative_temperatures
 from .selection import SensitivePoints, common_points, rank_by_correlation, select_sensitive_points
 
@@ -215,7 +216,8 @@ def select_for_fold(
     if settings.scope == "training":
         keep = (X["run"] != fold).to_numpy()
         X, Y = X.loc[keep], Y.loc[keep]
-    sensors = sensor_columns(X)
+    fixed = tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
+    sensors = informative_sensors(X[sensor_columns(X)], fixed, where=f"fold {fold}")
     absolute = X[sensors]
     relative = relative_temperatures(X)[sensors]
     k_points = b_points = None

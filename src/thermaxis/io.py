@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from . import guard
 from .naming import natural_key
 
 __all__ = [
@@ -31,6 +32,7 @@ __all__ = [
     "read_measurement",
     "read_measurements",
     "read_measurements_of",
+    "read_first_measurement",
     "SCHEMA_DIR",
     "NAME_PATTERN",
 ]
@@ -126,15 +128,9 @@ class Dataset:
 
 
 def _read_yaml(path: Path) -> dict:
-    if not path.is_file():
+    if not path.exists():
         raise DataError(f"{path}: file not found (every dataset needs dataset.yaml)")
-    try:
-        with open(path, encoding="utf-8") as fh:
-            doc = yaml.safe_load(fh)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f"line {mark.line + 1}: " if mark is not None else ""
-        raise DataError(f"{path}: {line}not valid YAML ({getattr(exc, 'problem', exc)})") from None
+    doc = guard.load_yaml(path)
     if not isinstance(doc, dict):
         raise DataError(f"{path}: expected a mapping at top level, got {type(doc).__name__}")
     return doc
@@ -168,9 +164,15 @@ def _validate_meta(path: Path, meta: dict) -> None:
 
 def _coerce_cell(value: str, kind: str):
     if kind == "integer":
-        return int(value)
+        number = int(value)
+        if abs(number) >= 2**63:
+            raise ValueError(value)  # beyond every table's 64-bit integers
+        return number
     if kind == "number":
-        return float(value)
+        number = float(value)
+        if not np.isfinite(number):
+            raise ValueError(value)
+        return number
     return value
 
 
@@ -191,9 +193,10 @@ def _numeric_descriptors(runs: pd.DataFrame, path: Path) -> pd.DataFrame:
 
 
 def _read_runs(path: Path) -> pd.DataFrame:
-    if not path.is_file():
+    if not path.exists():
         raise DataError(f"{path}: file not found (every dataset needs runs.tsv)")
-    with open(path, encoding="utf-8", newline="") as fh:
+    guard.sniff_delimited(path, "\t", guard.MAX_SHEET_BYTES)
+    with open(path, encoding="utf-8-sig", newline="") as fh:
         rows = list(csv.reader(fh, delimiter="\t"))
     if not rows:
         raise DataError(f"{path}: empty file, expected a tab-separated header {' '.join(RUN_COLUMNS)}")
@@ -220,7 +223,7 @@ def _read_runs(path: Path) -> pd.DataFrame:
                 record[name] = _coerce_cell(cell.strip(), kind)
             except ValueError:
                 raise DataError(
-                    f"{path}: line {lineno}, column {name!r}: expected {'an integer' if kind == 'integer' else 'a number'}, got {cell!r}"
+                    f"{path}: line {lineno}, column {name!r}: expected {'an integer' if kind == 'integer' else 'a finite number'}, got {cell!r}"
                 ) from None
         errors = list(validator.iter_errors(record))
         if errors:
@@ -261,14 +264,15 @@ def load_dataset(root) -> Dataset:
 
 
 def _read_csv(path: Path) -> pd.DataFrame:
-    if not path.is_file():
-        raise DataError(f"{path}: file not found")
-    if path.stat().st_size == 0:
+    if guard.check_regular_file(path, what="data file") == 0:
         raise DataError(f"{path}: empty file, expected a header and data rows")
+    guard.sniff_delimited(path, ",")
     try:
         frame = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
     except pd.errors.EmptyDataError:
         raise DataError(f"{path}: empty file, expected a header and data rows") from None
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: byte 0x{exc.object[exc.start]:02x} is not UTF-8; expected UTF-8 text") from None
     except pd.errors.ParserError as exc:
         raise DataError(f"{path}: not a valid CSV file ({str(exc).splitlines()[0]})") from None
     frame.columns = [str(c).strip() for c in frame.columns]
@@ -278,6 +282,7 @@ def _read_csv(path: Path) -> pd.DataFrame:
 
 
 def _parse_time(path: Path, values: pd.Series) -> pd.Series:
+    guard.check_time_zones(path, values)
     parsed = pd.to_datetime(values, format="ISO8601", errors="coerce")
     bad = parsed.isna().to_numpy()
     if bad.any():
@@ -285,6 +290,7 @@ def _parse_time(path: Path, values: pd.Series) -> pd.Series:
         raise DataError(f"{path}: line {i + 2}, column 'time': expected an ISO 8601 time, got {values.iloc[i]!r}")
     if getattr(parsed.dt, "tz", None) is not None:
         raise DataError(f"{path}: column 'time': expected times without a time zone (one zone per dataset)")
+    guard.check_time_range(path, parsed, values)
     return parsed.astype("datetime64[ns]")
 
 
@@ -292,7 +298,7 @@ def _parse_numbers(path: Path, frame: pd.DataFrame, column: str, allow_empty: bo
     raw = frame[column].str.strip()
     empty = raw == ""
     numbers = pd.to_numeric(raw.where(~empty, None), errors="coerce").to_numpy(dtype=float)
-    bad = np.isnan(numbers) & ~empty.to_numpy()
+    bad = ~np.isfinite(numbers) & ~empty.to_numpy()
     if not allow_empty:
         bad |= empty.to_numpy()
     if bad.any():
@@ -441,12 +447,38 @@ def _read_logs(folder: Path, dataset: Dataset, kind: str) -> dict[str, pd.DataFr
     for source in dataset.sources:
         expected = of(source)
         if expected:
-            logs[source] = read_temperature_source(folder / f"{source}.csv", expected, known, kind)
+            path = guard.check_inside(folder / f"{source}.csv", dataset.root, what=f"{kind} file")
+            logs[source] = read_temperature_source(path, expected, known, kind)
     if folder.is_dir():
         for extra in sorted(folder.glob("*.csv")):
+            if extra.stem not in dataset.sources:
+                raise DataError(f"{extra}: unknown {kind} source {extra.stem!r} (not declared in dataset.yaml)")
             if not of(extra.stem):
-                raise DataError(f"{extra}: no {kind} of dataset.yaml is logged by source {extra.stem!r}")
+                raise DataError(f"{extra}: source {extra.stem!r} logs no {kind} declared in dataset.yaml")
     return logs
+
+
+def _measurement_source(dataset: Dataset, run: str) -> tuple[Path, list[Path]]:
+    """Where a run's measurements are: ``<run>/errors.csv`` (one file) or ``<run>/errors/*.csv``."""
+    folder = dataset.root / run
+    err_dir, err_file = folder / "errors", folder / "errors.csv"
+    if err_dir.is_dir() and err_file.exists():
+        raise DataError(f"{err_file}: the run also has a folder {err_dir}; expected one of the two layouts")
+    if err_file.exists():
+        return err_file, [guard.check_inside(err_file, dataset.root, what="measurement file")]
+    if not err_dir.is_dir():
+        raise DataError(f"{err_dir}: folder not found (expected one CSV per interferometer measurement, or {err_file})")
+    files = sorted(err_dir.glob("*.csv"))
+    for f in files:
+        guard.check_name(f.stem, "measurement", f)
+        guard.check_inside(f, dataset.root, what="measurement file")
+    return err_dir, files
+
+
+def _read_measurement_files(source: Path, files: list[Path]) -> dict[str, pd.DataFrame]:
+    if source.is_file():
+        return read_measurements(files[0])
+    return {f.stem: read_measurement(f) for f in files}
 
 
 def read_measurements_of(dataset: Dataset, run: str, min_measurements: int = 1) -> tuple[dict[str, pd.DataFrame], Path]:
@@ -455,23 +487,20 @@ def read_measurements_of(dataset: Dataset, run: str, min_measurements: int = 1) 
     Measurements come either from ``<run>/errors/<measurement>.csv`` (one file each) or
     from ``<run>/errors.csv`` with a ``measurement`` column (one file for the run).
     """
-    folder = dataset.root / run
-    err_dir, err_file = folder / "errors", folder / "errors.csv"
-    if err_dir.is_dir() and err_file.exists():
-        raise DataError(f"{err_file}: the run also has a folder {err_dir}; expected one of the two layouts")
-    if err_file.exists():
-        measurements = read_measurements(err_file)
-        source = err_file
-    elif err_dir.is_dir():
-        files = sorted(err_dir.glob("*.csv"))
-        measurements = {f.stem: read_measurement(f) for f in files}
-        source = err_dir
-    else:
-        raise DataError(f"{err_dir}: folder not found (expected one CSV per interferometer measurement, or {err_file})")
+    source, files = _measurement_source(dataset, run)
+    measurements = _read_measurement_files(source, files)
     if len(measurements) < min_measurements:
         raise DataError(f"{source}: {len(measurements)} measurement(s), expected at least {min_measurements}")
     ordered = dict(sorted(measurements.items(), key=lambda kv: (kv[1]["time"].iloc[0], natural_key(kv[0]))))
     return ordered, source
+
+
+def read_first_measurement(dataset: Dataset, run: str) -> pd.DataFrame:
+    """One measurement of the run (its first file), validated: enough to know the targets."""
+    source, files = _measurement_source(dataset, run)
+    if not files:
+        raise DataError(f"{source}: no measurement files (expected one CSV per interferometer measurement)")
+    return next(iter(_read_measurement_files(source, files[:1]).values()))
 
 
 def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
@@ -479,6 +508,7 @@ def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
     temp_dir = dataset.root / run / "temperatures"
     if not temp_dir.is_dir():
         raise DataError(f"{temp_dir}: folder not found (expected one CSV per temperature source)")
+    guard.check_inside(dataset.root / run, dataset.root, what="run folder")
     sources = _read_logs(temp_dir, dataset, "sensor")
     signals = _read_logs(dataset.root / run / "signals", dataset, "signal") if dataset.signals else {}
     measurements, source = read_measurements_of(dataset, run, min_measurements)

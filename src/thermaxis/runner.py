@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 import sys
 import tempfile
 import warnings
@@ -18,6 +19,16 @@ from pathlib import Path
 from .io import DataError
 
 __all__ = ["run_script", "atomic_path", "write_csv", "write_text"]
+
+
+class _OneLine(logging.Formatter):
+    """``thermaxis warning: <message>``; a captured Python warning loses its source location."""
+
+    _LOCATION = re.compile(r"^.*?:\d+: \w*Warning: ")
+
+    def format(self, record):
+        first = record.getMessage().splitlines()[0] if record.getMessage() else ""
+        return f"thermaxis warning: {self._LOCATION.sub('', first)}"
 
 
 def _configure_logging(log_path: str | None) -> logging.Logger:
@@ -31,11 +42,19 @@ def _configure_logging(log_path: str | None) -> logging.Logger:
     else:
         handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("%(levelname)s %(message)s"))
+    # A warning only in a log file nobody opens is silence: the terminal gets it too
+    # (errors reach it through run_script's one line).
+    terminal = logging.StreamHandler(sys.stderr)
+    terminal.setFormatter(_OneLine())
+    terminal.addFilter(lambda record: record.levelno == logging.WARNING)
     logger.addHandler(handler)
     logging.captureWarnings(True)
     py_warnings = logging.getLogger("py.warnings")
     py_warnings.handlers.clear()
     py_warnings.addHandler(handler)
+    if log_path:
+        logger.addHandler(terminal)
+        py_warnings.addHandler(terminal)
     return logger
 
 
@@ -50,6 +69,11 @@ def run_script(main, snakemake) -> None:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         logger.error(message)
         print(f"thermaxis error: {message}", file=sys.stderr)
+        sys.exit(1)
+    except Exception as exc:  # noqa: BLE001 - an unforeseen input must still end in one line
+        logger.exception("unexpected error")
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        print(f"thermaxis error: unexpected {type(exc).__name__}: {first} (traceback in {log or 'stderr'})", file=sys.stderr)
         sys.exit(1)
 
 

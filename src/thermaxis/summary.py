@@ -50,6 +50,11 @@ def format_cell(value, float_format: str) -> str:
     """One table cell as text: floats in ``float_format``, missing values blank."""
     if isinstance(value, (bool, np.bool_)):
         return str(bool(value))
+    # Free-form properties of dataset.yaml (``tags: [a, b]``) are lists or mappings.
+    if isinstance(value, (list, tuple)):
+        return ", ".join(format_cell(v, float_format) for v in value)
+    if isinstance(value, dict):
+        return ", ".join(f"{k}: {format_cell(v, float_format)}" for k, v in value.items())
     if pd.isna(value):
         return ""
     if isinstance(value, (float, np.floating)):

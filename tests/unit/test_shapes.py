@@ -13,9 +13,10 @@ import pandas as pd
 import pytest
 from conftest import write_dataset
 
-from thermaxis.assemble import check_common_targets, clean_and_assemble_run, model_inputs
+from thermaxis.assemble import clean_and_assemble_run, model_inputs
 from thermaxis.config import load_config
 from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
+from thermaxis.guard import check_same_targets
 from thermaxis.io import DataError, load_dataset, read_run
 
 CONFIG = load_config()
@@ -75,8 +76,8 @@ def test_runs_with_different_targets_are_refused_naming_the_run(tmp_path):
     a = write_dataset(tmp_path / "a", runs=("A",), positions=(0.0, 50.0, 100.0))
     b = write_dataset(tmp_path / "b", runs=("B",), positions=(0.0, 50.0, 120.0))
     errors = pd.concat([assembled(a)[0], assembled(b)[0]], ignore_index=True)
-    with pytest.raises(DataError, match=r"^data/B: run 'B' reads targets \[0, 50, 120\] but run 'A' reads \[0, 50, 100\]"):
-        check_common_targets(errors, lambda run: f"data/{run}")
+    with pytest.raises(DataError, match=r"^data/B/errors: run B reads 3 target positions, run A 3 \(120 mm is not a target of run A\)"):
+        check_same_targets(errors, "data")
 
 
 def test_single_position_common_set_follows_the_ranking_not_the_names(tmp_path):

@@ -4,7 +4,8 @@ from pathlib import Path
 
 from thermaxis.config import dataset_of
 from thermaxis.deps import library_modules
-from thermaxis.io import DataError, load_dataset
+from thermaxis import guard
+from thermaxis.io import DataError, load_dataset, read_first_measurement
 from thermaxis.captions import figure_caption
 from thermaxis.summary import data_statement
 from thermaxis.reporting import PAPER_HEADLINE
@@ -29,6 +30,7 @@ config["dataset"] = dataset_of(config)
 # missing run folder stops everything with one line before any job starts.
 try:
     DATASET = load_dataset(config["dataset"])
+    guard.check_dataset_shape(DATASET, config)
 except DataError as exc:
     sys.exit(f"thermaxis error: {exc}")
 
@@ -38,7 +40,9 @@ def _fail(message):
 
 
 RUNS = list(DATASET.run_ids)
-OUT = f"results/{DATASET.name}"
+OUT = str(
+    guard.check_inside(f"results/{DATASET.name}", "results", what="results folder")
+)
 LOGS = f"logs/{DATASET.name}"
 BENCH = f"benchmarks/{DATASET.name}"
 ENV = "../../envs/thermaxis.yaml"
@@ -65,14 +69,15 @@ PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
 
 
 def _count_positions():
-    """Targets of the first run's first measurement, read once at parse time."""
-    from thermaxis.io import read_measurements_of
+    """Targets of the first run's first measurement, read once at parse time.
 
+    The one data file read before any job: size-checked, regular, and fully
+    validated, so a bad file stops the parse with one line, never a traceback or a hang.
+    """
     try:
-        first = next(iter(read_measurements_of(DATASET, RUNS[0])[0].values()))
+        return read_first_measurement(DATASET, RUNS[0])["position_mm"].nunique()
     except DataError as exc:
         _fail(exc)
-    return first["position_mm"].nunique()
 
 
 # With one target there is no line to decouple: the point-by-point branch runs alone.

@@ -1,6 +1,6 @@
 import pandas as pd
 
-from thermaxis.assemble import check_common_targets
+from thermaxis.guard import check_same_targets
 from thermaxis.naming import sort_naturally
 from thermaxis.runner import run_script, write_csv, write_parquet
 
@@ -10,7 +10,7 @@ def main(snakemake):
         return pd.concat([reader(p) for p in paths], ignore_index=True)
 
     errors = concat(snakemake.input.errors, pd.read_parquet)
-    check_common_targets(errors, lambda run: f"{snakemake.params.dataset}/{run}")
+    check_same_targets(errors, snakemake.params.dataset)
     temperatures = concat(snakemake.input.temperatures, pd.read_parquet)
     signals = concat(snakemake.input.signals, pd.read_parquet)
     qc = concat(snakemake.input.qc, pd.read_csv)

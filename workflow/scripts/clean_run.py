@@ -1,6 +1,7 @@
 import logging
 
 from thermaxis.assemble import clean_and_assemble_run
+from thermaxis.guard import check_run_plausibility
 from thermaxis.io import load_dataset, read_run
 from thermaxis.runner import run_script, write_csv, write_parquet
 
@@ -9,8 +10,11 @@ def main(snakemake):
     config = {"temperatures": snakemake.params.temperatures, "errors": snakemake.params.errors}
     dataset = load_dataset(snakemake.params.dataset)
     raw = read_run(dataset, snakemake.wildcards.run)
-    tables = clean_and_assemble_run(dataset, raw, config)
     log = logging.getLogger("thermaxis")
+    # Before cleaning, which may stop on what these warnings explain (°F or kelvin readings).
+    for note in check_run_plausibility(dataset, raw, config):
+        log.warning(note)
+    tables = clean_and_assemble_run(dataset, raw, config)
     for note in tables.notes:
         log.warning(note)
     out = snakemake.output
