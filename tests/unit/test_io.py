@@ -43,7 +43,7 @@ def test_wrong_type_in_runs_sheet(tiny_dataset):
     with pytest.raises(DataError) as exc:
         load_dataset(tiny_dataset)
     msg = one_line(exc)
-    assert "runs.tsv" in msg and "line 3" in msg and "'feed_mm_min'" in msg and "a number" in msg
+    assert "runs.tsv" in msg and "line 3" in msg and "'feed_mm_min'" in msg and "a finite number" in msg
 
 
 def test_negative_feed_violates_schema(tiny_dataset):

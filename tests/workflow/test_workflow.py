@@ -111,7 +111,7 @@ def test_bad_sheet_stops_before_any_job(tmp_path):
     work = workdir(tmp_path)
     proc = run_snakemake(work, "--configfile", str(tiny_config(work, dataset)), check=False)
     assert proc.returncode != 0
-    assert f"thermaxis error: {dataset / 'runs.tsv'}: line 3, column 'feed_mm_min': expected a number, got 'x'" in proc.stderr
+    assert f"thermaxis error: {dataset / 'runs.tsv'}: line 3, column 'feed_mm_min': expected a finite number, got 'x'" in proc.stderr
     assert not (work / "results").exists()
 
 
