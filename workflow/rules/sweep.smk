@@ -3,24 +3,45 @@
 #
 # Batches, not one job per configuration: each batch is one process that reads the
 # assembled tables once and evaluates its share of the grid with the library function
-# the main workflow uses (thermaxis.experiment.evaluate_configuration). There is one
-# batch per core given (or config sweep.batches); the batch count is part of the batch
-# files' path, so a run with another core count does not mix shares of two plans.
+# the main workflow uses (thermaxis.experiment.evaluate_configuration). Locally there
+# is one batch per core given; on a cluster one per sweep.cluster_batch_size evaluations,
+# since the cluster has more cores than a workflow asks for and each job pays a
+# scheduling delay (config sweep.batches overrides both). The batch count is part of
+# the batch files' path, so runs with other counts do not mix shares of two plans.
 import json
 import sys
 
-from thermaxis.sweep import batch_count, grid_from_config, plan_units
+from thermaxis.sweep import (
+    batch_count,
+    cluster_batch_count,
+    cost_estimate,
+    grid_from_config,
+    plan_units,
+)
 
 SWEEP = f"{OUT}/sweep"
 SWEEP_GRID = grid_from_config(config["sweep"])
 SWEEP_FOLDS = list(config["sweep"]["folds"]) or RUNS
-SWEEP_UNITS, SWEEP_SKIPPED = plan_units(SWEEP_GRID, SWEEP_FOLDS, DATASET.sensors)
-
-
-# One batch per core given (None without --cores: one batch).
-SWEEP_BATCHES = batch_count(
-    config["sweep"]["batches"], workflow.resource_settings.cores, len(SWEEP_UNITS)
-)
+try:
+    SWEEP_UNITS, SWEEP_SKIPPED = plan_units(SWEEP_GRID, SWEEP_FOLDS, DATASET.sensors)
+except ValueError as exc:
+    sys.exit(f"thermaxis error: {exc}")
+SWEEP_UNIT_SIZES = [
+    len(SWEEP_GRID.unit_configurations(u.selection, DECOUPLED)) for u in SWEEP_UNITS
+]
+# A job the cluster runs parses the workflow again: it must find the same plan.
+SWEEP_ON_CLUSTER = workflow.non_local_exec or workflow.remote_exec
+if SWEEP_ON_CLUSTER:
+    SWEEP_BATCHES = cluster_batch_count(
+        config["sweep"]["batches"],
+        SWEEP_UNIT_SIZES,
+        config["sweep"]["cluster_batch_size"],
+    )
+else:
+    # One batch per core given (None without --cores: one batch).
+    SWEEP_BATCHES = batch_count(
+        config["sweep"]["batches"], workflow.resource_settings.cores, len(SWEEP_UNITS)
+    )
 SWEEP_BATCH_FILES = expand(
     f"{SWEEP}/batches/{SWEEP_BATCHES}/{{batch}}.parquet", batch=range(SWEEP_BATCHES)
 )
@@ -40,6 +61,24 @@ if not SWEEP_UNITS:
     sys.exit(
         "thermaxis error: config sweep: no selection setting fits the dataset "
         f"({'; '.join(SWEEP_SKIPPED)})"
+    )
+# The estimate is printed when the sweep is asked for, by the process that plans it.
+SWEEP_TARGETS = workflow.dag_settings.targets if workflow.dag_settings else ()
+if not workflow.remote_exec and any(
+    t == "sweep" or t.startswith(SWEEP) for t in SWEEP_TARGETS
+):
+    _cost = cost_estimate(
+        sum(SWEEP_UNIT_SIZES),
+        config["sweep"]["seconds_per_evaluation"],
+        SWEEP_BATCHES,
+    )
+    print(
+        f"thermaxis: sweep of {len(SWEEP_UNITS)} fold x selection units, "
+        f"{_cost['evaluations']} evaluations in {SWEEP_BATCHES} batches; estimated "
+        f"{_cost['cpu_hours']:.2f} CPU-hours at {_cost['seconds_per_evaluation']:g} s each "
+        f"(config sweep.seconds_per_evaluation), >= {_cost['wall_minutes']:.1f} min wall "
+        f"with every batch running at once",
+        file=sys.stderr,
     )
 
 
@@ -66,6 +105,7 @@ SWEEP_REPORT = dict(
 
 wildcard_constraints:
     batch=r"\d+",
+    n_batches=r"\d+",
 
 
 rule sweep_batch:
@@ -73,11 +113,11 @@ rule sweep_batch:
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
     output:
-        f"{SWEEP}/batches/{SWEEP_BATCHES}/{{batch}}.parquet",
+        f"{SWEEP}/batches/{{n_batches}}/{{batch}}.parquet",
     log:
-        f"{LOGS}/sweep/batch_{SWEEP_BATCHES}_{{batch}}.log",
+        f"{LOGS}/sweep/batch_{{n_batches}}_{{batch}}.log",
     benchmark:
-        f"{BENCH}/sweep/batch_{SWEEP_BATCHES}_{{batch}}.tsv"
+        f"{BENCH}/sweep/batch_{{n_batches}}_{{batch}}.tsv"
     conda:
         ENV
     threads: 1
@@ -88,7 +128,7 @@ rule sweep_batch:
         models=config["models"],
         folds=SWEEP_FOLDS,
         sensors=list(DATASET.sensors),
-        n_batches=SWEEP_BATCHES,
+        n_batches=lambda w: int(w.n_batches),
         decoupled=DECOUPLED,
     script:
         "../scripts/sweep_batch.py"
