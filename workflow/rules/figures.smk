@@ -19,6 +19,9 @@ rule fig2_positioning_error:
         f"{BENCH}/figures/fig2.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         run=FIG_RUN,
         caption=figure_caption("fig2", DATASET.name, SIMULATED, run=FIG_RUN),
@@ -46,6 +49,9 @@ rule fig3_ambient:
         f"{BENCH}/figures/fig3.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         runs=RUNS,
         sensor=config["ambient_sensor"],
@@ -74,6 +80,9 @@ rule fig5_unzeroed:
         f"{BENCH}/figures/fig5.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         run=FIG_RUN,
         caption=figure_caption("fig5", DATASET.name, SIMULATED, run=FIG_RUN),
@@ -101,6 +110,9 @@ rule fig6_error_vs_time:
         f"{BENCH}/figures/fig6.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         run=FIG_RUN,
         caption=figure_caption("fig6", DATASET.name, SIMULATED, run=FIG_RUN),
@@ -128,6 +140,9 @@ rule fig7_error_surface:
         f"{BENCH}/figures/fig7.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         run=FIG_RUN,
         caption=figure_caption("fig7", DATASET.name, SIMULATED, run=FIG_RUN),
@@ -155,6 +170,9 @@ rule fig8_rezeroed:
         f"{BENCH}/figures/fig8.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         run=FIG_RUN,
         caption=figure_caption("fig8", DATASET.name, SIMULATED, run=FIG_RUN),
@@ -182,6 +200,9 @@ rule fig9_other_runs:
         f"{BENCH}/figures/fig9.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         runs=OTHER_RUNS,
         caption=figure_caption("fig9", DATASET.name, SIMULATED, runs=OTHER_RUNS),
@@ -209,6 +230,9 @@ rule fig10_temperature_rise:
         f"{BENCH}/figures/fig10.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         run=FIG_RUN,
         caption=figure_caption("fig10", DATASET.name, SIMULATED, run=FIG_RUN),
@@ -236,6 +260,9 @@ rule fig12_slope_intercept:
         f"{BENCH}/figures/fig12.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         caption=figure_caption("fig12", DATASET.name, SIMULATED),
         simulated=SIMULATED,
@@ -268,6 +295,9 @@ rule fig_kb_prediction:
         f"{BENCH}/figures/kb_prediction_{{fold}}_{{approach}}_{{algorithm}}.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         caption=lambda w: prediction_caption("kb_prediction", w),
         simulated=SIMULATED,
@@ -300,6 +330,9 @@ rule fig_error_prediction:
         f"{BENCH}/figures/error_prediction_{{fold}}_{{approach}}_{{algorithm}}.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         caption=lambda w: prediction_caption("error_prediction", w),
         simulated=SIMULATED,
@@ -326,6 +359,9 @@ rule fig_fold_comparison:
         f"{BENCH}/figures/fold_comparison.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         caption=figure_caption(
             "fold_comparison", DATASET.name, SIMULATED, target="error"

@@ -11,8 +11,10 @@
 import json
 import sys
 
+from thermaxis.resources import request
 from thermaxis.sweep import (
     batch_count,
+    batch_units,
     cluster_batch_count,
     cost_estimate,
     grid_from_config,
@@ -29,8 +31,11 @@ except ValueError as exc:
 SWEEP_UNIT_SIZES = [
     len(SWEEP_GRID.unit_configurations(u.selection, DECOUPLED)) for u in SWEEP_UNITS
 ]
-# A job the cluster runs parses the workflow again: it must find the same plan.
-SWEEP_ON_CLUSTER = workflow.non_local_exec or workflow.remote_exec
+# The executor is chosen after the Snakefile is parsed; what is known then is that a
+# cluster run is given --jobs (a profile's `jobs:`; locally --jobs means --cores), and
+# that a job the cluster runs parses the workflow again in remote mode: it must find
+# the same plan.
+SWEEP_ON_CLUSTER = workflow.remote_exec or workflow.resource_settings.nodes is not None
 if SWEEP_ON_CLUSTER:
     SWEEP_BATCHES = cluster_batch_count(
         config["sweep"]["batches"],
@@ -42,6 +47,17 @@ else:
     SWEEP_BATCHES = batch_count(
         config["sweep"]["batches"], workflow.resource_settings.cores, len(SWEEP_UNITS)
     )
+
+
+def sweep_batch_minutes(wildcards):
+    """Time limit of a batch job: its evaluations at the configured cost, with headroom."""
+    units = batch_units(SWEEP_UNITS, int(wildcards.n_batches), int(wildcards.batch))
+    evaluations = sum(
+        len(SWEEP_GRID.unit_configurations(u.selection, DECOUPLED)) for u in units
+    )
+    return request(evaluations * config["sweep"]["seconds_per_evaluation"], 0.0)[1]
+
+
 SWEEP_BATCH_FILES = expand(
     f"{SWEEP}/batches/{SWEEP_BATCHES}/{{batch}}.parquet", batch=range(SWEEP_BATCHES)
 )
@@ -62,25 +78,6 @@ if not SWEEP_UNITS:
         "thermaxis error: config sweep: no selection setting fits the dataset "
         f"({'; '.join(SWEEP_SKIPPED)})"
     )
-# The estimate is printed when the sweep is asked for, by the process that plans it.
-SWEEP_TARGETS = workflow.dag_settings.targets if workflow.dag_settings else ()
-if not workflow.remote_exec and any(
-    t == "sweep" or t.startswith(SWEEP) for t in SWEEP_TARGETS
-):
-    _cost = cost_estimate(
-        sum(SWEEP_UNIT_SIZES),
-        config["sweep"]["seconds_per_evaluation"],
-        SWEEP_BATCHES,
-    )
-    print(
-        f"thermaxis: sweep of {len(SWEEP_UNITS)} fold x selection units, "
-        f"{_cost['evaluations']} evaluations in {SWEEP_BATCHES} batches; estimated "
-        f"{_cost['cpu_hours']:.2f} CPU-hours at {_cost['seconds_per_evaluation']:g} s each "
-        f"(config sweep.seconds_per_evaluation), >= {_cost['wall_minutes']:.1f} min wall "
-        f"with every batch running at once",
-        file=sys.stderr,
-    )
-
 
 SWEEP_HEATMAP = [f"{SWEEP}/figures/sweep_heatmap.{ext}" for ext in FIG_FORMATS]
 SWEEP_EFFECTS = [f"{SWEEP}/figures/sweep_factor_effects.{ext}" for ext in FIG_FORMATS]
@@ -103,6 +100,24 @@ SWEEP_REPORT = dict(
 )
 
 
+# The cost estimate, before the first job starts and only when batches are to run.
+onstart:
+    if any(j.rule.name == "sweep_batch" for j in workflow.dag.needrun_jobs()):
+        _cost = cost_estimate(
+            sum(SWEEP_UNIT_SIZES),
+            config["sweep"]["seconds_per_evaluation"],
+            SWEEP_BATCHES,
+        )
+        print(
+            f"thermaxis: sweep of {len(SWEEP_UNITS)} fold x selection units, "
+            f"{_cost['evaluations']} evaluations in {SWEEP_BATCHES} batches; estimated "
+            f"{_cost['cpu_hours']:.2f} CPU-hours at {_cost['seconds_per_evaluation']:g} s each "
+            "(config sweep.seconds_per_evaluation), "
+            f">= {_cost['wall_minutes']:.1f} min wall with every batch running at once",
+            file=sys.stderr,
+        )
+
+
 wildcard_constraints:
     batch=r"\d+",
     n_batches=r"\d+",
@@ -121,6 +136,9 @@ rule sweep_batch:
     conda:
         ENV
     threads: 1
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: sweep_batch_minutes(w) * attempt,
     params:
         sweep=config["sweep"],
         selection=config["selection"],
@@ -147,6 +165,9 @@ rule sweep_collect:
         f"{BENCH}/sweep/collect.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
         degree=config["decoupling"]["degree"],
@@ -165,6 +186,9 @@ rule sweep_heatmap:
         f"{BENCH}/sweep/heatmap.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
         degree=config["decoupling"]["degree"],
@@ -185,6 +209,9 @@ rule sweep_factor_effects:
         f"{BENCH}/sweep/factor_effects.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
         degree=config["decoupling"]["degree"],
@@ -219,6 +246,9 @@ rule sweep_report:
         f"{BENCH}/sweep/report.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 750 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         title=f"Sweep report: {DATASET.name}",
         statement=DATA_STATEMENT,

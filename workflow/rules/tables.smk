@@ -44,6 +44,9 @@ rule collect_model_tables:
         f"{BENCH}/collect_model_tables.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         provenance=DATA_STATEMENT,
     script:
@@ -67,6 +70,9 @@ rule ambient_ranges:
         f"{BENCH}/ambient_ranges.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         runs=RUNS,
         provenance=DATA_STATEMENT,
@@ -101,6 +107,9 @@ rule paper_comparison:
         f"{BENCH}/paper_comparison.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         paper_fold=config["paper_fold"],
         provenance=DATA_STATEMENT,
