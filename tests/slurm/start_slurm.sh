@@ -2,8 +2,10 @@
 # A one-node Slurm cluster for the tests, from Debian's packages (slurm-wlm, munge, slurmdbd,
 # mariadb-server), started as plain daemons: CI containers have no systemd.
 #
-# Accounting (MariaDB + slurmdbd) is part of it because the executor plugin asks `sacct`
-# for job states whenever sacct is installed, and sacct without a database answers nothing.
+# Accounting (MariaDB + slurmdbd) is part of it, as on a real cluster: the executor plugin
+# asks `sacct` for job states by default and `sacctmgr` for the user's account, and the
+# tests read a killed job's final state from `sacct`. (profiles/slurm asks squeue for job
+# states instead, see there; the plugin still falls back to sacct when MinJobAge is short.)
 #
 # Idempotent: daemons already answering are left alone. Needs root. Exits non-zero with one
 # line on stderr ("start_slurm: ...") when the cluster cannot be brought up; the tests skip

@@ -119,18 +119,27 @@ def _running_job(rule: str, timeout: float = 300.0) -> str:
     raise AssertionError(f"no RUNNING Slurm job of rule {rule} within {timeout:.0f} s")
 
 
+def _start(work: Path, command: list[str], log: Path) -> subprocess.Popen:
+    # Output to a file, not a pipe: a full pipe would stall Snakemake while the test waits.
+    with open(log, "w") as out:
+        return subprocess.Popen(command, cwd=work, env=snakemake_env(), stdout=out, stderr=subprocess.STDOUT)
+
+
+def _finish(run: subprocess.Popen, log: Path) -> str:
+    run.wait(timeout=900)
+    return log.read_text()
+
+
 def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(slurm, local_results, tmp_path):
     work, config = _workdir(tmp_path)
-    env = snakemake_env()
     # 1. Without retries the killed job fails the run, with the job and its state named.
-    run = subprocess.Popen(_slurm_command(config, "--retries", "0"), cwd=work, env=env,
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    run = _start(work, _slurm_command(config, "--retries", "0"), tmp_path / "run.log")
     killed = _running_job("fit_predict")
     subprocess.run(["scancel", killed], check=True)
-    _, stderr = run.communicate(timeout=900)
+    output = _finish(run, tmp_path / "run.log")
     assert run.returncode != 0
-    assert f"SLURM-job '{killed}' failed, SLURM status is: 'CANCELLED'" in stderr
-    assert "fit_predict" in stderr
+    assert f"SLURM-job '{killed}' failed, SLURM status is: 'CANCELLED'" in output
+    assert "fit_predict" in output
     # Nothing half-written: the killed job's outputs are gone, no temporary file is left.
     fold_dir = work / "results" / "twin" / "models" / "E4"
     assert not (fold_dir.exists() and any(fold_dir.iterdir()))
@@ -138,14 +147,13 @@ def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(slurm, local
 
     # 2. The rerun, with the profile's retries: its fit_predict job is killed too,
     # resubmitted, and the run completes with the local run's bytes.
-    rerun = subprocess.Popen(_slurm_command(config), cwd=work, env=env,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    rerun = _start(work, _slurm_command(config), tmp_path / "rerun.log")
     killed_again = _running_job("fit_predict")
     subprocess.run(["scancel", killed_again], check=True)
-    _, stderr = rerun.communicate(timeout=900)
-    assert rerun.returncode == 0, stderr[-5000:]
-    assert f"SLURM-job '{killed_again}' failed, SLURM status is: 'CANCELLED'" in stderr
-    assert "Trying to restart job" in stderr
+    output = _finish(rerun, tmp_path / "rerun.log")
+    assert rerun.returncode == 0, output[-5000:]
+    assert f"SLURM-job '{killed_again}' failed, SLURM status is: 'CANCELLED'" in output
+    assert "Trying to restart job" in output
     assert _results(work) == local_results
     assert shutil.which("sacct")
     states = subprocess.run(["sacct", "-n", "-X", "-P", "-j", killed_again, "-o", "State"],
