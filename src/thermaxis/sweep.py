@@ -61,6 +61,7 @@ __all__ = [
     "plan_units",
     "batch_count",
     "cluster_batch_count",
+    "batch_minutes",
     "subset_count",
     "cost_estimate",
     "batch_units",
@@ -320,6 +321,17 @@ def cluster_batch_count(requested: int, evaluations_per_unit: Sequence[int], per
     else:
         wanted = math.ceil(sum(evaluations_per_unit) / per_batch)
     return max(1, min(int(wanted), max(len(evaluations_per_unit), 1)))
+
+
+def batch_minutes(
+    grid: SweepGrid, units: Sequence[Unit], n_batches: int, batch: int, seconds_per_evaluation: float, decoupled: bool = True
+) -> int:
+    """Time limit (minutes) of one batch job: its evaluations at the given cost, with the
+    headroom :func:`thermaxis.resources.request` gives every rule."""
+    from .resources import request
+
+    evaluations = sum(len(grid.unit_configurations(u.selection, decoupled)) for u in batch_units(units, n_batches, batch))
+    return request(evaluations * seconds_per_evaluation, 0.0)[1]
 
 
 def subset_count(n_sensors: int, sizes: Iterable[int]) -> int:

@@ -106,3 +106,14 @@ def test_pointwise_mlr_of_a_subset_matches_plain_least_squares():
     assert got["max_abs"] == pytest.approx(np.abs(residuals).max(), rel=1e-9)
     assert got["rmse"] == pytest.approx(math.sqrt(np.mean(residuals**2)), rel=1e-9)
     assert got["sensors"] == "error=S1+S2"
+
+
+def test_batch_time_limit_by_hand():
+    # 27 units of 4 approach-degrees x 5 algorithms = 20 evaluations; 3 batches of 9 units
+    # = 180 evaluations x 2 s = 360 s; five times that is 1800 s = 30 min.
+    grid = sweep.SweepGrid(fixed=(("b", ("T1",)), ("k", ("T1",)), ("pointwise", ("T1",))))
+    units, _ = sweep.plan_units(grid, ["E1"], TWELVE)
+    assert len(units) == 27
+    assert sweep.batch_minutes(grid, units, 3, 0, 2.0) == 30
+    # 180 x 0.05 s = 9 s: the 5-minute floor.
+    assert sweep.batch_minutes(grid, units, 3, 2, 0.05) == 5

@@ -11,10 +11,9 @@
 import json
 import sys
 
-from thermaxis.resources import request
 from thermaxis.sweep import (
     batch_count,
-    batch_units,
+    batch_minutes,
     cluster_batch_count,
     cost_estimate,
     grid_from_config,
@@ -47,15 +46,6 @@ else:
     SWEEP_BATCHES = batch_count(
         config["sweep"]["batches"], workflow.resource_settings.cores, len(SWEEP_UNITS)
     )
-
-
-def sweep_batch_minutes(wildcards):
-    """Time limit of a batch job: its evaluations at the configured cost, with headroom."""
-    units = batch_units(SWEEP_UNITS, int(wildcards.n_batches), int(wildcards.batch))
-    evaluations = sum(
-        len(SWEEP_GRID.unit_configurations(u.selection, DECOUPLED)) for u in units
-    )
-    return request(evaluations * config["sweep"]["seconds_per_evaluation"], 0.0)[1]
 
 
 SWEEP_BATCH_FILES = expand(
@@ -138,7 +128,15 @@ rule sweep_batch:
     threads: 1
     resources:
         mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: sweep_batch_minutes(w) * attempt,
+        runtime=lambda w, attempt: attempt
+        * batch_minutes(
+            SWEEP_GRID,
+            SWEEP_UNITS,
+            int(w.n_batches),
+            int(w.batch),
+            config["sweep"]["seconds_per_evaluation"],
+            DECOUPLED,
+        ),
     params:
         sweep=config["sweep"],
         selection=config["selection"],
