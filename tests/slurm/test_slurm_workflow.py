@@ -97,6 +97,7 @@ def test_slurm_run_is_byte_identical_to_the_local_run(slurm, local_results, tmp_
                           env=snakemake_env(), timeout=900)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-5000:]
     assert "SLURM run ID" in proc.stderr
+    assert "Submitted array job" in proc.stderr  # the sweep batches, as one job array
     # The cluster plan: 8 evaluations in batches of 4.
     batches = sorted(p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir())
     assert batches == ["0.parquet", "1.parquet"]
