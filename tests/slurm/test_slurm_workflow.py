@@ -22,6 +22,7 @@ from conftest import REPO, SNAKEMAKE, run_snakemake, snakemake_env, workflow_wor
 pytestmark = [pytest.mark.slurm, pytest.mark.slow]
 
 START = REPO / "tests" / "slurm" / "start_slurm.sh"
+STOP = REPO / "tests" / "slurm" / "stop_slurm.sh"
 TARGETS = (
     "results/twin/tables/metrics.csv",
     "results/twin/sweep/summary.csv",
@@ -50,12 +51,19 @@ CONFIG = {
 
 @pytest.fixture(scope="module")
 def slurm():
+    """The one-node cluster; stopped afterwards if this fixture started it."""
     if os.geteuid() != 0:
         pytest.skip("Slurm test: needs root to start the one-node cluster (tests/slurm/start_slurm.sh)")
+    was_up = shutil.which("scontrol") is not None and "UP" in subprocess.run(
+        ["scontrol", "ping"], capture_output=True, text=True
+    ).stdout
     proc = subprocess.run(["bash", str(START)], capture_output=True, text=True, timeout=300)
     if proc.returncode != 0:
         reason = (proc.stderr.strip().splitlines() or ["no message"])[-1]
         pytest.skip(f"Slurm test: the one-node cluster did not start: {reason}")
+    yield
+    if not was_up:
+        subprocess.run(["bash", str(STOP)], capture_output=True, timeout=60)
 
 
 def _workdir(tmp_path: Path) -> tuple[Path, Path]:
@@ -156,7 +164,6 @@ def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(slurm, local
     assert f"SLURM-job '{killed_again}' failed, SLURM status is: 'CANCELLED'" in output
     assert "Trying to restart job" in output
     assert _results(work) == local_results
-    assert shutil.which("sacct")
     states = subprocess.run(["sacct", "-n", "-X", "-P", "-j", killed_again, "-o", "State"],
                             capture_output=True, text=True).stdout  # fmt: skip
     assert states.strip().startswith("CANCELLED")
