@@ -10,7 +10,8 @@
 # Idempotent: daemons already answering are left alone. Needs root. Exits non-zero with one
 # line on stderr ("start_slurm: ...") when the cluster cannot be brought up; the tests skip
 # with that line. The state lives in $THERMAXIS_SLURM_STATE (default /var/lib/thermaxis-slurm);
-# tests/slurm/stop_slurm.sh stops what this script started.
+# the pid files of the daemons it started are listed in $STATE/started, and
+# tests/slurm/stop_slurm.sh stops those and no others.
 set -euo pipefail
 
 STATE="${THERMAXIS_SLURM_STATE:-/var/lib/thermaxis-slurm}"
@@ -59,6 +60,7 @@ if ! munge -n 2>/dev/null | unmunge >/dev/null 2>&1; then
     chown munge:munge /etc/munge/munge.key
     chmod 0400 /etc/munge/munge.key
     runuser -u munge -- munged --pid-file=/run/munge/munged.pid
+    echo /run/munge/munged.pid >>"$STATE/started"
     wait_for 20 munged sh -c 'munge -n | unmunge'
 fi
 
@@ -69,6 +71,7 @@ if ! mariadb-admin ping >/dev/null 2>&1; then
     fi
     nohup mariadbd --user=mysql --skip-networking --socket=/run/mysqld/mysqld.sock \
         --pid-file=/run/mysqld/mysqld.pid >"$STATE/log/mariadb.log" 2>&1 &
+    echo /run/mysqld/mysqld.pid >>"$STATE/started"
     wait_for 60 mariadbd mariadb-admin ping
 fi
 mariadb -e "CREATE USER IF NOT EXISTS 'slurm'@'localhost' IDENTIFIED BY '$DB_PASS';
@@ -129,6 +132,7 @@ chmod 0600 "$CONF_DIR/slurmdbd.conf"
 # --- slurmdbd, then the cluster, account and user it must know before slurmctld registers
 if ! sacctmgr -n list cluster >/dev/null 2>&1; then
     slurmdbd
+    echo "$STATE/slurmdbd.pid" >>"$STATE/started"
     wait_for 60 slurmdbd sacctmgr -n list cluster
 fi
 if ! sacctmgr -n -P list cluster format=cluster | grep -qx "$CLUSTER"; then
@@ -144,10 +148,12 @@ fi
 # --- slurmctld and slurmd
 if ! scontrol ping 2>/dev/null | grep -q UP; then
     slurmctld
+    echo "$STATE/slurmctld.pid" >>"$STATE/started"
     wait_for 60 slurmctld sh -c 'scontrol ping | grep -q UP'
 fi
 if ! pgrep -F "$STATE/slurmd.pid" slurmd >/dev/null 2>&1; then
     slurmd
+    echo "$STATE/slurmd.pid" >>"$STATE/started"
 fi
 node_ready() {
     local state

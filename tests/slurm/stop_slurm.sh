@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Stops the daemons tests/slurm/start_slurm.sh started, by their pid files, newest first.
+# Stops the daemons tests/slurm/start_slurm.sh started (the pid files it listed in
+# $STATE/started), newest first; daemons it found already running are left alone.
 set -uo pipefail
 STATE="${THERMAXIS_SLURM_STATE:-/var/lib/thermaxis-slurm}"
-for pidfile in "$STATE/slurmd.pid" "$STATE/slurmctld.pid" "$STATE/slurmdbd.pid" \
-    /run/mysqld/mysqld.pid /run/munge/munged.pid; do
-    if [ -s "$pidfile" ]; then
-        kill "$(cat "$pidfile")" 2>/dev/null && echo "stop_slurm: stopped $(basename "$pidfile" .pid)"
+[ -s "$STATE/started" ] || exit 0
+tac "$STATE/started" | while read -r pidfile; do
+    if [ -s "$pidfile" ] && kill "$(cat "$pidfile")" 2>/dev/null; then
+        echo "stop_slurm: stopped $(basename "$pidfile" .pid)"
     fi
 done
+rm -f "$STATE/started"

@@ -94,7 +94,8 @@ def _results(work: Path) -> dict[str, bytes]:
 @pytest.fixture(scope="module")
 def local_results(tmp_path_factory):
     work, config = _workdir(tmp_path_factory.mktemp("local"))
-    run_snakemake(work, "--configfile", str(config), "--cores", "1", "--", *TARGETS)
+    proc = run_snakemake(work, "--configfile", str(config), "--cores", "1", "--", *TARGETS)
+    assert "thermaxis: sweep of 2 fold x selection units, 8 evaluations in 1 batches" in proc.stderr
     assert (work / "results" / "twin" / "sweep" / "batches" / "1" / "0.parquet").is_file()
     return _results(work)
 
@@ -106,6 +107,8 @@ def test_slurm_run_is_byte_identical_to_the_local_run(slurm, local_results, tmp_
     assert proc.returncode == 0, proc.stderr[-5000:]
     assert "SLURM run ID" in proc.stderr
     assert "Submitted array job" in proc.stderr  # the sweep batches, as one job array
+    # The estimate before the start: 8 evaluations x 0.065 s on 2 batches = 0.26 s wall.
+    assert "8 evaluations in 2 batches; estimated 0.00 CPU-hours at 0.065 s each" in proc.stderr
     # The cluster plan: 8 evaluations in batches of 4.
     batches = sorted(p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir())
     assert batches == ["0.parquet", "1.parquet"]
