@@ -47,6 +47,7 @@ results: env
 		echo "== $$ds"; \
 		$(BIN)/python -m thermaxis.resume $(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
 	done
+	$(BIN)/python -m thermaxis.crossdataset --results results
 
 # Re-import the embedded measured dataset from its public source (shared/realdata).
 import: env

@@ -20,6 +20,12 @@ How the cost is kept down
   identical (fold, approach, algorithm, degree, sensors) evaluation are reused.
   Units are cut into batches in fold order, which keeps a fold's units together.
 
+Exhaustive subsets (method ``subset``): every subset of ``n`` sensors (``n`` from the
+``n_clusters`` levels) is used as it stands for k, b and the point-by-point models, as
+method ``fixed`` uses the paper's lists.  C(12, 3) = 220 subsets per size and fold is
+why it wants a cluster: :func:`subset_count` caps it and :func:`cost_estimate` says
+what it will cost before it starts.
+
 Factors that do not apply to a configuration are left empty (None): n_clusters for
 ``all`` and ``fixed``; similarity and grade for every method but ``fuzzy_grey``; the
 degree for the point-by-point approach, which never decouples.
@@ -30,6 +36,7 @@ while it parses the Snakefile.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 import sys
@@ -53,6 +60,10 @@ __all__ = [
     "svr_grid_for_sweep",
     "plan_units",
     "batch_count",
+    "cluster_batch_count",
+    "batch_minutes",
+    "subset_count",
+    "cost_estimate",
     "batch_units",
     "Progress",
     "run_batch",
@@ -83,7 +94,9 @@ RANKING_COLUMNS = (
     "n_folds",
     "main_config",
 )
-METHODS = ("fuzzy_grey", "correlation", "all", "fixed")
+# "subset" (exhaustive) is asked for by name; a grid without methods sweeps the others.
+DEFAULT_METHODS = ("fuzzy_grey", "correlation", "all", "fixed")
+METHODS = (*DEFAULT_METHODS, "subset")
 APPROACHES = ("decoupled", "pointwise")
 _INTEGER_FACTORS = ("n_clusters", "degree")
 # Order of the levels in tables and figures: the paper's choice first.
@@ -107,6 +120,7 @@ class SelectionSpec:
     n_clusters: int | None = None
     similarity: str | None = None
     grade: str | None = None
+    sensors: tuple[str, ...] = ()  # method "subset": the subset, for every target
 
     @property
     def label(self) -> str:
@@ -114,6 +128,8 @@ class SelectionSpec:
         if self.n_clusters is not None:
             parts.append(f"n{self.n_clusters}")
         parts += [p for p in (self.similarity, self.grade) if p is not None]
+        if self.sensors:
+            parts.append("+".join(self.sensors))
         return ":".join(parts)
 
     def settings(self, base, degree: int, fixed: tuple = ()):
@@ -125,6 +141,10 @@ class SelectionSpec:
         changes = {"method": self.method, "degree": int(degree)}
         if self.method == "fixed":
             changes["fixed"] = tuple(fixed)
+        if self.method == "subset":
+            # A subset is a fixed choice made by the sweep: the same sensors for every target.
+            changes["method"] = "fixed"
+            changes["fixed"] = tuple((target, self.sensors) for target in ("b", "k", "pointwise"))
         for name in ("n_clusters", "similarity", "grade"):
             value = getattr(self, name)
             if value is not None:
@@ -163,7 +183,7 @@ class Configuration:
 class SweepGrid:
     """The levels of every factor (config ``sweep``), in the order they are swept."""
 
-    methods: tuple[str, ...] = METHODS
+    methods: tuple[str, ...] = DEFAULT_METHODS
     n_clusters: tuple[int, ...] = (2, 3, 4, 5, 6)
     similarities: tuple[str, ...] = ("pearson", "printed")
     grades: tuple[str, ...] = ("deng", "absolute")
@@ -171,6 +191,7 @@ class SweepGrid:
     degrees: tuple[int, ...] = (1, 2, 3)
     algorithms: tuple[str, ...] = ("mlr", "svr", "ridge", "pls", "gpr")
     fixed: tuple = ()  # ((target, (sensor, ...)), ...) for method "fixed"
+    max_subsets: int = 1000  # method "subset": more subsets than this stop the plan
 
     def selection_specs(self, sensors: Sequence[str]) -> tuple[list[SelectionSpec], list[str]]:
         """Selection settings the dataset allows, and one note per setting left out.
@@ -193,6 +214,19 @@ class SweepGrid:
                         notes.append(f"correlation ranking of {n} sensors: the dataset has only {n_sensors} sensors")
                         continue
                     specs.append(SelectionSpec(method, n))
+            elif method == "subset":
+                count = subset_count(n_sensors, self.n_clusters)
+                if count > self.max_subsets:
+                    raise ValueError(
+                        f"config sweep: method subset would evaluate {count} subsets of "
+                        f"{'/'.join(map(str, self.n_clusters))} of {n_sensors} sensors; "
+                        f"the cap sweep.max_subsets is {self.max_subsets}"
+                    )
+                for n in self.n_clusters:
+                    if n > n_sensors:
+                        notes.append(f"subsets of {n} sensors: the dataset has only {n_sensors} sensors")
+                        continue
+                    specs += [SelectionSpec(method, n, sensors=c) for c in itertools.combinations(sensors, n)]
             elif method == "fixed":
                 wanted = sorted({s for _, chosen in self.fixed for s in chosen})
                 missing = [s for s in wanted if s not in sensors]
@@ -241,6 +275,7 @@ def grid_from_config(sweep: Mapping) -> SweepGrid:
         degrees=tuple(int(d) for d in sweep["degrees"]),
         algorithms=tuple(sweep["algorithms"]),
         fixed=tuple(sorted((k, tuple(v)) for k, v in fixed.items())),
+        max_subsets=int(sweep["max_subsets"]),
     )
 
 
@@ -273,6 +308,51 @@ def batch_count(requested: int, cores: int | None, n_units: int) -> int:
         raise ValueError(f"config sweep.batches: expected 0 (one per core) or a positive count, got {requested}")
     wanted = requested if requested > 0 else (cores or 1)
     return max(1, min(int(wanted), max(n_units, 1)))
+
+
+def cluster_batch_count(requested: int, evaluations_per_unit: Sequence[int], per_batch: int) -> int:
+    """Batches on a cluster: ``requested`` if positive, else one per ``per_batch`` evaluations.
+
+    An evaluation is one configuration on one fold.  Never more batches than units
+    (a unit is not split) nor fewer than one.
+    """
+    if requested > 0:
+        wanted = requested
+    else:
+        wanted = math.ceil(sum(evaluations_per_unit) / per_batch)
+    return max(1, min(int(wanted), max(len(evaluations_per_unit), 1)))
+
+
+def batch_minutes(
+    grid: SweepGrid, units: Sequence[Unit], n_batches: int, batch: int, seconds_per_evaluation: float, decoupled: bool = True
+) -> int:
+    """Time limit (minutes) of one batch job: its evaluations at the given cost, with the
+    headroom :func:`thermaxis.resources.request` gives every rule."""
+    from .resources import request
+
+    evaluations = sum(len(grid.unit_configurations(u.selection, decoupled)) for u in batch_units(units, n_batches, batch))
+    return request(evaluations * seconds_per_evaluation, 0.0)[1]
+
+
+def subset_count(n_sensors: int, sizes: Iterable[int]) -> int:
+    """How many sensor subsets of the given sizes: the sum of C(n_sensors, n)."""
+    return sum(math.comb(n_sensors, n) for n in set(sizes) if n <= n_sensors)
+
+
+def cost_estimate(n_evaluations: int, seconds_per_evaluation: float, workers: int) -> dict:
+    """CPU time of a sweep and its wall time on ``workers`` parallel single-core batches.
+
+    The wall time assumes the evaluations split evenly and ignores start-up and
+    scheduling; it is a lower bound a plan can be checked against.
+    """
+    cpu_s = n_evaluations * seconds_per_evaluation
+    return {
+        "evaluations": int(n_evaluations),
+        "seconds_per_evaluation": float(seconds_per_evaluation),
+        "cpu_hours": cpu_s / 3600.0,
+        "workers": int(workers),
+        "wall_minutes": cpu_s / max(int(workers), 1) / 60.0,
+    }
 
 
 def batch_units(units: Sequence[Unit], n_batches: int, batch: int) -> list[Unit]:

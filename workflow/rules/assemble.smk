@@ -23,6 +23,9 @@ rule assemble:
         f"{BENCH}/assemble.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         provenance=DATA_STATEMENT,
         dataset=str(DATASET.root),

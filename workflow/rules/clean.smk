@@ -18,6 +18,9 @@ rule clean_run:
         f"{BENCH}/clean/{{run}}.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         temperatures=config["temperatures"],

@@ -18,6 +18,9 @@ rule decouple:
         f"{BENCH}/decouple.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         degree=config["decoupling"]["degree"],
         provenance=DATA_STATEMENT,

@@ -130,6 +130,9 @@ for fig in FIGURES:
             f"{BENCH}/figures/{fig['stem']}.tsv"
         conda:
             ENV
+        resources:
+            mem_mb=lambda w, attempt: 500 * attempt,
+            runtime=lambda w, attempt: 5 * attempt,
         params:
             draw=fig["draw"],
             arguments=fig.get("arguments", {}),

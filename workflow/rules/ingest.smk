@@ -16,6 +16,9 @@ rule dataset_summary:
         f"{BENCH}/dataset_summary.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         provenance=DATA_STATEMENT,

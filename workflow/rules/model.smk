@@ -16,6 +16,9 @@ rule fit_predict:
         f"{BENCH}/models/{{fold}}.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         approaches=APPROACHES,
         algorithms=ALGORITHMS,

@@ -19,6 +19,9 @@ rule provenance:
         f"{BENCH}/provenance.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         config_json=json.dumps(config, sort_keys=True),
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
@@ -53,6 +56,9 @@ rule dataset_report:
         f"{BENCH}/reports/dataset_report.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 750 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         title=f"Dataset report: {DATASET.name}",
         statement=DATA_STATEMENT,
@@ -92,6 +98,9 @@ rule condition_report:
         f"{BENCH}/reports/condition_{{run}}.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 750 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         title=lambda w: f"Condition report: run {w.run} ({DATASET.name})",
         statement=DATA_STATEMENT,
@@ -144,6 +153,9 @@ rule model_report:
         f"{BENCH}/reports/model_{{fold}}_{{approach}}_{{algorithm}}.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 750 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         title=lambda w: f"Model report: fold {w.fold}, {w.approach}, {w.algorithm} ({DATASET.name})",
         statement=DATA_STATEMENT,
@@ -191,6 +203,9 @@ rule paper_report:
         f"{BENCH}/reports/paper_report.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 750 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         title=f"Paper report: Xu et al. reproduced on {DATASET.name}",
         statement=DATA_STATEMENT,
@@ -221,6 +236,9 @@ rule index:
         f"{BENCH}/index.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         dataset_name=DATASET.name,
         simulated=SIMULATED,

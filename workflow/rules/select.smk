@@ -12,6 +12,9 @@ rule select_sensitive_points:
         f"{BENCH}/select/{{fold}}.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
         decoupling=config["decoupling"],

@@ -3,24 +3,51 @@
 #
 # Batches, not one job per configuration: each batch is one process that reads the
 # assembled tables once and evaluates its share of the grid with the library function
-# the main workflow uses (thermaxis.experiment.evaluate_configuration). There is one
-# batch per core given (or config sweep.batches); the batch count is part of the batch
-# files' path, so a run with another core count does not mix shares of two plans.
+# the main workflow uses (thermaxis.experiment.evaluate_configuration). Locally there
+# is one batch per core given; on a cluster one per sweep.cluster_batch_size evaluations,
+# since the cluster has more cores than a workflow asks for and each job pays a
+# scheduling delay (config sweep.batches overrides both). The batch count is part of
+# the batch files' path, so runs with other counts do not mix shares of two plans.
 import json
 import sys
 
-from thermaxis.sweep import batch_count, grid_from_config, plan_units
+from thermaxis.sweep import (
+    batch_count,
+    batch_minutes,
+    cluster_batch_count,
+    cost_estimate,
+    grid_from_config,
+    plan_units,
+)
 
 SWEEP = f"{OUT}/sweep"
 SWEEP_GRID = grid_from_config(config["sweep"])
 SWEEP_FOLDS = list(config["sweep"]["folds"]) or RUNS
-SWEEP_UNITS, SWEEP_SKIPPED = plan_units(SWEEP_GRID, SWEEP_FOLDS, DATASET.sensors)
+try:
+    SWEEP_UNITS, SWEEP_SKIPPED = plan_units(SWEEP_GRID, SWEEP_FOLDS, DATASET.sensors)
+except ValueError as exc:
+    sys.exit(f"thermaxis error: {exc}")
+SWEEP_UNIT_SIZES = [
+    len(SWEEP_GRID.unit_configurations(u.selection, DECOUPLED)) for u in SWEEP_UNITS
+]
+# The executor is chosen after the Snakefile is parsed; what is known then is that a
+# cluster run is given --jobs (a profile's `jobs:`; locally --jobs means --cores), and
+# that a job the cluster runs parses the workflow again in remote mode: it must find
+# the same plan.
+SWEEP_ON_CLUSTER = workflow.remote_exec or workflow.resource_settings.nodes is not None
+if SWEEP_ON_CLUSTER:
+    SWEEP_BATCHES = cluster_batch_count(
+        config["sweep"]["batches"],
+        SWEEP_UNIT_SIZES,
+        config["sweep"]["cluster_batch_size"],
+    )
+else:
+    # One batch per core given (None without --cores: one batch).
+    SWEEP_BATCHES = batch_count(
+        config["sweep"]["batches"], workflow.resource_settings.cores, len(SWEEP_UNITS)
+    )
 
 
-# One batch per core given (None without --cores: one batch).
-SWEEP_BATCHES = batch_count(
-    config["sweep"]["batches"], workflow.resource_settings.cores, len(SWEEP_UNITS)
-)
 SWEEP_BATCH_FILES = expand(
     f"{SWEEP}/batches/{SWEEP_BATCHES}/{{batch}}.parquet", batch=range(SWEEP_BATCHES)
 )
@@ -41,7 +68,6 @@ if not SWEEP_UNITS:
         "thermaxis error: config sweep: no selection setting fits the dataset "
         f"({'; '.join(SWEEP_SKIPPED)})"
     )
-
 
 SWEEP_HEATMAP = [f"{SWEEP}/figures/sweep_heatmap.{ext}" for ext in FIG_FORMATS]
 SWEEP_EFFECTS = [f"{SWEEP}/figures/sweep_factor_effects.{ext}" for ext in FIG_FORMATS]
@@ -64,23 +90,54 @@ SWEEP_REPORT = dict(
 )
 
 
+# The cost estimate, before the first job starts and only when batches are to run.
+onstart:
+    if any(j.rule.name == "sweep_batch" for j in workflow.dag.needrun_jobs()):
+        _cost = cost_estimate(
+            sum(SWEEP_UNIT_SIZES),
+            config["sweep"]["seconds_per_evaluation"],
+            SWEEP_BATCHES,
+        )
+        print(
+            f"thermaxis: sweep of {len(SWEEP_UNITS)} fold x selection units, "
+            f"{_cost['evaluations']} evaluations in {SWEEP_BATCHES} batches; estimated "
+            f"{_cost['cpu_hours']:.2f} CPU-hours at {_cost['seconds_per_evaluation']:g} s each "
+            "(config sweep.seconds_per_evaluation), "
+            f">= {_cost['wall_minutes']:.1f} min wall with every batch running at once",
+            file=sys.stderr,
+        )
+
+
 wildcard_constraints:
     batch=r"\d+",
+    n_batches=r"\d+",
 
 
 rule sweep_batch:
     input:
+        code=code_of("sweep_batch.py"),
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
     output:
-        f"{SWEEP}/batches/{SWEEP_BATCHES}/{{batch}}.parquet",
+        f"{SWEEP}/batches/{{n_batches}}/{{batch}}.parquet",
     log:
-        f"{LOGS}/sweep/batch_{SWEEP_BATCHES}_{{batch}}.log",
+        f"{LOGS}/sweep/batch_{{n_batches}}_{{batch}}.log",
     benchmark:
-        f"{BENCH}/sweep/batch_{SWEEP_BATCHES}_{{batch}}.tsv"
+        f"{BENCH}/sweep/batch_{{n_batches}}_{{batch}}.tsv"
     conda:
         ENV
     threads: 1
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: attempt
+        * batch_minutes(
+            SWEEP_GRID,
+            SWEEP_UNITS,
+            int(w.n_batches),
+            int(w.batch),
+            config["sweep"]["seconds_per_evaluation"],
+            DECOUPLED,
+        ),
     params:
         sweep=config["sweep"],
         selection=config["selection"],
@@ -88,7 +145,7 @@ rule sweep_batch:
         models=config["models"],
         folds=SWEEP_FOLDS,
         sensors=list(DATASET.sensors),
-        n_batches=SWEEP_BATCHES,
+        n_batches=lambda w: int(w.n_batches),
         decoupled=DECOUPLED,
     script:
         "../scripts/sweep_batch.py"
@@ -96,6 +153,7 @@ rule sweep_batch:
 
 rule sweep_collect:
     input:
+        code=code_of("sweep_collect.py"),
         batches=SWEEP_BATCH_FILES,
     output:
         summary=f"{SWEEP}/summary.csv",
@@ -107,6 +165,9 @@ rule sweep_collect:
         f"{BENCH}/sweep/collect.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
         degree=config["decoupling"]["degree"],
@@ -116,6 +177,7 @@ rule sweep_collect:
 
 rule sweep_heatmap:
     input:
+        code=code_of("sweep_plot.py"),
         ranking=f"{SWEEP}/ranking.csv",
     output:
         figures=SWEEP_HEATMAP,
@@ -125,6 +187,9 @@ rule sweep_heatmap:
         f"{BENCH}/sweep/heatmap.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
         degree=config["decoupling"]["degree"],
@@ -136,6 +201,7 @@ rule sweep_heatmap:
 
 rule sweep_factor_effects:
     input:
+        code=code_of("sweep_plot.py"),
         ranking=f"{SWEEP}/ranking.csv",
     output:
         figures=SWEEP_EFFECTS,
@@ -145,6 +211,9 @@ rule sweep_factor_effects:
         f"{BENCH}/sweep/factor_effects.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
         degree=config["decoupling"]["degree"],
@@ -156,6 +225,7 @@ rule sweep_factor_effects:
 
 rule sweep_report:
     input:
+        library=code_of("notebooks/sweep_report.ipynb"),
         notebook="notebooks/sweep_report.ipynb",
         summary=f"{SWEEP}/summary.csv",
         ranking=f"{SWEEP}/ranking.csv",
@@ -179,6 +249,9 @@ rule sweep_report:
         f"{BENCH}/sweep/report.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 750 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         title=f"Sweep report: {DATASET.name}",
         statement=DATA_STATEMENT,

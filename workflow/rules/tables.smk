@@ -45,6 +45,9 @@ rule collect_model_tables:
         f"{BENCH}/collect_model_tables.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         provenance=DATA_STATEMENT,
     script:
@@ -70,6 +73,9 @@ rule ambient_ranges:
         f"{BENCH}/ambient_ranges.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         runs=RUNS,
         provenance=DATA_STATEMENT,
@@ -104,6 +110,9 @@ rule paper_comparison:
         f"{BENCH}/paper_comparison.tsv"
     conda:
         ENV
+    resources:
+        mem_mb=lambda w, attempt: 500 * attempt,
+        runtime=lambda w, attempt: 5 * attempt,
     params:
         paper_fold=config["paper_fold"],
         provenance=DATA_STATEMENT,

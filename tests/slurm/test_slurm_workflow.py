@@ -1,0 +1,172 @@
+"""The workflow through a real Slurm (tests/slurm/start_slurm.sh): same bytes as a local run,
+and a job killed with scancel is either resubmitted or fails the run cleanly.
+
+Skipped, with the reason, where the one-node cluster cannot be started (not root, the
+Debian packages missing). The twin's models and a small sweep on the held-out run E4
+keep each run to about a minute.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from conftest import REPO, SNAKEMAKE, run_snakemake, snakemake_env, workflow_workdir
+
+pytestmark = [pytest.mark.slurm, pytest.mark.slow]
+
+START = REPO / "tests" / "slurm" / "start_slurm.sh"
+STOP = REPO / "tests" / "slurm" / "stop_slurm.sh"
+TARGETS = (
+    "results/twin/tables/metrics.csv",
+    "results/twin/sweep/summary.csv",
+    "results/twin/sweep/ranking.csv",
+    "results/twin/sweep/factor_effects.csv",
+)
+SMALL_SVR = {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}
+CONFIG = {
+    "dataset": str(REPO / "data" / "raw" / "twin"),
+    "folds": ["E4"],
+    "models": {"algorithms": ["mlr", "svr"], "svr_grid": SMALL_SVR},
+    "figures": {"formats": ["png"], "algorithms": ["mlr"]},
+    "reports": {"model_algorithms": ["mlr"]},
+    # 2 selection settings x (decoupled d1 + pointwise) x 2 algorithms = 8 evaluations of
+    # fold E4: 1 batch locally on one core, 2 batches of 4 on the cluster.
+    "sweep": {
+        "methods": ["correlation", "fixed"],
+        "n_clusters": [3],
+        "degrees": [1],
+        "algorithms": ["mlr", "svr"],
+        "folds": ["E4"],
+        "cluster_batch_size": 4,
+    },
+}
+
+
+@pytest.fixture(scope="module")
+def slurm():
+    """The one-node cluster; stopped afterwards if this fixture started it."""
+    if os.geteuid() != 0:
+        pytest.skip("Slurm test: needs root to start the one-node cluster (tests/slurm/start_slurm.sh)")
+    was_up = shutil.which("scontrol") is not None and "UP" in subprocess.run(
+        ["scontrol", "ping"], capture_output=True, text=True
+    ).stdout
+    proc = subprocess.run(["bash", str(START)], capture_output=True, text=True, timeout=300)
+    if proc.returncode != 0:
+        reason = (proc.stderr.strip().splitlines() or ["no message"])[-1]
+        pytest.skip(f"Slurm test: the one-node cluster did not start: {reason}")
+    yield
+    if not was_up:
+        subprocess.run(["bash", str(STOP)], capture_output=True, timeout=60)
+
+
+def _workdir(tmp_path: Path) -> tuple[Path, Path]:
+    work = workflow_workdir(tmp_path)
+    os.symlink(REPO / "profiles", work / "profiles")
+    config = work / "slurm_test_config.yaml"
+    config.write_text(yaml.safe_dump(CONFIG))
+    return work, config
+
+
+def _slurm_command(config: Path, *extra: str) -> list[str]:
+    # Status checks every few seconds instead of the profile's 20 s: the jobs are short.
+    return [SNAKEMAKE, "--profile", "profiles/slurm", "--nolock", "--configfile", str(config),
+            "--slurm-init-seconds-before-status-checks", "2", "--latency-wait", "10", *extra,
+            "--", *TARGETS]  # fmt: skip
+
+
+def _results(work: Path) -> dict[str, bytes]:
+    """Every result file by relative path; the batch files differ by design (batch count)."""
+    root = work / "results" / "twin"
+    return {
+        str(p.relative_to(root)): p.read_bytes()
+        for p in sorted(root.rglob("*"))
+        if p.is_file() and "batches" not in p.relative_to(root).parts
+    }
+
+
+@pytest.fixture(scope="module")
+def local_results(tmp_path_factory):
+    work, config = _workdir(tmp_path_factory.mktemp("local"))
+    proc = run_snakemake(work, "--configfile", str(config), "--cores", "1", "--", *TARGETS)
+    assert "thermaxis: sweep of 2 fold x selection units, 8 evaluations in 1 batches" in proc.stderr
+    assert (work / "results" / "twin" / "sweep" / "batches" / "1" / "0.parquet").is_file()
+    return _results(work)
+
+
+def test_slurm_run_is_byte_identical_to_the_local_run(slurm, local_results, tmp_path):
+    work, config = _workdir(tmp_path)
+    proc = subprocess.run(_slurm_command(config), cwd=work, capture_output=True, text=True,
+                          env=snakemake_env(), timeout=900)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-5000:]
+    assert "SLURM run ID" in proc.stderr
+    assert "Submitted array job" in proc.stderr  # the sweep batches, as one job array
+    # The estimate before the start: 8 evaluations x 0.065 s on 2 batches = 0.26 s wall.
+    assert "8 evaluations in 2 batches; estimated 0.00 CPU-hours at 0.065 s each" in proc.stderr
+    # The cluster plan: 8 evaluations in batches of 4.
+    batches = sorted(p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir())
+    assert batches == ["0.parquet", "1.parquet"]
+    ours = _results(work)
+    assert sorted(ours) == sorted(local_results)
+    differing = [name for name in ours if ours[name] != local_results[name]]
+    assert differing == []
+
+
+def _running_job(rule: str, timeout: float = 300.0) -> str:
+    """The Slurm id of the first RUNNING job of ``rule`` (the plugin puts the rule in the comment)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        out = subprocess.run(["squeue", "-h", "-t", "RUNNING", "-o", "%i|%k"], capture_output=True, text=True).stdout
+        for line in out.splitlines():
+            job, _, comment = line.partition("|")
+            if f"rule_{rule}" in comment:
+                return job.strip()
+        time.sleep(0.5)
+    raise AssertionError(f"no RUNNING Slurm job of rule {rule} within {timeout:.0f} s")
+
+
+def _start(work: Path, command: list[str], log: Path) -> subprocess.Popen:
+    # Output to a file, not a pipe: a full pipe would stall Snakemake while the test waits.
+    with open(log, "w") as out:
+        return subprocess.Popen(command, cwd=work, env=snakemake_env(), stdout=out, stderr=subprocess.STDOUT)
+
+
+def _finish(run: subprocess.Popen, log: Path) -> str:
+    run.wait(timeout=900)
+    return log.read_text()
+
+
+def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(slurm, local_results, tmp_path):
+    work, config = _workdir(tmp_path)
+    # 1. Without retries the killed job fails the run, with the job and its state named.
+    run = _start(work, _slurm_command(config, "--retries", "0"), tmp_path / "run.log")
+    killed = _running_job("fit_predict")
+    subprocess.run(["scancel", killed], check=True)
+    output = _finish(run, tmp_path / "run.log")
+    assert run.returncode != 0
+    assert f"SLURM-job '{killed}' failed, SLURM status is: 'CANCELLED'" in output
+    assert "fit_predict" in output
+    # Nothing half-written: the killed job's outputs are gone, no temporary file is left.
+    fold_dir = work / "results" / "twin" / "models" / "E4"
+    assert not (fold_dir.exists() and any(fold_dir.iterdir()))
+    assert not [p for p in (work / "results").rglob(".*") if p.is_file()]
+
+    # 2. The rerun, with the profile's retries: its fit_predict job is killed too,
+    # resubmitted, and the run completes with the local run's bytes.
+    rerun = _start(work, _slurm_command(config), tmp_path / "rerun.log")
+    killed_again = _running_job("fit_predict")
+    subprocess.run(["scancel", killed_again], check=True)
+    output = _finish(rerun, tmp_path / "rerun.log")
+    assert rerun.returncode == 0, output[-5000:]
+    assert f"SLURM-job '{killed_again}' failed, SLURM status is: 'CANCELLED'" in output
+    assert "Trying to restart job" in output
+    assert _results(work) == local_results
+    states = subprocess.run(["sacct", "-n", "-X", "-P", "-j", killed_again, "-o", "State"],
+                            capture_output=True, text=True).stdout  # fmt: skip
+    assert states.strip().startswith("CANCELLED")
