@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import yaml
 
 from ..decouple import decouple_measurement
+from ..guard import load_yaml
 from . import conditions as cond
 from . import faults
 from . import model as mdl
@@ -94,7 +94,7 @@ def window_temperatures(root: Path | str, lines: pd.DataFrame) -> pd.DataFrame:
     the median ignores single-sample spikes and duplicated rows.
     """
     root = Path(root)
-    meta = yaml.safe_load((root / "dataset.yaml").read_text(encoding="utf-8"))
+    meta = load_yaml(root / "dataset.yaml")
     offsets = {s["name"]: float(s.get("clock_offset_s", 0.0)) for s in meta["sources"]}
     out = []
     for run, group in lines.groupby("run", sort=False):
