@@ -417,7 +417,7 @@ def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: st
     return notes
 
 
-def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str) -> list[str]:
+def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str, n_clusters: int = 0) -> list[str]:
     """Sensors that vary over the samples; a constant one is named and left out.
 
     A constant series has no correlation with anything (the fuzzy relation would hold
@@ -440,5 +440,12 @@ def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], wher
         warnings.warn(
             f"{where}: sensor {sensor} is constant over the training measurements; left out of the selection",
             stacklevel=2,
+        )
+    varying = len(temperatures.columns) - len(constant)
+    if n_clusters > varying:
+        raise _error(
+            "config selection.n_clusters",
+            f"{n_clusters} clusters but only {varying} sensors vary over the training measurements of {where} "
+            f"(expected at most {varying})",
         )
     return [str(s) for s in temperatures.columns if str(s) not in constant]

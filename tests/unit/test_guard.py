@@ -175,6 +175,14 @@ def test_constant_sensor_is_left_out_with_a_warning():
         assert guard.informative_sensors(frame, (), "fold E2") == ["T1", "T3"]
 
 
+def test_more_clusters_than_varying_sensors_names_the_config_key():
+    frame = pd.DataFrame({"T1": [20.0, 21.0, 22.0], "T2": [25.0, 25.0, 25.0], "T3": [1.0, 1.0, 1.5]})
+    with pytest.warns(UserWarning), pytest.raises(DataError, match="config selection.n_clusters: 3 clusters but only 2 sensors vary"):
+        guard.informative_sensors(frame, (), "fold E2", n_clusters=3)
+    with pytest.warns(UserWarning):
+        assert guard.informative_sensors(frame, (), "fold E2", n_clusters=2) == ["T1", "T3"]
+
+
 def test_constant_fixed_sensor_is_refused():
     frame = pd.DataFrame({"T1": [20.0, 21.0], "T2": [25.0, 25.0]})
     with pytest.raises(DataError, match="config selection.fixed: sensor T2 is constant"):
