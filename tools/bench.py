@@ -44,6 +44,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from .guard import load_yaml
+
 __all__ = [
     "Measurement",
     "ScaleFit",
@@ -328,7 +330,7 @@ def _git_commit(repo: Path) -> str | None:
 
 def _default_dataset_name(repo: Path) -> str:
     config = yaml.safe_load((repo / "config" / "config.yaml").read_text(encoding="utf-8"))
-    meta = yaml.safe_load((repo / config["dataset"] / "dataset.yaml").read_text(encoding="utf-8"))
+    meta = load_yaml(repo / config["dataset"] / "dataset.yaml")
     return meta["name"]
 
 

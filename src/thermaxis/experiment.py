@@ -217,7 +217,8 @@ def select_for_fold(
         keep = (X["run"] != fold).to_numpy()
         X, Y = X.loc[keep], Y.loc[keep]
     fixed = tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
-    sensors = informative_sensors(X[sensor_columns(X)], fixed, where=f"fold {fold}")
+    clustered = settings.n_clusters if settings.method in ("fuzzy_grey", "correlation") else 0
+    sensors = informative_sensors(X[sensor_columns(X)], fixed, where=f"fold {fold}", n_clusters=clustered)
     absolute = X[sensors]
     relative = relative_temperatures(X)[sensors]
     k_points = b_points = None

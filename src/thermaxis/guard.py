@@ -191,13 +191,13 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
         return raw.error_source if raw.error_source is not None and raw.error_source.is_file() else folder / "errors" / f"{name}.csv"
 
     for name, measurement in raw.measurements.items():
-        check_error_readings(file_of(name), measurement["error_um"].to_numpy(), config["errors"]["max_abs_error_um"])
-    for name, measurement in raw.measurements.items():
+        path, positions = file_of(name), measurement["position_mm"].to_numpy()
+        check_error_readings(path, measurement["error_um"].to_numpy(), config["errors"]["max_abs_error_um"])
         _refuse_first_row(
-            file_of(name),
-            np.abs(measurement["position_mm"].to_numpy()) > MAX_ABS_POSITION_MM,
+            path,
+            np.abs(positions) > MAX_ABS_POSITION_MM,
             "position_mm",
-            lambda i: f"expected a position within ±{MAX_ABS_POSITION_MM:g} mm, got {measurement['position_mm'].iloc[i]:g}",
+            lambda i: f"expected a position within ±{MAX_ABS_POSITION_MM:g} mm, got {positions[i]:g}",
         )
     windows = raw.windows()
     overlapping = np.flatnonzero(windows["start"].to_numpy()[1:] < windows["end"].to_numpy()[:-1])
@@ -210,7 +210,7 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
         )
     span_s = (windows["end"].max() - windows["start"].min()).total_seconds()
     interval_s = config["temperatures"]["interval_s"]
-    if interval_s > span_s:
+    if 0 < span_s < interval_s:
         raise _error(
             "config temperatures.interval_s",
             f"{interval_s:g} s is longer than run {raw.run} lasts ({span_s:g} s from its first to its last reading); "
@@ -219,9 +219,9 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
     median_c = config["temperatures"]["plausible_median_c"]
     if not median_c[0] < median_c[1]:
         raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got {median_c}")
-    notes = []
     if dataset.temperature_kind == "rise":
-        return notes  # rises are near 0 by design: no structure's plausible range applies
+        return []  # rises since the start sit near 0 °C by design: no structure-temperature median to judge
+    notes = []
     for source, frame in raw.sources.items():
         with np.errstate(over="ignore"):  # the median of two readings near 1e308 is inf: still implausible
             medians = frame.drop(columns="time").median().to_dict()
@@ -425,7 +425,7 @@ def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: st
     return notes
 
 
-def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str) -> list[str]:
+def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str, n_clusters: int = 0) -> list[str]:
     """Sensors that vary over the samples; a constant one is named and left out.
 
     A constant series has no correlation with anything (the fuzzy relation would hold
@@ -448,5 +448,12 @@ def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], wher
         warnings.warn(
             f"{where}: sensor {sensor} is constant over the training measurements; left out of the selection",
             stacklevel=2,
+        )
+    varying = len(temperatures.columns) - len(constant)
+    if n_clusters > varying:
+        raise _error(
+            "config selection.n_clusters",
+            f"{n_clusters} clusters but only {varying} sensors vary over the training measurements of {where} "
+            f"(expected at most {varying})",
         )
     return [str(s) for s in temperatures.columns if str(s) not in constant]

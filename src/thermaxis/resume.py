@@ -32,10 +32,11 @@ _TEMPORARY = re.compile(r"^\.(?P<name>.+)\.[a-z0-9_]{8}(?P<suffix>\.[^./]+)?$")
 
 def _is_snakemake(argv: list[str]) -> bool:
     """Snakemake itself (``snakemake ...`` or ``python .../snakemake ...``), not a shell that names it."""
-    words = [os.path.basename(a) for a in argv[:2]]
+    words = [os.path.basename(a) for a in argv[:3]]
     if words and words[0] == "snakemake":
         return True
-    return len(words) == 2 and words[0].startswith("python") and words[1] == "snakemake"
+    python = bool(words) and words[0].startswith("python")
+    return python and (words[1:2] == ["snakemake"] or words[1:3] == ["-m", "snakemake"])
 
 
 def live_snakemakes(folder: Path, proc: Path = PROC) -> list[int]:

@@ -175,6 +175,14 @@ def test_constant_sensor_is_left_out_with_a_warning():
         assert guard.informative_sensors(frame, (), "fold E2") == ["T1", "T3"]
 
 
+def test_more_clusters_than_varying_sensors_names_the_config_key():
+    frame = pd.DataFrame({"T1": [20.0, 21.0, 22.0], "T2": [25.0, 25.0, 25.0], "T3": [1.0, 1.0, 1.5]})
+    with pytest.warns(UserWarning), pytest.raises(DataError, match="config selection.n_clusters: 3 clusters but only 2 sensors vary"):
+        guard.informative_sensors(frame, (), "fold E2", n_clusters=3)
+    with pytest.warns(UserWarning):
+        assert guard.informative_sensors(frame, (), "fold E2", n_clusters=2) == ["T1", "T3"]
+
+
 def test_constant_fixed_sensor_is_refused():
     frame = pd.DataFrame({"T1": [20.0, 21.0], "T2": [25.0, 25.0]})
     with pytest.raises(DataError, match="config selection.fixed: sensor T2 is constant"):
@@ -213,3 +221,53 @@ def test_a_rule_writing_outside_the_dataset_folders_is_named():
     guard.check_rule_outputs([inside], roots)
     with pytest.raises(DataError, match=re.escape("rule leak: output 'logs/x/../leak.log' is outside results/x, logs/x, benchmarks/x")):
         guard.check_rule_outputs([inside, escaping], roots)
+
+
+def _raw_run(starts, temperature_c):
+    from thermaxis.io import RawRun
+
+    t0 = pd.Timestamp("2022-05-10T09:00:00")
+    measurements = {
+        f"M{k + 1}": pd.DataFrame(
+            {
+                "time": [t0 + pd.Timedelta(minutes=m), t0 + pd.Timedelta(minutes=m + 2)],
+                "position_mm": [0.0, 100.0],
+                "error_um": [0.0, -5.0],
+            }
+        )
+        for k, m in enumerate(starts)
+    }
+    box = pd.DataFrame({"time": [t0, t0 + pd.Timedelta(minutes=60)], "T1": [temperature_c, temperature_c + 1.0]})
+    return RawRun(run="E1", sources={"box": box}, measurements=measurements)
+
+
+def _plausibility_config(**temperatures):
+    return {
+        "errors": {"max_abs_error_um": 1000.0},
+        "temperatures": {"interval_s": 10.0, "plausible_median_c": [5.0, 60.0], **temperatures},
+    }
+
+
+def test_run_plausibility_warns_of_fahrenheit_unless_the_dataset_logs_rises(tmp_path):
+    from types import SimpleNamespace
+
+    # Median of 85 and 86 °F is 85.5 °F = 29.72 °C.
+    absolute = SimpleNamespace(root=tmp_path, meta={})
+    (note,) = guard.check_run_plausibility(absolute, _raw_run([0, 20], 85.0), _plausibility_config())
+    assert note.startswith(f"{tmp_path / 'E1' / 'temperatures' / 'box.csv'}: sensor T1: median 85.5 °C")
+    assert "that is 29.7 °C" in note
+    rise = SimpleNamespace(root=tmp_path, meta={"temperature_kind": "rise"})
+    assert guard.check_run_plausibility(rise, _raw_run([0, 20], 0.5), _plausibility_config()) == []
+
+
+def test_run_plausibility_refuses_overlaps_and_a_grid_step_longer_than_the_run(tmp_path):
+    from types import SimpleNamespace
+
+    dataset = SimpleNamespace(root=tmp_path, meta={})
+    # M2 starts 1 min after M1, which lasts 2 min.
+    with pytest.raises(DataError, match=re.escape(f"{tmp_path / 'E1' / 'errors' / 'M2.csv'}: readings from 2022-05-10 09:01:00 overlap measurement M1")):
+        guard.check_run_plausibility(dataset, _raw_run([0, 1], 20.0), _plausibility_config())
+    # The run spans 0 to 22 min = 1320 s.
+    with pytest.raises(DataError, match=re.escape("config temperatures.interval_s: 1321 s is longer than run E1 lasts (1320 s")):
+        guard.check_run_plausibility(dataset, _raw_run([0, 20], 20.0), _plausibility_config(interval_s=1321.0))
+    guard.check_run_plausibility(dataset, _raw_run([0, 20], 20.0), _plausibility_config(interval_s=1320.0))

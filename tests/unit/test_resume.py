@@ -16,6 +16,7 @@ from thermaxis import resume
         (["/x/.venv/bin/python3.11", "/x/.venv/bin/snakemake", "--cores", "2"], True),
         (["snakemake", "-n"], True),
         (["/usr/bin/python3", "/x/.venv/bin/snakemake"], True),
+        (["python3", "-m", "snakemake", "--cores", "1"], True),
         # make's shell and this wrapper name snakemake without being it.
         (["/bin/bash", "-c", ".venv/bin/python -m thermaxis.resume .venv/bin/snakemake"], False),
         (["/x/.venv/bin/python", "-m", "thermaxis.resume", "/x/.venv/bin/snakemake"], False),

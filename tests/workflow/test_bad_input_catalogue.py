@@ -371,6 +371,13 @@ CASES = [
         fails=False,
     ),
     Case(
+        "constant_sensor_too_few_for_clusters",
+        lambda ds, w: _column(ds / "E1/temperatures/box.csv", "T3", lambda v: "25.000"),
+        "config selection.n_clusters: 12 clusters but only 11 sensors vary over the training measurements of fold E2",
+        target="select:E2",
+        config={"selection": {"n_clusters": 12}},
+    ),
+    Case(
         "constant_fixed_sensor",
         lambda ds, w: _column(ds / "E1/temperatures/box.csv", "T1", lambda v: "25.000"),
         "config selection.fixed: sensor T1 is constant",
