@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .guard import load_yaml
+from thermaxis.guard import load_yaml
 
 __all__ = [
     "Measurement",
