@@ -171,3 +171,40 @@ def test_signals_are_held_as_steps_on_the_grid():
     held = signals_on_grid({"plc": log}, {}, grid)
     # Before the first sample: its value; from 95 s to 200 s: 3000; no ramp in between.
     assert held["rpm"].tolist() == [0, 0, 0, 0, 0, 0, 3000, 3000, 3000, 3000, 3000, 0, 0]
+
+
+def test_importer_takes_one_file_per_run_without_a_time_column(tmp_path):
+    # Two runs in their own tables, no time column: row i is i x 30 s after the start.
+    for name, slope in (("a.csv", 0.01), ("b.csv", 0.02)):
+        rows = np.arange(20)
+        pd.DataFrame({"temp A": 20 + 0.1 * rows, "temp B": 21 + 0.05 * rows, "disp": slope * 30 * rows}).to_csv(
+            tmp_path / name, index=False
+        )
+    mapping = _mapping(
+        tmp_path,
+        source=".",
+        time={"interval_s": 30, "start": "2030-01-01T00:00:00"},
+        signals=[],
+        split={"by": "files"},
+        errors={"columns": [{"column": "disp", "position_mm": 0}], "every_s": 150},
+        runs=[{"name": "A", "condition": "a", "description": "x", "file": "a.csv"},
+              {"name": "B", "condition": "b", "description": "y", "file": "b.csv"}],  # fmt: skip
+    )
+    dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "files"))
+    errors = pd.read_csv(dataset.root / "B" / "errors.csv")
+    # Samples every 30 s, a measurement every 150 s: rows 0, 5, 10, 15 -> 0, 3, 6, 9 um at 0.02 um/s.
+    np.testing.assert_allclose(errors["error_um"], [0.0, 3.0, 6.0, 9.0])
+    assert errors["time"].tolist()[1] == "2030-01-01T00:02:30"
+    assert "an invented clock" in dataset.meta["description"]
+
+
+def test_importer_cuts_explicit_time_ranges(tmp_path):
+    mapping = _mapping(
+        tmp_path,
+        split={"by": "ranges"},
+        runs=[{"name": "early", "condition": "a", "description": "x", "start_s": 0, "end_s": 1200},
+              {"name": "late", "condition": "b", "description": "y", "start_s": 2400, "end_s": 3600}],  # fmt: skip
+    )
+    dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "ranges"))
+    late = pd.read_csv(dataset.root / "late" / "errors.csv")
+    assert late["time"].iloc[0] == "2030-01-01T00:40:00" and len(late) == 4  # 2400 .. 3540 s every 300 s
