@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .summary import data_statement, markdown_table
+from .formatting import markdown_table
+from .summary import data_statement
 
 __all__ = ["ReproducedTables", "paper_comparison", "comparison_markdown"]
 

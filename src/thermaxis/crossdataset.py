@@ -141,7 +141,7 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
 
 def to_markdown(summary: pd.DataFrame) -> str:
     """The summary as a Markdown table, with a line on which datasets are simulated."""
-    from .summary import markdown_table
+    from .formatting import markdown_table
 
     simulated = sorted(summary.loc[summary["data"] == "simulated", "dataset"].unique())
     lines = ["# Held-out error per dataset, approach and algorithm", ""]

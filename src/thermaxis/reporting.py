@@ -38,7 +38,7 @@ from pathlib import Path
 import pandas as pd
 
 from .naming import sort_naturally
-from .summary import format_cell
+from .formatting import format_cell
 
 __all__ = [
     "REPORT_CSS",

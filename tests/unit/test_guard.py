@@ -14,7 +14,7 @@ import yaml
 
 from thermaxis import guard
 from thermaxis.io import DataError
-from thermaxis.summary import format_cell
+from thermaxis.formatting import format_cell
 
 REPO = Path(__file__).resolve().parents[2]
 
