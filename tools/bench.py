@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from thermaxis.config import load_config
 from thermaxis.guard import load_yaml
 
 __all__ = [
@@ -329,8 +330,8 @@ def _git_commit(repo: Path) -> str | None:
 
 
 def _default_dataset_name(repo: Path) -> str:
-    config = yaml.safe_load((repo / "config" / "config.yaml").read_text(encoding="utf-8"))
-    meta = load_yaml(repo / config["dataset"] / "dataset.yaml")
+    """The dataset a plain ``snakemake`` run builds: the first of config ``datasets``."""
+    meta = load_yaml(repo / load_config(repo / "config" / "config.yaml")["dataset"] / "dataset.yaml")
     return meta["name"]
 
 
