@@ -75,7 +75,7 @@ report: results
 # The index links the sweep report only if it exists when the index is built, so an
 # index that is already there is rebuilt after the sweep.
 sweep: env
-	$(SNAKEMAKE) sweep
+	$(BIN)/python -m thermaxis.resume $(SNAKEMAKE) sweep
 	if [ -f results/twin/index.html ]; then $(SNAKEMAKE) --forcerun index -- results/twin/index.html; fi
 
 # Many minutes (cold run, sweep, scale series up to 50 runs); e.g. BENCH_ARGS="--runs 5 10".
