@@ -723,6 +723,29 @@ _KB_PRED_COLUMNS = (
 _KB_TARGETS = (("k", "Slope k (µm/m)"), ("b", "Intercept b (µm)"))
 
 
+def _measured_and_predicted(ax, x: np.ndarray, rows: pd.DataFrame, algorithm: str, markevery=None) -> None:
+    """Measured (solid) and predicted (dashed) against x, the prediction interval shaded where given."""
+    if _has_band(rows):
+        ax.fill_between(
+            x,
+            rows["lower"].to_numpy(dtype=float),
+            rows["upper"].to_numpy(dtype=float),
+            color=CATEGORICAL_COLORS[1],
+            alpha=0.25,
+            linewidth=0,
+            label="Prediction interval",
+        )
+    ax.plot(x, rows["measured"].to_numpy(dtype=float), label="Measured", markevery=markevery, **_categorical_style(0))
+    ax.plot(
+        x,
+        rows["predicted"].to_numpy(dtype=float),
+        linestyle="--",
+        label=f"Predicted ({_display(algorithm)})",
+        markevery=markevery,
+        **_categorical_style(1),
+    )
+
+
 @_styled
 def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str) -> Figure:
     """Predicted against measured slope k and intercept b of the held-out run(s) (Figs. 14 and 16).
@@ -752,25 +775,7 @@ def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str
         for row, (target, label) in enumerate(_KB_TARGETS):
             ax = axes[row, col]
             part = rows[(rows["run"] == run) & (rows["target"] == target)].sort_values("measurement", kind="stable")
-            m = part["measurement"].to_numpy(dtype=float)
-            if _has_band(part):
-                ax.fill_between(
-                    m,
-                    part["lower"].to_numpy(dtype=float),
-                    part["upper"].to_numpy(dtype=float),
-                    color=CATEGORICAL_COLORS[1],
-                    alpha=0.25,
-                    linewidth=0,
-                    label="Prediction interval",
-                )
-            ax.plot(m, part["measured"].to_numpy(dtype=float), label="Measured", **_categorical_style(0))
-            ax.plot(
-                m,
-                part["predicted"].to_numpy(dtype=float),
-                linestyle="--",
-                label=f"Predicted ({_display(algorithm)})",
-                **_categorical_style(1),
-            )
+            _measured_and_predicted(ax, part["measurement"].to_numpy(dtype=float), part, algorithm)
             ax.set_ylabel(label if col == 0 else "")
             ax.xaxis.set_major_locator(MaxNLocator(integer=True))
             if row == 0:
@@ -869,26 +874,8 @@ def _prediction_in_time(ax_value, ax_res, rows: pd.DataFrame, algorithm: str, fi
     """Single-position prediction: measured and predicted error, and the residual, against time."""
     rows = rows.sort_values("time_min", kind="stable")
     t = rows["time_min"].to_numpy(dtype=float)
-    if _has_band(rows):
-        ax_value.fill_between(
-            t,
-            rows["lower"].to_numpy(dtype=float),
-            rows["upper"].to_numpy(dtype=float),
-            color=CATEGORICAL_COLORS[1],
-            alpha=0.25,
-            linewidth=0,
-            label="Prediction interval",
-        )
     every = _markevery(len(rows))
-    ax_value.plot(t, rows["measured"].to_numpy(dtype=float), label="Measured", markevery=every, **_categorical_style(0))
-    ax_value.plot(
-        t,
-        rows["predicted"].to_numpy(dtype=float),
-        linestyle="--",
-        label=f"Predicted ({_display(algorithm)})",
-        markevery=every,
-        **_categorical_style(1),
-    )
+    _measured_and_predicted(ax_value, t, rows, algorithm, markevery=every)
     ax_res.plot(t, rows["residual"].to_numpy(dtype=float), markevery=every, **_categorical_style(2))
     ax_res.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
     ax_value.set_ylabel(ERROR_LABEL if first else "")
