@@ -452,7 +452,8 @@ def _read_logs(folder: Path, dataset: Dataset, kind: str) -> dict[str, pd.DataFr
     if folder.is_dir():
         for extra in sorted(folder.glob("*.csv")):
             if extra.stem not in dataset.sources:
-                raise DataError(f"{extra}: unknown {kind} source {extra.stem!r} (not declared in dataset.yaml)")
+                logged = "temperature" if kind == "sensor" else kind
+                raise DataError(f"{extra}: unknown {logged} source {extra.stem!r} (not declared in dataset.yaml)")
             if not of(extra.stem):
                 raise DataError(f"{extra}: source {extra.stem!r} logs no {kind} declared in dataset.yaml")
     return logs
