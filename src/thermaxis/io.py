@@ -307,12 +307,14 @@ def _parse_numbers(path: Path, frame: pd.DataFrame, column: str, allow_empty: bo
     return numbers
 
 
-def _check_time_order(path: Path, time: pd.Series) -> None:
+def _check_time_order(path: Path, time: pd.Series, where: str = "") -> None:
+    """Times must not go back; the series' index is the row's position in the file (header = line 1)."""
     back = np.flatnonzero(np.diff(time.to_numpy().astype("int64")) < 0)
     if back.size:
         i = int(back[0]) + 1
         raise DataError(
-            f"{path}: line {i + 2}, column 'time': time goes backwards ({time.iloc[i]} after {time.iloc[i - 1]})"
+            f"{path}: line {int(time.index[i]) + 2}, column 'time': time goes backwards "
+            f"({time.iloc[i]} after {time.iloc[i - 1]}){where}"
         )
 
 
@@ -397,10 +399,7 @@ def read_measurements(path) -> dict[str, pd.DataFrame]:
     out = {}
     for label in dict.fromkeys(labels):
         rows = readings[(labels == label).to_numpy()]
-        back = np.flatnonzero(np.diff(rows["time"].to_numpy().astype("int64")) < 0)
-        if back.size:
-            line = int(rows.index[back[0] + 1]) + 2
-            raise DataError(f"{path}: line {line}, column 'time': time goes backwards within measurement {label!r}")
+        _check_time_order(path, rows["time"], f" within measurement {label!r}")
         _check_repeated_positions(path, rows.reset_index(drop=True), f"measurement {label!r}: ")
         out[label] = rows.reset_index(drop=True)
     return out
