@@ -15,18 +15,24 @@ lists them.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import re
+import runpy
 import shutil
+import signal
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Callable
 
 import pytest
 import yaml
 
 from conftest import REPO, run_snakemake, workflow_workdir
+from thermaxis.config import merge
+from thermaxis.preflight import check_before_jobs
 
 pytestmark = pytest.mark.slow
 
@@ -387,6 +393,22 @@ CASES = [
 ]
 
 
+# Run end to end through Snakemake as well: at least one case of every stage that can
+# refuse (the Snakefile's config check, each check of thermaxis.preflight, a job of each
+# rule that refuses or warns) and every case that could hang or write outside the
+# dataset's folders. Each also checks that the in-process message is Snakemake's.
+END_TO_END = {
+    "config_degree_out_of_range",  # the Snakefile's validate_config, before anything else
+    "name_dotdot",  # preflight: a name that would escape results/
+    "first_error_fifo",  # preflight: the one data file read at parse time; a FIFO must not hang
+    "yaml_list_property",  # accepted: both runs cleaned, the summary job
+    "temp_fifo",  # clean_run refuses; a FIFO inside a job must not hang
+    "measurement_symlink_outside",  # clean_run refuses a file outside the dataset
+    "temp_fahrenheit",  # clean_run warns, and the warning reaches the terminal
+    "error_positions_differ",  # assemble refuses
+    "constant_sensor_too_few_for_clusters",  # select_sensitive_points refuses
+}
+
 # --------------------------------------------------------------------------- #
 # running a case
 # --------------------------------------------------------------------------- #
@@ -402,6 +424,16 @@ def two_runs(tmp_path_factory) -> Path:
     _yaml_text(root, sheet.replace("reproduces: xu2023\n", ""))
     _write_lines(root / "runs.tsv", [l for l in _lines(TWIN / "runs.tsv") if l.split("\t")[0] in ("run", "E1", "E2")])
     return root
+
+
+def _broken(case: Case, two_runs: Path, tmp_path: Path) -> tuple[Path, Path, dict]:
+    """The case's dataset and workflow folder in tmp, and its config overrides."""
+    ds = tmp_path / "data" / NAME
+    shutil.copytree(two_runs, ds, symlinks=True)
+    work = workflow_workdir(tmp_path)
+    case.break_it(ds, work)
+    config = {"dataset": str(ds), "ambient_sensor": "T10", "selection": {"n_clusters": 3}, **case.config}
+    return ds, work, config
 
 
 def _targets(case: Case, name: str) -> list[str]:
@@ -437,13 +469,145 @@ def _record(case: Case, message: str, status: str) -> None:
         (Path(folder) / f"{case.id}.json").write_text(json.dumps({"id": case.id, "status": status, "message": message}))
 
 
+# ---- in process: the parse-time checks and the rules' own scripts -----------------------
+SCRIPTS = REPO / "workflow" / "scripts"
+CLEAN_OUTPUTS = ("series:temperatures.parquet", "qc:qc.csv", "gaps:gaps.csv", "errors:errors.parquet",
+                 "temperatures:measurement_temperatures.parquet", "windows:windows.csv",
+                 "signals:measurement_signals.parquet", "signal_series:signals.parquet")  # fmt: skip
+
+
+class _Timeout(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise _Timeout(f"no answer within {TIMEOUT_S} s")
+
+
+def _job(out: str, log: str, *, input=None, output=None, params=None, wildcards=None) -> SimpleNamespace:
+    """What Snakemake hands a script rule as ``snakemake`` (the fields the scripts read)."""
+    return SimpleNamespace(
+        input=SimpleNamespace(**(input or {})),
+        output=SimpleNamespace(**{k: f"{out}/{v}" for k, v in (output or {}).items()}),
+        params=SimpleNamespace(**(params or {})),
+        wildcards=SimpleNamespace(**(wildcards or {})),
+        log=[log],
+    )
+
+
+def _jobs(case: Case, checked) -> list[tuple[str, SimpleNamespace]]:
+    """The script jobs Snakemake runs for the case's target, in order, with the rules' params.
+
+    Mirrors the rules' inputs, outputs and params (clean.smk, assemble.smk, select.smk,
+    ingest.smk); the end-to-end cases run the rules themselves.
+    """
+    config, out, logs = checked.config, checked.out, f"logs/{checked.dataset.name}"
+    root, runs = str(checked.dataset.root), list(checked.dataset.run_ids)
+    kind, _, arg = case.target.partition(":")
+
+    def clean(run):
+        outputs = {k: f"clean/{run}/{v}" for k, v in (o.split(":") for o in CLEAN_OUTPUTS)}
+        params = {"dataset": root, "temperatures": config["temperatures"], "errors": config["errors"]}
+        return "clean_run.py", _job(out, f"{logs}/clean/{run}.log", output=outputs, params=params, wildcards={"run": run})
+
+    def cleaned(name):
+        return [f"{out}/clean/{run}/{name}" for run in runs]
+
+    assemble = ("assemble.py", _job(
+        out, f"{logs}/assemble.log",
+        input={"errors": cleaned("errors.parquet"), "temperatures": cleaned("measurement_temperatures.parquet"),
+               "signals": cleaned("measurement_signals.parquet"), "qc": cleaned("qc.csv")},
+        output={"errors": "assembled/errors.parquet", "temperatures": "assembled/temperatures.parquet",
+                "signals": "assembled/signals.parquet", "qc": "tables/cleaning_qc.csv"},
+        params={"dataset": root},
+    ))  # fmt: skip
+    if kind == "clean":
+        return [clean(arg)]
+    if kind in ("parse", "summary"):
+        summary = ("dataset_summary.py", _job(
+            out, f"{logs}/dataset_summary.log", input={"windows": cleaned("windows.csv")},
+            output={"table": "tables/dataset_summary.csv"}, params={"dataset": root, "runs": runs},
+        ))  # fmt: skip
+        return [*map(clean, runs), summary]
+    if kind == "assemble":
+        return [*map(clean, runs), assemble]
+    select = ("select.py", _job(
+        out, f"{logs}/select/{arg}.log",
+        input={"errors": f"{out}/assembled/errors.parquet", "temperatures": f"{out}/assembled/temperatures.parquet"},
+        output={"selection": f"selection/{arg}.json", "table": f"selection/{arg}.csv"},
+        params={"selection": config["selection"], "decoupling": config["decoupling"],
+                "decoupled": checked.n_positions >= 2},
+        wildcards={"fold": arg},
+    ))  # fmt: skip
+    return [*map(clean, runs), assemble, select]
+
+
+def _in_process(case: Case, work: Path, config: dict, capsys) -> tuple[bool, str, str, list[Path]]:
+    """Refused?, the 'thermaxis error:' line, stderr, and the refusing job's outputs.
+
+    Parse time is thermaxis.preflight.check_before_jobs (what common.smk calls, after the
+    Snakefile's validate_config, which it calls too) on the config files merged as
+    Snakemake merges them; the jobs run the rules' scripts as Snakemake does.
+    """
+    base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
+    old = signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(TIMEOUT_S)
+    cwd = os.getcwd()
+    os.chdir(work)
+    try:
+        try:
+            checked = check_before_jobs(merge(base, config))
+        except ValueError as exc:
+            assert "\n" not in str(exc), repr(str(exc))
+            return True, f"thermaxis error: {exc}", capsys.readouterr().err, []
+        for script, job in _jobs(case, checked):
+            for path in vars(job.output).values():  # Snakemake makes the output folders
+                Path(path).parent.mkdir(parents=True, exist_ok=True)
+            try:
+                runpy.run_path(str(SCRIPTS / script), init_globals={"snakemake": job}, run_name="__main__")
+            except SystemExit as exc:
+                assert exc.code == 1, exc.code
+                err = capsys.readouterr().err
+                return True, _message(err), err, [work / p for p in vars(job.output).values()]
+        return False, "", capsys.readouterr().err, []
+    finally:
+        os.chdir(cwd)
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+        # run_script's logging set-up, undone: later tests must not write to this test's log.
+        logging.captureWarnings(False)
+        for name in ("thermaxis", "py.warnings"):
+            for handler in logging.getLogger(name).handlers[:]:
+                handler.close()
+                logging.getLogger(name).removeHandler(handler)
+
+
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
-def test_bad_input(case: Case, two_runs: Path, tmp_path: Path) -> None:
-    ds = tmp_path / "data" / NAME
-    shutil.copytree(two_runs, ds, symlinks=True)
-    work = workflow_workdir(tmp_path)
-    case.break_it(ds, work)
-    config = {"dataset": str(ds), "ambient_sensor": "T10", "selection": {"n_clusters": 3}, **case.config}
+def test_bad_input(case: Case, two_runs: Path, tmp_path: Path, capsys) -> None:
+    ds, work, config = _broken(case, two_runs, tmp_path)
+    before = _tree(tmp_path, ())
+    refused, message, stderr, outputs = _in_process(case, work, config, capsys)
+    new = _tree(tmp_path, ()) - before
+    assert "Traceback" not in stderr and not message.startswith("thermaxis error: unexpected "), stderr[-4000:]
+    _assert_confined(new)
+    if case.fails:
+        _record(case, message, "refused")
+        assert refused, f"accepted:\n{stderr[-4000:]}"
+        assert message, f"no 'thermaxis error:' line:\n{stderr[-4000:]}"
+        _assert_names(case, message, ds)
+        # Stricter than end to end, where Snakemake deletes a failed job's outputs: the
+        # refusing script itself leaves none of them, not even half-written.
+        assert not [p for p in outputs if p.exists()], "outputs written despite the error"
+        if case.target == "parse" or not outputs:
+            assert not [p for p in new if p.startswith(f"work/results/")], "parse-time refusal wrote results"
+    else:
+        assert not refused, stderr[-4000:]
+        _assert_warned(case, stderr, ds)
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if c.id in END_TO_END], ids=lambda c: c.id)
+def test_bad_input_end_to_end(case: Case, two_runs: Path, tmp_path: Path, capsys) -> None:
+    ds, work, config = _broken(case, two_runs, tmp_path)
     (work / "case.yaml").write_text(yaml.safe_dump(config))
     before = _tree(tmp_path, ("work/.snakemake",))
     proc = run_snakemake(
@@ -460,13 +624,8 @@ def test_bad_input(case: Case, two_runs: Path, tmp_path: Path) -> None:
     message = _message(proc.stderr)
     assert "Traceback" not in output, output[-4000:]
     new = _tree(tmp_path, ("work/.snakemake",)) - before
-    allowed = (f"work/results/{NAME}/", f"work/logs/{NAME}/", f"work/benchmarks/{NAME}/")
-    escaped = sorted(p for p in new if not p.startswith(allowed))
-    assert not escaped, f"written outside results/{NAME}/, logs/, benchmarks/: {escaped}"
-    partial = sorted(p for p in new if Path(p).name.startswith("."))
-    assert not partial, f"partial (temporary) outputs left: {partial}"
+    _assert_confined(new)
     if case.fails:
-        _record(case, message, "refused")
         assert proc.returncode != 0
         assert message, f"no 'thermaxis error:' line:\n{output[-4000:]}"
         _assert_names(case, message, ds)
@@ -475,13 +634,31 @@ def test_bad_input(case: Case, two_runs: Path, tmp_path: Path) -> None:
         assert not [p for p in new if p.startswith(f"work/results/{NAME}/") and case.target == "parse"]
     else:
         assert proc.returncode == 0, output[-4000:]
-        warnings = [l for l in proc.stderr.splitlines() if l.startswith("thermaxis warning:")]
-        warning = next((l for l in warnings if case.expect and case.expect in l), "")
-        _record(case, warning, "warned" if case.expect else "accepted")
-        if case.expect:
-            assert warning, f"no warning containing {case.expect!r} on the terminal:\n{output[-3000:]}"
-            if case.file:
-                assert str(ds / case.file) in warning
+        _assert_warned(case, proc.stderr, ds)
+    # The in-process path the catalogue runs gives the very same line.
+    shutil.rmtree(tmp_path / "data")
+    shutil.rmtree(tmp_path / "work")
+    ds, work, config = _broken(case, two_runs, tmp_path)
+    refused, in_process, _, _ = _in_process(case, work, config, capsys)
+    assert (refused, in_process) == (case.fails, message)
+
+
+def _assert_confined(new: set[str]) -> None:
+    allowed = (f"work/results/{NAME}/", f"work/logs/{NAME}/", f"work/benchmarks/{NAME}/")
+    escaped = sorted(p for p in new if not p.startswith(allowed))
+    assert not escaped, f"written outside results/{NAME}/, logs/, benchmarks/: {escaped}"
+    partial = sorted(p for p in new if Path(p).name.startswith("."))
+    assert not partial, f"partial (temporary) outputs left: {partial}"
+
+
+def _assert_warned(case: Case, stderr: str, ds: Path) -> None:
+    warnings = [l for l in stderr.splitlines() if l.startswith("thermaxis warning:")]
+    warning = next((l for l in warnings if case.expect and case.expect in l), "")
+    _record(case, warning, "warned" if case.expect else "accepted")
+    if case.expect:
+        assert warning, f"no warning containing {case.expect!r} on the terminal:\n{stderr[-3000:]}"
+        if case.file:
+            assert str(ds / case.file) in warning
 
 
 def _assert_names(case: Case, message: str, ds: Path) -> None:

@@ -2,10 +2,10 @@ import os
 import sys
 from pathlib import Path
 
-from thermaxis.config import dataset_of
 from thermaxis.deps import library_modules
 from thermaxis import guard
-from thermaxis.io import DataError, load_dataset, read_first_measurement
+from thermaxis.io import DataError
+from thermaxis.preflight import check_before_jobs
 from thermaxis.captions import figure_caption
 from thermaxis.summary import data_statement
 from thermaxis.reporting import PAPER_HEADLINE
@@ -24,25 +24,20 @@ os.environ["PATH"] = (
 
 # One dataset per Snakemake run: --config dataset=<folder>, else the first of `datasets`
 # (`make results` runs each listed dataset in turn).
-config["dataset"] = dataset_of(config)
-
-# The dataset is validated when the workflow is parsed, so a bad sheet or a
-# missing run folder stops everything with one line before any job starts.
+# The config, the dataset and its first data file are validated when the workflow is
+# parsed (thermaxis.preflight, which the bad-input tests call too), so a bad sheet, a
+# missing run folder or a bad config value stops everything with one line before any
+# job starts.
 try:
-    DATASET = load_dataset(config["dataset"])
-    guard.check_dataset_shape(DATASET, config)
-except DataError as exc:
+    CHECKED = check_before_jobs(config)
+except ValueError as exc:
     sys.exit(f"thermaxis error: {exc}")
-
-
-def _fail(message):
-    sys.exit(f"thermaxis error: {message}")
+config["dataset"] = CHECKED.config["dataset"]
+DATASET = CHECKED.dataset
 
 
 RUNS = list(DATASET.run_ids)
-OUT = str(
-    guard.check_inside(f"results/{DATASET.name}", "results", what="results folder")
-)
+OUT = CHECKED.out
 LOGS = f"logs/{DATASET.name}"
 BENCH = f"benchmarks/{DATASET.name}"
 ENV = "../../envs/thermaxis.yaml"
@@ -57,7 +52,7 @@ DATA_STATEMENT = data_statement(
 )
 # The paper's audit and report belong only to a dataset that reproduces the paper.
 PAPER = DATASET.reproduces == "xu2023"
-AMBIENT = config.get("ambient_sensor") or DATASET.ambient_sensor
+AMBIENT = CHECKED.ambient
 HEADLINE = (
     PAPER_HEADLINE
     if PAPER
@@ -68,20 +63,8 @@ FIG_ALGORITHMS = [a for a in config["figures"]["algorithms"] if a in ALGORITHMS]
 PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
 
 
-def _count_positions():
-    """Targets of the first run's first measurement, read once at parse time.
-
-    The one data file read before any job: size-checked, regular, and fully
-    validated, so a bad file stops the parse with one line, never a traceback or a hang.
-    """
-    try:
-        return read_first_measurement(DATASET, RUNS[0])["position_mm"].nunique()
-    except DataError as exc:
-        _fail(exc)
-
-
 # With one target there is no line to decouple: the point-by-point branch runs alone.
-DECOUPLED = _count_positions() >= 2
+DECOUPLED = CHECKED.n_positions >= 2
 APPROACHES = ["decoupled", "pointwise"] if DECOUPLED else ["pointwise"]
 if not DECOUPLED:
     print(
@@ -90,37 +73,12 @@ if not DECOUPLED:
         file=sys.stderr,
     )
 
-for _fold in FOLDS:
-    if _fold not in RUNS:
-        sys.exit(
-            f"thermaxis error: config folds: {_fold!r} is not a run of {DATASET.root / 'runs.tsv'}"
-        )
-if FIG_RUN not in RUNS:
-    _fail(
-        f"config figures.run: {FIG_RUN!r} is not a run of {DATASET.root / 'runs.tsv'}"
-    )
-if PAPER and config["paper_fold"] not in RUNS:
-    _fail(
-        f"config paper_fold: {config['paper_fold']!r} is not a run of {DATASET.root / 'runs.tsv'} "
-        f"(the paper's held-out run; expected one of {', '.join(RUNS)})"
-    )
-if AMBIENT is not None and AMBIENT not in DATASET.sensors:
-    _fail(
-        f"config ambient_sensor: {AMBIENT!r} is not a sensor of {DATASET.root / 'dataset.yaml'} "
-        f"(expected one of {', '.join(DATASET.sensors)})"
-    )
 if AMBIENT is None:
     print(
         f"thermaxis: dataset {DATASET.name!r} declares no ambient_sensor; the ambient figure (Fig. 3) and "
         "ambient table are left out",
         file=sys.stderr,
     )
-for _signal in config["models"]["signals"]:
-    if _signal not in SIGNALS:
-        _fail(
-            f"config models.signals: {_signal!r} is not an operating signal of {DATASET.root / 'dataset.yaml'} "
-            f"(it declares {', '.join(SIGNALS) or 'none'})"
-        )
 if DATASET.temperature_kind == "rise":
     print(
         f"thermaxis: dataset {DATASET.name!r} logs temperature rises, not absolute temperatures; "
