@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -211,6 +212,73 @@ def eq8_errors(X: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(design @ EQ8.T, columns=POSITIONS, index=X.index)
 
 
+# --------------------------------------------------------------------------- workflow runs shared by tests
+
+def tiny_config(work: Path, dataset: Path, name: str = "test_config.yaml", **extra) -> Path:
+    """The workflow configuration of the end-to-end tests, written to ``work/name``.
+
+    Two algorithms with a two-point SVR grid and one figure and report algorithm keep
+    the runs short; the full algorithm set is exercised by the unit tests and `make results`.
+    ``extra`` replaces top-level keys.
+    """
+    config = {
+        "dataset": str(dataset),
+        "ambient_sensor": "S1",
+        "selection": {"n_clusters": 2},
+        "models": {"algorithms": ["mlr", "svr"], "svr_grid": {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}},
+        "figures": {"algorithms": ["mlr"]},
+        "reports": {"model_algorithms": ["mlr"]},
+        **extra,
+    }
+    path = work / name
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+# k and b of each (run, measurement) of the `lines` dataset: exact lines the pipeline must recover.
+def k_true(r, m):
+    return -10.0 + 0.5 * m + r + 0.1 * m * m
+
+
+def b_true(r, m):
+    return -0.7 * m - 0.1 * r + 0.05 * r * m
+
+
+def exact_line(r, m, x):
+    return k_true(r, m) * (x - x[0]) / 1000.0 + b_true(r, m)
+
+
+LINES_RUNS = ("R1", "R2", "R3")
+
+
+@dataclass(frozen=True)
+class Run:
+    work: Path
+    dataset: Path
+    config: Path
+    out: Path
+
+
+@pytest.fixture(scope="session")
+def lines_run(tmp_path_factory) -> Run:
+    """The whole workflow (target ``all``: tables, figures, compensation, reports) once per
+    session on three runs of five measurements whose errors are exact lines.
+
+    Tests only read it or dry-run against it (`-n`), so they share it.
+    """
+    tmp = tmp_path_factory.mktemp("lines")
+    dataset = write_dataset(tmp / "lines", runs=LINES_RUNS, curve=exact_line, name="lines", n_measurements=5)
+    work = workflow_workdir(tmp)
+    config = tiny_config(work, dataset)
+    run_snakemake(work, "--configfile", str(config))
+    return Run(work=work, dataset=dataset, config=config, out=work / "results" / "lines")
+
+
+def planned_rules(proc: subprocess.CompletedProcess) -> set[str]:
+    """Rule names a Snakemake dry run (`-n`) would run."""
+    return set(re.findall(r"^(?:local)?rule (\w+):", proc.stdout + proc.stderr, flags=re.M))
+
+
 # --------------------------------------------------------------------------- the reports build
 
 
@@ -223,42 +291,33 @@ class Built:
     env: dict
 
 
-_BUILD: dict[str, Built] = {}
-
-
 def reports_snakemake(built: Built, *args, check=True) -> subprocess.CompletedProcess:
     return run_snakemake(built.work, "--configfile", str(built.config), *args, check=check, env=built.env)
 
 
-def build_reports(tmp_path_factory) -> Built:
-    """The workflow on a small simulated dataset, once per test session (the browser test reuses it)."""
-    if "built" not in _BUILD:
-        tmp = tmp_path_factory.mktemp("reports")
-        dataset = write_dataset(tmp / "rep", runs=("R1", "R2"), name="rep", reproduces="xu2023")
-        work = workflow_workdir(tmp)
-        config = work / "reports_config.yaml"
-        config.write_text(
-            yaml.safe_dump(
-                {
-                    "dataset": str(dataset),
-                    "ambient_sensor": "S1",
-                    "selection": {"n_clusters": 2},
-                    # One fold, one algorithm: every kind of report, as few notebooks as possible.
-                    "folds": ["R2"],
-                    "paper_fold": "R2",
-                    "models": {"algorithms": ["mlr"]},
-                    "figures": {"algorithms": ["mlr"], "formats": ["png"], "dpi": 80},
-                    "reports": {"model_algorithms": ["mlr"]},
-                }
-            )
-        )
-        env = snakemake_env()
-        built = Built(work=work, out=work / "results" / "rep", dataset=dataset, config=config, env=env)
-        reports_snakemake(built)
-        _BUILD["built"] = built
-    return _BUILD["built"]
-
-
 @pytest.fixture(scope="session")
-def built(tmp_path_factory):
-    return build_reports(tmp_path_factory)
+def built(tmp_path_factory) -> Built:
+    """The workflow with every kind of report on a small simulated dataset that reproduces
+    the paper, once per test session (the reports and the browser tests read it)."""
+    tmp = tmp_path_factory.mktemp("reports")
+    dataset = write_dataset(tmp / "rep", runs=("R1", "R2"), name="rep", reproduces="xu2023")
+    work = workflow_workdir(tmp)
+    config = work / "reports_config.yaml"
+    config.write_text(
+        yaml.safe_dump(
+            {
+                "dataset": str(dataset),
+                "ambient_sensor": "S1",
+                "selection": {"n_clusters": 2},
+                # One fold, one algorithm: every kind of report, as few notebooks as possible.
+                "folds": ["R2"],
+                "paper_fold": "R2",
+                "models": {"algorithms": ["mlr"]},
+                "figures": {"algorithms": ["mlr"], "formats": ["png"], "dpi": 80},
+                "reports": {"model_algorithms": ["mlr"]},
+            }
+        )
+    )
+    built = Built(work=work, out=work / "results" / "rep", dataset=dataset, config=config, env=snakemake_env())
+    reports_snakemake(built)
+    return built

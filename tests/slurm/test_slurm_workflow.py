@@ -19,7 +19,7 @@ import yaml
 
 from conftest import REPO, SNAKEMAKE, run_snakemake, snakemake_env, workflow_workdir
 
-pytestmark = [pytest.mark.slurm, pytest.mark.slow]
+pytestmark = pytest.mark.slurm
 
 START = REPO / "tests" / "slurm" / "start_slurm.sh"
 STOP = REPO / "tests" / "slurm" / "stop_slurm.sh"

@@ -34,8 +34,6 @@ from conftest import REPO, run_snakemake, workflow_workdir
 from thermaxis.config import merge
 from thermaxis.preflight import check_before_jobs
 
-pytestmark = pytest.mark.slow
-
 TWIN = REPO / "data" / "raw" / "twin"
 NAME = "cut"
 # A hang is a failure: far above the slowest case (a few seconds).

@@ -19,9 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import build_reports
-
-pytestmark = [pytest.mark.slow, pytest.mark.browser]
+pytestmark = pytest.mark.browser
 
 CHROMIUM = next((p for p in (shutil.which("chromium"), "/usr/bin/chromium") if p and Path(p).is_file()), None)
 CHROMEDRIVER = next((p for p in (shutil.which("chromedriver"), "/usr/bin/chromedriver") if p and Path(p).is_file()), None)
@@ -34,9 +32,8 @@ class _QuietHandler(SimpleHTTPRequestHandler):
 
 
 @pytest.fixture(scope="module")
-def server(tmp_path_factory):
+def server(built):
     """The built dataset's results folder over http://127.0.0.1:<free port>/."""
-    built = build_reports(tmp_path_factory)
     httpd = ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(built.out)))
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
     thread.start()

@@ -3,33 +3,13 @@
 from __future__ import annotations
 
 import json
-import re
-from pathlib import Path
 
 import pandas as pd
-import pytest
 import yaml
 
-from conftest import run_snakemake, workflow_workdir, write_dataset
-
-pytestmark = pytest.mark.slow
+from conftest import LINES_RUNS, planned_rules, run_snakemake, tiny_config, workflow_workdir, write_dataset
 
 TABLES = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
-
-
-def write_config(work: Path, dataset: Path, name: str, **extra) -> Path:
-    config = {
-        "dataset": str(dataset),
-        "ambient_sensor": "S1",
-        "selection": {"n_clusters": 2},
-        "models": {"algorithms": ["mlr"]},
-        "figures": {"algorithms": ["mlr"], "formats": ["png"]},
-        "reports": {"model_algorithms": ["mlr"]},
-        **extra,
-    }
-    path = work / name
-    path.write_text(yaml.safe_dump(config))
-    return path
 
 
 def targets(name: str, runs) -> list[str]:
@@ -37,25 +17,12 @@ def targets(name: str, runs) -> list[str]:
     return [f"{out}/{table}.csv" for table in TABLES] + [f"results/{name}/figures/compensation_drift_{run}.png" for run in runs]
 
 
-def planned_rules(proc) -> set[str]:
-    return set(re.findall(r"^(?:local)?rule (\w+):", proc.stdout + proc.stderr, flags=re.M))
-
-
-@pytest.fixture(scope="module")
-def lines_run(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("compensation")
-    runs = ("R1", "R2", "R3")
-    dataset = write_dataset(tmp / "lines", runs=runs, name="lines", n_measurements=5)
-    work = workflow_workdir(tmp)
-    config = write_config(work, dataset, "config.yaml")
-    wanted = targets("lines", runs) + ["results/lines/compensation/ThermalCompensation.st"]
-    run_snakemake(work, *wanted, "--configfile", str(config))
-    return work, config, wanted
+# The session's `lines_run` builds everything, the compensation outputs among them.
+WANTED = targets("lines", LINES_RUNS) + ["results/lines/compensation/ThermalCompensation.st"]
 
 
 def test_outputs_carry_their_conventions(lines_run):
-    work, _, _ = lines_run
-    out = work / "results" / "lines" / "compensation"
+    out = lines_run.out / "compensation"
     model = json.loads((out / "model.json").read_text())
     assert model["trained_on"] == ["R1", "R2", "R3"] and model["simulated"] is True
     assert {row["fold"] for row in model["held_out_accuracy"]} == {"R1", "R2", "R3"}
@@ -74,7 +41,7 @@ def test_outputs_carry_their_conventions(lines_run):
 
 
 def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run):
-    work, config, wanted = lines_run
+    work, config, wanted = lines_run.work, lines_run.config, WANTED
     doc = yaml.safe_load(config.read_text())
     model_change = work / "model_change.yaml"
     model_change.write_text(yaml.safe_dump({**doc, "models": {**doc["models"], "random_state": 7}}))
@@ -91,7 +58,7 @@ def test_single_position_dataset_exports_an_offset_only(tmp_path):
     runs = ("R1", "R2", "R3")
     dataset = write_dataset(tmp_path / "spot", runs=runs, positions=(120.0,), name="spot", n_measurements=4)
     work = workflow_workdir(tmp_path)
-    config = write_config(work, dataset, "config.yaml")
+    config = tiny_config(work, dataset, models={"algorithms": ["mlr"]})
     run_snakemake(work, *targets("spot", runs), "--configfile", str(config))
     out = work / "results" / "spot" / "compensation"
     assert json.loads((out / "model.json").read_text())["approach"] == "pointwise"
@@ -104,7 +71,7 @@ def test_single_position_dataset_exports_an_offset_only(tmp_path):
 def test_compensation_algorithm_outside_the_fitted_ones_stops_with_one_line(tmp_path):
     dataset = write_dataset(tmp_path / "tiny", name="tiny")
     work = workflow_workdir(tmp_path)
-    config = write_config(work, dataset, "config.yaml", compensation={"algorithm": "gpr"})
+    config = tiny_config(work, dataset, models={"algorithms": ["mlr"]}, compensation={"algorithm": "gpr"})
     proc = run_snakemake(work, "-n", "--configfile", str(config), check=False)
     assert proc.returncode != 0
     line = "thermaxis error: config compensation.algorithm: 'gpr' is not one of models.algorithms (mlr)"

@@ -4,11 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
 
 from conftest import REPO
-
-pytestmark = pytest.mark.slow
 
 BIN = Path(sys.executable).parent
 

@@ -9,11 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-import pytest
 import yaml
 from conftest import run_snakemake, workflow_workdir, write_dataset
-
-pytestmark = pytest.mark.slow
 
 RUNS = ("cold_start_morning_1250rpm", "warm_afternoon_2500rpm", "night_cooldown_variable")
 

@@ -3,13 +3,10 @@
 from __future__ import annotations
 
 import pandas as pd
-import pytest
 import yaml
 
 from conftest import run_snakemake, workflow_workdir, write_dataset
 from thermaxis import sweep
-
-pytestmark = pytest.mark.slow
 
 
 def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_path):

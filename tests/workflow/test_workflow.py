@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import re
 from pathlib import Path
 
@@ -11,54 +10,16 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import run_snakemake, set_csv_cell, write_dataset
+from conftest import b_true, k_true, planned_rules, run_snakemake, set_csv_cell, tiny_config, write_dataset
+from conftest import REPO
 from conftest import workflow_workdir as workdir
-
-pytestmark = pytest.mark.slow
-
-def tiny_config(work: Path, dataset: Path, **extra) -> Path:
-    # Two algorithms and one figure algorithm keep the end-to-end runs short; the
-    # full algorithm set is exercised by the unit tests and `make results`.
-    config = {
-        "dataset": str(dataset),
-        "ambient_sensor": "S1",
-        "selection": {"n_clusters": 2},
-        "models": {"algorithms": ["mlr", "svr"], "svr_grid": {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}},
-        "figures": {"algorithms": ["mlr"]},
-        "reports": {"model_algorithms": ["mlr"]},
-    }
-    config.update(extra)
-    path = work / "test_config.yaml"
-    path.write_text(yaml.safe_dump(config))
-    return path
+from thermaxis.config import merge
+from thermaxis.io import DataError
+from thermaxis.preflight import check_before_jobs
 
 
-# k and b of each (run, measurement): exact lines the pipeline must recover.
-def k_true(r, m):
-    return -10.0 + 0.5 * m + r + 0.1 * m * m
-
-
-def b_true(r, m):
-    return -0.7 * m - 0.1 * r + 0.05 * r * m
-
-
-def exact_line(r, m, x):
-    return k_true(r, m) * (x - x[0]) / 1000.0 + b_true(r, m)
-
-
-@pytest.fixture(scope="module")
-def finished_run(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("e2e")
-    dataset = write_dataset(tmp / "lines", runs=("R1", "R2", "R3"), curve=exact_line, name="lines", n_measurements=5)
-    work = workdir(tmp)
-    config = tiny_config(work, dataset)
-    run_snakemake(work, "--configfile", str(config))
-    return work, dataset, config
-
-
-def test_tables_exist_and_decouple_exact_lines(finished_run):
-    work, _, _ = finished_run
-    tables = work / "results" / "lines" / "tables"
+def test_tables_exist_and_decouple_exact_lines(lines_run):
+    tables = lines_run.out / "tables"
     for name in ("dataset_summary.csv", "cleaning_qc.csv", "table5_slope_intercept.csv", "metrics.csv",
                  "coefficients.csv", "sensitive_points.csv"):
         assert (tables / name).is_file(), name
@@ -75,9 +36,8 @@ def test_tables_exist_and_decouple_exact_lines(finished_run):
     np.testing.assert_allclose(kb["time_min"], m * 20.0)
 
 
-def test_metrics_cover_every_fold_approach_algorithm(finished_run):
-    work, _, _ = finished_run
-    metrics = pd.read_csv(work / "results" / "lines" / "tables" / "metrics.csv")
+def test_metrics_cover_every_fold_approach_algorithm(lines_run):
+    metrics = pd.read_csv(lines_run.out / "tables" / "metrics.csv")
     assert list(metrics.columns) == ["fold", "approach", "algorithm", "target", "rmse", "max_abs", "mae", "residual_min", "residual_max"]
     combos = set(zip(metrics["fold"], metrics["approach"], metrics["algorithm"]))
     assert combos == {(f, a, g) for f in ("R1", "R2", "R3") for a in ("decoupled", "pointwise") for g in ("mlr", "svr")}
@@ -86,9 +46,8 @@ def test_metrics_cover_every_fold_approach_algorithm(finished_run):
     assert (metrics["rmse"] <= metrics["max_abs"] + 1e-12).all()
 
 
-def test_noop_rerun_has_nothing_to_do(finished_run):
-    work, _, config = finished_run
-    proc = run_snakemake(work, "--configfile", str(config), "-n")
+def test_noop_rerun_has_nothing_to_do(lines_run):
+    proc = run_snakemake(lines_run.work, "--configfile", str(lines_run.config), "-n")
     assert "Nothing to be done" in proc.stdout + proc.stderr
 
 
@@ -105,53 +64,37 @@ def test_bad_input_stops_with_one_line_and_leaves_no_output(tmp_path):
     assert not (work / "results" / "bad" / "tables" / "table5_slope_intercept.csv").exists()
 
 
+def _parse_time_check(work: Path, config: Path):
+    """What the workflow checks while Snakemake parses it (common.smk calls the same function)."""
+    with open(REPO / "config" / "config.yaml", encoding="utf-8") as fh:
+        base = yaml.safe_load(fh)
+    return check_before_jobs(merge(base, yaml.safe_load(config.read_text())))
+
+
 def test_bad_sheet_stops_before_any_job(tmp_path):
     dataset = write_dataset(tmp_path / "sheet", name="sheet")
     (dataset / "runs.tsv").write_text((dataset / "runs.tsv").read_text().replace("R2\t2\t2000", "R2\t2\tx"))
     work = workdir(tmp_path)
-    proc = run_snakemake(work, "--configfile", str(tiny_config(work, dataset)), check=False)
-    assert proc.returncode != 0
-    assert f"thermaxis error: {dataset / 'runs.tsv'}: line 3, column 'feed_mm_min': expected a finite number, got 'x'" in proc.stderr
+    with pytest.raises(DataError) as refused:
+        _parse_time_check(work, tiny_config(work, dataset))
+    assert str(refused.value) == f"{dataset / 'runs.tsv'}: line 3, column 'feed_mm_min': expected a finite number, got 'x'"
     assert not (work / "results").exists()
 
 
 def test_bad_config_value_is_rejected_by_schema(tmp_path):
     dataset = write_dataset(tmp_path / "cfg", name="cfg")
     work = workdir(tmp_path)
-    config = tiny_config(work, dataset, decoupling={"degree": 7})
-    proc = run_snakemake(work, "--configfile", str(config), "-n", check=False)
-    assert proc.returncode != 0
-    assert "7 is greater than the maximum of 3" in proc.stdout + proc.stderr
+    with pytest.raises(ValueError, match="config decoupling/degree: 7 is greater than the maximum of 3"):
+        _parse_time_check(work, tiny_config(work, dataset, decoupling={"degree": 7}))
 
 
-def digest_tree(root: Path) -> dict[str, str]:
-    return {
-        str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
-        for p in sorted(root.rglob("*"))
-        if p.is_file()
-    }
-
-
-def test_two_cold_runs_are_byte_identical(finished_run, tmp_path):
-    work_a, dataset, _ = finished_run
-    work_b = workdir(tmp_path)
-    run_snakemake(work_b, "--configfile", str(tiny_config(work_b, dataset)))
-    a = digest_tree(work_a / "results" / "lines")
-    b = digest_tree(work_b / "results" / "lines")
-    assert a.keys() == b.keys()
-    differing = [name for name in a if a[name] != b[name]]
-    assert differing == []
-    assert any(name.endswith(".png") for name in a) and any(name.endswith(".pdf") for name in a)
-
-
-def test_plot_option_reruns_only_figure_rules(finished_run):
-    work, _, config = finished_run
-    changed = work / "changed_config.yaml"
-    doc = yaml.safe_load(config.read_text())
+def test_plot_option_reruns_only_figure_rules(lines_run):
+    changed = lines_run.work / "changed_config.yaml"
+    doc = yaml.safe_load(lines_run.config.read_text())
     doc["figures"] = {**doc["figures"], "dpi": 150}
     changed.write_text(yaml.safe_dump(doc))
-    proc = run_snakemake(work, "--configfile", str(changed), "-n")
-    rules = set(re.findall(r"^(?:local)?rule (\w+):", proc.stdout + proc.stderr, flags=re.M))
+    proc = run_snakemake(lines_run.work, "--configfile", str(changed), "-n")
+    rules = planned_rules(proc)
     assert rules, proc.stdout
     # Reports embed the figures and the index links them, so they follow; nothing upstream does.
     # provenance.json records the hash of the effective config, so it is rewritten too.
@@ -159,7 +102,7 @@ def test_plot_option_reruns_only_figure_rules(finished_run):
     assert "fig5_unzeroed" in rules
 
 
-def test_editing_a_module_selection_imports_indirectly_reruns_selection(finished_run):
+def test_editing_a_module_selection_imports_indirectly_reruns_selection(lines_run):
     """models.py is named in no rule; select.py reaches it through experiment.select_for_fold.
 
     Snakemake compares checksums of inputs newer than the outputs, so the edit must
@@ -169,7 +112,7 @@ def test_editing_a_module_selection_imports_indirectly_reruns_selection(finished
 
     import thermaxis.models
 
-    work, _, config = finished_run
+    work, config = lines_run.work, lines_run.config
     module = Path(thermaxis.models.__file__)
     original, stat = module.read_bytes(), module.stat()
     try:
