@@ -249,6 +249,19 @@ def exact_line(r, m, x):
 
 
 LINES_RUNS = ("R1", "R2", "R3")
+LINES_SENSORS = ("S1", "S2", "S3", "S4")
+# The sweep grid of the `sweep` target (not part of `all`), which test_sweep_workflow runs
+# on top of `lines_run`: 3 folds x (fuzzy 2 x 2 + correlation 2 = 6 selection settings)
+# x (2 degrees + pointwise) x 2 algorithms.
+LINES_SWEEP = {
+    "methods": ["fuzzy_grey", "correlation"],
+    "n_clusters": [2, 3],
+    "similarity": ["pearson"],
+    "grade": ["deng", "absolute"],
+    "degrees": [1, 2],
+    "algorithms": ["mlr", "svr"],
+    "svr_grid": "models",
+}
 
 
 @dataclass(frozen=True)
@@ -264,12 +277,14 @@ def lines_run(tmp_path_factory) -> Run:
     """The whole workflow (target ``all``: tables, figures, compensation, reports) once per
     session on three runs of five measurements whose errors are exact lines.
 
-    Tests only read it or dry-run against it (`-n`), so they share it.
+    Tests read it or dry-run against it (`-n`); only test_sweep_workflow adds to it, the
+    ``sweep/`` folder of the `sweep` target, which `all` does not make.
     """
     tmp = tmp_path_factory.mktemp("lines")
-    dataset = write_dataset(tmp / "lines", runs=LINES_RUNS, curve=exact_line, name="lines", n_measurements=5)
+    dataset = write_dataset(tmp / "lines", runs=LINES_RUNS, sensors=LINES_SENSORS, curve=exact_line, name="lines",
+                            n_measurements=5)  # fmt: skip
     work = workflow_workdir(tmp)
-    config = tiny_config(work, dataset)
+    config = tiny_config(work, dataset, sweep=LINES_SWEEP)
     run_snakemake(work, "--configfile", str(config))
     return Run(work=work, dataset=dataset, config=config, out=work / "results" / "lines")
 

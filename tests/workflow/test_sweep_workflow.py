@@ -5,31 +5,19 @@ from __future__ import annotations
 import pandas as pd
 import yaml
 
-from conftest import run_snakemake, workflow_workdir, write_dataset
+from conftest import run_snakemake
 from thermaxis import sweep
 
 
-def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(tmp_path):
-    dataset = write_dataset(tmp_path / "lines", runs=("R1", "R2", "R3"), sensors=("S1", "S2", "S3", "S4"),
-                            name="lines", n_measurements=5)  # fmt: skip
-    work = workflow_workdir(tmp_path)
-    main_models = {"algorithms": ["mlr", "svr"], "svr_grid": {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}}
-    config = {
-        "dataset": str(dataset),
-        "ambient_sensor": "S1",
-        "selection": {"n_clusters": 2},
-        "models": main_models,
-        "sweep": {"methods": ["fuzzy_grey", "correlation"], "n_clusters": [2, 3], "similarity": ["pearson"],
-                  "grade": ["deng", "absolute"], "degrees": [1, 2], "algorithms": ["mlr", "svr"],
-                  "svr_grid": "models"},  # fmt: skip
-        "figures": {"formats": ["png"]},
-    }
-    path = work / "config.yaml"
-    path.write_text(yaml.safe_dump(config))
-    proc = run_snakemake(work, "--configfile", str(path), "--", "results/lines/tables/metrics.csv", "sweep")
+def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines_run):
+    """The sweep on the session's `lines_run`, whose config carries the sweep grid (conftest.LINES_SWEEP)."""
+    work, path, out = lines_run.work, lines_run.config, lines_run.out
+    config = yaml.safe_load(path.read_text())
+    assert config["selection"] == {"n_clusters": 2} and config["models"]["algorithms"] == ["mlr", "svr"]
+    assert config["sweep"]["svr_grid"] == "models"
+    proc = run_snakemake(work, "--configfile", str(path), "--", "sweep")
     assert "sweep batch 2/2: 100%" in proc.stderr
 
-    out = work / "results" / "lines"
     for name in ("summary.csv", "ranking.csv", "factor_effects.csv", "sweep_report.html",
                  "figures/sweep_heatmap.png", "figures/sweep_factor_effects.png"):  # fmt: skip
         assert (out / "sweep" / name).is_file(), name
