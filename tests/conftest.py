@@ -336,3 +336,14 @@ def built(tmp_path_factory) -> Built:
     built = Built(work=work, out=work / "results" / "rep", dataset=dataset, config=config, env=snakemake_env())
     reports_snakemake(built)
     return built
+
+
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook reads the marks
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist (``--dist loadgroup``) the tests of one shared run go to one worker,
+    which builds it once (session fixtures are per worker)."""
+    for item in items:
+        for fixture in ("lines_run", "built"):
+            if fixture in getattr(item, "fixturenames", ()):
+                item.add_marker(pytest.mark.xdist_group(fixture))
+                break
