@@ -53,8 +53,12 @@ results: env
 import: env
 	$(BIN)/python -m thermaxis.importer data/import/fl_thermal.yaml --out data/raw/fl_thermal
 
+# Both tiers (tests/unit, tests/workflow) and tests/slurm (skipped without Slurm), on
+# PYTEST_WORKERS pytest-xdist workers; the tests of one shared workflow run stay on one
+# worker (tests/conftest.py). PYTEST_WORKERS=0 runs them in this process.
+PYTEST_WORKERS ?= 2
 test: env
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup
 
 lint: env
 	$(BIN)/snakemake --lint

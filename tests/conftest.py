@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
 import re
 import subprocess
 import sys
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -289,6 +291,29 @@ def lines_run(tmp_path_factory) -> Run:
     return Run(work=work, dataset=dataset, config=config, out=work / "results" / "lines")
 
 
+@contextmanager
+def library_lock(tmp_path_factory, exclusive: bool = False):
+    """A lock over the library's source files, shared by the pytest-xdist workers.
+
+    A test that edits a module of src/thermaxis (and restores it) holds it exclusively;
+    a test whose dry run must see the library as it is holds it shared.
+    """
+    path = tmp_path_factory.getbasetemp().parent / "thermaxis-library.lock"
+    with open(path, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+@pytest.fixture
+def library_unchanged(tmp_path_factory):
+    """For tests that dry-run (`-n`) and check what would rerun: no module is being edited meanwhile."""
+    with library_lock(tmp_path_factory):
+        yield
+
+
 def planned_rules(proc: subprocess.CompletedProcess) -> set[str]:
     """Rule names a Snakemake dry run (`-n`) would run."""
     return set(re.findall(r"^(?:local)?rule (\w+):", proc.stdout + proc.stderr, flags=re.M))
@@ -338,12 +363,48 @@ def built(tmp_path_factory) -> Built:
     return built
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist's own hook reads the marks
+# --------------------------------------------------------------------------- pytest-xdist
+
+# Test files whose tests share one expensive session fixture. `make test` runs pytest-xdist
+# workers with ``--dist loadgroup``: each group below goes to one worker, which builds the
+# run once (session fixtures are per worker), and every other file is a unit of its own.
+# (xdist 3.8's own loadgroup marks do not group under pytest 9, which no longer reads the
+# node id xdist rewrites; the scheduler below groups by file instead.)
+SHARED_RUN_FILES = {
+    "tests/slurm/test_slurm_workflow.py": "slurm",
+    "tests/workflow/test_workflow.py": "lines_run",
+    "tests/workflow/test_compensation_workflow.py": "lines_run",
+    "tests/workflow/test_interrupted_run.py": "lines_run",
+    "tests/workflow/test_sweep_workflow.py": "lines_run",
+    "tests/workflow/test_reports.py": "built",
+    "tests/workflow/test_browser.py": "built",
+}
+_FIRST = ("slurm", "lines_run", "built")  # the longest chains start first
+
+
+def _unit_of(nodeid: str) -> str:
+    path = nodeid.split("::", 1)[0]
+    return SHARED_RUN_FILES.get(path, path)
+
+
 def pytest_collection_modifyitems(config, items):
-    """Under pytest-xdist (``--dist loadgroup``) the tests of one shared run go to one worker,
-    which builds it once (session fixtures are per worker)."""
+    """The shared runs' files first; a test using a shared run outside its group is an error."""
     for item in items:
         for fixture in ("lines_run", "built"):
-            if fixture in getattr(item, "fixturenames", ()):
-                item.add_marker(pytest.mark.xdist_group(fixture))
-                break
+            if fixture in getattr(item, "fixturenames", ()) and _unit_of(item.nodeid) != fixture:
+                raise pytest.UsageError(f"{item.nodeid} uses {fixture}: list its file in conftest.SHARED_RUN_FILES")
+    rank = {group: i for i, group in enumerate(_FIRST)}
+    items.sort(key=lambda item: rank.get(_unit_of(item.nodeid), len(rank)))
+
+
+def pytest_xdist_make_scheduler(config, log):
+    if config.getoption("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class SharedRunScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return _unit_of(nodeid)
+
+    config.option.loadscopereorder = False  # keep the collection order: shared runs first
+    return SharedRunScheduling(config, log)

@@ -40,7 +40,7 @@ def test_outputs_carry_their_conventions(lines_run):
     assert "END_FUNCTION_BLOCK" in (out / "ThermalCompensation.st").read_text()
 
 
-def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run):
+def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run, library_unchanged):
     work, config, wanted = lines_run.work, lines_run.config, WANTED
     doc = yaml.safe_load(config.read_text())
     model_change = work / "model_change.yaml"

@@ -103,7 +103,7 @@ def test_index_links_every_report_figure_and_table(built):
     assert (built.out / "provenance.json").resolve() in targets
 
 
-def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built):
+def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built, library_unchanged):
     assert planned_rules(snakemake(built, "-n")) - {"all"} == set()
     page = built.out / "reports" / "dataset_report.html"
     before = page.read_bytes(), page.with_suffix(".ipynb").read_bytes()
@@ -111,7 +111,7 @@ def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built):
     assert (page.read_bytes(), page.with_suffix(".ipynb").read_bytes()) == before
 
 
-def test_changing_n_clusters_reruns_only_the_affected_reports(built):
+def test_changing_n_clusters_reruns_only_the_affected_reports(built, library_unchanged):
     changed = built.work / "n_clusters_3.yaml"
     doc = yaml.safe_load(built.config.read_text())
     doc["selection"]["n_clusters"] = 3

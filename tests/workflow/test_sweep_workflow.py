@@ -9,7 +9,7 @@ from conftest import run_snakemake
 from thermaxis import sweep
 
 
-def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines_run):
+def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines_run, library_unchanged):
     """The sweep on the session's `lines_run`, whose config carries the sweep grid (conftest.LINES_SWEEP)."""
     work, path, out = lines_run.work, lines_run.config, lines_run.out
     config = yaml.safe_load(path.read_text())

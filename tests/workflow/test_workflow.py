@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from conftest import b_true, k_true, planned_rules, run_snakemake, set_csv_cell, tiny_config, write_dataset
-from conftest import REPO
+from conftest import REPO, library_lock
 from conftest import workflow_workdir as workdir
 from thermaxis.config import merge
 from thermaxis.io import DataError
@@ -46,7 +46,7 @@ def test_metrics_cover_every_fold_approach_algorithm(lines_run):
     assert (metrics["rmse"] <= metrics["max_abs"] + 1e-12).all()
 
 
-def test_noop_rerun_has_nothing_to_do(lines_run):
+def test_noop_rerun_has_nothing_to_do(lines_run, library_unchanged):
     proc = run_snakemake(lines_run.work, "--configfile", str(lines_run.config), "-n")
     assert "Nothing to be done" in proc.stdout + proc.stderr
 
@@ -88,7 +88,7 @@ def test_bad_config_value_is_rejected_by_schema(tmp_path):
         _parse_time_check(work, tiny_config(work, dataset, decoupling={"degree": 7}))
 
 
-def test_plot_option_reruns_only_figure_rules(lines_run):
+def test_plot_option_reruns_only_figure_rules(lines_run, library_unchanged):
     changed = lines_run.work / "changed_config.yaml"
     doc = yaml.safe_load(lines_run.config.read_text())
     doc["figures"] = {**doc["figures"], "dpi": 150}
@@ -102,7 +102,7 @@ def test_plot_option_reruns_only_figure_rules(lines_run):
     assert "fig5_unzeroed" in rules
 
 
-def test_editing_a_module_selection_imports_indirectly_reruns_selection(lines_run):
+def test_editing_a_module_selection_imports_indirectly_reruns_selection(lines_run, tmp_path_factory):
     """models.py is named in no rule; select.py reaches it through experiment.select_for_fold.
 
     Snakemake compares checksums of inputs newer than the outputs, so the edit must
@@ -115,11 +115,12 @@ def test_editing_a_module_selection_imports_indirectly_reruns_selection(lines_ru
     work, config = lines_run.work, lines_run.config
     module = Path(thermaxis.models.__file__)
     original, stat = module.read_bytes(), module.stat()
-    try:
-        module.write_bytes(original + b"\n# an edit of the method\n")
-        dry = run_snakemake(work, "--configfile", str(config), "-n")
-    finally:
-        module.write_bytes(original)
-        os.utime(module, (stat.st_atime, stat.st_mtime))
+    with library_lock(tmp_path_factory, exclusive=True):  # other workers' dry runs wait
+        try:
+            module.write_bytes(original + b"\n# an edit of the method\n")
+            dry = run_snakemake(work, "--configfile", str(config), "-n")
+        finally:
+            module.write_bytes(original)
+            os.utime(module, (stat.st_atime, stat.st_mtime))
     assert re.search(r"rule select_sensitive_points:", dry.stdout)
     assert not re.search(r"rule clean_run:", dry.stdout)
