@@ -286,7 +286,9 @@ def lines_run(tmp_path_factory) -> Run:
     dataset = write_dataset(tmp / "lines", runs=LINES_RUNS, sensors=LINES_SENSORS, curve=exact_line, name="lines",
                             n_measurements=5)  # fmt: skip
     work = workflow_workdir(tmp)
-    config = tiny_config(work, dataset, sweep=LINES_SWEEP)
+    # No model reports (notebooks are the costliest jobs, and this run is made twice, see
+    # test_interrupted_run): the reports build `built` has them and checks their bytes.
+    config = tiny_config(work, dataset, reports={"model_algorithms": []}, sweep=LINES_SWEEP)
     run_snakemake(work, "--configfile", str(config))
     return Run(work=work, dataset=dataset, config=config, out=work / "results" / "lines")
 
