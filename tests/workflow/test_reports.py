@@ -134,4 +134,4 @@ def test_changing_n_clusters_reruns_only_the_affected_reports(built):
     proc = run_snakemake(built.work, "-n", "--configfile", str(changed), check=False, env=built.env, timeout=300)
     rules = planned_rules(proc)
     assert {"select_sensitive_points", "model_report", "paper_report", "provenance", "index"} <= rules, rules
-    assert not rules & {"dataset_report", "condition_report", "clean_run", "assemble", "fig5_unzeroed"}, rules
+    assert not rules & {"dataset_report", "condition_report", "clean_run", "assemble", "fig_data"}, rules
