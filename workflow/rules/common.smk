@@ -65,6 +65,11 @@ HEADLINE = (
 )
 SIGNALS = list(DATASET.signals)
 FIG_ALGORITHMS = [a for a in config["figures"]["algorithms"] if a in ALGORITHMS]
+REPORT_ALGORITHMS = [
+    a for a in config["reports"]["model_algorithms"] if a in ALGORITHMS
+]
+# Model reports embed the prediction figures of their algorithms, so those are drawn too.
+PREDICTION_ALGORITHMS = list(dict.fromkeys(FIG_ALGORITHMS + REPORT_ALGORITHMS))
 PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
 
 

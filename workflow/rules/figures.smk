@@ -117,7 +117,7 @@ FIGURES = [
     ),
     *(
         entry
-        for algorithm in FIG_ALGORITHMS
+        for algorithm in PREDICTION_ALGORITHMS
         for entry in [
             *(
                 prediction_entry(

@@ -128,6 +128,7 @@ rule model_report:
             f"{COMP}/folds/{w.fold}/{n}.csv"
             for n in ("summary", "iso230_2", "siemens_840d", "twincat")
         ],
+        figures=lambda w: [f["path"] for f in model_report_figures(w.fold).values()],
     output:
         notebook=f"{REPORTS}/model_{{fold}}.ipynb",
         html=report(
@@ -151,11 +152,18 @@ rule model_report:
         statement=DATA_STATEMENT,
         parameters=lambda w, input: notebook_parameters(
             input,
-            sections(*DATA_SECTIONS, "selection", "models", "folds", "compensation"),
+            sections(
+                *DATA_SECTIONS,
+                "selection",
+                "models",
+                "folds",
+                "compensation",
+                "figures",
+            ),
             fold=w.fold,
             models=REPORT_MODELS,
             runs=RUNS,
-            captions=model_report_captions(w.fold),
+            figures=model_report_figures(w.fold),
         ),
     shell:
         RUN_NOTEBOOK

@@ -15,9 +15,6 @@ import json
 from thermaxis.provenance import git_state
 
 REPORTS = f"{OUT}/reports"
-REPORT_ALGORITHMS = [
-    a for a in config["reports"]["model_algorithms"] if a in ALGORITHMS
-]
 # One model report per fold shows these side by side, as the paper compares them.
 REPORT_MODELS = [
     [approach, algorithm] for approach in APPROACHES for algorithm in REPORT_ALGORITHMS
@@ -145,16 +142,20 @@ def model_reports():
     return expand(f"{REPORTS}/model_{{fold}}.html", fold=FOLDS) if REPORT_MODELS else []
 
 
-def model_report_captions(fold):
-    """Captions of the prediction figures a model report draws, by kind, approach and algorithm."""
-    captions = {}
+def model_report_figures(fold):
+    """The workflow figures a model report embeds: its models' predictions and the drift."""
+    figures = {}
     for approach, algorithm in REPORT_MODELS:
         kinds = ["error_prediction"] + ["kb_prediction"] * (approach == "decoupled")
         for kind in kinds:
-            captions[f"{kind}_{approach}_{algorithm}"] = prediction_caption(
-                kind, fold, approach, algorithm
-            )
-    return captions
+            figures[f"{kind}_{approach}_{algorithm}"] = {
+                "path": f"{OUT}/figures/{kind}_{fold}_{approach}_{algorithm}.{EMBED_FORMAT}",
+                "caption": prediction_caption(kind, fold, approach, algorithm),
+            }
+    figures["compensation_drift"] = embedded(
+        f"compensation_drift_{fold}", "compensation_drift", fold=fold
+    )
+    return figures
 
 
 def report_html():
