@@ -334,10 +334,13 @@ def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None)
     missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
     if missing:
         raise ValueError(f"X lacks column(s) {missing}; expected run, measurement and sensor columns")
-    ordered = X.reset_index(drop=True).sort_values(["run", "measurement"], kind="stable")
-    first = ordered.groupby("run", sort=False).head(1).set_index("run")[sensors]
-    reference = first.reindex(X["run"].to_numpy()).to_numpy(dtype=float)
-    values = X[sensors].to_numpy(dtype=float) - reference
+    # In numpy, not a pandas sort and group-by: the sweep calls this thousands of times.
+    runs, _ = pd.factorize(X["run"])
+    # A stable sort by measurement puts each run's lowest measurement (the earlier row on a tie) first.
+    order = np.argsort(X["measurement"].to_numpy(), kind="stable")
+    _, first = np.unique(runs[order], return_index=True)
+    absolute = X[sensors].to_numpy(dtype=float)
+    values = absolute - absolute[order[first]][runs]
     return pd.DataFrame(values, index=X.index, columns=sensors)
 
 
