@@ -7,7 +7,6 @@ import pytest
 import yaml
 
 from conftest import run_snakemake, workflow_workdir, write_dataset
-from thermaxis import sweep
 from thermaxis.evaluate import METRIC_COLUMNS
 
 pytestmark = pytest.mark.slow
