@@ -47,7 +47,6 @@ from thermaxis.decouple import compose_curve, decouple_curves, stroke_powers
 __all__ = [
     "ALGORITHMS",
     "LINEAR_ALGORITHMS",
-    "DEFAULT_SVR_GRID",
     "COEFFICIENT_COLUMNS",
     "make_regressor",
     "fit_svr_by_group_search",
@@ -61,14 +60,6 @@ __all__ = [
 
 ALGORITHMS = ("mlr", "svr", "ridge", "pls", "gpr")
 LINEAR_ALGORITHMS = ("mlr", "ridge", "pls")
-
-#: Used when a model is asked for SVR without a grid.  C and epsilon act on the
-#: STANDARDISED target, so epsilon 0.05 means 5 % of the target's spread.
-DEFAULT_SVR_GRID: dict[str, list] = {
-    "C": [1.0, 10.0, 100.0],
-    "epsilon": [0.01, 0.05, 0.1],
-    "gamma": ["scale"],
-}
 
 COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
 
@@ -177,7 +168,7 @@ def make_regressor(
     )
 
 
-def fit_svr_by_group_search(X, y, groups, grid: Mapping | None, random_state: int = 0):
+def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
     """Fit an SVR whose hyper-parameters are chosen by leave-one-group-out search.
 
     Only the data passed in is used, so calling this on the training conditions of an
@@ -189,9 +180,10 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping | None, random_state: in
     y : array-like, shape (n,)
     groups : array-like, shape (n,)
         Group label per row (the run id): each group is held out once in the inner search.
-    grid : mapping of str to list, optional
-        Candidate values per SVR parameter (``C``, ``epsilon``, ``gamma``, ``kernel``);
-        ``None`` means :data:`DEFAULT_SVR_GRID`.
+    grid : mapping of str to list
+        Candidate values per SVR parameter (``C``, ``epsilon``, ``gamma``, ``kernel``).
+        C and epsilon act on the STANDARDISED target, so epsilon 0.05 means 5 % of the
+        target's spread. The workflow's grid is config ``models.svr_grid``.
     random_state : int
         Passed to :func:`make_regressor` for symmetry (SVR itself is deterministic).
 
@@ -204,7 +196,7 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping | None, random_state: in
         is nothing to hold out, so the first grid point (each parameter's first value) is
         used without search.  Scoring is RMSE; ties go to the earlier grid point.
     """
-    grid = dict(DEFAULT_SVR_GRID if grid is None else grid)
+    grid = dict(grid)
     _check_params("svr", grid)
     if not grid or any(len(values) == 0 for values in grid.values()):
         raise ValueError("SVR grid must give at least one value for each listed parameter")
@@ -342,10 +334,13 @@ def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None)
     missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
     if missing:
         raise ValueError(f"X lacks column(s) {missing}; expected run, measurement and sensor columns")
-    ordered = X.reset_index(drop=True).sort_values(["run", "measurement"], kind="stable")
-    first = ordered.groupby("run", sort=False).head(1).set_index("run")[sensors]
-    reference = first.reindex(X["run"].to_numpy()).to_numpy(dtype=float)
-    values = X[sensors].to_numpy(dtype=float) - reference
+    # In numpy, not a pandas sort and group-by: the sweep calls this thousands of times.
+    runs, _ = pd.factorize(X["run"])
+    # A stable sort by measurement puts each run's lowest measurement (the earlier row on a tie) first.
+    order = np.argsort(X["measurement"].to_numpy(), kind="stable")
+    _, first = np.unique(runs[order], return_index=True)
+    absolute = X[sensors].to_numpy(dtype=float)
+    values = absolute - absolute[order[first]][runs]
     return pd.DataFrame(values, index=X.index, columns=sensors)
 
 
@@ -363,9 +358,11 @@ def _features(X: pd.DataFrame, sensors: Sequence[str], temperature: str, signals
 def _fit_one(features, target, groups, algorithm, params, svr_grid, random_state):
     """One regression; returns (fitted pipeline, chosen SVR parameters or None)."""
     if algorithm == "svr":
-        grid = svr_grid if svr_grid is not None else DEFAULT_SVR_GRID
+        if svr_grid is None:
+            # No default grid here: the one default is the schema's (config models.svr_grid).
+            raise ValueError("algorithm 'svr' needs svr_grid (the workflow passes config models.svr_grid)")
         # Fixed parameters (e.g. kernel) apply to every grid point unless the grid varies them.
-        grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(grid)}
+        grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(svr_grid)}
         return fit_svr_by_group_search(features, target, groups, grid, random_state)
     model = make_regressor(algorithm, params, random_state, n_features=features.shape[1])
     return model.fit(features, target), None
@@ -435,8 +432,8 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
     params : dict, optional
         Hyper-parameters for :func:`make_regressor`; for svr, fixed values added to the grid.
     svr_grid : dict, optional
-        SVR search grid (inner leave-one-run-out on the training runs); default
-        :data:`DEFAULT_SVR_GRID`.
+        SVR search grid (inner leave-one-run-out on the training runs); required for
+        ``algorithm="svr"`` (the workflow passes config ``models.svr_grid``).
     degree : {1, 2, 3}
         Decoupling polynomial degree; 1 is the paper's straight line.
     random_state : int
