@@ -356,7 +356,7 @@ class FigureSettings:
 
 @dataclass(frozen=True)
 class ReportSettings:
-    model_algorithms: tuple[str, ...]  # algorithms that get a model report per fold and approach
+    model_algorithms: tuple[str, ...]  # algorithms the model report of each fold shows side by side
 
     @classmethod
     def from_section(cls, reports: Mapping) -> "ReportSettings":

@@ -37,7 +37,8 @@ from sklearn.cross_decomposition import PLSRegression
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 from sklearn.linear_model import LinearRegression, Ridge
-from sklearn.model_selection import GridSearchCV, LeaveOneGroupOut, ParameterGrid
+from sklearn.metrics import root_mean_squared_error
+from sklearn.model_selection import LeaveOneGroupOut, ParameterGrid
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
@@ -72,7 +73,6 @@ _ALLOWED_PARAMS = {
     "gpr": {"length_scale", "noise_level", "n_restarts_optimizer"},
 }
 # Where make_regressor's pipeline keeps the wrapped regressor's parameters.
-_REGRESSOR_PATH = "regress__regressor__"
 _KB_COLUMNS = {
     "k": "k_um_per_m",
     "b": "b_um",
@@ -203,19 +203,28 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float)
     groups = np.asarray(groups)
+    candidates = list(ParameterGrid(grid))
     if np.unique(groups).size < 2:
-        chosen = dict(ParameterGrid(grid)[0])
+        chosen = dict(candidates[0])
         return make_regressor("svr", chosen, random_state).fit(X, y), chosen
-    search = GridSearchCV(
-        make_regressor("svr", random_state=random_state),
-        {_REGRESSOR_PATH + name: list(values) for name, values in grid.items()},
-        scoring="neg_root_mean_squared_error",
-        cv=LeaveOneGroupOut(),
-        refit=True,
-    )
-    search.fit(X, y, groups=groups)
-    chosen = {name.removeprefix(_REGRESSOR_PATH): value for name, value in search.best_params_.items()}
-    return search.best_estimator_, chosen
+    # GridSearchCV over make_regressor's pipeline, without its per-candidate cloning,
+    # re-validation and scorer calls: each hold-out is standardised once, the SVR fitted
+    # per candidate on the same arrays the pipeline would give it, so the scores, the
+    # choice and the refitted model are the ones GridSearchCV gives (test_models checks).
+    scores = np.empty((len(candidates), np.unique(groups).size))
+    for split, (train, test) in enumerate(LeaveOneGroupOut().split(X, y, groups)):
+        x_scaler = StandardScaler().fit(X[train])
+        X_train, X_test = x_scaler.transform(X[train]), x_scaler.transform(X[test])
+        y_scaler = StandardScaler().fit(y[train].reshape(-1, 1))
+        y_train = y_scaler.transform(y[train].reshape(-1, 1)).squeeze(axis=1)
+        for c, params in enumerate(candidates):
+            svr = _base_regressor("svr", params, random_state, None).fit(X_train, y_train)
+            predicted = y_scaler.inverse_transform(svr.predict(X_test).reshape(-1, 1)).squeeze(axis=1)
+            scores[c, split] = -root_mean_squared_error(y[test], predicted)
+    means = np.average(scores, axis=1)
+    # The first best candidate, NaN scores last, as GridSearchCV ranks them.
+    chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
+    return make_regressor("svr", chosen, random_state).fit(X, y), chosen
 
 
 def _final_regressor(fitted):

@@ -48,9 +48,9 @@ BENCH = f"benchmarks/{DATASET.name}"
 ENV = "../../envs/thermaxis.yaml"
 SIMULATED = DATASET.simulated
 FOLDS = list(config["folds"]) or RUNS
-ALGORITHMS = list(config["models"]["algorithms"])
-FIG_FORMATS = list(config["figures"]["formats"])
-FIG_RUN = config["figures"]["run"] or RUNS[0]
+ALGORITHMS = list(SETTINGS.models.algorithms)
+FIG_FORMATS = list(SETTINGS.figures.formats)
+FIG_RUN = SETTINGS.figures.run or RUNS[0]
 OTHER_RUNS = [r for r in RUNS if r != FIG_RUN]
 DATA_STATEMENT = data_statement(
     DATASET.name, SIMULATED, DATASET.meta["provenance"].get("citation", "")
@@ -64,10 +64,8 @@ HEADLINE = (
     else DATASET.meta.get("title", DATASET.meta["description"].strip().split("\n")[0])
 )
 SIGNALS = list(DATASET.signals)
-FIG_ALGORITHMS = [a for a in config["figures"]["algorithms"] if a in ALGORITHMS]
-REPORT_ALGORITHMS = [
-    a for a in config["reports"]["model_algorithms"] if a in ALGORITHMS
-]
+FIG_ALGORITHMS = [a for a in SETTINGS.figures.algorithms if a in ALGORITHMS]
+REPORT_ALGORITHMS = [a for a in SETTINGS.reports.model_algorithms if a in ALGORITHMS]
 # Model reports embed the prediction figures of their algorithms, so those are drawn too.
 PREDICTION_ALGORITHMS = list(dict.fromkeys(FIG_ALGORITHMS + REPORT_ALGORITHMS))
 PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
@@ -120,7 +118,7 @@ if AMBIENT is None:
         "ambient table are left out",
         file=sys.stderr,
     )
-for _signal in config["models"]["signals"]:
+for _signal in SETTINGS.models.signals:
     if _signal not in SIGNALS:
         _fail(
             f"config models.signals: {_signal!r} is not an operating signal of {DATASET.root / 'dataset.yaml'} "

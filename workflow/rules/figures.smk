@@ -225,6 +225,6 @@ for family, entries in FIGURE_FAMILIES.items():
         params:
             figures=lambda w, entries=entries: figure_specs(entries, dict(w.items())),
             simulated=SIMULATED,
-            dpi=config["figures"]["dpi"],
+            dpi=SETTINGS.figures.dpi,
         script:
             "../scripts/plot.py"

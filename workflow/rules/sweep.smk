@@ -190,7 +190,7 @@ rule sweep_heatmap:
         selection=config["selection"],
         decoupling=config["decoupling"],
         simulated=SIMULATED,
-        dpi=config["figures"]["dpi"],
+        dpi=SETTINGS.figures.dpi,
     script:
         "../scripts/sweep_plot.py"
 
@@ -212,7 +212,7 @@ rule sweep_factor_effects:
         runtime=lambda w, attempt: 5 * attempt,
     params:
         simulated=SIMULATED,
-        dpi=config["figures"]["dpi"],
+        dpi=SETTINGS.figures.dpi,
     script:
         "../scripts/sweep_plot.py"
 
