@@ -26,7 +26,6 @@ __all__ = [
     "unzeroed_matrix",
     "model_inputs",
     "tidy_signals",
-    "natural_key",
 ]
 
 @dataclass(frozen=True)

@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import string
 
-from .naming import natural_key
 
-__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption", "natural_key"]
+__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption"]
 
 
 SIMULATED_NOTE = "Simulated data (thermal twin), not the paper's measurements."

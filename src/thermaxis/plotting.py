@@ -44,7 +44,8 @@ from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from .captions import DISPLAY_NAMES, SIMULATED_NOTE, _display, figure_caption, natural_key  # noqa: E402,F401
+from .captions import DISPLAY_NAMES, SIMULATED_NOTE, _display, figure_caption  # noqa: E402,F401
+from .naming import natural_key, natural_sorted  # noqa: E402
 
 __all__ = [
     "STYLE",
@@ -159,10 +160,6 @@ def _require_columns(table: pd.DataFrame, columns: Iterable[str], name: str) -> 
         )
 
 
-def _natural_sorted(values: Iterable) -> list:
-    return sorted(pd.unique(pd.Series(list(values))), key=natural_key)
-
-
 def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
     """Rows where every column equals the given value; a ValueError names the choices when none match."""
     out = table
@@ -171,7 +168,7 @@ def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
         # when the CSV reader turned the column into integers.
         hit = out[(out[column] == value) | (out[column].astype(str) == str(value))]
         if hit.empty:
-            choices = ", ".join(map(str, _natural_sorted(out[column]))) or "none"
+            choices = ", ".join(map(str, natural_sorted(out[column]))) or "none"
             raise ValueError(f"{name} table has no rows with {column}={value!r}; available: {choices}")
         out = hit
     return out
@@ -346,7 +343,7 @@ def fig3_ambient(ambient: pd.DataFrame) -> Figure:
     _require_columns(ambient, ("run", "elapsed_min", "temperature_c"), "ambient")
     if ambient.empty:
         raise ValueError("ambient table is empty; expected at least one sample of one run")
-    runs = _natural_sorted(ambient["run"])
+    runs = natural_sorted(ambient["run"])
     fig = _new_figure(SINGLE_COLUMN_IN, 2.4)
     ax = fig.subplots()
     for i, run in enumerate(runs):
@@ -681,7 +678,7 @@ def fig12_slope_intercept(kb: pd.DataFrame) -> Figure:
     _require_columns(kb, ("run", "measurement", "k_um_per_m", "b_um"), "kb")
     if kb.empty:
         raise ValueError("kb table is empty; expected one row per run and measurement")
-    runs = _natural_sorted(kb["run"])
+    runs = natural_sorted(kb["run"])
     fig = _new_figure(SINGLE_COLUMN_IN, 3.6)
     ax_k, ax_b = fig.subplots(2, 1, sharex=True)
     for i, run in enumerate(runs):
@@ -768,7 +765,7 @@ def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str
     """
     _require_columns(kb_pred, _KB_PRED_COLUMNS, "kb_pred")
     rows = _select(kb_pred, "kb_pred", fold=fold, approach=approach, algorithm=algorithm)
-    runs = _natural_sorted(rows["run"])
+    runs = natural_sorted(rows["run"])
     fig = _new_figure(_prediction_columns(len(runs)), 3.6)
     axes = fig.subplots(2, len(runs), sharex="col", squeeze=False)
     for col, run in enumerate(runs):
@@ -823,7 +820,7 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
     """
     _require_columns(err_pred, _ERR_PRED_COLUMNS, "err_pred")
     rows = _select(err_pred, "err_pred", fold=fold, approach=approach, algorithm=algorithm)
-    runs = _natural_sorted(rows["run"])
+    runs = natural_sorted(rows["run"])
     fig = _new_figure(_prediction_columns(len(runs)), 4.0)
     axes = fig.subplots(2, len(runs), sharex="col", squeeze=False, height_ratios=(3, 2))
     if single_position(rows):
@@ -932,7 +929,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     """
     _require_columns(metrics, ("fold", "approach", "algorithm", "target", "rmse", "max_abs"), "metrics")
     rows = _select(metrics, "metrics", target=target)
-    folds = _natural_sorted(rows["fold"])
+    folds = natural_sorted(rows["fold"])
     pairs = sorted(
         {(str(a), str(g)) for a, g in zip(rows["approach"], rows["algorithm"])},
         key=lambda p: (natural_key(p[0]), natural_key(p[1])),
