@@ -4,7 +4,7 @@ import sys
 
 import thermaxis  # first: keeps jsonschema imports fast (see thermaxis/__init__.py)
 from snakemake.utils import min_version, validate
-from thermaxis.config import validate_config
+from thermaxis.config import Settings
 
 min_version("9.0")
 
@@ -12,9 +12,10 @@ min_version("9.0")
 configfile: "config/config.yaml"
 
 
-# The same schema twice: first for one line naming the key, then for Snakemake's defaults.
+# The same schema twice: first for one line naming the key (and every stage's settings,
+# parsed once), then for Snakemake's defaults.
 try:
-    validate_config(config)
+    SETTINGS = Settings.from_config(config)
 except ValueError as exc:
     sys.exit(f"thermaxis error: {exc}")
 validate(config, "workflow/schemas/config.schema.yaml", set_default=True)
@@ -31,8 +32,8 @@ include: "workflow/rules/decouple.smk"
 include: "workflow/rules/select.smk"
 include: "workflow/rules/model.smk"
 include: "workflow/rules/tables.smk"
-include: "workflow/rules/figures.smk"
 include: "workflow/rules/compensation.smk"
+include: "workflow/rules/figures.smk"
 include: "workflow/rules/reports.smk"
 include: "workflow/rules/sweep.smk"
 

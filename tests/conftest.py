@@ -16,11 +16,16 @@ import pandas as pd
 import pytest
 import yaml
 
+from thermaxis.config import Settings
+
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
 # 2023-11-14T22:13:20Z: pins the run time recorded in provenance and reports, the one
 # field that is otherwise meant to differ between runs.
 FIXED_EPOCH = "1700000000"
+# Every stage's settings from an empty config: the schema's defaults, through the config
+# loader (the settings dataclasses have no defaults of their own).
+DEFAULTS = Settings.from_config({})
 
 
 def workflow_workdir(tmp_path: Path) -> Path:

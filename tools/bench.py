@@ -14,7 +14,9 @@ so the repository's own ``results/`` are never touched):
   These runs use MLR and hold out ONE run (``folds: [S001]``): the leave-one-out loop
   over every run and the inner searches of SVR are quadratic in the runs by design,
   so they would hide how the pipeline itself scales.  Generating a dataset is timed
-  separately (``scale_generate_<n>``) and is not part of the fit.
+  separately (``scale_generate_<n>``) and is not part of the fit;
+* ``test_suite``: ``python -m pytest`` in the repository, as ``make test`` runs it once
+  the environment exists.
 
 Each command runs in its own process group.  Wall time is measured around it; CPU time
 (user + system) and the largest single process's peak RSS come from ``os.wait4``, which
@@ -66,12 +68,13 @@ SCALE_SHAPE = {"sensors": 64, "positions": 100, "hours": 8.0, "rate_hz": 1.0, "s
 MIB = 1024.0 * 1024.0
 # Linux reports ru_maxrss in KiB, macOS in bytes.
 _MAXRSS_UNIT = 1.0 if sys.platform == "darwin" else 1024.0
-STEPS = ("results", "sweep", "scale")
+STEPS = ("results", "sweep", "scale", "test")
 TARGETS = {
     "results_cold": "cold full regeneration of the twin <= 30 s",
     "results_noop": "no-op rerun <= 1.25 x a one-rule workflow's no-op",
     "sweep_default": "default sweep (all configurations x all folds) <= 30 s",
     "scale_50": "50 runs <= 5 min within 4 GiB",
+    "test_suite": "make test after set-up <= 150 s",
 }
 # The smallest workflow Snakemake can run: its no-op is the floor a no-op rerun is measured against.
 ONE_RULE_SNAKEFILE = 'rule all:\n    output:\n        "done.txt"\n    shell:\n        "touch {output}"\n'
@@ -427,6 +430,10 @@ def run_bench(
                 if not keep:
                     shutil.rmtree(data, ignore_errors=True)
                     shutil.rmtree(work_n, ignore_errors=True)
+        if "test" in steps:
+            record(measure("test_suite", [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider"], REPO,
+                           logs / "test_suite.log", "the test suite, as make test runs it (set-up done)", env,
+                           timeout_s))  # fmt: skip
     finally:
         if not keep and workdir is None:
             shutil.rmtree(scratch, ignore_errors=True)
@@ -500,6 +507,9 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
         n = m.extra.get("configurations", 0)
         add("sweep_default", m.ok and m.wall_s <= 30.0,
             f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s")  # fmt: skip
+    if "test_suite" in by_name:
+        m = by_name["test_suite"]
+        add("test_suite", m.ok and m.wall_s <= 150.0, f"{m.wall_s:.1f} s")
     if "scale_50" in by_name:
         m = by_name["scale_50"]
         peak = m.peak_tree_rss_mib if m.peak_tree_rss_mib is not None else m.peak_rss_mib

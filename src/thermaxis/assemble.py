@@ -14,19 +14,18 @@ import numpy as np
 import pandas as pd
 
 from . import clean
+from .config import CleaningSettings
 from .naming import natural_key
 from .io import DataError, Dataset, RawRun
 
 __all__ = [
     "RunTables",
-    "settings_from_config",
     "clean_and_assemble_run",
     "tidy_errors",
     "tidy_temperatures",
     "unzeroed_matrix",
     "model_inputs",
     "tidy_signals",
-    "natural_key",
 ]
 
 @dataclass(frozen=True)
@@ -41,22 +40,6 @@ class RunTables:
     signals: pd.DataFrame  # tidy, one row per measurement x operating signal (may be empty)
     signal_series: pd.DataFrame  # time, elapsed_min and each operating signal on the grid
     notes: tuple[str, ...] = field(default=())
-
-
-def settings_from_config(config: dict) -> tuple[clean.TemperatureCleaning, clean.ErrorCleaning]:
-    t = config["temperatures"]
-    e = config["errors"]
-    temperature = clean.TemperatureCleaning(
-        interval_s=float(t["interval_s"]),
-        hampel_window=int(t["hampel_window"]),
-        hampel_threshold=float(t["hampel_threshold"]),
-        hampel_min_deviation_c=float(t["hampel_min_deviation_c"]),
-        limits_c=(float(t["limits_c"][0]), float(t["limits_c"][1])),
-        max_gap_s=float(t["max_gap_s"]),
-        estimate_clock_offsets=bool(t["estimate_clock_offsets"]),
-    )
-    error = clean.ErrorCleaning(direction=e["direction"], max_missing_fraction=float(e["max_missing_fraction"]))
-    return temperature, error
 
 
 def _targets(raw: RawRun) -> np.ndarray:
@@ -131,9 +114,9 @@ def tidy_temperatures(run: str, condition: str, windows: pd.DataFrame, at_measur
     return pd.concat(frames, ignore_index=True)
 
 
-def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTables:
+def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSettings) -> RunTables:
     """Clean one run's logs and assemble its unzeroed errors and measurement temperatures."""
-    t_settings, e_settings = settings_from_config(config)
+    t_settings, e_settings = cleaning.temperatures, cleaning.errors
     run = raw.run
     condition = dataset.condition_of(run)
     windows = raw.windows()
@@ -160,14 +143,14 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, config: dict) -> RunTa
         gap_notes = clean.check_gaps(
             cleaned.gaps,
             windows,
-            allow=bool(config["temperatures"]["allow_long_gaps"]),
+            allow=cleaning.allow_long_gaps,
             files={s: temp_dir / f"{source}.csv" for source in raw.sources for s in dataset.sensors_of(source)},
             max_gap_s=t_settings.max_gap_s,
         )
     except ValueError as exc:
         raise DataError(str(exc)) from None  # the message starts with the sensor's file
     notes.extend(f"{run}: {n}" for n in gap_notes)
-    how = config["temperatures"]["window"]
+    how = cleaning.window
     at_measurements = clean.temperatures_in_windows(cleaned.frame, windows, how=how)
     sensors = [s for s in dataset.sensors if s in at_measurements.columns]
     missing = at_measurements[sensors].isna()

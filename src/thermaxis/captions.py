@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import string
 
-from .naming import natural_key
 
-__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption", "natural_key"]
+__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption"]
 
 
 SIMULATED_NOTE = "Simulated data (thermal twin), not the paper's measurements."
@@ -84,6 +83,14 @@ _CAPTIONS: dict[str, tuple[str | None, str]] = {
         "Prediction accuracy of every fold (held-out run), approach and algorithm: RMSE (top) "
         "and maximum absolute residual (bottom) of the {target}.",
     ),
+    "compensation_drift": (
+        None,
+        "Thermal drift of held-out run {fold} (after ISO 230-3's drift plots): the largest |deviation| "
+        "over the stroke and both directions at each measurement, with the static pitch table of the "
+        "first measurement only and with the temperature compensation of the fold's model as the "
+        "controller applies it (exported K0, tan(beta), P0 after the fallback policy). Ringed points "
+        "are measurements where the policy held or ramped the values.",
+    ),
 }
 # The paper repeats Figs. 14/15 for SVR as Figs. 16/17; the library draws both with one function.
 _CAPTIONS["fig16"] = ("16", _CAPTIONS["fig14"][1])
@@ -110,7 +117,8 @@ def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details
     ----------
     figure_id : str
         ``"fig2"`` ... ``"fig17"`` (not 4 and 13, which are photographs/schematics),
-        ``"kb_prediction"``, ``"error_prediction"`` or ``"fold_comparison"``.
+        ``"kb_prediction"``, ``"error_prediction"``, ``"fold_comparison"`` or
+        ``"compensation_drift"``.
     dataset_name : str
         Name of the dataset the figure was drawn from.
     simulated : bool

@@ -49,12 +49,11 @@ import numpy as np
 import pandas as pd
 from numpy.lib.stride_tricks import sliding_window_view
 
+from .config import ErrorCleaning, TemperatureCleaning
 from .naming import sort_naturally
 
 __all__ = [
-    "TemperatureCleaning",
     "CleanedTemperatures",
-    "ErrorCleaning",
     "MAD_TO_SIGMA",
     "GAP_FACTOR",
     "QC_COLUMNS",
@@ -106,47 +105,6 @@ GAP_KINDS = ("interior", "record start", "record end", "no readings")
 
 
 @dataclass(frozen=True)
-class TemperatureCleaning:
-    """Settings of :func:`clean_temperatures`; defaults mirror ``config/config.yaml``.
-
-    With ``estimate_clock_offsets`` every source but ``reference_source`` (default:
-    the source with most sensors) gets the offset :func:`estimate_clock_offset` finds
-    *after* its given offset is applied, added to it; ``max_offset_s`` bounds the
-    search and ``offset_step_s`` is its lag step (refined below one step).
-    """
-
-    interval_s: float = 10.0
-    hampel_window: int = 7
-    hampel_threshold: float = 4.0
-    hampel_min_deviation_c: float = 0.2
-    limits_c: tuple[float, float] = (-20.0, 120.0)
-    max_gap_s: float = 600.0
-    estimate_clock_offsets: bool = False
-    reference_source: str | None = None
-    max_offset_s: float = 120.0
-    offset_step_s: float = 1.0
-
-    def __post_init__(self):
-        if not self.interval_s > 0:
-            raise ValueError(f"interval_s must be > 0, got {self.interval_s}")
-        if self.hampel_window < 3 or self.hampel_window % 2 == 0:
-            raise ValueError(f"hampel_window must be an odd number of samples >= 3, got {self.hampel_window}")
-        if not self.hampel_threshold > 0:
-            raise ValueError(f"hampel_threshold must be > 0, got {self.hampel_threshold}")
-        if not self.hampel_min_deviation_c >= 0:
-            raise ValueError(f"hampel_min_deviation_c must be >= 0, got {self.hampel_min_deviation_c}")
-        low, high = self.limits_c
-        if not low < high:
-            raise ValueError(f"limits_c must be (low, high) with low < high, got {self.limits_c}")
-        if not self.max_gap_s >= 0:
-            raise ValueError(f"max_gap_s must be >= 0, got {self.max_gap_s}")
-        if not self.max_offset_s > 0:
-            raise ValueError(f"max_offset_s must be > 0, got {self.max_offset_s}")
-        if not self.offset_step_s > 0:
-            raise ValueError(f"offset_step_s must be > 0, got {self.offset_step_s}")
-
-
-@dataclass(frozen=True)
 class CleanedTemperatures:
     """Result of :func:`clean_temperatures`.
 
@@ -160,24 +118,6 @@ class CleanedTemperatures:
     frame: pd.DataFrame
     qc: pd.DataFrame
     gaps: pd.DataFrame
-
-
-@dataclass(frozen=True)
-class ErrorCleaning:
-    """Settings of :func:`combine_passes`.
-
-    direction : "mean" (mean of the forward and backward readings), "+" or "-".
-    max_missing_fraction : more targets than this fraction without a reading is an error.
-    """
-
-    direction: str = "mean"
-    max_missing_fraction: float = 0.2
-
-    def __post_init__(self):
-        if self.direction not in ("mean", "+", "-"):
-            raise ValueError(f"direction must be 'mean', '+' or '-', got {self.direction!r}")
-        if not 0 <= self.max_missing_fraction <= 1:
-            raise ValueError(f"max_missing_fraction must be in [0, 1], got {self.max_missing_fraction}")
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -558,7 +498,7 @@ def _onto_grid(native: _Native, grid: np.ndarray, max_gap_s: float):
 def clean_temperatures(
     sources: Mapping[str, pd.DataFrame],
     clock_offsets_s: Mapping[str, float],
-    settings: TemperatureCleaning = TemperatureCleaning(),
+    settings: TemperatureCleaning,
     start=None,
     end=None,
 ) -> CleanedTemperatures:
@@ -867,7 +807,7 @@ def _pass_at_targets(rows: pd.DataFrame, targets: np.ndarray, label: str, pass_n
 def combine_passes(
     measurement: pd.DataFrame,
     targets: Sequence[float],
-    settings: ErrorCleaning = ErrorCleaning(),
+    settings: ErrorCleaning,
     name: str = "",
 ) -> tuple[pd.Series, list[str]]:
     """One error per target from one measurement's pass(es).

@@ -42,6 +42,7 @@ import jsonschema
 import numpy as np
 import pandas as pd
 
+from .config import CompensationSettings, DecouplingSettings, ErrorCleaning, FallbackSettings, ModelSettings
 from .decouple import MM_PER_M
 from .models import linear_terms, relative_temperatures
 
@@ -50,9 +51,6 @@ __all__ = [
     "MODEL_SCHEMA",
     "CONVENTION",
     "UM_PER_MM",
-    "FallbackSettings",
-    "CompensationSettings",
-    "settings_from_config",
     "ControllerParameters",
     "Step",
     "Compensator",
@@ -82,55 +80,6 @@ CONVENTION = (
     "- predicted e at the reference temperatures captured when the axis was homed); the controller adds c to the "
     "setpoint, the deviation left is e + c; 840D: c = K0 + tan(beta) * (Px - P0)"
 )
-POLICIES = ("hold", "ramp_to_zero")
-
-
-@dataclass(frozen=True)
-class FallbackSettings:
-    """When the compensation must not trust its inputs, and what it does then.
-
-    A fault is any used sensor that is missing (NaN) or stale (older than
-    ``max_sensor_age_s``), outside ``plausible_c``, changing faster than
-    ``max_rate_c_per_min`` since the previous sample, or (as the model's input,
-    absolute or relative) more than ``range_margin_c`` outside the training range.
-    ``policy`` "hold" keeps the last good K0 and tan(beta); "ramp_to_zero" scales the
-    last good values linearly down to zero over ``ramp_to_zero_min`` minutes. Before any
-    good sample the compensation is zero. Values return as soon as a sample is good.
-    """
-
-    range_margin_c: float
-    plausible_c: tuple[float, float]
-    max_rate_c_per_min: float
-    max_sensor_age_s: float
-    policy: str
-    ramp_to_zero_min: float
-
-    def __post_init__(self):
-        if self.policy not in POLICIES:
-            raise ValueError(f"compensation fallback policy {self.policy!r}: expected one of {', '.join(POLICIES)}")
-
-
-@dataclass(frozen=True)
-class CompensationSettings:
-    """The configured algorithm and fallback; the approach is the workflow's (pointwise for one target)."""
-
-    algorithm: str
-    fallback: FallbackSettings
-
-
-def settings_from_config(config: Mapping) -> CompensationSettings:
-    c = config["compensation"]
-    return CompensationSettings(
-        algorithm=c["algorithm"],
-        fallback=FallbackSettings(
-            range_margin_c=float(c["range_margin_c"]),
-            plausible_c=(float(c["plausible_c"][0]), float(c["plausible_c"][1])),
-            max_rate_c_per_min=float(c["max_rate_c_per_min"]),
-            max_sensor_age_s=float(c["max_sensor_age_s"]),
-            policy=c["fallback"],
-            ramp_to_zero_min=float(c["ramp_to_zero_min"]),
-        ),
-    )
 
 
 # --------------------------------------------------------------------------- regressions as numbers
@@ -510,7 +459,7 @@ def twincat(p: ControllerParameters) -> list[tuple[str, str, float, str]]:
 # --------------------------------------------------------------------------- fitting and held-out evaluation
 
 
-def fit_axis_model(X: pd.DataFrame, Y: pd.DataFrame, approach: str, algorithm: str, selection, model_settings, degree: int):
+def fit_axis_model(X: pd.DataFrame, Y: pd.DataFrame, approach: str, algorithm: str, selection, model_settings, degree: int | None):
     """The configured model fitted on the rows given (all runs, or a fold's training runs)."""
     # The estimator the folds are evaluated with, so the deployed model is the one scored.
     from .experiment import _build_model
@@ -518,17 +467,23 @@ def fit_axis_model(X: pd.DataFrame, Y: pd.DataFrame, approach: str, algorithm: s
     return _build_model(approach, algorithm, selection, model_settings, degree).fit(X, Y)
 
 
-def fit_model_record(X: pd.DataFrame, Y: pd.DataFrame, selection, approach: str, config: Mapping, **about) -> dict:
+def fit_model_record(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    selection,
+    approach: str,
+    models: ModelSettings,
+    decoupling: DecouplingSettings,
+    settings: CompensationSettings,
+    **about,
+) -> dict:
     """Fit the configured model on X, Y and return its ``model.json`` record.
 
-    ``config`` holds the sections selection, decoupling, models and compensation;
-    ``about`` adds descriptive keys. The record names the runs it was fitted on.
+    ``approach`` is the workflow's (pointwise for a single-position dataset, else
+    ``settings.approach``); ``about`` adds descriptive keys. The record names the runs
+    it was fitted on.
     """
-    from .experiment import settings_from_config as model_settings_from_config
-
-    selection_settings, model_settings = model_settings_from_config(config)
-    settings = settings_from_config(config)
-    estimator = fit_axis_model(X, Y, approach, settings.algorithm, selection, model_settings, selection_settings.degree)
+    estimator = fit_axis_model(X, Y, approach, settings.algorithm, selection, models, decoupling.degree)
     trained_on = sorted(X["run"].unique().tolist())
     return model_record(estimator, approach, settings.algorithm, X, settings.fallback, trained_on=trained_on, **about)
 
@@ -554,7 +509,7 @@ def run_states(X_run: pd.DataFrame, sensors: Sequence[str]):
 
 def pass_deviations(raw_run, targets: Sequence[float], max_missing_fraction: float) -> dict[int, dict[str, np.ndarray]]:
     """Per measurement (1-based, time order) and direction ("+", "-"), the deviation at each target [um]."""
-    from .clean import ErrorCleaning, combine_passes
+    from .clean import combine_passes
 
     out = {}
     for number, (name, measurement) in enumerate(raw_run.measurements.items(), start=1):

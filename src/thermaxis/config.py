@@ -1,19 +1,48 @@
-"""The workflow's configuration outside Snakemake: safe-loaded, validated, defaults filled.
+"""The workflow's configuration: safe-loaded, validated, defaults filled, and its settings.
 
 The Snakefile validates with ``snakemake.utils.validate``; this module applies the same
 schema (``workflow/schemas/config.schema.yaml``) so that the library, the sweep and the
 tests see exactly the configuration the workflow sees.
+
+The settings model: one frozen dataclass per stage (cleaning, decoupling, selection,
+models, compensation, figures, reports, sweep), each built from its own config section
+by ``from_section`` and all of them at once by :meth:`Settings.from_config`. Every
+default lives in the schema: a dataclass field has none, so a value the config leaves
+out comes from :func:`validate_config` or nowhere. This module imports neither
+scikit-learn nor pandas: the workflow builds settings while it parses the Snakefile.
 """
 
 from __future__ import annotations
 
 import copy
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Mapping
 
 import jsonschema
 import yaml
 
-__all__ = ["CONFIG_SCHEMA", "load_config", "validate_config", "merge", "dataset_of"]
+from .sweep_plan import SweepGrid
+
+__all__ = [
+    "CONFIG_SCHEMA",
+    "load_config",
+    "validate_config",
+    "merge",
+    "dataset_of",
+    "TemperatureCleaning",
+    "ErrorCleaning",
+    "CleaningSettings",
+    "DecouplingSettings",
+    "SelectionSettings",
+    "ModelSettings",
+    "FallbackSettings",
+    "CompensationSettings",
+    "FigureSettings",
+    "ReportSettings",
+    "SweepSettings",
+    "Settings",
+]
 
 REPO = Path(__file__).resolve().parents[2]
 CONFIG_SCHEMA = REPO / "workflow" / "schemas" / "config.schema.yaml"
@@ -69,3 +98,333 @@ def load_config(*paths, overrides: dict | None = None) -> dict:
     if overrides:
         config = merge(config, overrides)
     return validate_config(config)
+
+
+# --------------------------------------------------------------------------- settings
+
+
+def _pair(values) -> tuple[float, float]:
+    return float(values[0]), float(values[1])
+
+
+def _sensor_lists(fixed: Mapping) -> tuple:
+    """``{target: [sensor, ...]}`` as ``((target, (sensor, ...)), ...)``, sorted by target (hashable)."""
+    return tuple(sorted((target, tuple(sensors)) for target, sensors in (fixed or {}).items()))
+
+
+def _svr_grid(grid: Mapping) -> tuple:
+    return tuple((name, tuple(grid[name])) for name in ("C", "epsilon", "gamma"))
+
+
+@dataclass(frozen=True)
+class TemperatureCleaning:
+    """Settings of :func:`thermaxis.clean.clean_temperatures` (config ``temperatures``).
+
+    With ``estimate_clock_offsets`` every source but ``reference_source`` (default:
+    the source with most sensors) gets the offset
+    :func:`thermaxis.clean.estimate_clock_offset` finds *after* its given offset is
+    applied, added to it; ``max_offset_s`` bounds the search and ``offset_step_s`` is
+    its lag step (refined below one step). These three are not configurable, so they
+    keep their values here rather than in the schema.
+    """
+
+    interval_s: float
+    hampel_window: int
+    hampel_threshold: float
+    hampel_min_deviation_c: float
+    limits_c: tuple[float, float]
+    max_gap_s: float
+    estimate_clock_offsets: bool
+    reference_source: str | None = None
+    max_offset_s: float = 120.0
+    offset_step_s: float = 1.0
+
+    def __post_init__(self):
+        if not self.interval_s > 0:
+            raise ValueError(f"interval_s must be > 0, got {self.interval_s}")
+        if self.hampel_window < 3 or self.hampel_window % 2 == 0:
+            raise ValueError(f"hampel_window must be an odd number of samples >= 3, got {self.hampel_window}")
+        if not self.hampel_threshold > 0:
+            raise ValueError(f"hampel_threshold must be > 0, got {self.hampel_threshold}")
+        if not self.hampel_min_deviation_c >= 0:
+            raise ValueError(f"hampel_min_deviation_c must be >= 0, got {self.hampel_min_deviation_c}")
+        low, high = self.limits_c
+        if not low < high:
+            raise ValueError(f"limits_c must be (low, high) with low < high, got {self.limits_c}")
+        if not self.max_gap_s >= 0:
+            raise ValueError(f"max_gap_s must be >= 0, got {self.max_gap_s}")
+        if not self.max_offset_s > 0:
+            raise ValueError(f"max_offset_s must be > 0, got {self.max_offset_s}")
+        if not self.offset_step_s > 0:
+            raise ValueError(f"offset_step_s must be > 0, got {self.offset_step_s}")
+
+
+@dataclass(frozen=True)
+class ErrorCleaning:
+    """Settings of :func:`thermaxis.clean.combine_passes`.
+
+    direction : "mean" (mean of the forward and backward readings), "+" or "-".
+    max_missing_fraction : more targets than this fraction without a reading is an error.
+    """
+
+    direction: str
+    max_missing_fraction: float
+
+    def __post_init__(self):
+        if self.direction not in ("mean", "+", "-"):
+            raise ValueError(f"direction must be 'mean', '+' or '-', got {self.direction!r}")
+        if not 0 <= self.max_missing_fraction <= 1:
+            raise ValueError(f"max_missing_fraction must be in [0, 1], got {self.max_missing_fraction}")
+
+
+@dataclass(frozen=True)
+class CleaningSettings:
+    """Cleaning of one run (config ``temperatures`` and ``errors``) and its plausibility checks."""
+
+    temperatures: TemperatureCleaning
+    errors: ErrorCleaning
+    allow_long_gaps: bool  # a long gap during a measurement is a warning, not an error
+    window: str  # temperature of a measurement: "mean" over its window or value at its "start"
+    plausible_median_c: tuple[float, float]
+    max_abs_error_um: float
+
+    @classmethod
+    def from_sections(cls, temperatures: Mapping, errors: Mapping) -> "CleaningSettings":
+        t, e = temperatures, errors
+        return cls(
+            temperatures=TemperatureCleaning(
+                interval_s=float(t["interval_s"]),
+                hampel_window=int(t["hampel_window"]),
+                hampel_threshold=float(t["hampel_threshold"]),
+                hampel_min_deviation_c=float(t["hampel_min_deviation_c"]),
+                limits_c=_pair(t["limits_c"]),
+                max_gap_s=float(t["max_gap_s"]),
+                estimate_clock_offsets=bool(t["estimate_clock_offsets"]),
+            ),
+            errors=ErrorCleaning(direction=e["direction"], max_missing_fraction=float(e["max_missing_fraction"])),
+            allow_long_gaps=bool(t["allow_long_gaps"]),
+            window=t["window"],
+            plausible_median_c=_pair(t["plausible_median_c"]),
+            max_abs_error_um=float(e["max_abs_error_um"]),
+        )
+
+
+@dataclass(frozen=True)
+class DecouplingSettings:
+    degree: int  # of the polynomial each error curve is decoupled into; 1 is the paper's line
+
+    @classmethod
+    def from_section(cls, decoupling: Mapping) -> "DecouplingSettings":
+        return cls(degree=int(decoupling["degree"]))
+
+
+@dataclass(frozen=True)
+class SelectionSettings:
+    method: str  # fuzzy_grey | correlation | all | fixed
+    scope: str  # training | all
+    n_clusters: int
+    similarity: str
+    grade: str
+    rho: float
+    normalisation: str
+    pointwise_common: int
+    fixed: tuple  # ((target, (sensor, ...)), ...) for method "fixed"
+
+    @classmethod
+    def from_section(cls, selection: Mapping) -> "SelectionSettings":
+        s = selection
+        return cls(
+            method=s["method"],
+            scope=s["scope"],
+            n_clusters=int(s["n_clusters"]),
+            similarity=s["similarity"],
+            grade=s["grade"],
+            rho=float(s["rho"]),
+            normalisation=s["normalisation"],
+            pointwise_common=int(s["pointwise_common"]),
+            fixed=_sensor_lists(s["fixed"]),
+        )
+
+    def fixed_for(self, target: str) -> tuple[str, ...]:
+        mapping = dict(self.fixed)
+        if target not in mapping:
+            raise ValueError(f"config selection.fixed: no sensor list for {target!r} (method 'fixed' needs k, b and pointwise)")
+        return tuple(mapping[target])
+
+
+@dataclass(frozen=True)
+class ModelSettings:
+    algorithms: tuple[str, ...]
+    ridge_alpha: float
+    pls_components: int
+    svr_kernel: str
+    svr_grid: tuple  # ((parameter, (value, ...)), ...): C, epsilon, gamma
+    interval_level: float
+    random_state: int
+    signals: tuple[str, ...]  # operating signals added to every model's inputs
+
+    @classmethod
+    def from_section(cls, models: Mapping) -> "ModelSettings":
+        m = models
+        return cls(
+            algorithms=tuple(m["algorithms"]),
+            ridge_alpha=float(m["ridge_alpha"]),
+            pls_components=int(m["pls_components"]),
+            svr_kernel=m["svr_kernel"],
+            svr_grid=_svr_grid(m["svr_grid"]),
+            interval_level=float(m["interval_level"]),
+            random_state=int(m["random_state"]),
+            signals=tuple(m["signals"]),
+        )
+
+    def params_for(self, algorithm: str) -> dict | None:
+        if algorithm == "ridge":
+            return {"alpha": self.ridge_alpha}
+        if algorithm == "pls":
+            return {"n_components": self.pls_components}
+        if algorithm == "svr":
+            return {"kernel": self.svr_kernel}
+        return None
+
+    def grid(self) -> dict:
+        return {name: list(values) for name, values in self.svr_grid}
+
+
+@dataclass(frozen=True)
+class FallbackSettings:
+    """When the compensation must not trust its inputs, and what it does then.
+
+    A fault is any used sensor that is missing (NaN) or stale (older than
+    ``max_sensor_age_s``), outside ``plausible_c``, changing faster than
+    ``max_rate_c_per_min`` since the previous sample, or (as the model's input,
+    absolute or relative) more than ``range_margin_c`` outside the training range.
+    ``policy`` "hold" keeps the last good K0 and tan(beta); "ramp_to_zero" scales the
+    last good values linearly down to zero over ``ramp_to_zero_min`` minutes. Before any
+    good sample the compensation is zero. Values return as soon as a sample is good.
+    """
+
+    range_margin_c: float
+    plausible_c: tuple[float, float]
+    max_rate_c_per_min: float
+    max_sensor_age_s: float
+    policy: str
+    ramp_to_zero_min: float
+
+    def __post_init__(self):
+        policies = ("hold", "ramp_to_zero")
+        if self.policy not in policies:
+            raise ValueError(f"compensation fallback policy {self.policy!r}: expected one of {', '.join(policies)}")
+
+
+@dataclass(frozen=True)
+class CompensationSettings:
+    """The configured approach, algorithm and fallback (a single-position dataset uses pointwise)."""
+
+    approach: str
+    algorithm: str
+    fallback: FallbackSettings
+
+    @classmethod
+    def from_section(cls, compensation: Mapping) -> "CompensationSettings":
+        c = compensation
+        return cls(
+            approach=c["approach"],
+            algorithm=c["algorithm"],
+            fallback=FallbackSettings(
+                range_margin_c=float(c["range_margin_c"]),
+                plausible_c=_pair(c["plausible_c"]),
+                max_rate_c_per_min=float(c["max_rate_c_per_min"]),
+                max_sensor_age_s=float(c["max_sensor_age_s"]),
+                policy=c["fallback"],
+                ramp_to_zero_min=float(c["ramp_to_zero_min"]),
+            ),
+        )
+
+
+@dataclass(frozen=True)
+class FigureSettings:
+    formats: tuple[str, ...]
+    dpi: int
+    run: str  # run of the single-run figures; empty = the first run
+    algorithms: tuple[str, ...]  # whose held-out predictions get figures
+
+    @classmethod
+    def from_section(cls, figures: Mapping) -> "FigureSettings":
+        f = figures
+        return cls(formats=tuple(f["formats"]), dpi=int(f["dpi"]), run=f["run"], algorithms=tuple(f["algorithms"]))
+
+
+@dataclass(frozen=True)
+class ReportSettings:
+    model_algorithms: tuple[str, ...]  # algorithms the model report of each fold shows side by side
+
+    @classmethod
+    def from_section(cls, reports: Mapping) -> "ReportSettings":
+        return cls(model_algorithms=tuple(reports["model_algorithms"]))
+
+
+@dataclass(frozen=True)
+class SweepSettings:
+    grid: SweepGrid
+    svr_grid: tuple  # as ModelSettings.svr_grid, with "models" already resolved
+    folds: tuple[str, ...]  # empty = every run
+    batches: int
+    cluster_batch_size: int
+    seconds_per_evaluation: float
+
+    @classmethod
+    def from_section(cls, sweep: Mapping, models: ModelSettings) -> "SweepSettings":
+        """``models`` supplies the SVR grid when ``sweep.svr_grid`` is ``"models"``."""
+        s = sweep
+        return cls(
+            grid=SweepGrid(
+                methods=tuple(s["methods"]),
+                n_clusters=tuple(int(n) for n in s["n_clusters"]),
+                similarities=tuple(s["similarity"]),
+                grades=tuple(s["grade"]),
+                approaches=tuple(s["approaches"]),
+                degrees=tuple(int(d) for d in s["degrees"]),
+                algorithms=tuple(s["algorithms"]),
+                fixed=_sensor_lists(s["fixed"]),
+                max_subsets=int(s["max_subsets"]),
+            ),
+            svr_grid=models.svr_grid if s["svr_grid"] == "models" else _svr_grid(s["svr_grid"]),
+            folds=tuple(s["folds"]),
+            batches=int(s["batches"]),
+            cluster_batch_size=int(s["cluster_batch_size"]),
+            seconds_per_evaluation=float(s["seconds_per_evaluation"]),
+        )
+
+    def models(self, base: ModelSettings) -> ModelSettings:
+        """``base`` with the sweep's SVR grid: the models the sweep evaluates."""
+        return replace(base, svr_grid=self.svr_grid)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Every stage's settings, parsed once from one configuration."""
+
+    cleaning: CleaningSettings
+    decoupling: DecouplingSettings
+    selection: SelectionSettings
+    models: ModelSettings
+    compensation: CompensationSettings
+    figures: FigureSettings
+    reports: ReportSettings
+    sweep: SweepSettings
+
+    @classmethod
+    def from_config(cls, config: Mapping) -> "Settings":
+        """The settings of ``config``, validated and with the schema's defaults filled first."""
+        c = validate_config(dict(config))
+        models = ModelSettings.from_section(c["models"])
+        return cls(
+            cleaning=CleaningSettings.from_sections(c["temperatures"], c["errors"]),
+            decoupling=DecouplingSettings.from_section(c["decoupling"]),
+            selection=SelectionSettings.from_section(c["selection"]),
+            models=models,
+            compensation=CompensationSettings.from_section(c["compensation"]),
+            figures=FigureSettings.from_section(c["figures"]),
+            reports=ReportSettings.from_section(c["reports"]),
+            sweep=SweepSettings.from_section(c["sweep"], models),
+        )

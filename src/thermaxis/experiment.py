@@ -19,6 +19,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
+from .config import ModelSettings, SelectionSettings
 from .evaluate import prediction_metrics
 from .guard import informative_sensors
 from .models import DecoupledAxisModel, PointwiseAxisModel, decouple_rows, relative_temperatures
@@ -26,16 +27,11 @@ from .selection import SensitivePoints, common_points, rank_by_correlation, sele
 
 __all__ = [
     "SORT_KEYS",
-    "SelectionSettings",
-    "ModelSettings",
     "FoldSelection",
     "FoldResult",
     "select_for_fold",
     "evaluate_configuration",
     "selection_table",
-    "settings_from_config",
-    "selection_settings_from_config",
-    "model_settings_from_config",
     "selection_to_dict",
     "selection_from_dict",
 ]
@@ -50,83 +46,6 @@ SORT_KEYS = {
     "error_predictions": ["fold", "approach", "algorithm", "measurement", "position_mm"],
     "selection": ["fold", "target", "position_mm", "cluster", "sensor"],
 }
-
-
-@dataclass(frozen=True)
-class SelectionSettings:
-    method: str = "fuzzy_grey"  # fuzzy_grey | correlation | all | fixed
-    scope: str = "training"  # training | all
-    n_clusters: int = 3
-    similarity: str = "pearson"
-    grade: str = "deng"
-    rho: float = 0.5
-    normalisation: str = "minmax"
-    pointwise_common: int = 3
-    fixed: tuple = ()  # ((target, (sensor, ...)), ...) for method "fixed"
-    degree: int = 1  # the decoupling whose k and b the selection grades against
-
-    def fixed_for(self, target: str) -> tuple[str, ...]:
-        mapping = dict(self.fixed)
-        if target not in mapping:
-            raise ValueError(f"config selection.fixed: no sensor list for {target!r} (method 'fixed' needs k, b and pointwise)")
-        return tuple(mapping[target])
-
-
-@dataclass(frozen=True)
-class ModelSettings:
-    ridge_alpha: float = 1.0
-    pls_components: int = 2
-    svr_kernel: str = "rbf"
-    svr_grid: tuple = (("C", (0.1, 1.0, 10.0, 100.0)), ("epsilon", (0.01, 0.1)), ("gamma", ("scale", 0.1)))
-    interval_level: float = 0.95
-    random_state: int = 0
-    signals: tuple[str, ...] = ()  # operating signals added to every model's inputs
-
-    def params_for(self, algorithm: str) -> dict | None:
-        if algorithm == "ridge":
-            return {"alpha": self.ridge_alpha}
-        if algorithm == "pls":
-            return {"n_components": self.pls_components}
-        if algorithm == "svr":
-            return {"kernel": self.svr_kernel}
-        return None
-
-    def grid(self) -> dict:
-        return {name: list(values) for name, values in self.svr_grid}
-
-
-def selection_settings_from_config(config: Mapping) -> SelectionSettings:
-    s = config["selection"]
-    return SelectionSettings(
-        method=s["method"],
-        scope=s["scope"],
-        n_clusters=int(s["n_clusters"]),
-        similarity=s["similarity"],
-        grade=s["grade"],
-        rho=float(s["rho"]),
-        normalisation=s["normalisation"],
-        pointwise_common=int(s["pointwise_common"]),
-        fixed=tuple(sorted((k, tuple(v)) for k, v in s.get("fixed", {}).items())),
-        degree=int(config["decoupling"]["degree"]),
-    )
-
-
-def model_settings_from_config(config: Mapping) -> ModelSettings:
-    m = config["models"]
-    grid = m["svr_grid"]
-    return ModelSettings(
-        ridge_alpha=float(m["ridge_alpha"]),
-        pls_components=int(m["pls_components"]),
-        svr_kernel=m["svr_kernel"],
-        svr_grid=tuple((name, tuple(grid[name])) for name in ("C", "epsilon", "gamma")),
-        interval_level=float(m["interval_level"]),
-        random_state=int(m["random_state"]),
-        signals=tuple(m.get("signals", ())),
-    )
-
-
-def settings_from_config(config: Mapping) -> tuple[SelectionSettings, ModelSettings]:
-    return selection_settings_from_config(config), model_settings_from_config(config)
 
 
 @dataclass(frozen=True)
@@ -202,10 +121,14 @@ def select_for_fold(
     Y: pd.DataFrame,
     fold: str,
     settings: SelectionSettings,
+    degree: int | None,
     decoupled: bool = True,
     pointwise: bool = True,
 ) -> FoldSelection:
     """Sensitive points for k (absolute temperatures), b and each position (relative ones).
+
+    k and b are those of the decoupling of ``degree`` (config ``decoupling.degree``);
+    ``None`` only with ``decoupled=False``, which decouples nothing.
 
     With ``scope='training'`` the held-out run (``fold``) is removed first, so the
     choice of inputs cannot depend on the condition being predicted.
@@ -223,7 +146,7 @@ def select_for_fold(
     relative = relative_temperatures(X)[sensors]
     k_points = b_points = None
     if decoupled:
-        kb = decouple_rows(X, Y, degree=settings.degree)
+        kb = decouple_rows(X, Y, degree=degree)
         k_points = _points(settings.method, absolute, kb["k_um_per_m"].to_numpy(), settings, "k")
         b_points = _points(settings.method, relative, kb["b_um"].to_numpy(), settings, "b")
     per_position = {}
@@ -283,7 +206,7 @@ class FoldResult:
     error_predictions: pd.DataFrame
 
 
-def _build_model(approach: str, algorithm: str, selection: FoldSelection, model: ModelSettings, degree: int):
+def _build_model(approach: str, algorithm: str, selection: FoldSelection, model: ModelSettings, degree: int | None):
     common = dict(
         algorithm=algorithm,
         params=model.params_for(algorithm),
@@ -305,10 +228,14 @@ def evaluate_configuration(
     approach: str,
     algorithm: str,
     selection: FoldSelection,
-    model: ModelSettings = ModelSettings(),
-    degree: int = 1,
+    model: ModelSettings,
+    degree: int | None,
 ) -> FoldResult:
-    """Fit on every run but ``fold``, predict ``fold`` from its temperatures, and score."""
+    """Fit on every run but ``fold``, predict ``fold`` from its temperatures, and score.
+
+    ``degree`` is the decoupling's (config ``decoupling.degree``); the point-by-point
+    approach never decouples and ignores it (``None`` allowed).
+    """
     test = (X["run"] == fold).to_numpy()
     if not test.any():
         raise ValueError(f"fold {fold!r}: no measurements of that run")

@@ -182,7 +182,7 @@ def check_dataset_shape(dataset, config) -> None:
         )
 
 
-def check_run_plausibility(dataset, raw, config) -> list[str]:
+def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
     """Refuse implausible readings or a grid step longer than the run; warn of implausible medians."""
     folder = dataset.root / raw.run
 
@@ -192,7 +192,7 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
 
     for name, measurement in raw.measurements.items():
         path, positions = file_of(name), measurement["position_mm"].to_numpy()
-        check_error_readings(path, measurement["error_um"].to_numpy(), config["errors"]["max_abs_error_um"])
+        check_error_readings(path, measurement["error_um"].to_numpy(), cleaning.max_abs_error_um)
         _refuse_first_row(
             path,
             np.abs(positions) > MAX_ABS_POSITION_MM,
@@ -209,16 +209,16 @@ def check_run_plausibility(dataset, raw, config) -> list[str]:
             f"{earlier['end']}); expected one measurement at a time (a copied file?)",
         )
     span_s = (windows["end"].max() - windows["start"].min()).total_seconds()
-    interval_s = config["temperatures"]["interval_s"]
+    interval_s = cleaning.temperatures.interval_s
     if 0 < span_s < interval_s:
         raise _error(
             "config temperatures.interval_s",
             f"{interval_s:g} s is longer than run {raw.run} lasts ({span_s:g} s from its first to its last reading); "
             "expected a grid step well below the time between measurements",
         )
-    median_c = config["temperatures"]["plausible_median_c"]
+    median_c = cleaning.plausible_median_c
     if not median_c[0] < median_c[1]:
-        raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got {median_c}")
+        raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got [{median_c[0]:g}, {median_c[1]:g}]")
     if dataset.meta.get("temperature_kind", "absolute") == "rise":
         return []  # rises since the start sit near 0 °C by design: no structure-temperature median to judge
     notes = []

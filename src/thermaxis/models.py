@@ -37,7 +37,8 @@ from sklearn.cross_decomposition import PLSRegression
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 from sklearn.linear_model import LinearRegression, Ridge
-from sklearn.model_selection import GridSearchCV, LeaveOneGroupOut, ParameterGrid
+from sklearn.metrics import root_mean_squared_error
+from sklearn.model_selection import LeaveOneGroupOut, ParameterGrid
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
@@ -47,7 +48,6 @@ from thermaxis.decouple import compose_curve, decouple_curves, stroke_powers
 __all__ = [
     "ALGORITHMS",
     "LINEAR_ALGORITHMS",
-    "DEFAULT_SVR_GRID",
     "COEFFICIENT_COLUMNS",
     "make_regressor",
     "fit_svr_by_group_search",
@@ -62,14 +62,6 @@ __all__ = [
 ALGORITHMS = ("mlr", "svr", "ridge", "pls", "gpr")
 LINEAR_ALGORITHMS = ("mlr", "ridge", "pls")
 
-#: Used when a model is asked for SVR without a grid.  C and epsilon act on the
-#: STANDARDISED target, so epsilon 0.05 means 5 % of the target's spread.
-DEFAULT_SVR_GRID: dict[str, list] = {
-    "C": [1.0, 10.0, 100.0],
-    "epsilon": [0.01, 0.05, 0.1],
-    "gamma": ["scale"],
-}
-
 COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
 
 _ID_COLUMNS = ("run", "measurement")
@@ -81,7 +73,6 @@ _ALLOWED_PARAMS = {
     "gpr": {"length_scale", "noise_level", "n_restarts_optimizer"},
 }
 # Where make_regressor's pipeline keeps the wrapped regressor's parameters.
-_REGRESSOR_PATH = "regress__regressor__"
 _KB_COLUMNS = {
     "k": "k_um_per_m",
     "b": "b_um",
@@ -177,7 +168,7 @@ def make_regressor(
     )
 
 
-def fit_svr_by_group_search(X, y, groups, grid: Mapping | None, random_state: int = 0):
+def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
     """Fit an SVR whose hyper-parameters are chosen by leave-one-group-out search.
 
     Only the data passed in is used, so calling this on the training conditions of an
@@ -189,9 +180,10 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping | None, random_state: in
     y : array-like, shape (n,)
     groups : array-like, shape (n,)
         Group label per row (the run id): each group is held out once in the inner search.
-    grid : mapping of str to list, optional
-        Candidate values per SVR parameter (``C``, ``epsilon``, ``gamma``, ``kernel``);
-        ``None`` means :data:`DEFAULT_SVR_GRID`.
+    grid : mapping of str to list
+        Candidate values per SVR parameter (``C``, ``epsilon``, ``gamma``, ``kernel``).
+        C and epsilon act on the STANDARDISED target, so epsilon 0.05 means 5 % of the
+        target's spread. The workflow's grid is config ``models.svr_grid``.
     random_state : int
         Passed to :func:`make_regressor` for symmetry (SVR itself is deterministic).
 
@@ -204,26 +196,35 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping | None, random_state: in
         is nothing to hold out, so the first grid point (each parameter's first value) is
         used without search.  Scoring is RMSE; ties go to the earlier grid point.
     """
-    grid = dict(DEFAULT_SVR_GRID if grid is None else grid)
+    grid = dict(grid)
     _check_params("svr", grid)
     if not grid or any(len(values) == 0 for values in grid.values()):
         raise ValueError("SVR grid must give at least one value for each listed parameter")
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float)
     groups = np.asarray(groups)
+    candidates = list(ParameterGrid(grid))
     if np.unique(groups).size < 2:
-        chosen = dict(ParameterGrid(grid)[0])
+        chosen = dict(candidates[0])
         return make_regressor("svr", chosen, random_state).fit(X, y), chosen
-    search = GridSearchCV(
-        make_regressor("svr", random_state=random_state),
-        {_REGRESSOR_PATH + name: list(values) for name, values in grid.items()},
-        scoring="neg_root_mean_squared_error",
-        cv=LeaveOneGroupOut(),
-        refit=True,
-    )
-    search.fit(X, y, groups=groups)
-    chosen = {name.removeprefix(_REGRESSOR_PATH): value for name, value in search.best_params_.items()}
-    return search.best_estimator_, chosen
+    # GridSearchCV over make_regressor's pipeline, without its per-candidate cloning,
+    # re-validation and scorer calls: each hold-out is standardised once, the SVR fitted
+    # per candidate on the same arrays the pipeline would give it, so the scores, the
+    # choice and the refitted model are the ones GridSearchCV gives (test_models checks).
+    scores = np.empty((len(candidates), np.unique(groups).size))
+    for split, (train, test) in enumerate(LeaveOneGroupOut().split(X, y, groups)):
+        x_scaler = StandardScaler().fit(X[train])
+        X_train, X_test = x_scaler.transform(X[train]), x_scaler.transform(X[test])
+        y_scaler = StandardScaler().fit(y[train].reshape(-1, 1))
+        y_train = y_scaler.transform(y[train].reshape(-1, 1)).squeeze(axis=1)
+        for c, params in enumerate(candidates):
+            svr = _base_regressor("svr", params, random_state, None).fit(X_train, y_train)
+            predicted = y_scaler.inverse_transform(svr.predict(X_test).reshape(-1, 1)).squeeze(axis=1)
+            scores[c, split] = -root_mean_squared_error(y[test], predicted)
+    means = np.average(scores, axis=1)
+    # The first best candidate, NaN scores last, as GridSearchCV ranks them.
+    chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
+    return make_regressor("svr", chosen, random_state).fit(X, y), chosen
 
 
 def _final_regressor(fitted):
@@ -342,10 +343,13 @@ def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None)
     missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
     if missing:
         raise ValueError(f"X lacks column(s) {missing}; expected run, measurement and sensor columns")
-    ordered = X.reset_index(drop=True).sort_values(["run", "measurement"], kind="stable")
-    first = ordered.groupby("run", sort=False).head(1).set_index("run")[sensors]
-    reference = first.reindex(X["run"].to_numpy()).to_numpy(dtype=float)
-    values = X[sensors].to_numpy(dtype=float) - reference
+    # In numpy, not a pandas sort and group-by: the sweep calls this thousands of times.
+    runs, _ = pd.factorize(X["run"])
+    # A stable sort by measurement puts each run's lowest measurement (the earlier row on a tie) first.
+    order = np.argsort(X["measurement"].to_numpy(), kind="stable")
+    _, first = np.unique(runs[order], return_index=True)
+    absolute = X[sensors].to_numpy(dtype=float)
+    values = absolute - absolute[order[first]][runs]
     return pd.DataFrame(values, index=X.index, columns=sensors)
 
 
@@ -363,9 +367,11 @@ def _features(X: pd.DataFrame, sensors: Sequence[str], temperature: str, signals
 def _fit_one(features, target, groups, algorithm, params, svr_grid, random_state):
     """One regression; returns (fitted pipeline, chosen SVR parameters or None)."""
     if algorithm == "svr":
-        grid = svr_grid if svr_grid is not None else DEFAULT_SVR_GRID
+        if svr_grid is None:
+            # No default grid here: the one default is the schema's (config models.svr_grid).
+            raise ValueError("algorithm 'svr' needs svr_grid (the workflow passes config models.svr_grid)")
         # Fixed parameters (e.g. kernel) apply to every grid point unless the grid varies them.
-        grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(grid)}
+        grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(svr_grid)}
         return fit_svr_by_group_search(features, target, groups, grid, random_state)
     model = make_regressor(algorithm, params, random_state, n_features=features.shape[1])
     return model.fit(features, target), None
@@ -435,8 +441,8 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
     params : dict, optional
         Hyper-parameters for :func:`make_regressor`; for svr, fixed values added to the grid.
     svr_grid : dict, optional
-        SVR search grid (inner leave-one-run-out on the training runs); default
-        :data:`DEFAULT_SVR_GRID`.
+        SVR search grid (inner leave-one-run-out on the training runs); required for
+        ``algorithm="svr"`` (the workflow passes config ``models.svr_grid``).
     degree : {1, 2, 3}
         Decoupling polynomial degree; 1 is the paper's straight line.
     random_state : int

@@ -44,7 +44,8 @@ from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from .captions import DISPLAY_NAMES, SIMULATED_NOTE, _display, figure_caption, natural_key  # noqa: E402,F401
+from .captions import DISPLAY_NAMES, SIMULATED_NOTE, _display, figure_caption  # noqa: E402,F401
+from .naming import natural_key, natural_sorted  # noqa: E402
 
 __all__ = [
     "STYLE",
@@ -159,10 +160,6 @@ def _require_columns(table: pd.DataFrame, columns: Iterable[str], name: str) -> 
         )
 
 
-def _natural_sorted(values: Iterable) -> list:
-    return sorted(pd.unique(pd.Series(list(values))), key=natural_key)
-
-
 def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
     """Rows where every column equals the given value; a ValueError names the choices when none match."""
     out = table
@@ -171,7 +168,7 @@ def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
         # when the CSV reader turned the column into integers.
         hit = out[(out[column] == value) | (out[column].astype(str) == str(value))]
         if hit.empty:
-            choices = ", ".join(map(str, _natural_sorted(out[column]))) or "none"
+            choices = ", ".join(map(str, natural_sorted(out[column]))) or "none"
             raise ValueError(f"{name} table has no rows with {column}={value!r}; available: {choices}")
         out = hit
     return out
@@ -346,7 +343,7 @@ def fig3_ambient(ambient: pd.DataFrame) -> Figure:
     _require_columns(ambient, ("run", "elapsed_min", "temperature_c"), "ambient")
     if ambient.empty:
         raise ValueError("ambient table is empty; expected at least one sample of one run")
-    runs = _natural_sorted(ambient["run"])
+    runs = natural_sorted(ambient["run"])
     fig = _new_figure(SINGLE_COLUMN_IN, 2.4)
     ax = fig.subplots()
     for i, run in enumerate(runs):
@@ -681,7 +678,7 @@ def fig12_slope_intercept(kb: pd.DataFrame) -> Figure:
     _require_columns(kb, ("run", "measurement", "k_um_per_m", "b_um"), "kb")
     if kb.empty:
         raise ValueError("kb table is empty; expected one row per run and measurement")
-    runs = _natural_sorted(kb["run"])
+    runs = natural_sorted(kb["run"])
     fig = _new_figure(SINGLE_COLUMN_IN, 3.6)
     ax_k, ax_b = fig.subplots(2, 1, sharex=True)
     for i, run in enumerate(runs):
@@ -768,7 +765,7 @@ def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str
     """
     _require_columns(kb_pred, _KB_PRED_COLUMNS, "kb_pred")
     rows = _select(kb_pred, "kb_pred", fold=fold, approach=approach, algorithm=algorithm)
-    runs = _natural_sorted(rows["run"])
+    runs = natural_sorted(rows["run"])
     fig = _new_figure(_prediction_columns(len(runs)), 3.6)
     axes = fig.subplots(2, len(runs), sharex="col", squeeze=False)
     for col, run in enumerate(runs):
@@ -823,7 +820,7 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
     """
     _require_columns(err_pred, _ERR_PRED_COLUMNS, "err_pred")
     rows = _select(err_pred, "err_pred", fold=fold, approach=approach, algorithm=algorithm)
-    runs = _natural_sorted(rows["run"])
+    runs = natural_sorted(rows["run"])
     fig = _new_figure(_prediction_columns(len(runs)), 4.0)
     axes = fig.subplots(2, len(runs), sharex="col", squeeze=False, height_ratios=(3, 2))
     if single_position(rows):
@@ -932,7 +929,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     """
     _require_columns(metrics, ("fold", "approach", "algorithm", "target", "rmse", "max_abs"), "metrics")
     rows = _select(metrics, "metrics", target=target)
-    folds = _natural_sorted(rows["fold"])
+    folds = natural_sorted(rows["fold"])
     pairs = sorted(
         {(str(a), str(g)) for a, g in zip(rows["approach"], rows["algorithm"])},
         key=lambda p: (natural_key(p[0]), natural_key(p[1])),
@@ -1042,3 +1039,93 @@ def save_figure(fig: Figure, paths, dpi: float | None = None) -> None:
         plt.close(fig)
 
 
+# =========================================================================== sweep figures
+# The sweep's figures (thermaxis.sweep's tables: heat map of the cluster count x algorithm,
+# factor effects), kept apart from the paper's figures above.
+
+__all__ += ["fig_sweep_heatmap", "fig_factor_effects"]
+
+
+def fig_sweep_heatmap(tables: dict[str, pd.DataFrame], titles: dict[str, str] | None = None):
+    """Heat maps of mean held-out max |residual| (um), one panel per approach.
+
+    Parameters
+    ----------
+    tables : mapping of approach to DataFrame
+        :func:`thermaxis.sweep.heatmap_table` results (rows n_clusters, columns algorithms).
+    titles : mapping of approach to str, optional
+        Panel titles; default the approach and what :func:`thermaxis.sweep.heatmap_table` held fixed.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    tables = {k: v for k, v in tables.items() if v.size}
+    if not tables:
+        raise ValueError("sweep heat map: no configuration sweeps n_clusters; expected fuzzy_grey or correlation in sweep.methods")
+    values = np.concatenate([t.to_numpy(dtype=float).ravel() for t in tables.values()])
+    values = values[np.isfinite(values)]
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=(DOUBLE_COLUMN_IN, 2.8), layout="constrained")
+        axes = np.atleast_1d(fig.subplots(1, len(tables), sharey=True))
+        norm = matplotlib.colors.Normalize(vmin=values.min(), vmax=values.max()) if values.size else None
+        image = None
+        for ax, (approach, table) in zip(axes, tables.items()):
+            data = table.to_numpy(dtype=float)
+            image = ax.imshow(data, cmap=ORDERED_CMAP, norm=norm, aspect="auto", origin="lower")
+            ax.set_xticks(range(table.shape[1]), [_display(a) for a in table.columns])
+            ax.set_yticks(range(table.shape[0]), [str(n) for n in table.index])
+            ax.grid(False)
+            threshold = norm.vmin + 0.6 * (norm.vmax - norm.vmin) if norm is not None else 0.0
+            for (i, j), v in np.ndenumerate(data):
+                if np.isfinite(v):
+                    ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=6.5,
+                            color="black" if v > threshold else "white")  # fmt: skip
+            title = (titles or {}).get(approach) or f"{_display(approach)} ({table.attrs.get('held', '')})".replace(" ()", "")
+            ax.set_title(title)
+            ax.set_xlabel("Algorithm")
+        axes[0].set_ylabel("Number of clusters")
+        if image is not None:
+            fig.colorbar(image, ax=list(axes), label="Mean held-out max |residual| (µm)", shrink=0.9)
+    return fig
+
+
+def fig_factor_effects(ranking: pd.DataFrame):
+    """One panel per factor: the configurations' mean held-out max |residual| by level.
+
+    Box plots (median, quartiles, whiskers to 1.5 IQR) over every complete
+    configuration where the factor applies; the dots are the configurations.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from .sweep import FACTORS, factor_levels
+
+    complete = ranking[ranking["n_folds"] == ranking["n_folds"].max()]
+    factors = [f for f in FACTORS if complete[f].notna().any()]
+    if not factors:
+        raise ValueError("factor effects: the ranking has no complete configuration")
+    ncols = min(4, len(factors))
+    nrows = math.ceil(len(factors) / ncols)
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=(DOUBLE_COLUMN_IN, 2.1 * nrows + 0.4), layout="constrained")
+        axes = np.atleast_1d(fig.subplots(nrows, ncols, sharey=True)).ravel()
+        for ax, factor in zip(axes, factors):
+            values = complete[[factor, "mean_max_abs"]].dropna()
+            levels = factor_levels(values[factor], factor)
+            groups = [values.loc[values[factor] == level, "mean_max_abs"].to_numpy(dtype=float) for level in levels]
+            ax.boxplot(groups, widths=0.55, showfliers=False, medianprops={"color": CATEGORICAL_COLORS[3]})
+            jitter = np.random.default_rng(0)  # fixed seed: the same figure every run
+            for i, g in enumerate(groups, start=1):
+                offsets = jitter.uniform(-0.18, 0.18, len(g))
+                ax.plot(i + offsets, g, ".", color=CATEGORICAL_COLORS[0], alpha=0.35, markersize=2.0)
+            ax.set_xticks(range(1, len(levels) + 1), [_display(v) for v in levels],
+                          rotation=30 if len(levels) > 3 else 0, ha="right" if len(levels) > 3 else "center")  # fmt: skip
+            ax.set_title(factor.replace("_", " "))
+            ax.grid(axis="x", visible=False)
+        for ax in axes[len(factors):]:
+            ax.set_visible(False)
+        for row in range(nrows):
+            axes[row * ncols].set_ylabel("Mean max |residual| (µm)")
+    return fig

@@ -9,10 +9,9 @@ A report rule runs ``python -m thermaxis.reporting run NOTEBOOK EXECUTED HTML ..
 :func:`execute` has papermill execute the notebook with the given parameters in a
 ``python3`` kernel (explicit start and execution timeouts) and :func:`convert` turns it
 into HTML.  One process instead of the ``papermill`` and ``jupyter nbconvert``
-commands saves several seconds per report: both import nbformat, whose jsonschema
-import builds an IRI grammar for ~2.5 s unless ``thermaxis`` is imported first (see
-``thermaxis/__init__.py``).  The HTML is written by :func:`convert` rather than by
-``jupyter nbconvert`` for two more reasons:
+commands saves an interpreter start and the imports of nbformat and nbconvert per
+report.  The HTML is written by :func:`convert` rather than by ``jupyter nbconvert``
+for two more reasons:
 
 * the HTML must load nothing from the network: the JupyterLab template of nbconvert
   pulls require.js, MathJax and mermaid from a CDN, so the template below drops those

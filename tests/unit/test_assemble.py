@@ -3,7 +3,8 @@
 import numpy as np
 import pandas as pd
 
-from thermaxis.assemble import model_inputs, natural_key, tidy_errors, tidy_temperatures
+from thermaxis.assemble import model_inputs, tidy_errors, tidy_temperatures
+from thermaxis.naming import natural_key
 
 
 def windows(n=3):

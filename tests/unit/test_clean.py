@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import DEFAULTS
 from thermaxis.clean import (
     CleanedTemperatures,
-    ErrorCleaning,
-    TemperatureCleaning,
     check_gaps,
     clean_temperatures,
     combine_passes,
@@ -19,7 +20,7 @@ from thermaxis.clean import (
 )
 
 T0 = pd.Timestamp("2022-05-10T09:00:00")  # a whole multiple of 10 s since the epoch
-SETTINGS = TemperatureCleaning()
+SETTINGS = DEFAULTS.cleaning.temperatures
 
 
 def at(seconds) -> pd.DatetimeIndex:
@@ -47,7 +48,7 @@ def qc_of(result: CleanedTemperatures, sensor: str) -> pd.Series:
 
 
 def clean(sources, offsets=None, **settings):
-    return clean_temperatures(sources, offsets or {}, TemperatureCleaning(**settings))
+    return clean_temperatures(sources, offsets or {}, replace(DEFAULTS.cleaning.temperatures, **settings))
 
 
 # ----------------------------------------------------------------------------- grid and ramps
@@ -396,11 +397,11 @@ def test_sensor_in_two_sources_raises():
 
 def test_settings_are_validated():
     with pytest.raises(ValueError, match="odd"):
-        TemperatureCleaning(hampel_window=6)
+        replace(DEFAULTS.cleaning.temperatures, hampel_window=6)
     with pytest.raises(ValueError, match="limits_c"):
-        TemperatureCleaning(limits_c=(120.0, -20.0))
+        replace(DEFAULTS.cleaning.temperatures, limits_c=(120.0, -20.0))
     with pytest.raises(ValueError, match="direction"):
-        ErrorCleaning(direction="both")
+        replace(DEFAULTS.cleaning.errors, direction="both")
 
 
 # ----------------------------------------------------------------------------- everything at once
@@ -460,7 +461,7 @@ def two_passes(forward, backward):
 
 def test_mean_of_both_passes():
     m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
-    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning(), name="m01")
+    curve, warnings = combine_passes(m, TARGETS, DEFAULTS.cleaning.errors, name="m01")
     np.testing.assert_allclose(curve.to_numpy(), [0.5, -0.5, -1.5, -2.5, -3.0])
     assert curve.index.tolist() == TARGETS and curve.index.name == "position_mm"
     assert warnings == []
@@ -471,64 +472,64 @@ def test_mean_of_both_passes():
 )
 def test_one_direction(direction, expected):
     m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
-    curve, _ = combine_passes(m, TARGETS, ErrorCleaning(direction=direction))
+    curve, _ = combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, direction=direction))
     np.testing.assert_allclose(curve.to_numpy(), expected)
 
 
 def test_single_unlabelled_pass_is_used_as_is():
     m = measurement([(p, -float(i), None) for i, p in enumerate(TARGETS)], direction=False)
-    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning(direction="mean"))
+    curve, warnings = combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, direction="mean"))
     np.testing.assert_allclose(curve.to_numpy(), [0.0, -1.0, -2.0, -3.0, -4.0])
     assert warnings == []
 
 
 def test_target_read_in_one_pass_only_keeps_that_reading_with_a_warning():
     m = two_passes([0.0, -1.0, None, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
-    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning(), name="m03")
+    curve, warnings = combine_passes(m, TARGETS, DEFAULTS.cleaning.errors, name="m03")
     assert curve[225.0] == -1.0
     assert len(warnings) == 1 and "m03" in warnings[0] and "225" in warnings[0]
 
 
 def test_missing_target_reading_is_dropped_with_a_warning():
     m = two_passes([0.0, -1.0, None, -3.0, -4.0], [1.0, 0.0, None, -2.0, -2.0])
-    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.2), name="m03")
+    curve, warnings = combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.2), name="m03")
     assert np.isnan(curve[225.0]) and curve.notna().sum() == 4
     assert len(warnings) == 1 and "225" in warnings[0] and "no reading" in warnings[0]
     # a NaN reading is as missing as an absent row
     m.loc[m["position_mm"] == 245.0, "error_um"] = np.nan
     with pytest.raises(ValueError, match="2 of 5"):
-        combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.2))
+        combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.2))
 
 
 def test_too_many_missing_targets_raise():
     m = two_passes([0.0, None, None, -3.0, -4.0], [1.0, None, None, -2.0, -2.0])
     with pytest.raises(ValueError, match=r"measurement m05: 2 of 5 targets"):
-        combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.2), name="m05")
-    curve, _ = combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=0.4), name="m05")
+        combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.2), name="m05")
+    curve, _ = combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.4), name="m05")
     assert curve.isna().sum() == 2
 
 
 def test_measurement_with_one_direction_only():
     # what thermaxis.io makes of a file without a direction column: every row "+"
     forward_only = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [None] * 5)
-    curve, warnings = combine_passes(forward_only, TARGETS, ErrorCleaning(direction="mean"))
+    curve, warnings = combine_passes(forward_only, TARGETS, replace(DEFAULTS.cleaning.errors, direction="mean"))
     np.testing.assert_allclose(curve.to_numpy(), [0.0, -1.0, -2.0, -3.0, -4.0])
     assert warnings == []
     with pytest.raises(ValueError, match=r"m02: no - pass"):
-        combine_passes(forward_only, TARGETS, ErrorCleaning(direction="-"), name="m02")
+        combine_passes(forward_only, TARGETS, replace(DEFAULTS.cleaning.errors, direction="-"), name="m02")
 
 
 def test_conflicting_duplicate_position_raises():
     m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
     m = pd.concat([m, measurement([(205.0, -1.3, "+")])], ignore_index=True)
     with pytest.raises(ValueError, match=r"m07.*205 mm.*\+ pass"):
-        combine_passes(m, TARGETS, ErrorCleaning(), name="m07")
+        combine_passes(m, TARGETS, DEFAULTS.cleaning.errors, name="m07")
 
 
 def test_exact_duplicate_rows_are_dropped_silently_and_counted():
     m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
     m = pd.concat([m, m.iloc[[1, 7]]], ignore_index=True)
-    curve, warnings = combine_passes(m, TARGETS, ErrorCleaning())
+    curve, warnings = combine_passes(m, TARGETS, DEFAULTS.cleaning.errors)
     np.testing.assert_allclose(curve.to_numpy(), [0.5, -0.5, -1.5, -2.5, -3.0])
     assert warnings == [] and curve.attrs["n_duplicate_rows"] == 2
 
@@ -536,4 +537,4 @@ def test_exact_duplicate_rows_are_dropped_silently_and_counted():
 def test_position_that_is_no_target_raises():
     m = measurement([(185.0, 0.0, "+"), (500.0, 1.0, "+")])
     with pytest.raises(ValueError, match="500 mm is not one of the targets"):
-        combine_passes(m, TARGETS, ErrorCleaning(max_missing_fraction=1.0))
+        combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=1.0))

@@ -10,7 +10,6 @@ import pytest
 from thermaxis.compensation import (
     ControllerParameters,
     Compensator,
-    FallbackSettings,
     Step,
     held_out_tables,
     line_weights,
@@ -18,6 +17,7 @@ from thermaxis.compensation import (
     siemens_840d,
     twincat,
 )
+from thermaxis.config import FallbackSettings
 from thermaxis.models import DecoupledAxisModel, PointwiseAxisModel
 
 TARGETS = [185.0 + 20.0 * i for i in range(14)]  # the paper's stroke; shifted origin 185 mm

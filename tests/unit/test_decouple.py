@@ -6,20 +6,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import write_dataset
+from conftest import DEFAULTS, write_dataset
 from thermaxis.assemble import clean_and_assemble_run
 from thermaxis.decouple import compose_curve, decouple_measurement, decouple_table
 from thermaxis.io import load_dataset, read_run
-
-CONFIG = {
-    "temperatures": {
-        "interval_s": 10, "hampel_window": 7, "hampel_threshold": 4.0, "hampel_min_deviation_c": 0.2,
-        "limits_c": [-20.0, 120.0], "max_gap_s": 600, "allow_long_gaps": False,
-        "estimate_clock_offsets": False, "window": "mean",
-    },
-    "errors": {"direction": "mean", "max_missing_fraction": 0.2},
-}
-
 
 def test_hand_worked_line():
     # x = 185, 205, 225 mm -> shifted 0, 0.02, 0.04 m; e = 1, 2, 4 um.
@@ -69,7 +59,7 @@ def test_exact_lines_from_raw_files_are_recovered_to_1e9(tmp_path):
 
     root = write_dataset(tmp_path / "lines", curve=curve, positions=np.arange(185.0, 446.0, 20.0))
     dataset = load_dataset(root)
-    frames = [clean_and_assemble_run(dataset, read_run(dataset, run), CONFIG).errors for run in dataset.run_ids]
+    frames = [clean_and_assemble_run(dataset, read_run(dataset, run), DEFAULTS.cleaning).errors for run in dataset.run_ids]
     kb, _ = decouple_table(pd.concat(frames, ignore_index=True))
     for row in kb.itertuples():
         key = (int(row.run[1:]) - 1, row.measurement - 1)

@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import EQ9_B, EQ9_K, POSITIONS, eq9_errors, synthetic_temperatures
+from conftest import DEFAULTS, EQ9_B, EQ9_K, POSITIONS, eq9_errors, synthetic_temperatures
 from thermaxis.experiment import (
-    ModelSettings,
-    SelectionSettings,
     evaluate_configuration,
     select_for_fold,
     selection_from_dict,
@@ -17,7 +17,7 @@ from thermaxis.experiment import (
     selection_to_dict,
 )
 
-SMALL_SVR = ModelSettings(svr_grid=(("C", (1.0, 10.0)), ("epsilon", (0.1,)), ("gamma", ("scale",))))
+SMALL_SVR = replace(DEFAULTS.models, svr_grid=(("C", (1.0, 10.0)), ("epsilon", (0.1,)), ("gamma", ("scale",))))
 
 
 @pytest.fixture(scope="module")
@@ -41,13 +41,13 @@ def perturb_run(Y: pd.DataFrame, X: pd.DataFrame, run: str) -> pd.DataFrame:
 
 def test_selection_ignores_the_held_out_run(eq9_data):
     X, Y = eq9_data
-    settings = SelectionSettings()
-    before = select_for_fold(X, Y, "E4", settings)
-    after = select_for_fold(X, perturb_run(Y, X, "E4"), "E4", settings)
+    settings = DEFAULTS.selection
+    before = select_for_fold(X, Y, "E4", settings, 1)
+    after = select_for_fold(X, perturb_run(Y, X, "E4"), "E4", settings, 1)
     assert selection_to_dict(before) == selection_to_dict(after)
     # ...but the paper's way (scope all) does look at it.
-    all_before = select_for_fold(X, Y, "E4", SelectionSettings(scope="all"))
-    all_after = select_for_fold(X, perturb_run(Y, X, "E4"), "E4", SelectionSettings(scope="all"))
+    all_before = select_for_fold(X, Y, "E4", replace(DEFAULTS.selection, scope="all"), 1)
+    all_after = select_for_fold(X, perturb_run(Y, X, "E4"), "E4", replace(DEFAULTS.selection, scope="all"), 1)
     assert selection_to_dict(all_before) != selection_to_dict(all_after)
 
 
@@ -55,10 +55,10 @@ def test_selection_ignores_the_held_out_run(eq9_data):
 @pytest.mark.parametrize("algorithm", ["mlr", "svr"])
 def test_fold_models_ignore_the_held_out_errors(eq9_data, approach, algorithm):
     X, Y = eq9_data
-    selection = select_for_fold(X, Y, "E2", SelectionSettings())
-    a = evaluate_configuration(X, Y, "E2", approach, algorithm, selection, SMALL_SVR)
+    selection = select_for_fold(X, Y, "E2", DEFAULTS.selection, 1)
+    a = evaluate_configuration(X, Y, "E2", approach, algorithm, selection, SMALL_SVR, 1)
     Y2 = perturb_run(Y, X, "E2")
-    b = evaluate_configuration(X, Y2, "E2", approach, algorithm, select_for_fold(X, Y2, "E2", SelectionSettings()), SMALL_SVR)
+    b = evaluate_configuration(X, Y2, "E2", approach, algorithm, select_for_fold(X, Y2, "E2", DEFAULTS.selection, 1), SMALL_SVR, 1)
     pd.testing.assert_frame_equal(a.coefficients, b.coefficients)
     np.testing.assert_array_equal(a.error_predictions["predicted"], b.error_predictions["predicted"])
     assert not np.allclose(a.error_predictions["measured"], b.error_predictions["measured"])
@@ -68,9 +68,9 @@ def test_fixed_paper_points_recover_eq9(eq9_data):
     X, _ = eq9_data
     Y = eq9_errors(X).reset_index(drop=True)  # exact, noise-free
     fixed = (("b", ("T2", "T7", "T11")), ("k", ("T1", "T6", "T12")), ("pointwise", ("T1", "T11", "T12")))
-    selection = select_for_fold(X, Y, "E4", SelectionSettings(method="fixed", fixed=fixed))
+    selection = select_for_fold(X, Y, "E4", replace(DEFAULTS.selection, method="fixed", fixed=fixed), 1)
     assert selection.k_sensors == ("T1", "T6", "T12") and selection.b_sensors == ("T2", "T7", "T11")
-    result = evaluate_configuration(X, Y, "E4", "decoupled", "mlr", selection)
+    result = evaluate_configuration(X, Y, "E4", "decoupled", "mlr", selection, DEFAULTS.models, 1)
     coef = result.coefficients.set_index(["target", "term"])["value"]
     for term, value in EQ9_K.items():
         assert coef[("k", term)] == pytest.approx(value, abs=1e-6)
@@ -85,12 +85,12 @@ def test_fixed_selection_names_an_unknown_sensor(eq9_data):
     X, Y = eq9_data
     fixed = (("b", ("T2",)), ("k", ("T99",)), ("pointwise", ("T1",)))
     with pytest.raises(ValueError, match="selection.fixed.k: unknown sensor 'T99'"):
-        select_for_fold(X, Y, "E4", SelectionSettings(method="fixed", fixed=fixed))
+        select_for_fold(X, Y, "E4", replace(DEFAULTS.selection, method="fixed", fixed=fixed), 1)
 
 
 def test_selection_round_trips_through_json_and_tables(eq9_data):
     X, Y = eq9_data
-    selection = select_for_fold(X, Y, "E1", SelectionSettings(n_clusters=4))
+    selection = select_for_fold(X, Y, "E1", replace(DEFAULTS.selection, n_clusters=4), 1)
     again = selection_from_dict(selection_to_dict(selection))
     assert selection_to_dict(again) == selection_to_dict(selection)
     table = selection_table(selection)
@@ -104,8 +104,8 @@ def test_selection_round_trips_through_json_and_tables(eq9_data):
 def test_single_position_runs_pointwise_only(eq9_data):
     X, Y = eq9_data
     Y1 = Y[[Y.columns[0]]]
-    selection = select_for_fold(X, Y1, "E3", SelectionSettings(), decoupled=False)
+    selection = select_for_fold(X, Y1, "E3", DEFAULTS.selection, 1, decoupled=False)
     assert selection.k is None and selection.b is None and len(selection.pointwise) == 3
-    result = evaluate_configuration(X, Y1, "E3", "pointwise", "mlr", selection)
+    result = evaluate_configuration(X, Y1, "E3", "pointwise", "mlr", selection, DEFAULTS.models, 1)
     assert list(result.metrics["target"]) == ["error"]
     assert len(result.error_predictions) == 8

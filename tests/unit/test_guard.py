@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import re
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,7 @@ import pandas as pd
 import pytest
 import yaml
 
+from conftest import DEFAULTS
 from thermaxis import guard
 from thermaxis.io import DataError
 from thermaxis.formatting import format_cell
@@ -241,11 +243,8 @@ def _raw_run(starts, temperature_c):
     return RawRun(run="E1", sources={"box": box}, measurements=measurements)
 
 
-def _plausibility_config(**temperatures):
-    return {
-        "errors": {"max_abs_error_um": 1000.0},
-        "temperatures": {"interval_s": 10.0, "plausible_median_c": [5.0, 60.0], **temperatures},
-    }
+def _plausibility_config(interval_s=10.0):
+    return replace(DEFAULTS.cleaning, temperatures=replace(DEFAULTS.cleaning.temperatures, interval_s=interval_s))
 
 
 def test_run_plausibility_warns_of_fahrenheit_unless_the_dataset_logs_rises(tmp_path):

@@ -325,6 +325,28 @@ def test_svr_group_search_picks_the_known_best_point():
     np.testing.assert_allclose(model.predict(x), refit.predict(x))
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
+    # The reference: scikit-learn's GridSearchCV over the same pipeline, leave one group out.
+    from sklearn.model_selection import GridSearchCV, LeaveOneGroupOut
+
+    rng = np.random.default_rng(seed)
+    x = rng.normal(size=(40, 3))
+    y = x @ np.array([1.0, -0.5, 0.2]) + 0.3 * np.sin(3.0 * x[:, 0]) + rng.normal(0.0, 0.1, 40)
+    groups = np.repeat(["r1", "r2", "r3", "r4"], 10)
+    # Two identical C values make a tie: the earlier grid point must win, as in GridSearchCV.
+    grid = {"C": [10.0, 0.1, 10.0], "epsilon": [0.01, 0.1], "gamma": ["scale", 0.1]}
+    model, chosen = fit_svr_by_group_search(x, y, groups, grid)
+    search = GridSearchCV(
+        make_regressor("svr"),
+        {f"regress__regressor__{k}": v for k, v in grid.items()},
+        scoring="neg_root_mean_squared_error",
+        cv=LeaveOneGroupOut(),
+    ).fit(x, y, groups=groups)
+    assert chosen == {k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()}
+    np.testing.assert_array_equal(model.predict(x), search.best_estimator_.predict(x))
+
+
 def test_svr_group_search_falls_back_to_first_grid_point_with_one_group():
     x = np.linspace(0.0, 1.0, 10)[:, None]
     _, chosen = fit_svr_by_group_search(x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]})

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -9,10 +10,11 @@ import pandas as pd
 import pytest
 import yaml
 
+from conftest import DEFAULTS
 from thermaxis.assemble import clean_and_assemble_run, model_inputs
-from thermaxis.clean import TemperatureCleaning, check_gaps, clean_temperatures, hampel_outliers, signals_on_grid
-from thermaxis.config import load_config
-from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
+from thermaxis.clean import check_gaps, clean_temperatures, hampel_outliers, signals_on_grid
+from thermaxis.config import Settings, load_config
+from thermaxis.experiment import evaluate_configuration, select_for_fold
 from thermaxis.importer import import_dataset, measurements_of
 from thermaxis.io import DataError, load_dataset, read_run
 
@@ -50,7 +52,7 @@ def test_a_record_that_ends_early_is_named_as_such_with_its_file():
     cleaned = clean_temperatures(
         {"box": _log(minutes, 20.0 + 0.01 * minutes)},
         {},
-        TemperatureCleaning(interval_s=30.0, max_gap_s=600.0),
+        replace(DEFAULTS.cleaning.temperatures, interval_s=30.0, max_gap_s=600.0),
         start="2024-01-01T00:00:00",
         end="2024-01-01T01:00:00",
     )
@@ -144,7 +146,7 @@ def test_fl_thermal_pointwise_mlr_equals_plain_least_squares():
     """The embedded measured record: held-out run R6, all 16 sensors plus a constant, by numpy."""
     dataset = load_dataset(FL_THERMAL)
     config = load_config()
-    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), config) for run in dataset.run_ids]
+    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), Settings.from_config(config).cleaning) for run in dataset.run_ids]
     X, Y = model_inputs(
         pd.concat([t.errors for t in tables], ignore_index=True),
         pd.concat([t.temperatures for t in tables], ignore_index=True),
@@ -152,8 +154,8 @@ def test_fl_thermal_pointwise_mlr_equals_plain_least_squares():
     sensors = tuple(c for c in X.columns if c.startswith("T"))
     assert len(sensors) == 16 and Y.shape[1] == 1
     fold = "R6_variable"
-    selection = select_for_fold(X, Y, fold, SelectionSettings(method="all"), decoupled=False)
-    result = evaluate_configuration(X, Y, fold, "pointwise", "mlr", selection, ModelSettings())
+    selection = select_for_fold(X, Y, fold, replace(DEFAULTS.selection, method="all"), 1, decoupled=False)
+    result = evaluate_configuration(X, Y, fold, "pointwise", "mlr", selection, DEFAULTS.models, 1)
 
     first = X.sort_values("measurement").groupby("run")[list(sensors)].transform("first").loc[X.index]
     T = X[list(sensors)].to_numpy(float) - first.to_numpy(float)

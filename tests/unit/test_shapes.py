@@ -8,23 +8,25 @@ or counts worked out by hand).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import write_dataset
+from conftest import DEFAULTS, write_dataset
 
 from thermaxis.assemble import clean_and_assemble_run, model_inputs
-from thermaxis.config import load_config
-from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
+from thermaxis.config import Settings, load_config
+from thermaxis.experiment import evaluate_configuration, select_for_fold
 from thermaxis.guard import check_same_targets
 from thermaxis.io import DataError, load_dataset, read_run
 
-CONFIG = load_config()
+CLEANING = Settings.from_config(load_config()).cleaning
 
 
 def assembled(root):
     dataset = load_dataset(root)
-    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), CONFIG) for run in dataset.run_ids]
+    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), CLEANING) for run in dataset.run_ids]
     errors = pd.concat([t.errors for t in tables], ignore_index=True)
     temperatures = pd.concat([t.temperatures for t in tables], ignore_index=True)
     return errors, temperatures
@@ -66,8 +68,8 @@ def test_shapes_assemble_and_predict_like_numpy(tmp_path, runs, counts, position
     assert X.groupby("run").size().to_dict() == dict(zip(runs, counts))
     assert Y.shape == (sum(counts), len(positions))
     sensors = ("S1", "S2")
-    selection = select_for_fold(X, Y, runs[-1], SelectionSettings(method="fixed", fixed=(("pointwise", sensors), ("k", sensors), ("b", sensors))), decoupled=False)
-    result = evaluate_configuration(X, Y, runs[-1], "pointwise", "mlr", selection, ModelSettings())
+    selection = select_for_fold(X, Y, runs[-1], replace(DEFAULTS.selection, method="fixed", fixed=(("pointwise", sensors), ("k", sensors), ("b", sensors))), 1, decoupled=False)
+    result = evaluate_configuration(X, Y, runs[-1], "pointwise", "mlr", selection, DEFAULTS.models, 1)
     predicted = result.error_predictions["predicted"].to_numpy().reshape(counts[-1], len(positions))
     np.testing.assert_allclose(predicted, numpy_pointwise(X, Y, runs[-1], sensors), atol=1e-6)
 
@@ -104,8 +106,8 @@ def test_single_position_common_set_follows_the_ranking_not_the_names(tmp_path):
         two_passes=False,
     )
     X, Y = model_inputs(*assembled(root))
-    settings = SelectionSettings(method="correlation", n_clusters=4, pointwise_common=2)
-    selection = select_for_fold(X, Y, "R3", settings, decoupled=False)
+    settings = replace(DEFAULTS.selection, method="correlation", n_clusters=4, pointwise_common=2)
+    selection = select_for_fold(X, Y, "R3", settings, 1, decoupled=False)
     assert selection.pointwise == ("Z9", "Z1")
 
 

@@ -9,7 +9,8 @@ import pandas as pd
 import pytest
 from blark.parse import parse_source_code
 
-from thermaxis.compensation import CONVENTION, Compensator, FallbackSettings, model_record, twincat
+from thermaxis.compensation import CONVENTION, Compensator, model_record, twincat
+from thermaxis.config import FallbackSettings
 from thermaxis.models import DecoupledAxisModel, PointwiseAxisModel
 from thermaxis.plc import st_real, structured_text
 

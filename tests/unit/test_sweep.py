@@ -10,16 +10,18 @@ from __future__ import annotations
 
 import io
 import sys
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 import pytest
-import yaml
 from threadpoolctl import threadpool_limits
 
-from conftest import REPO
-from thermaxis import experiment, sweep
-from thermaxis.experiment import ModelSettings, SelectionSettings, evaluate_configuration, select_for_fold
+from conftest import DEFAULTS, REPO
+from thermaxis import experiment, sweep, sweep_plan
+from thermaxis.config import Settings, load_config
+from thermaxis.evaluate import METRIC_COLUMNS
+from thermaxis.experiment import evaluate_configuration, select_for_fold
 
 PAPER_FIXED = (("b", ("T2", "T7", "T11")), ("k", ("T1", "T6", "T12")), ("pointwise", ("T1", "T11", "T12")))
 TWELVE = [f"T{i}" for i in range(1, 13)]
@@ -38,7 +40,7 @@ def test_default_grid_counts_by_hand():
     # fuzzy_grey: 5 cluster counts x 2 similarities x 2 grades = 20; correlation: 5;
     # all: 1; fixed: 1 -> 27 selection settings. Approaches: decoupled at degrees 1-3
     # plus pointwise = 4. Algorithms: 5. 27 x 4 x 5 = 540.
-    grid = sweep.SweepGrid(fixed=PAPER_FIXED)
+    grid = replace(DEFAULTS.sweep.grid, fixed=PAPER_FIXED)
     specs, notes = grid.selection_specs(TWELVE)
     assert (len(specs), notes) == (27, [])
     configs = grid.configurations(TWELVE)
@@ -49,11 +51,7 @@ def test_default_grid_counts_by_hand():
 
 
 def test_config_yaml_sweep_is_the_issue_grid():
-    from snakemake.utils import validate
-
-    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
-    validate(config, str(REPO / "workflow" / "schemas" / "config.schema.yaml"), set_default=True)
-    grid = sweep.grid_from_config(config["sweep"])
+    grid = Settings.from_config(load_config()).sweep.grid
     assert grid.n_clusters == (2, 3, 4, 5, 6) and grid.degrees == (1, 2, 3)
     assert len(grid.configurations(TWELVE)) >= 200
 
@@ -66,10 +64,9 @@ def test_schema_fills_defaults_and_rejects_bad_levels():
     validate(config, schema, set_default=True)
     assert config["sweep"]["methods"] == ["fuzzy_grey", "correlation", "all", "fixed"]
     assert config["sweep"]["batches"] == 0
-    assert sweep.svr_grid_for_sweep(config["sweep"], config["models"]) == {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]}
-    config = {"dataset": "x", "sweep": {"svr_grid": "models"}}
-    validate(config, schema, set_default=True)
-    assert sweep.svr_grid_for_sweep(config["sweep"], config["models"]) == config["models"]["svr_grid"]
+    assert Settings.from_config(config).sweep.svr_grid == (("C", (1.0, 10.0)), ("epsilon", (0.1,)), ("gamma", ("scale",)))
+    settings = Settings.from_config({"sweep": {"svr_grid": "models"}})
+    assert settings.sweep.svr_grid == settings.models.svr_grid
     for bad in ({"degrees": [4]}, {"methods": ["lasso"]}, {"svr_grid": "mine"}, {"batches": -1}, {"colour": 1}):
         with pytest.raises(Exception, match="sweep|valid"):
             validate({"dataset": "x", "sweep": bad}, schema, set_default=True)
@@ -78,7 +75,7 @@ def test_schema_fills_defaults_and_rejects_bad_levels():
 def test_settings_the_dataset_cannot_support_are_left_out_with_a_note():
     # Three sensors: only 2 and 3 clusters fit -> fuzzy 2 x 2 x 2 = 8, correlation 2,
     # all 1; fixed names T1.. which the dataset lacks.
-    grid = sweep.SweepGrid(fixed=PAPER_FIXED)
+    grid = replace(DEFAULTS.sweep.grid, fixed=PAPER_FIXED)
     specs, notes = grid.selection_specs(["S1", "S2", "S3"])
     assert len(specs) == 11
     assert len(notes) == 3 * 2 + 1
@@ -86,10 +83,10 @@ def test_settings_the_dataset_cannot_support_are_left_out_with_a_note():
 
 
 def test_spec_settings_apply_only_the_factors_of_the_method():
-    base = SelectionSettings(n_clusters=3, similarity="pearson", grade="deng")
-    s = sweep.SelectionSpec("correlation", 5).settings(base, 2)
-    assert (s.method, s.n_clusters, s.similarity, s.grade, s.degree) == ("correlation", 5, "pearson", "deng", 2)
-    f = sweep.SelectionSpec("fixed").settings(base, 1, PAPER_FIXED)
+    base = replace(DEFAULTS.selection, n_clusters=3, similarity="pearson", grade="deng")
+    s = sweep_plan.SelectionSpec("correlation", 5).settings(base, ())
+    assert (s.method, s.n_clusters, s.similarity, s.grade) == ("correlation", 5, "pearson", "deng")
+    f = sweep_plan.SelectionSpec("fixed").settings(base, PAPER_FIXED)
     assert f.fixed_for("k") == ("T1", "T6", "T12")
 
 
@@ -97,22 +94,22 @@ def test_spec_settings_apply_only_the_factors_of_the_method():
 
 
 def test_batches_cover_every_unit_once_in_contiguous_near_equal_shares():
-    units = [sweep.Unit(f"F{i}", sweep.SelectionSpec("all")) for i in range(10)]
-    shares = [sweep.batch_units(units, 4, b) for b in range(4)]
+    units = [sweep_plan.Unit(f"F{i}", sweep_plan.SelectionSpec("all")) for i in range(10)]
+    shares = [sweep_plan.batch_units(units, 4, b) for b in range(4)]
     # 10 units in 4 shares: boundaries round(0, 2.5, 5, 7.5, 10) = 0, 2, 5, 8, 10.
     assert [len(s) for s in shares] == [2, 3, 3, 2]
     assert [u for s in shares for u in s] == units
     with pytest.raises(ValueError, match="batch 4 does not exist"):
-        sweep.batch_units(units, 4, 4)
+        sweep_plan.batch_units(units, 4, 4)
 
 
 def test_batch_count_follows_the_cores_unless_set():
-    assert sweep.batch_count(0, 2, 108) == 2
-    assert sweep.batch_count(0, 64, 10) == 10
-    assert sweep.batch_count(3, 2, 108) == 3
-    assert sweep.batch_count(0, None, 5) == 1
+    assert sweep_plan.batch_count(0, 2, 108) == 2
+    assert sweep_plan.batch_count(0, 64, 10) == 10
+    assert sweep_plan.batch_count(3, 2, 108) == 3
+    assert sweep_plan.batch_count(0, None, 5) == 1
     with pytest.raises(ValueError, match="sweep.batches"):
-        sweep.batch_count(-1, 2, 5)
+        sweep_plan.batch_count(-1, 2, 5)
 
 
 def test_progress_prints_whole_tqdm_like_lines():
@@ -152,21 +149,21 @@ def _inputs(n_runs=3, n_measurements=6, seed=0):
 
 def test_batch_rows_are_the_library_functions_metrics():
     X, Y = _inputs()
-    grid = sweep.SweepGrid(methods=("fuzzy_grey",), n_clusters=(2,), similarities=("pearson",), grades=("deng",),
+    grid = replace(DEFAULTS.sweep.grid, methods=("fuzzy_grey",), n_clusters=(2,), similarities=("pearson",), grades=("deng",),
                            degrees=(1,), algorithms=("mlr", "ridge"))  # fmt: skip
-    units, _ = sweep.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
-    base = SelectionSettings(pointwise_common=2)
-    rows = sweep.run_batch(X, Y, units, grid, base, ModelSettings())
+    units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
+    base = replace(DEFAULTS.selection, pointwise_common=2)
+    rows = sweep.run_batch(X, Y, units, grid, base, DEFAULTS.models)
     # 1 unit x (decoupled d1 + pointwise) x 2 algorithms; decoupled has k, b, error rows.
     assert len(rows) == 2 * 3 + 2 * 1
     assert (rows["status"] == "ok").all()
-    selection = select_for_fold(X, Y, "R2", SelectionSettings(n_clusters=2, pointwise_common=2))
+    selection = select_for_fold(X, Y, "R2", replace(DEFAULTS.selection, n_clusters=2, pointwise_common=2), 1)
     for approach in ("decoupled", "pointwise"):
-        expected = evaluate_configuration(X, Y, "R2", approach, "ridge", selection, ModelSettings()).metrics
+        expected = evaluate_configuration(X, Y, "R2", approach, "ridge", selection, DEFAULTS.models, 1).metrics
         got = rows[(rows["approach"] == approach) & (rows["algorithm"] == "ridge")]
         pd.testing.assert_frame_equal(
-            got[["target", *sweep.METRICS]].reset_index(drop=True),
-            expected[["target", *sweep.METRICS]].reset_index(drop=True),
+            got[["target", *METRIC_COLUMNS]].reset_index(drop=True),
+            expected[["target", *METRIC_COLUMNS]].reset_index(drop=True),
         )
 
 
@@ -185,25 +182,25 @@ def test_identical_model_inputs_are_evaluated_once(monkeypatch):
     # So 2 settings x (decoupled d1 + pointwise) x 1 algorithm = 4 configurations,
     # but only 2 distinct evaluations.
     every = ("S1", "S2", "S3", "S4")
-    grid = sweep.SweepGrid(methods=("all", "fixed"), degrees=(1,), algorithms=("mlr",),
+    grid = replace(DEFAULTS.sweep.grid, methods=("all", "fixed"), degrees=(1,), algorithms=("mlr",),
                            fixed=(("b", every), ("k", every), ("pointwise", every)))  # fmt: skip
-    units, _ = sweep.plan_units(grid, ["R1"], list(every))
-    rows = sweep.run_batch(X, Y, units, grid, SelectionSettings(pointwise_common=4), ModelSettings())
+    units, _ = sweep_plan.plan_units(grid, ["R1"], list(every))
+    rows = sweep.run_batch(X, Y, units, grid, replace(DEFAULTS.selection, pointwise_common=4), DEFAULTS.models)
     assert len(calls) == 2
     assert rows["config_id"].nunique() == 4
-    a = rows[rows["method"] == "all"][list(sweep.METRICS)].to_numpy()
-    f = rows[rows["method"] == "fixed"][list(sweep.METRICS)].to_numpy()
+    a = rows[rows["method"] == "all"][list(METRIC_COLUMNS)].to_numpy()
+    f = rows[rows["method"] == "fixed"][list(METRIC_COLUMNS)].to_numpy()
     np.testing.assert_array_equal(a, f)
 
 
 def test_summary_does_not_depend_on_the_batch_count():
     X, Y = _inputs()
-    grid = sweep.SweepGrid(methods=("fuzzy_grey", "correlation"), n_clusters=(2, 3), similarities=("pearson",),
+    grid = replace(DEFAULTS.sweep.grid, methods=("fuzzy_grey", "correlation"), n_clusters=(2, 3), similarities=("pearson",),
                            grades=("deng", "absolute"), degrees=(1, 2), algorithms=("mlr",))  # fmt: skip
-    units, _ = sweep.plan_units(grid, ["R1", "R2", "R3"], ["S1", "S2", "S3", "S4"])
-    base = SelectionSettings(pointwise_common=2)
-    one = sweep.collect_summary([sweep.run_batch(X, Y, units, grid, base, ModelSettings())])
-    parts = [sweep.run_batch(X, Y, sweep.batch_units(units, 3, b), grid, base, ModelSettings()) for b in range(3)]
+    units, _ = sweep_plan.plan_units(grid, ["R1", "R2", "R3"], ["S1", "S2", "S3", "S4"])
+    base = replace(DEFAULTS.selection, pointwise_common=2)
+    one = sweep.collect_summary([sweep.run_batch(X, Y, units, grid, base, DEFAULTS.models)])
+    parts = [sweep.run_batch(X, Y, sweep_plan.batch_units(units, 3, b), grid, base, DEFAULTS.models) for b in range(3)]
     pd.testing.assert_frame_equal(sweep.collect_summary(parts[::-1]), one)
     # 3 folds x (2 fuzzy x 2 grades + 2 correlation) settings x (2 degrees + pointwise) x 1 algorithm.
     assert one.groupby("config_id")["fold"].nunique().eq(3).all()
@@ -215,9 +212,9 @@ def test_a_configuration_the_data_cannot_support_is_recorded_not_fatal():
     # Degree 3 needs four targets per measurement: there are four, so make one NaN in
     # every row of run R1 -> its decoupling fails for degree 3 only.
     Y.loc[X["run"] == "R1", 50.0] = np.nan
-    grid = sweep.SweepGrid(methods=("all",), approaches=("decoupled",), degrees=(1, 3), algorithms=("mlr",))
-    units, _ = sweep.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
-    rows = sweep.run_batch(X, Y, units, grid, SelectionSettings(), ModelSettings())
+    grid = replace(DEFAULTS.sweep.grid, methods=("all",), approaches=("decoupled",), degrees=(1, 3), algorithms=("mlr",))
+    units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
+    rows = sweep.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
     by_degree = rows.groupby("degree")["status"].first()
     assert by_degree.loc[1] == "ok"
     assert by_degree.loc[3] != "ok" and rows.loc[rows["degree"] == 3, "max_abs"].isna().all()
@@ -248,7 +245,7 @@ def _summary_rows():
 
 
 def test_ranking_by_mean_max_residual_incomplete_last_ties_by_id():
-    main = {"method": "fuzzy_grey", "n_clusters": 3, "similarity": "pearson", "grade": "deng"}
+    main = replace(DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="pearson", grade="deng")
     ranking = sweep.rank_configurations(_summary_rows(), main, 1)
     # A: (1 + 3) / 2 = 2, B: (2 + 2) / 2 = 2 (tie -> id order), D: 5, C: one fold only -> last.
     assert ranking["config_id"].tolist() == ["A", "B", "D", "C"]
@@ -261,7 +258,7 @@ def test_ranking_by_mean_max_residual_incomplete_last_ties_by_id():
 
 
 def test_factor_effects_by_hand():
-    main = {"method": "fixed"}
+    main = replace(DEFAULTS.selection, method="fixed")
     ranking = sweep.rank_configurations(_summary_rows(), main, 1)
     effects = sweep.factor_effects(ranking).set_index(["factor", "level"])
     # Complete configurations: A (fuzzy_grey, mlr, 2), B (all, mlr, 2), D (all, svr, 5).
@@ -284,7 +281,7 @@ def test_heatmap_holds_the_other_factors_at_the_main_configuration():
                                  "approach": "decoupled", "degree": degree, "algorithm": algorithm,
                                  "mean_max_abs": value})  # fmt: skip
     ranking = pd.DataFrame(rows)
-    main = {"method": "fuzzy_grey", "n_clusters": 3, "similarity": "printed", "grade": "deng"}
+    main = replace(DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="printed", grade="deng")
     table = sweep.heatmap_table(ranking, "decoupled", main, 2)
     assert table.columns.tolist() == ["mlr", "svr"] and table.index.tolist() == [2, 3]
     # printed (+100), degree 2 (+2): n=2 -> 122, n=3 -> 132; svr adds 0.5.

@@ -3,20 +3,21 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 import pytest
 from threadpoolctl import threadpool_limits
 
-from thermaxis import sweep
-from thermaxis.experiment import ModelSettings, SelectionSettings
+from conftest import DEFAULTS
+from thermaxis import sweep, sweep_plan
 
 TWELVE = [f"T{i}" for i in range(1, 13)]
 
 
 def subset_grid(sizes=(3,), cap=1000, **kw):
-    return sweep.SweepGrid(methods=("subset",), n_clusters=tuple(sizes), max_subsets=cap, **kw)
+    return replace(DEFAULTS.sweep.grid, methods=("subset",), n_clusters=tuple(sizes), max_subsets=cap, **kw)
 
 
 def test_every_subset_once_counted_by_hand():
@@ -26,7 +27,7 @@ def test_every_subset_once_counted_by_hand():
     assert len({s.sensors for s in specs}) == 220
     assert all(len(s.sensors) == 3 and s.n_clusters == 3 for s in specs)
     assert specs[0].sensors == ("T1", "T2", "T3") and specs[-1].sensors == ("T10", "T11", "T12")
-    assert sweep.subset_count(12, (2, 3)) == 66 + 220
+    assert sweep_plan.subset_count(12, (2, 3)) == 66 + 220
     # 220 subsets x (decoupled d1-3 + pointwise) x 5 algorithms.
     assert len(subset_grid((3,)).configurations(TWELVE)) == 220 * 4 * 5
     # A size above the sensor count is left out with a note, as for cluster counts.
@@ -36,30 +37,30 @@ def test_every_subset_once_counted_by_hand():
 
 def test_more_subsets_than_the_cap_stop_the_plan_with_the_count():
     with pytest.raises(ValueError, match="would evaluate 220 subsets of 3 of 12 sensors; the cap sweep.max_subsets is 219"):
-        sweep.plan_units(subset_grid((3,), cap=219), ["E1"], TWELVE)
-    units, _ = sweep.plan_units(subset_grid((3,), cap=220), ["E1", "E2"], TWELVE)
+        sweep_plan.plan_units(subset_grid((3,), cap=219), ["E1"], TWELVE)
+    units, _ = sweep_plan.plan_units(subset_grid((3,), cap=220), ["E1", "E2"], TWELVE)
     assert len(units) == 440
 
 
 def test_a_subset_is_the_fixed_choice_for_k_b_and_pointwise():
-    spec = sweep.SelectionSpec("subset", 2, sensors=("T4", "T9"))
-    settings = spec.settings(SelectionSettings(), 2)
-    assert (settings.method, settings.degree) == ("fixed", 2)
+    spec = sweep_plan.SelectionSpec("subset", 2, sensors=("T4", "T9"))
+    settings = spec.settings(DEFAULTS.selection, ())
+    assert settings.method == "fixed"
     assert [settings.fixed_for(t) for t in ("k", "b", "pointwise")] == [("T4", "T9")] * 3
-    assert sweep.Configuration(spec, "pointwise", None, "mlr").config_id == "subset:n2:T4+T9/pointwise/mlr"
+    assert sweep_plan.Configuration(spec, "pointwise", None, "mlr").config_id == "subset:n2:T4+T9/pointwise/mlr"
 
 
 def test_cluster_batches_follow_the_evaluation_count():
     # 27 units of 20 evaluations = 540; 200 per batch -> ceil(2.7) = 3.
-    assert sweep.cluster_batch_count(0, [20] * 27, 200) == 3
-    assert sweep.cluster_batch_count(0, [20] * 27, 1) == 27  # never more batches than units
-    assert sweep.cluster_batch_count(0, [20] * 3, 10_000) == 1
-    assert sweep.cluster_batch_count(5, [20] * 27, 200) == 5  # sweep.batches wins
+    assert sweep_plan.cluster_batch_count(0, [20] * 27, 200) == 3
+    assert sweep_plan.cluster_batch_count(0, [20] * 27, 1) == 27  # never more batches than units
+    assert sweep_plan.cluster_batch_count(0, [20] * 3, 10_000) == 1
+    assert sweep_plan.cluster_batch_count(5, [20] * 27, 200) == 5  # sweep.batches wins
 
 
 def test_cost_estimate_by_hand():
     # 880 evaluations x 0.5 s = 440 s = 0.1222 h; on 100 workers 4.4 s = 0.0733 min.
-    cost = sweep.cost_estimate(880, 0.5, 100)
+    cost = sweep_plan.cost_estimate(880, 0.5, 100)
     assert cost["cpu_hours"] == pytest.approx(440 / 3600)
     assert cost["wall_minutes"] == pytest.approx(4.4 / 60)
 
@@ -85,9 +86,9 @@ def _lines(n_runs=3, n_measurements=5, seed=1):
 def test_pointwise_mlr_of_a_subset_matches_plain_least_squares():
     X, Y = _lines()
     grid = subset_grid((2,), approaches=("pointwise",), algorithms=("mlr",))
-    units, _ = sweep.plan_units(grid, ["R3"], ["S1", "S2", "S3"])
+    units, _ = sweep_plan.plan_units(grid, ["R3"], ["S1", "S2", "S3"])
     with threadpool_limits(limits=1):
-        rows = sweep.run_batch(X, Y, units, grid, SelectionSettings(), ModelSettings())
+        rows = sweep.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
     assert rows["config_id"].tolist() == [
         "subset:n2:S1+S2/pointwise/mlr", "subset:n2:S1+S3/pointwise/mlr", "subset:n2:S2+S3/pointwise/mlr"
     ]  # fmt: skip
@@ -111,9 +112,9 @@ def test_pointwise_mlr_of_a_subset_matches_plain_least_squares():
 def test_batch_time_limit_by_hand():
     # 27 units of 4 approach-degrees x 5 algorithms = 20 evaluations; 3 batches of 9 units
     # = 180 evaluations x 2 s = 360 s; five times that is 1800 s = 30 min.
-    grid = sweep.SweepGrid(fixed=(("b", ("T1",)), ("k", ("T1",)), ("pointwise", ("T1",))))
-    units, _ = sweep.plan_units(grid, ["E1"], TWELVE)
+    grid = replace(DEFAULTS.sweep.grid, fixed=(("b", ("T1",)), ("k", ("T1",)), ("pointwise", ("T1",))))
+    units, _ = sweep_plan.plan_units(grid, ["E1"], TWELVE)
     assert len(units) == 27
-    assert sweep.batch_minutes(grid, units, 3, 0, 2.0) == 30
+    assert sweep_plan.batch_minutes(grid, units, 3, 0, 2.0) == 30
     # 180 x 0.05 s = 9 s: the 5-minute floor.
-    assert sweep.batch_minutes(grid, units, 3, 2, 0.05) == 5
+    assert sweep_plan.batch_minutes(grid, units, 3, 2, 0.05) == 5

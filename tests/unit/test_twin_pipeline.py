@@ -14,7 +14,7 @@ import pytest
 
 from conftest import REPO
 from thermaxis.assemble import clean_and_assemble_run, model_inputs
-from thermaxis.config import load_config
+from thermaxis.config import Settings, load_config
 from thermaxis.decouple import decouple_table
 from thermaxis.io import load_dataset, read_run
 from thermaxis.models import DecoupledAxisModel
@@ -29,7 +29,7 @@ pytestmark = pytest.mark.skipif(not (TWIN / "dataset.yaml").is_file(), reason="d
 def twin_tables():
     config = load_config()
     dataset = load_dataset(TWIN)
-    return dataset, {run: clean_and_assemble_run(dataset, read_run(dataset, run), config) for run in dataset.run_ids}
+    return dataset, {run: clean_and_assemble_run(dataset, read_run(dataset, run), Settings.from_config(config).cleaning) for run in dataset.run_ids}
 
 
 def test_twin_is_labelled_simulated(twin_tables):

@@ -77,8 +77,7 @@ PAGES = (
     "reports/paper_report.html",
     "reports/dataset_report.html",
     "reports/condition_R1.html",
-    "reports/model_R2_decoupled_mlr.html",
-    "reports/model_R2_pointwise_mlr.html",
+    "reports/model_R2.html",
 )
 
 

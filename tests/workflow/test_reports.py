@@ -19,8 +19,7 @@ from conftest import REPO, planned_rules, reports_snakemake as snakemake, run_sn
 from thermaxis import provenance
 
 def report_pages(out: Path) -> list[Path]:
-    names = ["paper_report", "dataset_report", "condition_R1", "condition_R2"]
-    names += [f"model_R2_{approach}_mlr" for approach in ("decoupled", "pointwise")]
+    names = ["paper_report", "dataset_report", "condition_R1", "condition_R2", "model_R2"]
     return [out / "reports" / f"{n}.html" for n in names]
 
 
@@ -29,10 +28,10 @@ def test_every_report_and_the_index_are_built(built):
         assert page.is_file(), page
         assert page.with_suffix(".ipynb").is_file(), page
     assert (built.out / "index.html").is_file()
-    assert sorted(p.name for p in (built.out / "reports").glob("model_*.html")) == [
-        "model_R2_decoupled_mlr.html",
-        "model_R2_pointwise_mlr.html",
-    ]
+    # One model report per fold, every approach side by side.
+    assert sorted(p.name for p in (built.out / "reports").glob("model_*.html")) == ["model_R2.html"]
+    page = (built.out / "reports" / "model_R2.html").read_text(encoding="utf-8")
+    assert "<h3>decoupled MLR</h3>" in page and "<h3>pointwise MLR</h3>" in page
 
 
 def test_first_screen_says_the_data_are_simulated(built):
@@ -107,7 +106,7 @@ def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built, library_un
     """A dataset report and a model report made again, in new processes, have the same bytes
     (the session's `lines_run` makes no model reports, so this is where they are checked)."""
     assert planned_rules(snakemake(built, "-n")) - {"all"} == set()
-    pages = [built.out / "reports" / name for name in ("dataset_report.html", "model_R2_decoupled_mlr.html")]
+    pages = [built.out / "reports" / name for name in ("dataset_report.html", "model_R2.html")]
     before = [(page.read_bytes(), page.with_suffix(".ipynb").read_bytes()) for page in pages]
     rules = ("dataset_report", "model_report")
     snakemake(built, "--forcerun", *rules, "--until", *rules)
@@ -122,4 +121,4 @@ def test_changing_n_clusters_reruns_only_the_affected_reports(built, library_unc
     proc = run_snakemake(built.work, "-n", "--configfile", str(changed), check=False, env=built.env, timeout=300)
     rules = planned_rules(proc) - {"all"}
     assert {"select_sensitive_points", "model_report", "paper_report", "provenance", "index"} <= rules, rules
-    assert not rules & {"dataset_report", "condition_report", "clean_run", "assemble", "fig5_unzeroed"}, rules
+    assert not rules & {"dataset_report", "condition_report", "clean_run", "assemble", "fig_data"}, rules

@@ -6,7 +6,7 @@ import pandas as pd
 import yaml
 
 from conftest import run_snakemake
-from thermaxis import sweep
+from thermaxis.evaluate import METRIC_COLUMNS
 
 
 def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines_run, library_unchanged):
@@ -28,7 +28,7 @@ def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines
                    & (summary["similarity"] == "pearson") & (summary["grade"] == "deng")
                    & summary["degree"].isin(["1", ""])]  # fmt: skip
     keys = ["fold", "approach", "algorithm", "target"]
-    columns = [*keys, *sweep.METRICS]
+    columns = [*keys, *METRIC_COLUMNS]
     theirs = pd.read_csv(out / "tables" / "metrics.csv", dtype=str, keep_default_na=False)
     ours = ours[columns].sort_values(keys, ignore_index=True)
     theirs = theirs[columns].sort_values(keys, ignore_index=True)

@@ -43,9 +43,9 @@ BENCH = f"benchmarks/{DATASET.name}"
 ENV = "../../envs/thermaxis.yaml"
 SIMULATED = DATASET.simulated
 FOLDS = list(config["folds"]) or RUNS
-ALGORITHMS = list(config["models"]["algorithms"])
-FIG_FORMATS = list(config["figures"]["formats"])
-FIG_RUN = config["figures"]["run"] or RUNS[0]
+ALGORITHMS = list(SETTINGS.models.algorithms)
+FIG_FORMATS = list(SETTINGS.figures.formats)
+FIG_RUN = SETTINGS.figures.run or RUNS[0]
 OTHER_RUNS = [r for r in RUNS if r != FIG_RUN]
 DATA_STATEMENT = data_statement(
     DATASET.name, SIMULATED, DATASET.meta["provenance"].get("citation", "")
@@ -59,7 +59,10 @@ HEADLINE = (
     else DATASET.meta.get("title", DATASET.meta["description"].strip().split("\n")[0])
 )
 SIGNALS = list(DATASET.signals)
-FIG_ALGORITHMS = [a for a in config["figures"]["algorithms"] if a in ALGORITHMS]
+FIG_ALGORITHMS = [a for a in SETTINGS.figures.algorithms if a in ALGORITHMS]
+REPORT_ALGORITHMS = [a for a in SETTINGS.reports.model_algorithms if a in ALGORITHMS]
+# Model reports embed the prediction figures of their algorithms, so those are drawn too.
+PREDICTION_ALGORITHMS = list(dict.fromkeys(FIG_ALGORITHMS + REPORT_ALGORITHMS))
 PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
 
 
@@ -119,63 +122,26 @@ def figure_paths(stem):
     return [f"{OUT}/figures/{stem}.{ext}" for ext in FIG_FORMATS]
 
 
-def prediction_caption(kind, wildcards):
+def prediction_caption(kind, fold, approach, algorithm):
     """Figs. 11/14-17 share two drawings; the caption names the paper's figure it mirrors."""
-    figure_id = kind
-    if kind == "error_prediction" and wildcards.approach == "pointwise":
-        figure_id = "fig11"
-        details = dict(fold=wildcards.fold, algorithm=wildcards.algorithm)
-    else:
-        details = dict(
-            fold=wildcards.fold,
-            approach=wildcards.approach,
-            algorithm=wildcards.algorithm,
+    if kind == "error_prediction" and approach == "pointwise":
+        return figure_caption(
+            "fig11", DATASET.name, SIMULATED, fold=fold, algorithm=algorithm
         )
-    return figure_caption(figure_id, DATASET.name, SIMULATED, **details)
-
-
-def data_figures():
-    # Figures along the stroke (2, 7, 8) need several positions; the others are drawn
-    # against time when there is one.
-    names = ["fig5_unzeroed", "fig6_error_vs_time", "fig10_temperature_rise"]
-    if AMBIENT:
-        names.append("fig3_ambient")
-    if OTHER_RUNS:
-        names.append("fig9_other_runs")
-    if DECOUPLED:
-        names += [
-            "fig2_positioning_error",
-            "fig7_error_surface",
-            "fig8_rezeroed",
-            "fig12_slope_intercept",
-        ]
-    return [p for name in names for p in figure_paths(name)]
-
-
-def prediction_figures():
-    paths = figure_paths("fold_comparison")
-    for fold in FOLDS:
-        for algorithm in FIG_ALGORITHMS:
-            for approach in APPROACHES:
-                paths += figure_paths(f"error_prediction_{fold}_{approach}_{algorithm}")
-            if DECOUPLED:
-                paths += figure_paths(f"kb_prediction_{fold}_decoupled_{algorithm}")
-    return paths
+    return figure_caption(
+        kind, DATASET.name, SIMULATED, fold=fold, approach=approach, algorithm=algorithm
+    )
 
 
 def compensation_outputs():
-    """model.json, the ST block, the tables and a drift figure per fold (compensation.smk)."""
+    """model.json, the ST block and the tables (compensation.smk); drift figures are figures."""
     paths = [f"{COMP}/model.json", f"{COMP}/ThermalCompensation.st"]
-    paths += [f"{COMP}/{name}.csv" for name in COMP_TABLES]
-    for fold in FOLDS:
-        paths += figure_paths(f"compensation_drift_{fold}")
-    return paths
+    return paths + [f"{COMP}/{name}.csv" for name in COMP_TABLES]
 
 
 def all_outputs():
     return [
-        *data_figures(),
-        *prediction_figures(),
+        *(p for stem in figure_stems() for p in figure_paths(stem)),
         f"{OUT}/tables/dataset_summary.csv",
         f"{OUT}/assembled/errors.parquet",
         f"{OUT}/tables/cleaning_qc.csv",

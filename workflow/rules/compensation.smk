@@ -126,30 +126,3 @@ rule compensation_collect:
         tables=COMP_TABLES,
     script:
         "../scripts/compensation_collect.py"
-
-
-# Named fig_* like every figure rule: a figure option reruns only figure rules.
-rule fig_compensation_drift:
-    input:
-        code=code_of("compensation_plot.py"),
-        summary=f"{COMP}/folds/{{fold}}/summary.csv",
-    output:
-        figures=report(
-            figure_paths("compensation_drift_{fold}"),
-            caption="../report/compensation_drift.rst",
-            category="6. Compensation",
-            labels={"figure": "thermal drift", "fold": "{fold}"},
-        ),
-    log:
-        f"{LOGS}/figures/compensation_drift_{{fold}}.log",
-    benchmark:
-        f"{BENCH}/figures/compensation_drift_{{fold}}.tsv"
-    conda:
-        ENV
-    resources:
-        mem_mb=500,
-    params:
-        simulated=SIMULATED,
-        dpi=config["figures"]["dpi"],
-    script:
-        "../scripts/compensation_plot.py"

@@ -1,52 +1,88 @@
-# The figures, from a table (showyourwork): one rule per entry, each reading tables the
-# computing rules wrote, so a cosmetic change reruns only the plots. An entry names its
-# plotting function, the tables passed to it (by argument name) and its fixed arguments;
-# wildcards (fold, approach, algorithm) are passed too. The rule is named after the
-# figure's stem unless the entry names it.
-from functools import partial
+# The figures, from a table (showyourwork): an entry names its figure's stem, the
+# function that draws it ("module.function" in thermaxis), the tables passed to it by
+# argument name, its fixed arguments and how the report files it. Entries are drawn in
+# families, one job per family (per fold for a fold's predictions), because starting
+# Python and importing matplotlib costs more than drawing a figure. A family reads only
+# tables the computing rules wrote, so a cosmetic change reruns only plots.
 
 ERRORS = f"{OUT}/assembled/errors.parquet"
 DATA_CATEGORY = "2. Errors and temperatures"
+PREDICTION_CATEGORY = "5. Prediction"
+# Figures along the stroke (2, 7, 8) need several positions; the others are drawn
+# against time when there is one.
 RUN_FIGURES = {
-    "fig2_positioning_error": ("fig2", "Fig. 2"),
-    "fig5_unzeroed": ("fig5", "Fig. 5"),
-    "fig6_error_vs_time": ("fig6", "Fig. 6"),
-    "fig7_error_surface": ("fig7", "Fig. 7"),
-    "fig8_rezeroed": ("fig8", "Fig. 8"),
+    "fig2_positioning_error": ("fig2", "Fig. 2", DECOUPLED),
+    "fig5_unzeroed": ("fig5", "Fig. 5", True),
+    "fig6_error_vs_time": ("fig6", "Fig. 6", True),
+    "fig7_error_surface": ("fig7", "Fig. 7", DECOUPLED),
+    "fig8_rezeroed": ("fig8", "Fig. 8", DECOUPLED),
 }
+
+
+def prediction_entry(kind, approach, algorithm, draw, tables, label):
+    stem = f"{kind}_{{fold}}_{approach}_{algorithm}"
+    return dict(
+        family="fig_predictions",
+        stem=stem,
+        draw=draw,
+        inputs=tables,
+        arguments={"approach": approach, "algorithm": algorithm},
+        category=PREDICTION_CATEGORY,
+        subcategory="{fold}",
+        labels={
+            "figure": label,
+            "fold": "{fold}",
+            "approach": approach,
+            "algorithm": algorithm,
+        },
+        caption=lambda w: prediction_caption(kind, w["fold"], approach, algorithm),
+    )
+
+
 FIGURES = [
     *(
         dict(
+            family="fig_data",
             stem=stem,
-            draw=stem,
+            draw=f"plotting.{stem}",
             inputs={"errors": ERRORS},
             arguments={"run": FIG_RUN},
             category=DATA_CATEGORY,
             labels={"figure": label, "run": FIG_RUN},
             caption=figure_caption(figure_id, DATASET.name, SIMULATED, run=FIG_RUN),
         )
-        for stem, (figure_id, label) in RUN_FIGURES.items()
+        for stem, (figure_id, label, drawn) in RUN_FIGURES.items()
+        if drawn
     ),
+    *[
+        dict(
+            family="fig_data",
+            stem="fig3_ambient",
+            draw="plotting.fig3_ambient",
+            inputs={"ambient": f"{OUT}/tables/ambient_series.parquet"},
+            category=DATA_CATEGORY,
+            labels={"figure": "Fig. 3", "run": "all"},
+            caption=figure_caption("fig3", DATASET.name, SIMULATED),
+        )
+    ]
+    * bool(AMBIENT),
+    *[
+        dict(
+            family="fig_data",
+            stem="fig9_other_runs",
+            draw="plotting.fig9_other_runs",
+            inputs={"errors": ERRORS},
+            arguments={"runs": OTHER_RUNS},
+            category=DATA_CATEGORY,
+            labels={"figure": "Fig. 9", "run": "others"},
+            caption=figure_caption("fig9", DATASET.name, SIMULATED, runs=OTHER_RUNS),
+        )
+    ]
+    * bool(OTHER_RUNS),
     dict(
-        stem="fig3_ambient",
-        draw="fig3_ambient",
-        inputs={"ambient": f"{OUT}/tables/ambient_series.parquet"},
-        category=DATA_CATEGORY,
-        labels={"figure": "Fig. 3", "run": "all"},
-        caption=figure_caption("fig3", DATASET.name, SIMULATED),
-    ),
-    dict(
-        stem="fig9_other_runs",
-        draw="fig9_other_runs",
-        inputs={"errors": ERRORS},
-        arguments={"runs": OTHER_RUNS},
-        category=DATA_CATEGORY,
-        labels={"figure": "Fig. 9", "run": "others"},
-        caption=figure_caption("fig9", DATASET.name, SIMULATED, runs=OTHER_RUNS),
-    ),
-    dict(
+        family="fig_data",
         stem="fig10_temperature_rise",
-        draw="fig10_temperature_rise",
+        draw="plotting.fig10_temperature_rise",
         inputs={
             "series": f"{OUT}/clean/{FIG_RUN}/temperatures.parquet",
             "signals": f"{OUT}/clean/{FIG_RUN}/signals.parquet",
@@ -56,88 +92,139 @@ FIGURES = [
         labels={"figure": "Fig. 10", "run": FIG_RUN},
         caption=figure_caption("fig10", DATASET.name, SIMULATED, run=FIG_RUN),
     ),
+    *[
+        dict(
+            family="fig_slope_intercept",
+            stem="fig12_slope_intercept",
+            draw="plotting.fig12_slope_intercept",
+            inputs={"kb": f"{OUT}/tables/table5_slope_intercept.csv"},
+            category="3. Decoupling",
+            labels={"figure": "Fig. 12", "run": "all"},
+            caption=figure_caption("fig12", DATASET.name, SIMULATED),
+        )
+    ]
+    * DECOUPLED,
     dict(
-        stem="fig12_slope_intercept",
-        draw="fig12_slope_intercept",
-        inputs={"kb": f"{OUT}/tables/table5_slope_intercept.csv"},
-        category="3. Decoupling",
-        labels={"figure": "Fig. 12", "run": "all"},
-        caption=figure_caption("fig12", DATASET.name, SIMULATED),
-    ),
-    dict(
-        name="fig_kb_prediction",
-        stem="kb_prediction_{fold}_{approach}_{algorithm}",
-        draw="fig_kb_prediction",
-        inputs={"kb_pred": f"{OUT}/tables/kb_predictions.csv"},
-        category="5. Prediction",
-        subcategory="{fold}",
-        labels={
-            "figure": "Figs. 14/16",
-            "fold": "{fold}",
-            "approach": "{approach}",
-            "algorithm": "{algorithm}",
-        },
-        caption=partial(prediction_caption, "kb_prediction"),
-    ),
-    dict(
-        name="fig_error_prediction",
-        stem="error_prediction_{fold}_{approach}_{algorithm}",
-        draw="fig_error_prediction",
-        inputs={"err_pred": f"{OUT}/tables/error_predictions.csv"},
-        category="5. Prediction",
-        subcategory="{fold}",
-        labels={
-            "figure": "Figs. 11/15/17",
-            "fold": "{fold}",
-            "approach": "{approach}",
-            "algorithm": "{algorithm}",
-        },
-        caption=partial(prediction_caption, "error_prediction"),
-    ),
-    dict(
-        name="fig_fold_comparison",
+        family="fig_fold_comparison",
         stem="fold_comparison",
-        draw="fig_fold_comparison",
+        draw="plotting.fig_fold_comparison",
         inputs={"metrics": f"{OUT}/tables/metrics.csv"},
-        category="5. Prediction",
+        category=PREDICTION_CATEGORY,
         labels={"figure": "fold comparison", "fold": "all"},
         caption=figure_caption(
             "fold_comparison", DATASET.name, SIMULATED, target="error"
         ),
     ),
+    *(
+        entry
+        for algorithm in PREDICTION_ALGORITHMS
+        for entry in [
+            *(
+                prediction_entry(
+                    "error_prediction",
+                    approach,
+                    algorithm,
+                    "plotting.fig_error_prediction",
+                    {"err_pred": f"{OUT}/tables/error_predictions.csv"},
+                    "Figs. 11/15/17",
+                )
+                for approach in APPROACHES
+            ),
+            *[
+                prediction_entry(
+                    "kb_prediction",
+                    "decoupled",
+                    algorithm,
+                    "plotting.fig_kb_prediction",
+                    {"kb_pred": f"{OUT}/tables/kb_predictions.csv"},
+                    "Figs. 14/16",
+                )
+            ]
+            * DECOUPLED,
+        ]
+    ),
+    # The drift of each compensated held-out run (compensation.smk), all in one job.
+    *(
+        dict(
+            family="fig_compensation_drift",
+            stem=f"compensation_drift_{fold}",
+            draw="compensation_figures.fig_compensation_drift",
+            inputs={"summary": f"{COMP}/folds/{fold}/summary.csv"},
+            arguments={"fold": fold},
+            category="6. Compensation",
+            labels={"figure": "thermal drift", "fold": fold},
+            caption=figure_caption(
+                "compensation_drift", DATASET.name, SIMULATED, fold=fold
+            ),
+        )
+        for fold in FOLDS
+    ),
 ]
-
-
+FIGURE_FAMILIES = {}
 for fig in FIGURES:
+    FIGURE_FAMILIES.setdefault(fig["family"], []).append(fig)
+
+
+def figure_stems():
+    """Every figure's stem, a fold's figures once per fold, in table order."""
+    return [
+        fig["stem"].format(fold=fold)
+        for fig in FIGURES
+        for fold in (FOLDS if "{fold}" in fig["stem"] else [None])
+    ]
+
+
+def figure_specs(entries, wildcards):
+    """What plot.py draws: per figure its function, tables, arguments, files and caption."""
+    specs = []
+    for fig in entries:
+        stem = fig["stem"].format(**wildcards)
+        caption = fig["caption"]
+        specs.append(
+            dict(
+                stem=stem,
+                draw=fig["draw"],
+                tables={k: v.format(**wildcards) for k, v in fig["inputs"].items()},
+                arguments={**fig.get("arguments", {}), **wildcards},
+                paths=figure_paths(stem),
+                caption=caption(wildcards) if callable(caption) else caption,
+            )
+        )
+    return specs
+
+
+for family, entries in FIGURE_FAMILIES.items():
+    where = "predictions_{fold}" if family == "fig_predictions" else family
 
     rule:
         name:
-            fig.get("name", fig["stem"])
+            family
         input:
-            **fig["inputs"],
+            tables=sorted({path for fig in entries for path in fig["inputs"].values()}),
             code=code_of("plot.py"),
         output:
-            figures=report(
-                figure_paths(fig["stem"]),
-                caption="../report/figure.rst",
-                category=fig["category"],
-                subcategory=fig.get("subcategory"),
-                labels=fig["labels"],
+            *(
+                report(
+                    figure_paths(fig["stem"]),
+                    caption="../report/figure.rst",
+                    category=fig["category"],
+                    subcategory=fig.get("subcategory"),
+                    labels=fig["labels"],
+                )
+                for fig in entries
             ),
         log:
-            f"{LOGS}/figures/{fig['stem']}.log",
+            f"{LOGS}/figures/{where}.log",
         benchmark:
-            f"{BENCH}/figures/{fig['stem']}.tsv"
+            f"{BENCH}/figures/{where}.tsv"
         conda:
             ENV
         resources:
             mem_mb=lambda w, attempt: 500 * attempt,
             runtime=lambda w, attempt: 5 * attempt,
         params:
-            draw=fig["draw"],
-            arguments=fig.get("arguments", {}),
-            caption=fig["caption"],
+            figures=lambda w, entries=entries: figure_specs(entries, dict(w.items())),
             simulated=SIMULATED,
-            dpi=config["figures"]["dpi"],
+            dpi=SETTINGS.figures.dpi,
         script:
             "../scripts/plot.py"

@@ -23,7 +23,6 @@ rule fit_predict:
         approaches=APPROACHES,
         algorithms=ALGORITHMS,
         models=config["models"],
-        selection=config["selection"],
         decoupling=config["decoupling"],
     script:
         "../scripts/fit_predict.py"

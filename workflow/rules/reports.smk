@@ -124,52 +124,46 @@ rule model_report:
         coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
         kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
         errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
-        # The compensation section belongs to the report of the compensated model.
-        compensation=lambda w: (
-            [
-                f"{COMP}/folds/{w.fold}/{n}.csv"
-                for n in ("summary", "iso230_2", "siemens_840d", "twincat")
-            ]
-            if (w.approach, w.algorithm) == (COMP_APPROACH, COMP_ALGORITHM)
-            else []
-        ),
+        compensation=lambda w: [
+            f"{COMP}/folds/{w.fold}/{n}.csv"
+            for n in ("summary", "iso230_2", "siemens_840d", "twincat")
+        ],
+        figures=lambda w: [f["path"] for f in model_report_figures(w.fold).values()],
     output:
-        notebook=f"{REPORTS}/model_{{fold}}_{{approach}}_{{algorithm}}.ipynb",
+        notebook=f"{REPORTS}/model_{{fold}}.ipynb",
         html=report(
-            f"{REPORTS}/model_{{fold}}_{{approach}}_{{algorithm}}.html",
+            f"{REPORTS}/model_{{fold}}.html",
             caption="../report/notebook_report.rst",
             category="7. Reports",
-            subcategory="Models: fold {fold}",
-            labels={
-                "report": "model",
-                "fold": "{fold}",
-                "approach": "{approach}",
-                "algorithm": "{algorithm}",
-            },
+            subcategory="Models",
+            labels={"report": "model", "fold": "{fold}"},
         ),
     log:
-        f"{LOGS}/reports/model_{{fold}}_{{approach}}_{{algorithm}}.log",
+        f"{LOGS}/reports/model_{{fold}}.log",
     benchmark:
-        f"{BENCH}/reports/model_{{fold}}_{{approach}}_{{algorithm}}.tsv"
+        f"{BENCH}/reports/model_{{fold}}.tsv"
     conda:
         ENV
     resources:
         mem_mb=lambda w, attempt: 750 * attempt,
         runtime=lambda w, attempt: 5 * attempt,
     params:
-        title=lambda w: f"Model report: fold {w.fold}, {w.approach}, {w.algorithm} ({DATASET.name})",
+        title=lambda w: f"Model report: fold {w.fold} ({DATASET.name})",
         statement=DATA_STATEMENT,
         parameters=lambda w, input: notebook_parameters(
             input,
-            sections(*DATA_SECTIONS, "selection", "models", "folds", "compensation"),
+            sections(
+                *DATA_SECTIONS,
+                "selection",
+                "models",
+                "folds",
+                "compensation",
+                "figures",
+            ),
             fold=w.fold,
-            approach=w.approach,
-            algorithm=w.algorithm,
+            models=REPORT_MODELS,
             runs=RUNS,
-            captions={
-                kind: prediction_caption(kind, w)
-                for kind in ("kb_prediction", "error_prediction")
-            },
+            figures=model_report_figures(w.fold),
         ),
     shell:
         RUN_NOTEBOOK

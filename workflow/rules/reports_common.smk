@@ -11,13 +11,13 @@
 # alone. The run time is the only field that differs between two builds from the
 # same inputs; SOURCE_DATE_EPOCH fixes it.
 import json
-from types import SimpleNamespace
 
 from thermaxis.provenance import git_state
 
 REPORTS = f"{OUT}/reports"
-REPORT_ALGORITHMS = [
-    a for a in config["reports"]["model_algorithms"] if a in ALGORITHMS
+# One model report per fold shows these side by side, as the paper compares them.
+REPORT_MODELS = [
+    [approach, algorithm] for approach in APPROACHES for algorithm in REPORT_ALGORITHMS
 ]
 # A path inside the repository, relative so the executed notebooks do not depend on
 # where the work folder is; git follows the symlinks of a test work folder.
@@ -109,21 +109,19 @@ def paper_report_figures():
     for algorithm in PAPER_ALGORITHMS:
         for approach in APPROACHES:
             stem = f"error_prediction_{REPORT_FOLD}_{approach}_{algorithm}"
-            w = SimpleNamespace(
-                fold=REPORT_FOLD, approach=approach, algorithm=algorithm
-            )
             figures[stem] = {
                 "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
-                "caption": prediction_caption("error_prediction", w),
+                "caption": prediction_caption(
+                    "error_prediction", REPORT_FOLD, approach, algorithm
+                ),
             }
         if DECOUPLED:
             stem = f"kb_prediction_{REPORT_FOLD}_decoupled_{algorithm}"
-            w = SimpleNamespace(
-                fold=REPORT_FOLD, approach="decoupled", algorithm=algorithm
-            )
             figures[stem] = {
                 "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
-                "caption": prediction_caption("kb_prediction", w),
+                "caption": prediction_caption(
+                    "kb_prediction", REPORT_FOLD, "decoupled", algorithm
+                ),
             }
     return figures
 
@@ -141,12 +139,23 @@ def condition_reports():
 
 
 def model_reports():
-    return expand(
-        f"{REPORTS}/model_{{fold}}_{{approach}}_{{algorithm}}.html",
-        fold=FOLDS,
-        approach=APPROACHES,
-        algorithm=REPORT_ALGORITHMS,
+    return expand(f"{REPORTS}/model_{{fold}}.html", fold=FOLDS) if REPORT_MODELS else []
+
+
+def model_report_figures(fold):
+    """The workflow figures a model report embeds: its models' predictions and the drift."""
+    figures = {}
+    for approach, algorithm in REPORT_MODELS:
+        kinds = ["error_prediction"] + ["kb_prediction"] * (approach == "decoupled")
+        for kind in kinds:
+            figures[f"{kind}_{approach}_{algorithm}"] = {
+                "path": f"{OUT}/figures/{kind}_{fold}_{approach}_{algorithm}.{EMBED_FORMAT}",
+                "caption": prediction_caption(kind, fold, approach, algorithm),
+            }
+    figures["compensation_drift"] = embedded(
+        f"compensation_drift_{fold}", "compensation_drift", fold=fold
     )
+    return figures
 
 
 def report_html():
@@ -196,20 +205,10 @@ def index_sections():
         for run in RUNS
     ]
     models = [
-        (
-            f"Fold {fold} (held-out run), {approach}",
-            [
-                (algorithm, f"{REPORTS}/model_{fold}_{approach}_{algorithm}.html")
-                for algorithm in REPORT_ALGORITHMS
-            ],
-        )
-        for fold in FOLDS
-        for approach in APPROACHES
-        if REPORT_ALGORITHMS
+        (f"Fold {fold} (held-out run)", [("model report", path)])
+        for fold, path in zip(FOLDS, model_reports())
     ]
-    stems = list(
-        dict.fromkeys(Path(p).stem for p in data_figures() + prediction_figures())
-    )
+    stems = figure_stems()
     figures = [
         (stem, [(ext, f"{OUT}/figures/{stem}.{ext}") for ext in FIG_FORMATS])
         for stem in stems
@@ -222,8 +221,9 @@ def index_sections():
         ("Reports", "", reports),
         (
             "Model reports",
-            "Sensitive points, coefficients, predictions and metrics of one fold, approach and "
-            f"algorithm (config `reports.model_algorithms`: {', '.join(REPORT_ALGORITHMS)}).",
+            "Metrics, sensitive points, coefficients, predictions and compensation of one fold, "
+            f"every approach with each algorithm of config `reports.model_algorithms` "
+            f"({', '.join(REPORT_ALGORITHMS)}) side by side.",
             models,
         ),
         ("Figures", "", figures),
@@ -231,8 +231,8 @@ def index_sections():
         (
             "Compensation",
             f"The {COMP_APPROACH} {COMP_ALGORITHM} model fitted on all runs (model.json), the controller "
-            "exports of each fold's model on its held-out run, the error left after compensating, and the "
-            "thermal-drift figures (README: Compensating a machine).",
+            "exports of each fold's model on its held-out run and the error left after compensating; "
+            "the thermal-drift figures are under Figures (README: Compensating a machine).",
             list(compensation.items()),
         ),
     ]

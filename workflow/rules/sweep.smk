@@ -11,18 +11,17 @@
 import json
 import sys
 
-from thermaxis.sweep import (
+from thermaxis.sweep_plan import (
     batch_count,
     batch_minutes,
     cluster_batch_count,
     cost_estimate,
-    grid_from_config,
     plan_units,
 )
 
 SWEEP = f"{OUT}/sweep"
-SWEEP_GRID = grid_from_config(config["sweep"])
-SWEEP_FOLDS = list(config["sweep"]["folds"]) or RUNS
+SWEEP_GRID = SETTINGS.sweep.grid
+SWEEP_FOLDS = list(SETTINGS.sweep.folds) or RUNS
 try:
     SWEEP_UNITS, SWEEP_SKIPPED = plan_units(SWEEP_GRID, SWEEP_FOLDS, DATASET.sensors)
 except ValueError as exc:
@@ -37,14 +36,12 @@ SWEEP_UNIT_SIZES = [
 SWEEP_ON_CLUSTER = workflow.remote_exec or workflow.resource_settings.nodes is not None
 if SWEEP_ON_CLUSTER:
     SWEEP_BATCHES = cluster_batch_count(
-        config["sweep"]["batches"],
-        SWEEP_UNIT_SIZES,
-        config["sweep"]["cluster_batch_size"],
+        SETTINGS.sweep.batches, SWEEP_UNIT_SIZES, SETTINGS.sweep.cluster_batch_size
     )
 else:
     # One batch per core given (None without --cores: one batch).
     SWEEP_BATCHES = batch_count(
-        config["sweep"]["batches"], workflow.resource_settings.cores, len(SWEEP_UNITS)
+        SETTINGS.sweep.batches, workflow.resource_settings.cores, len(SWEEP_UNITS)
     )
 
 
@@ -95,7 +92,7 @@ onstart:
     if any(j.rule.name == "sweep_batch" for j in workflow.dag.needrun_jobs()):
         _cost = cost_estimate(
             sum(SWEEP_UNIT_SIZES),
-            config["sweep"]["seconds_per_evaluation"],
+            SETTINGS.sweep.seconds_per_evaluation,
             SWEEP_BATCHES,
         )
         print(
@@ -135,13 +132,12 @@ rule sweep_batch:
             SWEEP_UNITS,
             int(w.n_batches),
             int(w.batch),
-            config["sweep"]["seconds_per_evaluation"],
+            SETTINGS.sweep.seconds_per_evaluation,
             DECOUPLED,
         ),
     params:
         sweep=config["sweep"],
         selection=config["selection"],
-        decoupling=config["decoupling"],
         models=config["models"],
         folds=SWEEP_FOLDS,
         sensors=list(DATASET.sensors),
@@ -170,7 +166,7 @@ rule sweep_collect:
         runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
-        degree=config["decoupling"]["degree"],
+        decoupling=config["decoupling"],
     script:
         "../scripts/sweep_collect.py"
 
@@ -192,9 +188,9 @@ rule sweep_heatmap:
         runtime=lambda w, attempt: 5 * attempt,
     params:
         selection=config["selection"],
-        degree=config["decoupling"]["degree"],
+        decoupling=config["decoupling"],
         simulated=SIMULATED,
-        dpi=config["figures"]["dpi"],
+        dpi=SETTINGS.figures.dpi,
     script:
         "../scripts/sweep_plot.py"
 
@@ -215,10 +211,8 @@ rule sweep_factor_effects:
         mem_mb=lambda w, attempt: 500 * attempt,
         runtime=lambda w, attempt: 5 * attempt,
     params:
-        selection=config["selection"],
-        degree=config["decoupling"]["degree"],
         simulated=SIMULATED,
-        dpi=config["figures"]["dpi"],
+        dpi=SETTINGS.figures.dpi,
     script:
         "../scripts/sweep_plot.py"
 

@@ -1,20 +1,21 @@
 import logging
 
 from thermaxis.assemble import clean_and_assemble_run
+from thermaxis.config import CleaningSettings
 from thermaxis.guard import check_run_plausibility
 from thermaxis.io import load_dataset, read_run
 from thermaxis.runner import run_script, write_csv, write_parquet
 
 
 def main(snakemake):
-    config = {"temperatures": snakemake.params.temperatures, "errors": snakemake.params.errors}
+    cleaning = CleaningSettings.from_sections(snakemake.params.temperatures, snakemake.params.errors)
     dataset = load_dataset(snakemake.params.dataset)
     raw = read_run(dataset, snakemake.wildcards.run)
     log = logging.getLogger("thermaxis")
     # Before cleaning, which may stop on what these warnings explain (°F or kelvin readings).
-    for note in check_run_plausibility(dataset, raw, config):
+    for note in check_run_plausibility(dataset, raw, cleaning):
         log.warning(note)
-    tables = clean_and_assemble_run(dataset, raw, config)
+    tables = clean_and_assemble_run(dataset, raw, cleaning)
     for note in tables.notes:
         log.warning(note)
     out = snakemake.output

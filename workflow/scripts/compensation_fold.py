@@ -7,6 +7,7 @@ import pandas as pd
 
 from thermaxis import compensation
 from thermaxis.assemble import model_inputs
+from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings
 from thermaxis.experiment import selection_from_dict
 from thermaxis.io import load_dataset, read_run
 from thermaxis.runner import run_script, write_csv, write_text
@@ -24,7 +25,9 @@ def main(snakemake):
         Y.loc[train].reset_index(drop=True),
         selection,
         p.approach,
-        p.sections,
+        ModelSettings.from_section(p.sections["models"]),
+        DecouplingSettings.from_section(p.sections["decoupling"]),
+        CompensationSettings.from_section(p.sections["compensation"]),
         **p.about,
     )
     text = json.dumps(record, indent=1) + "\n"

@@ -8,19 +8,24 @@ import pandas as pd
 
 from thermaxis import compensation
 from thermaxis.assemble import model_inputs
-from thermaxis.experiment import select_for_fold, selection_settings_from_config
+from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings, SelectionSettings
+from thermaxis.experiment import select_for_fold
 from thermaxis.runner import run_script, write_text
 
 
 def main(snakemake):
     p = snakemake.params
+    sections = p.sections
+    decoupling = DecouplingSettings.from_section(sections["decoupling"])
+    settings = CompensationSettings.from_section(sections["compensation"])
     X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
     # The deployed model sees every run, its sensitive points too.
     selection = select_for_fold(
         X,
         Y,
         "all runs",
-        replace(selection_settings_from_config(p.sections), scope="all"),
+        replace(SelectionSettings.from_section(sections["selection"]), scope="all"),
+        decoupling.degree,
         decoupled=p.approach == "decoupled",
         pointwise=p.approach == "pointwise",
     )
@@ -30,13 +35,15 @@ def main(snakemake):
         Y,
         selection,
         p.approach,
-        p.sections,
+        ModelSettings.from_section(sections["models"]),
+        decoupling,
+        settings,
         **p.about,
-        held_out_accuracy=compensation.held_out_accuracy(metrics, p.approach, p.sections["compensation"]["algorithm"]),
+        held_out_accuracy=compensation.held_out_accuracy(metrics, p.approach, settings.algorithm),
         provenance={
             "citation": p.citation,
             "packages": {name: version(name) for name in ("thermaxis", "scikit-learn", "numpy")},
-            "settings": p.sections,
+            "settings": sections,
         },
     )
     compensation.validate_model(record, where=snakemake.output.model)

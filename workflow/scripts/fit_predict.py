@@ -4,7 +4,8 @@ import logging
 import pandas as pd
 
 from thermaxis.assemble import model_inputs
-from thermaxis.experiment import SORT_KEYS, evaluate_configuration, selection_from_dict, settings_from_config
+from thermaxis.config import DecouplingSettings, ModelSettings
+from thermaxis.experiment import SORT_KEYS, evaluate_configuration, selection_from_dict
 from thermaxis.naming import sort_naturally
 from thermaxis.runner import run_script, write_csv
 
@@ -18,19 +19,14 @@ def main(snakemake):
     with open(snakemake.input.selection, encoding="utf-8") as fh:
         selection = selection_from_dict(json.load(fh))
     p = snakemake.params
-    selection_settings, model_settings = settings_from_config(
-        {"selection": p.selection, "decoupling": p.decoupling, "models": p.models}
-    )
+    models = ModelSettings.from_section(p.models)
+    degree = DecouplingSettings.from_section(p.decoupling).degree
     fold = snakemake.wildcards.fold
     results = []
     for approach in p.approaches:
         for algorithm in p.algorithms:
             logging.getLogger("thermaxis").info("fold %s: %s %s", fold, approach, algorithm)
-            results.append(
-                evaluate_configuration(
-                    X, Y, fold, approach, algorithm, selection, model_settings, degree=selection_settings.degree
-                )
-            )
+            results.append(evaluate_configuration(X, Y, fold, approach, algorithm, selection, models, degree))
     for name in ("metrics", "coefficients", "kb_predictions", "error_predictions"):
         frame = pd.concat([getattr(r, name) for r in results], ignore_index=True)
         frame = sort_naturally(frame, SORT_KEYS[name])

@@ -1,9 +1,11 @@
-"""One figure per rule: read the rule's tables, call the thermaxis.plotting function its entry names, save."""
+"""One family of figures per job: for each figure of the rule's table entries, read its tables, call the function it names, save."""
 
 import pandas as pd
 
-from thermaxis import plotting
+from thermaxis import compensation_figures, plotting
 from thermaxis.runner import run_script
+
+MODULES = {"plotting": plotting, "compensation_figures": compensation_figures}
 
 
 def _table(path):
@@ -11,12 +13,14 @@ def _table(path):
 
 
 def main(snakemake):
-    tables = {name: _table(path) for name, path in snakemake.input.items() if name != "code"}
-    draw = getattr(plotting, snakemake.params.draw)
-    fig = draw(**tables, **snakemake.params.arguments, **dict(snakemake.wildcards.items()))
-    if snakemake.params.simulated:
-        plotting.stamp_provenance(fig, plotting.SIMULATED_NOTE)
-    plotting.save_figure(fig, snakemake.output.figures, dpi=snakemake.params.dpi)
+    tables = {path: _table(path) for path in snakemake.input.tables}
+    for figure in snakemake.params.figures:
+        module, name = figure["draw"].split(".")
+        draw = getattr(MODULES[module], name)
+        fig = draw(**{arg: tables[path] for arg, path in figure["tables"].items()}, **figure["arguments"])
+        if snakemake.params.simulated:
+            plotting.stamp_provenance(fig, plotting.SIMULATED_NOTE)
+        plotting.save_figure(fig, figure["paths"], dpi=snakemake.params.dpi)
 
 
 run_script(main, snakemake)

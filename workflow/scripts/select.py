@@ -3,16 +3,17 @@ import json
 import pandas as pd
 
 from thermaxis.assemble import model_inputs
-from thermaxis.experiment import select_for_fold, selection_settings_from_config, selection_table, selection_to_dict
+from thermaxis.config import DecouplingSettings, SelectionSettings
+from thermaxis.experiment import select_for_fold, selection_table, selection_to_dict
 from thermaxis.runner import run_script, write_csv, write_text
 
 
 def main(snakemake):
     X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
-    settings = selection_settings_from_config(
-        {"selection": snakemake.params.selection, "decoupling": snakemake.params.decoupling}
-    )
-    selection = select_for_fold(X, Y, snakemake.wildcards.fold, settings, decoupled=snakemake.params.decoupled)
+    p = snakemake.params
+    settings = SelectionSettings.from_section(p.selection)
+    degree = DecouplingSettings.from_section(p.decoupling).degree
+    selection = select_for_fold(X, Y, snakemake.wildcards.fold, settings, degree, decoupled=p.decoupled)
     write_text(json.dumps(selection_to_dict(selection), indent=1, sort_keys=True) + "\n", snakemake.output.selection)
     write_csv(selection_table(selection), snakemake.output.table, float_format="%.6f")
 

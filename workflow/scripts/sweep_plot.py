@@ -1,21 +1,24 @@
 """The sweep's figures from ranking.csv: the n_clusters x algorithm heat map, the factor effects."""
 
 from thermaxis import plotting, sweep
+from thermaxis.config import DecouplingSettings, SelectionSettings
 from thermaxis.runner import run_script
 
 
 def _heatmap(snakemake, ranking):
     p = snakemake.params
+    selection = SelectionSettings.from_section(p.selection)
+    degree = DecouplingSettings.from_section(p.decoupling).degree
     tables = {
-        approach: sweep.heatmap_table(ranking, approach, p.selection, p.degree)
+        approach: sweep.heatmap_table(ranking, approach, selection, degree)
         for approach in dict.fromkeys(ranking["approach"])
     }
-    return sweep.fig_sweep_heatmap(tables)
+    return plotting.fig_sweep_heatmap(tables)
 
 
 DRAW = {
     "sweep_heatmap": _heatmap,
-    "sweep_factor_effects": lambda snakemake, ranking: sweep.fig_factor_effects(ranking),
+    "sweep_factor_effects": lambda snakemake, ranking: plotting.fig_factor_effects(ranking),
 }
 
 

@@ -17,9 +17,9 @@ import numpy as np
 import pandas as pd
 
 from ..assemble import clean_and_assemble_run, model_inputs
-from ..config import load_config
+from ..config import Settings, load_config
 from ..decouple import decouple_table
-from ..experiment import evaluate_configuration, select_for_fold, settings_from_config
+from ..experiment import evaluate_configuration, select_for_fold
 from ..io import load_dataset, read_run
 from ..paper import load_table
 from . import conditions as cond
@@ -223,6 +223,7 @@ class PipelineView:
     Y: pd.DataFrame  # pass-mean unzeroed error per target (columns, mm)
     ambient: pd.DataFrame  # run, min, max of the cleaned ambient sensor over the log
     config: dict
+    settings: Settings
 
     def observables(self) -> dict[str, RunObservables]:
         out = {}
@@ -243,7 +244,8 @@ def pipeline_view(root: Path | str) -> PipelineView:
     dataset = load_dataset(root)
     # The ambient sensor is the dataset's own declaration unless the config overrides it.
     config["ambient_sensor"] = config.get("ambient_sensor") or dataset.ambient_sensor
-    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), config) for run in dataset.run_ids]
+    settings = Settings.from_config(config)
+    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), settings.cleaning) for run in dataset.run_ids]
     errors = pd.concat([t.errors for t in tables], ignore_index=True)
     kb, _ = decouple_table(errors)
     kb["n_targets"] = errors.dropna(subset=["error_um"]).groupby(["run", "measurement"]).size().to_numpy()
@@ -252,18 +254,18 @@ def pipeline_view(root: Path | str) -> PipelineView:
     ambient = pd.DataFrame(
         [(t.run, t.series[sensor].min(), t.series[sensor].max()) for t in tables], columns=["run", "min", "max"]
     )
-    return PipelineView(kb=kb, X=X, Y=Y, ambient=ambient, config=config)
+    return PipelineView(kb=kb, X=X, Y=Y, ambient=ambient, config=config, settings=settings)
 
 
 def heldout_results(view: PipelineView) -> tuple[pd.DataFrame, dict[str, str]]:
     """The paper's fold (train on the other runs, predict it) as the workflow runs it."""
     fold = view.config["paper_fold"]
-    selection_settings, model_settings = settings_from_config(view.config)
-    selection = select_for_fold(view.X, view.Y, fold, selection_settings)
+    s = view.settings
+    selection = select_for_fold(view.X, view.Y, fold, s.selection, s.decoupling.degree)
     metrics = pd.concat(
         [
             evaluate_configuration(
-                view.X, view.Y, fold, approach, algorithm, selection, model_settings, degree=selection_settings.degree
+                view.X, view.Y, fold, approach, algorithm, selection, s.models, s.decoupling.degree
             ).metrics
             for approach, algorithm, _ in HELDOUT
         ],
