@@ -431,7 +431,9 @@ def run_bench(
                     shutil.rmtree(data, ignore_errors=True)
                     shutil.rmtree(work_n, ignore_errors=True)
         if "test" in steps:
-            record(measure("test_suite", [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider"], REPO,
+            workers = os.environ.get("PYTEST_WORKERS", "2")  # as the Makefile's test target
+            suite = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", workers, "--dist", "loadgroup"]
+            record(measure("test_suite", suite, REPO,
                            logs / "test_suite.log", "the test suite, as make test runs it (set-up done)", env,
                            timeout_s))  # fmt: skip
     finally:
