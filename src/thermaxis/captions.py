@@ -85,7 +85,7 @@ _CAPTIONS: dict[str, tuple[str | None, str]] = {
     ),
     "compensation_drift": (
         None,
-        "Thermal drift of held-out run {fold} (after ISO 230-3's drift plots): the largest |deviation| "
+        "Thermal drift of held-out run {fold} (after ISO 230-3's drift plots): the largest absolute deviation "
         "over the stroke and both directions at each measurement, with the static pitch table of the "
         "first measurement only and with the temperature compensation of the fold's model as the "
         "controller applies it (exported K0, tan(beta), P0 after the fallback policy). Ringed points "
