@@ -77,6 +77,14 @@ def embedded(stem, figure_id, **details):
     }
 
 
+def embedded_prediction(kind, fold, approach, algorithm):
+    """A prediction figure of the workflow for a report (Figs. 11/14-17)."""
+    return {
+        "path": f"{OUT}/figures/{kind}_{fold}_{approach}_{algorithm}.{EMBED_FORMAT}",
+        "caption": prediction_caption(kind, fold, approach, algorithm),
+    }
+
+
 def dataset_report_figures():
     figures = {"fig5_unzeroed": embedded("fig5_unzeroed", "fig5", run=FIG_RUN)}
     if AMBIENT:
@@ -109,20 +117,14 @@ def paper_report_figures():
     for algorithm in PAPER_ALGORITHMS:
         for approach in APPROACHES:
             stem = f"error_prediction_{REPORT_FOLD}_{approach}_{algorithm}"
-            figures[stem] = {
-                "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
-                "caption": prediction_caption(
-                    "error_prediction", REPORT_FOLD, approach, algorithm
-                ),
-            }
+            figures[stem] = embedded_prediction(
+                "error_prediction", REPORT_FOLD, approach, algorithm
+            )
         if DECOUPLED:
             stem = f"kb_prediction_{REPORT_FOLD}_decoupled_{algorithm}"
-            figures[stem] = {
-                "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
-                "caption": prediction_caption(
-                    "kb_prediction", REPORT_FOLD, "decoupled", algorithm
-                ),
-            }
+            figures[stem] = embedded_prediction(
+                "kb_prediction", REPORT_FOLD, "decoupled", algorithm
+            )
     return figures
 
 
@@ -148,10 +150,9 @@ def model_report_figures(fold):
     for approach, algorithm in REPORT_MODELS:
         kinds = ["error_prediction"] + ["kb_prediction"] * (approach == "decoupled")
         for kind in kinds:
-            figures[f"{kind}_{approach}_{algorithm}"] = {
-                "path": f"{OUT}/figures/{kind}_{fold}_{approach}_{algorithm}.{EMBED_FORMAT}",
-                "caption": prediction_caption(kind, fold, approach, algorithm),
-            }
+            figures[f"{kind}_{approach}_{algorithm}"] = embedded_prediction(
+                kind, fold, approach, algorithm
+            )
     figures["compensation_drift"] = embedded(
         f"compensation_drift_{fold}", "compensation_drift", fold=fold
     )
