@@ -204,14 +204,15 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
     y = np.asarray(y, dtype=float)
     groups = np.asarray(groups)
     candidates = list(ParameterGrid(grid))
-    if np.unique(groups).size < 2:
+    n_groups = np.unique(groups).size
+    if n_groups < 2:
         chosen = dict(candidates[0])
         return make_regressor("svr", chosen, random_state).fit(X, y), chosen
     # GridSearchCV over make_regressor's pipeline, without its per-candidate cloning,
     # re-validation and scorer calls: each hold-out is standardised once, the SVR fitted
     # per candidate on the same arrays the pipeline would give it, so the scores, the
     # choice and the refitted model are the ones GridSearchCV gives (test_models checks).
-    scores = np.empty((len(candidates), np.unique(groups).size))
+    scores = np.empty((len(candidates), n_groups))
     for split, (train, test) in enumerate(LeaveOneGroupOut().split(X, y, groups)):
         x_scaler = StandardScaler().fit(X[train])
         X_train, X_test = x_scaler.transform(X[train]), x_scaler.transform(X[test])
