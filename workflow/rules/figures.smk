@@ -194,7 +194,9 @@ def figure_specs(entries, wildcards):
 
 
 for family, entries in FIGURE_FAMILIES.items():
-    where = "predictions_{fold}" if family == "fig_predictions" else family
+    # A family whose stems hold the fold is one job per fold.
+    per_fold = any("{fold}" in fig["stem"] for fig in entries)
+    where = f"{family}_{{fold}}" if per_fold else family
 
     rule:
         name:
