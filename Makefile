@@ -45,13 +45,13 @@ results: env
 	@$(BIN)/python -c "from thermaxis.config import load_config; print('\n'.join(load_config()['datasets']))" \
 	| while IFS= read -r ds; do \
 		echo "== $$ds"; \
-		$(BIN)/python -m thermaxis.resume $(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
+		$(BIN)/python -m thermaxis.pipeline.resume $(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
 	done
-	$(BIN)/python -m thermaxis.crossdataset --results results
+	$(BIN)/python -m thermaxis.reports.crossdataset --results results
 
 # Re-import the embedded measured dataset from its public source (shared/realdata).
 import: env
-	$(BIN)/python -m thermaxis.importer data/import/fl_thermal.yaml --out data/raw/fl_thermal
+	$(BIN)/python -m thermaxis.dataset.importer data/import/fl_thermal.yaml --out data/raw/fl_thermal
 
 # Both tiers (tests/unit, tests/workflow) and tests/slurm (skipped without Slurm), on
 # PYTEST_WORKERS pytest-xdist workers; the tests of one shared workflow run stay on one
@@ -79,7 +79,7 @@ report: results
 # The index links the sweep report only if it exists when the index is built, so an
 # index that is already there is rebuilt after the sweep.
 sweep: env
-	$(BIN)/python -m thermaxis.resume $(SNAKEMAKE) sweep
+	$(BIN)/python -m thermaxis.pipeline.resume $(SNAKEMAKE) sweep
 	if [ -f results/twin/index.html ]; then $(SNAKEMAKE) --forcerun index -- results/twin/index.html; fi
 
 # Many minutes (cold run, sweep, scale series up to 50 runs); e.g. BENCH_ARGS="--runs 5 10".

@@ -5,6 +5,7 @@ import sys
 import thermaxis  # first: keeps jsonschema imports fast (see thermaxis/__init__.py)
 from snakemake.utils import min_version, validate
 from thermaxis.config import Settings
+from thermaxis.schemas import schema_path
 
 min_version("9.0")
 
@@ -18,7 +19,7 @@ try:
     SETTINGS = Settings.from_config(config)
 except ValueError as exc:
     sys.exit(f"thermaxis error: {exc}")
-validate(config, "workflow/schemas/config.schema.yaml", set_default=True)
+validate(config, str(schema_path("config")), set_default=True)
 
 
 report: "workflow/report/workflow.rst"
@@ -47,6 +48,6 @@ rule all:
 # Every output, log and benchmark stays in this dataset's folders (names are checked
 # too, but a rule edited later must not be able to write elsewhere either).
 try:
-    guard.check_rule_outputs(workflow.rules, (OUT, LOGS, BENCH))
+    check_rule_outputs(workflow.rules, (OUT, LOGS, BENCH))
 except DataError as exc:
     sys.exit(f"thermaxis error: {exc}")

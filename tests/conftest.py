@@ -34,7 +34,6 @@ def workflow_workdir(tmp_path: Path) -> Path:
     (work / "data").mkdir(parents=True)
     for name in ("Snakefile", "config", "workflow", "notebooks"):
         os.symlink(REPO / name, work / name)
-    os.symlink(REPO / "data" / "paper", work / "data" / "paper")
     return work
 
 

@@ -47,7 +47,7 @@ import numpy as np
 import yaml
 
 from thermaxis.config import load_config
-from thermaxis.guard import load_yaml
+from thermaxis.dataset.safety import load_yaml
 
 __all__ = [
     "Measurement",

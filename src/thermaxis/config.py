@@ -1,7 +1,7 @@
 """The workflow's configuration: safe-loaded, validated, defaults filled, and its settings.
 
 The Snakefile validates with ``snakemake.utils.validate``; this module applies the same
-schema (``workflow/schemas/config.schema.yaml``) so that the library, the sweep and the
+schema (``thermaxis/schemas/config.schema.yaml``) so that the library, the sweep and the
 tests see exactly the configuration the workflow sees.
 
 The settings model: one frozen dataclass per stage (cleaning, decoupling, selection,
@@ -22,7 +22,8 @@ from typing import Mapping
 import jsonschema
 import yaml
 
-from .sweep_plan import SweepGrid
+from thermaxis.schemas import schema_path
+from thermaxis.sweep.plan import SweepGrid
 
 __all__ = [
     "CONFIG_SCHEMA",
@@ -44,8 +45,7 @@ __all__ = [
     "Settings",
 ]
 
-REPO = Path(__file__).resolve().parents[2]
-CONFIG_SCHEMA = REPO / "workflow" / "schemas" / "config.schema.yaml"
+CONFIG_SCHEMA = schema_path("config")
 
 
 def merge(base: dict, update: dict) -> dict:
@@ -89,7 +89,8 @@ def dataset_of(config: dict) -> str:
 def load_config(*paths, overrides: dict | None = None) -> dict:
     """Safe-load one or more YAML files (later ones win), apply overrides, validate."""
     config: dict = {}
-    for path in paths or (REPO / "config" / "config.yaml",):
+    # Relative to the working folder, as Snakemake reads `configfile:`.
+    for path in paths or (Path("config/config.yaml"),):
         with open(path, encoding="utf-8") as fh:
             doc = yaml.safe_load(fh) or {}
         if not isinstance(doc, dict):
@@ -118,11 +119,11 @@ def _svr_grid(grid: Mapping) -> tuple:
 
 @dataclass(frozen=True)
 class TemperatureCleaning:
-    """Settings of :func:`thermaxis.clean.clean_temperatures` (config ``temperatures``).
+    """Settings of :func:`thermaxis.cleaning.temperatures.clean_temperatures` (config ``temperatures``).
 
     With ``estimate_clock_offsets`` every source but ``reference_source`` (default:
     the source with most sensors) gets the offset
-    :func:`thermaxis.clean.estimate_clock_offset` finds *after* its given offset is
+    :func:`thermaxis.cleaning.clock.estimate_clock_offset` finds *after* its given offset is
     applied, added to it; ``max_offset_s`` bounds the search and ``offset_step_s`` is
     its lag step (refined below one step). These three are not configurable, so they
     keep their values here rather than in the schema.
@@ -161,7 +162,7 @@ class TemperatureCleaning:
 
 @dataclass(frozen=True)
 class ErrorCleaning:
-    """Settings of :func:`thermaxis.clean.combine_passes`.
+    """Settings of :func:`thermaxis.cleaning.passes.combine_passes`.
 
     direction : "mean" (mean of the forward and backward readings), "+" or "-".
     max_missing_fraction : more targets than this fraction without a reading is an error.

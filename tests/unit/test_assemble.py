@@ -3,8 +3,8 @@
 import numpy as np
 import pandas as pd
 
-from thermaxis.assemble import model_inputs, tidy_errors, tidy_temperatures
-from thermaxis.naming import natural_key
+from thermaxis.cleaning.run import model_inputs, tidy_errors, tidy_temperatures
+from thermaxis.labels import natural_key
 
 
 def windows(n=3):

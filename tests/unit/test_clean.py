@@ -1,4 +1,4 @@
-"""Tests of thermaxis.clean: one per fault class, on small series whose truth is known."""
+"""Tests of thermaxis.cleaning: one per fault class, on small series whose truth is known."""
 
 from __future__ import annotations
 
@@ -9,15 +9,15 @@ import pandas as pd
 import pytest
 
 from conftest import DEFAULTS
-from thermaxis.clean import (
+from thermaxis.cleaning.temperatures import (
     CleanedTemperatures,
     check_gaps,
     clean_temperatures,
-    combine_passes,
-    estimate_clock_offset,
     hampel_outliers,
     temperatures_in_windows,
 )
+from thermaxis.cleaning.passes import combine_passes
+from thermaxis.cleaning.clock import estimate_clock_offset
 
 T0 = pd.Timestamp("2022-05-10T09:00:00")  # a whole multiple of 10 s since the epoch
 SETTINGS = DEFAULTS.cleaning.temperatures
@@ -510,7 +510,7 @@ def test_too_many_missing_targets_raise():
 
 
 def test_measurement_with_one_direction_only():
-    # what thermaxis.io makes of a file without a direction column: every row "+"
+    # what thermaxis.dataset.reader makes of a file without a direction column: every row "+"
     forward_only = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [None] * 5)
     curve, warnings = combine_passes(forward_only, TARGETS, replace(DEFAULTS.cleaning.errors, direction="mean"))
     np.testing.assert_allclose(curve.to_numpy(), [0.0, -1.0, -2.0, -3.0, -4.0])

@@ -7,18 +7,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from thermaxis.compensation import (
-    ControllerParameters,
-    Compensator,
-    Step,
-    held_out_tables,
-    line_weights,
-    model_record,
-    siemens_840d,
-    twincat,
-)
+from thermaxis.compensation.runtime import ControllerParameters, Compensator, Step
+from thermaxis.compensation.heldout import held_out_tables
+from thermaxis.compensation.model import line_weights, model_record
+from thermaxis.compensation.exports import siemens_840d, twincat
 from thermaxis.config import FallbackSettings
-from thermaxis.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
 
 TARGETS = [185.0 + 20.0 * i for i in range(14)]  # the paper's stroke; shifted origin 185 mm
 HOLD = FallbackSettings(
@@ -250,8 +244,8 @@ def test_residuals_and_summary_by_hand():
 
 
 def test_pass_deviations_split_the_passes_per_measurement():
-    from thermaxis.compensation import pass_deviations
-    from thermaxis.io import RawRun
+    from thermaxis.compensation.heldout import pass_deviations
+    from thermaxis.dataset.reader import RawRun
 
     def measurement(start, up, down):
         times = pd.date_range(start, periods=4, freq="5s")

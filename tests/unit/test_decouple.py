@@ -7,9 +7,9 @@ import pandas as pd
 import pytest
 
 from conftest import DEFAULTS, write_dataset
-from thermaxis.assemble import clean_and_assemble_run
-from thermaxis.decouple import compose_curve, decouple_measurement, decouple_table
-from thermaxis.io import load_dataset, read_run
+from thermaxis.cleaning.run import clean_and_assemble_run
+from thermaxis.method.decouple import compose_curve, decouple_measurement, decouple_table
+from thermaxis.dataset.reader import load_dataset, read_run
 
 def test_hand_worked_line():
     # x = 185, 205, 225 mm -> shifted 0, 0.02, 0.04 m; e = 1, 2, 4 um.

@@ -2,28 +2,36 @@
 
 from pathlib import Path
 
-from thermaxis.deps import library_modules
+from thermaxis.pipeline.deps import PACKAGE, library_modules
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 def names(entry):
-    return {Path(p).name for p in library_modules(REPO / entry)}
+    return {Path(p).relative_to(PACKAGE).as_posix() for p in library_modules(entry)}
 
 
-def test_selection_script_reaches_models_through_experiment():
-    # select.py imports assemble, experiment and runner; experiment imports models,
-    # selection, decouple and evaluate (read off the files' import lines by hand).
-    found = names("workflow/scripts/select.py")
-    assert {"assemble.py", "experiment.py", "runner.py", "models.py", "selection.py", "decouple.py", "evaluate.py"} <= found
-    assert "plotting.py" not in found and "audit.py" not in found
+def test_selection_script_reaches_models_through_the_folds():
+    # select.py imports cleaning.run, method.folds and pipeline.runner; the folds import
+    # models, selection, decouple and metrics (read off the files' import lines by hand).
+    found = names(REPO / "workflow/scripts/select.py")
+    assert {
+        "cleaning/run.py",
+        "method/folds.py",
+        "pipeline/runner.py",
+        "method/models.py",
+        "method/selection.py",
+        "method/decouple.py",
+        "method/metrics.py",
+    } <= found
+    assert not {p for p in found if p.startswith(("figures/", "paper/"))}
 
 
 def test_notebook_code_cells_count(tmp_path):
     notebook = tmp_path / "n.ipynb"
     notebook.write_text(
-        '{"cells": [{"cell_type": "code", "source": ["from thermaxis import paper\\n"]},'
-        ' {"cell_type": "markdown", "source": ["import thermaxis.plotting"]}]}'
+        '{"cells": [{"cell_type": "code", "source": ["from thermaxis.paper import published\\n"]},'
+        ' {"cell_type": "markdown", "source": ["import thermaxis.figures.paper"]}]}'
     )
-    found = {Path(p).name for p in library_modules(notebook)}
-    assert "paper.py" in found and "plotting.py" not in found
+    found = names(notebook)
+    assert "paper/published.py" in found and "figures/paper.py" not in found

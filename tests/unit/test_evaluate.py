@@ -1,11 +1,11 @@
-"""Tests of thermaxis.evaluate: metrics by hand, folds by hand, fold isolation."""
+"""Tests of thermaxis.method.metrics: metrics by hand, folds by hand, fold isolation."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from thermaxis.evaluate import METRICS_CSV_COLUMNS, prediction_metrics
+from thermaxis.method.metrics import METRICS_CSV_COLUMNS, prediction_metrics
 
 
 def test_metrics_match_hand_computation_and_skip_nan_pairs():

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from conftest import DEFAULTS, EQ9_B, EQ9_K, POSITIONS, eq9_errors, synthetic_temperatures
-from thermaxis.experiment import (
+from thermaxis.method.folds import (
     evaluate_configuration,
     select_for_fold,
     selection_from_dict,

@@ -1,4 +1,4 @@
-"""thermaxis.guard: the checks that stand between an untrusted dataset and the pipeline."""
+"""thermaxis.dataset.safety: the checks that stand between an untrusted dataset and the pipeline."""
 
 from __future__ import annotations
 
@@ -14,9 +14,11 @@ import pytest
 import yaml
 
 from conftest import DEFAULTS
-from thermaxis import guard
-from thermaxis.io import DataError
-from thermaxis.formatting import format_cell
+from thermaxis.dataset import plausibility
+from thermaxis.dataset import safety
+from thermaxis.method import selection
+from thermaxis.errors import DataError
+from thermaxis.reports.formatting import format_cell
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -24,12 +26,12 @@ REPO = Path(__file__).resolve().parents[2]
 @pytest.mark.parametrize("name", ["..", ".", "...", "a/b", "a\\b", "-rf", "", ".hidden", "x" * 129, "a b", "é", "E1\n"])
 def test_unsafe_names_are_refused(name):
     with pytest.raises(DataError, match="is not a safe name"):
-        guard.check_name(name, "run", "runs.tsv")
+        safety.check_name(name, "run", "runs.tsv")
 
 
 @pytest.mark.parametrize("name", ["E1", "twin", "run_1.v2", "_x", "9", "a-b", "x" * 128])
 def test_safe_names_pass(name):
-    assert guard.check_name(name, "run", "runs.tsv") == name
+    assert safety.check_name(name, "run", "runs.tsv") == name
 
 
 @pytest.mark.parametrize(
@@ -43,25 +45,24 @@ def test_safe_names_pass(name):
     ],
 )
 def test_every_sheet_schema_uses_the_one_name_pattern(schema, path):
-    for folder in (REPO / "workflow" / "schemas", REPO / "src" / "thermaxis" / "schemas"):
-        node = yaml.safe_load((folder / f"{schema}.schema.yaml").read_text())
-        for key in path:
-            node = node[key]
-        assert node["pattern"] == guard.NAME_PATTERN
+    node = yaml.safe_load((REPO / "src" / "thermaxis" / "schemas" / f"{schema}.schema.yaml").read_text())
+    for key in path:
+        node = node[key]
+    assert node["pattern"] == safety.NAME_PATTERN
 
 
 def test_yaml_duplicate_key_names_both_lines(tmp_path):
     path = tmp_path / "d.yaml"
     path.write_text("name: a\nother: 1\nname: b\n")
     with pytest.raises(DataError, match=re.escape(f"{path}: line 3, column 1: not valid YAML (duplicate key 'name' (first on line 1))")):
-        guard.load_yaml(path)
+        safety.load_yaml(path)
 
 
 def test_yaml_nested_duplicate_key_is_refused(tmp_path):
     path = tmp_path / "d.yaml"
     path.write_text("axis:\n  name: X\n  name: Y\n")
     with pytest.raises(DataError, match="line 3.*duplicate key 'name'"):
-        guard.load_yaml(path)
+        safety.load_yaml(path)
 
 
 def test_yaml_alias_is_refused_before_expansion(tmp_path):
@@ -71,20 +72,20 @@ def test_yaml_alias_is_refused_before_expansion(tmp_path):
     lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 10)]
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(DataError, match="line 2, column 10: .*found alias \\*a0"):
-        guard.load_yaml(path)
+        safety.load_yaml(path)
 
 
 def test_yaml_non_finite_number_is_refused_with_its_key(tmp_path):
     path = tmp_path / "d.yaml"
     path.write_text("sources:\n  - {name: box, clock_offset_s: .nan}\n")
     with pytest.raises(DataError, match=re.escape("sources/0/clock_offset_s: expected a finite number, got nan")):
-        guard.load_yaml(path)
+        safety.load_yaml(path)
 
 
 def test_yaml_plain_document_loads(tmp_path):
     path = tmp_path / "d.yaml"
     path.write_text("\ufeffname: twin\nsensors:\n  - {id: T1, tags: [a, b]}\n", encoding="utf-8")
-    assert guard.load_yaml(path) == {"name": "twin", "sensors": [{"id": "T1", "tags": ["a", "b"]}]}
+    assert safety.load_yaml(path) == {"name": "twin", "sensors": [{"id": "T1", "tags": ["a", "b"]}]}
 
 
 def test_fifo_is_refused_without_opening_it(tmp_path):
@@ -92,15 +93,15 @@ def test_fifo_is_refused_without_opening_it(tmp_path):
     os.mkfifo(fifo)
     # Opening a FIFO without a writer would block forever; the check must not open it.
     with pytest.raises(DataError, match=re.escape(f"{fifo}: not a regular file (a FIFO); expected a data file")):
-        guard.check_regular_file(fifo, what="data file")
+        safety.check_regular_file(fifo, what="data file")
 
 
 def test_size_limit_is_checked_before_reading(tmp_path):
     path = tmp_path / "big.csv"
     path.write_bytes(b"x" * 101)
     with pytest.raises(DataError, match="101 bytes, larger than the limit of 100 bytes"):
-        guard.check_regular_file(path, max_bytes=100)
-    assert guard.check_regular_file(path, max_bytes=101) == 101
+        safety.check_regular_file(path, max_bytes=100)
+    assert safety.check_regular_file(path, max_bytes=101) == 101
 
 
 @pytest.mark.parametrize(
@@ -123,20 +124,20 @@ def test_sniffing_names_what_the_file_looks_like(tmp_path, content, delimiter, m
     path.write_bytes(content)
     # The whole message, so a decimal-comma hint where it does not belong fails.
     with pytest.raises(DataError, match=re.escape(f"{path}: {message}") + "$"):
-        guard.sniff_delimited(path, delimiter)
+        safety.sniff_delimited(path, delimiter)
 
 
 def test_sniffing_accepts_utf8_bom_crlf_and_quoted_fields(tmp_path):
     path = tmp_path / "f.csv"
     path.write_bytes(b'\xef\xbb\xbftime,T1\r\n2022-01-01T00:00:00,"20,5"\r\n')
-    guard.sniff_delimited(path, ",")
+    safety.sniff_delimited(path, ",")
 
 
 def test_check_within_normalises_before_comparing():
-    assert guard.check_within("results/x/clean/{run}/qc.csv", ("results/x", "logs/x"), "rule r")
+    assert safety.check_within("results/x/clean/{run}/qc.csv", ("results/x", "logs/x"), "rule r")
     for escaping in ("results/x/../y/a.csv", "/tmp/a.csv", "results/xy/a.csv", "results/x"):
         with pytest.raises(DataError, match="is outside"):
-            guard.check_within(escaping, ("results/x", "logs/x"), "rule r")
+            safety.check_within(escaping, ("results/x", "logs/x"), "rule r")
 
 
 def test_check_inside_follows_symlinks(tmp_path):
@@ -145,22 +146,22 @@ def test_check_inside_follows_symlinks(tmp_path):
     (tmp_path / "secret.csv").write_text("x")
     os.symlink(tmp_path / "secret.csv", root / "M01.csv")
     with pytest.raises(DataError, match=f"resolves to {tmp_path / 'secret.csv'}, outside {root}"):
-        guard.check_inside(root / "M01.csv", root)
-    assert guard.check_inside(root / "E1" / "M02.csv", root) == root / "E1" / "M02.csv"
+        safety.check_inside(root / "M01.csv", root)
+    assert safety.check_inside(root / "E1" / "M02.csv", root) == root / "E1" / "M02.csv"
 
 
 def test_error_readings_beyond_the_bound_name_the_line():
     errors = np.array([0.5, -999.0, 1000.0, -1000.5])
     # Row 3 (index 3) is file line 5: header is line 1.
     with pytest.raises(DataError, match=re.escape("M.csv: line 5, column 'error_um': -1000.5 um is beyond the plausible ±1000 um")):
-        guard.check_error_readings("M.csv", errors, 1000.0)
+        plausibility.check_error_readings("M.csv", errors, 1000.0)
     with pytest.raises(DataError, match="line 2, column 'error_um': inf um"):
-        guard.check_error_readings("M.csv", np.array([np.inf]), 1000.0)
+        plausibility.check_error_readings("M.csv", np.array([np.inf]), 1000.0)
 
 
 def test_fahrenheit_and_kelvin_hints_convert_the_median():
     # 86 °F = 30 °C exactly; 4 °C is outside [5, 60], 5 and 60 are inside.
-    notes = guard.sensor_median_warnings(
+    notes = plausibility.sensor_median_warnings(
         {"T1": 86.0, "T2": 5.0, "T3": 60.0, "T4": 4.0, "T5": float("nan"), "T6": 300.0}, 5, 60, "box.csv"
     )
     assert len(notes) == 3
@@ -174,36 +175,36 @@ def test_fahrenheit_and_kelvin_hints_convert_the_median():
 def test_constant_sensor_is_left_out_with_a_warning():
     frame = pd.DataFrame({"T1": [20.0, 21.0, 22.0], "T2": [25.0, 25.0, 25.0], "T3": [1.0, 1.0, 1.5]})
     with pytest.warns(UserWarning, match="fold E2: sensor T2 is constant over the training measurements"):
-        assert guard.informative_sensors(frame, (), "fold E2") == ["T1", "T3"]
+        assert selection.informative_sensors(frame, (), "fold E2") == ["T1", "T3"]
 
 
 def test_more_clusters_than_varying_sensors_names_the_config_key():
     frame = pd.DataFrame({"T1": [20.0, 21.0, 22.0], "T2": [25.0, 25.0, 25.0], "T3": [1.0, 1.0, 1.5]})
     with pytest.warns(UserWarning), pytest.raises(DataError, match="config selection.n_clusters: 3 clusters but only 2 sensors vary"):
-        guard.informative_sensors(frame, (), "fold E2", n_clusters=3)
+        selection.informative_sensors(frame, (), "fold E2", n_clusters=3)
     with pytest.warns(UserWarning):
-        assert guard.informative_sensors(frame, (), "fold E2", n_clusters=2) == ["T1", "T3"]
+        assert selection.informative_sensors(frame, (), "fold E2", n_clusters=2) == ["T1", "T3"]
 
 
 def test_constant_fixed_sensor_is_refused():
     frame = pd.DataFrame({"T1": [20.0, 21.0], "T2": [25.0, 25.0]})
     with pytest.raises(DataError, match="config selection.fixed: sensor T2 is constant"):
-        guard.informative_sensors(frame, ("T1", "T2"), "fold E2")
+        selection.informative_sensors(frame, ("T1", "T2"), "fold E2")
 
 
 def test_one_training_measurement_is_named():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         with pytest.raises(DataError, match="fold E2: 1 training measurement; selection and models need at least 2"):
-            guard.informative_sensors(pd.DataFrame({"T1": [20.0]}), (), "fold E2")
+            selection.informative_sensors(pd.DataFrame({"T1": [20.0]}), (), "fold E2")
 
 
 def test_runs_with_different_targets_are_named():
     errors = pd.DataFrame({"run": ["E1"] * 3 + ["E2"] * 3, "position_mm": [0.0, 50.0, 100.0, 0.0, 50.0, 101.0]})
     with pytest.raises(DataError, match=re.escape("ds/E2/errors: run E2 reads 3 target positions, run E1 3 (101 mm is not a target of run E1)")):
-        guard.check_same_targets(errors, "ds")
+        plausibility.check_same_targets(errors, "ds")
     same = errors.assign(position_mm=[0.0, 50.0, 100.0] * 2)
-    guard.check_same_targets(same, "ds")
+    plausibility.check_same_targets(same, "ds")
 
 
 @pytest.mark.parametrize(
@@ -220,13 +221,13 @@ def test_a_rule_writing_outside_the_dataset_folders_is_named():
     inside = SimpleNamespace(name="clean_run", output=["results/x/clean/{run}/qc.csv"], log=["logs/x/clean/{run}.log"], benchmark="benchmarks/x/c.tsv")
     escaping = SimpleNamespace(name="leak", output=["results/x/a.csv"], log=["logs/x/../leak.log"], benchmark=None)
     roots = ("results/x", "logs/x", "benchmarks/x")
-    guard.check_rule_outputs([inside], roots)
+    safety.check_rule_outputs([inside], roots)
     with pytest.raises(DataError, match=re.escape("rule leak: output 'logs/x/../leak.log' is outside results/x, logs/x, benchmarks/x")):
-        guard.check_rule_outputs([inside, escaping], roots)
+        safety.check_rule_outputs([inside, escaping], roots)
 
 
 def _raw_run(starts, temperature_c):
-    from thermaxis.io import RawRun
+    from thermaxis.dataset.reader import RawRun
 
     t0 = pd.Timestamp("2022-05-10T09:00:00")
     measurements = {
@@ -252,11 +253,11 @@ def test_run_plausibility_warns_of_fahrenheit_unless_the_dataset_logs_rises(tmp_
 
     # Median of 85 and 86 °F is 85.5 °F = 29.72 °C.
     absolute = SimpleNamespace(root=tmp_path, meta={})
-    (note,) = guard.check_run_plausibility(absolute, _raw_run([0, 20], 85.0), _plausibility_config())
+    (note,) = plausibility.check_run_plausibility(absolute, _raw_run([0, 20], 85.0), _plausibility_config())
     assert note.startswith(f"{tmp_path / 'E1' / 'temperatures' / 'box.csv'}: sensor T1: median 85.5 °C")
     assert "that is 29.7 °C" in note
     rise = SimpleNamespace(root=tmp_path, meta={"temperature_kind": "rise"})
-    assert guard.check_run_plausibility(rise, _raw_run([0, 20], 0.5), _plausibility_config()) == []
+    assert plausibility.check_run_plausibility(rise, _raw_run([0, 20], 0.5), _plausibility_config()) == []
 
 
 def test_run_plausibility_refuses_overlaps_and_a_grid_step_longer_than_the_run(tmp_path):
@@ -265,8 +266,8 @@ def test_run_plausibility_refuses_overlaps_and_a_grid_step_longer_than_the_run(t
     dataset = SimpleNamespace(root=tmp_path, meta={})
     # M2 starts 1 min after M1, which lasts 2 min.
     with pytest.raises(DataError, match=re.escape(f"{tmp_path / 'E1' / 'errors' / 'M2.csv'}: readings from 2022-05-10 09:01:00 overlap measurement M1")):
-        guard.check_run_plausibility(dataset, _raw_run([0, 1], 20.0), _plausibility_config())
+        plausibility.check_run_plausibility(dataset, _raw_run([0, 1], 20.0), _plausibility_config())
     # The run spans 0 to 22 min = 1320 s.
     with pytest.raises(DataError, match=re.escape("config temperatures.interval_s: 1321 s is longer than run E1 lasts (1320 s")):
-        guard.check_run_plausibility(dataset, _raw_run([0, 20], 20.0), _plausibility_config(interval_s=1321.0))
-    guard.check_run_plausibility(dataset, _raw_run([0, 20], 20.0), _plausibility_config(interval_s=1320.0))
+        plausibility.check_run_plausibility(dataset, _raw_run([0, 20], 20.0), _plausibility_config(interval_s=1321.0))
+    plausibility.check_run_plausibility(dataset, _raw_run([0, 20], 20.0), _plausibility_config(interval_s=1320.0))

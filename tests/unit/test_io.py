@@ -9,7 +9,8 @@ import pytest
 import yaml
 
 from conftest import set_csv_cell
-from thermaxis.io import DataError, load_dataset, read_run
+from thermaxis.errors import DataError
+from thermaxis.dataset.reader import load_dataset, read_run
 
 
 def one_line(excinfo) -> str:

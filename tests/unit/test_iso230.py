@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from thermaxis.iso230 import NOT_COMPUTED, QUANTITIES, single_pass_quantities
+from thermaxis.compensation.iso230 import NOT_COMPUTED, QUANTITIES, single_pass_quantities
 
 
 def test_three_targets_both_directions():

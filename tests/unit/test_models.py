@@ -1,4 +1,4 @@
-"""Tests of thermaxis.models against coefficients known by construction or computed directly."""
+"""Tests of thermaxis.method.models against coefficients known by construction or computed directly."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
-from thermaxis.models import (
+from thermaxis.method.models import (
     ALGORITHMS,
     DecoupledAxisModel,
     PointwiseAxisModel,

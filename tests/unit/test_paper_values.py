@@ -1,4 +1,4 @@
-"""The transcribed paper values (data/paper/) against the paper itself.
+"""The transcribed paper values (thermaxis/paper/values/) against the paper itself.
 
 The expected numbers are parsed here, independently of the CSV files, from the two texts in
 ``shared/paper/`` beside the repository: the digest's markdown tables and formulas, and the
@@ -15,7 +15,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from thermaxis import paper
+from thermaxis.paper import published
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SHARED_PAPER = REPO_ROOT.parent / "shared" / "paper"
@@ -88,13 +88,13 @@ def _sensor_key(sensor: str) -> int:
 # ----------------------------------------------------------------------------- fixtures
 @pytest.fixture(scope="module")
 def values() -> pd.DataFrame:
-    return paper.published_values().set_index("item")
+    return published.published_values().set_index("item")
 
 
 # ----------------------------------------------------------------------------- Table 1
 @needs_shared
 def test_table1_matches_digest_and_full_text():
-    table = paper.load_table("table1").set_index("experiment")
+    table = published.load_table("table1").set_index("experiment")
     digest_rows = _digest_table("Table 1")
     assert len(digest_rows) == 4
     for experiment, feed, measurements, ambient in digest_rows:
@@ -117,7 +117,7 @@ def test_table1_matches_digest_and_full_text():
 # ----------------------------------------------------------------------------- Table 2
 @needs_shared
 def test_table2_sensors_match_digest():
-    sensors = paper.load_table("table2").set_index("sensor")
+    sensors = published.load_table("table2").set_index("sensor")
     assert list(sensors.index) == [f"T{i}" for i in range(1, 13)]
     digest = {}
     for a, loc_a, b, loc_b in _digest_table("Table 2"):
@@ -134,7 +134,7 @@ def test_table2_sensors_match_digest():
 
 # ----------------------------------------------------------------------------- Table 3
 def _table3_sets() -> dict[int, set[str]]:
-    df = paper.load_table("table3")
+    df = published.load_table("table3")
     return {int(p): set(g["sensor"]) for p, g in df.groupby("position_mm")}
 
 
@@ -156,10 +156,10 @@ def test_table3_has_three_points_at_each_of_the_14_targets():
 
 def test_table3_three_most_frequent_points_are_the_eq8_inputs():
     # The paper picks the three points found most often in Table 3 as Eq. 8's inputs.
-    counts = Counter(paper.load_table("table3")["sensor"])
+    counts = Counter(published.load_table("table3")["sensor"])
     top3 = {sensor for sensor, _ in counts.most_common(3)}
     assert counts.most_common(4)[2][1] > counts.most_common(4)[3][1]  # no tie at rank 3
-    eq8_sensors = set(paper.load_table("eq8")["term"]) - {"const"}
+    eq8_sensors = set(published.load_table("eq8")["term"]) - {"const"}
     assert top3 == eq8_sensors == {"T1", "T11", "T12"}
 
 
@@ -178,7 +178,7 @@ def _digest_table5() -> dict[tuple[str, int, str], float]:
 def test_table5_all_64_numbers_match_digest(values):
     expected = _digest_table5()
     assert len(expected) == 64
-    table = paper.load_table("table5").set_index(["run", "measurement"])
+    table = published.load_table("table5").set_index(["run", "measurement"])
     for (run, m, target), value in expected.items():
         column = "k_um_per_m" if target == "k" else "b_um"
         assert table.loc[(run, m), column] == value, (run, m, target)
@@ -199,7 +199,7 @@ def test_table5_digest_agrees_with_full_text():
 
 
 def test_table5_shape_and_keys():
-    table = paper.load_table("table5")
+    table = published.load_table("table5")
     assert len(table) == 32
     assert not table.duplicated(["run", "measurement"]).any()
     assert (table["k_um_per_m"] < 0).all()  # every printed slope is negative
@@ -212,7 +212,7 @@ def _parse_clusters(cell: str) -> list[set[str]]:
 
 @needs_shared
 def test_table6_matches_digest_and_full_text():
-    table = paper.load_table("table6")
+    table = published.load_table("table6")
     ours = {
         target: (
             [set(g["sensor"]) for _, g in sub.groupby("cluster")],
@@ -233,9 +233,9 @@ def test_table6_matches_digest_and_full_text():
 
 
 def test_table6_one_sensitive_point_per_cluster_and_they_are_the_eq9_inputs():
-    table = paper.load_table("table6")
+    table = published.load_table("table6")
     assert (table.groupby(["target", "cluster"])["selected"].sum() == 1).all()
-    eq9 = paper.load_table("eq9")
+    eq9 = published.load_table("eq9")
     for target in ("k", "b"):
         selected = set(table.loc[table["selected"] & (table["target"] == target), "sensor"])
         inputs = set(eq9.loc[(eq9["target"] == target) & (eq9["term"] != "const"), "term"])
@@ -243,7 +243,7 @@ def test_table6_one_sensitive_point_per_cluster_and_they_are_the_eq9_inputs():
 
 
 def test_table6_clusters_are_numbered_by_their_lowest_sensor():
-    table = paper.load_table("table6")
+    table = published.load_table("table6")
     for _, sub in table.groupby("target"):
         lowest = sub.groupby("cluster")["sensor"].agg(lambda s: min(map(_sensor_key, s)))
         assert list(lowest.sort_index()) == sorted(lowest)
@@ -261,7 +261,7 @@ _DIGEST_MODELS = {
 def test_prediction_metrics_match_digest(values):
     rows = _digest_table("Prediction of experiment 4")
     assert len(rows) == 7
-    table = paper.load_table("prediction_metrics").set_index(["table", "target"])
+    table = published.load_table("prediction_metrics").set_index(["table", "target"])
     for number, model, target_cell, rmse, max_abs, mae in rows:
         target = target_cell.split()[0]
         row = table.loc[(int(number), target)]
@@ -282,7 +282,7 @@ def test_prediction_metrics_match_full_text_tables():
         word = next((w for w in TARGET_WORDS if cells[0].startswith(w)), None)
         if word and len(cells) == 4:
             printed[(current_table, TARGET_WORDS[word])] = tuple(map(float, cells[1:]))
-    table = paper.load_table("prediction_metrics")
+    table = published.load_table("prediction_metrics")
     ours = {(r.table, r.target): (r.rmse, r.max_abs, r.mae) for r in table.itertuples()}
     assert ours == printed
 
@@ -302,8 +302,8 @@ def test_residual_ranges_and_largest_error_match_digest(values):
 
 def test_residual_ranges_are_consistent_with_the_max_abs_residuals():
     # The printed max |residual| of the error must be the larger end of the printed range.
-    ranges = paper.load_table("residual_ranges")
-    metrics = paper.load_table("prediction_metrics").set_index(["table", "target"])
+    ranges = published.load_table("residual_ranges")
+    metrics = published.load_table("prediction_metrics").set_index(["table", "target"])
     for r in ranges.itertuples():
         assert max(-r.residual_min, r.residual_max) == metrics.loc[(r.table, r.target), "max_abs"]
 
@@ -329,7 +329,7 @@ def test_eq8_matches_digest_and_full_text(values):
     full = {int(row): _latex_terms(expr) for row, expr in zip(full_parts[::2], full_parts[1::2])}
     assert full == digest
 
-    eq8 = paper.load_table("eq8")
+    eq8 = published.load_table("eq8")
     ours = {
         int(row): dict(zip(g["term"], g["value"])) for row, g in eq8.groupby("equation_row")
     }
@@ -351,7 +351,7 @@ def test_eq9_matches_digest_and_full_text(values):
     full_k, full_b = line.split("b =")
     assert {"k": _latex_terms(full_k.split("k =")[1]), "b": _latex_terms(full_b)} == digest
 
-    eq9 = paper.load_table("eq9")
+    eq9 = published.load_table("eq9")
     for target, terms in digest.items():
         sub = eq9[eq9["target"] == target]
         assert dict(zip(sub["term"], sub["value"])) == terms
@@ -363,8 +363,8 @@ def test_eq9_matches_digest_and_full_text(values):
 
 # ----------------------------------------------------------------------------- published_values()
 def test_published_values_shape_and_unique_keys(values):
-    frame = paper.published_values()
-    assert tuple(frame.columns) == paper.PUBLISHED_COLUMNS
+    frame = published.published_values()
+    assert tuple(frame.columns) == published.PUBLISHED_COLUMNS
     assert frame["item"].is_unique
     assert frame["value"].notna().all() and frame["unit"].notna().all()
     # Counts follow from the paper's layout: 4 runs x 4 numbers; 14 positions x 3 points;
@@ -388,20 +388,20 @@ def test_published_values_item_encodes_its_describing_columns(values):
 # ----------------------------------------------------------------------------- bad input
 def test_unknown_table_name_is_a_value_error():
     with pytest.raises(ValueError, match="unknown paper table 'table9'"):
-        paper.load_table("table9")
+        published.load_table("table9")
 
 
 def test_renamed_column_is_a_value_error(tmp_path):
-    source = paper.PAPER_DIR / "table5_slope_intercept.csv"
+    source = published.PAPER_DIR / "table5_slope_intercept.csv"
     text = source.read_text(encoding="utf-8").replace("k_um_per_m", "k")
     (tmp_path / source.name).write_text(text, encoding="utf-8")
     with pytest.raises(ValueError, match="do not match the expected"):
-        paper.load_table("table5", paper_dir=tmp_path)
+        published.load_table("table5", paper_dir=tmp_path)
 
 
 def test_paper_dir_is_overridable(tmp_path):
-    source = paper.PAPER_DIR / "eq9_decoupled_mlr.csv"
+    source = published.PAPER_DIR / "eq9_decoupled_mlr.csv"
     edited = source.read_text(encoding="utf-8").replace("-306.494", "-1.5")
     (tmp_path / source.name).write_text(edited, encoding="utf-8")
-    eq9 = paper.load_table("eq9_decoupled_mlr.csv", paper_dir=tmp_path)
+    eq9 = published.load_table("eq9_decoupled_mlr.csv", paper_dir=tmp_path)
     assert eq9.loc[(eq9["target"] == "k") & (eq9["term"] == "const"), "value"].item() == -1.5

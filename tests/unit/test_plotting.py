@@ -23,7 +23,10 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from thermaxis import plotting as P  # noqa: E402
+from thermaxis.figures import captions
+from thermaxis.figures import paper as paper_figures
+from thermaxis.figures import predictions as prediction_figures
+from thermaxis.figures import style
 
 STEP_MIN = 20.0
 
@@ -67,7 +70,7 @@ def make_dataset(n_runs: int, positions, n_meas: int) -> dict:
     kb = pd.DataFrame(kb_rows)
 
     kb_pred_rows, err_pred_rows, metric_rows = [], [], []
-    models = [("decoupled", "mlr"), ("decoupled", "gpr"), (P.POINTWISE_APPROACH, "mlr")]
+    models = [("decoupled", "mlr"), ("decoupled", "gpr"), ("pointwise", "mlr")]
     for approach, algorithm in models:
         band = algorithm == "gpr"
         for f, fold in enumerate(runs):
@@ -161,19 +164,19 @@ def tiny():
 def all_figures(d: dict) -> dict:
     first, last = d["runs"][0], d["runs"][-1]
     return {
-        "fig2": lambda: P.fig2_positioning_error(d["errors"], first),
-        "fig3": lambda: P.fig3_ambient(d["ambient"]),
-        "fig5": lambda: P.fig5_unzeroed(d["errors"], first),
-        "fig6": lambda: P.fig6_error_vs_time(d["errors"], first),
-        "fig7": lambda: P.fig7_error_surface(d["errors"], first),
-        "fig8": lambda: P.fig8_rezeroed(d["errors"], first),
-        "fig9": lambda: P.fig9_other_runs(d["errors"], d["runs"]),
-        "fig10": lambda: P.fig10_temperature_rise(d["series"]),
-        "fig11": lambda: P.fig11_pointwise_prediction(d["err_pred"], last, "mlr"),
-        "fig12": lambda: P.fig12_slope_intercept(d["kb"]),
-        "kb_prediction": lambda: P.fig_kb_prediction(d["kb_pred"], last, "decoupled", "gpr"),
-        "error_prediction": lambda: P.fig_error_prediction(d["err_pred"], last, "decoupled", "gpr"),
-        "fold_comparison": lambda: P.fig_fold_comparison(d["metrics"]),
+        "fig2": lambda: paper_figures.fig2_positioning_error(d["errors"], first),
+        "fig3": lambda: paper_figures.fig3_ambient(d["ambient"]),
+        "fig5": lambda: paper_figures.fig5_unzeroed(d["errors"], first),
+        "fig6": lambda: paper_figures.fig6_error_vs_time(d["errors"], first),
+        "fig7": lambda: paper_figures.fig7_error_surface(d["errors"], first),
+        "fig8": lambda: paper_figures.fig8_rezeroed(d["errors"], first),
+        "fig9": lambda: paper_figures.fig9_other_runs(d["errors"], d["runs"]),
+        "fig10": lambda: paper_figures.fig10_temperature_rise(d["series"]),
+        "fig11": lambda: prediction_figures.fig_error_prediction(d["err_pred"], last, "pointwise", "mlr"),
+        "fig12": lambda: paper_figures.fig12_slope_intercept(d["kb"]),
+        "kb_prediction": lambda: prediction_figures.fig_kb_prediction(d["kb_pred"], last, "decoupled", "gpr"),
+        "error_prediction": lambda: prediction_figures.fig_error_prediction(d["err_pred"], last, "decoupled", "gpr"),
+        "fold_comparison": lambda: prediction_figures.fig_fold_comparison(d["metrics"]),
     }
 
 
@@ -197,7 +200,7 @@ def test_every_figure_renders_on_every_shape(dataset):
 
 def test_figure_functions_leave_global_rcparams_alone(tiny):
     before = dict(matplotlib.rcParams)
-    P.fig5_unzeroed(tiny["errors"], "R1")
+    paper_figures.fig5_unzeroed(tiny["errors"], "R1")
     assert dict(matplotlib.rcParams) == before
 
 
@@ -210,7 +213,7 @@ def test_save_figure_is_byte_identical_across_renders(tiny, tmp_path, name):
     outputs = []
     for attempt in ("a", "b"):
         paths = [tmp_path / attempt / f"{name}.{suffix}" for suffix in ("png", "pdf", "svg")]
-        P.save_figure(make(), paths)
+        style.save_figure(make(), paths)
         outputs.append([p.read_bytes() for p in paths])
     for suffix, first, second in zip(("png", "pdf", "svg"), *outputs):
         assert first, suffix
@@ -221,15 +224,15 @@ def test_save_figure_is_byte_identical_across_renders(tiny, tmp_path, name):
 
 
 def test_save_figure_rejects_an_unknown_suffix_before_writing(tiny, tmp_path):
-    fig = P.fig2_positioning_error(tiny["errors"], "R1")
+    fig = paper_figures.fig2_positioning_error(tiny["errors"], "R1")
     with pytest.raises(ValueError, match="suffix"):
-        P.save_figure(fig, [tmp_path / "ok.png", tmp_path / "bad.jpg"])
+        style.save_figure(fig, [tmp_path / "ok.png", tmp_path / "bad.jpg"])
     assert not (tmp_path / "ok.png").exists()
 
 
 def test_save_figure_accepts_a_single_path_and_creates_folders(tiny, tmp_path):
     target = tmp_path / "deep" / "fig2.png"
-    P.save_figure(P.fig2_positioning_error(tiny["errors"], "R1"), str(target))
+    style.save_figure(paper_figures.fig2_positioning_error(tiny["errors"], "R1"), str(target))
     assert target.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -237,14 +240,14 @@ def test_save_figure_accepts_a_single_path_and_creates_folders(tiny, tmp_path):
 
 
 def test_fig2_draws_the_first_measurement(tiny):
-    (line,) = lines_of(P.fig2_positioning_error(tiny["errors"], "R2").axes[0])
+    (line,) = lines_of(paper_figures.fig2_positioning_error(tiny["errors"], "R2").axes[0])
     # Measurement 1 of run index 1: b = 0, k = -11 um/m over x - 0 mm.
     np.testing.assert_allclose(line.get_xdata(), [0.0, 10.0, 20.0, 30.0])
     np.testing.assert_allclose(line.get_ydata(), [0.0, -0.11, -0.22, -0.33])
 
 
 def test_fig5_one_curve_per_measurement_labelled_by_time(tiny):
-    ax = P.fig5_unzeroed(tiny["errors"], "R1").axes[0]
+    ax = paper_figures.fig5_unzeroed(tiny["errors"], "R1").axes[0]
     lines = lines_of(ax)
     assert [line.get_label() for line in lines] == ["0 min", "20 min", "40 min"]
     # Measurement 3 of run index 0: b = -1.0, k = -10 um/m.
@@ -254,15 +257,15 @@ def test_fig5_one_curve_per_measurement_labelled_by_time(tiny):
 
 def test_fig5_many_measurements_get_a_colour_bar_instead_of_a_legend():
     d = make_dataset(*SHAPES["five_runs_many_lines"])
-    fig = P.fig5_unzeroed(d["errors"], "R1")
+    fig = paper_figures.fig5_unzeroed(d["errors"], "R1")
     ax = fig.axes[0]
     assert ax.get_legend() is None
     assert len(lines_of(ax)) == 12
-    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == P.TIME_LABEL
+    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == style.TIME_LABEL
 
 
 def test_fig6_one_curve_per_position_against_time(tiny):
-    lines = lines_of(P.fig6_error_vs_time(tiny["errors"], "R1").axes[0])
+    lines = lines_of(paper_figures.fig6_error_vs_time(tiny["errors"], "R1").axes[0])
     assert [line.get_label() for line in lines] == ["0 mm", "10 mm", "20 mm", "30 mm"]
     np.testing.assert_allclose(lines[0].get_xdata(), [0.0, 20.0, 40.0])
     # At the first position the error is the intercept b_m alone.
@@ -278,7 +281,7 @@ def _quads(fig):
 
 def test_fig7_fills_one_cell_per_pair_of_neighbouring_measurements_and_positions(tiny):
     # 3 measurements x 4 positions -> 2 x 3 cells.
-    assert _quads(P.fig7_error_surface(tiny["errors"], "R1")) == 6
+    assert _quads(paper_figures.fig7_error_surface(tiny["errors"], "R1")) == 6
 
 
 def test_fig7_leaves_cells_with_a_missing_reading_open(tiny):
@@ -286,18 +289,18 @@ def test_fig7_leaves_cells_with_a_missing_reading_open(tiny):
     hole = (errors["run"] == "R1") & (errors["measurement"] == 2) & (errors["position_mm"] == 10.0)
     errors.loc[hole, "error_um"] = np.nan
     # The middle measurement's second position touches 4 of the 6 cells.
-    assert _quads(P.fig7_error_surface(errors, "R1")) == 2
+    assert _quads(paper_figures.fig7_error_surface(errors, "R1")) == 2
 
 
 def test_fig7_single_measurement_draws_the_curve_without_cells(tiny):
     errors = tiny["errors"][tiny["errors"]["measurement"] == 1]
-    fig = P.fig7_error_surface(errors, "R1")
+    fig = paper_figures.fig7_error_surface(errors, "R1")
     assert _quads(fig) == 0
     assert len(fig.axes[0].get_lines()) == 1
 
 
 def test_fig8_plots_rezeroed_values_starting_at_zero(tiny):
-    lines = lines_of(P.fig8_rezeroed(tiny["errors"], "R2").axes[0])
+    lines = lines_of(paper_figures.fig8_rezeroed(tiny["errors"], "R2").axes[0])
     assert len(lines) == 3
     for line in lines:
         assert line.get_ydata()[0] == 0.0
@@ -307,7 +310,7 @@ def test_fig8_plots_rezeroed_values_starting_at_zero(tiny):
 
 def test_fig9_one_labelled_panel_per_run_in_a_grid():
     d = make_dataset(5, [0.0, 10.0], 2)
-    fig = P.fig9_other_runs(d["errors"], ["R2", "R3", "R4", "R5", "R1"])
+    fig = paper_figures.fig9_other_runs(d["errors"], ["R2", "R3", "R4", "R5", "R1"])
     panels = [ax for ax in fig.axes if ax.get_title(loc="left")]
     assert [ax.get_title(loc="left") for ax in panels] == [
         "(a) Run R2",
@@ -322,7 +325,7 @@ def test_fig9_one_labelled_panel_per_run_in_a_grid():
 
 
 def test_panel_labels_continue_after_z():
-    assert [P._panel_label(i) for i in (0, 1, 25, 26, 27, 51, 52)] == [
+    assert [style._panel_label(i) for i in (0, 1, 25, 26, 27, 51, 52)] == [
         "(a)",
         "(b)",
         "(z)",
@@ -334,7 +337,7 @@ def test_panel_labels_continue_after_z():
 
 
 def test_fig10_rise_is_zero_at_elapsed_zero(tiny):
-    lines = lines_of(P.fig10_temperature_rise(tiny["series"]).axes[0])
+    lines = lines_of(paper_figures.fig10_temperature_rise(tiny["series"]).axes[0])
     assert [line.get_label() for line in lines] == ["T1", "T2", "T3"]
     for i, line in enumerate(lines):
         x, y = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
@@ -346,7 +349,7 @@ def test_fig10_rise_is_zero_at_elapsed_zero(tiny):
 def test_fig10_interpolates_the_reference_when_no_sample_is_at_zero(tiny):
     series = tiny["series"].copy()
     series.loc[series["elapsed_min"] == 0.0, "T2"] = np.nan
-    (line,) = lines_of(P.fig10_temperature_rise(series, sensors=["T2"]).axes[0])
+    (line,) = lines_of(paper_figures.fig10_temperature_rise(series, sensors=["T2"]).axes[0])
     x, y = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
     assert 0.0 not in x
     # T2 is linear, so the interpolated reference is its value at 0 and the rise stays 0.1 t.
@@ -355,11 +358,11 @@ def test_fig10_interpolates_the_reference_when_no_sample_is_at_zero(tiny):
 
 def test_fig10_rejects_an_unknown_sensor(tiny):
     with pytest.raises(ValueError, match="T99"):
-        P.fig10_temperature_rise(tiny["series"], sensors=["T1", "T99"])
+        paper_figures.fig10_temperature_rise(tiny["series"], sensors=["T1", "T99"])
 
 
 def test_fig12_k_on_top_and_b_below_one_line_per_run(tiny):
-    ax_k, ax_b = P.fig12_slope_intercept(tiny["kb"]).axes
+    ax_k, ax_b = paper_figures.fig12_slope_intercept(tiny["kb"]).axes
     k_lines, b_lines = lines_of(ax_k), lines_of(ax_b)
     assert [line.get_label() for line in k_lines] == ["Run R1", "Run R2"]
     np.testing.assert_allclose(k_lines[1].get_ydata(), [-11.0, -11.0, -11.0])
@@ -371,7 +374,7 @@ def test_fig12_orders_runs_naturally():
     kb = pd.DataFrame(
         dict(run=["E10", "E2", "E10", "E2"], measurement=[1, 1, 2, 2], k_um_per_m=[1.0, 2.0, 3.0, 4.0], b_um=0.0)
     )
-    ax_k = P.fig12_slope_intercept(kb).axes[0]
+    ax_k = paper_figures.fig12_slope_intercept(kb).axes[0]
     assert [line.get_label() for line in lines_of(ax_k)] == ["Run E2", "Run E10"]
 
 
@@ -380,19 +383,19 @@ def _bands(ax):
 
 
 def test_kb_prediction_shades_the_interval_only_when_given(tiny):
-    fig = P.fig_kb_prediction(tiny["kb_pred"], "R2", "decoupled", "gpr")
+    fig = prediction_figures.fig_kb_prediction(tiny["kb_pred"], "R2", "decoupled", "gpr")
     ax_k, ax_b = fig.axes
     measured, predicted = lines_of(ax_k)
     np.testing.assert_allclose(measured.get_ydata(), [-11.0, -11.0, -11.0])
     np.testing.assert_allclose(predicted.get_ydata(), [-10.75, -10.75, -10.75])
     assert predicted.get_label() == "Predicted (GPR)"
     assert len(_bands(ax_k)) == 1 and len(_bands(ax_b)) == 1
-    no_band = P.fig_kb_prediction(tiny["kb_pred"], "R2", "decoupled", "mlr")
+    no_band = prediction_figures.fig_kb_prediction(tiny["kb_pred"], "R2", "decoupled", "mlr")
     assert all(not _bands(ax) for ax in no_band.axes)
 
 
 def test_error_prediction_draws_measured_predicted_and_residual(tiny):
-    fig = P.fig_error_prediction(tiny["err_pred"], "R1", "decoupled", "mlr")
+    fig = prediction_figures.fig_error_prediction(tiny["err_pred"], "R1", "decoupled", "mlr")
     ax_curve, ax_res = fig.axes[:2]
     curves = ax_curve.get_lines()
     assert len(curves) == 2 * 3  # measured + predicted per measurement
@@ -403,16 +406,16 @@ def test_error_prediction_draws_measured_predicted_and_residual(tiny):
     assert all(np.allclose(line.get_ydata(), 0.125) for line in residuals)
 
 
-def test_fig11_selects_the_pointwise_approach(tiny):
+def test_fig11_draws_the_pointwise_rows(tiny):
     err_pred = tiny["err_pred"].copy()
-    pointwise = err_pred["approach"] == P.POINTWISE_APPROACH
+    pointwise = err_pred["approach"] == "pointwise"
     err_pred.loc[pointwise, "residual"] = 0.75
-    ax_res = P.fig11_pointwise_prediction(err_pred, "R1", "mlr").axes[1]
+    ax_res = prediction_figures.fig_error_prediction(err_pred, "R1", "pointwise", "mlr").axes[1]
     assert all(np.allclose(line.get_ydata(), 0.75) for line in lines_of(ax_res))
 
 
 def test_fold_comparison_bar_heights_are_the_metrics(tiny):
-    fig = P.fig_fold_comparison(tiny["metrics"])
+    fig = prediction_figures.fig_fold_comparison(tiny["metrics"])
     ax_rmse, ax_max = fig.axes
     # Pairs sorted: (decoupled, gpr), (decoupled, mlr), (pointwise, mlr); folds R1, R2.
     heights = [p.get_height() for p in ax_rmse.patches]
@@ -425,7 +428,7 @@ def test_fold_comparison_bar_heights_are_the_metrics(tiny):
 def test_fold_comparison_leaves_a_gap_for_a_missing_pair(tiny):
     metrics = tiny["metrics"]
     drop = (metrics["fold"] == "R2") & (metrics["algorithm"] == "gpr")
-    ax_rmse = P.fig_fold_comparison(metrics[~drop]).axes[0]
+    ax_rmse = prediction_figures.fig_fold_comparison(metrics[~drop]).axes[0]
     assert len(ax_rmse.patches) == 5
 
 
@@ -434,22 +437,22 @@ def test_fold_comparison_leaves_a_gap_for_a_missing_pair(tiny):
 
 def test_unknown_run_names_the_available_runs(tiny):
     with pytest.raises(ValueError, match=r"run='R9'.*R1, R2"):
-        P.fig5_unzeroed(tiny["errors"], "R9")
+        paper_figures.fig5_unzeroed(tiny["errors"], "R9")
 
 
 def test_missing_column_is_named(tiny):
     with pytest.raises(ValueError, match="rezeroed_um"):
-        P.fig8_rezeroed(tiny["errors"].drop(columns="rezeroed_um"), "R1")
+        paper_figures.fig8_rezeroed(tiny["errors"].drop(columns="rezeroed_um"), "R1")
 
 
 def test_unknown_fold_is_named(tiny):
     with pytest.raises(ValueError, match="fold='R7'"):
-        P.fig_kb_prediction(tiny["kb_pred"], "R7", "decoupled", "mlr")
+        prediction_figures.fig_kb_prediction(tiny["kb_pred"], "R7", "decoupled", "mlr")
 
 
 def test_fig9_needs_a_run(tiny):
     with pytest.raises(ValueError, match="at least one run"):
-        P.fig9_other_runs(tiny["errors"], [])
+        paper_figures.fig9_other_runs(tiny["errors"], [])
 
 
 # ---------------------------------------------------------------------------- captions
@@ -479,15 +482,15 @@ PHRASE = "Simulated data (thermal twin), not the paper's measurements."
 @pytest.mark.parametrize("figure_id", list(CAPTION_DETAILS))
 @pytest.mark.parametrize("simulated", [True, False])
 def test_caption_has_the_simulated_phrase_iff_simulated(figure_id, simulated):
-    caption = P.figure_caption(figure_id, "twin", simulated, **CAPTION_DETAILS[figure_id])
+    caption = captions.figure_caption(figure_id, "twin", simulated, **CAPTION_DETAILS[figure_id])
     assert (PHRASE in caption) is simulated
     assert "twin" in caption and "{" not in caption
 
 
 def test_caption_fills_details_and_names_the_paper_figure():
-    caption = P.figure_caption("fig9", "lab", False, runs=["E2", "E3"])
+    caption = captions.figure_caption("fig9", "lab", False, runs=["E2", "E3"])
     assert "runs E2, E3" in caption and "paper's Fig. 9." in caption
-    assert P.figure_caption("fig16", "lab", False, fold="E4", approach="decoupled", algorithm="svr").count("SVR") == 1
+    assert captions.figure_caption("fig16", "lab", False, fold="E4", approach="decoupled", algorithm="svr").count("SVR") == 1
 
 
 @pytest.mark.parametrize(
@@ -501,7 +504,7 @@ def test_caption_fills_details_and_names_the_paper_figure():
 )
 def test_caption_rejects_bad_requests(args, kwargs, match):
     with pytest.raises(ValueError, match=match):
-        P.figure_caption(*args, **kwargs)
+        captions.figure_caption(*args, **kwargs)
 
 
 # ---------------------------------------------------------------------------- provenance and ids
@@ -509,7 +512,7 @@ def test_caption_rejects_bad_requests(args, kwargs, match):
 
 @pytest.mark.parametrize("name", ["fig5", "fig7"])
 def test_stamp_provenance_adds_the_note_once(tiny, name):
-    fig = P.stamp_provenance(all_figures(tiny)[name]())
+    fig = style.stamp_provenance(all_figures(tiny)[name]())
     texts = [t.get_text() for t in fig.texts]  # a supxlabel is one of them too
     assert texts.count(PHRASE) == 1
     FigureCanvasAgg(fig).draw()
@@ -518,12 +521,12 @@ def test_stamp_provenance_adds_the_note_once(tiny, name):
 def test_save_figure_dpi_sets_the_png_size(tiny, tmp_path):
     from PIL import Image
 
-    P.save_figure(P.fig2_positioning_error(tiny["errors"], "R1"), tmp_path / "f.png", dpi=100)
+    style.save_figure(paper_figures.fig2_positioning_error(tiny["errors"], "R1"), tmp_path / "f.png", dpi=100)
     # fig2 is 3.5 in x 2.4 in.
     assert Image.open(tmp_path / "f.png").size == (350, 240)
 
 
 def test_integer_ids_match_their_text_form(tiny):
     kb_pred = tiny["kb_pred"].assign(fold=tiny["kb_pred"]["fold"].str[1:].astype(int))
-    fig = P.fig_kb_prediction(kb_pred, "2", "decoupled", "mlr")
+    fig = prediction_figures.fig_kb_prediction(kb_pred, "2", "decoupled", "mlr")
     np.testing.assert_allclose(lines_of(fig.axes[0])[0].get_ydata(), [-11.0, -11.0, -11.0])

@@ -11,12 +11,18 @@ import pytest
 import yaml
 
 from conftest import DEFAULTS
-from thermaxis.assemble import clean_and_assemble_run, model_inputs
-from thermaxis.clean import check_gaps, clean_temperatures, hampel_outliers, signals_on_grid
+from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
+from thermaxis.cleaning.temperatures import (
+    check_gaps,
+    clean_temperatures,
+    hampel_outliers,
+    signals_on_grid,
+)
 from thermaxis.config import Settings, load_config
-from thermaxis.experiment import evaluate_configuration, select_for_fold
-from thermaxis.importer import import_dataset, measurements_of
-from thermaxis.io import DataError, load_dataset, read_run
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
+from thermaxis.dataset.importer import import_dataset, measurements_of
+from thermaxis.errors import DataError
+from thermaxis.dataset.reader import load_dataset, read_run
 
 REPO = Path(__file__).resolve().parents[2]
 FL_THERMAL = REPO / "data" / "raw" / "fl_thermal"

@@ -17,7 +17,11 @@ import pandas as pd
 import pytest
 
 from conftest import FIXED_EPOCH, REPO
-from thermaxis import provenance, reporting
+from thermaxis.reports import html as rep
+from thermaxis.reports import index as index_page
+from thermaxis.reports import notebooks
+from thermaxis.reports import provenance
+from thermaxis.reports import summaries
 
 NOTEBOOKS = ("dataset_report", "condition_report", "model_report", "paper_report")
 
@@ -131,7 +135,7 @@ def test_remote_loads_finds_scripts_styles_images_but_not_links():
         '<a href="https://doi.org/10.19650/j.cnki.cjsi.J2209628">paper</a>'
         '<img src="data:image/png;base64,AAAA"><link rel="icon" href="data:,"><a href="../index.html">i</a>'
     )
-    found = reporting.remote_loads(page)
+    found = notebooks.remote_loads(page)
     assert len(found) == 5
     assert not any("doi.org" in f for f in found)
 
@@ -144,7 +148,7 @@ def test_strip_volatile_drops_time_stamps_and_fixes_the_injected_cell_id():
             {"id": "keep", "metadata": {"execution": {"iopub.status.busy": "t"}}},
         ],
     }
-    reporting.strip_volatile(nb)
+    notebooks.strip_volatile(nb)
     assert nb["metadata"]["papermill"] == {"parameters": {"a": 1}}
     assert nb["cells"][0]["id"] == "injected-parameters"
     assert nb["cells"][0]["metadata"]["papermill"] == {"status": "completed"}
@@ -166,43 +170,43 @@ def test_cleaning_repairs_keeps_only_repaired_sensors():
             "n_long_gap": [0, 0, 0],
         }
     )
-    repairs = reporting.cleaning_repairs(qc)
+    repairs = summaries.cleaning_repairs(qc)
     assert repairs[["run", "sensor", "repaired"]].values.tolist() == [["E1", "T2", 6]]
     with pytest.raises(ValueError, match="n_spikes"):
-        reporting.cleaning_repairs(qc.drop(columns=["n_spikes"]))
+        summaries.cleaning_repairs(qc.drop(columns=["n_spikes"]))
 
 
 def test_table_html_formats_numbers_blanks_missing_and_escapes_text():
     frame = pd.DataFrame({"name": ["<T1>", "T2"], "value": [1.23456, float("nan")], "n": [3, 4]})
-    text = reporting.table_html(frame, "%.2f", caption="A & B", max_rows=1)
+    text = rep.table_html(frame, "%.2f", caption="A & B", max_rows=1)
     assert "<caption>A &amp; B</caption>" in text
     assert '<td>&lt;T1&gt;</td><td class="tx-num">1.23</td><td class="tx-num">3</td>' in text
     assert "T2" not in text and "First 1 of 2 rows" in text
-    assert '<td class="tx-num"></td>' in reporting.table_html(frame.iloc[1:], "%.2f")
+    assert '<td class="tx-num"></td>' in rep.table_html(frame.iloc[1:], "%.2f")
 
 
 def test_figure_html_embeds_the_bytes():
     png = b"\x89PNG\r\n\x1a\nnot really a picture"
-    text = reporting.figure_html(png, caption="Fig. `x`")
+    text = rep.figure_html(png, caption="Fig. `x`")
     uri = re.search(r'src="data:image/png;base64,([^"]+)"', text).group(1)
     assert base64.b64decode(uri) == png
     assert "<figcaption>Fig. <code>x</code></figcaption>" in text
 
 
 def test_banner_flags_simulated_and_measured_data():
-    simulated = reporting.banner_html("Report", "Dataset `twin`: SIMULATED data.", True)
-    measured = reporting.banner_html("Report", "Dataset `lab`: measured data.", False)
+    simulated = rep.banner_html("Report", "Dataset `twin`: SIMULATED data.", True)
+    measured = rep.banner_html("Report", "Dataset `lab`: measured data.", False)
     assert "SIMULATED DATA" in simulated and "Dataset <code>twin</code>: SIMULATED data." in simulated
     assert "MEASURED DATA" in measured and "SIMULATED" not in measured
 
 
 def test_index_page_links_and_states_the_data():
     sections = [
-        reporting.IndexSection("Reports", (reporting.IndexRow("paper", (("html", "reports/paper_report.html"),)),)),
-        reporting.IndexSection("Empty", ()),
+        index_page.IndexSection("Reports", (index_page.IndexRow("paper", (("html", "reports/paper_report.html"),)),)),
+        index_page.IndexSection("Empty", ()),
     ]
-    page = reporting.render_index("twin", "Dataset `twin`: SIMULATED data.", True, sections)
+    page = index_page.render_index("twin", "Dataset `twin`: SIMULATED data.", True, sections)
     assert '<a href="reports/paper_report.html">html</a>' in page
     assert page.index("SIMULATED DATA") < page.index("<h2>Reports</h2>")
     assert "<h2>Empty</h2>" not in page
-    assert reporting.remote_loads(page) == []
+    assert notebooks.remote_loads(page) == []

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from thermaxis import resources
+from thermaxis.pipeline import resources
 
 RULES = '''
 rule clean_run:

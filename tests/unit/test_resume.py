@@ -1,4 +1,4 @@
-"""thermaxis.resume: which processes count as a live Snakemake, which files are orphaned."""
+"""thermaxis.pipeline.resume: which processes count as a live Snakemake, which files are orphaned."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from thermaxis import resume
+from thermaxis.pipeline import resume
 
 
 @pytest.mark.parametrize(
@@ -18,8 +18,8 @@ from thermaxis import resume
         (["/usr/bin/python3", "/x/.venv/bin/snakemake"], True),
         (["python3", "-m", "snakemake", "--cores", "1"], True),
         # make's shell and this wrapper name snakemake without being it.
-        (["/bin/bash", "-c", ".venv/bin/python -m thermaxis.resume .venv/bin/snakemake"], False),
-        (["/x/.venv/bin/python", "-m", "thermaxis.resume", "/x/.venv/bin/snakemake"], False),
+        (["/bin/bash", "-c", ".venv/bin/python -m thermaxis.pipeline.resume .venv/bin/snakemake"], False),
+        (["/x/.venv/bin/python", "-m", "thermaxis.pipeline.resume", "/x/.venv/bin/snakemake"], False),
         # A rule's script job.
         (["/x/.venv/bin/python", "/w/.snakemake/scripts/tmpab12.clean_run.py"], False),
         ([], False),

@@ -1,4 +1,4 @@
-"""Tests of thermaxis.selection (temperature-sensitive point selection).
+"""Tests of thermaxis.method.selection (temperature-sensitive point selection).
 
 Expected numbers come from published worked examples (cited per test) or are
 worked out by hand in the comments; none is output of the code captured once.
@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from thermaxis.selection import (
+from thermaxis.method.selection import (
     SensitivePoints,
     absolute_grey_incidence,
     classes_for_count,

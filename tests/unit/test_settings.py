@@ -8,6 +8,7 @@ import pytest
 import yaml
 
 from conftest import REPO
+from thermaxis.schemas import schema_path
 from thermaxis.config import (
     CleaningSettings,
     CompensationSettings,
@@ -19,7 +20,7 @@ from thermaxis.config import (
     load_config,
 )
 
-SCHEMA = yaml.safe_load((REPO / "workflow" / "schemas" / "config.schema.yaml").read_text(encoding="utf-8"))
+SCHEMA = yaml.safe_load(schema_path("config").read_text(encoding="utf-8"))
 
 
 def schema_default(*path):

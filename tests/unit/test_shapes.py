@@ -15,11 +15,12 @@ import pandas as pd
 import pytest
 from conftest import DEFAULTS, write_dataset
 
-from thermaxis.assemble import clean_and_assemble_run, model_inputs
+from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.config import Settings, load_config
-from thermaxis.experiment import evaluate_configuration, select_for_fold
-from thermaxis.guard import check_same_targets
-from thermaxis.io import DataError, load_dataset, read_run
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
+from thermaxis.dataset.plausibility import check_same_targets
+from thermaxis.errors import DataError
+from thermaxis.dataset.reader import load_dataset, read_run
 
 CLEANING = Settings.from_config(load_config()).cleaning
 

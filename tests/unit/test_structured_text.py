@@ -9,10 +9,12 @@ import pandas as pd
 import pytest
 from blark.parse import parse_source_code
 
-from thermaxis.compensation import CONVENTION, Compensator, model_record, twincat
+from thermaxis.compensation.model import CONVENTION, model_record
+from thermaxis.compensation.runtime import Compensator
+from thermaxis.compensation.exports import twincat
 from thermaxis.config import FallbackSettings
-from thermaxis.models import DecoupledAxisModel, PointwiseAxisModel
-from thermaxis.plc import st_real, structured_text
+from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.compensation.plc import st_real, structured_text
 
 TARGETS = np.array([185.0 + 20.0 * i for i in range(14)])
 RAMP = FallbackSettings(1.5, (-10.0, 90.0), 0.25, 30.0, "ramp_to_zero", 20.0)

@@ -1,4 +1,4 @@
-"""Tests of thermaxis.sweep (the `sweep` target end to end: tests/workflow/test_sweep_workflow.py).
+"""Tests of thermaxis.sweep.run (the `sweep` target end to end: tests/workflow/test_sweep_workflow.py).
 
 Counts, partitions, rankings and factor effects are checked against numbers worked
 out by hand in the comments; the sweep's metrics are checked against the library
@@ -18,10 +18,13 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 from conftest import DEFAULTS, REPO
-from thermaxis import experiment, sweep, sweep_plan
+from thermaxis.schemas import schema_path
+from thermaxis.method import folds
+from thermaxis.sweep import plan as sweep_plan
+from thermaxis.sweep import run as sweep_run
 from thermaxis.config import Settings, load_config
-from thermaxis.evaluate import METRIC_COLUMNS
-from thermaxis.experiment import evaluate_configuration, select_for_fold
+from thermaxis.method.metrics import METRIC_COLUMNS
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
 
 PAPER_FIXED = (("b", ("T2", "T7", "T11")), ("k", ("T1", "T6", "T12")), ("pointwise", ("T1", "T11", "T12")))
 TWELVE = [f"T{i}" for i in range(1, 13)]
@@ -59,7 +62,7 @@ def test_config_yaml_sweep_is_the_issue_grid():
 def test_schema_fills_defaults_and_rejects_bad_levels():
     from snakemake.utils import validate
 
-    schema = str(REPO / "workflow" / "schemas" / "config.schema.yaml")
+    schema = str(schema_path("config"))
     config = {"dataset": "x"}
     validate(config, schema, set_default=True)
     assert config["sweep"]["methods"] == ["fuzzy_grey", "correlation", "all", "fixed"]
@@ -115,7 +118,7 @@ def test_batch_count_follows_the_cores_unless_set():
 def test_progress_prints_whole_tqdm_like_lines():
     ticks = iter([0.0, 1.0, 2.0, 3.0, 4.0, 4.0])
     out = io.StringIO()
-    progress = sweep.Progress(4, "sweep batch 1/2", stream=out, every_s=10.0, clock=lambda: next(ticks))
+    progress = sweep_run.Progress(4, "sweep batch 1/2", stream=out, every_s=10.0, clock=lambda: next(ticks))
     for _ in range(4):
         progress.update()
     # Only the last update is printed (10 s never pass); 4 configurations in 4 s.
@@ -153,7 +156,7 @@ def test_batch_rows_are_the_library_functions_metrics():
                            degrees=(1,), algorithms=("mlr", "ridge"))  # fmt: skip
     units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
     base = replace(DEFAULTS.selection, pointwise_common=2)
-    rows = sweep.run_batch(X, Y, units, grid, base, DEFAULTS.models)
+    rows = sweep_run.run_batch(X, Y, units, grid, base, DEFAULTS.models)
     # 1 unit x (decoupled d1 + pointwise) x 2 algorithms; decoupled has k, b, error rows.
     assert len(rows) == 2 * 3 + 2 * 1
     assert (rows["status"] == "ok").all()
@@ -170,13 +173,13 @@ def test_batch_rows_are_the_library_functions_metrics():
 def test_identical_model_inputs_are_evaluated_once(monkeypatch):
     X, Y = _inputs()
     calls = []
-    original = experiment.evaluate_configuration
+    original = folds.evaluate_configuration
 
     def counting(*args, **kwargs):
         calls.append(args[2:5])
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(experiment, "evaluate_configuration", counting)
+    monkeypatch.setattr(folds, "evaluate_configuration", counting)
     # "all" puts every sensor in k and b, and its pointwise common set is the first
     # pointwise_common (here 4 = all) sensors; "fixed" lists exactly the same sensors.
     # So 2 settings x (decoupled d1 + pointwise) x 1 algorithm = 4 configurations,
@@ -185,7 +188,7 @@ def test_identical_model_inputs_are_evaluated_once(monkeypatch):
     grid = replace(DEFAULTS.sweep.grid, methods=("all", "fixed"), degrees=(1,), algorithms=("mlr",),
                            fixed=(("b", every), ("k", every), ("pointwise", every)))  # fmt: skip
     units, _ = sweep_plan.plan_units(grid, ["R1"], list(every))
-    rows = sweep.run_batch(X, Y, units, grid, replace(DEFAULTS.selection, pointwise_common=4), DEFAULTS.models)
+    rows = sweep_run.run_batch(X, Y, units, grid, replace(DEFAULTS.selection, pointwise_common=4), DEFAULTS.models)
     assert len(calls) == 2
     assert rows["config_id"].nunique() == 4
     a = rows[rows["method"] == "all"][list(METRIC_COLUMNS)].to_numpy()
@@ -199,9 +202,9 @@ def test_summary_does_not_depend_on_the_batch_count():
                            grades=("deng", "absolute"), degrees=(1, 2), algorithms=("mlr",))  # fmt: skip
     units, _ = sweep_plan.plan_units(grid, ["R1", "R2", "R3"], ["S1", "S2", "S3", "S4"])
     base = replace(DEFAULTS.selection, pointwise_common=2)
-    one = sweep.collect_summary([sweep.run_batch(X, Y, units, grid, base, DEFAULTS.models)])
-    parts = [sweep.run_batch(X, Y, sweep_plan.batch_units(units, 3, b), grid, base, DEFAULTS.models) for b in range(3)]
-    pd.testing.assert_frame_equal(sweep.collect_summary(parts[::-1]), one)
+    one = sweep_run.collect_summary([sweep_run.run_batch(X, Y, units, grid, base, DEFAULTS.models)])
+    parts = [sweep_run.run_batch(X, Y, sweep_plan.batch_units(units, 3, b), grid, base, DEFAULTS.models) for b in range(3)]
+    pd.testing.assert_frame_equal(sweep_run.collect_summary(parts[::-1]), one)
     # 3 folds x (2 fuzzy x 2 grades + 2 correlation) settings x (2 degrees + pointwise) x 1 algorithm.
     assert one.groupby("config_id")["fold"].nunique().eq(3).all()
     assert one["config_id"].nunique() == 6 * 3
@@ -214,7 +217,7 @@ def test_a_configuration_the_data_cannot_support_is_recorded_not_fatal():
     Y.loc[X["run"] == "R1", 50.0] = np.nan
     grid = replace(DEFAULTS.sweep.grid, methods=("all",), approaches=("decoupled",), degrees=(1, 3), algorithms=("mlr",))
     units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
-    rows = sweep.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
+    rows = sweep_run.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
     by_degree = rows.groupby("degree")["status"].first()
     assert by_degree.loc[1] == "ok"
     assert by_degree.loc[3] != "ok" and rows.loc[rows["degree"] == 3, "max_abs"].isna().all()
@@ -239,14 +242,14 @@ def _summary_rows():
     ]  # fmt: skip
     # A k row must not count: only the error curves rank configurations.
     rows.append({**rows[0], "target": "k", "max_abs": 100.0})
-    frame = sweep._as_summary_frame(rows)
+    frame = sweep_run._as_summary_frame(rows)
     frame.loc[len(frame)] = {**rows[4], "fold": "E2", "status": "failed", "rmse": np.nan, "max_abs": np.nan}
     return frame
 
 
 def test_ranking_by_mean_max_residual_incomplete_last_ties_by_id():
     main = replace(DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="pearson", grade="deng")
-    ranking = sweep.rank_configurations(_summary_rows(), main, 1)
+    ranking = sweep_run.rank_configurations(_summary_rows(), main, 1)
     # A: (1 + 3) / 2 = 2, B: (2 + 2) / 2 = 2 (tie -> id order), D: 5, C: one fold only -> last.
     assert ranking["config_id"].tolist() == ["A", "B", "D", "C"]
     assert ranking["rank"].tolist() == [1, 2, 3, 4]
@@ -259,8 +262,8 @@ def test_ranking_by_mean_max_residual_incomplete_last_ties_by_id():
 
 def test_factor_effects_by_hand():
     main = replace(DEFAULTS.selection, method="fixed")
-    ranking = sweep.rank_configurations(_summary_rows(), main, 1)
-    effects = sweep.factor_effects(ranking).set_index(["factor", "level"])
+    ranking = sweep_run.rank_configurations(_summary_rows(), main, 1)
+    effects = sweep_run.factor_effects(ranking).set_index(["factor", "level"])
     # Complete configurations: A (fuzzy_grey, mlr, 2), B (all, mlr, 2), D (all, svr, 5).
     assert effects.loc[("method", "all"), ["n_configurations", "best", "median", "worst"]].tolist() == [2, 2.0, 3.5, 5.0]
     assert effects.loc[("algorithm", "mlr"), "mean"] == 2.0
@@ -282,7 +285,7 @@ def test_heatmap_holds_the_other_factors_at_the_main_configuration():
                                  "mean_max_abs": value})  # fmt: skip
     ranking = pd.DataFrame(rows)
     main = replace(DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="printed", grade="deng")
-    table = sweep.heatmap_table(ranking, "decoupled", main, 2)
+    table = sweep_run.heatmap_table(ranking, "decoupled", main, 2)
     assert table.columns.tolist() == ["mlr", "svr"] and table.index.tolist() == [2, 3]
     # printed (+100), degree 2 (+2): n=2 -> 122, n=3 -> 132; svr adds 0.5.
     np.testing.assert_array_equal(table.to_numpy(), [[122.0, 122.5], [132.0, 132.5]])

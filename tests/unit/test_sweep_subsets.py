@@ -11,7 +11,8 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 from conftest import DEFAULTS
-from thermaxis import sweep, sweep_plan
+from thermaxis.sweep import plan as sweep_plan
+from thermaxis.sweep import run as sweep_run
 
 TWELVE = [f"T{i}" for i in range(1, 13)]
 
@@ -55,7 +56,7 @@ def test_cluster_batches_follow_the_evaluation_count():
     assert sweep_plan.cluster_batch_count(0, [20] * 27, 200) == 3
     assert sweep_plan.cluster_batch_count(0, [20] * 27, 1) == 27  # never more batches than units
     assert sweep_plan.cluster_batch_count(0, [20] * 3, 10_000) == 1
-    assert sweep_plan.cluster_batch_count(5, [20] * 27, 200) == 5  # sweep.batches wins
+    assert sweep_plan.cluster_batch_count(5, [20] * 27, 200) == 5  # sweep_run.batches wins
 
 
 def test_cost_estimate_by_hand():
@@ -88,7 +89,7 @@ def test_pointwise_mlr_of_a_subset_matches_plain_least_squares():
     grid = subset_grid((2,), approaches=("pointwise",), algorithms=("mlr",))
     units, _ = sweep_plan.plan_units(grid, ["R3"], ["S1", "S2", "S3"])
     with threadpool_limits(limits=1):
-        rows = sweep.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
+        rows = sweep_run.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
     assert rows["config_id"].tolist() == [
         "subset:n2:S1+S2/pointwise/mlr", "subset:n2:S1+S3/pointwise/mlr", "subset:n2:S2+S3/pointwise/mlr"
     ]  # fmt: skip

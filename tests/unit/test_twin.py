@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from conftest import REPO
-from thermaxis.io import load_dataset, read_run
+from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.twin import ScaleSpec, generate_dataset, generate_scale
 from thermaxis.twin.network import CONDUCTANCE_W_PER_K, NODES, discretise, simulate
 from thermaxis.twin import model as twin_model

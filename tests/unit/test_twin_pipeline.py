@@ -13,11 +13,11 @@ import pandas as pd
 import pytest
 
 from conftest import REPO
-from thermaxis.assemble import clean_and_assemble_run, model_inputs
+from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.config import Settings, load_config
-from thermaxis.decouple import decouple_table
-from thermaxis.io import load_dataset, read_run
-from thermaxis.models import DecoupledAxisModel
+from thermaxis.method.decouple import decouple_table
+from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.method.models import DecoupledAxisModel
 
 TWIN = REPO / "data" / "raw" / "twin"
 TRUTH = REPO / "data" / "twin_truth"
@@ -93,7 +93,7 @@ def test_papers_mlr_does_not_reproduce_the_twin_exactly(twin_tables):
 
 
 # The paper's Eq. 9 and the printed rows of Eq. 8, typed from the article (not from
-# data/paper/ or the twin): constant, then coefficient per sensor.
+# thermaxis/paper/values/ or the twin): constant, then coefficient per sensor.
 EQ9_K = (-306.494, {"T1": 13.247, "T6": -6.629, "T12": 3.326})  # absolute degC -> um/m
 EQ9_B = (-0.576, {"T2": -11.058, "T7": 0.974, "T11": -1.915})  # relative to M1 -> um
 EQ8 = {

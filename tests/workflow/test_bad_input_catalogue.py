@@ -7,7 +7,7 @@ file written outside ``results/<dataset>/``, ``logs/`` and ``benchmarks/``. Legi
 oddities must pass, implausible values must warn.
 
 ``test_bad_input`` runs every case in-process, the way the workflow does: the parse-time
-checks through :func:`thermaxis.preflight.check_before_jobs` (the one call common.smk
+checks through :func:`thermaxis.pipeline.preflight.check_before_jobs` (the one call common.smk
 makes), then the scripts of the rules up to the first one that must refuse (the case's
 target), with the params the rules give them. ``test_bad_input_end_to_end`` runs a
 representative set (``END_TO_END``) through Snakemake itself and checks that it prints
@@ -40,7 +40,7 @@ import yaml
 
 from conftest import REPO, run_snakemake, workflow_workdir
 from thermaxis.config import merge
-from thermaxis.preflight import check_before_jobs
+from thermaxis.pipeline.preflight import check_before_jobs
 
 TWIN = REPO / "data" / "raw" / "twin"
 NAME = "cut"
@@ -400,7 +400,7 @@ CASES = [
 
 
 # Run end to end through Snakemake as well: at least one case of every stage that can
-# refuse (the Snakefile's config check, each check of thermaxis.preflight, a job of each
+# refuse (the Snakefile's config check, each check of thermaxis.pipeline.preflight, a job of each
 # rule that refuses or warns) and every case that could hang or write outside the
 # dataset's folders. Each also checks that the in-process message is Snakemake's.
 END_TO_END = {
@@ -551,7 +551,7 @@ def _jobs(case: Case, checked) -> list[tuple[str, SimpleNamespace]]:
 def _in_process(case: Case, work: Path, config: dict, capsys) -> tuple[bool, str, str, list[Path]]:
     """Refused?, the 'thermaxis error:' line, stderr, and the refusing job's outputs.
 
-    Parse time is thermaxis.preflight.check_before_jobs (what common.smk calls, after the
+    Parse time is thermaxis.pipeline.preflight.check_before_jobs (what common.smk calls, after the
     Snakefile's validate_config, which it calls too) on the config files merged as
     Snakemake merges them; the jobs run the rules' scripts as Snakemake does.
     """

@@ -1,5 +1,5 @@
 """Recovery (issue 13): a workflow killed with SIGKILL completes on a plain rerun of the
-``make results`` recipe (``python -m thermaxis.resume snakemake ...``), with results
+``make results`` recipe (``python -m thermaxis.pipeline.resume snakemake ...``), with results
 byte-identical to a run that was never interrupted; a live run is never disturbed.
 
 The run that is never interrupted is the session's ``lines_run``; the killed run starts
@@ -41,7 +41,7 @@ def test_sigkill_then_plain_rerun_completes_byte_identical(lines_run, tmp_path):
     work = workflow_workdir(tmp_path / "killed")
     config = Path(shutil.copy(lines_run.config, work / lines_run.config.name))  # same dataset, same config
     # The make results recipe, with the test's cores and configuration.
-    command = [sys.executable, "-m", "thermaxis.resume", SNAKEMAKE, "--cores", "2", "--configfile", config.name]
+    command = [sys.executable, "-m", "thermaxis.pipeline.resume", SNAKEMAKE, "--cores", "2", "--configfile", config.name]
     first = subprocess.Popen(command, cwd=work, env=snakemake_env(), start_new_session=True,
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
     try:

@@ -16,7 +16,7 @@ import nbformat
 import yaml
 
 from conftest import REPO, planned_rules, reports_snakemake as snakemake, run_snakemake
-from thermaxis import provenance
+from thermaxis.reports import provenance
 
 def report_pages(out: Path) -> list[Path]:
     names = ["paper_report", "dataset_report", "condition_R1", "condition_R2", "model_R2"]

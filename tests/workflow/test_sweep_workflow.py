@@ -6,7 +6,7 @@ import pandas as pd
 import yaml
 
 from conftest import run_snakemake
-from thermaxis.evaluate import METRIC_COLUMNS
+from thermaxis.method.metrics import METRIC_COLUMNS
 
 
 def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines_run, library_unchanged):

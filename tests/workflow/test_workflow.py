@@ -14,8 +14,8 @@ from conftest import b_true, k_true, planned_rules, run_snakemake, set_csv_cell,
 from conftest import REPO, library_lock
 from conftest import workflow_workdir as workdir
 from thermaxis.config import merge
-from thermaxis.io import DataError
-from thermaxis.preflight import check_before_jobs
+from thermaxis.errors import DataError
+from thermaxis.pipeline.preflight import check_before_jobs
 
 
 def test_tables_exist_and_decouple_exact_lines(lines_run):
@@ -110,10 +110,10 @@ def test_editing_a_module_selection_imports_indirectly_reruns_selection(lines_ru
     """
     import os
 
-    import thermaxis.models
+    import thermaxis.method.models
 
     work, config = lines_run.work, lines_run.config
-    module = Path(thermaxis.models.__file__)
+    module = Path(thermaxis.method.models.__file__)
     original, stat = module.read_bytes(), module.stat()
     with library_lock(tmp_path_factory, exclusive=True):  # other workers' dry runs wait
         try:

@@ -2,13 +2,15 @@ import os
 import sys
 from pathlib import Path
 
-from thermaxis.deps import library_modules
-from thermaxis import guard
-from thermaxis.io import DataError
-from thermaxis.preflight import check_before_jobs
-from thermaxis.captions import figure_caption
-from thermaxis.summary import data_statement
-from thermaxis.reporting import PAPER_HEADLINE
+from thermaxis.dataset.safety import check_rule_outputs
+from thermaxis.errors import DataError
+from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
+from thermaxis.schemas import schema_path
+from thermaxis.pipeline.deps import library_modules
+from thermaxis.pipeline.preflight import check_before_jobs
+from thermaxis.figures.captions import figure_caption
+from thermaxis.dataset.summary import data_statement
+from thermaxis.reports.index import PAPER_HEADLINE
 
 
 envvars:
@@ -25,7 +27,7 @@ os.environ["PATH"] = (
 # One dataset per Snakemake run: --config dataset=<folder>, else the first of `datasets`
 # (`make results` runs each listed dataset in turn).
 # The config, the dataset and its first data file are validated when the workflow is
-# parsed (thermaxis.preflight, which the bad-input tests call too), so a bad sheet, a
+# parsed (thermaxis.pipeline.preflight, which the bad-input tests call too), so a bad sheet, a
 # missing run folder or a bad config value stops everything with one line before any
 # job starts.
 try:
@@ -63,7 +65,11 @@ FIG_ALGORITHMS = [a for a in SETTINGS.figures.algorithms if a in ALGORITHMS]
 REPORT_ALGORITHMS = [a for a in SETTINGS.reports.model_algorithms if a in ALGORITHMS]
 # Model reports embed the prediction figures of their algorithms, so those are drawn too.
 PREDICTION_ALGORITHMS = list(dict.fromkeys(FIG_ALGORITHMS + REPORT_ALGORITHMS))
-PAPER_FILES = sorted(str(p) for p in Path("data/paper").glob("*.csv"))
+# The paper's published values and the schemas are package data (relative paths keep the
+# executed notebooks independent of where the checkout is).
+PAPER_DIR = os.path.relpath(PUBLISHED_DIR)
+PAPER_FILES = sorted(str(p) for p in Path(PAPER_DIR).glob("*.csv"))
+MODEL_SCHEMA = os.path.relpath(schema_path("compensation_model"))
 
 
 # With one target there is no line to decouple: the point-by-point branch runs alone.

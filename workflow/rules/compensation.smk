@@ -26,7 +26,7 @@ COMP_PARAMS = dict(
 rule compensation_model:
     input:
         code=code_of("compensation_model.py"),
-        schema="workflow/schemas/compensation_model.schema.json",
+        schema=MODEL_SCHEMA,
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         metrics=f"{OUT}/tables/metrics.csv",
@@ -70,7 +70,7 @@ rule compensation_plc:
 rule compensation_fold:
     input:
         code=code_of("compensation_fold.py"),
-        schema="workflow/schemas/compensation_model.schema.json",
+        schema=MODEL_SCHEMA,
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         selection=f"{OUT}/selection/{{fold}}.json",

@@ -2,7 +2,7 @@ rule decouple:
     input:
         code=code_of("decouple.py"),
         errors=f"{OUT}/assembled/errors.parquet",
-        paper="data/paper/table5_slope_intercept.csv",
+        paper=f"{PAPER_DIR}/table5_slope_intercept.csv",
     output:
         table=report(
             f"{OUT}/tables/table5_slope_intercept.csv",

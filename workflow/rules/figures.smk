@@ -1,5 +1,5 @@
 # The figures, from a table (showyourwork): an entry names its figure's stem, the
-# function that draws it ("module.function" in thermaxis), the tables passed to it by
+# function that draws it ("package.module.function" in thermaxis), the tables passed to it by
 # argument name, its fixed arguments and how the report files it. Entries are drawn in
 # families, one job per family (per fold for a fold's predictions), because starting
 # Python and importing matplotlib costs more than drawing a figure. A family reads only
@@ -44,7 +44,7 @@ FIGURES = [
         dict(
             family="fig_data",
             stem=stem,
-            draw=f"plotting.{stem}",
+            draw=f"figures.paper.{stem}",
             inputs={"errors": ERRORS},
             arguments={"run": FIG_RUN},
             category=DATA_CATEGORY,
@@ -58,7 +58,7 @@ FIGURES = [
         dict(
             family="fig_data",
             stem="fig3_ambient",
-            draw="plotting.fig3_ambient",
+            draw="figures.paper.fig3_ambient",
             inputs={"ambient": f"{OUT}/tables/ambient_series.parquet"},
             category=DATA_CATEGORY,
             labels={"figure": "Fig. 3", "run": "all"},
@@ -70,7 +70,7 @@ FIGURES = [
         dict(
             family="fig_data",
             stem="fig9_other_runs",
-            draw="plotting.fig9_other_runs",
+            draw="figures.paper.fig9_other_runs",
             inputs={"errors": ERRORS},
             arguments={"runs": OTHER_RUNS},
             category=DATA_CATEGORY,
@@ -82,7 +82,7 @@ FIGURES = [
     dict(
         family="fig_data",
         stem="fig10_temperature_rise",
-        draw="plotting.fig10_temperature_rise",
+        draw="figures.paper.fig10_temperature_rise",
         inputs={
             "series": f"{OUT}/clean/{FIG_RUN}/temperatures.parquet",
             "signals": f"{OUT}/clean/{FIG_RUN}/signals.parquet",
@@ -96,7 +96,7 @@ FIGURES = [
         dict(
             family="fig_slope_intercept",
             stem="fig12_slope_intercept",
-            draw="plotting.fig12_slope_intercept",
+            draw="figures.paper.fig12_slope_intercept",
             inputs={"kb": f"{OUT}/tables/table5_slope_intercept.csv"},
             category="3. Decoupling",
             labels={"figure": "Fig. 12", "run": "all"},
@@ -107,7 +107,7 @@ FIGURES = [
     dict(
         family="fig_fold_comparison",
         stem="fold_comparison",
-        draw="plotting.fig_fold_comparison",
+        draw="figures.predictions.fig_fold_comparison",
         inputs={"metrics": f"{OUT}/tables/metrics.csv"},
         category=PREDICTION_CATEGORY,
         labels={"figure": "fold comparison", "fold": "all"},
@@ -124,7 +124,7 @@ FIGURES = [
                     "error_prediction",
                     approach,
                     algorithm,
-                    "plotting.fig_error_prediction",
+                    "figures.predictions.fig_error_prediction",
                     {"err_pred": f"{OUT}/tables/error_predictions.csv"},
                     "Figs. 11/15/17",
                 )
@@ -135,7 +135,7 @@ FIGURES = [
                     "kb_prediction",
                     "decoupled",
                     algorithm,
-                    "plotting.fig_kb_prediction",
+                    "figures.predictions.fig_kb_prediction",
                     {"kb_pred": f"{OUT}/tables/kb_predictions.csv"},
                     "Figs. 14/16",
                 )
@@ -148,7 +148,7 @@ FIGURES = [
         dict(
             family="fig_compensation_drift",
             stem=f"compensation_drift_{fold}",
-            draw="compensation_figures.fig_compensation_drift",
+            draw="figures.compensation.fig_compensation_drift",
             inputs={"summary": f"{COMP}/folds/{fold}/summary.csv"},
             arguments={"fold": fold},
             category="6. Compensation",

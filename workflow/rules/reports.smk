@@ -210,7 +210,7 @@ rule paper_report:
             fold=REPORT_FOLD,
             algorithms=PAPER_ALGORITHMS,
             approaches=APPROACHES,
-            paper_dir=os.path.dirname(PAPER_FILES[0]) if PAPER_FILES else "data/paper",
+            paper_dir=PAPER_DIR,
             figures=paper_report_figures(),
         ),
     shell:

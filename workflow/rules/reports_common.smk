@@ -12,7 +12,7 @@
 # same inputs; SOURCE_DATE_EPOCH fixes it.
 import json
 
-from thermaxis.provenance import git_state
+from thermaxis.reports.provenance import git_state
 
 REPORTS = f"{OUT}/reports"
 # One model report per fold shows these side by side, as the paper compares them.
@@ -33,7 +33,7 @@ PAPER_ALGORITHMS = [a for a in ("mlr", "svr") if a in FIG_ALGORITHMS]
 # no cell may take over 10 min. One process runs papermill and the HTML conversion
 # (src/thermaxis/reporting.py says why).
 RUN_NOTEBOOK = (
-    "python -m thermaxis.reporting run {input.notebook:q} {output.notebook:q} {output.html:q}"
+    "python -m thermaxis.reports.notebooks run {input.notebook:q} {output.notebook:q} {output.html:q}"
     " --kernel python3 --start-timeout 120 --execution-timeout 600"
     " --title {params.title:q} --parameters {params.parameters:q} > {log:q} 2>&1"
 )

@@ -3,7 +3,7 @@
 #
 # Batches, not one job per configuration: each batch is one process that reads the
 # assembled tables once and evaluates its share of the grid with the library function
-# the main workflow uses (thermaxis.experiment.evaluate_configuration). Locally there
+# the main workflow uses (thermaxis.method.folds.evaluate_configuration). Locally there
 # is one batch per core given; on a cluster one per sweep.cluster_batch_size evaluations,
 # since the cluster has more cores than a workflow asks for and each job pays a
 # scheduling delay (config sweep.batches overrides both). The batch count is part of
@@ -11,7 +11,7 @@
 import json
 import sys
 
-from thermaxis.sweep_plan import (
+from thermaxis.sweep.plan import (
     batch_count,
     batch_minutes,
     cluster_batch_count,
@@ -51,7 +51,7 @@ SWEEP_BATCH_FILES = expand(
 SWEEP_PAPERMILL = (
     "papermill {input.notebook:q} {output.notebook:q} -k python3 --no-progress-bar"
     " --start-timeout 120 --execution-timeout 600 -y {params.parameters:q} > {log:q} 2>&1"
-    " && python -m thermaxis.reporting html {output.notebook:q} {output.html:q}"
+    " && python -m thermaxis.reports.notebooks html {output.notebook:q} {output.html:q}"
     " --title {params.title:q} >> {log:q} 2>&1"
 )
 

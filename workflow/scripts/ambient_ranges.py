@@ -1,6 +1,6 @@
 import pandas as pd
 
-from thermaxis.runner import run_script, write_csv, write_parquet
+from thermaxis.pipeline.runner import run_script, write_csv, write_parquet
 
 
 def main(snakemake):

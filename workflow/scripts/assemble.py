@@ -1,8 +1,8 @@
 import pandas as pd
 
-from thermaxis.guard import check_same_targets
-from thermaxis.naming import sort_naturally
-from thermaxis.runner import run_script, write_csv, write_parquet
+from thermaxis.dataset.plausibility import check_same_targets
+from thermaxis.labels import sort_naturally
+from thermaxis.pipeline.runner import run_script, write_csv, write_parquet
 
 
 def main(snakemake):

@@ -1,10 +1,10 @@
 import logging
 
-from thermaxis.assemble import clean_and_assemble_run
+from thermaxis.cleaning.run import clean_and_assemble_run
 from thermaxis.config import CleaningSettings
-from thermaxis.guard import check_run_plausibility
-from thermaxis.io import load_dataset, read_run
-from thermaxis.runner import run_script, write_csv, write_parquet
+from thermaxis.dataset.plausibility import check_run_plausibility
+from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.pipeline.runner import run_script, write_csv, write_parquet
 
 
 def main(snakemake):

@@ -1,8 +1,8 @@
 import pandas as pd
 
-from thermaxis.experiment import SORT_KEYS
-from thermaxis.naming import sort_naturally
-from thermaxis.runner import run_script, write_csv
+from thermaxis.method.folds import SORT_KEYS
+from thermaxis.labels import sort_naturally
+from thermaxis.pipeline.runner import run_script, write_csv
 
 
 def main(snakemake):

@@ -2,8 +2,8 @@
 
 import pandas as pd
 
-from thermaxis.compensation import file_header
-from thermaxis.runner import run_script, write_text
+from thermaxis.compensation.exports import file_header
+from thermaxis.pipeline.runner import run_script, write_text
 
 SORT = ["fold", "measurement"]
 

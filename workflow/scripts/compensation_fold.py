@@ -5,12 +5,14 @@ import logging
 
 import pandas as pd
 
-from thermaxis import compensation
-from thermaxis.assemble import model_inputs
+from thermaxis.compensation import heldout
+from thermaxis.compensation import model as comp_model
+from thermaxis.compensation import runtime
+from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings
-from thermaxis.experiment import selection_from_dict
-from thermaxis.io import load_dataset, read_run
-from thermaxis.runner import run_script, write_csv, write_text
+from thermaxis.method.folds import selection_from_dict
+from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
 
 def main(snakemake):
@@ -20,7 +22,7 @@ def main(snakemake):
     with open(snakemake.input.selection, encoding="utf-8") as fh:
         selection = selection_from_dict(json.load(fh))
     train = (X["run"] != fold).to_numpy()
-    record = compensation.fit_model_record(
+    record = comp_model.fit_model_record(
         X.loc[train].reset_index(drop=True),
         Y.loc[train].reset_index(drop=True),
         selection,
@@ -33,20 +35,20 @@ def main(snakemake):
     text = json.dumps(record, indent=1) + "\n"
     write_text(text, snakemake.output.model)
     # The controller side reads the exported numbers, not the fitted estimator.
-    model = compensation.Compensator(json.loads(text))
-    final = compensation.Compensator.from_json(snakemake.input.final)
+    model = runtime.Compensator(json.loads(text))
+    final = runtime.Compensator.from_json(snakemake.input.final)
     X_run = X.loc[~train]
-    times_s, samples, reference = compensation.run_states(X_run, model.sensors)
+    times_s, samples, reference = heldout.run_states(X_run, model.sensors)
     steps = model.run(times_s, samples, reference)
-    _, final_samples, final_reference = compensation.run_states(X_run, final.sensors)
+    _, final_samples, final_reference = heldout.run_states(X_run, final.sensors)
     final_values = [final.parameters(s, final_reference) for s in final_samples]
     for step in steps:
         if step.reasons:
             logging.getLogger("thermaxis").warning("fold %s t=%g s: %s: %s", fold, step.time_s, step.status, "; ".join(step.reasons))
     raw = read_run(load_dataset(p.dataset), fold)
-    deviations = compensation.pass_deviations(raw, list(Y.columns), p.max_missing_fraction)
+    deviations = heldout.pass_deviations(raw, list(Y.columns), p.max_missing_fraction)
     time_min = X_run.sort_values("measurement")["time_min"].tolist()
-    tables = compensation.held_out_tables(fold, steps, time_min, deviations, list(Y.columns), final_values)
+    tables = heldout.held_out_tables(fold, steps, time_min, deviations, list(Y.columns), final_values)
     for name, frame in tables.items():
         write_csv(frame, snakemake.output[name], float_format="%.10g")
 

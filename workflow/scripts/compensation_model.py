@@ -6,11 +6,12 @@ from importlib.metadata import version
 
 import pandas as pd
 
-from thermaxis import compensation
-from thermaxis.assemble import model_inputs
+from thermaxis.compensation import heldout
+from thermaxis.compensation import model as comp_model
+from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings, SelectionSettings
-from thermaxis.experiment import select_for_fold
-from thermaxis.runner import run_script, write_text
+from thermaxis.method.folds import select_for_fold
+from thermaxis.pipeline.runner import run_script, write_text
 
 
 def main(snakemake):
@@ -30,7 +31,7 @@ def main(snakemake):
         pointwise=p.approach == "pointwise",
     )
     metrics = pd.read_csv(snakemake.input.metrics)
-    record = compensation.fit_model_record(
+    record = comp_model.fit_model_record(
         X,
         Y,
         selection,
@@ -39,14 +40,14 @@ def main(snakemake):
         decoupling,
         settings,
         **p.about,
-        held_out_accuracy=compensation.held_out_accuracy(metrics, p.approach, settings.algorithm),
+        held_out_accuracy=heldout.held_out_accuracy(metrics, p.approach, settings.algorithm),
         provenance={
             "citation": p.citation,
             "packages": {name: version(name) for name in ("thermaxis", "scikit-learn", "numpy")},
             "settings": sections,
         },
     )
-    compensation.validate_model(record, where=snakemake.output.model)
+    comp_model.validate_model(record, where=snakemake.output.model)
     write_text(json.dumps(record, indent=1) + "\n", snakemake.output.model)
 
 

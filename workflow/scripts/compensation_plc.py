@@ -1,8 +1,8 @@
 """Write the IEC 61131-3 Structured Text block of model.json."""
 
-from thermaxis.compensation import Compensator
-from thermaxis.plc import structured_text
-from thermaxis.runner import run_script, write_text
+from thermaxis.compensation.runtime import Compensator
+from thermaxis.compensation.plc import structured_text
+from thermaxis.pipeline.runner import run_script, write_text
 
 
 def main(snakemake):

@@ -1,8 +1,8 @@
 import pandas as pd
 
-from thermaxis.io import load_dataset
-from thermaxis.runner import run_script, write_csv
-from thermaxis.summary import dataset_summary
+from thermaxis.dataset.reader import load_dataset
+from thermaxis.pipeline.runner import run_script, write_csv
+from thermaxis.dataset.summary import dataset_summary
 
 
 def main(snakemake):

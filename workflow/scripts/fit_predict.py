@@ -3,11 +3,11 @@ import logging
 
 import pandas as pd
 
-from thermaxis.assemble import model_inputs
+from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import DecouplingSettings, ModelSettings
-from thermaxis.experiment import SORT_KEYS, evaluate_configuration, selection_from_dict
-from thermaxis.naming import sort_naturally
-from thermaxis.runner import run_script, write_csv
+from thermaxis.method.folds import SORT_KEYS, evaluate_configuration, selection_from_dict
+from thermaxis.labels import sort_naturally
+from thermaxis.pipeline.runner import run_script, write_csv
 
 
 def main(snakemake):

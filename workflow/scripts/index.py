@@ -3,8 +3,8 @@
 import json
 import os
 
-from thermaxis.reporting import IndexRow, IndexSection, render_index
-from thermaxis.runner import run_script, write_text
+from thermaxis.reports.index import IndexRow, IndexSection, render_index
+from thermaxis.pipeline.runner import run_script, write_text
 
 
 def main(snakemake):

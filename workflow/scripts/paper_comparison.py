@@ -1,8 +1,8 @@
 import pandas as pd
 
-from thermaxis.audit import ReproducedTables, comparison_markdown, paper_comparison
+from thermaxis.paper.audit import ReproducedTables, comparison_markdown, paper_comparison
 from thermaxis.paper import published_values
-from thermaxis.runner import run_script, write_csv, write_text
+from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
 
 def main(snakemake):

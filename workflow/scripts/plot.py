@@ -2,10 +2,11 @@
 
 import pandas as pd
 
-from thermaxis import compensation_figures, plotting
-from thermaxis.runner import run_script
+from thermaxis.figures import compensation, captions, paper, predictions, style
+from thermaxis.pipeline.runner import run_script
 
-MODULES = {"plotting": plotting, "compensation_figures": compensation_figures}
+# The figure table names functions as "figures.<module>.<function>".
+MODULES = {f"figures.{m.__name__.rsplit('.', 1)[1]}": m for m in (paper, predictions, compensation)}
 
 
 def _table(path):
@@ -15,12 +16,12 @@ def _table(path):
 def main(snakemake):
     tables = {path: _table(path) for path in snakemake.input.tables}
     for figure in snakemake.params.figures:
-        module, name = figure["draw"].split(".")
+        module, name = figure["draw"].rsplit(".", 1)
         draw = getattr(MODULES[module], name)
         fig = draw(**{arg: tables[path] for arg, path in figure["tables"].items()}, **figure["arguments"])
         if snakemake.params.simulated:
-            plotting.stamp_provenance(fig, plotting.SIMULATED_NOTE)
-        plotting.save_figure(fig, figure["paths"], dpi=snakemake.params.dpi)
+            style.stamp_provenance(fig, captions.SIMULATED_NOTE)
+        style.save_figure(fig, figure["paths"], dpi=snakemake.params.dpi)
 
 
 run_script(main, snakemake)

@@ -2,10 +2,10 @@ import json
 
 import pandas as pd
 
-from thermaxis.assemble import model_inputs
+from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import DecouplingSettings, SelectionSettings
-from thermaxis.experiment import select_for_fold, selection_table, selection_to_dict
-from thermaxis.runner import run_script, write_csv, write_text
+from thermaxis.method.folds import select_for_fold, selection_table, selection_to_dict
+from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
 
 def main(snakemake):

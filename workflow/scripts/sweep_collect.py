@@ -2,19 +2,19 @@
 
 import pandas as pd
 
-from thermaxis import sweep
+from thermaxis.sweep import run as sweep_run
 from thermaxis.config import DecouplingSettings, SelectionSettings
-from thermaxis.runner import run_script, write_csv
+from thermaxis.pipeline.runner import run_script, write_csv
 
 
 def main(snakemake):
     p = snakemake.params
-    summary = sweep.collect_summary(pd.read_parquet(path) for path in snakemake.input.batches)
+    summary = sweep_run.collect_summary(pd.read_parquet(path) for path in snakemake.input.batches)
     degree = DecouplingSettings.from_section(p.decoupling).degree
-    ranking = sweep.rank_configurations(summary, SelectionSettings.from_section(p.selection), degree)
+    ranking = sweep_run.rank_configurations(summary, SelectionSettings.from_section(p.selection), degree)
     write_csv(summary, snakemake.output.summary, float_format="%.6f")
     write_csv(ranking, snakemake.output.ranking, float_format="%.6f")
-    write_csv(sweep.factor_effects(ranking), snakemake.output.effects, float_format="%.6f")
+    write_csv(sweep_run.factor_effects(ranking), snakemake.output.effects, float_format="%.6f")
 
 
 run_script(main, snakemake)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..decouple import decouple_measurement
+from thermaxis.method.decouple import decouple_measurement
 from . import conditions as cond
 from . import faults
 from . import model as mdl

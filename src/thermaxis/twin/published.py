@@ -5,7 +5,7 @@ relative to the run's first measurement) and Eq. 8 (the point-by-point MLR on T1
 T12 relative to the run start; printed only at 185, 205, 225 and 445 mm) to ITS data.
 A twin whose temperatures are faithful to the paper's should give back its own k, b
 and errors when those equations are applied to its sensors.  Coefficients and the
-error bounds (Table 7) are read from the transcriptions in ``data/paper/``; nothing
+error bounds (Table 7) are read from the transcriptions in ``thermaxis/paper/values/``; nothing
 from the pipeline's held-out results enters here.
 """
 
@@ -16,7 +16,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ..paper import load_table
+from thermaxis.paper.published import load_table
 
 __all__ = ["PublishedModel", "PublishedTargets", "published_targets"]
 

@@ -1,10 +1,10 @@
 """Dataset documents (dataset.yaml, runs.tsv, README.md) and the calibration report.
 
 The calibration report is computed from the RAW files just written, by the pipeline's
-own library with the default configuration: :func:`thermaxis.assemble.clean_and_assemble_run`
-(cleaning, pass mean, window-mean temperatures), :func:`thermaxis.decouple.decouple_table`
+own library with the default configuration: :func:`thermaxis.cleaning.run.clean_and_assemble_run`
+(cleaning, pass mean, window-mean temperatures), :func:`thermaxis.method.decouple.decouple_table`
 (k and b, origin 185 mm) and, for the held-out fold E4, the workflow's
-:func:`thermaxis.experiment.select_for_fold` and :func:`~thermaxis.experiment.evaluate_configuration`.
+:func:`thermaxis.method.folds.select_for_fold` and :func:`~thermaxis.method.folds.evaluate_configuration`.
 The held-out results are reported, never fitted to.
 """
 
@@ -16,12 +16,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..assemble import clean_and_assemble_run, model_inputs
-from ..config import Settings, load_config
-from ..decouple import decouple_table
-from ..experiment import evaluate_configuration, select_for_fold
-from ..io import load_dataset, read_run
-from ..paper import load_table
+from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
+from thermaxis.config import Settings, load_config
+from thermaxis.method.decouple import decouple_table
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
+from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.paper.published import load_table
 from . import conditions as cond
 from . import faults
 from . import model as mdl
@@ -526,10 +526,10 @@ def write_calibration_report(root: Path | str, params: mdl.TwinParams) -> pd.Dat
 **SIMULATED data.** Every figure below is computed by `python -m thermaxis.twin generate`
 (and `calibrate`) from the RAW files of this folder -- faults included -- with the
 pipeline's own library and default configuration (`config/config.yaml`): cleaning and
-window-mean temperatures (`thermaxis.assemble.clean_and_assemble_run`), pass-mean errors
+window-mean temperatures (`thermaxis.cleaning.run.clean_and_assemble_run`), pass-mean errors
 ({miss_run} M{miss_meas:02d} has no `{miss_dir}` capture at {miss_pos:g} mm: the pipeline keeps the other pass's reading there),
 and the least-squares line of each measurement, k in um/m and b in um at 185 mm
-(`thermaxis.decouple.decouple_table`, the paper's Eq. 6).
+(`thermaxis.method.decouple.decouple_table`, the paper's Eq. 6).
 
 ## Targets
 
@@ -584,7 +584,7 @@ measurement, degC) are shown for comparison with the figure:
 ## Held-out results of the pipeline (fold {view.config['paper_fold']}, default configuration)
 
 Computed here with the workflow's own selection and models
-(`thermaxis.experiment.select_for_fold`, `evaluate_configuration`; the same numbers as
+(`thermaxis.method.folds.select_for_fold`, `evaluate_configuration`; the same numbers as
 `snakemake results/twin/tables/metrics.csv`). RMSE / max |residual| / MAE:
 
 | model | target | paper table | paper | new twin | previous twin (Table 5 only) |

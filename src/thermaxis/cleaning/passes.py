@@ -1,0 +1,140 @@
+"""Combining an interferometer measurement's forward and backward passes at the target positions."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from thermaxis.config import ErrorCleaning
+
+
+__all__ = [
+    "combine_passes",
+]
+# Positions closer than this are the same target (readings are logged to 1e-3 mm at best).
+_POSITION_TOL_MM = 1e-6
+
+
+# ----------------------------------------------------------------------------- errors
+
+
+def _passes(measurement: pd.DataFrame, label: str) -> dict[str, pd.DataFrame]:
+    """Split a measurement into its passes: {"+": ..., "-": ...} or {"single": ...}."""
+    if "direction" not in measurement.columns or measurement["direction"].isna().all():
+        return {"single": measurement}
+    direction = measurement["direction"]
+    if direction.isna().any():
+        raise ValueError(f"{label}: column 'direction' is empty in some rows; expected '+' or '-' in all or none")
+    bad = ~direction.isin(["+", "-"])
+    if bad.any():
+        raise ValueError(f"{label}: column 'direction': expected '+' or '-', got {direction[bad].iloc[0]!r}")
+    return {d: measurement[direction.to_numpy() == d] for d in ("+", "-") if (direction == d).any()}
+
+
+def _pass_at_targets(rows: pd.DataFrame, targets: np.ndarray, label: str, pass_name: str) -> np.ndarray:
+    """One pass's reading at each target (NaN where it has none)."""
+    rows = rows[np.isfinite(rows["error_um"].to_numpy(dtype=float))]
+    position = rows["position_mm"].to_numpy(dtype=float)
+    error = rows["error_um"].to_numpy(dtype=float)
+    match = np.abs(position[:, None] - targets[None, :]) <= _POSITION_TOL_MM
+    unmatched = ~match.any(axis=1)
+    if unmatched.any():
+        raise ValueError(f"{label}: position {position[unmatched][0]:g} mm is not one of the targets")
+    target_of = match.argmax(axis=1)
+    out = np.full(targets.size, np.nan)
+    for k in np.unique(target_of):
+        readings = np.unique(error[target_of == k])
+        if readings.size > 1:
+            raise ValueError(
+                f"{label}: position {targets[k]:g} mm appears twice in the {pass_name} pass with different errors "
+                f"{readings.tolist()} (expected one reading per target and pass)"
+            )
+        out[k] = readings[0]
+    return out
+
+
+def combine_passes(
+    measurement: pd.DataFrame,
+    targets: Sequence[float],
+    settings: ErrorCleaning,
+    name: str = "",
+) -> tuple[pd.Series, list[str]]:
+    """One error per target from one measurement's pass(es).
+
+    Parameters
+    ----------
+    measurement : columns ``position_mm``, ``error_um`` (NaN = no reading), optional
+        ``time`` and ``direction`` ("+" / "-").  Without directions (absent or all
+        empty) the rows are one pass, used whatever ``settings.direction`` asks for;
+        with one direction only, "mean" uses that pass and the other one is an error.
+    targets : the target positions, mm.
+    settings : :class:`ErrorCleaning`.
+    name : the measurement's name for messages (e.g. its file).
+
+    Returns
+    -------
+    (pd.Series, list of str)
+        Errors indexed by ``position_mm`` in the targets' order (NaN = missing), with
+        ``attrs["n_duplicate_rows"]``; and warnings.  With ``direction="mean"`` a target
+        read in one pass only keeps that reading (with a warning): operators keep such a
+        reading, although it carries that pass's reversal error instead of the mean.
+
+    Raises
+    ------
+    ValueError
+        A position that is no target, the same position twice in one pass with
+        different errors, the requested direction absent, or more than
+        ``max_missing_fraction`` of targets missing.
+    """
+    label = f"measurement {name}" if name else "measurement"
+    targets = np.asarray(targets, dtype=float)
+    if targets.ndim != 1 or targets.size == 0 or not np.isfinite(targets).all():
+        raise ValueError(f"{label}: targets must be a non-empty 1-D sequence of finite positions in mm")
+    if np.unique(targets).size != targets.size:
+        raise ValueError(f"{label}: targets must be distinct, got {targets.tolist()}")
+    for column in ("position_mm", "error_um"):
+        if column not in measurement.columns:
+            raise ValueError(f"{label}: missing column {column!r} (expected position_mm, error_um[, direction])")
+
+    repeated = measurement.duplicated(keep="first")
+    measurement = measurement[~repeated.to_numpy()]
+    passes = {d: _pass_at_targets(rows, targets, label, d) for d, rows in _passes(measurement, label).items()}
+
+    warnings: list[str] = []
+    if settings.direction in ("+", "-") and "single" not in passes:
+        if settings.direction not in passes:
+            (other,) = passes
+            raise ValueError(
+                f"{label}: no {settings.direction} pass (only {other}); expected errors.direction 'mean' or {other!r}"
+            )
+        combined = passes[settings.direction]
+    elif len(passes) == 1:
+        # One pass only (unlabelled, or every row in one direction): nothing to average.
+        (combined,) = passes.values()
+    else:
+        forward = passes.get("+", np.full(targets.size, np.nan))
+        backward = passes.get("-", np.full(targets.size, np.nan))
+        combined = np.where(
+            np.isfinite(forward) & np.isfinite(backward),
+            0.5 * (forward + backward),
+            np.where(np.isfinite(forward), forward, backward),
+        )
+        for k in np.flatnonzero(np.isfinite(forward) != np.isfinite(backward)):
+            have, lack = ("+", "-") if np.isfinite(forward[k]) else ("-", "+")
+            warnings.append(
+                f"{label}: position {targets[k]:g} mm has no {lack} reading; using the {have} reading alone"
+            )
+
+    missing = ~np.isfinite(combined)
+    for k in np.flatnonzero(missing):
+        warnings.append(f"{label}: position {targets[k]:g} mm has no reading; dropped from this measurement")
+    if missing.sum() > settings.max_missing_fraction * targets.size:
+        raise ValueError(
+            f"{label}: {int(missing.sum())} of {targets.size} targets have no reading, more than "
+            f"max_missing_fraction={settings.max_missing_fraction:g}"
+        )
+    result = pd.Series(combined, index=pd.Index(targets, name="position_mm"), name="error_um")
+    result.attrs["n_duplicate_rows"] = int(repeated.sum())
+    return result, warnings

@@ -1,0 +1,236 @@
+"""From one run's raw logs to tidy tables: unzeroed errors and measurement temperatures.
+
+The unzeroed error matrix keeps the drift the paper is about: the interferometer
+datum is set once per run, so a later measurement's first-position reading is not 0.
+The re-zeroed view (each measurement minus its own first-position reading, Fig. 8)
+is kept beside it only to show what re-zeroing hides.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from thermaxis.cleaning import passes
+from thermaxis.cleaning import temperatures as temperature_cleaning
+from thermaxis.config import CleaningSettings
+from thermaxis.labels import natural_key
+from thermaxis.errors import DataError
+from thermaxis.dataset.reader import Dataset, RawRun
+
+__all__ = [
+    "RunTables",
+    "clean_and_assemble_run",
+    "tidy_errors",
+    "tidy_temperatures",
+    "unzeroed_matrix",
+    "model_inputs",
+    "tidy_signals",
+]
+
+@dataclass(frozen=True)
+class RunTables:
+    run: str
+    series: pd.DataFrame  # cleaned temperatures on the common grid
+    qc: pd.DataFrame
+    gaps: pd.DataFrame
+    errors: pd.DataFrame  # tidy, one row per measurement x position
+    temperatures: pd.DataFrame  # tidy, one row per measurement x sensor
+    windows: pd.DataFrame
+    signals: pd.DataFrame  # tidy, one row per measurement x operating signal (may be empty)
+    signal_series: pd.DataFrame  # time, elapsed_min and each operating signal on the grid
+    notes: tuple[str, ...] = field(default=())
+
+
+def _targets(raw: RawRun) -> np.ndarray:
+    """The run's target set: every position read in any of its measurements."""
+    positions = np.concatenate([m["position_mm"].to_numpy() for m in raw.measurements.values()])
+    return np.unique(positions)
+
+
+def minutes_since_first(times, windows: pd.DataFrame):
+    """Minutes since the start of the run's first measurement (the paper's time axis)."""
+    return (times - windows["start"].iloc[0]) / pd.Timedelta(minutes=1)
+
+
+def tidy_errors(run: str, condition: str, windows: pd.DataFrame, combined: list[pd.Series]) -> pd.DataFrame:
+    """Unzeroed errors (passes combined) plus the re-zeroed view, one row per reading."""
+    rows = []
+    for (_, w), curve in zip(windows.iterrows(), combined):
+        first = curve.dropna()
+        origin = first.iloc[0] if len(first) else np.nan
+        time_min = minutes_since_first(w["start"], windows)
+        for position, value in curve.items():
+            rows.append((run, condition, int(w["measurement"]), time_min, float(position), value, value - origin))
+    return pd.DataFrame(
+        rows,
+        columns=["run", "condition", "measurement", "time_min", "position_mm", "error_um", "rezeroed_um"],
+    )
+
+
+SIGNAL_COLUMNS = ["run", "condition", "measurement", "time_min", "signal", "value"]
+
+
+def tidy_signals(run: str, condition: str, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
+    """Operating signals (window means) per measurement, one row per measurement x signal."""
+    time_min = minutes_since_first(windows["start"], windows).to_numpy()
+    signals = [c for c in at_measurements.columns if c not in ("measurement", "start", "end")]
+    frames = [
+        pd.DataFrame(
+            {
+                "run": run,
+                "condition": condition,
+                "measurement": windows["measurement"].to_numpy(dtype=int),
+                "time_min": time_min,
+                "signal": signal,
+                "value": at_measurements[signal].to_numpy(dtype=float),
+            }
+        )
+        for signal in signals
+    ]
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=SIGNAL_COLUMNS)
+
+
+def tidy_temperatures(run: str, condition: str, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
+    """Absolute temperatures per measurement and their rise since the run's first measurement."""
+    time_min = minutes_since_first(windows["start"], windows).to_numpy()
+    sensors = [c for c in at_measurements.columns if c not in ("measurement", "start", "end")]
+    frames = []
+    for sensor in sensors:
+        absolute = at_measurements[sensor].to_numpy(dtype=float)
+        frames.append(
+            pd.DataFrame(
+                {
+                    "run": run,
+                    "condition": condition,
+                    "measurement": windows["measurement"].to_numpy(dtype=int),
+                    "time_min": time_min,
+                    "sensor": sensor,
+                    "absolute_c": absolute,
+                    "relative_c": absolute - absolute[0],
+                }
+            )
+        )
+    return pd.concat(frames, ignore_index=True)
+
+
+def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSettings) -> RunTables:
+    """Clean one run's logs and assemble its unzeroed errors and measurement temperatures."""
+    t_settings, e_settings = cleaning.temperatures, cleaning.errors
+    run = raw.run
+    condition = dataset.condition_of(run)
+    windows = raw.windows()
+    notes: list[str] = []
+
+    targets = _targets(raw)
+    combined = []
+    for name, measurement in raw.measurements.items():
+        label = str(dataset.root / run / "errors" / f"{name}.csv")
+        curve, warns = passes.combine_passes(measurement, targets, e_settings, name=label)
+        notes.extend(warns)
+        combined.append(curve)
+
+    # The grid spans the measurements with a margin so window means never extrapolate.
+    margin = pd.Timedelta(seconds=max(60.0, 3 * t_settings.interval_s))
+    start = windows["start"].min() - margin
+    end = windows["end"].max() + margin
+    temp_dir = dataset.root / run / "temperatures"
+    try:
+        cleaned = temperature_cleaning.clean_temperatures(raw.sources, dataset.clock_offsets_s(), t_settings, start=start, end=end)
+    except ValueError as exc:
+        raise DataError(f"{temp_dir}: {exc}") from None
+    try:
+        gap_notes = temperature_cleaning.check_gaps(
+            cleaned.gaps,
+            windows,
+            allow=cleaning.allow_long_gaps,
+            files={s: temp_dir / f"{source}.csv" for source in raw.sources for s in dataset.sensors_of(source)},
+            max_gap_s=t_settings.max_gap_s,
+        )
+    except ValueError as exc:
+        raise DataError(str(exc)) from None  # the message starts with the sensor's file
+    notes.extend(f"{run}: {n}" for n in gap_notes)
+    how = cleaning.window
+    at_measurements = temperature_cleaning.temperatures_in_windows(cleaned.frame, windows, how=how)
+    sensors = [s for s in dataset.sensors if s in at_measurements.columns]
+    missing = at_measurements[sensors].isna()
+    if missing.any().any():
+        sensor = missing.any()[missing.any()].index[0]
+        window = windows.loc[missing[sensor].to_numpy()].iloc[0]
+        source = next(src for src in raw.sources if sensor in dataset.sensors_of(src))
+        raise DataError(
+            f"{temp_dir / f'{source}.csv'}: sensor {sensor!r} of run {run!r} has no usable reading during measurement "
+            f"{window['measurement']} ({window['name']}, {window['start']} to {window['end']}); "
+            "expected readings within temperatures.max_gap_s of every measurement (raise max_gap_s, or drop the sensor "
+            "from dataset.yaml)"
+        )
+    signal_frame = temperature_cleaning.signals_on_grid(raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"])
+    signal_values = temperature_cleaning.temperatures_in_windows(signal_frame, windows, how=how)
+
+    series = cleaned.frame.copy()
+    series.insert(1, "elapsed_min", minutes_since_first(series["time"], windows))
+    signal_series = signal_frame.copy()
+    signal_series.insert(1, "elapsed_min", series["elapsed_min"].to_numpy())
+    return RunTables(
+        run=run,
+        series=series,
+        qc=_with_run(cleaned.qc, run),
+        gaps=_with_run(cleaned.gaps, run),
+        errors=tidy_errors(run, condition, windows, combined),
+        temperatures=tidy_temperatures(run, condition, windows, at_measurements[sensors]),
+        windows=_with_run(windows, run),
+        signals=tidy_signals(run, condition, windows, signal_values.drop(columns=["start", "end"])),
+        signal_series=signal_series,
+        notes=tuple(notes),
+    )
+
+
+def _with_run(frame: pd.DataFrame, run: str) -> pd.DataFrame:
+    out = frame.copy()
+    out.insert(0, "run", run)
+    return out
+
+
+def unzeroed_matrix(errors: pd.DataFrame, value: str = "error_um") -> pd.DataFrame:
+    """Measurement x position matrix (rows (run, measurement), columns position_mm).
+
+    Only the (run, measurement) pairs that exist get a row, so runs of different
+    lengths stay as long as they are; a target a measurement lacks is NaN.
+    """
+    matrix = errors.set_index(["run", "measurement", "position_mm"])[value].unstack("position_mm")
+    return matrix.sort_index(axis=0).sort_index(axis=1)
+
+
+def model_inputs(
+    errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None, signals: pd.DataFrame | None = None
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The estimators' view: X (run, measurement, time_min, absolute temperature per sensor) and Y.
+
+    Relative temperatures are NOT passed: the models derive them from each run's own
+    first measurement, so a held-out run can never borrow another run's start.
+    ``signals`` (the tidy operating-signal table) adds one column per signal after the
+    sensors, for models asked to use them as inputs.
+    """
+    wide = temperatures.pivot_table(index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True)
+    if sensors is None:
+        # Natural order (T2 before T10), so clusters and tables read like the paper's.
+        sensors = sorted(wide.columns, key=natural_key)
+    times = errors.groupby(["run", "measurement"], sort=True)["time_min"].first()
+    Y = unzeroed_matrix(errors)
+    index = Y.index.intersection(wide.index)
+    if len(index) != len(Y.index):
+        missing = Y.index.difference(wide.index)[0]
+        raise DataError(f"assembled tables: run {missing[0]!r} measurement {missing[1]} has errors but no temperatures")
+    X = wide.loc[index, list(sensors)]
+    if signals is not None and len(signals):
+        signal_wide = signals.pivot_table(index=["run", "measurement"], columns="signal", values="value", sort=True)
+        X = X.join(signal_wide.reindex(index)[sorted(signal_wide.columns, key=natural_key)])
+    X = X.reset_index()
+    X.insert(2, "time_min", times.loc[index].to_numpy())
+    X.columns.name = None
+    Y = Y.loc[index].reset_index(drop=True)
+    Y.columns = [float(c) for c in Y.columns]
+    Y.columns.name = None
+    return X, Y

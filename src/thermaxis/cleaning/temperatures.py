@@ -1,0 +1,571 @@
+"""Cleaning of one run's raw temperature logs and interferometer readings (issue 4).
+
+Temperatures
+------------
+Each source (acquisition box, wireless nut sensor, CNC HMI, ...) logs on its own
+clock and at its own, possibly irregular, rate.  :func:`clean_temperatures` repairs
+each sensor's *native* series and then puts every sensor on one regular time grid.
+The order of the steps matters:
+
+1. **Exact duplicate rows** are dropped first: they are logging artefacts and would
+   otherwise count twice in the spike filter's window.
+2. **Clock offset** (from ``dataset.yaml``) is added to the source's timestamps.  A
+   constant shift does not change steps 3-5 (they work per sample or per sample
+   index), but every later step that compares *times* must see corrected times.
+3. **Out-of-range** readings (open or short circuit, e.g. 850 C or -200 C) are removed
+   before anything statistical: one such value would dominate any mean.
+4. **Repeated timestamps** with different values are merged into their mean (after
+   step 3, so an open-circuit value never enters the mean).
+5. **Spikes**: a Hampel filter on the native series (window counted in the source's
+   own samples), so the filter sees the raw sampling and not interpolated points.
+   ``hampel_min_deviation_c`` keeps quantised data (the HMI's 0.1 C steps give a
+   window MAD of 0) from turning every quantisation step into a "spike".
+6. **Estimated clock offsets** (optional): after steps 3-5, because a spike or an
+   open-circuit value would dominate the cross-correlation.
+7. **Grid**: the remaining valid samples are interpolated *linearly in time* onto a
+   grid aligned to whole multiples of ``interval_s``.  Interpolation, not bin
+   averaging, so a fast transient is not smeared by the bin width and a linear
+   temperature ramp is reproduced exactly.
+8. **Gaps**: a grid point whose nearest valid samples on either side are more than
+   ``max_gap_s`` apart stays NaN and the gap is reported.  Before a sensor's first
+   (after its last) valid sample, its value is held for up to ``max_gap_s / 2``: that
+   is the farthest an interior point of an allowed gap can be from a real sample.
+
+Removed spikes and out-of-range values leave short gaps that step 7 fills; the QC
+table says how many grid points each repair touched.
+
+Errors
+------
+:func:`combine_passes` turns one measurement (one or two passes over the targets)
+into one error per target.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from numpy.lib.stride_tricks import sliding_window_view
+
+from thermaxis.config import TemperatureCleaning
+from thermaxis.labels import sort_naturally
+
+from thermaxis.cleaning._timebase import MAD_TO_SIGMA, _NS, _as_ns, _iso, _timestamp_ns
+from thermaxis.cleaning.clock import _best_offset
+
+__all__ = [
+    "CleanedTemperatures",
+    "GAP_FACTOR",
+    "QC_COLUMNS",
+    "GAP_COLUMNS",
+    "hampel_outliers",
+    "clean_temperatures",
+    "check_gaps",
+    "signals_on_grid",
+    "temperatures_in_windows",
+]
+# A spacing between valid samples longer than this many times the sensor's median
+# spacing is a gap (lost packet, removed spike, ...): grid points in it are counted as
+# interpolated in the QC table.  1.5 tolerates the jitter of irregular (wireless) sampling.
+GAP_FACTOR = 1.5
+# Relative tolerance of threshold comparisons: a tie must not flip on float rounding.
+_TIE_RTOL = 1e-9
+
+QC_COLUMNS = [
+    "sensor",
+    "source",
+    "n_raw",
+    "n_duplicates",
+    "n_out_of_range",
+    "n_spikes",
+    "n_interpolated",
+    "n_edge_held",
+    "n_long_gap",
+    "longest_gap_s",
+    "clock_offset_s",
+    "offset_estimated",
+]
+GAP_COLUMNS = ["sensor", "start", "end", "duration_s", "kind"]
+
+
+@dataclass(frozen=True)
+class CleanedTemperatures:
+    """Result of :func:`clean_temperatures`.
+
+    frame : ``time`` + one column per sensor on the regular grid (NaN in long gaps).
+    qc    : one row per sensor, columns :data:`QC_COLUMNS`.
+    gaps  : one row per gap left NaN, columns :data:`GAP_COLUMNS` (``start``/``end``
+            are the valid samples bounding it, or the grid's ends for a sensor that
+            starts late or stops early).
+    """
+
+    frame: pd.DataFrame
+    qc: pd.DataFrame
+    gaps: pd.DataFrame
+
+
+# ----------------------------------------------------------------------------- spikes
+
+
+def hampel_outliers(values, window: int = 7, threshold: float = 4.0, min_deviation: float = 0.0) -> np.ndarray:
+    """Boolean mask of the samples a Hampel filter calls spikes.
+
+    A sample is a spike when it deviates from the median of the ``window`` samples
+    centred on it by more than ``max(threshold * 1.4826 * MAD, min_deviation)``,
+    MAD being that window's median absolute deviation from its median.
+
+    Parameters
+    ----------
+    values : 1-D array of valid (finite) samples in time order.
+    window : odd number of samples.
+    threshold : in scaled MADs (normal-noise standard deviations).
+    min_deviation : deviations up to this are never spikes (quantised data has MAD 0).
+
+    Notes
+    -----
+    A sample within ``window // 2`` of an end is judged against the nearest FULL
+    window (the first or last ``window`` samples), never a mirrored one: mirroring a
+    steady ramp folds it into a peak, so its first and last samples would look like
+    spikes.  Deviations within a relative 1e-9 of the limit count as equal to it, so a
+    reading exactly ``min_deviation`` away is never flagged by a rounding error
+    (0.1 C steps give 0.20000000000000284 for 0.2).  Vectorised with a sliding-window
+    view and ``np.partition`` (exact window medians, no Python loop over samples).
+    """
+    x = np.asarray(values, dtype=float)
+    if window < 3 or window % 2 == 0:
+        raise ValueError(f"Hampel window must be an odd number of samples >= 3, got {window}")
+    half = window // 2
+    if x.size < window:
+        return np.zeros(x.shape, dtype=bool)
+    windows = sliding_window_view(x, window)
+    median = np.partition(windows, half, axis=1)[:, half]
+    mad = np.partition(np.abs(windows - median[:, None]), half, axis=1)[:, half]
+    # Window i is centred on sample i + half; the ends borrow the first and last window.
+    centre = np.clip(np.arange(x.size) - half, 0, windows.shape[0] - 1)
+    limit = np.maximum(threshold * MAD_TO_SIGMA * mad[centre], min_deviation)
+    return np.abs(x - median[centre]) > limit * (1.0 + _TIE_RTOL)
+
+
+# ----------------------------------------------------------------------------- native series
+
+
+@dataclass
+class _Native:
+    """One sensor's valid samples after the native-series repairs, and their counts."""
+
+    sensor: str
+    source: str
+    t: np.ndarray
+    v: np.ndarray
+    n_raw: int
+    n_duplicates: int
+    n_out_of_range: int
+    n_spikes: int
+    clock_offset_s: float
+    offset_estimated: bool = False
+
+
+def _clean_source(
+    name: str, frame: pd.DataFrame, offset_s: float, settings: TemperatureCleaning
+) -> list[_Native]:
+    if "time" not in frame.columns:
+        raise ValueError(f"temperature source {name!r}: missing column 'time'")
+    sensors = [c for c in frame.columns if c != "time"]
+    values = frame[sensors].to_numpy(dtype=float)
+    n_raw = np.isfinite(values).sum(axis=0)
+
+    repeated = frame.duplicated(keep="first").to_numpy()
+    duplicates = np.isfinite(values[repeated]).sum(axis=0)
+    values = values[~repeated]
+    t = _as_ns(frame["time"])[~repeated] + int(round(offset_s * _NS))
+    if np.any(np.diff(t) < 0):
+        raise ValueError(f"temperature source {name!r}: column 'time' goes backwards; expected non-decreasing times")
+
+    low, high = settings.limits_c
+    out_of_range = ~np.isnan(values) & ((values < low) | (values > high))
+    values = np.where(out_of_range, np.nan, values)
+
+    if t.size and np.any(np.diff(t) == 0):
+        grouped = pd.DataFrame(values, columns=sensors).groupby(t, sort=True)
+        counts = grouped.count().to_numpy()
+        duplicates = duplicates + np.clip(counts - 1, 0, None).sum(axis=0)
+        merged = grouped.mean()
+        values = merged.to_numpy(dtype=float)
+        t = merged.index.to_numpy(dtype=np.int64)
+
+    natives = []
+    for j, sensor in enumerate(sensors):
+        ok = np.isfinite(values[:, j])
+        ts, vs = t[ok], values[ok, j]
+        spikes = hampel_outliers(
+            vs, settings.hampel_window, settings.hampel_threshold, settings.hampel_min_deviation_c
+        )
+        natives.append(
+            _Native(
+                sensor=str(sensor),
+                source=name,
+                t=ts[~spikes],
+                v=vs[~spikes],
+                n_raw=int(n_raw[j]),
+                n_duplicates=int(duplicates[j]),
+                n_out_of_range=int(out_of_range[:, j].sum()),
+                n_spikes=int(spikes.sum()),
+                clock_offset_s=float(offset_s),
+            )
+        )
+    return natives
+
+
+def _estimate_offsets(natives: list[_Native], sources: Sequence[str], settings: TemperatureCleaning) -> None:
+    """Shift every non-reference source by its estimated residual offset (in place)."""
+    by_source = {s: [n for n in natives if n.source == s] for s in sources}
+    reference = settings.reference_source
+    if reference is None:
+        reference = max(sources, key=lambda s: len(by_source[s]))  # first on ties
+    elif reference not in by_source:
+        raise ValueError(f"reference_source {reference!r} is not one of the run's sources {list(sources)}")
+    ref = [(n.t, n.v) for n in by_source[reference]]
+    for source in sources:
+        if source == reference:
+            continue
+        # Sensors of one source share one clock: the pair of this source's and the
+        # reference's sensors that match best decides.
+        try:
+            best_offset, _ = _best_offset(
+                [(n.t, n.v) for n in by_source[source]], ref, settings.max_offset_s, settings.offset_step_s
+            )
+        except ValueError as exc:
+            raise ValueError(f"source {source!r}: {exc}") from None
+        shift = int(round(best_offset * _NS))
+        for native in by_source[source]:
+            native.t = native.t + shift
+            native.clock_offset_s += best_offset
+            native.offset_estimated = True
+
+
+# ----------------------------------------------------------------------------- grid
+
+
+def _grid(start_ns: int, end_ns: int, interval_ns: int) -> np.ndarray:
+    first = -(-start_ns // interval_ns)  # ceil: the grid stays inside [start, end]
+    last = end_ns // interval_ns
+    if last < first:
+        raise ValueError(
+            f"empty time grid: no whole multiple of the interval between {_iso(start_ns)} and {_iso(end_ns)}"
+        )
+    return np.arange(first, last + 1, dtype=np.int64) * interval_ns
+
+
+def _onto_grid(native: _Native, grid: np.ndarray, max_gap_s: float):
+    """Interpolate one sensor onto the grid; returns values, QC counts and long gaps."""
+    t, v = native.t, native.v
+    max_gap = max_gap_s * _NS
+    n = t.size
+    if n == 0:
+        counts = dict(n_interpolated=0, n_edge_held=0, n_long_gap=int(grid.size), longest_gap_s=np.nan)
+        return np.full(grid.size, np.nan), counts, [(int(grid[0]), int(grid[-1]), "no readings")]
+    origin = t[0]
+    y = np.interp((grid - origin) / _NS, (t - origin) / _NS, v)  # holds the end values outside
+    left = np.searchsorted(t, grid, side="right") - 1  # last sample <= grid point
+    right = np.searchsorted(t, grid, side="left")  # first sample >= grid point
+    before, after = left < 0, right >= n
+    inside = ~before & ~after
+    li, ri = np.clip(left, 0, n - 1), np.clip(right, 0, n - 1)
+    spacing = np.where(inside, t[ri] - t[li], 0)
+    long_gap = inside & (spacing > max_gap)
+    edge_far = (before & (t[0] - grid > max_gap / 2)) | (after & (grid - t[-1] > max_gap / 2))
+    y[long_gap | edge_far] = np.nan
+
+    steps = np.diff(t)
+    typical = np.median(steps) if steps.size else np.inf
+    interpolated = inside & ~long_gap & (spacing > GAP_FACTOR * typical)
+
+    gaps = [
+        (int(t[i]), int(t[i + 1]), "interior")
+        for i in np.flatnonzero(steps > max_gap)
+        if t[i] < grid[-1] and t[i + 1] > grid[0]
+    ]
+    if t[0] - grid[0] > max_gap / 2:
+        gaps.insert(0, (int(grid[0]), int(t[0]), "record start"))
+    if grid[-1] - t[-1] > max_gap / 2:
+        gaps.append((int(t[-1]), int(grid[-1]), "record end"))
+    counts = dict(
+        n_interpolated=int(interpolated.sum()),
+        n_edge_held=int(((before | after) & ~edge_far).sum()),
+        n_long_gap=int((long_gap | edge_far).sum()),
+        longest_gap_s=float(steps.max() / _NS) if steps.size else np.nan,
+    )
+    return y, counts, gaps
+
+
+def clean_temperatures(
+    sources: Mapping[str, pd.DataFrame],
+    clock_offsets_s: Mapping[str, float],
+    settings: TemperatureCleaning,
+    start=None,
+    end=None,
+) -> CleanedTemperatures:
+    """Clean one run's temperature logs and put every sensor on one regular grid.
+
+    Parameters
+    ----------
+    sources : source name -> DataFrame with ``time`` (naive datetimes, non-decreasing)
+        and one float column per sensor (NaN = missing).
+    clock_offsets_s : source name -> seconds to ADD to its timestamps (missing = 0).
+    settings : :class:`TemperatureCleaning`.
+    start, end : grid span (anything ``pd.Timestamp`` accepts); default the first and
+        last valid sample of any sensor after the clock corrections.  Grid points are
+        the whole multiples of ``interval_s`` inside [start, end].
+
+    Returns
+    -------
+    CleanedTemperatures
+        See the module docstring for the order of the repairs and why.
+
+    Raises
+    ------
+    ValueError
+        A sensor in two sources, a source without ``time`` or going back in time, an
+        empty grid, or a clock offset that cannot be estimated.
+    """
+    if not sources:
+        raise ValueError("no temperature sources: expected at least one source DataFrame")
+    natives: list[_Native] = []
+    seen: dict[str, str] = {}
+    for name, frame in sources.items():
+        for native in _clean_source(name, frame, float(clock_offsets_s.get(name, 0.0)), settings):
+            if native.sensor in seen:
+                raise ValueError(
+                    f"sensor {native.sensor!r} appears in sources {seen[native.sensor]!r} and {name!r}; expected one"
+                )
+            seen[native.sensor] = name
+            natives.append(native)
+    if settings.estimate_clock_offsets and len(sources) > 1:
+        _estimate_offsets(natives, list(sources), settings)
+
+    valid_times = [n.t for n in natives if n.t.size]
+    if start is None or end is None:
+        if not valid_times:
+            raise ValueError("no valid temperature sample in any source: cannot place the time grid")
+    start_ns = _timestamp_ns(start) if start is not None else int(min(t[0] for t in valid_times))
+    end_ns = _timestamp_ns(end) if end is not None else int(max(t[-1] for t in valid_times))
+    grid = _grid(start_ns, end_ns, int(round(settings.interval_s * _NS)))
+
+    columns = {"time": grid.astype("datetime64[ns]")}
+    qc_rows, gap_rows = [], []
+    for native in natives:
+        values, counts, gaps = _onto_grid(native, grid, settings.max_gap_s)
+        columns[native.sensor] = values
+        qc_rows.append(
+            dict(
+                sensor=native.sensor,
+                source=native.source,
+                n_raw=native.n_raw,
+                n_duplicates=native.n_duplicates,
+                n_out_of_range=native.n_out_of_range,
+                n_spikes=native.n_spikes,
+                **counts,
+                clock_offset_s=native.clock_offset_s,
+                offset_estimated=native.offset_estimated,
+            )
+        )
+        gap_rows.extend((native.sensor, a, b, (b - a) / _NS, kind) for a, b, kind in gaps)
+    gaps = pd.DataFrame(gap_rows, columns=GAP_COLUMNS)
+    gaps["start"] = gaps["start"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
+    gaps["end"] = gaps["end"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
+    gaps["duration_s"] = gaps["duration_s"].astype(float)
+    return CleanedTemperatures(
+        frame=pd.DataFrame(columns),
+        qc=pd.DataFrame(qc_rows, columns=QC_COLUMNS),
+        gaps=sort_naturally(gaps, ["start", "sensor"]),
+    )
+
+
+def signals_on_grid(
+    signals: Mapping[str, pd.DataFrame], clock_offsets_s: Mapping[str, float], grid_times
+) -> pd.DataFrame:
+    """Operating signals on the temperature grid, each held at its last logged value.
+
+    Signals are set points or programme states (a spindle speed, a feed), not physical
+    quantities with noise: no limits and no spike filter apply, and a step stays a
+    step instead of being smeared into a ramp.  Before a signal's first sample it
+    takes that sample's value: the grid starts a margin before the first measurement,
+    which may be the record's first sample.
+    """
+    grid = _as_ns(grid_times)
+    columns = {"time": grid.astype("datetime64[ns]")}
+    for name, frame in signals.items():
+        t = _as_ns(frame["time"]) + int(round(float(clock_offsets_s.get(name, 0.0)) * _NS))
+        for signal in (c for c in frame.columns if c != "time"):
+            v = frame[signal].to_numpy(dtype=float)
+            ok = np.isfinite(v)
+            ts, vs = t[ok], v[ok]
+            last = np.clip(np.searchsorted(ts, grid, side="right") - 1, 0, None)
+            columns[signal] = vs[last] if vs.size else np.full(grid.size, np.nan)
+    return pd.DataFrame(columns)
+
+
+# ----------------------------------------------------------------------------- windows
+
+
+def _window_label(row) -> str:
+    if "name" in row and pd.notna(row["name"]):
+        return f"{row['measurement']} ({row['name']})" if "measurement" in row else str(row["name"])
+    return str(row["measurement"])
+
+
+def _check_windows(windows: pd.DataFrame) -> None:
+    for column in ("start", "end"):
+        if column not in windows.columns:
+            raise ValueError(f"measurement windows: missing column {column!r} (expected measurement, start, end)")
+    if "measurement" not in windows.columns:
+        raise ValueError("measurement windows: missing column 'measurement' (expected measurement, start, end)")
+    if (_as_ns(windows["end"]) < _as_ns(windows["start"])).any():
+        raise ValueError("measurement windows: a window ends before it starts; expected start <= end")
+
+
+def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float | None) -> str:
+    """What a gap is, in the words a user can act on."""
+    limit = f" (max_gap_s {max_gap_s:g})" if max_gap_s is not None else ""
+    if gap.get("kind", "interior") == "no readings":
+        return "has no valid reading at all (empty, or every value out of range or a spike)"
+    if gap.get("kind", "interior") == "record start":
+        return (
+            f"has no reading before {_iso(end_ns)}: its record starts too late{limit}; a value is held at most "
+            "max_gap_s / 2 before a sensor's first sample"
+        )
+    if gap.get("kind", "interior") == "record end":
+        return (
+            f"has no reading after {_iso(start_ns)}: its record ends too early{limit}; a value is held at most "
+            "max_gap_s / 2 after a sensor's last sample"
+        )
+    return f"has a {gap['duration_s']:.0f} s gap ({_iso(start_ns)} to {_iso(end_ns)}) longer than max_gap_s{limit}"
+
+
+def check_gaps(
+    gaps: pd.DataFrame,
+    windows: pd.DataFrame,
+    allow: bool = False,
+    files: Mapping[str, object] | None = None,
+    max_gap_s: float | None = None,
+) -> list[str]:
+    """Long temperature gaps that overlap a measurement window.
+
+    Parameters
+    ----------
+    gaps : ``CleanedTemperatures.gaps``.
+    windows : one row per measurement: ``measurement``, ``start``, ``end`` (optionally
+        ``name``).
+    allow : when False an overlap is an error; when True it is returned as a warning.
+    files : sensor -> the file its readings came from, named in the messages.
+    max_gap_s : the limit in force, named in the messages.
+
+    Returns
+    -------
+    list of str
+        One warning per (sensor, measurement) overlap (only when ``allow``).  Gaps
+        outside every window are harmless and already listed in ``gaps``.
+
+    Raises
+    ------
+    ValueError
+        Naming the file, the sensor, the gap (interior, or the record's start or end)
+        and the measurement, for the first overlap.
+    """
+    _check_windows(windows)
+    files = files or {}
+    g_start, g_end = _as_ns(gaps["start"]), _as_ns(gaps["end"])
+    w_start, w_end = _as_ns(windows["start"]), _as_ns(windows["end"])
+    # Strict inequalities: a gap ending exactly at a window's start has a real sample there.
+    hits = (g_start[:, None] < w_end[None, :]) & (g_end[:, None] > w_start[None, :])
+    messages = []
+    for i, j in zip(*np.nonzero(hits)):
+        gap, window = gaps.iloc[i], windows.iloc[j]
+        where = f"{files[gap['sensor']]}: " if gap["sensor"] in files else ""
+        messages.append(
+            f"{where}sensor {gap['sensor']} {_gap_text(gap, g_start[i], g_end[i], max_gap_s)}, during measurement "
+            f"{_window_label(window)} ({_iso(w_start[j])} to {_iso(w_end[j])})"
+        )
+    if messages and not allow:
+        more = f" (and {len(messages) - 1} more)" if len(messages) > 1 else ""
+        raise ValueError(
+            f"{messages[0]}{more}; expected readings throughout every measurement: raise temperatures.max_gap_s, "
+            "or set temperatures.allow_long_gaps to average what the window has"
+        )
+    return messages
+
+
+def _interp_at(grid_ns: np.ndarray, values: np.ndarray, t_ns: np.ndarray) -> np.ndarray:
+    """Linear interpolation of grid rows at times t (NaN if a neighbour is NaN)."""
+    j = np.clip(np.searchsorted(grid_ns, t_ns, side="right") - 1, 0, grid_ns.size - 1)
+    k = np.minimum(j + 1, grid_ns.size - 1)
+    span = (grid_ns[k] - grid_ns[j]).astype(float)
+    w = np.divide((t_ns - grid_ns[j]).astype(float), span, out=np.zeros(t_ns.shape), where=span > 0)
+    exact = (w == 0)[:, None]
+    # An exact hit must not be spoilt by a NaN next door.
+    return np.where(exact, values[j], values[j] * (1 - w[:, None]) + values[k] * w[:, None])
+
+
+def _window_mean(grid_ns: np.ndarray, values: np.ndarray, start: int, end: int) -> np.ndarray:
+    """Time average of the piecewise-linear grid signal over [start, end], NaN segments skipped."""
+    if end == start:
+        return _interp_at(grid_ns, values, np.array([start]))[0]
+    inner = (grid_ns > start) & (grid_ns < end)
+    t = np.concatenate([[start], grid_ns[inner], [end]])
+    v = np.vstack(
+        [_interp_at(grid_ns, values, np.array([start])), values[inner], _interp_at(grid_ns, values, np.array([end]))]
+    )
+    width = np.diff(t).astype(float)[:, None]
+    segment = 0.5 * (v[:-1] + v[1:])
+    ok = np.isfinite(segment)
+    covered = (width * ok).sum(axis=0)
+    total = np.where(ok, segment * width, 0.0).sum(axis=0)
+    return np.divide(total, covered, out=np.full(values.shape[1], np.nan), where=covered > 0)
+
+
+def temperatures_in_windows(frame: pd.DataFrame, windows: pd.DataFrame, how: str = "mean") -> pd.DataFrame:
+    """Each sensor's temperature during each measurement.
+
+    Parameters
+    ----------
+    frame : ``CleanedTemperatures.frame`` (``time`` + sensor columns on a regular grid).
+    windows : ``measurement``, ``start``, ``end`` per measurement.
+    how : "mean" - time average of the linearly interpolated series over [start, end]
+        (exact for a linear ramp: its value at the window's middle); NaN stretches are
+        left out of the average.  "start" - the value at the window's start.
+
+    Returns
+    -------
+    pd.DataFrame
+        ``measurement``, ``start``, ``end`` and one column per sensor, one row per window
+        in the windows' order.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``how``, or a window outside the frame's time span.
+    """
+    if how not in ("mean", "start"):
+        raise ValueError(f"how must be 'mean' or 'start', got {how!r}")
+    _check_windows(windows)
+    sensors = [c for c in frame.columns if c != "time"]
+    grid = _as_ns(frame["time"])
+    values = frame[sensors].to_numpy(dtype=float)
+    w_start, w_end = _as_ns(windows["start"]), _as_ns(windows["end"])
+    if grid.size == 0:
+        raise ValueError("temperature frame is empty: expected a time grid covering the measurements")
+    outside = (w_start < grid[0]) | (w_end > grid[-1])
+    if outside.any():
+        i = int(np.flatnonzero(outside)[0])
+        raise ValueError(
+            f"measurement {_window_label(windows.iloc[i])} ({_iso(w_start[i])} to {_iso(w_end[i])}) lies outside "
+            f"the temperature record ({_iso(grid[0])} to {_iso(grid[-1])})"
+        )
+    if how == "start":
+        rows = _interp_at(grid, values, w_start)
+    else:
+        rows = np.vstack([_window_mean(grid, values, a, b) for a, b in zip(w_start, w_end)])
+    out = windows[["measurement", "start", "end"]].reset_index(drop=True)
+    return pd.concat([out, pd.DataFrame(rows.reshape(len(out), len(sensors)), columns=sensors)], axis=1)

@@ -1,0 +1,144 @@
+"""The held-out evidence of a compensation: each held-out run's deviations before and after compensating."""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from thermaxis.config import ErrorCleaning
+
+from thermaxis.compensation.exports import siemens_840d, twincat
+from thermaxis.compensation.runtime import ControllerParameters, Step
+
+__all__ = [
+    "held_out_accuracy",
+    "run_states",
+    "pass_deviations",
+    "held_out_tables",
+]
+
+
+def held_out_accuracy(metrics: pd.DataFrame, approach: str, algorithm: str) -> list[dict]:
+    """The folds' held-out metrics of this approach and algorithm (every target), for model.json."""
+    rows = metrics[(metrics["approach"] == approach) & (metrics["algorithm"] == algorithm)]
+    if rows.empty:
+        raise ValueError(f"tables/metrics.csv: no rows for approach {approach!r} and algorithm {algorithm!r}")
+    columns = ["fold", "target", "rmse", "max_abs", "mae", "residual_min", "residual_max"]
+    return [
+        {c: (str(v) if c in ("fold", "target") else float(v)) for c, v in row.items()}
+        for row in rows[columns].to_dict("records")
+    ]
+
+
+def run_states(X_run: pd.DataFrame, sensors: Sequence[str]):
+    """A run's measurement times [s], temperature samples and reference (its first measurement)."""
+    ordered = X_run.sort_values("measurement", kind="stable")
+    samples = [{s: float(row[s]) for s in sensors} for _, row in ordered.iterrows()]
+    return (ordered["time_min"].to_numpy(dtype=float) * 60.0).tolist(), samples, samples[0]
+
+
+def pass_deviations(raw_run, targets: Sequence[float], max_missing_fraction: float) -> dict[int, dict[str, np.ndarray]]:
+    """Per measurement (1-based, time order) and direction ("+", "-"), the deviation at each target [um]."""
+    from thermaxis.cleaning.passes import combine_passes
+
+    out = {}
+    for number, (name, measurement) in enumerate(raw_run.measurements.items(), start=1):
+        label = f"{raw_run.run}/errors/{name}.csv"
+        passes = {}
+        for direction in sorted(set(measurement["direction"]), reverse=True):  # "+" before "-"
+            settings = ErrorCleaning(direction=direction, max_missing_fraction=max_missing_fraction)
+            curve, _ = combine_passes(measurement[measurement["direction"] == direction], targets, settings, name=label)
+            passes[direction] = curve.to_numpy(dtype=float)
+        out[number] = passes
+    return out
+
+
+def _pitch_table(first: Mapping[str, np.ndarray]) -> np.ndarray:
+    """The static pitch table: the reference measurement's deviation, mean of its passes."""
+    return np.nanmean(np.vstack(list(first.values())), axis=0)
+
+
+def _systematic(quantities: Mapping[str, float]) -> float:
+    """E, or the one direction's E when the measurement has a single pass."""
+    for name in ("E", "E_up", "E_down"):
+        if np.isfinite(quantities[name]):
+            return quantities[name]
+    return float("nan")
+
+
+def _controller_rows(label: dict, rows, final_rows, status: str) -> list[dict]:
+    return [
+        {**label, "parameter": p, "name": n, "unit": u, "value": v, "final_model_value": fv, "status": status}
+        for (p, n, v, u), (_, _, fv, _) in zip(rows, final_rows)
+    ]
+
+
+def held_out_tables(
+    fold: str,
+    steps: Sequence[Step],
+    time_min: Sequence[float],
+    deviations: Mapping[int, Mapping[str, np.ndarray]],
+    positions_mm: Sequence[float],
+    final: Sequence[ControllerParameters],
+) -> dict[str, pd.DataFrame]:
+    """Exports, residuals, ISO 230-2 quantities and the drift summary of one held-out run.
+
+    ``steps`` are the fold model's values per measurement (after the fallback policy),
+    ``final`` the final model's parameters for the same temperatures (reference values).
+    The pitch table is the first measurement's; compensation is what the controller
+    computes from the exported K0, tan(beta), P0.
+    """
+    from thermaxis.compensation.iso230 import (
+        NEEDS_CYCLES,
+        NOT_COMPUTED,
+        QUANTITIES,
+        single_pass_quantities,
+    )
+
+    positions = np.asarray(positions_mm, dtype=float)
+    table = _pitch_table(deviations[1])
+    siemens, tc, residuals, iso, summary = [], [], [], [], []
+    for number, (step, minutes, reference) in enumerate(zip(steps, time_min, final), start=1):
+        label = {"fold": fold, "run": fold, "measurement": number, "time_min": float(minutes)}
+        reasons = "; ".join(step.reasons)
+        siemens += _controller_rows(label, siemens_840d(step.parameters), siemens_840d(reference), step.status)
+        tc_rows = _controller_rows(label, twincat(step.parameters), twincat(reference), step.status)
+        for row in tc_rows:
+            row["register"] = int(round(row["value"]))
+        tc += tc_rows
+        applied = step.parameters.at(positions)
+        before, after = {}, {}
+        for direction, values in deviations[number].items():
+            drift = values - table
+            before[direction], after[direction] = drift, drift + applied
+            for x, d, c in zip(positions, drift, applied):
+                residuals.append({**label, "direction": direction, "position_mm": x, "uncompensated_um": d, "compensation_um": c, "residual_um": d + c, "status": step.status})
+        q_before = single_pass_quantities(before.get("+"), before.get("-"))
+        q_after = single_pass_quantities(after.get("+"), after.get("-"))
+        for name, description in QUANTITIES.items():
+            iso.append({**label, "quantity": name, "description": description, "uncompensated_um": q_before[name], "compensated_um": q_after[name], "computed": bool(np.isfinite(q_before[name])), "note": ""})
+        for name, description in NOT_COMPUTED.items():
+            iso.append({**label, "quantity": name, "description": description, "uncompensated_um": np.nan, "compensated_um": np.nan, "computed": False, "note": NEEDS_CYCLES})
+        all_before = np.concatenate(list(before.values()))
+        all_after = np.concatenate(list(after.values()))
+        summary.append(
+            {
+                **label,
+                "status": step.status,
+                "largest_abs_uncompensated_um": float(np.nanmax(np.abs(all_before))),
+                "largest_abs_compensated_um": float(np.nanmax(np.abs(all_after))),
+                "E_uncompensated_um": _systematic(q_before),
+                "E_compensated_um": _systematic(q_after),
+                "line_gap_um": step.parameters.line_gap_um,
+                "reasons": reasons,
+            }
+        )
+    return {
+        "siemens_840d": pd.DataFrame(siemens),
+        "twincat": pd.DataFrame(tc),
+        "residuals": pd.DataFrame(residuals),
+        "iso230_2": pd.DataFrame(iso),
+        "summary": pd.DataFrame(summary),
+    }

@@ -1,0 +1,255 @@
+"""From a fitted thermal-error model to a machine: the deployable compensation.
+
+Direction convention (every export states it): the positional deviation is
+e = actual position - target position (the interferometer's reading minus the target,
+ISO 230-2), in um. The static pitch-error table is measured in the *reference state*,
+the state in which the axis is homed (referenced) and the reference temperatures are
+captured. The temperature compensation supplies what the pitch table cannot:
+
+    compensation c(x) = -(e_hat(x; T) - e_hat(x; T_ref))
+
+the negative of the model's predicted change of the error since the reference state,
+so c is zero when the axis is in its reference state. A controller adds c to the
+position setpoint; the deviation left is e + c.
+
+Controllers take a straight line per temperature state:
+
+* SINUMERIK 840D: c = K0 + tan(beta) * (Px - P0), SD43900 K0 [mm], SD43910 tan(beta)
+  [dimensionless, mm per mm], SD43920 P0 [mm];
+* TwinCAT CNC: P-AXIS-00272 temp_comp_position_0 [0.1 um], P-AXIS-00273
+  temp_comp_offset_0 [0.1 um], P-AXIS-00274 temp_comp_coefficient [um/m] (SGN32).
+
+P0 is the first target, the origin of the shifted stroke of the decoupling
+(:mod:`thermaxis.method.decouple`), so for the decoupled model K0 = -delta b / 1000 and
+tan(beta) = -delta k * 1e-6 exactly. For curves that are not straight (decoupling
+degree 2-3, point-by-point models) the least-squares line over the targets is exported
+and its largest distance from the curve is reported.
+
+The model is stored as plain numbers (``model.json``, schema
+``thermaxis/schemas/compensation_model.schema.json``): affine regressions as a constant
+and one coefficient per degree C, kernel regressions (SVR, GPR) as an RBF expansion.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from typing import Mapping, Sequence
+
+import jsonschema
+import numpy as np
+import pandas as pd
+
+from thermaxis.schemas import schema_path
+
+from thermaxis.config import CompensationSettings, DecouplingSettings, FallbackSettings, ModelSettings
+from thermaxis.method.decouple import MM_PER_M
+from thermaxis.method.models import linear_terms, relative_temperatures
+
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "MODEL_SCHEMA",
+    "CONVENTION",
+    "UM_PER_MM",
+    "regression_record",
+    "evaluate_regression",
+    "model_record",
+    "line_weights",
+    "validate_model",
+    "fit_axis_model",
+    "fit_model_record",
+]
+
+SCHEMA_VERSION = 1
+MODEL_SCHEMA = schema_path("compensation_model")
+UM_PER_MM = 1000.0
+# 0.1 um per register count (TwinCAT P-AXIS-00272/00273).
+TENTHS_UM_PER_MM = 1e4
+CONVENTION = (
+    "deviation e = actual - target (um, ISO 230-2); compensation c = -(predicted e at the current temperatures "
+    "- predicted e at the reference temperatures captured when the axis was homed); the controller adds c to the "
+    "setpoint, the deviation left is e + c; 840D: c = K0 + tan(beta) * (Px - P0)"
+)
+
+
+# --------------------------------------------------------------------------- regressions as numbers
+
+
+def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline) -> dict:
+    """One fitted :func:`thermaxis.method.models.make_regressor` pipeline as plain numbers.
+
+    ``inputs`` are indices into the model's input list. Affine fits (mlr, ridge, pls) keep
+    the constant and one coefficient per input in physical units (target unit per degree
+    C); SVR and GPR become ``offset + sum_i w_i exp(-gamma |z - z_i|^2)`` on standardised
+    inputs z, scaled back to the target's unit.
+    """
+    record = {"target": target, "position_mm": position_mm, "inputs": [int(i) for i in inputs]}
+    terms = linear_terms(pipeline, [str(i) for i in inputs])
+    if terms is not None:
+        return {**record, "form": "affine", "constant": terms["const"], "coefficients": [terms[str(i)] for i in inputs]}
+    from sklearn.gaussian_process import GaussianProcessRegressor
+
+    scaler = pipeline.named_steps["standardise"]
+    target_scaler = pipeline.named_steps["regress"].transformer_
+    regressor = pipeline.named_steps["regress"].regressor_
+    if isinstance(regressor, GaussianProcessRegressor):
+        # Constant * RBF + White: the white noise adds nothing off the training points.
+        kernel = regressor.kernel_.k1
+        gamma = 1.0 / (2.0 * float(kernel.k2.length_scale) ** 2)
+        centres = regressor.X_train_
+        weights = float(kernel.k1.constant_value) * np.asarray(regressor.alpha_, dtype=float).ravel()
+        offset = 0.0
+    else:
+        if regressor.kernel != "rbf":
+            raise ValueError(f"compensation: SVR kernel {regressor.kernel!r} cannot be exported; expected 'rbf'")
+        gamma = float(regressor._gamma)
+        centres = regressor.support_vectors_
+        weights = np.asarray(regressor.dual_coef_, dtype=float).ravel()
+        offset = float(regressor.intercept_[0])
+    return {
+        **record,
+        "form": "rbf",
+        "input_mean": scaler.mean_.tolist(),
+        "input_scale": scaler.scale_.tolist(),
+        "target_mean": float(target_scaler.mean_[0]),
+        "target_scale": float(target_scaler.scale_[0]),
+        "gamma": gamma,
+        "centres": np.asarray(centres, dtype=float).tolist(),
+        "weights": weights.tolist(),
+        "offset": offset,
+    }
+
+
+def evaluate_regression(record: Mapping, values) -> np.ndarray:
+    """A record's prediction for input rows ``values`` (n, inputs of the record)."""
+    u = np.atleast_2d(np.asarray(values, dtype=float))
+    if record["form"] == "affine":
+        return record["constant"] + u @ np.asarray(record["coefficients"], dtype=float)
+    z = (u - np.asarray(record["input_mean"])) / np.asarray(record["input_scale"])
+    centres = np.asarray(record["centres"], dtype=float)
+    squared = ((z[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
+    standardised = np.exp(-record["gamma"] * squared) @ np.asarray(record["weights"]) + record["offset"]
+    return standardised * record["target_scale"] + record["target_mean"]
+
+
+def line_weights(positions_mm: Sequence[float], origin_mm: float, basis: np.ndarray) -> np.ndarray:
+    """(2, R) weights giving the least-squares line (b [um], k [um/m]) from the regressions' changes.
+
+    ``basis`` (positions, R) maps the R regression changes to the error curve at the
+    targets. With a single target there is no slope: b is the curve, k is 0.
+    """
+    positions = np.asarray(positions_mm, dtype=float)
+    if positions.size == 1:
+        return np.vstack([basis[0], np.zeros(basis.shape[1])])
+    design = np.column_stack([np.ones(positions.size), (positions - origin_mm) / MM_PER_M])
+    return np.linalg.pinv(design) @ basis
+
+
+# --------------------------------------------------------------------------- building model.json
+
+
+def _inputs_of(approach: str, estimator) -> list[tuple[str, str]]:
+    if approach == "decoupled":
+        return [(s, "absolute") for s in estimator.k_sensors] + [(s, "relative") for s in estimator.b_sensors]
+    return [(s, "relative") for s in estimator.sensors]
+
+
+def _input_values(X: pd.DataFrame, inputs: Sequence[tuple[str, str]]) -> np.ndarray:
+    sensors = sorted({s for s, _ in inputs})
+    relative = relative_temperatures(X, sensors)
+    return np.column_stack([(X[s] if kind == "absolute" else relative[s]).to_numpy(dtype=float) for s, kind in inputs])
+
+
+def model_record(estimator, approach: str, algorithm: str, X_train: pd.DataFrame, fallback: FallbackSettings, **about) -> dict:
+    """The ``model.json`` content of a fitted Decoupled- or PointwiseAxisModel.
+
+    ``about`` adds descriptive keys (dataset, provenance, held_out_accuracy, ...).
+    """
+    inputs = _inputs_of(approach, estimator)
+    index = {item: i for i, item in enumerate(inputs)}
+    positions = np.asarray(estimator.positions_mm_, dtype=float)
+    origin = float(positions[0])
+    regressions = []
+    if approach == "decoupled":
+        k_inputs = [index[(s, "absolute")] for s in estimator.k_sensors]
+        b_inputs = [index[(s, "relative")] for s in estimator.b_sensors]
+        for target, _, kind in estimator._targets():
+            chosen = b_inputs if kind == "relative" else k_inputs
+            regressions.append(regression_record(target, None, chosen, estimator.estimators_[target]))
+        power = {"b": 0, "k": 1, "c2": 2, "c3": 3}
+        shifted = (positions - origin) / MM_PER_M
+        basis = np.column_stack([shifted ** power[r["target"]] for r in regressions])
+    else:
+        chosen = [index[(s, "relative")] for s in estimator.sensors]
+        for position, pipeline in zip(positions, estimator.estimators_):
+            regressions.append(regression_record("error", float(position), chosen, pipeline))
+        basis = np.eye(positions.size)
+    values = _input_values(X_train, inputs)
+    return {
+        "schema": "thermaxis-compensation-model",
+        "schema_version": SCHEMA_VERSION,
+        **about,
+        "convention": CONVENTION,
+        "approach": approach,
+        "algorithm": algorithm,
+        "degree": int(getattr(estimator, "degree", 0)),
+        "sensors": list(dict.fromkeys(s for s, _ in inputs)),
+        "inputs": [
+            {"sensor": s, "temperature": kind, "training_min_c": float(values[:, i].min()), "training_max_c": float(values[:, i].max())}
+            for i, (s, kind) in enumerate(inputs)
+        ],
+        "reference": {
+            "temperatures": "captured when the axis is homed (referenced); relative inputs are temperature minus this reference",
+            "static_pitch_table": "measured in the reference state; the temperature compensation is zero there",
+            "reference_position_mm": origin,
+        },
+        "positions_mm": positions.tolist(),
+        "units": {"k": "um/m", "b": "um", "c2": "um/m^2", "c3": "um/m^3", "error": "um", "coefficients": "target unit per degree C"},
+        "regressions": regressions,
+        "line_weights": line_weights(positions, origin, basis).tolist(),
+        "curve_basis": basis.tolist(),
+        "fallback": asdict(fallback) | {"plausible_c": list(fallback.plausible_c)},
+    }
+
+
+def validate_model(record: Mapping, where: str = "model.json") -> None:
+    """Raise ValueError with one line when ``record`` does not follow the committed schema."""
+    with open(MODEL_SCHEMA, encoding="utf-8") as fh:
+        schema = json.load(fh)
+    errors = sorted(jsonschema.Draft202012Validator(schema).iter_errors(record), key=lambda e: list(e.absolute_path))
+    if errors:
+        path = "/".join(map(str, errors[0].absolute_path)) or "top level"
+        raise ValueError(f"{where}: {path}: {errors[0].message}")
+
+
+# --------------------------------------------------------------------------- fitting and held-out evaluation
+
+
+def fit_axis_model(X: pd.DataFrame, Y: pd.DataFrame, approach: str, algorithm: str, selection, model_settings, degree: int | None):
+    """The configured model fitted on the rows given (all runs, or a fold's training runs)."""
+    # The estimator the folds are evaluated with, so the deployed model is the one scored.
+    from thermaxis.method.folds import _build_model
+
+    return _build_model(approach, algorithm, selection, model_settings, degree).fit(X, Y)
+
+
+def fit_model_record(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    selection,
+    approach: str,
+    models: ModelSettings,
+    decoupling: DecouplingSettings,
+    settings: CompensationSettings,
+    **about,
+) -> dict:
+    """Fit the configured model on X, Y and return its ``model.json`` record.
+
+    ``approach`` is the workflow's (pointwise for a single-position dataset, else
+    ``settings.approach``); ``about`` adds descriptive keys. The record names the runs
+    it was fitted on.
+    """
+    estimator = fit_axis_model(X, Y, approach, settings.algorithm, selection, models, decoupling.degree)
+    trained_on = sorted(X["run"].unique().tolist())
+    return model_record(estimator, approach, settings.algorithm, X, settings.fallback, trained_on=trained_on, **about)

@@ -1,0 +1,188 @@
+"""Plausibility of a dataset's shape and readings: refusals and warnings before any model sees them."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from thermaxis.dataset.safety import _error, check_inside, check_name, check_regular_file
+
+__all__ = [
+    "check_dataset_shape",
+    "check_run_plausibility",
+    "check_same_targets",
+    "check_time_zones",
+    "check_time_range",
+    "check_error_readings",
+    "sensor_median_warnings",
+]
+# No linear axis is a kilometre long: beyond this a position is a unit or logging fault.
+MAX_ABS_POSITION_MM = 1e6
+# A zone follows the clock time: "...T09:10:00Z", "... 09:10:00.5+02:00", "...T09:10-0500".
+_TIME_ZONE = re.compile(r"[T\s]\d{1,2}:\d{2}(?::\d{2}(?:\.\d*)?)?\s*(?:Z|[+-]\d{2}(?::?\d{2})?)\s*$", re.IGNORECASE)
+
+
+def check_dataset_shape(dataset, config) -> None:
+    """Dataset-level needs of the workflow, named before any job starts.
+
+    Lists and stats the run folders' data files (safe names, regular files of bounded
+    size, inside the dataset) and counts the measurements; nothing is read.
+    """
+    # The schemas' patterns again, strictly (a JSON-schema "$" accepts a trailing newline).
+    sheet = dataset.root / "dataset.yaml"
+    check_name(dataset.name, "dataset name", sheet)
+    for name in dataset.sensors:
+        check_name(name, "sensor", sheet)
+    for name in dataset.sources:
+        check_name(name, "source", sheet)
+    for run in dataset.run_ids:
+        check_name(run, "run", dataset.root / "runs.tsv")
+        check_inside(dataset.root / run, dataset.root, what="run folder")
+        for path in sorted((dataset.root / run / "errors").glob("*.csv")):
+            check_name(path.stem, "measurement", path)
+        folder = dataset.root / run
+        data_files = [*folder.glob("errors/*.csv"), *folder.glob("errors.csv"), *folder.glob("temperatures/*.csv"), *folder.glob("signals/*.csv")]
+        for path in sorted(data_files):
+            check_inside(path, dataset.root, what="data file")
+            check_regular_file(path, what="data file")
+    runs_sheet = dataset.root / "runs.tsv"
+    if len(dataset.run_ids) < 2:
+        raise _error(
+            runs_sheet,
+            f"{len(dataset.run_ids)} run listed; leave-one-condition-out needs at least 2 runs",
+        )
+    # A run's measurements in one errors.csv are counted when it is read, not here.
+    counts = {run: len(list((dataset.root / run / "errors").glob("*.csv"))) for run in dataset.run_ids}
+    if not any((dataset.root / run / "errors.csv").exists() for run in dataset.run_ids) and max(counts.values()) < 2:
+        raise _error(
+            dataset.root,
+            "one measurement per run; the drift (intercept b) and every model need at least 2 measurements "
+            "in a run (expected several measurements while the axis heats up)",
+        )
+    selection = config["selection"]
+    n_sensors = len(dataset.sensors)
+    if selection["method"] in ("fuzzy_grey", "correlation") and selection["n_clusters"] > n_sensors:
+        raise _error(
+            "config selection.n_clusters",
+            f"{selection['n_clusters']} clusters but {dataset.root / 'dataset.yaml'} declares {n_sensors} "
+            f"sensors (expected at most {n_sensors})",
+        )
+
+
+def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
+    """Refuse implausible readings or a grid step longer than the run; warn of implausible medians."""
+    folder = dataset.root / raw.run
+
+    def file_of(name):
+        # One file per measurement, or the run's one errors.csv.
+        return raw.error_source if raw.error_source is not None and raw.error_source.is_file() else folder / "errors" / f"{name}.csv"
+
+    for name, measurement in raw.measurements.items():
+        path, positions = file_of(name), measurement["position_mm"].to_numpy()
+        check_error_readings(path, measurement["error_um"].to_numpy(), cleaning.max_abs_error_um)
+        _refuse_first_row(
+            path,
+            np.abs(positions) > MAX_ABS_POSITION_MM,
+            "position_mm",
+            lambda i: f"expected a position within ±{MAX_ABS_POSITION_MM:g} mm, got {positions[i]:g}",
+        )
+    windows = raw.windows()
+    overlapping = np.flatnonzero(windows["start"].to_numpy()[1:] < windows["end"].to_numpy()[:-1])
+    if overlapping.size:
+        earlier, later = windows.iloc[overlapping[0]], windows.iloc[overlapping[0] + 1]
+        raise _error(
+            file_of(later["name"]),
+            f"readings from {later['start']} overlap measurement {earlier['name']} ({earlier['start']} to "
+            f"{earlier['end']}); expected one measurement at a time (a copied file?)",
+        )
+    span_s = (windows["end"].max() - windows["start"].min()).total_seconds()
+    interval_s = cleaning.temperatures.interval_s
+    if 0 < span_s < interval_s:
+        raise _error(
+            "config temperatures.interval_s",
+            f"{interval_s:g} s is longer than run {raw.run} lasts ({span_s:g} s from its first to its last reading); "
+            "expected a grid step well below the time between measurements",
+        )
+    median_c = cleaning.plausible_median_c
+    if not median_c[0] < median_c[1]:
+        raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got [{median_c[0]:g}, {median_c[1]:g}]")
+    if dataset.meta.get("temperature_kind", "absolute") == "rise":
+        return []  # rises since the start sit near 0 °C by design: no structure-temperature median to judge
+    notes = []
+    for source, frame in raw.sources.items():
+        with np.errstate(over="ignore"):  # the median of two readings near 1e308 is inf: still implausible
+            medians = frame.drop(columns="time").median().to_dict()
+        notes += sensor_median_warnings(medians, *median_c, where=str(folder / "temperatures" / f"{source}.csv"))
+    return notes
+
+
+def check_same_targets(errors: pd.DataFrame, dataset_root) -> None:
+    """Every run reads the same target positions, or the runs cannot share one model."""
+    targets = errors.groupby("run", sort=True)["position_mm"].unique()
+    first_run = targets.index[0]
+    reference = np.sort(targets.iloc[0])
+    for run, positions in targets.items():
+        positions = np.sort(positions)
+        if positions.shape != reference.shape or not np.allclose(positions, reference, rtol=0, atol=1e-6):
+            extra = np.setdiff1d(positions, reference)
+            lacking = np.setdiff1d(reference, positions)
+            detail = f"{extra[0]:g} mm is not a target of run {first_run}" if extra.size else f"{lacking[0]:g} mm is never read"
+            raise _error(
+                Path(dataset_root) / run / "errors",
+                f"run {run} reads {positions.size} target positions, run {first_run} {reference.size} "
+                f"({detail}); expected the same targets in every run",
+            )
+
+
+def check_time_zones(path, values: pd.Series, column: str = "time") -> None:
+    """Times carry no zone (one zone per dataset); name the first that does."""
+    zoned = values.astype(str).str.contains(_TIME_ZONE).to_numpy()
+    _refuse_first_row(
+        path, zoned, column, lambda i: f"expected a time without a time zone (one zone per dataset), got {values.iloc[i]!r}"
+    )
+
+
+def check_time_range(path, parsed: pd.Series, values: pd.Series, column: str = "time") -> None:
+    """Times the nanosecond clock of the tables can hold (pandas: 1677-09-21 to 2262-04-11)."""
+    years = parsed.dt.year.to_numpy()
+    _refuse_first_row(
+        path, (years < 1678) | (years > 2261), column, lambda i: f"expected a time between 1678 and 2261, got {values.iloc[i]!r}"
+    )
+
+
+def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float) -> None:
+    """Interferometer errors are finite and within ``max_abs_um`` (row i is file line i + 2)."""
+    errors_um = np.asarray(errors_um, dtype=float)
+    bad = ~np.isfinite(errors_um) | (np.abs(errors_um) > max_abs_um)
+    _refuse_first_row(
+        path,
+        bad,
+        "error_um",
+        lambda i: f"{errors_um[i]:g} um is beyond the plausible ±{max_abs_um:g} um (config errors.max_abs_error_um)",
+    )
+
+
+def _refuse_first_row(path, bad: np.ndarray, column: str, what) -> None:
+    """The first flagged row as a file line (row i is line i + 2: the header is line 1)."""
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise _error(path, f"line {i + 2}, column {column!r}: {what(i)}")
+
+
+def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: str) -> list[str]:
+    """One warning per sensor whose median temperature is implausible for a machine structure."""
+    notes = []
+    for sensor, median in sorted(medians.items()):
+        if not math.isnan(median) and not (low_c <= median <= high_c):
+            # Above 200 a kelvin reading is likelier than a Fahrenheit one.
+            unit, celsius = ("kelvin", median - 273.15) if median > 200 else ("°F", (median - 32.0) * 5.0 / 9.0)
+            notes.append(
+                f"{where}: sensor {sensor}: median {median:.1f} °C is outside the plausible {low_c:g}-{high_c:g} °C "
+                f"of a machine structure (config temperatures.plausible_median_c); if it is in {unit}, "
+                f"that is {celsius:.1f} °C: expected °C"
+            )
+    return notes

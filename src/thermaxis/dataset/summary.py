@@ -1,0 +1,48 @@
+"""Small summaries and Markdown renderings of the tables (no plotting, no models)."""
+
+from __future__ import annotations
+
+
+import pandas as pd
+
+from thermaxis.dataset.reader import Dataset
+from thermaxis.labels import sort_naturally
+
+
+__all__ = [
+    "dataset_summary",
+    "data_statement",
+]
+
+
+def data_statement(dataset_name: str, simulated: bool, citation: str = "") -> str:
+    """The sentence every report and caption carries about where the numbers come from."""
+    if simulated:
+        return (
+            f"Dataset `{dataset_name}`: SIMULATED data (thermal twin calibrated to the paper's Table 5), "
+            "not the paper's measurements."
+        )
+    source = f" Source: {citation.strip()}" if citation.strip() else ""
+    return f"Dataset `{dataset_name}`: MEASURED data.{source}"
+
+
+def dataset_summary(dataset: Dataset, n_measurements: dict[str, int]) -> pd.DataFrame:
+    """One row per run: condition, operating descriptors, and how many measurements and sensors it has."""
+    rows = []
+    for _, run in dataset.runs.iterrows():
+        rows.append(
+            {
+                "dataset": dataset.name,
+                "provenance": dataset.meta["provenance"]["kind"],
+                "run": run["run"],
+                "condition": str(run["condition"]),
+                **{column: float(run[column]) for column in dataset.descriptors},
+                "n_measurements": int(n_measurements[run["run"]]),
+                "n_sensors": len(dataset.sensors),
+                "n_signals": len(dataset.signals),
+                "n_sources": len(dataset.sources),
+                "temperature_kind": dataset.temperature_kind,
+                "description": run["description"],
+            }
+        )
+    return sort_naturally(pd.DataFrame(rows), ["run"])

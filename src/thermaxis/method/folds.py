@@ -1,0 +1,365 @@
+"""One configuration on one leave-one-condition-out fold: select, fit, predict, score.
+
+This module is the single implementation shared by the main workflow (one fold at a
+time) and the sweep (hundreds of configurations in one process): selection results
+are computed once per fold and selection setting and reused by every algorithm.
+
+Leakage rule: everything fitted (sensitive points when ``scope='training'``, scalers,
+hyper-parameter searches, regressions) sees only the training runs. The held-out
+run contributes its temperatures (relative ones to its own first measurement) at
+prediction time and its measured errors only to the metrics.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+
+from thermaxis.config import ModelSettings, SelectionSettings
+from thermaxis.method.metrics import prediction_metrics
+from thermaxis.method.selection import informative_sensors
+from thermaxis.method.models import (
+    DecoupledAxisModel,
+    PointwiseAxisModel,
+    decouple_rows,
+    relative_temperatures,
+)
+from thermaxis.method.selection import (
+    SensitivePoints,
+    common_points,
+    rank_by_correlation,
+    select_sensitive_points,
+)
+
+__all__ = [
+    "SORT_KEYS",
+    "FoldSelection",
+    "FoldResult",
+    "select_for_fold",
+    "evaluate_configuration",
+    "selection_table",
+    "selection_to_dict",
+    "selection_from_dict",
+]
+
+META = ("run", "measurement", "time_min")
+
+# Row order of the result tables, per fold and collected over folds (deterministic files).
+SORT_KEYS = {
+    "metrics": ["fold", "approach", "algorithm", "target"],
+    "coefficients": ["fold", "approach", "algorithm", "target", "position_mm", "temperature", "term"],
+    "kb_predictions": ["fold", "approach", "algorithm", "target", "measurement"],
+    "error_predictions": ["fold", "approach", "algorithm", "measurement", "position_mm"],
+    "selection": ["fold", "target", "position_mm", "cluster", "sensor"],
+}
+
+
+@dataclass(frozen=True)
+class FoldSelection:
+    """Sensitive points of one fold: for k, for b, per position, and the pointwise common set."""
+
+    fold: str
+    k: SensitivePoints | None
+    b: SensitivePoints | None
+    per_position: Mapping[float, SensitivePoints] = field(default_factory=dict)
+    pointwise: tuple[str, ...] = ()
+
+    @property
+    def k_sensors(self) -> tuple[str, ...]:
+        return self.k.selected if self.k is not None else ()
+
+    @property
+    def b_sensors(self) -> tuple[str, ...]:
+        return self.b.selected if self.b is not None else ()
+
+
+def sensor_columns(X: pd.DataFrame) -> list[str]:
+    return [c for c in X.columns if c not in META]
+
+
+def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, target: str) -> SensitivePoints:
+    if method == "fuzzy_grey":
+        return select_sensitive_points(
+            T,
+            y,
+            n_clusters=s.n_clusters,
+            similarity=s.similarity,
+            grade=s.grade,
+            rho=s.rho,
+            normalisation=s.normalisation,
+        )
+    if method == "correlation":
+        chosen = rank_by_correlation(T, y, s.n_clusters)
+        return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades=_abs_correlation(T, y), eta=float("nan"))
+    if method == "all":
+        names = tuple(T.columns)
+        return SensitivePoints(clusters=(names,), selected=names, grades={}, eta=float("nan"))
+    if method == "fixed":
+        chosen = s.fixed_for(target)
+        unknown = [c for c in chosen if c not in T.columns]
+        if unknown:
+            raise ValueError(f"config selection.fixed.{target}: unknown sensor {unknown[0]!r} (dataset has {', '.join(T.columns)})")
+        return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades={}, eta=float("nan"))
+    raise ValueError(f"config selection.method: unknown method {method!r}")
+
+
+def _abs_correlation(T: pd.DataFrame, y: np.ndarray) -> dict[str, float]:
+    """|Pearson r| of every sensor with y (0 for a constant sensor): the correlation ranking's scores."""
+    values = T.to_numpy(dtype=float)
+    centred = values - values.mean(axis=0)
+    yc = np.asarray(y, dtype=float) - np.mean(y)
+    denominator = np.sqrt((centred**2).sum(axis=0) * (yc @ yc))
+    r = np.divide(np.abs(centred.T @ yc), denominator, out=np.zeros(values.shape[1]), where=denominator > 0)
+    return {str(name): float(v) for name, v in zip(T.columns, r)}
+
+
+def _mean_scores(points: list[SensitivePoints]) -> dict[str, float]:
+    """Each sensor's mean grade over the positions: the selection's own ranking for tie-breaks."""
+    totals: dict[str, float] = {}
+    for p in points:
+        for sensor, grade in p.grades.items():
+            totals[sensor] = totals.get(sensor, 0.0) + float(grade)
+    return {sensor: total / len(points) for sensor, total in totals.items()}
+
+
+def select_for_fold(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    fold: str,
+    settings: SelectionSettings,
+    degree: int | None,
+    decoupled: bool = True,
+    pointwise: bool = True,
+) -> FoldSelection:
+    """Sensitive points for k (absolute temperatures), b and each position (relative ones).
+
+    k and b are those of the decoupling of ``degree`` (config ``decoupling.degree``);
+    ``None`` only with ``decoupled=False``, which decouples nothing.
+
+    With ``scope='training'`` the held-out run (``fold``) is removed first, so the
+    choice of inputs cannot depend on the condition being predicted.
+    ``pointwise=False`` skips the per-position selection (empty ``per_position`` and
+    ``pointwise``): the sweep selects k and b once per decoupling degree, but the
+    point-by-point points, which do not depend on the degree, only once.
+    """
+    if settings.scope == "training":
+        keep = (X["run"] != fold).to_numpy()
+        X, Y = X.loc[keep], Y.loc[keep]
+    fixed = tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
+    clustered = settings.n_clusters if settings.method in ("fuzzy_grey", "correlation") else 0
+    sensors = informative_sensors(X[sensor_columns(X)], fixed, where=f"fold {fold}", n_clusters=clustered)
+    absolute = X[sensors]
+    relative = relative_temperatures(X)[sensors]
+    k_points = b_points = None
+    if decoupled:
+        kb = decouple_rows(X, Y, degree=degree)
+        k_points = _points(settings.method, absolute, kb["k_um_per_m"].to_numpy(), settings, "k")
+        b_points = _points(settings.method, relative, kb["b_um"].to_numpy(), settings, "b")
+    per_position = {}
+    if not pointwise:
+        common = ()
+    elif settings.method == "all":
+        # Every sensor ties under "all": the common set is every sensor, not the first n.
+        common = tuple(sensors)
+    elif settings.method == "fixed":
+        common = settings.fixed_for("pointwise")
+        _points("fixed", relative, np.zeros(len(relative)), settings, "pointwise")
+    else:
+        for position in Y.columns:
+            y = Y[position].to_numpy(dtype=float)
+            ok = ~np.isnan(y)
+            per_position[float(position)] = _points(settings.method, relative.loc[ok], y[ok], settings, "pointwise")
+        chosen = [p.selected for p in per_position.values()]
+        distinct = len({sensor for points in chosen for sensor in points})
+        n_common = min(settings.pointwise_common, distinct)
+        if n_common < settings.pointwise_common:
+            warnings.warn(
+                f"fold {fold}: only {distinct} distinct sensors were selected over the positions; "
+                f"the point-by-point common set has {n_common} instead of {settings.pointwise_common}",
+                stacklevel=2,
+            )
+        common = common_points(chosen, n_common, order=sensors, scores=_mean_scores(list(per_position.values())))
+    return FoldSelection(fold=fold, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common))
+
+
+def selection_table(selection: FoldSelection) -> pd.DataFrame:
+    """Tables 3 and 6 in long form: fold, target, position_mm, sensor, cluster, selected, grade."""
+    rows = []
+
+    def add(target, position, points: SensitivePoints):
+        for c, cluster in enumerate(points.clusters, start=1):
+            for sensor in cluster:
+                rows.append(
+                    (selection.fold, target, position, sensor, c, sensor in points.selected, points.grades.get(sensor, np.nan))
+                )
+
+    if selection.k is not None:
+        add("k", np.nan, selection.k)
+    if selection.b is not None:
+        add("b", np.nan, selection.b)
+    for position, points in selection.per_position.items():
+        add("error", position, points)
+    for sensor in selection.pointwise:
+        rows.append((selection.fold, "pointwise_common", np.nan, sensor, 0, True, np.nan))
+    return pd.DataFrame(rows, columns=["fold", "target", "position_mm", "sensor", "cluster", "selected", "grade"])
+
+
+@dataclass(frozen=True)
+class FoldResult:
+    metrics: pd.DataFrame
+    coefficients: pd.DataFrame
+    kb_predictions: pd.DataFrame
+    error_predictions: pd.DataFrame
+
+
+def _build_model(approach: str, algorithm: str, selection: FoldSelection, model: ModelSettings, degree: int | None):
+    common = dict(
+        algorithm=algorithm,
+        params=model.params_for(algorithm),
+        svr_grid=model.grid(),
+        random_state=model.random_state,
+        signals=model.signals,
+    )
+    if approach == "decoupled":
+        return DecoupledAxisModel(k_sensors=selection.k_sensors, b_sensors=selection.b_sensors, degree=degree, **common)
+    if approach == "pointwise":
+        return PointwiseAxisModel(sensors=selection.pointwise, **common)
+    raise ValueError(f"unknown approach {approach!r} (expected decoupled or pointwise)")
+
+
+def evaluate_configuration(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    fold: str,
+    approach: str,
+    algorithm: str,
+    selection: FoldSelection,
+    model: ModelSettings,
+    degree: int | None,
+) -> FoldResult:
+    """Fit on every run but ``fold``, predict ``fold`` from its temperatures, and score.
+
+    ``degree`` is the decoupling's (config ``decoupling.degree``); the point-by-point
+    approach never decouples and ignores it (``None`` allowed).
+    """
+    test = (X["run"] == fold).to_numpy()
+    if not test.any():
+        raise ValueError(f"fold {fold!r}: no measurements of that run")
+    X_train, Y_train = X.loc[~test].reset_index(drop=True), Y.loc[~test].reset_index(drop=True)
+    X_test, Y_test = X.loc[test].reset_index(drop=True), Y.loc[test].reset_index(drop=True)
+    estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
+
+    predicted = np.asarray(estimator.predict(X_test), dtype=float)
+    measured = Y_test.to_numpy(dtype=float)
+    lower = upper = np.full_like(predicted, np.nan)
+    if algorithm == "gpr":
+        lower, upper = estimator.predict_interval(X_test, level=model.interval_level)
+
+    label = {"fold": fold, "approach": approach, "algorithm": algorithm}
+    metric_rows = []
+    kb_rows = []
+    if approach == "decoupled":
+        kb_measured = decouple_rows(X_test, Y_test, degree=degree)
+        kb_predicted = estimator.predict_kb(X_test)
+        kb_interval = estimator.predict_kb_interval(X_test, model.interval_level) if algorithm == "gpr" else None
+        for target, column in (("k", "k_um_per_m"), ("b", "b_um")):
+            m = kb_measured[column].to_numpy()
+            p = kb_predicted[column].to_numpy()
+            metric_rows.append({**label, "target": target, **prediction_metrics(m, p)})
+            lo, hi = kb_interval[column] if kb_interval is not None else (np.full_like(p, np.nan),) * 2
+            kb_rows.append(
+                pd.DataFrame(
+                    {
+                        **label,
+                        "run": fold,
+                        "measurement": X_test["measurement"].to_numpy(),
+                        "time_min": X_test["time_min"].to_numpy(),
+                        "target": target,
+                        "measured": m,
+                        "predicted": p,
+                        "lower": lo,
+                        "upper": hi,
+                    }
+                )
+            )
+    metric_rows.append({**label, "target": "error", **prediction_metrics(measured, predicted)})
+    positions = np.asarray(Y.columns, dtype=float)
+    n, p = measured.shape
+    errors = pd.DataFrame(
+        {
+            **label,
+            "run": fold,
+            "measurement": np.repeat(X_test["measurement"].to_numpy(), p),
+            "time_min": np.repeat(X_test["time_min"].to_numpy(), p),
+            "position_mm": np.tile(positions, n),
+            "measured": measured.ravel(),
+            "predicted": predicted.ravel(),
+            "residual": (measured - predicted).ravel(),
+            "lower": np.asarray(lower, dtype=float).ravel(),
+            "upper": np.asarray(upper, dtype=float).ravel(),
+        }
+    )
+    coefficients = estimator.coefficients()
+    coefficients = coefficients.assign(**label)[
+        ["fold", "approach", "algorithm", "target", "position_mm", "term", "temperature", "value"]
+    ]
+    kb_frame = pd.concat(kb_rows, ignore_index=True) if kb_rows else _empty_kb()
+    return FoldResult(
+        metrics=pd.DataFrame(metric_rows),
+        coefficients=coefficients,
+        kb_predictions=kb_frame,
+        error_predictions=errors,
+    )
+
+
+def _empty_kb() -> pd.DataFrame:
+    return pd.DataFrame(
+        columns=["fold", "approach", "algorithm", "run", "measurement", "time_min", "target", "measured", "predicted", "lower", "upper"]
+    )
+
+
+def _points_to_dict(points: SensitivePoints | None):
+    if points is None:
+        return None
+    return {
+        "clusters": [list(c) for c in points.clusters],
+        "selected": list(points.selected),
+        "grades": {k: float(v) for k, v in sorted(points.grades.items())},
+        "eta": None if np.isnan(points.eta) else float(points.eta),
+    }
+
+
+def _points_from_dict(d) -> SensitivePoints | None:
+    if d is None:
+        return None
+    return SensitivePoints(
+        clusters=tuple(tuple(c) for c in d["clusters"]),
+        selected=tuple(d["selected"]),
+        grades=dict(d["grades"]),
+        eta=float("nan") if d["eta"] is None else float(d["eta"]),
+    )
+
+
+def selection_to_dict(selection: FoldSelection) -> dict:
+    """A JSON-ready form; floats of positions become strings so keys survive JSON."""
+    return {
+        "fold": selection.fold,
+        "k": _points_to_dict(selection.k),
+        "b": _points_to_dict(selection.b),
+        "per_position": {repr(float(p)): _points_to_dict(v) for p, v in sorted(selection.per_position.items())},
+        "pointwise": list(selection.pointwise),
+    }
+
+
+def selection_from_dict(d: dict) -> FoldSelection:
+    return FoldSelection(
+        fold=d["fold"],
+        k=_points_from_dict(d["k"]),
+        b=_points_from_dict(d["b"]),
+        per_position={float(p): _points_from_dict(v) for p, v in d["per_position"].items()},
+        pointwise=tuple(d["pointwise"]),
+    )

@@ -1,0 +1,690 @@
+"""Thermal-error models of the linear axis: the paper's Eq. 8 and Eq. 9 as estimators.
+
+Two approaches, both scikit-learn estimators taking the same data:
+
+* :class:`DecoupledAxisModel` (the paper's step-by-step model, Eq. 9): every training
+  measurement's unzeroed error curve is decoupled into slope k and intercept b
+  (:func:`thermaxis.method.decouple.decouple_measurement`); k is regressed on ABSOLUTE
+  temperatures of its sensitive points and b on temperatures RELATIVE to the run's first
+  measurement.  A prediction recomposes the whole error curve.
+* :class:`PointwiseAxisModel` (the point-by-point baseline, Eq. 8): one regression per
+  target position on relative temperatures.
+
+Data conventions
+----------------
+``X`` is a DataFrame with one row per measurement: ``run`` (str), ``measurement`` (int,
+1-based time order within the run) and one float column per sensor id, absolute degrees C.
+``Y`` has the same rows (matched by position, not by index); its columns are the target
+positions in mm, ascending, values the unzeroed errors in um (NaN where a reading is missing).
+Relative temperatures are referenced to each run's lowest ``measurement`` present in X,
+so an X passed to ``predict`` must hold the run's first measurement.
+
+Every regressor is wrapped so that inputs AND target are standardised (see
+:func:`make_regressor`); :func:`linear_terms` converts any affine fit back to the paper's
+units, per degree C.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from scipy.stats import norm
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.compose import TransformedTargetRegressor
+from sklearn.cross_decomposition import PLSRegression
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+from sklearn.linear_model import LinearRegression, Ridge
+from sklearn.metrics import root_mean_squared_error
+from sklearn.model_selection import LeaveOneGroupOut, ParameterGrid
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.svm import SVR
+
+from thermaxis.method.decouple import compose_curve, decouple_curves, stroke_powers
+
+__all__ = [
+    "ALGORITHMS",
+    "LINEAR_ALGORITHMS",
+    "COEFFICIENT_COLUMNS",
+    "make_regressor",
+    "fit_svr_by_group_search",
+    "linear_terms",
+    "predict_with_std",
+    "relative_temperatures",
+    "decouple_rows",
+    "DecoupledAxisModel",
+    "PointwiseAxisModel",
+]
+
+ALGORITHMS = ("mlr", "svr", "ridge", "pls", "gpr")
+LINEAR_ALGORITHMS = ("mlr", "ridge", "pls")
+
+COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
+
+_ID_COLUMNS = ("run", "measurement")
+_ALLOWED_PARAMS = {
+    "mlr": set(),
+    "ridge": {"alpha"},
+    "pls": {"n_components"},
+    "svr": {"C", "epsilon", "gamma", "kernel"},
+    "gpr": {"length_scale", "noise_level", "n_restarts_optimizer"},
+}
+# Where make_regressor's pipeline keeps the wrapped regressor's parameters.
+_KB_COLUMNS = {
+    "k": "k_um_per_m",
+    "b": "b_um",
+    "c2": "c2_um_per_m2",
+    "c3": "c3_um_per_m3",
+}
+
+
+# --------------------------------------------------------------------------- regressors
+
+
+def _check_algorithm(algorithm: str) -> None:
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"unknown algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}")
+
+
+def _check_params(algorithm: str, params: Mapping | None) -> dict:
+    params = dict(params or {})
+    unknown = sorted(set(params) - _ALLOWED_PARAMS[algorithm])
+    if unknown:
+        allowed = ", ".join(sorted(_ALLOWED_PARAMS[algorithm])) or "none"
+        raise ValueError(f"unknown parameter(s) {unknown} for {algorithm}; allowed: {allowed}")
+    return params
+
+
+def _base_regressor(algorithm: str, params: dict, random_state: int, n_features: int | None):
+    if algorithm == "mlr":
+        return LinearRegression()
+    if algorithm == "ridge":
+        return Ridge(alpha=float(params.get("alpha", 1.0)))
+    if algorithm == "pls":
+        n_components = int(params.get("n_components", 2))
+        if n_features is not None:
+            n_components = min(n_components, n_features)
+        # Inputs and target are already standardised by the pipeline.
+        return PLSRegression(n_components=n_components, scale=False)
+    if algorithm == "svr":
+        return SVR(
+            kernel=params.get("kernel", "rbf"),
+            C=float(params.get("C", 1.0)),
+            epsilon=float(params.get("epsilon", 0.1)),
+            gamma=params.get("gamma", "scale"),
+        )
+    # gpr: bounds are in standardised units.  A nearly linear response drives the RBF
+    # towards long length scales and large amplitudes, hence the wide upper bounds; a
+    # noise floor of 1e-6 keeps exact (noise-free) training data well posed.
+    kernel = ConstantKernel(1.0, (1e-3, 1e5)) * RBF(
+        float(params.get("length_scale", 1.0)), (1e-2, 1e4)
+    ) + WhiteKernel(float(params.get("noise_level", 0.1)), (1e-6, 1e1))
+    return GaussianProcessRegressor(
+        kernel=kernel,
+        normalize_y=False,
+        n_restarts_optimizer=int(params.get("n_restarts_optimizer", 0)),
+        random_state=random_state,
+    )
+
+
+def make_regressor(
+    algorithm: str, params: Mapping | None = None, random_state: int = 0, n_features: int | None = None
+) -> Pipeline:
+    """An unfitted regressor with standardised inputs and standardised target.
+
+    Parameters
+    ----------
+    algorithm : {"mlr", "svr", "ridge", "pls", "gpr"}
+        Multiple linear regression, support-vector regression, ridge, partial least
+        squares, Gaussian-process regression.
+    params : mapping, optional
+        Hyper-parameters: ridge ``alpha`` (1.0); pls ``n_components`` (2); svr ``C`` (1.0),
+        ``epsilon`` (0.1, in standardised target units), ``gamma`` ("scale"), ``kernel``
+        ("rbf"); gpr ``length_scale`` (1.0), ``noise_level`` (0.1), ``n_restarts_optimizer``
+        (0).  Unknown keys raise ``ValueError``.
+    random_state : int
+        Seed of the GPR optimiser restarts (the other algorithms are deterministic).
+    n_features : int, optional
+        Number of inputs; caps PLS ``n_components`` (PLS cannot use more components than
+        inputs).
+
+    Returns
+    -------
+    sklearn.pipeline.Pipeline
+        ``StandardScaler`` followed by ``TransformedTargetRegressor(regressor,
+        transformer=StandardScaler())``; GPR kernel ``Constant * RBF + White``.
+    """
+    _check_algorithm(algorithm)
+    params = _check_params(algorithm, params)
+    regressor = _base_regressor(algorithm, params, random_state, n_features)
+    return Pipeline(
+        [
+            ("standardise", StandardScaler()),
+            ("regress", TransformedTargetRegressor(regressor=regressor, transformer=StandardScaler())),
+        ]
+    )
+
+
+def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
+    """Fit an SVR whose hyper-parameters are chosen by leave-one-group-out search.
+
+    Only the data passed in is used, so calling this on the training conditions of an
+    outer leave-one-condition-out fold keeps the held-out condition unseen.
+
+    Parameters
+    ----------
+    X : array-like, shape (n, f)
+    y : array-like, shape (n,)
+    groups : array-like, shape (n,)
+        Group label per row (the run id): each group is held out once in the inner search.
+    grid : mapping of str to list
+        Candidate values per SVR parameter (``C``, ``epsilon``, ``gamma``, ``kernel``).
+        C and epsilon act on the STANDARDISED target, so epsilon 0.05 means 5 % of the
+        target's spread. The workflow's grid is config ``models.svr_grid``.
+    random_state : int
+        Passed to :func:`make_regressor` for symmetry (SVR itself is deterministic).
+
+    Returns
+    -------
+    estimator : Pipeline
+        Refitted on all rows with the chosen parameters.
+    chosen : dict
+        The chosen parameters, by their plain names.  With fewer than two groups there
+        is nothing to hold out, so the first grid point (each parameter's first value) is
+        used without search.  Scoring is RMSE; ties go to the earlier grid point.
+    """
+    grid = dict(grid)
+    _check_params("svr", grid)
+    if not grid or any(len(values) == 0 for values in grid.values()):
+        raise ValueError("SVR grid must give at least one value for each listed parameter")
+    X = np.asarray(X, dtype=float)
+    y = np.asarray(y, dtype=float)
+    groups = np.asarray(groups)
+    candidates = list(ParameterGrid(grid))
+    n_groups = np.unique(groups).size
+    if n_groups < 2:
+        chosen = dict(candidates[0])
+        return make_regressor("svr", chosen, random_state).fit(X, y), chosen
+    # GridSearchCV over make_regressor's pipeline, without its per-candidate cloning,
+    # re-validation and scorer calls: each hold-out is standardised once, the SVR fitted
+    # per candidate on the same arrays the pipeline would give it, so the scores, the
+    # choice and the refitted model are the ones GridSearchCV gives (test_models checks).
+    scores = np.empty((len(candidates), n_groups))
+    for split, (train, test) in enumerate(LeaveOneGroupOut().split(X, y, groups)):
+        x_scaler = StandardScaler().fit(X[train])
+        X_train, X_test = x_scaler.transform(X[train]), x_scaler.transform(X[test])
+        y_scaler = StandardScaler().fit(y[train].reshape(-1, 1))
+        y_train = y_scaler.transform(y[train].reshape(-1, 1)).squeeze(axis=1)
+        for c, params in enumerate(candidates):
+            svr = _base_regressor("svr", params, random_state, None).fit(X_train, y_train)
+            predicted = y_scaler.inverse_transform(svr.predict(X_test).reshape(-1, 1)).squeeze(axis=1)
+            scores[c, split] = -root_mean_squared_error(y[test], predicted)
+    means = np.average(scores, axis=1)
+    # The first best candidate, NaN scores last, as GridSearchCV ranks them.
+    chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
+    return make_regressor("svr", chosen, random_state).fit(X, y), chosen
+
+
+def _final_regressor(fitted):
+    return fitted.named_steps["regress"].regressor_
+
+
+def linear_terms(fitted_estimator, feature_names: Sequence[str]) -> dict[str, float] | None:
+    """Constant and per-feature coefficients of an affine fit, in the inputs' own units.
+
+    The pipeline standardises inputs and target internally; since every step is affine
+    for mlr, ridge and pls, probing the prediction at the origin and at unit vectors
+    gives the constant and the slopes in original units (per degree C).
+
+    Parameters
+    ----------
+    fitted_estimator : Pipeline
+        A fitted :func:`make_regressor` pipeline.
+    feature_names : sequence of str
+        Names of the inputs, in column order.
+
+    Returns
+    -------
+    dict or None
+        ``{"const": c, name: slope, ...}``; ``None`` for svr and gpr, which are not affine.
+    """
+    if not isinstance(_final_regressor(fitted_estimator), (LinearRegression, Ridge, PLSRegression)):
+        return None
+    names = list(feature_names)
+    n_inputs = fitted_estimator.named_steps["standardise"].n_features_in_
+    if len(names) != n_inputs:
+        raise ValueError(f"got {len(names)} feature names for a model with {n_inputs} inputs")
+    probes = np.vstack([np.zeros(len(names)), np.eye(len(names))])
+    values = np.asarray(fitted_estimator.predict(probes), dtype=float).ravel()
+    const = float(values[0])
+    terms = {"const": const}
+    terms.update({name: float(v - const) for name, v in zip(names, values[1:])})
+    return terms
+
+
+def predict_with_std(fitted_estimator, X) -> tuple[np.ndarray, np.ndarray]:
+    """Predictive mean and standard deviation of a fitted GPR pipeline, original units.
+
+    Raises
+    ------
+    NotImplementedError
+        If the pipeline does not end in a Gaussian-process regressor.
+    """
+    gpr = _final_regressor(fitted_estimator)
+    if not isinstance(gpr, GaussianProcessRegressor):
+        raise NotImplementedError("prediction intervals are only available for algorithm 'gpr'")
+    scaled = fitted_estimator.named_steps["standardise"].transform(np.asarray(X, dtype=float))
+    mean_s, std_s = gpr.predict(scaled, return_std=True)
+    target_scaler = fitted_estimator.named_steps["regress"].transformer_
+    scale = float(target_scaler.scale_[0])
+    offset = float(target_scaler.mean_[0])
+    return np.asarray(mean_s).ravel() * scale + offset, np.asarray(std_s).ravel() * scale
+
+
+# --------------------------------------------------------------------------- data checks
+
+
+def _check_X(X, sensors: Sequence[str]) -> None:
+    if not isinstance(X, pd.DataFrame):
+        raise ValueError(f"X must be a pandas DataFrame, got {type(X).__name__}")
+    missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
+    if missing:
+        raise ValueError(
+            f"X lacks column(s) {missing}; expected run, measurement and sensors {list(sensors)}"
+        )
+    if X[list(sensors)].isna().to_numpy().any():
+        raise ValueError(
+            f"X has missing temperatures in sensor column(s) {list(sensors)}; fill or drop those rows"
+        )
+    if X.duplicated(list(_ID_COLUMNS)).any():
+        raise ValueError("X has duplicate (run, measurement) rows; expected one row per measurement")
+
+
+def _positions_of(X: pd.DataFrame, Y, min_positions: int = 2) -> np.ndarray:
+    if not isinstance(Y, pd.DataFrame):
+        raise ValueError(f"Y must be a pandas DataFrame, got {type(Y).__name__}")
+    if len(Y) != len(X):
+        raise ValueError(
+            f"Y has {len(Y)} rows but X has {len(X)}; expected one row of errors per measurement"
+        )
+    try:
+        positions = np.asarray(Y.columns, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError("Y's columns must be target positions in mm (numbers)") from exc
+    if positions.size < min_positions or np.any(np.diff(positions) <= 0):
+        raise ValueError(
+            f"Y's columns must be at least {min_positions} target position(s) in strictly ascending order"
+        )
+    return positions
+
+
+def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None) -> pd.DataFrame:
+    """Temperatures relative to the same run's first measurement.
+
+    Parameters
+    ----------
+    X : DataFrame
+        Columns ``run``, ``measurement`` and sensor columns in absolute degrees C.
+    sensors : sequence of str, optional
+        Which sensor columns; default every numeric column other than run and measurement.
+
+    Returns
+    -------
+    DataFrame
+        Same index as X, one column per sensor: value minus the run's value at its lowest
+        ``measurement`` among the rows of X, so a run's first row is all zeros.  A run's
+        reference comes from its own rows only, whatever other runs X holds.
+    """
+    if sensors is None:
+        sensors = [c for c in X.columns if c not in _ID_COLUMNS and pd.api.types.is_numeric_dtype(X[c].dtype)]
+    sensors = list(sensors)
+    missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
+    if missing:
+        raise ValueError(f"X lacks column(s) {missing}; expected run, measurement and sensor columns")
+    # In numpy, not a pandas sort and group-by: the sweep calls this thousands of times.
+    runs, _ = pd.factorize(X["run"])
+    # A stable sort by measurement puts each run's lowest measurement (the earlier row on a tie) first.
+    order = np.argsort(X["measurement"].to_numpy(), kind="stable")
+    _, first = np.unique(runs[order], return_index=True)
+    absolute = X[sensors].to_numpy(dtype=float)
+    values = absolute - absolute[order[first]][runs]
+    return pd.DataFrame(values, index=X.index, columns=sensors)
+
+
+def _features(X: pd.DataFrame, sensors: Sequence[str], temperature: str, signals: Sequence[str] = ()) -> np.ndarray:
+    """Temperatures of the given kind, then operating signals as logged (a speed has no 'rise')."""
+    if temperature == "absolute":
+        values = X[list(sensors)].to_numpy(dtype=float)
+    else:
+        values = relative_temperatures(X, sensors).to_numpy(dtype=float)
+    if signals:
+        values = np.hstack([values, X[list(signals)].to_numpy(dtype=float)])
+    return values
+
+
+def _fit_one(features, target, groups, algorithm, params, svr_grid, random_state):
+    """One regression; returns (fitted pipeline, chosen SVR parameters or None)."""
+    if algorithm == "svr":
+        if svr_grid is None:
+            # No default grid here: the one default is the schema's (config models.svr_grid).
+            raise ValueError("algorithm 'svr' needs svr_grid (the workflow passes config models.svr_grid)")
+        # Fixed parameters (e.g. kernel) apply to every grid point unless the grid varies them.
+        grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(svr_grid)}
+        return fit_svr_by_group_search(features, target, groups, grid, random_state)
+    model = make_regressor(algorithm, params, random_state, n_features=features.shape[1])
+    return model.fit(features, target), None
+
+
+def _coefficient_rows(target, position_mm, temperature, terms: dict | None, signals: Sequence[str] = ()) -> list[dict]:
+    if terms is None:
+        return []
+    return [
+        {
+            "target": target,
+            "position_mm": position_mm,
+            "term": term,
+            "temperature": "signal" if term in signals else temperature,
+            "value": value,
+        }
+        for term, value in terms.items()
+    ]
+
+
+def _coefficient_frame(rows: list[dict]) -> pd.DataFrame:
+    frame = pd.DataFrame(rows, columns=list(COEFFICIENT_COLUMNS))
+    return frame.astype({"position_mm": float, "value": float})
+
+
+def _z_score(level: float) -> float:
+    if not 0.0 < level < 1.0:
+        raise ValueError(f"interval level must lie strictly between 0 and 1, got {level}")
+    return float(norm.ppf(0.5 + level / 2.0))
+
+
+# --------------------------------------------------------------------------- decoupled
+
+
+def decouple_rows(X: pd.DataFrame, Y: pd.DataFrame, degree: int = 1) -> pd.DataFrame:
+    """Decoupling of every row of Y (Eq. 6): run, measurement, k_um_per_m, b_um (c2, c3), r2, rms_um.
+
+    The origin is Y's first position, so b means the same for every measurement.
+    """
+    positions = np.asarray(Y.columns, dtype=float)
+    labels = [f"run {run} measurement {measurement}" for run, measurement in zip(X["run"], X["measurement"])]
+    fits = decouple_curves(positions, Y.to_numpy(dtype=float), degree, origin_mm=float(positions[0]), labels=labels)
+    rows = []
+    for run, measurement, fit in zip(X["run"], X["measurement"], fits):
+        row = {"run": run, "measurement": measurement, "k_um_per_m": fit.k_um_per_m, "b_um": fit.b_um}
+        for p in range(2, degree + 1):
+            row[_KB_COLUMNS[f"c{p}"]] = fit.coefficients[p]
+        row.update(r2=fit.r2, rms_um=fit.rms_um)
+        rows.append(row)
+    return pd.DataFrame(rows, index=X.index)
+
+
+
+class DecoupledAxisModel(RegressorMixin, BaseEstimator):
+    """Step-by-step model (Eq. 9): k from absolute, b from relative temperatures.
+
+    Parameters
+    ----------
+    k_sensors : tuple of str
+        Sensitive points of the slope k (absolute temperatures).  Higher decoupling
+        coefficients (c2, c3) use the same sensors, also absolute: like k they describe
+        the curve's shape, which follows the temperature field, not its drift.
+    b_sensors : tuple of str
+        Sensitive points of the intercept b (temperatures relative to the run's first
+        measurement).
+    algorithm : {"mlr", "svr", "ridge", "pls", "gpr"}
+    params : dict, optional
+        Hyper-parameters for :func:`make_regressor`; for svr, fixed values added to the grid.
+    svr_grid : dict, optional
+        SVR search grid (inner leave-one-run-out on the training runs); required for
+        ``algorithm="svr"`` (the workflow passes config ``models.svr_grid``).
+    degree : {1, 2, 3}
+        Decoupling polynomial degree; 1 is the paper's straight line.
+    random_state : int
+    signals : tuple of str
+        Operating signals (columns of X, e.g. a spindle speed) added as inputs to every
+        coefficient's regression, as logged.
+
+    Attributes
+    ----------
+    positions_mm_ : ndarray
+        Target positions seen in fit; predictions are on these.
+    origin_mm_ : float
+        First target; the shifted stroke starts here and b is the error at it.
+    kb_ : DataFrame
+        Training decoupling: run, measurement, k_um_per_m, b_um (c2_um_per_m2,
+        c3_um_per_m3 for higher degrees), r2, rms_um.
+    estimators_ : dict
+        Fitted pipeline per target ("k", "b", "c2", "c3").
+    svr_params_ : dict
+        Chosen SVR parameters per target (empty for other algorithms).
+    """
+
+    def __init__(
+        self,
+        k_sensors=("T1", "T6", "T12"),
+        b_sensors=("T2", "T7", "T11"),
+        algorithm="mlr",
+        params=None,
+        svr_grid=None,
+        degree=1,
+        random_state=0,
+        signals=(),
+    ):
+        self.k_sensors = k_sensors
+        self.b_sensors = b_sensors
+        self.algorithm = algorithm
+        self.params = params
+        self.svr_grid = svr_grid
+        self.degree = degree
+        self.random_state = random_state
+        self.signals = signals
+
+    def _targets(self) -> list[tuple[str, tuple[str, ...], str]]:
+        """(target, sensors, temperature kind) per modelled coefficient."""
+        targets = [("k", tuple(self.k_sensors), "absolute"), ("b", tuple(self.b_sensors), "relative")]
+        targets += [(f"c{p}", tuple(self.k_sensors), "absolute") for p in range(2, self.degree + 1)]
+        return targets
+
+    def fit(self, X: pd.DataFrame, Y: pd.DataFrame) -> DecoupledAxisModel:
+        """Decouple every training measurement and regress its coefficients on temperature."""
+        _check_algorithm(self.algorithm)
+        if self.degree not in (1, 2, 3):
+            raise ValueError(f"decoupling degree must be 1, 2 or 3, got {self.degree}")
+        _check_X(X, (*self.k_sensors, *self.b_sensors, *self.signals))
+        self.positions_mm_ = _positions_of(X, Y)
+        self.origin_mm_ = float(self.positions_mm_[0])
+        self.kb_ = decouple_rows(X, Y, self.degree)
+        groups = X["run"].to_numpy()
+        self.estimators_, self.svr_params_ = {}, {}
+        for target, sensors, temperature in self._targets():
+            features = _features(X, sensors, temperature, self.signals)
+            y = self.kb_[_KB_COLUMNS[target]].to_numpy(dtype=float)
+            model, chosen = _fit_one(
+                features, y, groups, self.algorithm, self.params, self.svr_grid, self.random_state
+            )
+            self.estimators_[target] = model
+            if chosen is not None:
+                self.svr_params_[target] = chosen
+        return self
+
+    def predict_kb(self, X: pd.DataFrame, return_std: bool = False) -> pd.DataFrame:
+        """Predicted decoupling coefficients per row of X.
+
+        Parameters
+        ----------
+        X : DataFrame
+            Temperatures of the runs to predict (each run's first measurement included).
+        return_std : bool
+            Also return each coefficient's predictive standard deviation as a
+            ``<column>_std`` column (gpr only, else ``NotImplementedError``).
+
+        Returns
+        -------
+        DataFrame
+            Index aligned with X; columns k_um_per_m, b_um (c2_um_per_m2, c3_um_per_m3 for
+            higher degrees), then the ``_std`` columns if asked for.
+        """
+        if return_std and self.algorithm != "gpr":
+            raise NotImplementedError("predictive standard deviations are only available for algorithm 'gpr'")
+        _check_X(X, (*self.k_sensors, *self.b_sensors, *self.signals))
+        means, stds = {}, {}
+        for target, sensors, temperature in self._targets():
+            features = _features(X, sensors, temperature, self.signals)
+            column = _KB_COLUMNS[target]
+            if return_std:
+                means[column], stds[f"{column}_std"] = predict_with_std(self.estimators_[target], features)
+            else:
+                means[column] = np.asarray(self.estimators_[target].predict(features)).ravel()
+        return pd.DataFrame({**means, **stds}, index=X.index)
+
+    def predict(self, X: pd.DataFrame) -> np.ndarray:
+        """Predicted error curves, shape (n rows, n positions) in um."""
+        kb = self.predict_kb(X)
+        coefficients = np.column_stack(
+            [kb["b_um"], kb["k_um_per_m"], *(kb[_KB_COLUMNS[f"c{p}"]] for p in range(2, self.degree + 1))]
+        )
+        return compose_curve(coefficients, self.positions_mm_, self.origin_mm_)
+
+    def predict_kb_interval(self, X: pd.DataFrame, level: float = 0.95) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Gaussian interval of each decoupling coefficient (gpr only): column -> (lower, upper)."""
+        z = _z_score(level)
+        kb = self.predict_kb(X, return_std=True)
+        columns = [c for c in kb.columns if not c.endswith("_std")]
+        return {c: (kb[c].to_numpy() - z * kb[f"{c}_std"].to_numpy(), kb[c].to_numpy() + z * kb[f"{c}_std"].to_numpy()) for c in columns}
+
+    def predict_interval(self, X: pd.DataFrame, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+        """Pointwise prediction interval of the error curves (gpr only).
+
+        The k, b (and c2, c3) models are fitted separately, so their predictive
+        uncertainties are taken as independent: var e(x) = sum_p s_p^2 x^(2p) on the
+        shifted stroke x.  Gaussian quantiles at ``level``.
+
+        Raises
+        ------
+        NotImplementedError
+            For algorithms other than gpr.
+        """
+        if self.algorithm != "gpr":
+            raise NotImplementedError("prediction intervals are only available for algorithm 'gpr'")
+        z = _z_score(level)
+        kb = self.predict_kb(X, return_std=True)
+        columns = [_KB_COLUMNS[t] for t in ("b", "k", "c2", "c3")[: self.degree + 1]]
+        means = kb[columns].to_numpy()
+        stds = kb[[f"{c}_std" for c in columns]].to_numpy()
+        powers = stroke_powers(self.positions_mm_, self.origin_mm_, self.degree).T
+        centre = means @ powers
+        half = z * np.sqrt(stds**2 @ powers**2)
+        return centre - half, centre + half
+
+    def coefficients(self) -> pd.DataFrame:
+        """Fitted terms in the paper's units (Eq. 9); no rows for svr and gpr.
+
+        Returns
+        -------
+        DataFrame
+            Columns target ("k", "b", "c2", "c3"), position_mm (NaN), term ("const" or a
+            sensor id), temperature ("absolute" or "relative", the kind the model uses),
+            value (k: um/m and um/m per degree C; b: um and um per degree C).
+        """
+        rows = []
+        for target, sensors, temperature in self._targets():
+            terms = linear_terms(self.estimators_[target], (*sensors, *self.signals))
+            rows += _coefficient_rows(target, np.nan, temperature, terms, self.signals)
+        return _coefficient_frame(rows)
+
+
+# --------------------------------------------------------------------------- pointwise
+
+
+class PointwiseAxisModel(RegressorMixin, BaseEstimator):
+    """Point-by-point baseline (Eq. 8): one regression per target position.
+
+    Inputs are temperatures relative to the run's first measurement, as Eq. 8's small
+    constants show.  A position's fit skips the rows where its error is missing.
+
+    Parameters
+    ----------
+    sensors : tuple of str
+        Sensitive points used for every position (the paper: T1, T11, T12).
+    algorithm, params, svr_grid, random_state, signals
+        As for :class:`DecoupledAxisModel`.
+
+    Attributes
+    ----------
+    positions_mm_ : ndarray
+    estimators_ : list
+        Fitted pipeline per position.
+    svr_params_ : dict
+        Chosen SVR parameters per position (empty for other algorithms).
+    """
+
+    def __init__(
+        self, sensors=("T1", "T11", "T12"), algorithm="mlr", params=None, svr_grid=None, random_state=0, signals=()
+    ):
+        self.sensors = sensors
+        self.algorithm = algorithm
+        self.params = params
+        self.svr_grid = svr_grid
+        self.random_state = random_state
+        self.signals = signals
+
+    def fit(self, X: pd.DataFrame, Y: pd.DataFrame) -> PointwiseAxisModel:
+        """Fit one regression per position on relative temperatures."""
+        _check_algorithm(self.algorithm)
+        _check_X(X, (*self.sensors, *self.signals))
+        self.positions_mm_ = _positions_of(X, Y, min_positions=1)
+        features = _features(X, self.sensors, "relative", self.signals)
+        groups = X["run"].to_numpy()
+        errors = Y.to_numpy(dtype=float)
+        self.estimators_, self.svr_params_ = [], {}
+        for j, position in enumerate(self.positions_mm_):
+            valid = np.isfinite(errors[:, j])
+            if valid.sum() < 2:
+                raise ValueError(
+                    f"position {position:g} mm has {valid.sum()} error reading(s); need at least 2"
+                )
+            model, chosen = _fit_one(
+                features[valid],
+                errors[valid, j],
+                groups[valid],
+                self.algorithm,
+                self.params,
+                self.svr_grid,
+                self.random_state,
+            )
+            self.estimators_.append(model)
+            if chosen is not None:
+                self.svr_params_[float(position)] = chosen
+        return self
+
+    def predict(self, X: pd.DataFrame) -> np.ndarray:
+        """Predicted errors, shape (n rows, n positions) in um."""
+        _check_X(X, (*self.sensors, *self.signals))
+        features = _features(X, self.sensors, "relative", self.signals)
+        return np.column_stack([np.asarray(m.predict(features)).ravel() for m in self.estimators_])
+
+    def predict_interval(self, X: pd.DataFrame, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+        """Pointwise Gaussian prediction interval (gpr only; else NotImplementedError)."""
+        if self.algorithm != "gpr":
+            raise NotImplementedError("prediction intervals are only available for algorithm 'gpr'")
+        z = _z_score(level)
+        _check_X(X, (*self.sensors, *self.signals))
+        features = _features(X, self.sensors, "relative", self.signals)
+        mean, std = zip(*(predict_with_std(m, features) for m in self.estimators_))
+        mean, std = np.column_stack(mean), np.column_stack(std)
+        return mean - z * std, mean + z * std
+
+    def coefficients(self) -> pd.DataFrame:
+        """Fitted terms per position in um and um per degree C (Eq. 8); no rows for svr/gpr."""
+        rows = []
+        for position, model in zip(self.positions_mm_, self.estimators_):
+            terms = linear_terms(model, (*self.sensors, *self.signals))
+            rows += _coefficient_rows("error", float(position), "relative", terms, self.signals)
+        return _coefficient_frame(rows)

@@ -1,0 +1,1 @@
+"""The Snakemake glue, no science: the parse-time gate, the script runner, code dependencies, resources and resuming an interrupted run."""

@@ -1,0 +1,110 @@
+"""The edge between Snakemake scripts and the library.
+
+Scripts stay thin: they call :func:`run_script`, which sends warnings and log
+records to the rule's log file and turns a data problem into ONE line on stderr
+instead of a traceback, so the user sees which file and what was expected.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import sys
+import tempfile
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+
+from thermaxis.errors import DataError
+
+__all__ = ["run_script", "atomic_path", "write_csv", "write_text"]
+
+
+class _OneLine(logging.Formatter):
+    """``thermaxis warning: <message>``; a captured Python warning loses its source location."""
+
+    _LOCATION = re.compile(r"^.*?:\d+: \w*Warning: ")
+
+    def format(self, record):
+        first = record.getMessage().splitlines()[0] if record.getMessage() else ""
+        return f"thermaxis warning: {self._LOCATION.sub('', first)}"
+
+
+def _configure_logging(log_path: str | None) -> logging.Logger:
+    logger = logging.getLogger("thermaxis")
+    logger.handlers.clear()
+    logger.setLevel(logging.INFO)
+    handler: logging.Handler
+    if log_path:
+        Path(log_path).parent.mkdir(parents=True, exist_ok=True)
+        handler = logging.FileHandler(log_path, mode="w", encoding="utf-8")
+    else:
+        handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(levelname)s %(message)s"))
+    # A warning only in a log file nobody opens is silence: the terminal gets it too
+    # (errors reach it through run_script's one line).
+    terminal = logging.StreamHandler(sys.stderr)
+    terminal.setFormatter(_OneLine())
+    terminal.addFilter(lambda record: record.levelno == logging.WARNING)
+    logger.addHandler(handler)
+    logging.captureWarnings(True)
+    py_warnings = logging.getLogger("py.warnings")
+    py_warnings.handlers.clear()
+    py_warnings.addHandler(handler)
+    if log_path:
+        logger.addHandler(terminal)
+        py_warnings.addHandler(terminal)
+    return logger
+
+
+def run_script(main, snakemake) -> None:
+    """Run ``main(snakemake)``; a :class:`DataError` or ``ValueError`` ends in one clear line."""
+    log = snakemake.log[0] if len(snakemake.log) else None
+    logger = _configure_logging(log)
+    warnings.simplefilter("default")
+    try:
+        main(snakemake)
+    except (DataError, ValueError) as exc:
+        message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        logger.error(message)
+        print(f"thermaxis error: {message}", file=sys.stderr)
+        sys.exit(1)
+    except Exception as exc:  # noqa: BLE001 - an unforeseen input must still end in one line
+        logger.exception("unexpected error")
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        print(f"thermaxis error: unexpected {type(exc).__name__}: {first} (traceback in {log or 'stderr'})", file=sys.stderr)
+        sys.exit(1)
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary path beside ``path`` and move it into place only on success."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        # mkstemp creates 0600 files; results are meant to be read and served by others.
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def write_csv(frame, path, float_format: str = "%.6g") -> None:
+    """CSV with explicit float format and Unix newlines, so reruns are byte-identical."""
+    with atomic_path(path) as tmp:
+        frame.to_csv(tmp, index=False, float_format=float_format, lineterminator="\n")
+
+
+def write_text(text: str, path) -> None:
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
+
+
+def write_parquet(frame, path) -> None:
+    with atomic_path(path) as tmp:
+        frame.to_parquet(tmp, index=False)

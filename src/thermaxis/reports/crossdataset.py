@@ -1,0 +1,204 @@
+"""Held-out error across datasets: one row per dataset x approach x algorithm.
+
+Each dataset's workflow run writes ``results/<dataset>/tables/metrics.csv`` (one row
+per fold x approach x algorithm x target, see :data:`thermaxis.method.metrics.METRICS_CSV_COLUMNS`).
+This module reads every such table under a results folder and summarises the error
+curves' held-out residuals (target ``error``) over the leave-one-condition-out folds:
+mean RMSE, mean and worst max |residual|.  Whether a dataset is simulated comes from
+its own ``dataset.yaml`` (found through ``provenance.json``), so the summary says so
+for every row.
+
+Command line (writes ``summary.csv``, ``summary.md`` and ``heldout_error.{png,pdf}``)::
+
+    python -m thermaxis.reports.crossdataset --results results --out results/_datasets
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Iterable, Mapping
+from contextlib import ExitStack
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from thermaxis.errors import DataError
+
+from thermaxis.figures.crossdataset import fig_heldout_error
+
+__all__ = [
+    "SUMMARY_COLUMNS",
+    "read_metrics",
+    "dataset_kind",
+    "summarise",
+    "to_markdown",
+    "main",
+]
+
+_METRICS_COLUMNS = ("fold", "approach", "algorithm", "target", "rmse", "max_abs")
+SUMMARY_COLUMNS = (
+    "dataset",
+    "data",
+    "approach",
+    "algorithm",
+    "n_folds",
+    "mean_rmse_um",
+    "mean_max_abs_um",
+    "worst_max_abs_um",
+)
+_APPROACH_ORDER = ("decoupled", "pointwise")
+_ALGORITHM_ORDER = ("mlr", "svr", "ridge", "pls", "gpr")
+# Folders of results/ that are not datasets.
+_NOT_DATASETS = ("_datasets", "bench")
+
+
+def read_metrics(path) -> pd.DataFrame:
+    """One dataset's metrics.csv, checked for the columns the summary needs."""
+    path = Path(path)
+    try:
+        frame = pd.read_csv(path, keep_default_na=False, na_values=[""])  # "n/a" is an error, not a gap
+    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        raise DataError(f"{path}: cannot be read as CSV ({str(exc).splitlines()[0]})") from exc
+    missing = [c for c in _METRICS_COLUMNS if c not in frame.columns]
+    if missing:
+        raise DataError(f"{path}: column {missing[0]!r} missing; expected {', '.join(_METRICS_COLUMNS)}")
+    for column in ("rmse", "max_abs"):
+        values = pd.to_numeric(frame[column], errors="coerce")
+        bad = values.isna() & frame[column].notna()
+        if bad.any():
+            row = int(np.flatnonzero(bad.to_numpy())[0]) + 2  # header is line 1
+            raise DataError(f"{path}: line {row}, column {column!r}: expected a number, got {frame[column].iloc[row - 2]!r}")
+        frame[column] = values
+    return frame
+
+
+def dataset_kind(result_dir) -> str:
+    """'simulated' or 'measured', from the dataset.yaml that provenance.json names."""
+    result_dir = Path(result_dir)
+    provenance = result_dir / "provenance.json"
+    try:
+        root = Path(json.loads(provenance.read_text(encoding="utf-8"))["data"]["root"])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise DataError(f"{provenance}: expected the workflow's provenance record with data.root ({exc})") from exc
+    sheet = root / "dataset.yaml"
+    try:
+        kind = yaml.safe_load(sheet.read_text(encoding="utf-8"))["provenance"]["kind"]
+    except (OSError, yaml.YAMLError, KeyError, TypeError) as exc:
+        raise DataError(f"{sheet}: expected provenance.kind (simulated or measured) ({exc})") from exc
+    if kind not in ("simulated", "measured"):
+        raise DataError(f"{sheet}: provenance.kind: expected 'simulated' or 'measured', got {kind!r}")
+    return kind
+
+
+def _order(values: Iterable[str], preferred: tuple[str, ...]) -> list[str]:
+    rank = {v: i for i, v in enumerate(preferred)}
+    return sorted(set(values), key=lambda v: (rank.get(v, len(rank)), v))
+
+
+def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> pd.DataFrame:
+    """Held-out error of the whole error curve per dataset x approach x algorithm.
+
+    Parameters
+    ----------
+    metrics : mapping of dataset name to DataFrame
+        Each dataset's metrics table (:func:`read_metrics`).
+    kinds : mapping of dataset name to str
+        'simulated' or 'measured' (:func:`dataset_kind`).
+
+    Returns
+    -------
+    DataFrame
+        :data:`SUMMARY_COLUMNS`; means and the worst case are over the folds.  Sorted
+        by dataset, then approach and algorithm in the paper's order.
+    """
+    rows = []
+    for name in sorted(metrics):
+        errors = metrics[name][metrics[name]["target"] == "error"]
+        if errors.empty:
+            raise DataError(f"dataset {name}: metrics hold no row with target 'error'; expected held-out error curves")
+        for approach in _order(errors["approach"], _APPROACH_ORDER):
+            for algorithm in _order(errors.loc[errors["approach"] == approach, "algorithm"], _ALGORITHM_ORDER):
+                group = errors[(errors["approach"] == approach) & (errors["algorithm"] == algorithm)]
+                rows.append(
+                    {
+                        "dataset": name,
+                        "data": kinds[name],
+                        "approach": approach,
+                        "algorithm": algorithm,
+                        "n_folds": int(group["fold"].nunique()),
+                        "mean_rmse_um": float(group["rmse"].mean()),
+                        "mean_max_abs_um": float(group["max_abs"].mean()),
+                        "worst_max_abs_um": float(group["max_abs"].max()),
+                    }
+                )
+    if not rows:
+        raise DataError("no dataset results found; expected results/<dataset>/tables/metrics.csv")
+    return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
+
+
+def to_markdown(summary: pd.DataFrame) -> str:
+    """The summary as a Markdown table, with a line on which datasets are simulated."""
+    from thermaxis.reports.formatting import markdown_table
+
+    simulated = sorted(summary.loc[summary["data"] == "simulated", "dataset"].unique())
+    lines = ["# Held-out error per dataset, approach and algorithm", ""]
+    if simulated:
+        lines += [f"SIMULATED data: {', '.join(simulated)} (not measurements).", ""]
+    lines += [
+        "Error curves of each held-out condition (leave-one-condition-out); means and worst case over the folds, µm.",
+        "",
+        markdown_table(summary, float_format="%.3f"),
+    ]
+    return "\n".join(lines)
+
+
+def _result_dirs(results: Path) -> list[Path]:
+    return sorted(
+        p.parent.parent
+        for p in results.glob("*/tables/metrics.csv")
+        if p.parent.parent.name not in _NOT_DATASETS
+    )
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m thermaxis.reports.crossdataset", description=__doc__.splitlines()[0])
+    parser.add_argument("--results", default="results", help="folder holding results/<dataset>/ (default: results)")
+    parser.add_argument("--out", default=None, help="output folder (default: <results>/_datasets)")
+    parser.add_argument("--formats", nargs="+", default=["png", "pdf"], help="figure formats (default: png pdf)")
+    args = parser.parse_args(argv)
+    results = Path(args.results)
+    out = Path(args.out) if args.out else results / "_datasets"
+    try:
+        dirs = _result_dirs(results)
+        metrics = {d.name: read_metrics(d / "tables" / "metrics.csv") for d in dirs}
+        kinds = {d.name: dataset_kind(d) for d in dirs}
+        summary = summarise(metrics, kinds)
+        fig = fig_heldout_error(summary)
+    except DataError as exc:
+        print(f"thermaxis error: {exc}", file=sys.stderr)
+        return 1
+    _write(summary, fig, out, args.formats)
+    print(f"thermaxis: held-out error of {len(dirs)} dataset(s) -> {out}/summary.csv", file=sys.stderr)
+    return 0
+
+
+def _write(summary: pd.DataFrame, fig, out: Path, formats) -> None:
+    """Every output under a temporary name first, then all moved into place."""
+    from thermaxis.figures.style import save_figure
+    from thermaxis.pipeline.runner import atomic_path
+
+    with ExitStack() as stack:
+        table = stack.enter_context(atomic_path(out / "summary.csv"))
+        markdown = stack.enter_context(atomic_path(out / "summary.md"))
+        figures = [stack.enter_context(atomic_path(out / f"heldout_error.{ext}")) for ext in formats]
+        summary.to_csv(table, index=False, float_format="%.6f", lineterminator="\n")
+        markdown.write_text(to_markdown(summary), encoding="utf-8")
+        save_figure(fig, figures)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

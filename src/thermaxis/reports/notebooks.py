@@ -1,0 +1,205 @@
+"""Running a report notebook: papermill execution, volatile-field stripping and self-contained HTML.
+
+``python -m thermaxis.reports.notebooks run NOTEBOOK OUT.ipynb OUT.html ...`` executes and converts in one process.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+
+
+
+
+__all__ = [
+    "strip_volatile",
+    "remote_loads",
+    "notebook_to_html",
+    "convert",
+    "execute",
+]
+
+
+# --------------------------------------------------------------------------- conversion
+
+_VOLATILE_KEYS = ("start_time", "end_time", "duration")
+
+# The JupyterLab template without the blocks that load require.js, MathJax, mermaid
+# and widget managers from a CDN; its CSS is inlined by nbconvert. The empty icon
+# keeps browsers from requesting /favicon.ico (a 404 in the console when served).
+_TEMPLATE = """{%- extends 'index.html.j2' -%}
+{%- block html_head_js -%}<link rel="icon" href="data:,">{%- endblock html_head_js -%}
+{%- block html_head_js_mathjax -%}{%- endblock html_head_js_mathjax -%}
+{%- block html_head_js_mermaidjs -%}{%- endblock html_head_js_mermaidjs -%}
+{%- block jupyter_widgets -%}{%- endblock jupyter_widgets -%}
+"""
+
+
+def strip_volatile(nb: dict) -> dict:
+    """Drop what differs between two executions of the same notebook on the same inputs.
+
+    Removes papermill's and nbclient's time stamps (notebook and cell metadata) and
+    gives papermill's injected parameters cell a fixed id.  ``nb`` is changed in place
+    and returned.
+    """
+    meta = nb.get("metadata", {}).get("papermill")
+    if isinstance(meta, dict):
+        for key in _VOLATILE_KEYS:
+            meta.pop(key, None)
+    for i, cell in enumerate(nb.get("cells", [])):
+        cell_meta = cell.get("metadata", {})
+        cell_meta.pop("execution", None)
+        if isinstance(cell_meta.get("papermill"), dict):
+            for key in _VOLATILE_KEYS:
+                cell_meta["papermill"].pop(key, None)
+        if "injected-parameters" in cell_meta.get("tags", []):
+            cell["id"] = "injected-parameters"
+    return nb
+
+
+_REMOTE = re.compile(
+    r"""<(?:script|img|iframe|source|video|audio|embed)\b[^>]*\bsrc\s*=\s*["']?\s*(?:https?:)?//[^"'\s>]+"""
+    r"""|<link\b[^>]*\bhref\s*=\s*["']?\s*(?:https?:)?//[^"'\s>]+"""
+    r"""|@import\s+(?:url\()?\s*["']?\s*(?:https?:)?//[^"')\s;]+"""
+    r"""|url\(\s*["']?\s*(?:https?:)?//[^"')\s]+""",
+    re.IGNORECASE,
+)
+
+
+def remote_loads(text: str) -> list[str]:
+    """Every place where an HTML page would load something from the network.
+
+    Scripts, images, frames and media with a remote ``src``, stylesheets (``<link
+    href>``), CSS ``@import`` and ``url()``.  Plain hyperlinks (``<a href>``) are not
+    loads and are not reported.
+    """
+    return [m.group(0) for m in _REMOTE.finditer(text)]
+
+
+def notebook_to_html(nb, title: str) -> str:
+    """HTML of an executed notebook: outputs and Markdown only (code hidden), nothing remote.
+
+    Raises
+    ------
+    ValueError
+        If the page would still load something from the network.
+    """
+    import jinja2
+    from nbconvert import HTMLExporter
+
+    exporter = HTMLExporter(
+        template_name="lab",
+        extra_loaders=[jinja2.DictLoader({"thermaxis.html.j2": _TEMPLATE})],
+        template_file="thermaxis.html.j2",
+        exclude_input=True,
+        exclude_input_prompt=True,
+        exclude_output_prompt=True,
+    )
+    nb.metadata["title"] = title  # the template prefers it to the resource name
+    body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title}})
+    remote = remote_loads(body)
+    if remote:
+        raise ValueError(f"report {title!r} would load {remote[0]!r} from the network; expected a self-contained page")
+    return body
+
+
+def convert(notebook_path, html_path, title: str) -> None:
+    """Normalise an executed notebook in place (:func:`strip_volatile`) and write its HTML."""
+    import nbformat
+
+    from thermaxis.pipeline.runner import write_text
+
+    nb = nbformat.read(str(notebook_path), as_version=4)
+    strip_volatile(nb)
+    page = notebook_to_html(nb, title)
+    write_text(nbformat.writes(nb) + "\n", notebook_path)
+    write_text(page, html_path)
+
+
+# --------------------------------------------------------------------------- command line
+
+
+def execute(
+    notebook,
+    executed,
+    html_path,
+    title: str,
+    parameters: dict,
+    kernel: str = "python3",
+    start_timeout: float = 120,
+    execution_timeout: float = 600,
+) -> None:
+    """Execute a report notebook with papermill, then :func:`convert` it to HTML.
+
+    Parameters
+    ----------
+    notebook, executed, html_path : str or os.PathLike
+        The clean notebook, the executed notebook to write, the HTML to write.
+    title : str
+        Title of the HTML page.
+    parameters : dict
+        Values for the notebook's ``parameters`` cell.
+    kernel : str
+        Jupyter kernel name.
+    start_timeout, execution_timeout : float
+        Seconds the kernel may take to start, and any one cell to run.
+    """
+    import papermill
+
+    papermill.execute_notebook(
+        str(notebook),
+        str(executed),
+        parameters=parameters,
+        kernel_name=kernel,
+        start_timeout=start_timeout,
+        execution_timeout=execution_timeout,
+        progress_bar=False,
+    )
+    convert(executed, html_path, title)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m thermaxis.reports.notebooks", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="execute a report notebook with papermill and write its HTML")
+    run.add_argument("notebook")
+    run.add_argument("executed")
+    run.add_argument("html")
+    run.add_argument("--title", required=True)
+    run.add_argument("--parameters", default="{}", help="JSON object of notebook parameters")
+    run.add_argument("--kernel", default="python3")
+    run.add_argument("--start-timeout", type=float, default=120)
+    run.add_argument("--execution-timeout", type=float, default=600)
+    to_html = sub.add_parser("html", help="normalise an executed notebook and write its self-contained HTML")
+    to_html.add_argument("notebook")
+    to_html.add_argument("html")
+    to_html.add_argument("--title", required=True)
+    args = parser.parse_args(argv)
+    try:
+        if args.command == "run":
+            execute(
+                args.notebook,
+                args.executed,
+                args.html,
+                args.title,
+                json.loads(args.parameters),
+                kernel=args.kernel,
+                start_timeout=args.start_timeout,
+                execution_timeout=args.execution_timeout,
+            )
+        else:
+            convert(args.notebook, args.html, args.title)
+    except (OSError, ValueError) as exc:
+        print(f"thermaxis error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # papermill's execution error: the traceback of the failing cell
+        print(exc, file=sys.stderr)
+        print(f"thermaxis error: {args.notebook}: {type(exc).__name__} while executing the notebook", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

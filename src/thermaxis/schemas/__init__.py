@@ -1,0 +1,32 @@
+"""The schemas of the config, the dataset sheets, the import mapping and ``model.json``.
+
+They are package data, so an installed wheel validates exactly as a checkout does.
+"""
+
+from __future__ import annotations
+
+import json
+from functools import lru_cache
+from pathlib import Path
+
+import yaml
+
+__all__ = ["SCHEMA_DIR", "schema_path", "load_schema"]
+
+SCHEMA_DIR = Path(__file__).resolve().parent
+
+
+def schema_path(name: str) -> Path:
+    """The file of schema ``name`` (``config``, ``dataset``, ``runs``, ``import_mapping``, ``compensation_model``)."""
+    for suffix in (".schema.yaml", ".schema.json"):
+        path = SCHEMA_DIR / f"{name}{suffix}"
+        if path.is_file():
+            return path
+    raise FileNotFoundError(f"no schema {name!r} in {SCHEMA_DIR}")
+
+
+@lru_cache(maxsize=None)
+def load_schema(name: str) -> dict:
+    path = schema_path(name)
+    with open(path, encoding="utf-8") as fh:
+        return json.load(fh) if path.suffix == ".json" else yaml.safe_load(fh)

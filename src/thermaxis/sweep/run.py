@@ -1,0 +1,377 @@
+"""Evaluating a sweep: every configuration of a batch on its fold, then the summary and ranking.
+
+Each configuration is evaluated on every fold by
+:func:`thermaxis.method.folds.evaluate_configuration`, the function the main workflow's
+``fit_predict`` rule calls: the sweep has no model code of its own, and its metric
+columns are :data:`thermaxis.method.metrics.METRIC_COLUMNS`. The grid, units and batches are
+planned by :mod:`thermaxis.sweep.plan`; the figures are in :mod:`thermaxis.figures`.
+
+How the cost is kept down
+-------------------------
+* Start-up and imports are paid per *batch*, not per configuration: a batch is one
+  process that reads the assembled tables once and works through its share of the
+  grid.
+* A unit's sensitive points are selected once per decoupling degree and shared by
+  every approach and algorithm.
+* Many selection settings pick the same sensors (the point-by-point common set has
+  ``selection.pointwise_common`` sensors whatever the cluster count).  An evaluation depends on the selection
+  only through the sensors its model uses, so within a batch the metrics of an
+  identical (fold, approach, algorithm, degree, sensors) evaluation are reused.
+
+scikit-learn is imported only when a batch evaluates, so the collecting and plotting
+jobs do not pay for it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import sys
+import time
+from collections.abc import Callable, Iterable
+
+import numpy as np
+import pandas as pd
+
+from thermaxis.config import ModelSettings, SelectionSettings
+from thermaxis.method.metrics import METRIC_COLUMNS
+from thermaxis.sweep.plan import FACTORS, LEVEL_ORDER, Configuration, SelectionSpec, SweepGrid, Unit
+
+__all__ = [
+    "SUMMARY_COLUMNS",
+    "RANKING_COLUMNS",
+    "Progress",
+    "run_batch",
+    "read_table",
+    "collect_summary",
+    "rank_configurations",
+    "factor_effects",
+    "factor_levels",
+    "heatmap_table",
+    "main_configuration_mask",
+]
+
+log = logging.getLogger("thermaxis")
+
+SUMMARY_COLUMNS = ("config_id", *FACTORS, "fold", "target", *METRIC_COLUMNS, "sensors", "status")
+RANKING_COLUMNS = (
+    "rank",
+    "config_id",
+    *FACTORS,
+    "mean_max_abs",
+    "mean_rmse",
+    "worst_max_abs",
+    "n_folds",
+    "main_config",
+)
+_INTEGER_FACTORS = ("n_clusters", "degree")
+
+
+class Progress:
+    """A tqdm-like progress line on stderr, at most every ``every_s`` seconds and at the end.
+
+    Whole lines, not carriage returns: batches run side by side and Snakemake
+    interleaves their output.
+    """
+
+    def __init__(self, total: int, label: str, stream=None, every_s: float = 2.0, clock: Callable[[], float] = time.monotonic):
+        self.total, self.label, self.every_s, self.clock = int(total), label, every_s, clock
+        self.stream = stream if stream is not None else sys.stderr
+        self.done = 0
+        self.start = self._last = clock()
+
+    def line(self) -> str:
+        elapsed = self.clock() - self.start
+        fraction = self.done / self.total if self.total else 1.0
+        bar = "#" * int(20 * fraction)
+        rate = self.done / elapsed if elapsed > 0 else float("nan")
+        left = (self.total - self.done) / rate if rate and rate > 0 else float("nan")
+        return (
+            f"{self.label}: {100 * fraction:3.0f}%|{bar:<20}| {self.done}/{self.total} "
+            f"[{_clock_text(elapsed)}<{_clock_text(left)}, {rate:.1f} config/s]"
+        )
+
+    def update(self, n: int = 1) -> None:
+        self.done += n
+        now = self.clock()
+        if self.done >= self.total or now - self._last >= self.every_s:
+            self._last = now
+            print(self.line(), file=self.stream, flush=True)
+
+
+def _clock_text(seconds: float) -> str:
+    if not math.isfinite(seconds):
+        return "?"
+    minutes, secs = divmod(int(round(seconds)), 60)
+    return f"{minutes:02d}:{secs:02d}"
+
+
+# --------------------------------------------------------------------------- evaluation
+
+
+def _model_inputs_of(selection, approach: str) -> tuple:
+    """The sensors the model of ``approach`` reads: what makes two evaluations equal.
+
+    Must follow thermaxis.method.folds._build_model: decoupled models read the k and b
+    points, pointwise models the common set.
+    """
+    if approach == "decoupled":
+        return ("k", selection.k_sensors, "b", selection.b_sensors)
+    return ("error", selection.pointwise)
+
+
+def _sensors_text(inputs: tuple) -> str:
+    return ";".join(f"{inputs[i]}={'+'.join(inputs[i + 1])}" for i in range(0, len(inputs), 2))
+
+
+def _unit_selections(X, Y, unit: Unit, grid: SweepGrid, base: SelectionSettings, decoupled: bool) -> dict:
+    """The unit's selections: {degree: FoldSelection} for decoupled, {None: ...} for pointwise.
+
+    A selection the data cannot support is kept as its one-line error message, so
+    only the configurations that need it fail.
+    """
+    from thermaxis.method.folds import select_for_fold
+
+    pairs = grid.approach_degrees(decoupled)
+    degrees = sorted({d for _, d in pairs if d is not None})
+    wants_pointwise = any(d is None for _, d in pairs)
+    out: dict = {}
+    for degree in degrees:
+        # The point-by-point points do not depend on the degree: selected once, with
+        # the first degree whose selection succeeds.
+        with_pointwise = wants_pointwise and None not in out
+        settings = unit.selection.settings(base, grid.fixed)
+        try:
+            out[degree] = select_for_fold(X, Y, unit.fold, settings, degree, decoupled=True, pointwise=with_pointwise)
+        except ValueError as exc:
+            out[degree] = f"selection failed: {str(exc).splitlines()[0]}"
+            continue
+        if with_pointwise:
+            out[None] = out[degree]
+    if wants_pointwise and None not in out:
+        settings = unit.selection.settings(base, grid.fixed)
+        try:
+            out[None] = select_for_fold(X, Y, unit.fold, settings, None, decoupled=False)
+        except ValueError as exc:
+            out[None] = f"selection failed: {str(exc).splitlines()[0]}"
+    return out
+
+
+def _evaluate(X, Y, fold: str, config: Configuration, selection, model: ModelSettings) -> pd.DataFrame | str:
+    """The metrics of one evaluation, or its one-line error message."""
+    from thermaxis.method.folds import evaluate_configuration
+
+    try:
+        return evaluate_configuration(X, Y, fold, config.approach, config.algorithm, selection, model, config.degree).metrics
+    except ValueError as exc:
+        return str(exc).splitlines()[0]
+
+
+def _config_rows(config: Configuration, fold: str, inputs: tuple, outcome, reused: bool = False, seconds: float = 0.0) -> list[dict]:
+    """Summary rows of one configuration on one fold, and its log line."""
+    label = {"config_id": config.config_id, **config.factors(), "fold": fold}
+    if isinstance(outcome, str):
+        log.warning("%s fold %s: failed: %s", config.config_id, fold, outcome)
+        return [{**label, "target": "error", "sensors": "", "status": outcome}]
+    error = outcome.loc[outcome["target"] == "error", "max_abs"].iloc[0]
+    log.info(
+        "%s fold %s: max|residual| %.4g um (%s, %.2f s)",
+        config.config_id, fold, error, "reused" if reused else "fitted", seconds,
+    )  # fmt: skip
+    sensors = _sensors_text(inputs)
+    return [
+        {**label, "target": r["target"], **{m: r[m] for m in METRIC_COLUMNS}, "sensors": sensors, "status": "ok"}
+        for r in outcome.to_dict("records")
+    ]
+
+
+def run_batch(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    units: Iterable[Unit],
+    grid: SweepGrid,
+    base_selection: SelectionSettings,
+    model: ModelSettings,
+    decoupled: bool = True,
+    progress: Progress | None = None,
+) -> pd.DataFrame:
+    """Evaluate every configuration of ``units`` on its fold; one row per target.
+
+    Parameters
+    ----------
+    X, Y : DataFrame
+        :func:`thermaxis.cleaning.run.model_inputs` of the assembled tables.
+    units : iterable of Unit
+    grid : SweepGrid
+        Approaches, degrees and algorithms evaluated for every unit.
+    base_selection : thermaxis.config.SelectionSettings
+        Settings the sweep does not vary (scope, rho, normalisation, pointwise_common,
+        and ``fixed`` for method "fixed").
+    model : thermaxis.config.ModelSettings
+        With the sweep's SVR grid (:meth:`thermaxis.config.SweepSettings.models`).
+    decoupled : bool
+        False for a dataset with a single target position (pointwise only).
+    progress : Progress, optional
+        Advanced once per configuration and fold.
+
+    Returns
+    -------
+    DataFrame
+        :data:`SUMMARY_COLUMNS`, metrics unrounded.  A configuration that cannot be
+        evaluated on a fold (e.g. a selection the data cannot support) gives one row
+        with NaN metrics and the reason in ``status``, instead of stopping the sweep.
+    """
+    rows: list[dict] = []
+    done: dict[tuple, pd.DataFrame | str] = {}
+    for unit in units:
+        selections = _unit_selections(X, Y, unit, grid, base_selection, decoupled)
+        for config in grid.unit_configurations(unit.selection, decoupled):
+            selection = selections[config.degree]
+            if isinstance(selection, str):
+                rows += _config_rows(config, unit.fold, (), selection)
+            else:
+                started = time.perf_counter()
+                inputs = _model_inputs_of(selection, config.approach)
+                key = (unit.fold, config.approach, config.algorithm, config.degree, inputs)
+                reused = key in done
+                if not reused:
+                    done[key] = _evaluate(X, Y, unit.fold, config, selection, model)
+                rows += _config_rows(config, unit.fold, inputs, done[key], reused, time.perf_counter() - started)
+            if progress is not None:
+                progress.update()
+    return _as_summary_frame(rows)
+
+
+def _as_summary_frame(rows: list[dict]) -> pd.DataFrame:
+    frame = pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
+    for name in _INTEGER_FACTORS:
+        frame[name] = frame[name].astype("Int64")
+    for name in METRIC_COLUMNS:
+        frame[name] = frame[name].astype(float)
+    return frame
+
+
+# --------------------------------------------------------------------------- summary and ranking
+
+
+def read_table(path) -> pd.DataFrame:
+    """summary.csv or ranking.csv with the integer factors as nullable integers (empty = n/a)."""
+    return pd.read_csv(path, dtype={name: "Int64" for name in _INTEGER_FACTORS})
+
+
+def collect_summary(frames: Iterable[pd.DataFrame]) -> pd.DataFrame:
+    """All batches' rows in one table, sorted by configuration, fold and target."""
+    frames = [f for f in frames if len(f)]
+    if not frames:
+        raise ValueError("sweep: the batches hold no rows; expected at least one configuration")
+    summary = pd.concat(frames, ignore_index=True)
+    summary = _as_summary_frame(summary.to_dict("records"))
+    duplicated = summary.duplicated(["config_id", "fold", "target"])
+    if duplicated.any():
+        row = summary.loc[duplicated].iloc[0]
+        raise ValueError(f"sweep: configuration {row['config_id']} fold {row['fold']} appears in two batches")
+    return summary.sort_values(["config_id", "fold", "target"], kind="stable", ignore_index=True)
+
+
+def main_configuration_mask(frame: pd.DataFrame, selection: SelectionSettings, degree: int) -> pd.Series:
+    """Rows of the main workflow's configuration (config ``selection`` and ``decoupling``).
+
+    The selection method's own factors must match; the degree matters for the decoupled
+    approach only.  Every algorithm and approach of the main configuration is marked.
+    """
+    spec = SelectionSpec.of(selection)
+    same = frame["method"] == spec.method
+    for name in ("n_clusters", "similarity", "grade"):
+        value = getattr(spec, name)
+        same &= frame[name].isna() if value is None else (frame[name] == value).fillna(False)
+    same_degree = (frame["approach"] == "pointwise") | (frame["degree"] == degree).fillna(False)
+    return (same & same_degree).astype(bool)
+
+
+def rank_configurations(summary: pd.DataFrame, main_selection: SelectionSettings, main_degree: int) -> pd.DataFrame:
+    """Configurations ranked by their mean held-out max |residual| of the error curves.
+
+    The mean is over folds; a configuration that failed on any fold is ranked after
+    all complete ones (its mean is over fewer folds and would flatter it).  Ties are
+    broken by the configuration id, so the order is deterministic.
+    """
+    errors = summary[summary["target"] == "error"]
+    n_folds = errors["fold"].nunique()
+    grouped = errors.groupby("config_id", sort=True)
+    table = grouped[list(FACTORS)].first()
+    table["mean_max_abs"] = grouped["max_abs"].mean()
+    table["mean_rmse"] = grouped["rmse"].mean()
+    table["worst_max_abs"] = grouped["max_abs"].max()
+    table["n_folds"] = grouped["max_abs"].count().astype(int)
+    table = table.reset_index()
+    complete = table["n_folds"] == n_folds
+    table = (
+        table.assign(_incomplete=~complete)
+        .sort_values(["_incomplete", "mean_max_abs", "config_id"], kind="stable", na_position="last")
+        .drop(columns="_incomplete")
+        .reset_index(drop=True)
+    )
+    table.insert(0, "rank", np.arange(1, len(table) + 1))
+    table["main_config"] = main_configuration_mask(table, main_selection, main_degree)
+    for name in _INTEGER_FACTORS:
+        table[name] = table[name].astype("Int64")
+    return table[list(RANKING_COLUMNS)]
+
+
+def factor_effects(ranking: pd.DataFrame) -> pd.DataFrame:
+    """Per factor and level: how many configurations, and their mean max |residual| spread.
+
+    Only configurations where the factor applies (non-empty) and that are complete
+    over all folds are counted.  Columns: factor, level, n_configurations, best,
+    median, mean, worst (of the configurations' fold-mean max |residual|, um).
+    """
+    complete = ranking[ranking["n_folds"] == ranking["n_folds"].max()]
+    rows = []
+    for factor in FACTORS:
+        values = complete[[factor, "mean_max_abs"]].dropna(subset=[factor])
+        for level in factor_levels(values[factor], factor):
+            v = values.loc[values[factor] == level, "mean_max_abs"].to_numpy(dtype=float)
+            rows.append(
+                {"factor": factor, "level": str(level), "n_configurations": len(v), "best": v.min(),
+                 "median": float(np.median(v)), "mean": v.mean(), "worst": v.max()}
+            )  # fmt: skip
+    return pd.DataFrame(rows, columns=["factor", "level", "n_configurations", "best", "median", "mean", "worst"])
+
+
+def factor_levels(values: pd.Series, factor: str) -> list:
+    """The levels present, in the order of :data:`LEVEL_ORDER` (integers ascending)."""
+    present = list(dict.fromkeys(values.tolist()))
+    if factor in LEVEL_ORDER:
+        order = {level: i for i, level in enumerate(LEVEL_ORDER[factor])}
+        return sorted(present, key=lambda v: (order.get(v, len(order)), str(v)))
+    return sorted(present)
+
+
+def heatmap_table(ranking: pd.DataFrame, approach: str, selection: SelectionSettings, degree: int) -> pd.DataFrame:
+    """Mean held-out max |residual| over n_clusters (rows) x algorithm (columns) for one approach.
+
+    The cluster count is swept by fuzzy_grey (else correlation) selection; the other
+    selection factors are held at the main configuration's values where the grid has
+    them (else at the grid's first level), as is the degree of the decoupled approach.
+    ``attrs["held"]`` says what was held, e.g. ``"fuzzy_grey, pearson, deng, degree 1"``.
+    """
+    rows = ranking[ranking["approach"] == approach]
+    method = "fuzzy_grey" if (rows["method"] == "fuzzy_grey").any() else "correlation"
+    rows = rows[rows["method"] == method]
+    held = [method]
+    names = ("similarity", "grade") if method == "fuzzy_grey" else ()
+    if approach == "decoupled":
+        names += ("degree",)
+    wanted_values = {"similarity": selection.similarity, "grade": selection.grade, "degree": degree}
+    for name in names:
+        present = factor_levels(rows[name].dropna(), name)
+        if not present:
+            continue
+        wanted = wanted_values.get(name) if wanted_values.get(name) in present else present[0]
+        rows = rows[(rows[name] == wanted).fillna(False)]
+        held.append(f"degree {wanted}" if name == "degree" else str(wanted))
+    table = rows.pivot_table(index="n_clusters", columns="algorithm", values="mean_max_abs", aggfunc="first", sort=True)
+    table = table[factor_levels(pd.Series(table.columns), "algorithm")]
+    table.index = table.index.astype(int)
+    table.attrs["held"] = ", ".join(held)
+    return table
