@@ -56,7 +56,7 @@ def test_cluster_batches_follow_the_evaluation_count():
     assert sweep_plan.cluster_batch_count(0, [20] * 27, 200) == 3
     assert sweep_plan.cluster_batch_count(0, [20] * 27, 1) == 27  # never more batches than units
     assert sweep_plan.cluster_batch_count(0, [20] * 3, 10_000) == 1
-    assert sweep_plan.cluster_batch_count(5, [20] * 27, 200) == 5  # sweep_run.batches wins
+    assert sweep_plan.cluster_batch_count(5, [20] * 27, 200) == 5  # sweep.batches wins
 
 
 def test_cost_estimate_by_hand():

@@ -1,7 +1,7 @@
 import pandas as pd
 
 from thermaxis.paper.audit import ReproducedTables, comparison_markdown, paper_comparison
-from thermaxis.paper import published_values
+from thermaxis.paper.published import published_values
 from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
 
