@@ -3,6 +3,36 @@
 Reproduces Xu et al., "Research on decoupling and step-by-step modelling of thermal
 positioning error of the linear axis" (Chinese Journal of Scientific Instrument,
 DOI 10.19650/j.cnki.cjsi.J2209628), and goes beyond it.
+
+The library is a subpackage per stage of the workflow: ``dataset``, ``cleaning``,
+``method``, ``sweep``, ``compensation``, ``paper``, ``figures``, ``reports``,
+``pipeline`` (the Snakemake glue) and ``twin``. The names most users need are
+available here, imported on first use so that ``import thermaxis`` stays instant::
+
+    from thermaxis import Settings, load_dataset, DecoupledAxisModel, Compensator
 """
 
+from importlib import import_module
+
 __version__ = "0.1.0"
+
+_PUBLIC = {
+    "Settings": "thermaxis.config",
+    "DataError": "thermaxis.errors",
+    "load_dataset": "thermaxis.dataset.reader",
+    "DecoupledAxisModel": "thermaxis.method.models",
+    "PointwiseAxisModel": "thermaxis.method.models",
+    "Compensator": "thermaxis.compensation.runtime",
+}
+
+__all__ = sorted(_PUBLIC)
+
+
+def __getattr__(name):
+    if name in _PUBLIC:
+        return getattr(import_module(_PUBLIC[name]), name)
+    raise AttributeError(f"module 'thermaxis' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted([*globals(), *_PUBLIC])

@@ -44,10 +44,10 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
 
 from thermaxis.method.decouple import compose_curve, decouple_curves, stroke_powers
+from thermaxis.vocabulary import ALGORITHMS
 
 __all__ = [
     "ALGORITHMS",
-    "LINEAR_ALGORITHMS",
     "COEFFICIENT_COLUMNS",
     "make_regressor",
     "fit_svr_by_group_search",
@@ -59,8 +59,6 @@ __all__ = [
     "PointwiseAxisModel",
 ]
 
-ALGORITHMS = ("mlr", "svr", "ridge", "pls", "gpr")
-LINEAR_ALGORITHMS = ("mlr", "ridge", "pls")
 
 COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
 

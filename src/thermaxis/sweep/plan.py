@@ -33,6 +33,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from thermaxis.vocabulary import APPROACHES
+
 __all__ = [
     "FACTORS",
     "APPROACHES",
@@ -52,7 +54,6 @@ __all__ = [
 
 FACTORS = ("method", "n_clusters", "similarity", "grade", "approach", "degree", "algorithm")
 METHODS = ("fuzzy_grey", "correlation", "all", "fixed", "subset")
-APPROACHES = ("decoupled", "pointwise")
 # Order of the levels in tables and figures: the paper's choice first.
 LEVEL_ORDER = {
     "method": METHODS,

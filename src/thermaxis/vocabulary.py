@@ -1,0 +1,17 @@
+"""The paper's vocabulary, defined once: the two modelling approaches and the algorithms.
+
+Code, the config schema (``$defs``), the wildcard constraints of the workflow and the
+figure table all take these from here; a test checks the schema against them. This
+module imports nothing, so the workflow can read it while Snakemake parses.
+"""
+
+__all__ = ["APPROACHES", "ALGORITHMS"]
+
+# Decoupled: the slope k and the intercept b of each measurement's error line (Eq. 6),
+# each modelled from temperatures (Eq. 9). Point by point: one model of the error at
+# every target position (Eq. 8).
+APPROACHES = ("decoupled", "pointwise")
+
+# Multiple linear regression and support-vector regression (the paper's two), ridge,
+# partial least squares and Gaussian-process regression.
+ALGORITHMS = ("mlr", "svr", "ridge", "pls", "gpr")
