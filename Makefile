@@ -35,7 +35,31 @@ env:
 		"$(PYTHON)" -m venv "$(VENV)"; \
 		"$(BIN)/python" -m pip install --quiet --disable-pip-version-check -r envs/requirements.txt; \
 		"$(BIN)/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .; \
+		"$(BIN)/python" -m pip check --disable-pip-version-check; \
 		echo "$$want" > "$(STAMP)"; \
+	fi
+
+# The Slurm executor plugin is not in .venv: Snakemake imports every installed executor
+# plugin at each start, and plugin 2.8.0 then waits up to 10 s for an absent Slurm
+# controller (docs/slurm-plugin-startup.md). Cluster runs (profiles/slurm) and tests/slurm
+# use .venv-slurm instead: envs/requirements.txt plus envs/requirements-slurm.txt, with its
+# own hash stamp of both files and pyproject.toml. Made only by this target, never by `env`.
+SLURM_VENV := .venv-slurm
+SLURM_STAMP := $(SLURM_VENV)/.thermaxis-env.sha256
+.PHONY: slurm-env
+slurm-env:
+	@want="$$(cat envs/requirements.txt envs/requirements-slurm.txt pyproject.toml | sha256sum | cut -d' ' -f1)"; \
+	have="$$(cat $(SLURM_STAMP) 2>/dev/null || true)"; \
+	if [ ! -x "$(SLURM_VENV)/bin/python" ] || [ "$$want" != "$$have" ]; then \
+		echo "setting up $(SLURM_VENV) from envs/requirements.txt and envs/requirements-slurm.txt"; \
+		rm -rf "$(SLURM_VENV)"; \
+		"$(PYTHON)" -m venv "$(SLURM_VENV)"; \
+		echo '*' > "$(SLURM_VENV)/.gitignore"; \
+		"$(SLURM_VENV)/bin/python" -m pip install --quiet --disable-pip-version-check \
+			-r envs/requirements.txt -r envs/requirements-slurm.txt; \
+		"$(SLURM_VENV)/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .; \
+		"$(SLURM_VENV)/bin/python" -m pip check --disable-pip-version-check; \
+		echo "$$want" > "$(SLURM_STAMP)"; \
 	fi
 
 # Every dataset of config `datasets` (config/config.yaml), one Snakemake run each. After
