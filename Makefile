@@ -72,6 +72,10 @@ results: env
 		$(BIN)/python -m thermaxis.pipeline.resume $(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
 	done
 	$(BIN)/python -m thermaxis.reports.crossdataset --results results
+	@# The FL_THERMAL authors' protocol on their own record (needs the public record beside the checkout).
+	@if [ -f ../shared/realdata/fl_thermal/data.xlsx ]; then \
+		$(BIN)/python -m thermaxis.benchmark data/benchmarks/fl_thermal.yaml --out results/_benchmarks/fl_thermal; \
+	else echo "thermaxis: benchmark fl_thermal skipped: ../shared/realdata/fl_thermal/data.xlsx is not beside the checkout"; fi
 
 # Re-import the embedded measured dataset from its public source (shared/realdata).
 import: env
