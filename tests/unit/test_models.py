@@ -8,8 +8,8 @@ import pytest
 from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
+from thermaxis.vocabulary import ALGORITHMS
 from thermaxis.method.models import (
-    ALGORITHMS,
     DecoupledAxisModel,
     PointwiseAxisModel,
     fit_svr_by_group_search,

@@ -47,7 +47,6 @@ from thermaxis.method.decouple import compose_curve, decouple_curves, stroke_pow
 from thermaxis.vocabulary import ALGORITHMS
 
 __all__ = [
-    "ALGORITHMS",
     "COEFFICIENT_COLUMNS",
     "make_regressor",
     "fit_svr_by_group_search",
