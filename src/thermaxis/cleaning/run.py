@@ -127,8 +127,7 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     targets = _targets(raw)
     combined = []
     for name, measurement in raw.measurements.items():
-        label = str(dataset.root / run / "errors" / f"{name}.csv")
-        curve, warns = passes.combine_passes(measurement, targets, e_settings, name=label)
+        curve, warns = passes.combine_passes(measurement, targets, e_settings, name=raw.error_origin(name))
         notes.extend(warns)
         combined.append(curve)
 
