@@ -258,18 +258,18 @@ def test_run_plausibility_warns_of_fahrenheit_unless_the_dataset_logs_rises(tmp_
     from types import SimpleNamespace
 
     # Median of 85 and 86 °F is 85.5 °F = 29.72 °C.
-    absolute = SimpleNamespace(root=tmp_path, meta={})
+    absolute = SimpleNamespace(root=tmp_path, temperature_kind="absolute")
     (note,) = plausibility.check_run_plausibility(absolute, _raw_run([0, 20], 85.0), _plausibility_config())
     assert note.startswith(f"{tmp_path / 'E1' / 'temperatures' / 'box.csv'}: sensor T1: median 85.5 °C")
     assert "that is 29.7 °C" in note
-    rise = SimpleNamespace(root=tmp_path, meta={"temperature_kind": "rise"})
+    rise = SimpleNamespace(root=tmp_path, temperature_kind="rise")
     assert plausibility.check_run_plausibility(rise, _raw_run([0, 20], 0.5), _plausibility_config()) == []
 
 
 def test_run_plausibility_refuses_overlaps_and_a_grid_step_longer_than_the_run(tmp_path):
     from types import SimpleNamespace
 
-    dataset = SimpleNamespace(root=tmp_path, meta={})
+    dataset = SimpleNamespace(root=tmp_path, temperature_kind="absolute")
     # M2 starts 1 min after M1, which lasts 2 min.
     with pytest.raises(DataError, match=re.escape(f"{tmp_path / 'E1' / 'errors' / 'M2.csv'}: readings from 2022-05-10 09:01:00 overlap measurement M1")):
         plausibility.check_run_plausibility(dataset, _raw_run([0, 1], 20.0, tmp_path), _plausibility_config())

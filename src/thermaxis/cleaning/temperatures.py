@@ -109,7 +109,7 @@ class CleanedTemperatures:
 # ----------------------------------------------------------------------------- spikes
 
 
-def hampel_outliers(values, window: int = 7, threshold: float = 4.0, min_deviation: float = 0.0) -> np.ndarray:
+def hampel_outliers(values, window: int, threshold: float, min_deviation: float) -> np.ndarray:
     """Boolean mask of the samples a Hampel filter calls spikes.
 
     A sample is a spike when it deviates from the median of the ``window`` samples
@@ -119,9 +119,10 @@ def hampel_outliers(values, window: int = 7, threshold: float = 4.0, min_deviati
     Parameters
     ----------
     values : 1-D array of valid (finite) samples in time order.
-    window : odd number of samples.
-    threshold : in scaled MADs (normal-noise standard deviations).
-    min_deviation : deviations up to this are never spikes (quantised data has MAD 0).
+    window : odd number of samples (config ``temperatures.hampel_window``).
+    threshold : in scaled MADs (normal-noise standard deviations; ``hampel_threshold``).
+    min_deviation : deviations up to this are never spikes (quantised data has MAD 0;
+        ``hampel_min_deviation_c``).
 
     Notes
     -----
@@ -426,9 +427,9 @@ def _check_windows(windows: pd.DataFrame) -> None:
         raise ValueError("measurement windows: a window ends before it starts; expected start <= end")
 
 
-def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float | None) -> str:
+def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float) -> str:
     """What a gap is, in the words a user can act on."""
-    limit = f" (max_gap_s {max_gap_s:g})" if max_gap_s is not None else ""
+    limit = f" (max_gap_s {max_gap_s:g})"
     if gap.get("kind", "interior") == "no readings":
         return "has no valid reading at all (empty, or every value out of range or a spike)"
     if gap.get("kind", "interior") == "record start":
@@ -447,9 +448,10 @@ def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float | None) -> str:
 def check_gaps(
     gaps: pd.DataFrame,
     windows: pd.DataFrame,
-    allow: bool = False,
+    *,
+    allow: bool,
+    max_gap_s: float,
     files: Mapping[str, object] | None = None,
-    max_gap_s: float | None = None,
 ) -> list[str]:
     """Long temperature gaps that overlap a measurement window.
 
@@ -458,9 +460,10 @@ def check_gaps(
     gaps : ``CleanedTemperatures.gaps``.
     windows : one row per measurement: ``measurement``, ``start``, ``end`` (optionally
         ``name``).
-    allow : when False an overlap is an error; when True it is returned as a warning.
+    allow : when False an overlap is an error; when True it is returned as a warning
+        (config ``temperatures.allow_long_gaps``).
+    max_gap_s : the limit in force, named in the messages (``temperatures.max_gap_s``).
     files : sensor -> the file its readings came from, named in the messages.
-    max_gap_s : the limit in force, named in the messages.
 
     Returns
     -------
@@ -525,14 +528,14 @@ def _window_mean(grid_ns: np.ndarray, values: np.ndarray, start: int, end: int) 
     return np.divide(total, covered, out=np.full(values.shape[1], np.nan), where=covered > 0)
 
 
-def temperatures_in_windows(frame: pd.DataFrame, windows: pd.DataFrame, how: str = "mean") -> pd.DataFrame:
+def temperatures_in_windows(frame: pd.DataFrame, windows: pd.DataFrame, how: str) -> pd.DataFrame:
     """Each sensor's temperature during each measurement.
 
     Parameters
     ----------
     frame : ``CleanedTemperatures.frame`` (``time`` + sensor columns on a regular grid).
     windows : ``measurement``, ``start``, ``end`` per measurement.
-    how : "mean" - time average of the linearly interpolated series over [start, end]
+    how : (config ``temperatures.window``) "mean" - time average of the linearly interpolated series over [start, end]
         (exact for a linear ramp: its value at the window's middle); NaN stretches are
         left out of the average.  "start" - the value at the window's start.
 

@@ -109,7 +109,7 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
     median_c = cleaning.plausible_median_c
     if not median_c[0] < median_c[1]:
         raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got [{median_c[0]:g}, {median_c[1]:g}]")
-    if dataset.meta.get("temperature_kind", "absolute") == "rise":
+    if dataset.temperature_kind == "rise":
         return []  # rises since the start sit near 0 °C by design: no structure-temperature median to judge
     notes = []
     for source, frame in raw.sources.items():
