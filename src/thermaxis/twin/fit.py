@@ -43,7 +43,6 @@ __all__ = [
     "TOLERANCE_B",
     "RunObservables",
     "FitResult",
-    "noise_free_runs",
     "target_residuals",
     "OBJECTIVE_FACTOR",
     "acceptance_bounds",
@@ -238,12 +237,6 @@ def _runs_from_bases(params: mdl.TwinParams, problem: _Problem, bases: _Bases) -
             temperatures[sensor.id] = mix + sensor.offset_c
         out[run] = RunObservables(k=k, b=b, curve=curve, temperatures=temperatures)
     return out
-
-
-def noise_free_runs(params: mdl.TwinParams, step_s: float = cond.STEP_S) -> dict[str, RunObservables]:
-    """Noise-free k, b, pass-mean curves and sensor temperatures of the 8 measurements of every run."""
-    problem = _problem(step_s)
-    return _runs_from_bases(params, problem, _bases(problem, params.values, step_s))
 
 
 def target_residuals(runs: dict[str, RunObservables], targets: PublishedTargets) -> dict[str, dict[str, np.ndarray]]:
