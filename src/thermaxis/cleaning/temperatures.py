@@ -1,4 +1,4 @@
-"""Cleaning of one run's raw temperature logs and interferometer readings (issue 4).
+"""Cleaning of one run's raw temperature logs.
 
 Temperatures
 ------------
@@ -34,10 +34,9 @@ The order of the steps matters:
 Removed spikes and out-of-range values leave short gaps that step 7 fills; the QC
 table says how many grid points each repair touched.
 
-Errors
-------
-:func:`combine_passes` turns one measurement (one or two passes over the targets)
-into one error per target.
+The interferometer readings are cleaned by :mod:`thermaxis.cleaning.passes` (one error
+per target from a measurement's one or two passes), the clock offsets of step 6 are
+estimated by :mod:`thermaxis.cleaning.clock`.
 """
 
 from __future__ import annotations

@@ -199,7 +199,7 @@ def write_dataset_docs(root: Path | str) -> None:
 
 #: The held-out comparisons of the paper: (approach, algorithm, paper table).
 HELDOUT = (("decoupled", "mlr", 7), ("decoupled", "svr", 8), ("pointwise", "mlr", 4))
-#: The twin before issue 14 (calibrated to Table 5 only), fold E4 with the default
+#: The twin before it was calibrated to Eq. 8 and Eq. 9 too (to Table 5 only), fold E4 with the default
 #: configuration: ``snakemake results/twin/tables/metrics.csv`` at commit fac73bc.
 #: A record of that run for comparison; nothing is computed from it.
 PREVIOUS_TWIN_HELDOUT = {
