@@ -332,6 +332,28 @@ def clean_temperatures(
     """
     if not sources:
         raise ValueError("no temperature sources: expected at least one source DataFrame")
+    natives = _native_series(sources, clock_offsets_s, settings)
+    if settings.estimate_clock_offsets and len(sources) > 1:
+        _estimate_offsets(natives, list(sources), settings)
+    grid = _grid(*_grid_span(natives, start, end), int(round(settings.interval_s * _NS)))
+    columns = {"time": grid.astype("datetime64[ns]")}
+    qc_rows, gap_rows = [], []
+    for native in natives:
+        values, counts, gaps = _onto_grid(native, grid, settings.max_gap_s)
+        columns[native.sensor] = values
+        qc_rows.append(_qc_row(native, counts))
+        gap_rows.extend((native.sensor, a, b, (b - a) / _NS, kind) for a, b, kind in gaps)
+    return CleanedTemperatures(
+        frame=pd.DataFrame(columns),
+        qc=pd.DataFrame(qc_rows, columns=QC_COLUMNS),
+        gaps=_gap_table(gap_rows),
+    )
+
+
+def _native_series(
+    sources: Mapping[str, pd.DataFrame], clock_offsets_s: Mapping[str, float], settings: TemperatureCleaning
+) -> list[_Native]:
+    """Every sensor's repaired native series (steps 1-5), each sensor in exactly one source."""
     natives: list[_Native] = []
     seen: dict[str, str] = {}
     for name, frame in sources.items():
@@ -342,45 +364,41 @@ def clean_temperatures(
                 )
             seen[native.sensor] = name
             natives.append(native)
-    if settings.estimate_clock_offsets and len(sources) > 1:
-        _estimate_offsets(natives, list(sources), settings)
+    return natives
 
+
+def _grid_span(natives: list[_Native], start, end) -> tuple[int, int]:
+    """The grid's span in ns: ``start`` and ``end`` where given, else the first and last valid sample."""
     valid_times = [n.t for n in natives if n.t.size]
-    if start is None or end is None:
-        if not valid_times:
-            raise ValueError("no valid temperature sample in any source: cannot place the time grid")
+    if (start is None or end is None) and not valid_times:
+        raise ValueError("no valid temperature sample in any source: cannot place the time grid")
     start_ns = _timestamp_ns(start) if start is not None else int(min(t[0] for t in valid_times))
     end_ns = _timestamp_ns(end) if end is not None else int(max(t[-1] for t in valid_times))
-    grid = _grid(start_ns, end_ns, int(round(settings.interval_s * _NS)))
+    return start_ns, end_ns
 
-    columns = {"time": grid.astype("datetime64[ns]")}
-    qc_rows, gap_rows = [], []
-    for native in natives:
-        values, counts, gaps = _onto_grid(native, grid, settings.max_gap_s)
-        columns[native.sensor] = values
-        qc_rows.append(
-            dict(
-                sensor=native.sensor,
-                source=native.source,
-                n_raw=native.n_raw,
-                n_duplicates=native.n_duplicates,
-                n_out_of_range=native.n_out_of_range,
-                n_spikes=native.n_spikes,
-                **counts,
-                clock_offset_s=native.clock_offset_s,
-                offset_estimated=native.offset_estimated,
-            )
-        )
-        gap_rows.extend((native.sensor, a, b, (b - a) / _NS, kind) for a, b, kind in gaps)
+
+def _qc_row(native: _Native, counts: dict) -> dict:
+    """One sensor's row of the QC table: the native repairs' counts, then the grid's."""
+    return dict(
+        sensor=native.sensor,
+        source=native.source,
+        n_raw=native.n_raw,
+        n_duplicates=native.n_duplicates,
+        n_out_of_range=native.n_out_of_range,
+        n_spikes=native.n_spikes,
+        **counts,
+        clock_offset_s=native.clock_offset_s,
+        offset_estimated=native.offset_estimated,
+    )
+
+
+def _gap_table(gap_rows: list[tuple]) -> pd.DataFrame:
+    """The long gaps as a table (:data:`GAP_COLUMNS`), in time order."""
     gaps = pd.DataFrame(gap_rows, columns=GAP_COLUMNS)
     gaps["start"] = gaps["start"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
     gaps["end"] = gaps["end"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
     gaps["duration_s"] = gaps["duration_s"].astype(float)
-    return CleanedTemperatures(
-        frame=pd.DataFrame(columns),
-        qc=pd.DataFrame(qc_rows, columns=QC_COLUMNS),
-        gaps=sort_naturally(gaps, ["start", "sensor"]),
-    )
+    return sort_naturally(gaps, ["start", "sensor"])
 
 
 def signals_on_grid(
