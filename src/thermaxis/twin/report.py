@@ -554,9 +554,13 @@ def _measurement_values(table: pd.DataFrame) -> dict:
         f"{r.dk:+.2f} | {r.b_um:.2f} | {r.b_paper:.1f} | {r.db:+.2f} | {r.r2:.3f} | {r.rms_um:.3f} |"
         for r in table.itertuples()
     )
-    spread = {
-        f"{name}_{stat}": f"{getattr(table[column], stat)():.3f}"
-        for name, column in (("r2", "r2"), ("rms", "rms_um"))
-        for stat in ("min", "max", "median")
-    }
-    return dict(measurement_rows=rows, **spread)
+    r2, rms = table["r2"], table["rms_um"]
+    return dict(
+        measurement_rows=rows,
+        r2_min=f"{r2.min():.3f}",
+        r2_max=f"{r2.max():.3f}",
+        r2_median=f"{r2.median():.3f}",
+        rms_min=f"{rms.min():.3f}",
+        rms_max=f"{rms.max():.3f}",
+        rms_median=f"{rms.median():.3f}",
+    )
