@@ -94,10 +94,12 @@ def held_out_tables(
 
     positions = np.asarray(positions_mm, dtype=float)
     table = _pitch_table(deviations[1])
-    tables: dict[str, list[dict]] = {name: [] for name in ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")}
+    names = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
+    tables: dict[str, list[dict]] = {name: [] for name in names}
     for number, (step, minutes, reference) in enumerate(zip(steps, time_min, final), start=1):
         label = {"fold": fold, "run": fold, "measurement": number, "time_min": float(minutes)}
-        tables["siemens_840d"] += _controller_rows(label, siemens_840d(step.parameters), siemens_840d(reference), step.status)
+        siemens = _controller_rows(label, siemens_840d(step.parameters), siemens_840d(reference), step.status)
+        tables["siemens_840d"] += siemens
         tables["twincat"] += _twincat_rows(label, step, reference)
         applied = step.parameters.at(positions)
         # The drift since the pitch table was taken, before and after the compensation is applied.
@@ -119,10 +121,18 @@ def _twincat_rows(label: dict, step: Step, reference: ControllerParameters) -> l
     return rows
 
 
-def _residual_rows(label: dict, positions: np.ndarray, drifts: Mapping[str, np.ndarray], applied, status: str) -> list[dict]:
+def _residual_rows(label: dict, positions: np.ndarray, drifts: Mapping[str, np.ndarray], applied, status: str):
     """Per pass and target: the uncompensated drift, the compensation applied, and what remains."""
     return [
-        {**label, "direction": direction, "position_mm": x, "uncompensated_um": d, "compensation_um": c, "residual_um": d + c, "status": status}
+        {
+            **label,
+            "direction": direction,
+            "position_mm": x,
+            "uncompensated_um": d,
+            "compensation_um": c,
+            "residual_um": d + c,
+            "status": status,
+        }
         for direction, drift in drifts.items()
         for x, d, c in zip(positions, drift, applied)
     ]
@@ -132,14 +142,15 @@ def _iso_rows(label: dict, q_before: Mapping[str, float], q_after: Mapping[str, 
     """The ISO 230-2 quantities one measurement gives, before and after, and those it cannot give."""
     from thermaxis.compensation.iso230 import NEEDS_CYCLES, NOT_COMPUTED, QUANTITIES
 
+    def row(name, description, before, after, computed, note):
+        return {**label, "quantity": name, "description": description, "uncompensated_um": before,
+                "compensated_um": after, "computed": computed, "note": note}  # fmt: skip
+
     computed = [
-        {**label, "quantity": name, "description": description, "uncompensated_um": q_before[name], "compensated_um": q_after[name], "computed": bool(np.isfinite(q_before[name])), "note": ""}
+        row(name, description, q_before[name], q_after[name], bool(np.isfinite(q_before[name])), "")
         for name, description in QUANTITIES.items()
     ]
-    return computed + [
-        {**label, "quantity": name, "description": description, "uncompensated_um": np.nan, "compensated_um": np.nan, "computed": False, "note": NEEDS_CYCLES}
-        for name, description in NOT_COMPUTED.items()
-    ]
+    return computed + [row(name, description, np.nan, np.nan, False, NEEDS_CYCLES) for name, description in NOT_COMPUTED.items()]
 
 
 def _summary_row(label: dict, step: Step, before, after, q_before, q_after) -> dict:
