@@ -8,8 +8,8 @@ import pytest
 from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
+from thermaxis.vocabulary import ALGORITHMS
 from thermaxis.method.models import (
-    ALGORITHMS,
     DecoupledAxisModel,
     PointwiseAxisModel,
     fit_svr_by_group_search,
@@ -187,14 +187,14 @@ def _noisy_linear(n=40, seed=0):
 def test_mlr_matches_plain_least_squares_and_is_unit_invariant():
     X, y = _noisy_linear()
     names = ["a", "b", "c"]
-    terms = linear_terms(make_regressor("mlr").fit(X, y), names)
+    terms = linear_terms(make_regressor("mlr", random_state=0).fit(X, y), names)
     design = np.column_stack([np.ones(len(X)), X])
     direct, *_ = np.linalg.lstsq(design, y, rcond=None)
     np.testing.assert_allclose([terms[n] for n in ("const", *names)], direct, rtol=1e-9, atol=1e-9)
 
     # Same data in degrees Fahrenheit: identical predictions, slopes divided by 1.8.
     X_f = X * 1.8 + 32.0
-    model_f = make_regressor("mlr").fit(X_f, y)
+    model_f = make_regressor("mlr", random_state=0).fit(X_f, y)
     np.testing.assert_allclose(model_f.predict(X_f), design @ direct, atol=1e-9)
     terms_f = linear_terms(model_f, names)
     np.testing.assert_allclose([terms_f[n] for n in names], direct[1:] / 1.8, rtol=1e-9)
@@ -215,7 +215,7 @@ def _to_original(beta_s, stats):
 def test_ridge_linear_terms_match_closed_form():
     X, y = _noisy_linear()
     alpha = 7.0
-    terms = linear_terms(make_regressor("ridge", {"alpha": alpha}).fit(X, y), ["a", "b", "c"])
+    terms = linear_terms(make_regressor("ridge", {"alpha": alpha}, random_state=0).fit(X, y), ["a", "b", "c"])
     Xs, ys, stats = _standardised(X, y)
     beta_s = np.linalg.solve(Xs.T @ Xs + alpha * np.eye(3), Xs.T @ ys)
     np.testing.assert_allclose(list(terms.values()), _to_original(beta_s, stats), rtol=1e-9, atol=1e-9)
@@ -223,7 +223,7 @@ def test_ridge_linear_terms_match_closed_form():
 
 def test_pls_linear_terms_match_one_component_closed_form():
     X, y = _noisy_linear()
-    terms = linear_terms(make_regressor("pls", {"n_components": 1}).fit(X, y), ["a", "b", "c"])
+    terms = linear_terms(make_regressor("pls", {"n_components": 1}, random_state=0).fit(X, y), ["a", "b", "c"])
     Xs, ys, stats = _standardised(X, y)
     w = Xs.T @ ys
     w /= np.linalg.norm(w)
@@ -234,7 +234,7 @@ def test_pls_linear_terms_match_one_component_closed_form():
 
 def test_pls_with_all_components_is_least_squares():
     X, y = _noisy_linear()
-    model = make_regressor("pls", {"n_components": 5}, n_features=3).fit(X, y)
+    model = make_regressor("pls", {"n_components": 5}, random_state=0, n_features=3).fit(X, y)
     direct, *_ = np.linalg.lstsq(np.column_stack([np.ones(len(X)), X]), y, rcond=None)
     np.testing.assert_allclose(
         list(linear_terms(model, ["a", "b", "c"]).values()), direct, rtol=1e-7, atol=1e-7
@@ -244,13 +244,13 @@ def test_pls_with_all_components_is_least_squares():
 def test_linear_terms_is_none_for_nonlinear_algorithms():
     X, y = _noisy_linear()
     for algorithm in ("svr", "gpr"):
-        assert linear_terms(make_regressor(algorithm).fit(X, y), ["a", "b", "c"]) is None
+        assert linear_terms(make_regressor(algorithm, random_state=0).fit(X, y), ["a", "b", "c"]) is None
 
 
 def test_gpr_interval_contains_mean_and_widens_away_from_data():
     x = np.linspace(0.0, 3.0, 15)[:, None]
     y = np.sin(x).ravel()
-    model = make_regressor("gpr").fit(x, y)
+    model = make_regressor("gpr", random_state=0).fit(x, y)
     mean, std = predict_with_std(model, np.array([[1.5], [9.0]]))
     np.testing.assert_allclose(mean, model.predict(np.array([[1.5], [9.0]])), atol=1e-9)
     assert np.all(std > 0)
@@ -268,8 +268,8 @@ def test_decoupled_gpr_interval_brackets_prediction_and_widens_far_from_training
         mean = model.predict(X_new)
         assert lower.shape == mean.shape == (8, 14)
         assert np.all(lower < mean) and np.all(mean < upper)
-    width_near = np.subtract(*model.predict_interval(X_near)[::-1])
-    width_far = np.subtract(*model.predict_interval(X_far)[::-1])
+    width_near = np.subtract(*model.predict_interval(X_near, level=0.95)[::-1])
+    width_far = np.subtract(*model.predict_interval(X_far, level=0.95)[::-1])
     # k uses absolute temperatures, so the far run's slope is uncertain: wider at the far end.
     assert np.all(width_far[:, -1] > width_near[:, -1])
     # Independence of k and b: half-width z*sd(b) at the origin, z*sqrt(sd(b)^2 + (0.26 m sd(k))^2) at 445 mm.
@@ -289,14 +289,14 @@ def test_decoupled_gpr_interval_brackets_prediction_and_widens_far_from_training
 def test_pointwise_gpr_interval_and_non_gpr_refusal():
     X, Y = _noisy_eq9()
     model = PointwiseAxisModel(algorithm="gpr").fit(X, Y.iloc[:, ::4])
-    lower, upper = model.predict_interval(X.iloc[:8])
+    lower, upper = model.predict_interval(X.iloc[:8], level=0.95)
     mean = model.predict(X.iloc[:8])
     assert mean.shape == (8, 4)
     assert np.all(lower < mean) and np.all(mean < upper)
     with pytest.raises(NotImplementedError):
-        PointwiseAxisModel().fit(X, Y).predict_interval(X)
+        PointwiseAxisModel().fit(X, Y).predict_interval(X, level=0.95)
     with pytest.raises(NotImplementedError):
-        DecoupledAxisModel().fit(X, Y).predict_interval(X)
+        DecoupledAxisModel().fit(X, Y).predict_interval(X, level=0.95)
     with pytest.raises(NotImplementedError):
         DecoupledAxisModel().fit(X, Y).predict_kb(X, return_std=True)
 
@@ -308,7 +308,7 @@ def test_svr_group_search_picks_the_known_best_point():
     groups = np.repeat(["a", "b", "c"], 10)
     # C = 1e-3 keeps the prediction near the mean; C = 100 follows the curve.
     grid = {"C": [1e-3, 100.0], "epsilon": [0.01]}
-    model, chosen = fit_svr_by_group_search(x, y, groups, grid)
+    model, chosen = fit_svr_by_group_search(x, y, groups, grid, random_state=0)
     assert chosen == {"C": 100.0, "epsilon": 0.01}
 
     # Independent leave-one-group-out computation of the mean fold RMSE per grid point.
@@ -316,12 +316,12 @@ def test_svr_group_search_picks_the_known_best_point():
         scores = []
         for g in "abc":
             test = groups == g
-            fitted = make_regressor("svr", params).fit(x[~test], y[~test])
+            fitted = make_regressor("svr", params, random_state=0).fit(x[~test], y[~test])
             scores.append(np.sqrt(np.mean((fitted.predict(x[test]) - y[test]) ** 2)))
         return np.mean(scores)
 
     assert mean_rmse({"C": 100.0, "epsilon": 0.01}) < mean_rmse({"C": 1e-3, "epsilon": 0.01})
-    refit = make_regressor("svr", chosen).fit(x, y)
+    refit = make_regressor("svr", chosen, random_state=0).fit(x, y)
     np.testing.assert_allclose(model.predict(x), refit.predict(x))
 
 
@@ -336,9 +336,9 @@ def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
     groups = np.repeat(["r1", "r2", "r3", "r4"], 10)
     # Two identical C values make a tie: the earlier grid point must win, as in GridSearchCV.
     grid = {"C": [10.0, 0.1, 10.0], "epsilon": [0.01, 0.1], "gamma": ["scale", 0.1]}
-    model, chosen = fit_svr_by_group_search(x, y, groups, grid)
+    model, chosen = fit_svr_by_group_search(x, y, groups, grid, random_state=0)
     search = GridSearchCV(
-        make_regressor("svr"),
+        make_regressor("svr", random_state=0),
         {f"regress__regressor__{k}": v for k, v in grid.items()},
         scoring="neg_root_mean_squared_error",
         cv=LeaveOneGroupOut(),
@@ -349,7 +349,7 @@ def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
 
 def test_svr_group_search_falls_back_to_first_grid_point_with_one_group():
     x = np.linspace(0.0, 1.0, 10)[:, None]
-    _, chosen = fit_svr_by_group_search(x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]})
+    _, chosen = fit_svr_by_group_search(x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]}, random_state=0)
     assert chosen == {"C": 100.0, "epsilon": 0.2}
 
 
@@ -369,9 +369,9 @@ def test_bad_input_raises_value_error():
     X = synthetic_temperatures()
     Y = eq9_errors(X)
     with pytest.raises(ValueError, match="unknown algorithm"):
-        make_regressor("lasso")
+        make_regressor("lasso", random_state=0)
     with pytest.raises(ValueError, match="unknown parameter"):
-        make_regressor("ridge", {"C": 1.0})
+        make_regressor("ridge", {"C": 1.0}, random_state=0)
     with pytest.raises(ValueError, match="rows"):
         DecoupledAxisModel().fit(X, Y.iloc[:-1])
     with pytest.raises(ValueError, match="lacks column"):

@@ -67,7 +67,7 @@ def test_a_record_that_ends_early_is_named_as_such_with_its_file():
         {"measurement": [1], "start": [pd.Timestamp("2024-01-01T00:58:00")], "end": [pd.Timestamp("2024-01-01T00:59:00")]}
     )
     with pytest.raises(ValueError) as info:
-        check_gaps(cleaned.gaps, windows, files={"T1": "data/raw/x/R1/temperatures/box.csv"}, max_gap_s=600.0)
+        check_gaps(cleaned.gaps, windows, allow=False, max_gap_s=600.0, files={"T1": "data/raw/x/R1/temperatures/box.csv"})
     message = str(info.value)
     assert message.startswith("data/raw/x/R1/temperatures/box.csv: sensor T1 has no reading after 2024-01-01T00:50:00")
     assert "record ends too early" in message and "max_gap_s / 2" in message and "measurement 1" in message

@@ -47,7 +47,6 @@ from thermaxis.method.decouple import compose_curve, decouple_curves, stroke_pow
 from thermaxis.vocabulary import ALGORITHMS
 
 __all__ = [
-    "ALGORITHMS",
     "COEFFICIENT_COLUMNS",
     "make_regressor",
     "fit_svr_by_group_search",
@@ -99,21 +98,18 @@ def _check_params(algorithm: str, params: Mapping | None) -> dict:
 def _base_regressor(algorithm: str, params: dict, random_state: int, n_features: int | None):
     if algorithm == "mlr":
         return LinearRegression()
+    # A hyper-parameter left out keeps scikit-learn's default: the workflow's come from config.
     if algorithm == "ridge":
-        return Ridge(alpha=float(params.get("alpha", 1.0)))
+        return Ridge(**{name: float(value) for name, value in params.items()})
     if algorithm == "pls":
-        n_components = int(params.get("n_components", 2))
-        if n_features is not None:
-            n_components = min(n_components, n_features)
         # Inputs and target are already standardised by the pipeline.
-        return PLSRegression(n_components=n_components, scale=False)
+        pls = PLSRegression(scale=False, **{name: int(value) for name, value in params.items()})
+        if n_features is not None:
+            pls.set_params(n_components=min(pls.n_components, n_features))
+        return pls
     if algorithm == "svr":
-        return SVR(
-            kernel=params.get("kernel", "rbf"),
-            C=float(params.get("C", 1.0)),
-            epsilon=float(params.get("epsilon", 0.1)),
-            gamma=params.get("gamma", "scale"),
-        )
+        numbers = {name: float(params[name]) for name in ("C", "epsilon") if name in params}
+        return SVR(**{**params, **numbers})
     # gpr: bounds are in standardised units.  A nearly linear response drives the RBF
     # towards long length scales and large amplitudes, hence the wide upper bounds; a
     # noise floor of 1e-6 keeps exact (noise-free) training data well posed.
@@ -129,7 +125,7 @@ def _base_regressor(algorithm: str, params: dict, random_state: int, n_features:
 
 
 def make_regressor(
-    algorithm: str, params: Mapping | None = None, random_state: int = 0, n_features: int | None = None
+    algorithm: str, params: Mapping | None = None, *, random_state: int, n_features: int | None = None
 ) -> Pipeline:
     """An unfitted regressor with standardised inputs and standardised target.
 
@@ -139,12 +135,14 @@ def make_regressor(
         Multiple linear regression, support-vector regression, ridge, partial least
         squares, Gaussian-process regression.
     params : mapping, optional
-        Hyper-parameters: ridge ``alpha`` (1.0); pls ``n_components`` (2); svr ``C`` (1.0),
-        ``epsilon`` (0.1, in standardised target units), ``gamma`` ("scale"), ``kernel``
-        ("rbf"); gpr ``length_scale`` (1.0), ``noise_level`` (0.1), ``n_restarts_optimizer``
-        (0).  Unknown keys raise ``ValueError``.
+        Hyper-parameters: ridge ``alpha``; pls ``n_components``; svr ``C``, ``epsilon`` (in
+        standardised target units), ``gamma``, ``kernel`` (the workflow sets them from config
+        ``models``; one left out keeps scikit-learn's default); gpr ``length_scale`` (1.0),
+        ``noise_level`` (0.1), ``n_restarts_optimizer`` (0), the starting point of this
+        module's kernel.  Unknown keys raise ``ValueError``.
     random_state : int
-        Seed of the GPR optimiser restarts (the other algorithms are deterministic).
+        Seed of the GPR optimiser restarts (config ``models.random_state``; the other
+        algorithms are deterministic).
     n_features : int, optional
         Number of inputs; caps PLS ``n_components`` (PLS cannot use more components than
         inputs).
@@ -166,7 +164,7 @@ def make_regressor(
     )
 
 
-def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
+def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int):
     """Fit an SVR whose hyper-parameters are chosen by leave-one-group-out search.
 
     Only the data passed in is used, so calling this on the training conditions of an
@@ -205,7 +203,7 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
     n_groups = np.unique(groups).size
     if n_groups < 2:
         chosen = dict(candidates[0])
-        return make_regressor("svr", chosen, random_state).fit(X, y), chosen
+        return make_regressor("svr", chosen, random_state=random_state).fit(X, y), chosen
     # GridSearchCV over make_regressor's pipeline, without its per-candidate cloning,
     # re-validation and scorer calls: each hold-out is standardised once, the SVR fitted
     # per candidate on the same arrays the pipeline would give it, so the scores, the
@@ -223,7 +221,7 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
     means = np.average(scores, axis=1)
     # The first best candidate, NaN scores last, as GridSearchCV ranks them.
     chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
-    return make_regressor("svr", chosen, random_state).fit(X, y), chosen
+    return make_regressor("svr", chosen, random_state=random_state).fit(X, y), chosen
 
 
 def _final_regressor(fitted):
@@ -372,7 +370,7 @@ def _fit_one(features, target, groups, algorithm, params, svr_grid, random_state
         # Fixed parameters (e.g. kernel) apply to every grid point unless the grid varies them.
         grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(svr_grid)}
         return fit_svr_by_group_search(features, target, groups, grid, random_state)
-    model = make_regressor(algorithm, params, random_state, n_features=features.shape[1])
+    model = make_regressor(algorithm, params, random_state=random_state, n_features=features.shape[1])
     return model.fit(features, target), None
 
 
@@ -405,7 +403,7 @@ def _z_score(level: float) -> float:
 # --------------------------------------------------------------------------- decoupled
 
 
-def decouple_rows(X: pd.DataFrame, Y: pd.DataFrame, degree: int = 1) -> pd.DataFrame:
+def decouple_rows(X: pd.DataFrame, Y: pd.DataFrame, degree: int) -> pd.DataFrame:
     """Decoupling of every row of Y (Eq. 6): run, measurement, k_um_per_m, b_um (c2, c3), r2, rms_um.
 
     The origin is Y's first position, so b means the same for every measurement.
@@ -464,6 +462,9 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         Chosen SVR parameters per target (empty for other algorithms).
     """
 
+    # Every parameter has a default because scikit-learn asks it of an estimator (clone,
+    # get_params, construction without arguments); the defaults are the paper's Eq. 9 model.
+    # The workflow sets each one from the settings (thermaxis.method.folds).
     def __init__(
         self,
         k_sensors=("T1", "T6", "T12"),
@@ -550,14 +551,14 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         )
         return compose_curve(coefficients, self.positions_mm_, self.origin_mm_)
 
-    def predict_kb_interval(self, X: pd.DataFrame, level: float = 0.95) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    def predict_kb_interval(self, X: pd.DataFrame, level: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Gaussian interval of each decoupling coefficient (gpr only): column -> (lower, upper)."""
         z = _z_score(level)
         kb = self.predict_kb(X, return_std=True)
         columns = [c for c in kb.columns if not c.endswith("_std")]
         return {c: (kb[c].to_numpy() - z * kb[f"{c}_std"].to_numpy(), kb[c].to_numpy() + z * kb[f"{c}_std"].to_numpy()) for c in columns}
 
-    def predict_interval(self, X: pd.DataFrame, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    def predict_interval(self, X: pd.DataFrame, level: float) -> tuple[np.ndarray, np.ndarray]:
         """Pointwise prediction interval of the error curves (gpr only).
 
         The k, b (and c2, c3) models are fitted separately, so their predictive
@@ -623,6 +624,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         Chosen SVR parameters per position (empty for other algorithms).
     """
 
+    # Defaults for scikit-learn, as for DecoupledAxisModel: the paper's Eq. 8 model.
     def __init__(
         self, sensors=("T1", "T11", "T12"), algorithm="mlr", params=None, svr_grid=None, random_state=0, signals=()
     ):
@@ -668,7 +670,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         features = _features(X, self.sensors, "relative", self.signals)
         return np.column_stack([np.asarray(m.predict(features)).ravel() for m in self.estimators_])
 
-    def predict_interval(self, X: pd.DataFrame, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    def predict_interval(self, X: pd.DataFrame, level: float) -> tuple[np.ndarray, np.ndarray]:
         """Pointwise Gaussian prediction interval (gpr only; else NotImplementedError)."""
         if self.algorithm != "gpr":
             raise NotImplementedError("prediction intervals are only available for algorithm 'gpr'")
