@@ -12,7 +12,7 @@ from thermaxis.vocabulary import ALGORITHMS
 from thermaxis.method.models import (
     DecoupledAxisModel,
     PointwiseAxisModel,
-    fit_svr_by_group_search,
+    fit_by_group_search,
     linear_terms,
     make_regressor,
     predict_with_std,
@@ -159,7 +159,7 @@ def test_held_out_errors_do_not_reach_the_fold_model(algorithm, approach):
     original, changed = folds(Y), folds(perturbed)
     np.testing.assert_array_equal(original[held_out][1], changed[held_out][1])
     pd.testing.assert_frame_equal(original[held_out][0].coefficients(), changed[held_out][0].coefficients())
-    assert original[held_out][0].svr_params_ == changed[held_out][0].svr_params_
+    assert original[held_out][0].searched_params_ == changed[held_out][0].searched_params_
     # The perturbation is large enough to show up wherever E3 IS used for training.
     assert any(not np.allclose(original[f][1], changed[f][1]) for f in original if f != held_out)
 
@@ -308,7 +308,7 @@ def test_svr_group_search_picks_the_known_best_point():
     groups = np.repeat(["a", "b", "c"], 10)
     # C = 1e-3 keeps the prediction near the mean; C = 100 follows the curve.
     grid = {"C": [1e-3, 100.0], "epsilon": [0.01]}
-    model, chosen = fit_svr_by_group_search(x, y, groups, grid, random_state=0)
+    model, chosen = fit_by_group_search("svr", x, y, groups, grid, random_state=0, inner=(12, 5))
     assert chosen == {"C": 100.0, "epsilon": 0.01}
 
     # Independent leave-one-group-out computation of the mean fold RMSE per grid point.
@@ -336,7 +336,7 @@ def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
     groups = np.repeat(["r1", "r2", "r3", "r4"], 10)
     # Two identical C values make a tie: the earlier grid point must win, as in GridSearchCV.
     grid = {"C": [10.0, 0.1, 10.0], "epsilon": [0.01, 0.1], "gamma": ["scale", 0.1]}
-    model, chosen = fit_svr_by_group_search(x, y, groups, grid, random_state=0)
+    model, chosen = fit_by_group_search("svr", x, y, groups, grid, random_state=0, inner=(12, 5))
     search = GridSearchCV(
         make_regressor("svr", random_state=0),
         {f"regress__regressor__{k}": v for k, v in grid.items()},
@@ -349,17 +349,17 @@ def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
 
 def test_svr_group_search_falls_back_to_first_grid_point_with_one_group():
     x = np.linspace(0.0, 1.0, 10)[:, None]
-    _, chosen = fit_svr_by_group_search(x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]}, random_state=0)
+    _, chosen = fit_by_group_search("svr", x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]}, random_state=0, inner=(12, 5))
     assert chosen == {"C": 100.0, "epsilon": 0.2}
 
 
-def test_svr_coefficients_are_empty_but_svr_params_recorded():
+def test_svr_coefficients_are_empty_but_searched_params_recorded():
     X, Y = _noisy_eq9()
     model = DecoupledAxisModel(algorithm="svr", svr_grid=SMALL_GRID).fit(X, Y)
     assert model.coefficients().empty
     assert list(model.coefficients().columns) == ["target", "position_mm", "term", "temperature", "value"]
-    assert set(model.svr_params_) == {"k", "b"}
-    assert model.svr_params_["k"]["C"] in (1.0, 10.0)
+    assert set(model.searched_params_) == {"k", "b"}
+    assert model.searched_params_["k"]["C"] in (1.0, 10.0)
 
 
 # --------------------------------------------------------------------------- bad input
@@ -369,7 +369,7 @@ def test_bad_input_raises_value_error():
     X = synthetic_temperatures()
     Y = eq9_errors(X)
     with pytest.raises(ValueError, match="unknown algorithm"):
-        make_regressor("lasso", random_state=0)
+        make_regressor("elasticnet", random_state=0)
     with pytest.raises(ValueError, match="unknown parameter"):
         make_regressor("ridge", {"C": 1.0}, random_state=0)
     with pytest.raises(ValueError, match="rows"):
@@ -382,3 +382,58 @@ def test_bad_input_raises_value_error():
     X_missing.loc[4, "T1"] = np.nan
     with pytest.raises(ValueError, match="missing temperatures"):
         DecoupledAxisModel().fit(X_missing, Y)
+
+
+@pytest.mark.parametrize(
+    "algorithm, grid, splitter",
+    [
+        ("ridge", {"alpha": [100.0, 0.01, 1.0]}, "logo"),
+        ("lasso", {"alpha": [0.3, 0.001, 0.03]}, "logo"),
+        ("pls", {"n_components": [1, 3, 2]}, "logo"),
+        ("ridge", {"alpha": [100.0, 0.01, 1.0]}, "groupkfold"),
+    ],
+)
+def test_searched_strength_is_what_gridsearchcv_chooses(algorithm, grid, splitter):
+    # The reference: scikit-learn's GridSearchCV over the same pipeline and group splitter.
+    from sklearn.model_selection import GridSearchCV, GroupKFold, LeaveOneGroupOut
+
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=(60, 4))
+    x[:, 3] = x[:, 2] + rng.normal(0.0, 0.05, 60)  # nearly collinear, where the strength matters
+    y = x @ np.array([1.0, -0.5, 0.2, 0.2]) + rng.normal(0.0, 0.3, 60)
+    groups = np.repeat([f"r{i}" for i in range(6)], 10)
+    # Up to 12 runs leave one out; with the limit at 4, the 6 runs go into 3 group folds.
+    inner, cv = ((12, 3), LeaveOneGroupOut()) if splitter == "logo" else ((4, 3), GroupKFold(n_splits=3))
+    model, chosen = fit_by_group_search(algorithm, x, y, groups, grid, random_state=0, inner=inner)
+    search = GridSearchCV(
+        make_regressor(algorithm, random_state=0),
+        {f"regress__regressor__{k}": v for k, v in grid.items()},
+        scoring="neg_root_mean_squared_error",
+        cv=cv,
+    ).fit(x, y, groups=groups)
+    assert chosen == {k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()}
+    np.testing.assert_allclose(model.predict(x), search.best_estimator_.predict(x), rtol=1e-12, atol=1e-12)
+
+
+def test_a_searched_model_records_its_choice_and_a_fixed_one_does_not():
+    X = synthetic_temperatures()
+    Y = eq9_errors(X)
+    searched = PointwiseAxisModel(algorithm="ridge", search_grid={"alpha": [0.01, 10.0]}).fit(X, Y)
+    assert set(searched.searched_params_) == {float(p) for p in Y.columns}
+    assert PointwiseAxisModel(algorithm="ridge", params={"alpha": 1.0}).fit(X, Y).searched_params_ == {}
+
+
+def test_gpr_beyond_its_sample_limit_is_fitted_on_evenly_spaced_rows():
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(40, 1))
+    y = np.sin(x).ravel()
+    X = pd.DataFrame({"run": np.repeat(["a", "b"], 20), "measurement": np.tile(np.arange(20), 2), "T1": x.ravel()})
+    Y = pd.DataFrame({0.0: y})
+    model = PointwiseAxisModel(sensors=("T1",), algorithm="gpr", gpr_max_samples=10).fit(X, Y)
+    # The fitted GP holds 10 training rows: 0, 4, 9, 13, ..., 39 (evenly spaced, both ends).
+    gp = model.estimators_[0].named_steps["regress"].regressor_
+    assert gp.X_train_.shape == (10, 1)
+    kept = np.unique(np.linspace(0, 39, 10).round().astype(int))
+    relative = x.ravel() - np.repeat(x.ravel()[[0, 20]], 20)  # the model's inputs are rises
+    scaler = model.estimators_[0].named_steps["standardise"]
+    np.testing.assert_allclose(scaler.inverse_transform(gp.X_train_).ravel(), relative[kept])

@@ -221,6 +221,9 @@ def _build_model(approach: str, algorithm: str, selection: FoldSelection, model:
         algorithm=algorithm,
         params=model.params_for(algorithm),
         svr_grid=model.grid(),
+        search_grid=model.search_grid_for(algorithm),
+        inner_search=model.inner_search,
+        gpr_max_samples=model.gpr_max_samples,
         random_state=model.random_state,
         signals=model.signals,
     )
