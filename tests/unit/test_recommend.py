@@ -104,12 +104,19 @@ def test_inner_splits_become_group_folds_above_the_limit():
 def test_time_inputs_and_signals_are_seen_only_by_candidates_that_use_them():
     X = pd.DataFrame({"run": ["R1"], "measurement": [1], "time_min": [0.0], "T1": [20.0],
                       "T1@lag30min": [19.0], "S": [100.0], "S@lag30min": [90.0]})  # fmt: skip
+    keys = ["run", "measurement", "time_min"]
     plain = fixed("T1")
-    assert list(candidate_view(X, plain, ["S"]).columns) == ["run", "measurement", "time_min", "T1"]
+    view, selectable, models = candidate_view(X, plain, ["S"])
+    assert list(view.columns) == selectable == [*keys, "T1"] and models.signals == ()
     lagged = replace(plain, time_inputs=True)
-    assert list(candidate_view(X, lagged, ["S"]).columns) == ["run", "measurement", "time_min", "T1", "T1@lag30min"]
+    view, selectable, _ = candidate_view(X, lagged, ["S"])
+    assert list(view.columns) == selectable == [*keys, "T1", "T1@lag30min"]
     both = replace(lagged, models=replace(DEFAULTS.models, signals=("S",)))
-    assert list(candidate_view(X, both, ["S"]).columns) == list(X.columns)
+    view, selectable, models = candidate_view(X, both, ["S"])
+    # The signal and its lag go into every model's inputs; only temperatures are selected.
+    assert list(view.columns) == [*keys, "T1", "T1@lag30min", "S", "S@lag30min"]
+    assert selectable == [*keys, "T1", "T1@lag30min"]
+    assert models.signals == ("S", "S@lag30min")
 
 
 def test_too_few_runs_are_refused_with_the_reason():

@@ -42,6 +42,9 @@ __all__ = [
     "inner_splits",
     "held_out_scores",
     "recommend",
+    "default_candidates",
+    "candidate_table",
+    "summary_of",
 ]
 
 # What the inner loop minimises: the mean over inner folds of the held-out error curves'
@@ -85,22 +88,27 @@ class Recommendation:
     score: str
 
 
-def candidate_view(X: pd.DataFrame, candidate: Candidate, signals: Sequence[str]) -> pd.DataFrame:
-    """The columns of X a candidate may use: the keys, temperatures, its lags and signals."""
-    keep = []
-    for column in X.columns:
-        if column in META:
-            keep.append(column)
-        elif column in signals:
-            if column in candidate.models.signals:
-                keep.append(column)
-        elif "@" in str(column):
-            base = str(column).split("@", 1)[0]
-            if candidate.time_inputs and (base not in signals or base in candidate.models.signals):
-                keep.append(column)
-        else:
-            keep.append(column)
-    return X[keep]
+def _base(column: str) -> str:
+    """The logged signal a derived input comes from: ``T5@lag30min`` -> ``T5``."""
+    return str(column).split("@", 1)[0]
+
+
+def candidate_view(X: pd.DataFrame, candidate: Candidate, signals: Sequence[str]):
+    """What a candidate may use: (X's columns it sees, those selection may choose, its settings).
+
+    Temperatures, and with ``time_inputs`` their lags, are candidates for the sensitive
+    points; the operating signals the candidate uses (and their lags) are added to every
+    model's inputs, as ``models.signals`` does, never selected.
+    """
+    derived = [c for c in X.columns if "@" in str(c)]
+    temperatures = [c for c in X.columns if c not in META and c not in signals and c not in derived]
+    if candidate.time_inputs:
+        temperatures += [c for c in derived if _base(c) not in signals]
+    used = [s for s in candidate.models.signals if s in X.columns]
+    if candidate.time_inputs:
+        used += [c for c in derived if _base(c) in candidate.models.signals]
+    keys = [c for c in X.columns if c in META]
+    return X[keys + temperatures + used], keys + temperatures, replace(candidate.models, signals=tuple(used))
 
 
 def inner_splits(runs: Sequence[str], max_loco_runs: int, n_group_folds: int) -> list[tuple[str, ...]]:
@@ -117,17 +125,24 @@ def inner_splits(runs: Sequence[str], max_loco_runs: int, n_group_folds: int) ->
     return [tuple(chunk) for chunk in np.array_split(np.array(runs, dtype=object), k)]
 
 
-def _error_metrics(X, Y, test_run, candidate, degree, signals) -> dict[str, float]:
-    """Select on the training rows of X, fit, predict ``test_run``: its error metrics."""
-    view = candidate_view(X, candidate, signals)
+def _error_metrics(X, Y, test_run, candidate, degree, signals, cache) -> dict[str, float]:
+    """Select on the training rows of X, fit, predict ``test_run``: its error metrics.
+
+    Candidates that differ only in their algorithm share the selection (``cache``),
+    as the main workflow's algorithms share a fold's.
+    """
+    view, selectable, models = candidate_view(X, candidate, signals)
     # The recommendation never lets the held-out run into the choice of sensitive points.
     selection_settings = replace(candidate.selection, scope="training")
     decoupled = candidate.approach == "decoupled"
-    selection = select_for_fold(
-        view, Y, test_run, selection_settings, degree if decoupled else None, decoupled=decoupled, pointwise=not decoupled
-    )
+    key = (tuple(sorted(pd.unique(X["run"]))), test_run, tuple(selectable), selection_settings, decoupled)
+    if key not in cache:
+        cache[key] = select_for_fold(
+            view[selectable], Y, test_run, selection_settings, degree if decoupled else None,
+            decoupled=decoupled, pointwise=not decoupled,
+        )  # fmt: skip
     result = evaluate_configuration(
-        view, Y, test_run, candidate.approach, candidate.algorithm, selection, candidate.models, degree if decoupled else None
+        view, Y, test_run, candidate.approach, candidate.algorithm, cache[key], models, degree if decoupled else None
     )
     row = result.metrics.loc[result.metrics["target"] == "error"].iloc[0]
     return {"rmse": float(row["rmse"]), "max_abs": float(row["max_abs"])}
@@ -141,6 +156,7 @@ def held_out_scores(
     candidate: Candidate,
     degree: int,
     signals: Sequence[str],
+    cache: dict,
 ) -> list[dict]:
     """Each held-out run's error when ``candidate`` is fitted on the rest of ``train_runs``.
 
@@ -153,7 +169,7 @@ def held_out_scores(
         for run in group:
             keep = X["run"].isin([*fit_runs, run]).to_numpy()
             metrics = _error_metrics(
-                X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True), run, candidate, degree, signals
+                X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True), run, candidate, degree, signals, cache
             )
             rows.append({"candidate": candidate.name, "held_out": run, **metrics})
     return rows
@@ -202,13 +218,14 @@ def recommend(
         )
     outer = list(outer_folds) if outer_folds is not None else runs
     say = progress or (lambda message: None)
+    cache: dict = {}
 
     # Each candidate's error on each run when fitted on all the others: the outer
     # evaluations of every fold, and the scores of the final choice.
     loco_rows = []
     for candidate in candidates:
         say(f"leave-one-condition-out of {candidate.name}")
-        loco_rows += held_out_scores(X, Y, runs, [(r,) for r in runs], candidate, degree, signals)
+        loco_rows += held_out_scores(X, Y, runs, [(r,) for r in runs], candidate, degree, signals, cache)
     loco = pd.DataFrame(loco_rows)
 
     fold_rows, inner_rows = [], []
@@ -218,7 +235,7 @@ def recommend(
         fold_scores = []
         for candidate in candidates:
             say(f"fold {fold}: inner choice, {candidate.name}")
-            rows = held_out_scores(X, Y, train, splits, candidate, degree, signals)
+            rows = held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)
             fold_scores += rows
             inner_rows += [{"fold": fold, **row} for row in rows]
         chosen, inner_score = _choose(pd.DataFrame(fold_scores), names, score)
@@ -271,3 +288,44 @@ def summary_of(recommendation: Recommendation) -> Mapping[str, float]:
         "paper_rmse_um": float(f["paper_rmse_um"].mean()),
         "paper_max_abs_um": float(f["paper_max_abs_um"].mean()),
     }
+
+
+def default_candidates(
+    selection: SelectionSettings, models: ModelSettings, decoupled: bool, signals: Sequence[str], time_inputs: bool
+) -> list[Candidate]:
+    """The default list, simplest first: the paper's configuration, its variants, regularised models.
+
+    * ``paper``: the configured selection, the decoupled approach (point by point for a
+      single-position dataset) and MLR, as the paper models;
+    * the same selection with the other approach and with the SVR;
+    * MLR over every sensor, and ridge, lasso and PLS over every sensor with their
+      strength chosen by an inner search on the training runs;
+    * with ``time_inputs``, the MLR and regularised candidates again with the lags;
+    * with operating ``signals``, the regularised candidates again with them as inputs
+      (and their lags with ``time_inputs``).
+    """
+    approaches = ["decoupled", "pointwise"] if decoupled else ["pointwise"]
+    plain = replace(models, signals=(), searched=())
+    searched = replace(plain, searched=("ridge", "lasso", "pls"))
+    every_sensor = replace(selection, method="all")
+    candidates = [Candidate("paper", approaches[0], "mlr", selection, plain, False)]
+    for approach in approaches:
+        for algorithm in ("mlr", "svr"):
+            if (approach, algorithm) != (approaches[0], "mlr"):
+                candidates.append(Candidate(f"{approach}-{algorithm}", approach, algorithm, selection, plain, False))
+    regularised = [
+        Candidate(f"{approach}-{algorithm}-all", approach, algorithm, every_sensor, searched, False)
+        for approach in approaches
+        for algorithm in ("mlr", "ridge", "lasso", "pls")
+    ]
+    candidates += regularised
+    if time_inputs:
+        linear = [c for c in candidates if c.algorithm != "svr"]
+        candidates += [replace(c, name=f"{c.name}+lags", time_inputs=True) for c in linear]
+    if signals:
+        with_signals = replace(searched, signals=tuple(signals))
+        for c in regularised:
+            candidates.append(replace(c, name=f"{c.name}+signals", models=with_signals))
+            if time_inputs:
+                candidates.append(replace(c, name=f"{c.name}+signals+lags", models=with_signals, time_inputs=True))
+    return candidates
