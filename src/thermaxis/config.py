@@ -15,7 +15,7 @@ scikit-learn nor pandas: the workflow builds settings while it parses the Snakef
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Mapping
 
@@ -40,6 +40,9 @@ __all__ = [
     "ModelSettings",
     "FallbackSettings",
     "CompensationSettings",
+    "ExtraCandidate",
+    "RecommendSettings",
+    "selection_overrides",
     "FigureSettings",
     "ReportSettings",
     "SweepSettings",
@@ -268,6 +271,16 @@ class SelectionSettings:
         return tuple(mapping[target])
 
 
+def selection_overrides(selection: "SelectionSettings", overrides: Mapping) -> "SelectionSettings":
+    """``selection`` with some of its config keys changed (a recommendation candidate's)."""
+    known = {f.name for f in fields(SelectionSettings)}
+    unknown = sorted(set(overrides) - known)
+    if unknown:
+        raise ValueError(f"config recommend.extra_candidates: unknown selection setting {unknown[0]!r}")
+    values = {k: (_sensor_lists(v) if k == "fixed" else v) for k, v in overrides.items()}
+    return replace(selection, **values)
+
+
 @dataclass(frozen=True)
 class ModelSettings:
     algorithms: tuple[str, ...]
@@ -279,6 +292,8 @@ class ModelSettings:
     searched: tuple[str, ...]  # ridge, lasso, pls whose strength an inner search chooses
     search_grids: tuple  # ((algorithm, ((parameter, (value, ...)), ...)), ...)
     inner_search: tuple[int, int]  # (max_loco_runs, group_folds)
+    input_lags_min: tuple[float, ...]  # time-aware inputs of every model: lag time constants
+    input_rates_min: tuple[float, ...]  # and rate-of-change windows
     gpr_max_samples: int
     interval_level: float
     random_state: int
@@ -297,6 +312,8 @@ class ModelSettings:
             searched=_searchable(m["searched"]),
             search_grids=tuple((name, _grid(grid)) for name, grid in sorted(m["search_grids"].items())),
             inner_search=(int(m["inner_search"]["max_loco_runs"]), int(m["inner_search"]["group_folds"])),
+            input_lags_min=tuple(float(v) for v in m["inputs"]["lags_min"]),
+            input_rates_min=tuple(float(v) for v in m["inputs"]["rates_min"]),
             gpr_max_samples=int(m["gpr_max_samples"]),
             interval_level=float(m["interval_level"]),
             random_state=int(m["random_state"]),
@@ -352,8 +369,11 @@ class FallbackSettings:
 
 @dataclass(frozen=True)
 class CompensationSettings:
-    """The configured approach, algorithm and fallback (a single-position dataset uses pointwise)."""
+    """Which model is deployed, the configured approach and algorithm (``model: paper``; a
+    single-position dataset uses pointwise), the verdict's tolerance and the fallback."""
 
+    model: str  # recommended | paper | a candidate's name
+    max_worsening_um: float
     approach: str
     algorithm: str
     fallback: FallbackSettings
@@ -362,6 +382,8 @@ class CompensationSettings:
     def from_section(cls, compensation: Mapping) -> "CompensationSettings":
         c = compensation
         return cls(
+            model=c["model"],
+            max_worsening_um=float(c["max_worsening_um"]),
             approach=c["approach"],
             algorithm=c["algorithm"],
             fallback=FallbackSettings(
@@ -372,6 +394,49 @@ class CompensationSettings:
                 policy=c["fallback"],
                 ramp_to_zero_min=float(c["ramp_to_zero_min"]),
             ),
+        )
+
+
+@dataclass(frozen=True)
+class ExtraCandidate:
+    """A user's candidate of the recommendation: selection settings that differ, and its inputs."""
+
+    name: str
+    approach: str
+    algorithm: str
+    selection: tuple  # ((key, value), ...) overriding the configured selection
+    time_inputs: bool
+    signals: bool
+
+
+@dataclass(frozen=True)
+class RecommendSettings:
+    score: str  # max_abs | rmse
+    lags_min: tuple[float, ...]
+    max_loco_runs: int
+    group_folds: int
+    extra_candidates: tuple[ExtraCandidate, ...]
+
+    @classmethod
+    def from_section(cls, recommend: Mapping) -> "RecommendSettings":
+        r = recommend
+        extra = tuple(
+            ExtraCandidate(
+                name=e["name"],
+                approach=e["approach"],
+                algorithm=e["algorithm"],
+                selection=tuple(sorted((e.get("selection") or {}).items())),
+                time_inputs=bool(e.get("time_inputs", False)),
+                signals=bool(e.get("signals", False)),
+            )
+            for e in r["extra_candidates"]
+        )
+        return cls(
+            score=r["score"],
+            lags_min=tuple(float(v) for v in r["lags_min"]),
+            max_loco_runs=int(r["max_loco_runs"]),
+            group_folds=int(r["group_folds"]),
+            extra_candidates=extra,
         )
 
 
@@ -443,6 +508,7 @@ class Settings:
     selection: SelectionSettings
     models: ModelSettings
     compensation: CompensationSettings
+    recommend: RecommendSettings
     figures: FigureSettings
     reports: ReportSettings
     sweep: SweepSettings
@@ -458,6 +524,7 @@ class Settings:
             selection=SelectionSettings.from_section(c["selection"]),
             models=models,
             compensation=CompensationSettings.from_section(c["compensation"]),
+            recommend=RecommendSettings.from_section(c["recommend"]),
             figures=FigureSettings.from_section(c["figures"]),
             reports=ReportSettings.from_section(c["reports"]),
             sweep=SweepSettings.from_section(c["sweep"], models),

@@ -58,6 +58,8 @@ def test_every_algorithm_and_approach_setting_of_the_config_refers_to_the_vocabu
         "figures/algorithms",
         "models/algorithms",
         "models/searched",
+        "recommend/extra_candidates/algorithm",
+        "recommend/extra_candidates/approach",
         "reports/model_algorithms",
         "sweep/algorithms",
         "sweep/approaches",

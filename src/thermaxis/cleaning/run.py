@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.cleaning import passes
+from thermaxis.method import inputs as time_inputs
 from thermaxis.cleaning import temperatures as temperature_cleaning
 from thermaxis.config import CleaningSettings
 from thermaxis.labels import natural_key
@@ -28,6 +29,7 @@ __all__ = [
     "unzeroed_matrix",
     "model_inputs",
     "tidy_signals",
+    "derived_inputs",
 ]
 
 @dataclass(frozen=True)
@@ -143,6 +145,39 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     )
 
 
+def derived_inputs(tables: RunTables, lags_min, rates_min) -> pd.DataFrame:
+    """Time-aware inputs of every temperature and operating signal at each measurement.
+
+    First-order lags (time constants ``lags_min``) and rates of change (windows
+    ``rates_min``) of the cleaned series on the run's grid, evaluated at the middle of
+    each measurement window, the instant the window-mean temperature stands for. The
+    filters start steady at the grid's first sample, a margin before the first
+    measurement: the run's history starts where its measurements do. Gaps the cleaning
+    left on the grid (none can fall in a measurement window) are bridged linearly for
+    the filters, which need a value at every sample. One row per measurement x input
+    (``input`` named like ``T5@lag30min``).
+    """
+    columns = ["run", "condition", "measurement", "time_min", "input", "value"]
+    if not lags_min and not rates_min:
+        return pd.DataFrame(columns=columns)
+    frame = tables.series.drop(columns="elapsed_min")
+    signals = tables.signal_series.drop(columns=["time", "elapsed_min"])
+    frame = pd.concat([frame.reset_index(drop=True), signals.reset_index(drop=True)], axis=1)
+    values = frame.drop(columns="time").interpolate(limit_direction="both")
+    frame = pd.concat([frame[["time"]], values], axis=1)
+    windows = tables.windows
+    derived = time_inputs.inputs_at_measurements(
+        frame, windows[["measurement", "start", "end"]], [60.0 * m for m in lags_min], [60.0 * m for m in rates_min], at="mid"
+    )
+    names = [c for c in derived.columns if "@" in c]
+    long = derived.melt(id_vars=["measurement"], value_vars=names, var_name="input", value_name="value")
+    time_min = dict(zip(windows["measurement"], minutes_since_first(windows["start"], windows)))
+    long.insert(0, "run", tables.run)
+    long.insert(1, "condition", tables.errors["condition"].iloc[0] if len(tables.errors) else "")
+    long.insert(3, "time_min", long["measurement"].map(time_min).to_numpy(dtype=float))
+    return long[columns].astype({"measurement": int, "value": float})
+
+
 def _combined_errors(raw: RawRun, cleaning: CleaningSettings) -> tuple[list[pd.Series], list[str]]:
     """Every measurement's passes combined at the run's targets, and the warnings of doing so."""
     targets = _targets(raw)
@@ -218,14 +253,19 @@ def unzeroed_matrix(errors: pd.DataFrame, value: str = "error_um") -> pd.DataFra
 
 
 def model_inputs(
-    errors: pd.DataFrame, temperatures: pd.DataFrame, sensors=None, signals: pd.DataFrame | None = None
+    errors: pd.DataFrame,
+    temperatures: pd.DataFrame,
+    sensors=None,
+    signals: pd.DataFrame | None = None,
+    inputs: pd.DataFrame | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The estimators' view: X (run, measurement, time_min, absolute temperature per sensor) and Y.
 
     Relative temperatures are NOT passed: the models derive them from each run's own
     first measurement, so a held-out run can never borrow another run's start.
     ``signals`` (the tidy operating-signal table) adds one column per signal after the
-    sensors, for models asked to use them as inputs.
+    sensors, for models asked to use them as inputs; ``inputs`` (the tidy table of
+    :func:`derived_inputs`) one column per time-aware input after those.
     """
     wide = temperatures.pivot_table(index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True)
     if sensors is None:
@@ -241,6 +281,9 @@ def model_inputs(
     if signals is not None and len(signals):
         signal_wide = signals.pivot_table(index=["run", "measurement"], columns="signal", values="value", sort=True)
         X = X.join(signal_wide.reindex(index)[sorted(signal_wide.columns, key=natural_key)])
+    if inputs is not None and len(inputs):
+        derived = inputs.pivot_table(index=["run", "measurement"], columns="input", values="value", sort=True)
+        X = X.join(derived.reindex(index)[sorted(derived.columns, key=natural_key)])
     X = X.reset_index()
     X.insert(2, "time_min", times.loc[index].to_numpy())
     X.columns.name = None

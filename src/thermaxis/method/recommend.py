@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from thermaxis.config import ModelSettings, SelectionSettings
+from thermaxis.config import ModelSettings, SelectionSettings, selection_overrides
 from thermaxis.labels import natural_sorted
 from thermaxis.method.folds import META, evaluate_configuration, select_for_fold
 
@@ -43,6 +43,7 @@ __all__ = [
     "held_out_scores",
     "recommend",
     "default_candidates",
+    "extra_candidates",
     "candidate_table",
     "summary_of",
 ]
@@ -329,3 +330,21 @@ def default_candidates(
             if time_inputs:
                 candidates.append(replace(c, name=f"{c.name}+signals+lags", models=with_signals, time_inputs=True))
     return candidates
+
+
+def extra_candidates(settings, selection: SelectionSettings, models: ModelSettings, signals: Sequence[str]):
+    """The user's candidates (config ``recommend.extra_candidates``), after the default ones."""
+    out = []
+    for extra in settings.extra_candidates:
+        used = tuple(signals) if extra.signals else ()
+        out.append(
+            Candidate(
+                name=extra.name,
+                approach=extra.approach,
+                algorithm=extra.algorithm,
+                selection=selection_overrides(selection, dict(extra.selection)),
+                models=replace(models, signals=used, searched=("ridge", "lasso", "pls")),
+                time_inputs=extra.time_inputs,
+            )
+        )
+    return out
