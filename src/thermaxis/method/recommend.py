@@ -33,6 +33,7 @@ import pandas as pd
 from thermaxis.config import ModelSettings, SelectionSettings, selection_overrides
 from thermaxis.labels import natural_sorted
 from thermaxis.method.folds import META, evaluate_configuration, select_for_fold
+from thermaxis.reports.formatting import markdown_table
 
 __all__ = [
     "SCORES",
@@ -41,10 +42,17 @@ __all__ = [
     "candidate_view",
     "inner_splits",
     "held_out_scores",
+    "SCORE_COLUMNS",
+    "fold_scores",
+    "collect",
     "recommend",
     "default_candidates",
     "extra_candidates",
     "candidate_table",
+    "candidates_for",
+    "candidate_record",
+    "candidate_from_record",
+    "recommendation_markdown",
     "summary_of",
 ]
 
@@ -186,6 +194,77 @@ def _choose(scores: pd.DataFrame, order: Sequence[str], score: str) -> tuple[str
     raise AssertionError("unreachable: the minimum is one of the candidates")
 
 
+SCORE_COLUMNS = ["kind", "fold", "candidate", "held_out", "rmse", "max_abs"]
+
+
+def fold_scores(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    candidates: Sequence[Candidate],
+    fold: str,
+    degree: int,
+    max_loco_runs: int,
+    n_group_folds: int,
+    signals: Sequence[str] = (),
+    progress: Callable[[str], None] | None = None,
+) -> pd.DataFrame:
+    """Everything one outer fold contributes: its inner scores and its held-out errors.
+
+    Rows of kind ``inner``: each candidate fitted on the training runs but one inner
+    group, scored on that group (the fold's run is in none of them). Rows of kind
+    ``loco``: each candidate fitted on every run but ``fold``, scored on ``fold``.
+    """
+    runs = natural_sorted(pd.unique(X["run"]).tolist())
+    if len(runs) < 3:
+        raise ValueError(
+            f"{len(runs)} runs: a nested leave-one-condition-out choice needs at least 3 "
+            "(one held out, and at least two to compare candidates on)"
+        )
+    say = progress or (lambda message: None)
+    train = [r for r in runs if r != fold]
+    splits = inner_splits(train, max_loco_runs, n_group_folds)
+    cache: dict = {}
+    rows = []
+    for candidate in candidates:
+        say(f"fold {fold}: {candidate.name}")
+        rows += [{"kind": "loco", "fold": fold, **r} for r in held_out_scores(X, Y, runs, [(fold,)], candidate, degree, signals, cache)]
+        rows += [{"kind": "inner", "fold": fold, **r} for r in held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)]
+    return pd.DataFrame(rows, columns=SCORE_COLUMNS)
+
+
+def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
+    if score not in SCORES:
+        raise ValueError(f"config recommend.score: {score!r} is not one of {', '.join(SCORES)}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"candidate names must be unique, got {list(names)}")
+    if reference not in names:
+        raise ValueError(f"reference candidate {reference!r} is not one of {list(names)}")
+
+
+def collect(scores: pd.DataFrame, names: Sequence[str], reference: str, score: str) -> Recommendation:
+    """The choice of every outer fold, and the final one, from the folds' scores."""
+    _check_choice(names, reference, score)
+    loco = scores.loc[scores["kind"] == "loco", ["candidate", "held_out", "rmse", "max_abs"]].reset_index(drop=True)
+    inner = scores.loc[scores["kind"] == "inner", ["fold", "candidate", "held_out", "rmse", "max_abs"]]
+    at = loco.set_index(["candidate", "held_out"])
+    rows = []
+    for fold in natural_sorted(pd.unique(scores["fold"]).tolist()):
+        chosen, inner_score = _choose(inner.loc[inner["fold"] == fold], names, score)
+        rows.append(
+            {
+                "fold": fold,
+                "chosen": chosen,
+                "inner_score": inner_score,
+                "rmse_um": at.loc[(chosen, fold), "rmse"],
+                "max_abs_um": at.loc[(chosen, fold), "max_abs"],
+                "paper_rmse_um": at.loc[(reference, fold), "rmse"],
+                "paper_max_abs_um": at.loc[(reference, fold), "max_abs"],
+            }
+        )
+    final, _ = _choose(loco, names, score)
+    return Recommendation(pd.DataFrame(rows), inner.reset_index(drop=True), loco, final, score)
+
+
 def recommend(
     X: pd.DataFrame,
     Y: pd.DataFrame,
@@ -202,64 +281,17 @@ def recommend(
     """Nested leave-one-condition-out choice among ``candidates`` (simplest first).
 
     ``reference`` names the candidate reported beside the choice (the paper's
-    configuration). ``outer_folds`` default to every run.
+    configuration). ``outer_folds`` default to every run. The workflow runs
+    :func:`fold_scores` as one job per fold and :func:`collect` once.
     """
-    if score not in SCORES:
-        raise ValueError(f"config recommend.score: {score!r} is not one of {', '.join(SCORES)}")
+    folds = list(outer_folds) if outer_folds is not None else natural_sorted(pd.unique(X["run"]).tolist())
     names = [c.name for c in candidates]
-    if len(set(names)) != len(names):
-        raise ValueError(f"candidate names must be unique, got {names}")
-    if reference not in names:
-        raise ValueError(f"reference candidate {reference!r} is not one of {names}")
-    runs = natural_sorted(pd.unique(X["run"]).tolist())
-    if len(runs) < 3:
-        raise ValueError(
-            f"{len(runs)} runs: a nested leave-one-condition-out choice needs at least 3 "
-            "(one held out, and at least two to compare candidates on)"
-        )
-    outer = list(outer_folds) if outer_folds is not None else runs
-    say = progress or (lambda message: None)
-    cache: dict = {}
-
-    # Each candidate's error on each run when fitted on all the others: the outer
-    # evaluations of every fold, and the scores of the final choice.
-    loco_rows = []
-    for candidate in candidates:
-        say(f"leave-one-condition-out of {candidate.name}")
-        loco_rows += held_out_scores(X, Y, runs, [(r,) for r in runs], candidate, degree, signals, cache)
-    loco = pd.DataFrame(loco_rows)
-
-    fold_rows, inner_rows = [], []
-    for fold in outer:
-        train = [r for r in runs if r != fold]
-        splits = inner_splits(train, max_loco_runs, n_group_folds)
-        fold_scores = []
-        for candidate in candidates:
-            say(f"fold {fold}: inner choice, {candidate.name}")
-            rows = held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)
-            fold_scores += rows
-            inner_rows += [{"fold": fold, **row} for row in rows]
-        chosen, inner_score = _choose(pd.DataFrame(fold_scores), names, score)
-        at = loco.set_index(["candidate", "held_out"])
-        fold_rows.append(
-            {
-                "fold": fold,
-                "chosen": chosen,
-                "inner_score": inner_score,
-                "rmse_um": at.loc[(chosen, fold), "rmse"],
-                "max_abs_um": at.loc[(chosen, fold), "max_abs"],
-                "paper_rmse_um": at.loc[(reference, fold), "rmse"],
-                "paper_max_abs_um": at.loc[(reference, fold), "max_abs"],
-            }
-        )
-    final, _ = _choose(loco, names, score)
-    return Recommendation(
-        folds=pd.DataFrame(fold_rows),
-        inner=pd.DataFrame(inner_rows, columns=["fold", "candidate", "held_out", "rmse", "max_abs"]),
-        loco=loco,
-        final=final,
-        score=score,
+    _check_choice(names, reference, score)
+    scores = pd.concat(
+        [fold_scores(X, Y, candidates, f, degree, max_loco_runs, n_group_folds, signals, progress) for f in folds],
+        ignore_index=True,
     )
+    return collect(scores, names, reference, score)
 
 
 def candidate_table(candidates: Sequence[Candidate]) -> pd.DataFrame:
@@ -348,3 +380,55 @@ def extra_candidates(settings, selection: SelectionSettings, models: ModelSettin
             )
         )
     return out
+
+
+def candidates_for(settings, decoupled: bool, signals: Sequence[str]) -> list[Candidate]:
+    """The configured candidate list: the defaults, then the user's (``settings`` is a Settings)."""
+    time_inputs = bool(settings.recommend.lags_min)
+    return [
+        *default_candidates(settings.selection, settings.models, decoupled, signals, time_inputs),
+        *extra_candidates(settings.recommend, settings.selection, settings.models, signals),
+    ]
+
+
+def candidate_record(candidate: Candidate) -> dict:
+    """A candidate as plain JSON: what the compensation refits on all runs."""
+    selection = {f: getattr(candidate.selection, f) for f in candidate.selection.__dataclass_fields__}
+    selection["fixed"] = {target: list(sensors) for target, sensors in candidate.selection.fixed}
+    return {
+        "name": candidate.name,
+        "approach": candidate.approach,
+        "algorithm": candidate.algorithm,
+        "selection": selection,
+        "signals": list(candidate.models.signals),
+        "searched": list(candidate.models.searched),
+        "time_inputs": candidate.time_inputs,
+    }
+
+
+def candidate_from_record(record: Mapping, models: ModelSettings) -> Candidate:
+    """The inverse of :func:`candidate_record`, on the configured model settings."""
+    selection = SelectionSettings.from_section(record["selection"])
+    return Candidate(
+        name=record["name"],
+        approach=record["approach"],
+        algorithm=record["algorithm"],
+        selection=selection,
+        models=replace(models, signals=tuple(record["signals"]), searched=tuple(record["searched"])),
+        time_inputs=bool(record["time_inputs"]),
+    )
+
+
+def recommendation_markdown(recommendation: Recommendation, statement: str) -> str:
+    """recommendation.md: the answer first, then the folds."""
+    s = summary_of(recommendation)
+    f = recommendation.folds
+    head = (
+        f"# Recommended model\n\n{statement}\n\n"
+        f"Recommended (chosen on all runs): **{recommendation.final}**. Chosen fold by fold without the "
+        f"held-out run (score: mean inner {recommendation.score}), the pipeline's choice leaves a mean "
+        f"held-out RMSE of {s['rmse_um']:.2f} um and a mean largest |residual| of {s['max_abs_um']:.2f} um, "
+        f"against {s['paper_rmse_um']:.2f} and {s['paper_max_abs_um']:.2f} um for the paper's configuration "
+        f"on the same folds.\n\n"
+    )
+    return head + markdown_table(f, "%.3f")
