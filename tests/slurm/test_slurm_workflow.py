@@ -17,7 +17,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import REPO, SNAKEMAKE, run_snakemake, snakemake_env, workflow_workdir
+from helpers import REPO
+from helpers.workflow import SNAKEMAKE, run_snakemake, snakemake_env, workflow_workdir
 
 pytestmark = pytest.mark.slurm
 

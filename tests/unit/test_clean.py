@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import DEFAULTS
+from helpers import DEFAULTS
 from thermaxis.cleaning.temperatures import (
     CleanedTemperatures,
     check_gaps,

@@ -2,7 +2,7 @@
 
 import pytest
 
-from conftest import REPO
+from helpers import REPO
 from thermaxis.config import load_config, validate_config
 
 

@@ -6,7 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import DEFAULTS, write_dataset
+from helpers import DEFAULTS
+from helpers.builders import write_dataset
 from thermaxis.cleaning.run import clean_and_assemble_run
 from thermaxis.method.decouple import compose_curve, decouple_measurement, decouple_table
 from thermaxis.dataset.reader import load_dataset, read_run

@@ -8,7 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import DEFAULTS, EQ9_B, EQ9_K, POSITIONS, eq9_errors, synthetic_temperatures
+from helpers import DEFAULTS
+from helpers.builders import synthetic_temperatures
+from helpers.truth import EQ9_B, EQ9_K, POSITIONS, eq9_errors
 from thermaxis.method.folds import (
     evaluate_configuration,
     select_for_fold,

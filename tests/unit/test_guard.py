@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import DEFAULTS
+from helpers import DEFAULTS
 from thermaxis.dataset import plausibility
 from thermaxis.dataset import safety
 from thermaxis.method import selection

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import set_csv_cell
+from helpers.builders import set_csv_cell
 from thermaxis.errors import DataError
 from thermaxis.dataset.reader import load_dataset, read_run
 

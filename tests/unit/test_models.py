@@ -19,7 +19,8 @@ from thermaxis.method.models import (
     relative_temperatures,
 )
 
-from conftest import EQ8, EQ9_B, EQ9_K, POSITIONS, SENSORS, eq8_errors, eq9_errors, eq9_truth, synthetic_temperatures
+from helpers.builders import synthetic_temperatures
+from helpers.truth import EQ8, EQ9_B, EQ9_K, POSITIONS, SENSORS, eq8_errors, eq9_errors, eq9_truth
 
 pytestmark = pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
 

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import DEFAULTS
+from helpers import DEFAULTS
 from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.cleaning.temperatures import (
     check_gaps,

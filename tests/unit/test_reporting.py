@@ -16,7 +16,8 @@ import nbformat
 import pandas as pd
 import pytest
 
-from conftest import FIXED_EPOCH, REPO
+from helpers import REPO
+from helpers.workflow import FIXED_EPOCH
 from thermaxis.reports import html as rep
 from thermaxis.reports import index as index_page
 from thermaxis.reports import notebooks

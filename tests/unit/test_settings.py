@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 import yaml
 
-from conftest import REPO
+from helpers import REPO
 from thermaxis.schemas import schema_path
 from thermaxis.config import (
     CleaningSettings,

@@ -13,7 +13,8 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import DEFAULTS, write_dataset
+from helpers import DEFAULTS
+from helpers.builders import write_dataset
 
 from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.config import Settings, load_config

@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 from threadpoolctl import threadpool_limits
 
-from conftest import DEFAULTS, REPO
+from helpers import DEFAULTS, REPO
 from thermaxis.schemas import schema_path
 from thermaxis.method import folds
 from thermaxis.sweep import plan as sweep_plan

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from threadpoolctl import threadpool_limits
 
-from conftest import DEFAULTS
+from helpers import DEFAULTS
 from thermaxis.sweep import plan as sweep_plan
 from thermaxis.sweep import run as sweep_run
 

@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import REPO
+from helpers import REPO
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.twin import ScaleSpec, generate_dataset, generate_scale
 from thermaxis.twin.network import CONDUCTANCE_W_PER_K, NODES, discretise, simulate

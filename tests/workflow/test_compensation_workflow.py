@@ -7,7 +7,9 @@ import json
 import pandas as pd
 import yaml
 
-from conftest import LINES_RUNS, planned_rules, run_snakemake, tiny_config, workflow_workdir, write_dataset
+from helpers.builders import write_dataset
+from helpers.runs import LINES_RUNS
+from helpers.workflow import planned_rules, run_snakemake, tiny_config, workflow_workdir
 
 TABLES = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
 

@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 
-from conftest import SNAKEMAKE, snakemake_env, workflow_workdir
+from helpers.workflow import SNAKEMAKE, snakemake_env, workflow_workdir
 
 # Waiting for the killed run to reach the middle of the workflow; a bound, not a measurement.
 WAIT_S = 300

@@ -5,7 +5,7 @@ import sys
 from pathlib import Path
 
 
-from conftest import REPO
+from helpers import REPO
 
 BIN = Path(sys.executable).parent
 

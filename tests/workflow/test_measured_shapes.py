@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import yaml
-from conftest import run_snakemake, workflow_workdir, write_dataset
+from helpers.builders import write_dataset
+from helpers.workflow import run_snakemake, workflow_workdir
 
 RUNS = ("cold_start_morning_1250rpm", "warm_afternoon_2500rpm", "night_cooldown_variable")
 

@@ -15,7 +15,9 @@ import thermaxis  # noqa: F401  first: nbformat's jsonschema import is seconds f
 import nbformat
 import yaml
 
-from conftest import REPO, planned_rules, reports_snakemake as snakemake, run_snakemake
+from helpers import REPO
+from helpers.runs import reports_snakemake as snakemake
+from helpers.workflow import planned_rules, run_snakemake
 from thermaxis.reports import provenance
 
 def report_pages(out: Path) -> list[Path]:

@@ -10,9 +10,11 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import b_true, k_true, planned_rules, run_snakemake, set_csv_cell, tiny_config, write_dataset
-from conftest import REPO, library_lock
-from conftest import workflow_workdir as workdir
+from helpers import REPO
+from helpers.builders import set_csv_cell, write_dataset
+from helpers.locks import library_lock
+from helpers.truth import b_true, k_true
+from helpers.workflow import planned_rules, run_snakemake, tiny_config, workflow_workdir as workdir
 from thermaxis.config import merge
 from thermaxis.errors import DataError
 from thermaxis.pipeline.preflight import check_before_jobs
