@@ -9,6 +9,7 @@ import pandas as pd
 import yaml
 
 from helpers.truth import SENSORS
+from thermaxis.config import FallbackSettings
 
 
 def write_dataset(
@@ -121,3 +122,66 @@ def synthetic_temperatures(
         for m in range(n_measurements):
             rows.append({"run": run, "measurement": m + 1, **dict(zip(SENSORS, temps[m], strict=True))})
     return pd.DataFrame(rows)
+
+
+# --------------------------------------------------------------------------- a model.json by hand
+
+TARGETS = [185.0 + 20.0 * i for i in range(14)]  # the paper's stroke; shifted origin 185 mm
+HOLD = FallbackSettings(
+    range_margin_c=2.0,
+    plausible_c=(-20.0, 120.0),
+    max_rate_c_per_min=0.5,
+    max_sensor_age_s=60.0,
+    policy="hold",
+    ramp_to_zero_min=30.0,
+)
+
+
+def hand_model(fallback=HOLD, positions=TARGETS) -> dict:
+    """A ``model.json`` record written by hand (tests/unit/test_compensation.py works its
+    controller values out from it; tests/packaging/test_wheel.py validates it):
+    k = -300 + 13 T1 [um/m] (absolute T1), b = -0.5 - 11 dT2 [um] (T2 relative to homing).
+    """
+    s = [(x - positions[0]) / 1000.0 for x in positions]
+    return {
+        "schema": "thermaxis-compensation-model",
+        "schema_version": 1,
+        "convention": "e = actual - target",
+        "approach": "decoupled",
+        "algorithm": "mlr",
+        "degree": 1,
+        "sensors": ["T1", "T2"],
+        "inputs": [
+            {"sensor": "T1", "temperature": "absolute", "training_min_c": 28.0, "training_max_c": 34.0},
+            {"sensor": "T2", "temperature": "relative", "training_min_c": 0.0, "training_max_c": 3.0},
+        ],
+        "reference": {
+            "temperatures": "at homing",
+            "static_pitch_table": "at homing",
+            "reference_position_mm": positions[0],
+        },
+        "positions_mm": list(positions),
+        "units": {},
+        "regressions": [
+            {
+                "target": "k",
+                "position_mm": None,
+                "inputs": [0],
+                "form": "affine",
+                "constant": -300.0,
+                "coefficients": [13.0],
+            },
+            {
+                "target": "b",
+                "position_mm": None,
+                "inputs": [1],
+                "form": "affine",
+                "constant": -0.5,
+                "coefficients": [-11.0],
+            },
+        ],
+        # b row, k row: the line through k*s + b is that line.
+        "line_weights": [[0.0, 1.0], [1.0, 0.0]],
+        "curve_basis": [[si, 1.0] for si in s],
+        "fallback": {**fallback.__dict__, "plausible_c": list(fallback.plausible_c)},
+    }
