@@ -120,7 +120,9 @@ def synthetic_temperatures(
         walk = np.cumsum(rng.normal(0.0, 0.15, (n_measurements, len(SENSORS))), axis=0)
         temps = base + rise * (1.0 - np.exp(-t[:, None] / tau)) + walk
         for m in range(n_measurements):
-            rows.append({"run": run, "measurement": m + 1, **dict(zip(SENSORS, temps[m], strict=True))})
+            rows.append(
+                {"run": run, "measurement": m + 1, **dict(zip(SENSORS, temps[m], strict=True))}
+            )
     return pd.DataFrame(rows)
 
 
@@ -152,8 +154,18 @@ def hand_model(fallback=HOLD, positions=TARGETS) -> dict:
         "degree": 1,
         "sensors": ["T1", "T2"],
         "inputs": [
-            {"sensor": "T1", "temperature": "absolute", "training_min_c": 28.0, "training_max_c": 34.0},
-            {"sensor": "T2", "temperature": "relative", "training_min_c": 0.0, "training_max_c": 3.0},
+            {
+                "sensor": "T1",
+                "temperature": "absolute",
+                "training_min_c": 28.0,
+                "training_max_c": 34.0,
+            },
+            {
+                "sensor": "T2",
+                "temperature": "relative",
+                "training_min_c": 0.0,
+                "training_max_c": 3.0,
+            },
         ],
         "reference": {
             "temperatures": "at homing",

@@ -103,7 +103,10 @@ def make_built(tmp: Path) -> Built:
         )
     )
     built = Built(
-        work=work, out=work / "results" / "rep", dataset=dataset, config=config,
+        work=work,
+        out=work / "results" / "rep",
+        dataset=dataset,
+        config=config,
         env=snakemake_env(),
     )
     reports_snakemake(built)

@@ -68,6 +68,7 @@ def eq8_errors(X: pd.DataFrame) -> pd.DataFrame:
 
 # --------------------------------------------------------------------------- the `lines` dataset
 
+
 # k and b of each (run, measurement) of the `lines` dataset: exact lines the pipeline must recover.
 def k_true(r, m):
     return -10.0 + 0.5 * m + r + 0.1 * m * m

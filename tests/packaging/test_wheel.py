@@ -39,7 +39,9 @@ def _pip(*args: str, cwd: Path) -> None:
         text=True,
         timeout=300,
     )
-    assert proc.returncode == 0, f"pip {args[0]} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    assert proc.returncode == 0, (
+        f"pip {args[0]} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    )
 
 
 def _source_files() -> set[str]:
@@ -128,7 +130,9 @@ CHILD = textwrap.dedent(
 def child(installed, tmp_path_factory) -> dict:
     """What the installed copy reads, run from a folder outside the checkout."""
     outside = tmp_path_factory.mktemp("outside")
-    paths = [str(installed)] + list(dict.fromkeys(sysconfig.get_paths()[k] for k in ("purelib", "platlib")))
+    paths = [str(installed)] + list(
+        dict.fromkeys(sysconfig.get_paths()[k] for k in ("purelib", "platlib"))
+    )
     proc = subprocess.run(
         [sys.executable, "-I", "-S", "-c", CHILD, json.dumps(paths), json.dumps(hand_model())],
         cwd=outside,
@@ -147,7 +151,9 @@ def test_installed_copy_is_the_one_imported(child, installed):
     # The checkout itself and its src/ (the venv may live inside the checkout: .venv).
     source = REPO / "src"
     checkout = [
-        p for p in child["sys_path"] if Path(p).resolve() == REPO or Path(p).resolve().is_relative_to(source)
+        p
+        for p in child["sys_path"]
+        if Path(p).resolve() == REPO or Path(p).resolve().is_relative_to(source)
     ]
     assert not checkout, checkout
     assert "" not in child["sys_path"]  # no current folder either

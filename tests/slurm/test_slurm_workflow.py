@@ -54,10 +54,13 @@ CONFIG = {
 def slurm():
     """The one-node cluster; stopped afterwards if this fixture started it."""
     if os.geteuid() != 0:
-        pytest.skip("Slurm test: needs root to start the one-node cluster (tests/slurm/start_slurm.sh)")
-    was_up = shutil.which("scontrol") is not None and "UP" in subprocess.run(
-        ["scontrol", "ping"], capture_output=True, text=True
-    ).stdout
+        pytest.skip(
+            "Slurm test: needs root to start the one-node cluster (tests/slurm/start_slurm.sh)"
+        )
+    was_up = (
+        shutil.which("scontrol") is not None
+        and "UP" in subprocess.run(["scontrol", "ping"], capture_output=True, text=True).stdout
+    )
     proc = subprocess.run(["bash", str(START)], capture_output=True, text=True, timeout=300)
     if proc.returncode != 0:
         reason = (proc.stderr.strip().splitlines() or ["no message"])[-1]
@@ -111,7 +114,9 @@ def test_slurm_run_is_byte_identical_to_the_local_run(slurm, local_results, tmp_
     # The estimate before the start: 8 evaluations x 0.065 s on 2 batches = 0.26 s wall.
     assert "8 evaluations in 2 batches; estimated 0.00 CPU-hours at 0.065 s each" in proc.stderr
     # The cluster plan: 8 evaluations in batches of 4.
-    batches = sorted(p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir())
+    batches = sorted(
+        p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir()
+    )
     assert batches == ["0.parquet", "1.parquet"]
     ours = _results(work)
     assert sorted(ours) == sorted(local_results)
@@ -123,7 +128,9 @@ def _running_job(rule: str, timeout: float = 300.0) -> str:
     """The Slurm id of the first RUNNING job of ``rule`` (the plugin puts the rule in the comment)."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        out = subprocess.run(["squeue", "-h", "-t", "RUNNING", "-o", "%i|%k"], capture_output=True, text=True).stdout
+        out = subprocess.run(
+            ["squeue", "-h", "-t", "RUNNING", "-o", "%i|%k"], capture_output=True, text=True
+        ).stdout
         for line in out.splitlines():
             job, _, comment = line.partition("|")
             if f"rule_{rule}" in comment:
@@ -135,7 +142,9 @@ def _running_job(rule: str, timeout: float = 300.0) -> str:
 def _start(work: Path, command: list[str], log: Path) -> subprocess.Popen:
     # Output to a file, not a pipe: a full pipe would stall Snakemake while the test waits.
     with open(log, "w") as out:
-        return subprocess.Popen(command, cwd=work, env=snakemake_env(), stdout=out, stderr=subprocess.STDOUT)
+        return subprocess.Popen(
+            command, cwd=work, env=snakemake_env(), stdout=out, stderr=subprocess.STDOUT
+        )
 
 
 def _finish(run: subprocess.Popen, log: Path) -> str:

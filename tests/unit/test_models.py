@@ -102,8 +102,12 @@ def test_decoupled_degree_two_models_curvature_on_absolute_temperatures():
         assert coefs.loc[("c2", term), "temperature"] == "absolute"
     assert coefs.loc[("k", "T1"), "value"] == pytest.approx(EQ9_K["T1"], abs=1e-6)
     X_new = synthetic_temperatures(runs=("E5",), seed=3)
-    c2_new = c2_terms["const"] + sum(v * X_new[s].to_numpy() for s, v in c2_terms.items() if s != "const")
-    np.testing.assert_allclose(model.predict(X_new), eq9_errors(X_new, c2=c2_new).to_numpy(), atol=1e-6)
+    c2_new = c2_terms["const"] + sum(
+        v * X_new[s].to_numpy() for s, v in c2_terms.items() if s != "const"
+    )
+    np.testing.assert_allclose(
+        model.predict(X_new), eq9_errors(X_new, c2=c2_new).to_numpy(), atol=1e-6
+    )
 
 
 def test_pointwise_mlr_recovers_eq8_per_position():
@@ -142,9 +146,9 @@ def test_held_out_errors_do_not_reach_the_fold_model(algorithm, approach):
     held_out = "E3"
     perturbed = Y.copy()
     rows = (X["run"] == held_out).to_numpy()
-    perturbed.loc[rows, :] = perturbed.loc[rows, :].to_numpy() + 50.0 * np.random.default_rng(1).normal(
-        size=(rows.sum(), Y.shape[1])
-    )
+    perturbed.loc[rows, :] = perturbed.loc[rows, :].to_numpy() + 50.0 * np.random.default_rng(
+        1
+    ).normal(size=(rows.sum(), Y.shape[1]))
     cls = DecoupledAxisModel if approach == "decoupled" else PointwiseAxisModel
     estimator = cls(algorithm=algorithm, svr_grid=SMALL_GRID)
 
@@ -153,13 +157,17 @@ def test_held_out_errors_do_not_reach_the_fold_model(algorithm, approach):
         out = {}
         for fold in sorted(set(X["run"])):
             test = (X["run"] == fold).to_numpy()
-            model = clone(estimator).fit(X[~test].reset_index(drop=True), Y[~test].reset_index(drop=True))
+            model = clone(estimator).fit(
+                X[~test].reset_index(drop=True), Y[~test].reset_index(drop=True)
+            )
             out[fold] = model, np.asarray(model.predict(X[test].reset_index(drop=True)))
         return out
 
     original, changed = folds(Y), folds(perturbed)
     np.testing.assert_array_equal(original[held_out][1], changed[held_out][1])
-    pd.testing.assert_frame_equal(original[held_out][0].coefficients(), changed[held_out][0].coefficients())
+    pd.testing.assert_frame_equal(
+        original[held_out][0].coefficients(), changed[held_out][0].coefficients()
+    )
     assert original[held_out][0].svr_params_ == changed[held_out][0].svr_params_
     # The perturbation is large enough to show up wherever E3 IS used for training.
     assert any(not np.allclose(original[f][1], changed[f][1]) for f in original if f != held_out)
@@ -171,7 +179,9 @@ def test_prediction_uses_only_the_predicted_runs_temperatures():
     model = DecoupledAxisModel(algorithm="ridge").fit(X, Y)
     alone = model.predict(X[X["run"] == "E2"])
     shuffled = X.sample(frac=1.0, random_state=0)
-    together = pd.DataFrame(model.predict(shuffled), index=shuffled.index).loc[X.index[X["run"] == "E2"]]
+    together = pd.DataFrame(model.predict(shuffled), index=shuffled.index).loc[
+        X.index[X["run"] == "E2"]
+    ]
     np.testing.assert_allclose(together.to_numpy(), alone, rtol=0, atol=1e-12)
 
 
@@ -219,7 +229,9 @@ def test_ridge_linear_terms_match_closed_form():
     terms = linear_terms(make_regressor("ridge", {"alpha": alpha}).fit(X, y), ["a", "b", "c"])
     Xs, ys, stats = _standardised(X, y)
     beta_s = np.linalg.solve(Xs.T @ Xs + alpha * np.eye(3), Xs.T @ ys)
-    np.testing.assert_allclose(list(terms.values()), _to_original(beta_s, stats), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(
+        list(terms.values()), _to_original(beta_s, stats), rtol=1e-9, atol=1e-9
+    )
 
 
 def test_pls_linear_terms_match_one_component_closed_form():
@@ -230,7 +242,9 @@ def test_pls_linear_terms_match_one_component_closed_form():
     w /= np.linalg.norm(w)
     t = Xs @ w
     q = (t @ ys) / (t @ t)
-    np.testing.assert_allclose(list(terms.values()), _to_original(w * q, stats), rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(
+        list(terms.values()), _to_original(w * q, stats), rtol=1e-8, atol=1e-8
+    )
 
 
 def test_pls_with_all_components_is_least_squares():
@@ -344,13 +358,17 @@ def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
         scoring="neg_root_mean_squared_error",
         cv=LeaveOneGroupOut(),
     ).fit(x, y, groups=groups)
-    assert chosen == {k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()}
+    assert chosen == {
+        k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()
+    }
     np.testing.assert_array_equal(model.predict(x), search.best_estimator_.predict(x))
 
 
 def test_svr_group_search_falls_back_to_first_grid_point_with_one_group():
     x = np.linspace(0.0, 1.0, 10)[:, None]
-    _, chosen = fit_svr_by_group_search(x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]})
+    _, chosen = fit_svr_by_group_search(
+        x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]}
+    )
     assert chosen == {"C": 100.0, "epsilon": 0.2}
 
 
@@ -358,7 +376,13 @@ def test_svr_coefficients_are_empty_but_svr_params_recorded():
     X, Y = _noisy_eq9()
     model = DecoupledAxisModel(algorithm="svr", svr_grid=SMALL_GRID).fit(X, Y)
     assert model.coefficients().empty
-    assert list(model.coefficients().columns) == ["target", "position_mm", "term", "temperature", "value"]
+    assert list(model.coefficients().columns) == [
+        "target",
+        "position_mm",
+        "term",
+        "temperature",
+        "value",
+    ]
     assert set(model.svr_params_) == {"k", "b"}
     assert model.svr_params_["k"]["C"] in (1.0, 10.0)
 

@@ -260,7 +260,9 @@ LEVELS = [round(0.1 * i, 1) for i in range(11)]
 @st.composite
 def similarity_matrices(draw):
     n = draw(st.integers(min_value=1, max_value=7))
-    upper = draw(st.lists(st.sampled_from(LEVELS), min_size=n * (n - 1) // 2, max_size=n * (n - 1) // 2))
+    upper = draw(
+        st.lists(st.sampled_from(LEVELS), min_size=n * (n - 1) // 2, max_size=n * (n - 1) // 2)
+    )
     R = np.eye(n)
     R[np.triu_indices(n, k=1)] = upper
     return np.maximum(R, R.T)
@@ -327,7 +329,9 @@ def test_deng_grade_minmax_by_hand_uses_global_two_level_extremes():
     X = np.array([[0.0, 2.0], [2.0, 1.0], [2.0, 0.0]])
     np.testing.assert_allclose(grey_relational_grade([0, 1, 2], X), [5 / 6, 5 / 9], rtol=1e-12)
     # rho = 1: xi = 1/(D + 1): x1 -> (1, 2/3, 1) -> 8/9; x2 -> (1/2, 1, 1/2) -> 2/3.
-    np.testing.assert_allclose(grey_relational_grade([0, 1, 2], X, rho=1.0), [8 / 9, 2 / 3], rtol=1e-12)
+    np.testing.assert_allclose(
+        grey_relational_grade([0, 1, 2], X, rho=1.0), [8 / 9, 2 / 3], rtol=1e-12
+    )
 
 
 def test_deng_grade_initial_and_mean_normalisation_by_hand():
@@ -392,7 +396,9 @@ def test_deng_grade_reproduces_gdp_worked_example():
     """
     x0, X = GDP_RAW[:, 0], GDP_RAW[:, 1:]
     # Our mean normalisation reproduces the published table ...
-    np.testing.assert_allclose(GDP_RAW / GDP_RAW.mean(axis=0), GDP_MEAN_NORMALISED_PUBLISHED, atol=5e-5)
+    np.testing.assert_allclose(
+        GDP_RAW / GDP_RAW.mean(axis=0), GDP_MEAN_NORMALISED_PUBLISHED, atol=5e-5
+    )
     # ... and the grades match the hand arithmetic above.
     grades = grey_relational_grade(x0, X, rho=0.5, normalisation="mean")
     np.testing.assert_allclose(grades, [0.5088, 0.6247, 0.7577], atol=1e-3)
@@ -452,7 +458,9 @@ def test_absolute_grey_incidence_by_hand():
     # X2 = X0 + 100 has the same zero-started image -> eps = 1.
     # X3 = 2*X0: s3 = 29, |s3 - s0| = 14.5 -> eps = (1+14.5+29)/(1+14.5+29+14.5) = 44.5/59.
     X = np.column_stack([X1, np.add(x0, 100), np.multiply(x0, 2)])
-    np.testing.assert_allclose(absolute_grey_incidence(x0, X), [143 / 256, 1.0, 44.5 / 59], rtol=1e-12)
+    np.testing.assert_allclose(
+        absolute_grey_incidence(x0, X), [143 / 256, 1.0, 44.5 / 59], rtol=1e-12
+    )
 
 
 # --------------------------------------------------------------------------- #
@@ -468,7 +476,9 @@ def _three_group_readings():
     k = np.arange(8.0)
     wiggle = np.array([0.0, 0.1, 0.0, -0.1, 0.0, 0.1, 0.0, -0.1])
     quad = (k - 3.5) ** 2
-    return pd.DataFrame({"T1": k, "T2": k + wiggle, "T3": quad, "T4": 2 * quad + 1, "T5": (-1.0) ** k})
+    return pd.DataFrame(
+        {"T1": k, "T2": k + wiggle, "T3": quad, "T4": 2 * quad + 1, "T5": (-1.0) ** k}
+    )
 
 
 def test_select_sensitive_points_on_constructed_groups():

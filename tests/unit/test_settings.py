@@ -36,9 +36,15 @@ def test_values_missing_from_the_config_get_the_schema_defaults():
     assert settings.selection.rho == schema_default("selection", "rho")
     assert settings.decoupling.degree == schema_default("decoupling", "degree")
     for name in ("C", "epsilon", "gamma"):
-        assert list(dict(settings.models.svr_grid)[name]) == schema_default("models", "svr_grid", name)
-    assert settings.cleaning.temperatures.hampel_window == schema_default("temperatures", "hampel_window")
-    assert list(settings.cleaning.plausible_median_c) == schema_default("temperatures", "plausible_median_c")
+        assert list(dict(settings.models.svr_grid)[name]) == schema_default(
+            "models", "svr_grid", name
+        )
+    assert settings.cleaning.temperatures.hampel_window == schema_default(
+        "temperatures", "hampel_window"
+    )
+    assert list(settings.cleaning.plausible_median_c) == schema_default(
+        "temperatures", "plausible_median_c"
+    )
     assert settings.compensation.fallback.policy == schema_default("compensation", "fallback")
     assert list(settings.figures.formats) == schema_default("figures", "formats")
     assert list(settings.reports.model_algorithms) == schema_default("reports", "model_algorithms")
@@ -48,9 +54,19 @@ def test_values_missing_from_the_config_get_the_schema_defaults():
 
 
 def test_the_dataclasses_have_no_defaults_of_their_own():
-    for cls in (DecouplingSettings, SelectionSettings, ModelSettings, CompensationSettings, CleaningSettings, SweepSettings):
+    for cls in (
+        DecouplingSettings,
+        SelectionSettings,
+        ModelSettings,
+        CompensationSettings,
+        CleaningSettings,
+        SweepSettings,
+    ):
         fields = dataclasses.fields(cls)
-        assert all(f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING for f in fields), cls
+        assert all(
+            f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+            for f in fields
+        ), cls
     with pytest.raises(TypeError):
         SelectionSettings()
 
@@ -86,12 +102,21 @@ def test_each_section_builds_from_its_config_section():
          "estimate_clock_offsets": False, "window": "start"},
         {"direction": "+", "max_missing_fraction": 0.5, "max_abs_error_um": 200},
     )  # fmt: skip
-    assert (cleaning.temperatures.interval_s, cleaning.temperatures.limits_c) == (30.0, (-10.0, 90.0))
-    assert (cleaning.errors.direction, cleaning.max_abs_error_um, cleaning.window) == ("+", 200.0, "start")
+    assert (cleaning.temperatures.interval_s, cleaning.temperatures.limits_c) == (
+        30.0,
+        (-10.0, 90.0),
+    )
+    assert (cleaning.errors.direction, cleaning.max_abs_error_um, cleaning.window) == (
+        "+",
+        200.0,
+        "start",
+    )
 
 
 def test_the_sweep_takes_the_models_grid_when_asked():
-    settings = Settings.from_config({"sweep": {"svr_grid": "models"}, "models": {"svr_grid": {"C": [2.0]}}})
+    settings = Settings.from_config(
+        {"sweep": {"svr_grid": "models"}, "models": {"svr_grid": {"C": [2.0]}}}
+    )
     # C from the config, epsilon and gamma from the schema's models.svr_grid.
     expected = {"C": [2.0], "epsilon": schema_default("models", "svr_grid", "epsilon"),
                 "gamma": schema_default("models", "svr_grid", "gamma")}  # fmt: skip
@@ -100,7 +125,11 @@ def test_the_sweep_takes_the_models_grid_when_asked():
 
 def test_the_papers_preset_parses_once():
     settings = Settings.from_config(load_config())
-    assert (settings.selection.method, settings.selection.n_clusters, settings.decoupling.degree) == ("fuzzy_grey", 3, 1)
+    assert (
+        settings.selection.method,
+        settings.selection.n_clusters,
+        settings.decoupling.degree,
+    ) == ("fuzzy_grey", 3, 1)
 
 
 def test_a_bad_value_is_one_line():

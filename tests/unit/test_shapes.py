@@ -28,7 +28,9 @@ CLEANING = Settings.from_config(load_config()).cleaning
 
 def assembled(root):
     dataset = load_dataset(root)
-    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), CLEANING) for run in dataset.run_ids]
+    tables = [
+        clean_and_assemble_run(dataset, read_run(dataset, run), CLEANING) for run in dataset.run_ids
+    ]
     errors = pd.concat([t.errors for t in tables], ignore_index=True)
     temperatures = pd.concat([t.temperatures for t in tables], ignore_index=True)
     return errors, temperatures
@@ -36,7 +38,9 @@ def assembled(root):
 
 def relative(X, sensors):
     """Temperatures minus each run's first measurement, computed directly."""
-    first = X.sort_values("measurement").groupby("run")[list(sensors)].transform("first").loc[X.index]
+    first = (
+        X.sort_values("measurement").groupby("run")[list(sensors)].transform("first").loc[X.index]
+    )
     return X[list(sensors)].to_numpy(float) - first.to_numpy(float)
 
 
@@ -57,12 +61,18 @@ def numpy_pointwise(X, Y, fold, sensors):
     [
         (("A", "B"), (5, 3), (0.0, 50.0, 100.0)),  # two runs of unequal length
         (("R1", "R2", "R3"), (4, 7, 2), (0.0,)),  # one position, unequal runs
-        (tuple(f"run_{i:02d}" for i in range(1, 8)), (3, 4, 5, 3, 6, 4, 3), (0.0, 100.0)),  # many runs
+        (
+            tuple(f"run_{i:02d}" for i in range(1, 8)),
+            (3, 4, 5, 3, 6, 4, 3),
+            (0.0, 100.0),
+        ),  # many runs
         (("A", "B", "C"), (3, 3, 4), tuple(np.linspace(0.0, 900.0, 46))),  # many positions
     ],
 )
 def test_shapes_assemble_and_predict_like_numpy(tmp_path, runs, counts, positions):
-    root = write_dataset(tmp_path / "ds", runs=runs, n_measurements=counts, positions=positions, two_passes=False)
+    root = write_dataset(
+        tmp_path / "ds", runs=runs, n_measurements=counts, positions=positions, two_passes=False
+    )
     errors, temperatures = assembled(root)
     X, Y = model_inputs(errors, temperatures)
     # One row per measurement that exists: no padding to the longest run.
@@ -70,8 +80,21 @@ def test_shapes_assemble_and_predict_like_numpy(tmp_path, runs, counts, position
     assert X.groupby("run").size().to_dict() == dict(zip(runs, counts))
     assert Y.shape == (sum(counts), len(positions))
     sensors = ("S1", "S2")
-    selection = select_for_fold(X, Y, runs[-1], replace(DEFAULTS.selection, method="fixed", fixed=(("pointwise", sensors), ("k", sensors), ("b", sensors))), 1, decoupled=False)
-    result = evaluate_configuration(X, Y, runs[-1], "pointwise", "mlr", selection, DEFAULTS.models, 1)
+    selection = select_for_fold(
+        X,
+        Y,
+        runs[-1],
+        replace(
+            DEFAULTS.selection,
+            method="fixed",
+            fixed=(("pointwise", sensors), ("k", sensors), ("b", sensors)),
+        ),
+        1,
+        decoupled=False,
+    )
+    result = evaluate_configuration(
+        X, Y, runs[-1], "pointwise", "mlr", selection, DEFAULTS.models, 1
+    )
     predicted = result.error_predictions["predicted"].to_numpy().reshape(counts[-1], len(positions))
     np.testing.assert_allclose(predicted, numpy_pointwise(X, Y, runs[-1], sensors), atol=1e-6)
 
@@ -80,7 +103,10 @@ def test_runs_with_different_targets_are_refused_naming_the_run(tmp_path):
     a = write_dataset(tmp_path / "a", runs=("A",), positions=(0.0, 50.0, 100.0))
     b = write_dataset(tmp_path / "b", runs=("B",), positions=(0.0, 50.0, 120.0))
     errors = pd.concat([assembled(a)[0], assembled(b)[0]], ignore_index=True)
-    with pytest.raises(DataError, match=r"^data/B/errors: run B reads 3 target positions, run A 3 \(120 mm is not a target of run A\)"):
+    with pytest.raises(
+        DataError,
+        match=r"^data/B/errors: run B reads 3 target positions, run A 3 \(120 mm is not a target of run A\)",
+    ):
         check_same_targets(errors, "data")
 
 
@@ -90,8 +116,11 @@ def test_single_position_common_set_follows_the_ranking_not_the_names(tmp_path):
     def temperature(r, s, minutes):
         # Z9 (s=4) is the error's driver, Z1 (s=0) a noisy copy, the rest unrelated wiggles.
         base = (1.0 + r) * (1.0 - np.exp(-minutes / 40.0))
-        return 20.0 + np.where(s == 4, base, 0.0) + np.where(s == 0, base + 0.05 * np.sin(minutes), 0.0) + (
-            0.0 if s in (0, 4) else 0.3 * np.sin(minutes / (7.0 + s))
+        return (
+            20.0
+            + np.where(s == 4, base, 0.0)
+            + np.where(s == 0, base + 0.05 * np.sin(minutes), 0.0)
+            + (0.0 if s in (0, 4) else 0.3 * np.sin(minutes / (7.0 + s)))
         )
 
     def curve(r, m, x):
@@ -131,8 +160,12 @@ def test_errors_in_one_file_per_run_read_like_one_file_per_measurement(tmp_path)
 
 def test_condition_is_a_label_and_feed_optional(tmp_path):
     root = write_dataset(tmp_path / "ds", runs=("A", "B"))
-    (root / "runs.tsv").write_text("run\tcondition\tspindle_rpm\tdescription\nA\tcold start\t1500\tx\nB\twarm\t\ty\n")
+    (root / "runs.tsv").write_text(
+        "run\tcondition\tspindle_rpm\tdescription\nA\tcold start\t1500\tx\nB\twarm\t\ty\n"
+    )
     dataset = load_dataset(root)
     assert dataset.condition_of("A") == "cold start"
     assert dataset.descriptors == ("spindle_rpm",)
-    assert dataset.runs["spindle_rpm"].tolist()[0] == 1500.0 and np.isnan(dataset.runs["spindle_rpm"].tolist()[1])
+    assert dataset.runs["spindle_rpm"].tolist()[0] == 1500.0 and np.isnan(
+        dataset.runs["spindle_rpm"].tolist()[1]
+    )

@@ -27,7 +27,15 @@ def exact_runs(wobble_um: float = 0.0):
         for m in range(6):
             t1 = 28.0 + r + 0.8 * m + 0.3 * m * m
             rise = 0.5 * m + 0.05 * r * m
-            rows.append({"run": f"R{r}", "measurement": m + 1, "time_min": 20.0 * m, "T1": t1, "T2": 25.0 + 0.4 * r + rise})
+            rows.append(
+                {
+                    "run": f"R{r}",
+                    "measurement": m + 1,
+                    "time_min": 20.0 * m,
+                    "T1": t1,
+                    "T2": 25.0 + 0.4 * r + rise,
+                }
+            )
             k = -300.0 + 13.0 * t1 + 10.0 * wobble_um * np.cos(5.0 * m + r)
             b = -0.5 - 11.0 * rise + wobble_um * np.sin(7.0 * m + 3.0 * r)
             curves.append(k * (TARGETS - 185.0) / 1000.0 + b)
@@ -87,7 +95,9 @@ def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray) -> dict
     if "COEFF" in c:
         change = np.asarray(c["COEFF"]).reshape(c["N_REGRESSIONS"], c["N_INPUTS"]) @ (now - ref)
     else:
-        change = np.array([rbf(c, r, now) - rbf(c, r, ref) for r in range(1, c["N_REGRESSIONS"] + 1)])
+        change = np.array(
+            [rbf(c, r, now) - rbf(c, r, ref) for r in range(1, c["N_REGRESSIONS"] + 1)]
+        )
     b = np.dot(c["LINE_B"], change)
     k = np.dot(c["LINE_K"], change)
     return {
@@ -104,7 +114,9 @@ def rbf(c: dict, r: int, inputs: np.ndarray) -> float:
     z = (inputs[chosen] - np.asarray(c[name + "MEAN"])) / np.asarray(c[name + "SCALE"])
     centres = np.asarray(c[name + "CENTRES"]).reshape(-1, chosen.size)
     kernel = np.exp(-c[name + "GAMMA"] * ((z - centres) ** 2).sum(axis=1))
-    return (kernel @ np.asarray(c[name + "WEIGHTS"]) + c[name + "OFFSET"]) * c[name + "TARGET_SCALE"] + c[name + "TARGET_MEAN"]
+    return (kernel @ np.asarray(c[name + "WEIGHTS"]) + c[name + "OFFSET"]) * c[
+        name + "TARGET_SCALE"
+    ] + c[name + "TARGET_MEAN"]
 
 
 def test_constants_read_back_exactly(exported):
@@ -115,7 +127,13 @@ def test_constants_read_back_exactly(exported):
     assert c["INPUT_MAX"] == [i["training_max_c"] for i in model["inputs"]]
     assert c["LINE_B"] + c["LINE_K"] == [w for row in model["line_weights"] for w in row]
     assert c["P0_MM"] == 185.0
-    assert (c["RANGE_MARGIN"], c["PLAUSIBLE_MIN"], c["PLAUSIBLE_MAX"], c["MAX_RATE"], c["MAX_AGE"]) == (1.5, -10.0, 90.0, 0.25, 30.0)
+    assert (
+        c["RANGE_MARGIN"],
+        c["PLAUSIBLE_MIN"],
+        c["PLAUSIBLE_MAX"],
+        c["MAX_RATE"],
+        c["MAX_AGE"],
+    ) == (1.5, -10.0, 90.0, 0.25, 30.0)
     assert c["POLICY_RAMP"] is True and c["RAMP_TIME"] == 1200.0
 
 
@@ -125,7 +143,12 @@ def test_constants_read_back_exactly(exported):
 )
 def test_st_values_equal_compensator(exported, now, ref):
     _, comp, _, c = exported
-    expected = {row[0]: row[2] for row in twincat(comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref))))}
+    expected = {
+        row[0]: row[2]
+        for row in twincat(
+            comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref)))
+        )
+    }
     got = st_twincat(c, np.array(now), np.array(ref))
     for parameter, value in expected.items():
         assert got[parameter] == pytest.approx(value, abs=1e-9), parameter
@@ -136,7 +159,9 @@ def test_hand_worked_signs(exported):
     # offset_0 = +16.5 um = 165 (0.1 um), coefficient = -26 um/m, position_0 = 185 mm = 1850000 (0.1 um).
     _, _, source, c = exported
     got = st_twincat(c, np.array([32.0, 26.5]), np.array([30.0, 25.0]))
-    assert got == pytest.approx({"P-AXIS-00272": 1_850_000.0, "P-AXIS-00273": 165.0, "P-AXIS-00274": -26.0}, abs=1e-6)
+    assert got == pytest.approx(
+        {"P-AXIS-00272": 1_850_000.0, "P-AXIS-00273": 165.0, "P-AXIS-00274": -26.0}, abs=1e-6
+    )
     assert CONVENTION in source and "P-AXIS-00273 temp_comp_offset_0 [0.1 um]" in source
     assert "SIMULATED" in source
 
@@ -145,7 +170,9 @@ def test_single_position_block_has_no_slope():
     X, Y = exact_runs()
     Y = Y[[TARGETS[3]]]
     estimator = PointwiseAxisModel(("T2",), algorithm="mlr").fit(X, Y)
-    c = parsed_constants(structured_text(model_record(estimator, "pointwise", "mlr", X, RAMP), "SIMULATED"))
+    c = parsed_constants(
+        structured_text(model_record(estimator, "pointwise", "mlr", X, RAMP), "SIMULATED")
+    )
     assert c["LINE_K"] == [0.0] and c["LINE_B"] == [1.0] and c["P0_MM"] == TARGETS[3]
 
 
@@ -160,7 +187,12 @@ def test_kernel_blocks_equal_compensator(algorithm):
     c = parsed_constants(structured_text(model, "SIMULATED"))
     assert "COEFF" not in c and c["R1_GAMMA"] == model["regressions"][0]["gamma"]
     for now, ref in (((32.0, 26.5), (30.0, 25.0)), ((29.25, 24.1), (30.5, 25.3))):
-        expected = {row[0]: row[2] for row in twincat(comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref))))}
+        expected = {
+            row[0]: row[2]
+            for row in twincat(
+                comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref)))
+            )
+        }
         got = st_twincat(c, np.array(now), np.array(ref))
         assert got == pytest.approx(expected, abs=1e-9)
         assert abs(got["P-AXIS-00274"]) > 1.0  # a real slope, not an empty model

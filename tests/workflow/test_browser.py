@@ -21,8 +21,13 @@ import pytest
 
 pytestmark = pytest.mark.browser
 
-CHROMIUM = next((p for p in (shutil.which("chromium"), "/usr/bin/chromium") if p and Path(p).is_file()), None)
-CHROMEDRIVER = next((p for p in (shutil.which("chromedriver"), "/usr/bin/chromedriver") if p and Path(p).is_file()), None)
+CHROMIUM = next(
+    (p for p in (shutil.which("chromium"), "/usr/bin/chromium") if p and Path(p).is_file()), None
+)
+CHROMEDRIVER = next(
+    (p for p in (shutil.which("chromedriver"), "/usr/bin/chromedriver") if p and Path(p).is_file()),
+    None,
+)
 FIRST_SCREEN_PX = 800
 
 
@@ -34,7 +39,9 @@ class _QuietHandler(SimpleHTTPRequestHandler):
 @pytest.fixture(scope="module")
 def server(built):
     """The built dataset's results folder over http://127.0.0.1:<free port>/."""
-    httpd = ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(built.out)))
+    httpd = ThreadingHTTPServer(
+        ("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(built.out))
+    )
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
     thread.start()
     yield f"http://127.0.0.1:{httpd.server_address[1]}"
@@ -45,8 +52,12 @@ def server(built):
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory):
     if CHROMIUM is None or CHROMEDRIVER is None:
-        pytest.skip("headless Chromium not found: install the Debian packages chromium and chromium-driver (.ci/run does)")
-    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (envs/requirements.txt pins it)")
+        pytest.skip(
+            "headless Chromium not found: install the Debian packages chromium and chromium-driver (.ci/run does)"
+        )
+    webdriver = pytest.importorskip(
+        "selenium.webdriver", reason="selenium is not installed (envs/requirements.txt pins it)"
+    )
     from selenium.webdriver.chrome.service import Service
 
     options = webdriver.ChromeOptions()
@@ -110,7 +121,9 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
     assert errors == [], f"{page}: console errors: {errors}"
 
     # Chromium's own chrome:// pages show up in the log too; the network is http(s) and ws(s).
-    network = [u for u in requested_urls(browser) if u.split(":", 1)[0] in ("http", "https", "ws", "wss")]
+    network = [
+        u for u in requested_urls(browser) if u.split(":", 1)[0] in ("http", "https", "ws", "wss")
+    ]
     foreign = [u for u in network if not u.startswith(f"{server}/")]
     assert foreign == [], f"{page}: requests beyond the local server: {foreign[:5]}"
 
@@ -120,7 +133,9 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
     )
     assert banner is not None, f"{page}: no data statement banner"
     top, bottom, text = banner
-    assert 0 <= top and bottom <= FIRST_SCREEN_PX, f"{page}: the data statement is not on the first screen ({top}-{bottom} px)"
+    assert 0 <= top and bottom <= FIRST_SCREEN_PX, (
+        f"{page}: the data statement is not on the first screen ({top}-{bottom} px)"
+    )
     assert "SIMULATED DATA" in text and "SIMULATED data" in text
 
     shot = tmp_path / (page.replace("/", "_").removesuffix(".html") + ".png")

@@ -11,7 +11,9 @@ BIN = Path(sys.executable).parent
 
 
 def test_snakemake_lint_reports_nothing():
-    proc = subprocess.run([str(BIN / "snakemake"), "--lint"], cwd=REPO, capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [str(BIN / "snakemake"), "--lint"], cwd=REPO, capture_output=True, text=True, timeout=300
+    )
     out = proc.stdout + proc.stderr
     assert proc.returncode == 0, out
     assert "Congratulations, your workflow is in a good condition!" in out, out
@@ -19,6 +21,10 @@ def test_snakemake_lint_reports_nothing():
 
 def test_snakefmt_check_passes():
     proc = subprocess.run(
-        [str(BIN / "snakefmt"), "--check", "Snakefile", "workflow/rules/"], cwd=REPO, capture_output=True, text=True, timeout=300
+        [str(BIN / "snakefmt"), "--check", "Snakefile", "workflow/rules/"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr

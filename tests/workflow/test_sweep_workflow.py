@@ -9,11 +9,16 @@ from helpers.workflow import run_snakemake
 from thermaxis.method.metrics import METRIC_COLUMNS
 
 
-def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines_run, library_unchanged):
+def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(
+    lines_run, library_unchanged
+):
     """The sweep on the session's `lines_run`, whose config carries the sweep grid (helpers.runs.LINES_SWEEP)."""
     work, path, out = lines_run.work, lines_run.config, lines_run.out
     config = yaml.safe_load(path.read_text())
-    assert config["selection"] == {"n_clusters": 2} and config["models"]["algorithms"] == ["mlr", "svr"]
+    assert config["selection"] == {"n_clusters": 2} and config["models"]["algorithms"] == [
+        "mlr",
+        "svr",
+    ]
     assert config["sweep"]["svr_grid"] == "models"
     proc = run_snakemake(work, "--configfile", str(path), "--", "sweep")
     assert "sweep batch 2/2: 100%" in proc.stderr
