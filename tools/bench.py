@@ -275,7 +275,8 @@ def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
             growth = "cost grows about quadratically (or faster) with the number of runs"
         growth += f" (quadratic share at {top:g} runs {share:.2f})"
     statement = (
-        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run (least squares, R^2 = {r2:.3f}); {growth}; "
+        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run "
+        f"(least squares, R^2 = {r2:.3f}); {growth}; "
         f"marginal cost {', '.join(f'{v:.2f}' for v in marginal)} s per added run"
     )
     return ScaleFit(float(intercept), float(slope), r2, marginal, share, statement)
@@ -285,7 +286,8 @@ def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
 
 
 def prepare_workdir(root: Path, repo: Path = REPO) -> Path:
-    """A scratch work folder whose Snakefile, config, workflow, notebooks and data link to ``repo``."""
+    """A scratch work folder whose Snakefile, config, workflow, notebooks and data link to
+    ``repo``."""
     root.mkdir(parents=True, exist_ok=True)
     for name in ("Snakefile", "config", "workflow", "notebooks", "data"):
         target = root / name
@@ -389,7 +391,8 @@ def run_bench(
         measurements.append(m)
         status = "ok" if m.ok else f"FAILED (exit {m.returncode}, log {m.log})"
         progress(
-            f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, {m.peak_rss_mib:.0f} MiB peak; {status}"
+            f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, "
+            f"{m.peak_rss_mib:.0f} MiB peak; {status}"
         )
         return m
 
@@ -398,8 +401,17 @@ def run_bench(
             work = prepare_workdir(scratch / "default")
             dataset_name = _default_dataset_name(REPO)
         if "results" in steps:
-            record(measure("results_cold", _snakemake(cores), work, logs / "results_cold.log",
-                                  "snakemake --cores N on nothing (make results after set-up)", env, timeout_s))  # fmt: skip
+            record(
+                measure(
+                    "results_cold",
+                    _snakemake(cores),
+                    work,
+                    logs / "results_cold.log",
+                    "snakemake --cores N on nothing (make results after set-up)",
+                    env,
+                    timeout_s,
+                )
+            )
             record(measure("results_noop", _snakemake(cores), work, logs / "results_noop.log",
                            "the same again: nothing to do", env, timeout_s))  # fmt: skip
             baseline = scratch / "one_rule"
@@ -413,47 +425,114 @@ def run_bench(
                 check=True,
                 timeout=timeout_s,
             )
-            record(measure("one_rule_noop", _snakemake(cores), baseline, logs / "one_rule_noop.log",
-                           "a one-rule Snakemake workflow with nothing to do (the floor)", env, timeout_s))  # fmt: skip
+            record(
+                measure(
+                    "one_rule_noop",
+                    _snakemake(cores),
+                    baseline,
+                    logs / "one_rule_noop.log",
+                    "a one-rule Snakemake workflow with nothing to do (the floor)",
+                    env,
+                    timeout_s,
+                )
+            )
             base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
             alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
             (work / "bench_param.yaml").write_text(
                 yaml.safe_dump({"models": {"ridge_alpha": alpha}})
             )
-            record(measure("results_model_param",
-                                     _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
-                                     work, logs / "results_model_param.log",
-                                     f"after changing one model parameter (models.ridge_alpha -> {alpha:g})", env,
-                                     timeout_s))  # fmt: skip
+            record(
+                measure(
+                    "results_model_param",
+                    _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
+                    work,
+                    logs / "results_model_param.log",
+                    f"after changing one model parameter (models.ridge_alpha -> {alpha:g})",
+                    env,
+                    timeout_s,
+                )
+            )
         if "sweep" in steps:
-            m = record(measure("sweep_default", _snakemake(cores, "sweep"), work, logs / "sweep_default.log",
-                               "snakemake sweep, default grid (assembled data present)", env, timeout_s))  # fmt: skip
+            m = record(
+                measure(
+                    "sweep_default",
+                    _snakemake(cores, "sweep"),
+                    work,
+                    logs / "sweep_default.log",
+                    "snakemake sweep, default grid (assembled data present)",
+                    env,
+                    timeout_s,
+                )
+            )
             m.extra.update(_sweep_size(work, dataset_name))
         if "scale" in steps:
             for n in runs:
                 data = scratch / "scale" / f"data_{n}"
                 shutil.rmtree(data, ignore_errors=True)
-                generate = [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(data), "--runs", str(n),
-                            "--sensors", str(SCALE_SHAPE["sensors"]), "--positions", str(SCALE_SHAPE["positions"]),
-                            "--hours", str(SCALE_SHAPE["hours"]), "--rate-hz", str(SCALE_SHAPE["rate_hz"]),
-                            "--seed", str(SCALE_SHAPE["seed"])]  # fmt: skip
-                record(measure(f"scale_generate_{n}", generate, scratch, logs / f"scale_generate_{n}.log",
-                               f"python -m thermaxis.twin scale: {n} runs (not part of the fit)", env, timeout_s,
-                               runs=n))  # fmt: skip
+                generate = [
+                    sys.executable,
+                    "-m",
+                    "thermaxis.twin",
+                    "scale",
+                    "--out",
+                    str(data),
+                    "--runs",
+                    str(n),
+                    "--sensors",
+                    str(SCALE_SHAPE["sensors"]),
+                    "--positions",
+                    str(SCALE_SHAPE["positions"]),
+                    "--hours",
+                    str(SCALE_SHAPE["hours"]),
+                    "--rate-hz",
+                    str(SCALE_SHAPE["rate_hz"]),
+                    "--seed",
+                    str(SCALE_SHAPE["seed"]),
+                ]
+                record(
+                    measure(
+                        f"scale_generate_{n}",
+                        generate,
+                        scratch,
+                        logs / f"scale_generate_{n}.log",
+                        f"python -m thermaxis.twin scale: {n} runs (not part of the fit)",
+                        env,
+                        timeout_s,
+                        runs=n,
+                    )
+                )
                 work_n = prepare_workdir(scratch / "scale" / f"work_{n}")
-                override = {"dataset": str(data), "ambient_sensor": "T1", "models": {"algorithms": ["mlr"]},
-                            "folds": ["S001"], "paper_fold": "S001"}  # fmt: skip
+                override = {
+                    "dataset": str(data),
+                    "ambient_sensor": "T1",
+                    "models": {"algorithms": ["mlr"]},
+                    "folds": ["S001"],
+                    "paper_fold": "S001",
+                }
                 (work_n / "bench_scale.yaml").write_text(yaml.safe_dump(override))
                 targets = [
                     "results/twin_scale/tables/metrics.csv",
                     "results/twin_scale/tables/table5_slope_intercept.csv",
                 ]
-                m = record(measure(f"scale_{n}",
-                                   _snakemake(cores, "--configfile", "config/config.yaml", "bench_scale.yaml", "--",
-                                              *targets),
-                                   work_n, logs / f"scale_{n}.log",
-                                   f"{n} runs: cleaning to metrics.csv and Table 5 (MLR, fold S001)", env, timeout_s,
-                                   runs=n))  # fmt: skip
+                m = record(
+                    measure(
+                        f"scale_{n}",
+                        _snakemake(
+                            cores,
+                            "--configfile",
+                            "config/config.yaml",
+                            "bench_scale.yaml",
+                            "--",
+                            *targets,
+                        ),
+                        work_n,
+                        logs / f"scale_{n}.log",
+                        f"{n} runs: cleaning to metrics.csv and Table 5 (MLR, fold S001)",
+                        env,
+                        timeout_s,
+                        runs=n,
+                    )
+                )
                 if not keep:
                     shutil.rmtree(data, ignore_errors=True)
                     shutil.rmtree(work_n, ignore_errors=True)
@@ -471,9 +550,17 @@ def run_bench(
                 "--dist",
                 "loadgroup",
             ]
-            record(measure("test_suite", suite, REPO,
-                           logs / "test_suite.log", "the test suite, as make test runs it (set-up done)", env,
-                           timeout_s))  # fmt: skip
+            record(
+                measure(
+                    "test_suite",
+                    suite,
+                    REPO,
+                    logs / "test_suite.log",
+                    "the test suite, as make test runs it (set-up done)",
+                    env,
+                    timeout_s,
+                )
+            )
     finally:
         if not keep and workdir is None:
             shutil.rmtree(scratch, ignore_errors=True)
@@ -482,7 +569,8 @@ def run_bench(
 
 
 def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
-    """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and bench.md."""
+    """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and
+    bench.md."""
     doc["measurements"] = [{**asdict(m), "ok": m.ok} for m in measurements]
     scale = [
         m
@@ -506,7 +594,8 @@ def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
 
 
 def render(out: Path) -> dict:
-    """Re-derive the fits, targets and bench.md from an existing ``out/bench.json`` (nothing is rerun)."""
+    """Re-derive the fits, targets and bench.md from an existing ``out/bench.json`` (nothing is
+    rerun)."""
     path = out / "bench.json"
     if not path.is_file():
         raise ValueError(f"{path}: not found; run the benchmark first")
@@ -563,8 +652,11 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
     if "sweep_default" in by_name:
         m = by_name["sweep_default"]
         n = m.extra.get("configurations", 0)
-        add("sweep_default", m.ok and m.wall_s <= 30.0,
-            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s")  # fmt: skip
+        add(
+            "sweep_default",
+            m.ok and m.wall_s <= 30.0,
+            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s",
+        )
     if "test_suite" in by_name:
         m = by_name["test_suite"]
         add("test_suite", m.ok and m.wall_s <= 150.0, f"{m.wall_s:.1f} s")
@@ -586,12 +678,14 @@ def bench_markdown(doc: dict) -> str:
         "# thermaxis benchmark",
         "",
         f"Machine: {machine['usable_cores']} usable cores ({machine['cpu_count']} CPUs), "
-        f"{machine.get('memory_gib')} GiB memory, {machine['platform']}, Python {machine['python']}. "
+        f"{machine.get('memory_gib')} GiB memory, {machine['platform']}, "
+        f"Python {machine['python']}. "
         f"Snakemake ran with `--cores {doc['settings']['cores']}`. Load average at start "
         f"{machine['load_average_at_start']}, at end {machine.get('load_average_at_end')} "
         "(other work on the machine inflates wall times).",
         "",
-        "| measurement | wall (s) | CPU (s) | peak RSS, largest process (MiB) | peak RSS, process tree (MiB) | jobs | ok | what |",
+        "| measurement | wall (s) | CPU (s) | peak RSS, largest process (MiB) "
+        "| peak RSS, process tree (MiB) | jobs | ok | what |",
         "|---|---:|---:|---:|---:|---:|---|---|",
     ]
     for m in doc["measurements"]:
@@ -601,7 +695,8 @@ def bench_markdown(doc: dict) -> str:
         if "configurations" in m["extra"]:
             what += f"; {m['extra']['configurations']} configurations x {m['extra']['folds']} folds"
         lines.append(
-            f"| {m['name']} | {m['wall_s']:.1f} | {m['cpu_s']:.1f} | {m['peak_rss_mib']:.0f} | {tree} | "
+            f"| {m['name']} | {m['wall_s']:.1f} | {m['cpu_s']:.1f} | "
+            f"{m['peak_rss_mib']:.0f} | {tree} | "
             f"{'' if jobs is None else jobs} | {'yes' if m['ok'] else 'NO'} | {what} |"
         )
     if "scale_fit" in doc:
@@ -615,9 +710,10 @@ def bench_markdown(doc: dict) -> str:
         ]
     lines += [
         "",
-        "Scale runs: twin-generated datasets (64 sensors, 100 positions, 8 h at 1 Hz), main pipeline from "
-        "cleaning to `tables/metrics.csv` and Table 5 with MLR and one held-out run (S001); figures and "
-        "reports are not included. Peak RSS of the process tree is sampled every 0.2 s (psutil).",
+        "Scale runs: twin-generated datasets (64 sensors, 100 positions, 8 h at 1 Hz), main "
+        "pipeline from cleaning to `tables/metrics.csv` and Table 5 with MLR and one held-out "
+        "run (S001); figures and reports are not included. Peak RSS of the process tree is "
+        "sampled every 0.2 s (psutil).",
     ]
     return "\n".join(lines) + "\n"
 

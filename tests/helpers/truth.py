@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-# --------------------------------------------------------------------------- Eq. 8 and Eq. 9 by construction
+# ------------------------------------------------------------------ Eq. 8 and Eq. 9 by construction
 
 POSITIONS = np.arange(185.0, 446.0, 20.0)  # the paper's 14 targets
 SENSORS = [f"T{i}" for i in range(1, 13)]

@@ -237,7 +237,9 @@ def test_a_circle_is_named_with_its_lines(tmp_path):
             "pkg/a.py": "import os\nfrom pkg.sub import b\n",
             "pkg/sub/__init__.py": "",
             "pkg/sub/b.py": '"""doc"""\n\nfrom .. import a\n',
-            "pkg/c.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg import d\n",
+            "pkg/c.py": (
+                "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg import d\n"
+            ),
             "pkg/d.py": "from .c import TYPE_CHECKING\n",
         },
     )

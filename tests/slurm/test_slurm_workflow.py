@@ -125,7 +125,8 @@ def test_slurm_run_is_byte_identical_to_the_local_run(slurm, local_results, tmp_
 
 
 def _running_job(rule: str, timeout: float = 300.0) -> str:
-    """The Slurm id of the first RUNNING job of ``rule`` (the plugin puts the rule in the comment)."""
+    """The Slurm id of the first RUNNING job of ``rule`` (the plugin puts the rule in the
+    comment)."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         out = subprocess.run(

@@ -9,6 +9,8 @@ import pandas as pd
 import pytest
 
 from helpers import DEFAULTS
+from thermaxis.cleaning.clock import estimate_clock_offset
+from thermaxis.cleaning.passes import combine_passes
 from thermaxis.cleaning.temperatures import (
     CleanedTemperatures,
     check_gaps,
@@ -16,8 +18,6 @@ from thermaxis.cleaning.temperatures import (
     hampel_outliers,
     temperatures_in_windows,
 )
-from thermaxis.cleaning.passes import combine_passes
-from thermaxis.cleaning.clock import estimate_clock_offset
 
 T0 = pd.Timestamp("2022-05-10T09:00:00")  # a whole multiple of 10 s since the epoch
 SETTINGS = DEFAULTS.cleaning.temperatures
@@ -485,8 +485,12 @@ TARGETS = [185.0, 205.0, 225.0, 245.0, 265.0]
 
 
 def two_passes(forward, backward):
-    rows = [(p, e, "+") for p, e in zip(TARGETS, forward) if e is not None]
-    rows += [(p, e, "-") for p, e in zip(reversed(TARGETS), reversed(backward)) if e is not None]
+    rows = [(p, e, "+") for p, e in zip(TARGETS, forward, strict=True) if e is not None]
+    rows += [
+        (p, e, "-")
+        for p, e in zip(reversed(TARGETS), reversed(backward), strict=True)
+        if e is not None
+    ]
     return measurement(rows)
 
 

@@ -1,4 +1,5 @@
-"""Compensation: K0/tan(beta)/P0 from k and b worked by hand, the fallback policy, the residual tables."""
+"""Compensation: K0/tan(beta)/P0 from k and b worked by hand, the fallback policy, the residual
+tables."""
 
 import json
 import math
@@ -7,14 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from thermaxis.compensation.runtime import ControllerParameters, Compensator, Step
+from helpers.builders import HOLD, TARGETS, hand_model
+from thermaxis.compensation.exports import siemens_840d, twincat
 from thermaxis.compensation.heldout import held_out_tables
 from thermaxis.compensation.model import line_weights, model_record
+from thermaxis.compensation.runtime import Compensator, ControllerParameters, Step
 from thermaxis.config import FallbackSettings
-from thermaxis.compensation.exports import siemens_840d, twincat
 from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
-
-from helpers.builders import HOLD, TARGETS, hand_model
 
 REF = {"T1": 30.0, "T2": 25.0}
 WARM = {"T1": 32.0, "T2": 26.5}
@@ -133,7 +133,7 @@ def test_bad_model_json_is_one_line(tmp_path):
         Compensator.from_json(path)
 
 
-# --------------------------------------------------------------------------- JSON evaluation vs estimator
+# ----------------------------------------------------------------- JSON evaluation vs estimator
 
 
 def _training_data():

@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from thermaxis.reports import crossdataset
 from thermaxis.errors import DataError
+from thermaxis.reports import crossdataset
 
 HEADER = "fold,approach,algorithm,target,rmse,max_abs,mae,residual_min,residual_max\n"
 

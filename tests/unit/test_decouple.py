@@ -9,8 +9,8 @@ import pytest
 from helpers import DEFAULTS
 from helpers.builders import write_dataset
 from thermaxis.cleaning.run import clean_and_assemble_run
-from thermaxis.method.decouple import compose_curve, decouple_measurement, decouple_table
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.method.decouple import compose_curve, decouple_measurement, decouple_table
 
 
 def test_hand_worked_line():

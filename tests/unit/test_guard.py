@@ -14,10 +14,9 @@ import pytest
 import yaml
 
 from helpers import DEFAULTS
-from thermaxis.dataset import plausibility
-from thermaxis.dataset import safety
-from thermaxis.method import selection
+from thermaxis.dataset import plausibility, safety
 from thermaxis.errors import DataError
+from thermaxis.method import selection
 from thermaxis.reports.formatting import format_cell
 
 REPO = Path(__file__).resolve().parents[2]
@@ -76,7 +75,8 @@ def test_yaml_nested_duplicate_key_is_refused(tmp_path):
 
 def test_yaml_alias_is_refused_before_expansion(tmp_path):
     path = tmp_path / "bomb.yaml"
-    # 9**10 items if expanded; the first alias is at line 2, column 10 ("a1: &a1 [" is 9 characters).
+    # 9**10 items if expanded; the first alias is at line 2, column 10 ("a1: &a1 [" is 9
+    # characters).
     lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x]"]
     lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 10)]
     path.write_text("\n".join(lines) + "\n")
@@ -133,7 +133,8 @@ def test_size_limit_is_checked_before_reading(tmp_path):
         (
             b"time,T1,T2\n2022-01-01T00:00:00,20,5,21,0\n",
             ",",
-            "line 2: 5 comma-separated fields but the header has 3; looks like decimal commas (expected '.' as the decimal mark)",
+            "line 2: 5 comma-separated fields but the header has 3; looks like decimal commas "
+            "(expected '.' as the decimal mark)",
         ),
         (
             b"time,T1\n2022-01-01T00:00:00,20,x\n",
@@ -266,7 +267,8 @@ def test_runs_with_different_targets_are_named():
     with pytest.raises(
         DataError,
         match=re.escape(
-            "ds/E2/errors: run E2 reads 3 target positions, run E1 3 (101 mm is not a target of run E1)"
+            "ds/E2/errors: run E2 reads 3 target positions, run E1 3 "
+            "(101 mm is not a target of run E1)"
         ),
     ):
         plausibility.check_same_targets(errors, "ds")
@@ -365,7 +367,8 @@ def test_run_plausibility_refuses_overlaps_and_a_grid_step_longer_than_the_run(t
     with pytest.raises(
         DataError,
         match=re.escape(
-            f"{tmp_path / 'E1' / 'errors' / 'M2.csv'}: readings from 2022-05-10 09:01:00 overlap measurement M1"
+            f"{tmp_path / 'E1' / 'errors' / 'M2.csv'}: "
+            "readings from 2022-05-10 09:01:00 overlap measurement M1"
         ),
     ):
         plausibility.check_run_plausibility(dataset, _raw_run([0, 1], 20.0), _plausibility_config())

@@ -9,8 +9,8 @@ import pytest
 import yaml
 
 from helpers.builders import set_csv_cell
-from thermaxis.errors import DataError
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.errors import DataError
 
 
 def one_line(excinfo) -> str:

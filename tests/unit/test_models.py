@@ -1,4 +1,5 @@
-"""Tests of thermaxis.method.models against coefficients known by construction or computed directly."""
+"""Tests of thermaxis.method.models against coefficients known by construction or computed
+directly."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ import pytest
 from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
+from helpers.builders import synthetic_temperatures
+from helpers.truth import EQ8, EQ9_B, EQ9_K, POSITIONS, SENSORS, eq8_errors, eq9_errors, eq9_truth
 from thermaxis.method.models import (
     ALGORITHMS,
     DecoupledAxisModel,
@@ -18,9 +21,6 @@ from thermaxis.method.models import (
     predict_with_std,
     relative_temperatures,
 )
-
-from helpers.builders import synthetic_temperatures
-from helpers.truth import EQ8, EQ9_B, EQ9_K, POSITIONS, SENSORS, eq8_errors, eq9_errors, eq9_truth
 
 pytestmark = pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
 
@@ -287,7 +287,8 @@ def test_decoupled_gpr_interval_brackets_prediction_and_widens_far_from_training
     width_far = np.subtract(*model.predict_interval(X_far)[::-1])
     # k uses absolute temperatures, so the far run's slope is uncertain: wider at the far end.
     assert np.all(width_far[:, -1] > width_near[:, -1])
-    # Independence of k and b: half-width z*sd(b) at the origin, z*sqrt(sd(b)^2 + (0.26 m sd(k))^2) at 445 mm.
+    # Independence of k and b: half-width z*sd(b) at the origin,
+    # z*sqrt(sd(b)^2 + (0.26 m sd(k))^2) at 445 mm.
     kb = model.predict_kb(X_near, return_std=True)
     np.testing.assert_allclose(kb[["k_um_per_m", "b_um"]], model.predict_kb(X_near), atol=1e-9)
     assert (kb["k_um_per_m_std"] > 0).all() and (kb["b_um_std"] > 0).all()

@@ -322,17 +322,24 @@ def test_eq8_matches_digest_and_full_text(values):
     digest_text = _digest_paragraph("Eq. 8", "3. Decoupling")
     parts = re.split(r"dx(\d+) =", digest_text)[1:]
     digest = {
-        int(row): _linear_terms(expr.split(";")[0]) for row, expr in zip(parts[::2], parts[1::2])
+        int(row): _linear_terms(expr.split(";")[0])
+        for row, expr in zip(parts[::2], parts[1::2], strict=True)
     }
     assert sorted(digest) == [1, 2, 3, 14]
 
-    line = next(l for l in _full_text().splitlines() if "dx_1 =" in l)
+    line = next(row for row in _full_text().splitlines() if "dx_1 =" in row)
     full_parts = re.split(r"dx_\{?(\d+)\}? =", line.split("(8)")[0] + line.split("\\vdots")[1])[1:]
-    full = {int(row): _latex_terms(expr) for row, expr in zip(full_parts[::2], full_parts[1::2])}
+    full = {
+        int(row): _latex_terms(expr)
+        for row, expr in zip(full_parts[::2], full_parts[1::2], strict=True)
+    }
     assert full == digest
 
     eq8 = published.load_table("eq8")
-    ours = {int(row): dict(zip(g["term"], g["value"])) for row, g in eq8.groupby("equation_row")}
+    ours = {
+        int(row): dict(zip(g["term"], g["value"], strict=True))
+        for row, g in eq8.groupby("equation_row")
+    }
     assert ours == digest
     for row, group in eq8.groupby("equation_row"):
         assert set(group["position_mm"]) == {185 + 20 * (row - 1)}
@@ -347,14 +354,14 @@ def test_eq9_matches_digest_and_full_text(values):
     assert set(digest["k"]) == {"const", "T1", "T6", "T12"}
     assert set(digest["b"]) == {"const", "T2", "T7", "T11"}
 
-    line = next(l for l in _full_text().splitlines() if "k = -306" in l)
+    line = next(row for row in _full_text().splitlines() if "k = -306" in row)
     full_k, full_b = line.split("b =")
     assert {"k": _latex_terms(full_k.split("k =")[1]), "b": _latex_terms(full_b)} == digest
 
     eq9 = published.load_table("eq9")
     for target, terms in digest.items():
         sub = eq9[eq9["target"] == target]
-        assert dict(zip(sub["term"], sub["value"])) == terms
+        assert dict(zip(sub["term"], sub["value"], strict=True)) == terms
         for term, value in terms.items():
             assert values.loc[f"eq9/{target}/{term}", "value"] == value
     assert set(eq9.loc[eq9["target"] == "k", "temperature"]) == {"absolute"}

@@ -23,10 +23,9 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from thermaxis.figures import captions
+from thermaxis.figures import captions, style
 from thermaxis.figures import paper as paper_figures
 from thermaxis.figures import predictions as prediction_figures
-from thermaxis.figures import style
 
 STEP_MIN = 20.0
 
@@ -40,7 +39,8 @@ def intercept(m: int) -> float:
 
 
 def make_dataset(n_runs: int, positions, n_meas: int) -> dict:
-    """All tables the figure functions take, for runs R1..Rn (natural order differs from string order at R10)."""
+    """All tables the figure functions take, for runs R1..Rn (natural order differs from
+    string order at R10)."""
     positions = np.asarray(positions, dtype=float)
     x0 = positions[0]
     runs = [f"R{r + 1}" for r in range(n_runs)]
@@ -234,7 +234,7 @@ def test_save_figure_is_byte_identical_across_renders(tiny, tmp_path, name):
         paths = [tmp_path / attempt / f"{name}.{suffix}" for suffix in ("png", "pdf", "svg")]
         style.save_figure(make(), paths)
         outputs.append([p.read_bytes() for p in paths])
-    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs):
+    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs, strict=True):
         assert first, suffix
         assert first == second, f"{name}.{suffix} differs between two renders"
     svg = outputs[0][2].decode()

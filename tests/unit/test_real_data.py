@@ -1,4 +1,5 @@
-"""Measured data: cleaning that keeps real trends, gap messages, the table importer, the embedded record."""
+"""Measured data: cleaning that keeps real trends, gap messages, the table importer, the
+embedded record."""
 
 from __future__ import annotations
 
@@ -19,10 +20,10 @@ from thermaxis.cleaning.temperatures import (
     signals_on_grid,
 )
 from thermaxis.config import Settings, load_config
-from thermaxis.method.folds import evaluate_configuration, select_for_fold
 from thermaxis.dataset.importer import import_dataset, measurements_of
-from thermaxis.errors import DataError
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.errors import DataError
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
 
 REPO = Path(__file__).resolve().parents[2]
 FL_THERMAL = REPO / "data" / "raw" / "fl_thermal"
@@ -40,7 +41,8 @@ def test_hampel_still_flags_a_spike_at_the_end():
 
 
 def test_hampel_threshold_tie_is_not_a_spike():
-    # 0.1 C quantised readings: 20.6 is exactly 0.2 from the window median 20.4, the minimum deviation.
+    # 0.1 C quantised readings: 20.6 is exactly 0.2 from the window median 20.4, the minimum
+    # deviation.
     values = np.array([20.4, 20.4, 20.4, 20.6, 20.4, 20.4, 20.4])
     assert float(abs(values[3] - 20.4)) > 0.2  # the rounding the comparison must forgive
     assert not hampel_outliers(values, 7, 4.0, 0.2).any()
@@ -140,10 +142,12 @@ def test_importer_splits_by_signal_rereferences_and_states_its_assumptions(tmp_p
     out = import_dataset(_mapping(tmp_path), tmp_path / "raw" / "wide")
     dataset = load_dataset(out)
     assert dataset.run_ids == ("B1", "B2", "B3")
-    # Run 1 keeps the record's start (0 s); runs 2 and 3 start at their first active sample: 1500 s and 2700 s.
+    # Run 1 keeps the record's start (0 s); runs 2 and 3 start at their first active sample:
+    # 1500 s and 2700 s.
     errors = pd.read_csv(out / "B2" / "errors.csv")
     assert errors["time"].iloc[0] == "2030-01-01T00:25:00"
-    # Re-referenced to the run's first sample, 0.01 um/s: measurements every 300 s are 0, 3, 6, ... um.
+    # Re-referenced to the run's first sample, 0.01 um/s: measurements every 300 s are
+    # 0, 3, 6, ... um.
     np.testing.assert_allclose(errors["error_um"].to_numpy(), 3.0 * np.arange(len(errors)))
     assert len(errors) == 4  # 1500 .. 2640 s: samples at 1500, 1800, 2100, 2400
     description = dataset.meta["description"]
@@ -239,7 +243,8 @@ def test_importer_takes_one_file_per_run_without_a_time_column(tmp_path):
     )
     dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "files"))
     errors = pd.read_csv(dataset.root / "B" / "errors.csv")
-    # Samples every 30 s, a measurement every 150 s: rows 0, 5, 10, 15 -> 0, 3, 6, 9 um at 0.02 um/s.
+    # Samples every 30 s, a measurement every 150 s: rows 0, 5, 10, 15 -> 0, 3, 6, 9 um at
+    # 0.02 um/s.
     np.testing.assert_allclose(errors["error_um"], [0.0, 3.0, 6.0, 9.0])
     assert errors["time"].tolist()[1] == "2030-01-01T00:02:30"
     assert "an invented clock" in dataset.meta["description"]

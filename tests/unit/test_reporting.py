@@ -9,9 +9,8 @@ import os
 import re
 import shutil
 import subprocess
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 
-import thermaxis  # noqa: F401  first: nbformat's jsonschema import is seconds faster (thermaxis/__init__.py)
 import nbformat
 import pandas as pd
 import pytest
@@ -20,9 +19,7 @@ from helpers import REPO
 from helpers.workflow import FIXED_EPOCH
 from thermaxis.reports import html as rep
 from thermaxis.reports import index as index_page
-from thermaxis.reports import notebooks
-from thermaxis.reports import provenance
-from thermaxis.reports import summaries
+from thermaxis.reports import notebooks, provenance, summaries
 
 NOTEBOOKS = ("dataset_report", "condition_report", "model_report", "paper_report")
 
@@ -105,8 +102,7 @@ def test_run_time_honours_source_date_epoch(monkeypatch):
     with pytest.raises(ValueError, match="SOURCE_DATE_EPOCH"):
         provenance.run_time()
     assert (
-        provenance.run_time(datetime(2024, 2, 29, 12, 0, 5, tzinfo=timezone.utc))
-        == "2024-02-29T12:00:05Z"
+        provenance.run_time(datetime(2024, 2, 29, 12, 0, 5, tzinfo=UTC)) == "2024-02-29T12:00:05Z"
     )
 
 
@@ -162,7 +158,8 @@ def test_remote_loads_finds_scripts_styles_images_but_not_links():
         '<img src="http://example.org/x.png">'
         "<style>@import url(https://example.org/b.css); .x{background:url('http://e.org/i.png')}</style>"
         '<a href="https://doi.org/10.19650/j.cnki.cjsi.J2209628">paper</a>'
-        '<img src="data:image/png;base64,AAAA"><link rel="icon" href="data:,"><a href="../index.html">i</a>'
+        '<img src="data:image/png;base64,AAAA"><link rel="icon" href="data:,">'
+        '<a href="../index.html">i</a>'
     )
     found = notebooks.remote_loads(page)
     assert len(found) == 5

@@ -1,4 +1,5 @@
-"""thermaxis.pipeline.resume: which processes count as a live Snakemake, which files are orphaned."""
+"""thermaxis.pipeline.resume: which processes count as a live Snakemake, which files are
+orphaned."""
 
 from __future__ import annotations
 

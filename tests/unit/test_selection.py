@@ -65,7 +65,8 @@ SIVANANDAM_CLOSURE = np.array(
 )
 
 # Classic textbook example of fuzzy clustering of five objects (Chinese fuzzy
-# mathematics courses, e.g. the lecture "模糊聚类分析", max.book118.com/html/2016/0807/50629140.shtm,
+# mathematics courses, e.g. the lecture "模糊聚类分析",
+# max.book118.com/html/2016/0807/50629140.shtm,
 # which prints the maximum tree x1-x3 (0.8), x4-x5 (0.6), then edges of 0.5
 # and 0.4, and the partitions lambda = 0.8: {x1,x3},{x2},{x4},{x5} and
 # lambda = 0.6: {x1,x3},{x2},{x4,x5}).

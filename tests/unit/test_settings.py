@@ -7,8 +7,6 @@ import dataclasses
 import pytest
 import yaml
 
-from helpers import REPO
-from thermaxis.schemas import schema_path
 from thermaxis.config import (
     CleaningSettings,
     CompensationSettings,
@@ -19,6 +17,7 @@ from thermaxis.config import (
     SweepSettings,
     load_config,
 )
+from thermaxis.schemas import schema_path
 
 SCHEMA = yaml.safe_load(schema_path("config").read_text(encoding="utf-8"))
 
@@ -83,25 +82,50 @@ def test_settings_are_frozen():
 def test_each_section_builds_from_its_config_section():
     assert DecouplingSettings.from_section({"degree": 3}).degree == 3
     selection = SelectionSettings.from_section(
-        {"method": "fixed", "scope": "all", "n_clusters": 2, "similarity": "printed", "grade": "absolute",
-         "rho": 0.25, "normalisation": "mean", "pointwise_common": 2, "fixed": {"k": ["T2"], "b": ["T1", "T3"]}}
-    )  # fmt: skip
+        {
+            "method": "fixed",
+            "scope": "all",
+            "n_clusters": 2,
+            "similarity": "printed",
+            "grade": "absolute",
+            "rho": 0.25,
+            "normalisation": "mean",
+            "pointwise_common": 2,
+            "fixed": {"k": ["T2"], "b": ["T1", "T3"]},
+        }
+    )
     assert selection.fixed == (("b", ("T1", "T3")), ("k", ("T2",)))
     assert selection.fixed_for("k") == ("T2",)
     models = ModelSettings.from_section(
-        {"algorithms": ["mlr"], "ridge_alpha": 2, "pls_components": 1, "svr_kernel": "linear",
-         "svr_grid": {"gamma": ["scale"], "C": [3], "epsilon": [0.5]}, "interval_level": 0.9, "random_state": 7,
-         "signals": ["spindle_rpm"]}
-    )  # fmt: skip
+        {
+            "algorithms": ["mlr"],
+            "ridge_alpha": 2,
+            "pls_components": 1,
+            "svr_kernel": "linear",
+            "svr_grid": {"gamma": ["scale"], "C": [3], "epsilon": [0.5]},
+            "interval_level": 0.9,
+            "random_state": 7,
+            "signals": ["spindle_rpm"],
+        }
+    )
     assert models.grid() == {"C": [3], "epsilon": [0.5], "gamma": ["scale"]}
     assert models.params_for("ridge") == {"alpha": 2.0} and models.params_for("mlr") is None
     assert models.signals == ("spindle_rpm",)
     cleaning = CleaningSettings.from_sections(
-        {"interval_s": 30, "hampel_window": 5, "hampel_threshold": 3, "hampel_min_deviation_c": 0.1,
-         "limits_c": [-10, 90], "max_gap_s": 120, "plausible_median_c": [0, 50], "allow_long_gaps": True,
-         "estimate_clock_offsets": False, "window": "start"},
+        {
+            "interval_s": 30,
+            "hampel_window": 5,
+            "hampel_threshold": 3,
+            "hampel_min_deviation_c": 0.1,
+            "limits_c": [-10, 90],
+            "max_gap_s": 120,
+            "plausible_median_c": [0, 50],
+            "allow_long_gaps": True,
+            "estimate_clock_offsets": False,
+            "window": "start",
+        },
         {"direction": "+", "max_missing_fraction": 0.5, "max_abs_error_um": 200},
-    )  # fmt: skip
+    )
     assert (cleaning.temperatures.interval_s, cleaning.temperatures.limits_c) == (
         30.0,
         (-10.0, 90.0),

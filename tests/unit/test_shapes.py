@@ -1,4 +1,5 @@
-"""Datasets of other shapes than the paper's: unequal runs, one position, many positions, two and many runs.
+"""Datasets of other shapes than the paper's: unequal runs, one position, many positions, two
+and many runs.
 
 Each test writes a small dataset in the documented layout, runs the library's own
 chain (read -> clean -> assemble -> model inputs -> a leave-one-run-out fit) and
@@ -13,15 +14,15 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
+
 from helpers import DEFAULTS
 from helpers.builders import write_dataset
-
 from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.config import Settings, load_config
-from thermaxis.method.folds import evaluate_configuration, select_for_fold
 from thermaxis.dataset.plausibility import check_same_targets
-from thermaxis.errors import DataError
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.errors import DataError
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
 
 CLEANING = Settings.from_config(load_config()).cleaning
 
@@ -77,7 +78,7 @@ def test_shapes_assemble_and_predict_like_numpy(tmp_path, runs, counts, position
     X, Y = model_inputs(errors, temperatures)
     # One row per measurement that exists: no padding to the longest run.
     assert len(X) == sum(counts)
-    assert X.groupby("run").size().to_dict() == dict(zip(runs, counts))
+    assert X.groupby("run").size().to_dict() == dict(zip(runs, counts, strict=True))
     assert Y.shape == (sum(counts), len(positions))
     sensors = ("S1", "S2")
     selection = select_for_fold(
@@ -105,13 +106,15 @@ def test_runs_with_different_targets_are_refused_naming_the_run(tmp_path):
     errors = pd.concat([assembled(a)[0], assembled(b)[0]], ignore_index=True)
     with pytest.raises(
         DataError,
-        match=r"^data/B/errors: run B reads 3 target positions, run A 3 \(120 mm is not a target of run A\)",
+        match=r"^data/B/errors: run B reads 3 target positions, run A 3 "
+        r"\(120 mm is not a target of run A\)",
     ):
         check_same_targets(errors, "data")
 
 
 def test_single_position_common_set_follows_the_ranking_not_the_names(tmp_path):
-    """One position, five sensors; the error follows Z9 best, then Z1: the common set must be (Z9, Z1)."""
+    """One position, five sensors; the error follows Z9 best, then Z1: the common set must be
+    (Z9, Z1)."""
 
     def temperature(r, s, minutes):
         # Z9 (s=4) is the error's driver, Z1 (s=0) a noisy copy, the rest unrelated wiggles.

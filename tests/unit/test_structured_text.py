@@ -9,19 +9,20 @@ import pandas as pd
 import pytest
 from blark.parse import parse_source_code
 
-from thermaxis.compensation.model import CONVENTION, model_record
-from thermaxis.compensation.runtime import Compensator
 from thermaxis.compensation.exports import twincat
+from thermaxis.compensation.model import CONVENTION, model_record
+from thermaxis.compensation.plc import st_real, structured_text
+from thermaxis.compensation.runtime import Compensator
 from thermaxis.config import FallbackSettings
 from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
-from thermaxis.compensation.plc import st_real, structured_text
 
 TARGETS = np.array([185.0 + 20.0 * i for i in range(14)])
 RAMP = FallbackSettings(1.5, (-10.0, 90.0), 0.25, 30.0, "ramp_to_zero", 20.0)
 
 
 def exact_runs(wobble_um: float = 0.0):
-    """k = -300 + 13 T1 [um/m] on absolute T1, b = -0.5 - 11 dT2 [um] on T2's rise; noise-free unless wobbled."""
+    """k = -300 + 13 T1 [um/m] on absolute T1, b = -0.5 - 11 dT2 [um] on T2's rise; noise-free
+    unless wobbled."""
     rows, curves = [], []
     for r in range(3):
         for m in range(6):
@@ -108,7 +109,8 @@ def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray) -> dict
 
 
 def rbf(c: dict, r: int, inputs: np.ndarray) -> float:
-    """Regression r of a kernel block: (sum_i w_i exp(-gamma |z - z_i|^2) + offset) * scale + mean."""
+    """Regression r of a kernel block:
+    (sum_i w_i exp(-gamma |z - z_i|^2) + offset) * scale + mean."""
     name = f"R{r}_"
     chosen = np.asarray(c[name + "INPUTS"]) - 1
     z = (inputs[chosen] - np.asarray(c[name + "MEAN"])) / np.asarray(c[name + "SCALE"])
@@ -146,7 +148,9 @@ def test_st_values_equal_compensator(exported, now, ref):
     expected = {
         row[0]: row[2]
         for row in twincat(
-            comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref)))
+            comp.parameters(
+                dict(zip(("T1", "T2"), now, strict=True)), dict(zip(("T1", "T2"), ref, strict=True))
+            )
         )
     }
     got = st_twincat(c, np.array(now), np.array(ref))
@@ -156,7 +160,8 @@ def test_st_values_equal_compensator(exported, now, ref):
 
 def test_hand_worked_signs(exported):
     # T1 30 -> 32: k rises 26 um/m; T2 rises 1.5: b falls 16.5 um. Compensation = -change:
-    # offset_0 = +16.5 um = 165 (0.1 um), coefficient = -26 um/m, position_0 = 185 mm = 1850000 (0.1 um).
+    # offset_0 = +16.5 um = 165 (0.1 um), coefficient = -26 um/m,
+    # position_0 = 185 mm = 1850000 (0.1 um).
     _, _, source, c = exported
     got = st_twincat(c, np.array([32.0, 26.5]), np.array([30.0, 25.0]))
     assert got == pytest.approx(
@@ -190,7 +195,10 @@ def test_kernel_blocks_equal_compensator(algorithm):
         expected = {
             row[0]: row[2]
             for row in twincat(
-                comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref)))
+                comp.parameters(
+                    dict(zip(("T1", "T2"), now, strict=True)),
+                    dict(zip(("T1", "T2"), ref, strict=True)),
+                )
             )
         }
         got = st_twincat(c, np.array(now), np.array(ref))

@@ -1,4 +1,5 @@
-"""Tests of thermaxis.sweep.run (the `sweep` target end to end: tests/workflow/test_sweep_workflow.py).
+"""Tests of thermaxis.sweep.run (the `sweep` target end to end:
+tests/workflow/test_sweep_workflow.py).
 
 Counts, partitions, rankings and factor effects are checked against numbers worked
 out by hand in the comments; the sweep's metrics are checked against the library
@@ -17,14 +18,14 @@ import pandas as pd
 import pytest
 from threadpoolctl import threadpool_limits
 
-from helpers import DEFAULTS, REPO
-from thermaxis.schemas import schema_path
+from helpers import DEFAULTS
+from thermaxis.config import Settings, load_config
 from thermaxis.method import folds
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
+from thermaxis.method.metrics import METRIC_COLUMNS
+from thermaxis.schemas import schema_path
 from thermaxis.sweep import plan as sweep_plan
 from thermaxis.sweep import run as sweep_run
-from thermaxis.config import Settings, load_config
-from thermaxis.method.metrics import METRIC_COLUMNS
-from thermaxis.method.folds import evaluate_configuration, select_for_fold
 
 PAPER_FIXED = (
     ("b", ("T2", "T7", "T11")),
@@ -173,8 +174,15 @@ def _inputs(n_runs=3, n_measurements=6, seed=0):
 
 def test_batch_rows_are_the_library_functions_metrics():
     X, Y = _inputs()
-    grid = replace(DEFAULTS.sweep.grid, methods=("fuzzy_grey",), n_clusters=(2,), similarities=("pearson",), grades=("deng",),
-                           degrees=(1,), algorithms=("mlr", "ridge"))  # fmt: skip
+    grid = replace(
+        DEFAULTS.sweep.grid,
+        methods=("fuzzy_grey",),
+        n_clusters=(2,),
+        similarities=("pearson",),
+        grades=("deng",),
+        degrees=(1,),
+        algorithms=("mlr", "ridge"),
+    )
     units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
     base = replace(DEFAULTS.selection, pointwise_common=2)
     rows = sweep_run.run_batch(X, Y, units, grid, base, DEFAULTS.models)
@@ -225,8 +233,15 @@ def test_identical_model_inputs_are_evaluated_once(monkeypatch):
 
 def test_summary_does_not_depend_on_the_batch_count():
     X, Y = _inputs()
-    grid = replace(DEFAULTS.sweep.grid, methods=("fuzzy_grey", "correlation"), n_clusters=(2, 3), similarities=("pearson",),
-                           grades=("deng", "absolute"), degrees=(1, 2), algorithms=("mlr",))  # fmt: skip
+    grid = replace(
+        DEFAULTS.sweep.grid,
+        methods=("fuzzy_grey", "correlation"),
+        n_clusters=(2, 3),
+        similarities=("pearson",),
+        grades=("deng", "absolute"),
+        degrees=(1, 2),
+        algorithms=("mlr",),
+    )
     units, _ = sweep_plan.plan_units(grid, ["R1", "R2", "R3"], ["S1", "S2", "S3", "S4"])
     base = replace(DEFAULTS.selection, pointwise_common=2)
     one = sweep_run.collect_summary([sweep_run.run_batch(X, Y, units, grid, base, DEFAULTS.models)])
@@ -235,7 +250,8 @@ def test_summary_does_not_depend_on_the_batch_count():
         for b in range(3)
     ]
     pd.testing.assert_frame_equal(sweep_run.collect_summary(parts[::-1]), one)
-    # 3 folds x (2 fuzzy x 2 grades + 2 correlation) settings x (2 degrees + pointwise) x 1 algorithm.
+    # 3 folds x (2 fuzzy x 2 grades + 2 correlation) settings x (2 degrees + pointwise)
+    # x 1 algorithm.
     assert one.groupby("config_id")["fold"].nunique().eq(3).all()
     assert one["config_id"].nunique() == 6 * 3
 
@@ -264,18 +280,35 @@ def test_a_configuration_the_data_cannot_support_is_recorded_not_fatal():
 
 def _summary_rows():
     def row(config_id, method, algorithm, fold, max_abs, rmse):
-        return {"config_id": config_id, "method": method, "n_clusters": 3 if method == "fuzzy_grey" else None,
-                "similarity": "pearson" if method == "fuzzy_grey" else None,
-                "grade": "deng" if method == "fuzzy_grey" else None, "approach": "decoupled", "degree": 1,
-                "algorithm": algorithm, "fold": fold, "target": "error", "rmse": rmse, "max_abs": max_abs,
-                "mae": rmse, "residual_min": -max_abs, "residual_max": max_abs, "sensors": "", "status": "ok"}  # fmt: skip
+        return {
+            "config_id": config_id,
+            "method": method,
+            "n_clusters": 3 if method == "fuzzy_grey" else None,
+            "similarity": "pearson" if method == "fuzzy_grey" else None,
+            "grade": "deng" if method == "fuzzy_grey" else None,
+            "approach": "decoupled",
+            "degree": 1,
+            "algorithm": algorithm,
+            "fold": fold,
+            "target": "error",
+            "rmse": rmse,
+            "max_abs": max_abs,
+            "mae": rmse,
+            "residual_min": -max_abs,
+            "residual_max": max_abs,
+            "sensors": "",
+            "status": "ok",
+        }
 
     rows = [
-        row("A", "fuzzy_grey", "mlr", "E1", 1.0, 0.5), row("A", "fuzzy_grey", "mlr", "E2", 3.0, 1.5),
-        row("B", "all", "mlr", "E1", 2.0, 1.0), row("B", "all", "mlr", "E2", 2.0, 1.0),
+        row("A", "fuzzy_grey", "mlr", "E1", 1.0, 0.5),
+        row("A", "fuzzy_grey", "mlr", "E2", 3.0, 1.5),
+        row("B", "all", "mlr", "E1", 2.0, 1.0),
+        row("B", "all", "mlr", "E2", 2.0, 1.0),
         row("C", "all", "svr", "E1", 0.5, 0.2),
-        row("D", "all", "svr", "E1", 4.0, 2.0), row("D", "all", "svr", "E2", 6.0, 3.0),
-    ]  # fmt: skip
+        row("D", "all", "svr", "E1", 4.0, 2.0),
+        row("D", "all", "svr", "E2", 6.0, 3.0),
+    ]
     # A k row must not count: only the error curves rank configurations.
     rows.append({**rows[0], "target": "k", "max_abs": 100.0})
     frame = sweep_run._as_summary_frame(rows)
@@ -331,9 +364,18 @@ def test_heatmap_holds_the_other_factors_at_the_main_configuration():
                         + degree
                         + (0.5 if algorithm == "svr" else 0)
                     )
-                    rows.append({"method": "fuzzy_grey", "n_clusters": n, "similarity": similarity, "grade": "deng",
-                                 "approach": "decoupled", "degree": degree, "algorithm": algorithm,
-                                 "mean_max_abs": value})  # fmt: skip
+                    rows.append(
+                        {
+                            "method": "fuzzy_grey",
+                            "n_clusters": n,
+                            "similarity": similarity,
+                            "grade": "deng",
+                            "approach": "decoupled",
+                            "degree": degree,
+                            "algorithm": algorithm,
+                            "mean_max_abs": value,
+                        }
+                    )
     ranking = pd.DataFrame(rows)
     main = replace(
         DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="printed", grade="deng"
@@ -382,7 +424,8 @@ def test_measure_counts_the_whole_process_tree(tmp_path):
 
     # A grandchild (python under sh) holds 300 MiB and spins 0.4 s of CPU.
     script = (
-        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); t = time.process_time()\n"
+        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); "
+        "t = time.process_time()\n"
         "while time.process_time() - t < 0.4: pass"
     )
     command = ["sh", "-c", f'"{sys.executable}" -c "$0"; exit 3', script]
@@ -397,13 +440,30 @@ def test_bench_markdown_names_the_cores_and_the_targets():
     from tools.bench import bench_markdown
 
     doc = {
-        "machine": {"usable_cores": 2, "cpu_count": 2, "memory_gib": 8.0, "platform": "Linux", "python": "3.11",
-                    "load_average_at_start": [0.1, 0.1, 0.1], "load_average_at_end": [0.2, 0.1, 0.1]},
+        "machine": {
+            "usable_cores": 2,
+            "cpu_count": 2,
+            "memory_gib": 8.0,
+            "platform": "Linux",
+            "python": "3.11",
+            "load_average_at_start": [0.1, 0.1, 0.1],
+            "load_average_at_end": [0.2, 0.1, 0.1],
+        },
         "settings": {"cores": 2},
-        "measurements": [{"name": "results_noop", "wall_s": 1.5, "cpu_s": 1.2, "peak_rss_mib": 200.0,
-                          "peak_tree_rss_mib": 210.0, "extra": {"jobs": 0}, "ok": True, "description": "again"}],
+        "measurements": [
+            {
+                "name": "results_noop",
+                "wall_s": 1.5,
+                "cpu_s": 1.2,
+                "peak_rss_mib": 200.0,
+                "peak_tree_rss_mib": 210.0,
+                "extra": {"jobs": 0},
+                "ok": True,
+                "description": "again",
+            }
+        ],
         "targets": [{"target": "no-op rerun <= 2 s", "measured": "1.5 s", "met": True}],
-    }  # fmt: skip
+    }
     text = bench_markdown(doc)
     assert "2 usable cores" in text and "--cores 2" in text
     assert "| results_noop | 1.5 | 1.2 | 200 | 210 | 0 | yes | again |" in text

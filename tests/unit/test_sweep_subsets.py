@@ -103,8 +103,10 @@ def test_pointwise_mlr_of_a_subset_matches_plain_least_squares():
     with threadpool_limits(limits=1):
         rows = sweep_run.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
     assert rows["config_id"].tolist() == [
-        "subset:n2:S1+S2/pointwise/mlr", "subset:n2:S1+S3/pointwise/mlr", "subset:n2:S2+S3/pointwise/mlr"
-    ]  # fmt: skip
+        "subset:n2:S1+S2/pointwise/mlr",
+        "subset:n2:S1+S3/pointwise/mlr",
+        "subset:n2:S2+S3/pointwise/mlr",
+    ]
     got = rows.set_index("config_id").loc["subset:n2:S1+S2/pointwise/mlr"]
     # Plain numpy: per position, least squares on relative S1, S2 with an intercept,
     # fitted on R1-R2, residuals on R3.

@@ -17,8 +17,8 @@ import yaml
 from helpers import REPO
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.twin import ScaleSpec, generate_dataset, generate_scale
-from thermaxis.twin.network import CONDUCTANCE_W_PER_K, NODES, discretise, simulate
 from thermaxis.twin import model as twin_model
+from thermaxis.twin.network import CONDUCTANCE_W_PER_K, NODES, discretise, simulate
 from thermaxis.twin.observe import calibrated_sensors, lagged
 from thermaxis.twin.published import PublishedModel
 
@@ -59,7 +59,8 @@ def _measurements(run: str) -> list[pd.DataFrame]:
 
 
 def _polyfit_line(frame: pd.DataFrame) -> tuple[float, float, float]:
-    """k (um/m), b (um at 185 mm) and R^2 of the pass-mean curve (a target read in one pass keeps that reading)."""
+    """k (um/m), b (um at 185 mm) and R^2 of the pass-mean curve (a target read in one pass
+    keeps that reading)."""
     wide = frame.pivot(index="position_mm", columns="direction", values="error_um")
     x_m = (wide.index.to_numpy(float) - 185.0) / 1000.0
     y = wide.mean(axis=1).to_numpy()

@@ -53,7 +53,8 @@ def server(built):
 def browser(tmp_path_factory):
     if CHROMIUM is None or CHROMEDRIVER is None:
         pytest.skip(
-            "headless Chromium not found: install the Debian packages chromium and chromium-driver (.ci/run does)"
+            "headless Chromium not found: install the Debian packages chromium and "
+            "chromium-driver (.ci/run does)"
         )
     webdriver = pytest.importorskip(
         "selenium.webdriver", reason="selenium is not installed (envs/requirements.txt pins it)"
@@ -110,7 +111,8 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
     assert browser.execute_script("return document.readyState") == "complete"
 
     images = browser.execute_script(
-        "return Array.from(document.images).map(i => [i.alt.slice(0, 60), i.complete, i.naturalWidth])"
+        "return Array.from(document.images)"
+        ".map(i => [i.alt.slice(0, 60), i.complete, i.naturalWidth])"
     )
     broken = [alt for alt, complete, width in images if not (complete and width > 0)]
     assert broken == [], f"{page}: images that did not load: {broken}"
@@ -129,7 +131,8 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
 
     banner = browser.execute_script(
         "const b = document.querySelector('.tx-banner'); "
-        "return b ? [b.getBoundingClientRect().top, b.getBoundingClientRect().bottom, b.innerText] : null"
+        "return b ? [b.getBoundingClientRect().top, b.getBoundingClientRect().bottom, "
+        "b.innerText] : null"
     )
     assert banner is not None, f"{page}: no data statement banner"
     top, bottom, text = banner

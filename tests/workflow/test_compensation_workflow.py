@@ -89,5 +89,8 @@ def test_compensation_algorithm_outside_the_fitted_ones_stops_with_one_line(tmp_
     )
     proc = run_snakemake(work, "-n", "--configfile", str(config), check=False)
     assert proc.returncode != 0
-    line = "thermaxis error: config compensation.algorithm: 'gpr' is not one of models.algorithms (mlr)"
+    line = (
+        "thermaxis error: config compensation.algorithm: 'gpr' is not one of "
+        "models.algorithms (mlr)"
+    )
     assert line in proc.stderr

@@ -18,7 +18,6 @@ import sys
 import time
 from pathlib import Path
 
-
 from helpers.workflow import SNAKEMAKE, snakemake_env, workflow_workdir
 
 # Waiting for the killed run to reach the middle of the workflow; a bound, not a measurement.

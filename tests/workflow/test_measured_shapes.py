@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import yaml
+
 from helpers.builders import write_dataset
 from helpers.workflow import run_snakemake, workflow_workdir
 

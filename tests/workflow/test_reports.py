@@ -11,7 +11,6 @@ import sys
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
-import thermaxis  # noqa: F401  first: nbformat's jsonschema import is seconds faster (thermaxis/__init__.py)
 import nbformat
 import yaml
 

@@ -14,7 +14,8 @@ from helpers import REPO
 from helpers.builders import set_csv_cell, write_dataset
 from helpers.locks import library_lock
 from helpers.truth import b_true, k_true
-from helpers.workflow import planned_rules, run_snakemake, tiny_config, workflow_workdir as workdir
+from helpers.workflow import planned_rules, run_snakemake, tiny_config
+from helpers.workflow import workflow_workdir as workdir
 from thermaxis.config import merge
 from thermaxis.errors import DataError
 from thermaxis.pipeline.preflight import check_before_jobs
@@ -65,7 +66,7 @@ def test_metrics_cover_every_fold_approach_algorithm(lines_run):
         "residual_min",
         "residual_max",
     ]
-    combos = set(zip(metrics["fold"], metrics["approach"], metrics["algorithm"]))
+    combos = set(zip(metrics["fold"], metrics["approach"], metrics["algorithm"], strict=True))
     assert combos == {
         (f, a, g)
         for f in ("R1", "R2", "R3")
@@ -112,10 +113,10 @@ def test_bad_sheet_stops_before_any_job(tmp_path):
     work = workdir(tmp_path)
     with pytest.raises(DataError) as refused:
         _parse_time_check(work, tiny_config(work, dataset))
-    assert (
-        str(refused.value)
-        == f"{dataset / 'runs.tsv'}: line 3, column 'feed_mm_min': expected a finite number, got 'x'"
+    expected = (
+        f"{dataset / 'runs.tsv'}: line 3, column 'feed_mm_min': expected a finite number, got 'x'"
     )
+    assert str(refused.value) == expected
     assert not (work / "results").exists()
 
 
