@@ -20,6 +20,7 @@ import sysconfig
 import textwrap
 import tomllib
 import zipfile
+from fnmatch import fnmatch
 from pathlib import Path
 
 import pytest
@@ -47,11 +48,10 @@ def _pip(*args: str, cwd: Path) -> None:
 def _source_files() -> set[str]:
     """Every file of src/thermaxis the wheel must hold, modules and data, as wheel paths."""
     root = REPO / "src"
-    patterns = [p.removeprefix("*") for p in NOT_SHIPPED]
     files = set()
     for path in (root / "thermaxis").rglob("*"):
         parts = path.relative_to(root).parts
-        if path.is_file() and not any(part.endswith(p) for part in parts for p in patterns):
+        if path.is_file() and not any(fnmatch(part, p) for part in parts for p in NOT_SHIPPED):
             files.add("/".join(parts))
     return files
 
@@ -63,13 +63,23 @@ def wheel(tmp_path_factory) -> Path:
     project.mkdir()
     meta = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))
     readme = meta["project"].get("readme")
+    readme = readme.get("file") if isinstance(readme, dict) else readme
     for name in ("pyproject.toml", readme, "setup.cfg", "setup.py", "MANIFEST.in"):
         if name and (REPO / name).is_file():
             shutil.copy2(REPO / name, project / name)
     shutil.copytree(REPO / "src", project / "src", ignore=shutil.ignore_patterns(*NOT_SHIPPED))
-    _pip("wheel", "--no-deps", "--no-build-isolation", "--no-index", "-w", str(tmp / "dist"), ".",
-         cwd=project)  # fmt: skip
-    (built,) = (tmp / "dist").glob("thermaxis-*.whl")
+    dist = tmp / "dist"
+    _pip(
+        "wheel",
+        "--no-deps",
+        "--no-build-isolation",
+        "--no-index",
+        "-w",
+        str(dist),
+        ".",
+        cwd=project,
+    )
+    (built,) = dist.glob("thermaxis-*.whl")
     return built
 
 
