@@ -17,6 +17,7 @@ export PYTHONHASHSEED := 0
 help:
 	@echo "make help            this list"
 	@echo "make env             create .venv from the pinned envs/requirements.txt (every target that needs it does this first)"
+	@echo "make slurm-env       create .venv-slurm for cluster runs and tests/slurm: .venv's pins plus envs/requirements-slurm.txt"
 	@echo "make results         set up .venv if needed, run the whole workflow on every embedded dataset (simulated twin, measured fl_thermal)"
 	@echo "make import          re-import data/raw/fl_thermal from the public record with data/import/fl_thermal.yaml"
 	@echo "make test            set up .venv if needed, run the test suite (PYTEST_WORKERS=2 pytest-xdist workers)"
@@ -39,7 +40,31 @@ env:
 		"$(PYTHON)" -m venv "$(VENV)"; \
 		"$(BIN)/python" -m pip install --quiet --disable-pip-version-check -r envs/requirements.txt; \
 		"$(BIN)/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .; \
+		"$(BIN)/python" -m pip check --disable-pip-version-check; \
 		echo "$$want" > "$(STAMP)"; \
+	fi
+
+# The Slurm executor plugin is not in .venv: Snakemake imports every installed executor
+# plugin at each start, and plugin 2.8.0 then waits up to 10 s for an absent Slurm
+# controller (docs/slurm-plugin-startup.md). Cluster runs (profiles/slurm) and tests/slurm
+# use .venv-slurm instead: envs/requirements.txt plus envs/requirements-slurm.txt, with its
+# own hash stamp of both files and pyproject.toml. Made only by this target, never by `env`.
+SLURM_VENV := .venv-slurm
+SLURM_STAMP := $(SLURM_VENV)/.thermaxis-env.sha256
+.PHONY: slurm-env
+slurm-env:
+	@want="$$(cat envs/requirements.txt envs/requirements-slurm.txt pyproject.toml | sha256sum | cut -d' ' -f1)"; \
+	have="$$(cat $(SLURM_STAMP) 2>/dev/null || true)"; \
+	if [ ! -x "$(SLURM_VENV)/bin/python" ] || [ "$$want" != "$$have" ]; then \
+		echo "setting up $(SLURM_VENV) from envs/requirements.txt and envs/requirements-slurm.txt"; \
+		rm -rf "$(SLURM_VENV)"; \
+		"$(PYTHON)" -m venv "$(SLURM_VENV)"; \
+		echo '*' > "$(SLURM_VENV)/.gitignore"; \
+		"$(SLURM_VENV)/bin/python" -m pip install --quiet --disable-pip-version-check \
+			-r envs/requirements.txt -r envs/requirements-slurm.txt; \
+		"$(SLURM_VENV)/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .; \
+		"$(SLURM_VENV)/bin/python" -m pip check --disable-pip-version-check; \
+		echo "$$want" > "$(SLURM_STAMP)"; \
 	fi
 
 # Every dataset of config `datasets` (config/config.yaml), one Snakemake run each. After
@@ -52,6 +77,10 @@ results: env
 		$(BIN)/python -m thermaxis.pipeline.resume $(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
 	done
 	$(BIN)/python -m thermaxis.reports.crossdataset --results results
+	@# The FL_THERMAL authors' protocol on their own record (needs the public record beside the checkout).
+	@if [ -f ../shared/realdata/fl_thermal/data.xlsx ]; then \
+		$(BIN)/python -m thermaxis.benchmark data/benchmarks/fl_thermal.yaml --out results/_benchmarks/fl_thermal; \
+	else echo "thermaxis: benchmark fl_thermal skipped: ../shared/realdata/fl_thermal/data.xlsx is not beside the checkout"; fi
 
 # Re-import the embedded measured dataset from its public source (shared/realdata).
 import: env

@@ -23,6 +23,7 @@ import jsonschema
 import yaml
 
 from thermaxis.schemas import schema_path
+from thermaxis.vocabulary import SEARCHABLE
 from thermaxis.sweep.plan import SweepGrid
 
 __all__ = [
@@ -115,6 +116,20 @@ def _sensor_lists(fixed: Mapping) -> tuple:
 
 def _svr_grid(grid: Mapping) -> tuple:
     return tuple((name, tuple(grid[name])) for name in ("C", "epsilon", "gamma"))
+
+
+def _searchable(algorithms) -> tuple[str, ...]:
+    wrong = [a for a in algorithms if a not in SEARCHABLE]
+    if wrong:
+        raise ValueError(
+            f"config models.searched: {wrong[0]!r} has no strength to search; expected some of {', '.join(SEARCHABLE)}"
+        )
+    return tuple(algorithms)
+
+
+def _grid(grid: Mapping) -> tuple:
+    """A search grid as a frozen, ordered tuple: ((parameter, (value, ...)), ...)."""
+    return tuple((name, tuple(values)) for name, values in sorted(grid.items()))
 
 
 @dataclass(frozen=True)
@@ -257,9 +272,14 @@ class SelectionSettings:
 class ModelSettings:
     algorithms: tuple[str, ...]
     ridge_alpha: float
+    lasso_alpha: float
     pls_components: int
     svr_kernel: str
     svr_grid: tuple  # ((parameter, (value, ...)), ...): C, epsilon, gamma
+    searched: tuple[str, ...]  # ridge, lasso, pls whose strength an inner search chooses
+    search_grids: tuple  # ((algorithm, ((parameter, (value, ...)), ...)), ...)
+    inner_search: tuple[int, int]  # (max_loco_runs, group_folds)
+    gpr_max_samples: int
     interval_level: float
     random_state: int
     signals: tuple[str, ...]  # operating signals added to every model's inputs
@@ -270,9 +290,14 @@ class ModelSettings:
         return cls(
             algorithms=tuple(m["algorithms"]),
             ridge_alpha=float(m["ridge_alpha"]),
+            lasso_alpha=float(m["lasso_alpha"]),
             pls_components=int(m["pls_components"]),
             svr_kernel=m["svr_kernel"],
             svr_grid=_svr_grid(m["svr_grid"]),
+            searched=_searchable(m["searched"]),
+            search_grids=tuple((name, _grid(grid)) for name, grid in sorted(m["search_grids"].items())),
+            inner_search=(int(m["inner_search"]["max_loco_runs"]), int(m["inner_search"]["group_folds"])),
+            gpr_max_samples=int(m["gpr_max_samples"]),
             interval_level=float(m["interval_level"]),
             random_state=int(m["random_state"]),
             signals=tuple(m["signals"]),
@@ -281,6 +306,8 @@ class ModelSettings:
     def params_for(self, algorithm: str) -> dict | None:
         if algorithm == "ridge":
             return {"alpha": self.ridge_alpha}
+        if algorithm == "lasso":
+            return {"alpha": self.lasso_alpha}
         if algorithm == "pls":
             return {"n_components": self.pls_components}
         if algorithm == "svr":
@@ -289,6 +316,12 @@ class ModelSettings:
 
     def grid(self) -> dict:
         return {name: list(values) for name, values in self.svr_grid}
+
+    def search_grid_for(self, algorithm: str) -> dict | None:
+        """The inner search's grid of ``algorithm`` when it is searched, else None (fixed)."""
+        if algorithm not in self.searched:
+            return None
+        return {name: list(values) for name, values in dict(self.search_grids)[algorithm]}
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ figure table all take these from here; a test checks the schema against them. Th
 module imports nothing, so the workflow can read it while Snakemake parses.
 """
 
-__all__ = ["APPROACHES", "ALGORITHMS"]
+__all__ = ["APPROACHES", "ALGORITHMS", "SEARCHABLE"]
 
 # Decoupled: the slope k and the intercept b of each measurement's error line (Eq. 6),
 # each modelled from temperatures (Eq. 9). Point by point: one model of the error at
@@ -13,5 +13,10 @@ __all__ = ["APPROACHES", "ALGORITHMS"]
 APPROACHES = ("decoupled", "pointwise")
 
 # Multiple linear regression and support-vector regression (the paper's two), ridge,
-# partial least squares and Gaussian-process regression.
-ALGORITHMS = ("mlr", "svr", "ridge", "pls", "gpr")
+# lasso (a sparse model: it also selects sensors), partial least squares and
+# Gaussian-process regression.
+ALGORITHMS = ("mlr", "svr", "ridge", "lasso", "pls", "gpr")
+
+# The algorithms whose strength (ridge and lasso alpha, PLS components) an inner search
+# on the training runs may choose; the SVR always searches its grid.
+SEARCHABLE = ("ridge", "lasso", "pls")

@@ -4,6 +4,10 @@ and a job killed with scancel is either resubmitted or fails the run cleanly.
 Skipped, with the reason, where the one-node cluster cannot be started (not root, the
 Debian packages missing). The twin's models and a small sweep on the held-out run E4
 keep each run to about a minute.
+
+The cluster runs use .venv-slurm (`make slurm-env`: envs/requirements.txt plus the executor
+plugin of envs/requirements-slurm.txt), the local run this test's own environment, which
+has no executor plugin (docs/slurm-plugin-startup.md).
 """
 
 from __future__ import annotations
@@ -18,12 +22,13 @@ import pytest
 import yaml
 
 from helpers import REPO
-from helpers.workflow import SNAKEMAKE, run_snakemake, snakemake_env, workflow_workdir
+from helpers.workflow import run_snakemake, snakemake_env, workflow_workdir
 
 pytestmark = pytest.mark.slurm
 
 START = REPO / "tests" / "slurm" / "start_slurm.sh"
 STOP = REPO / "tests" / "slurm" / "stop_slurm.sh"
+SLURM_BIN = REPO / ".venv-slurm" / "bin"
 TARGETS = (
     "results/twin/tables/metrics.csv",
     "results/twin/sweep/summary.csv",
@@ -70,6 +75,19 @@ def slurm():
         subprocess.run(["bash", str(STOP)], capture_output=True, timeout=60)
 
 
+@pytest.fixture(scope="module")
+def slurm_env(slurm) -> dict:
+    """The environment of the cluster runs: .venv-slurm (made or brought up to date by
+    `make slurm-env`) first on PATH; a failure to build it fails the tests."""
+    proc = subprocess.run(["make", "--no-print-directory", "-C", str(REPO), "slurm-env"],
+                          capture_output=True, text=True, timeout=1200)  # fmt: skip
+    if proc.returncode != 0:
+        pytest.fail(f"make slurm-env failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
+    env = snakemake_env()
+    env["PATH"] = f"{SLURM_BIN}:{env['PATH']}"
+    return env
+
+
 def _workdir(tmp_path: Path) -> tuple[Path, Path]:
     work = workflow_workdir(tmp_path)
     os.symlink(REPO / "profiles", work / "profiles")
@@ -80,9 +98,21 @@ def _workdir(tmp_path: Path) -> tuple[Path, Path]:
 
 def _slurm_command(config: Path, *extra: str) -> list[str]:
     # Status checks every few seconds instead of the profile's 20 s: the jobs are short.
-    return [SNAKEMAKE, "--profile", "profiles/slurm", "--nolock", "--configfile", str(config),
-            "--slurm-init-seconds-before-status-checks", "2", "--latency-wait", "10", *extra,
-            "--", *TARGETS]  # fmt: skip
+    return [
+        str(SLURM_BIN / "snakemake"),
+        "--profile",
+        "profiles/slurm",
+        "--nolock",
+        "--configfile",
+        str(config),
+        "--slurm-init-seconds-before-status-checks",
+        "2",
+        "--latency-wait",
+        "10",
+        *extra,
+        "--",
+        *TARGETS,
+    ]
 
 
 def _results(work: Path) -> dict[str, bytes]:
@@ -104,10 +134,10 @@ def local_results(tmp_path_factory):
     return _results(work)
 
 
-def test_slurm_run_is_byte_identical_to_the_local_run(slurm, local_results, tmp_path):
+def test_slurm_run_is_byte_identical_to_the_local_run(slurm_env, local_results, tmp_path):
     work, config = _workdir(tmp_path)
     proc = subprocess.run(_slurm_command(config), cwd=work, capture_output=True, text=True,
-                          env=snakemake_env(), timeout=900)  # fmt: skip
+                          env=slurm_env, timeout=900)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-5000:]
     assert "SLURM run ID" in proc.stderr
     assert "Submitted array job" in proc.stderr  # the sweep batches, as one job array
@@ -140,12 +170,10 @@ def _running_job(rule: str, timeout: float = 300.0) -> str:
     raise AssertionError(f"no RUNNING Slurm job of rule {rule} within {timeout:.0f} s")
 
 
-def _start(work: Path, command: list[str], log: Path) -> subprocess.Popen:
+def _start(work: Path, command: list[str], log: Path, env: dict) -> subprocess.Popen:
     # Output to a file, not a pipe: a full pipe would stall Snakemake while the test waits.
     with open(log, "w") as out:
-        return subprocess.Popen(
-            command, cwd=work, env=snakemake_env(), stdout=out, stderr=subprocess.STDOUT
-        )
+        return subprocess.Popen(command, cwd=work, env=env, stdout=out, stderr=subprocess.STDOUT)
 
 
 def _finish(run: subprocess.Popen, log: Path) -> str:
@@ -153,10 +181,12 @@ def _finish(run: subprocess.Popen, log: Path) -> str:
     return log.read_text()
 
 
-def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(slurm, local_results, tmp_path):
+def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(
+    slurm_env, local_results, tmp_path
+):
     work, config = _workdir(tmp_path)
     # 1. Without retries the killed job fails the run, with the job and its state named.
-    run = _start(work, _slurm_command(config, "--retries", "0"), tmp_path / "run.log")
+    run = _start(work, _slurm_command(config, "--retries", "0"), tmp_path / "run.log", slurm_env)
     killed = _running_job("fit_predict")
     subprocess.run(["scancel", killed], check=True)
     output = _finish(run, tmp_path / "run.log")
@@ -170,7 +200,7 @@ def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(slurm, local
 
     # 2. The rerun, with the profile's retries: its fit_predict job is killed too,
     # resubmitted, and the run completes with the local run's bytes.
-    rerun = _start(work, _slurm_command(config), tmp_path / "rerun.log")
+    rerun = _start(work, _slurm_command(config), tmp_path / "rerun.log", slurm_env)
     killed_again = _running_job("fit_predict")
     subprocess.run(["scancel", killed_again], check=True)
     output = _finish(rerun, tmp_path / "rerun.log")

@@ -358,11 +358,13 @@ def test_long_gap_overlapping_a_measurement_raises_unless_allowed():
     )
     windows = windows_frame((0, 600), (1800, 2400), (3000, 3600))
     with pytest.raises(ValueError, match=r"T11.*measurement 2 \(m02\)"):
-        check_gaps(gaps, windows)
-    warnings = check_gaps(gaps, windows, allow=True)
+        check_gaps(gaps, windows, allow=False, max_gap_s=600.0)
+    warnings = check_gaps(gaps, windows, allow=True, max_gap_s=600.0)
     assert len(warnings) == 1 and "T11" in warnings[0] and "m02" in warnings[0]
     # A gap that ends exactly when a measurement starts has a real sample there.
-    assert check_gaps(gaps, windows_frame((0, 600), (1900, 2400))) == []
+    assert (
+        check_gaps(gaps, windows_frame((0, 600), (1900, 2400)), allow=False, max_gap_s=600.0) == []
+    )
 
 
 def test_gaps_of_clean_temperatures_feed_check_gaps():
@@ -370,8 +372,8 @@ def test_gaps_of_clean_temperatures_feed_check_gaps():
     hole = (s > 1000) & (s < 1900)
     result = clean({"box": source(s[~hole], T1=ramp(s[~hole]))})
     with pytest.raises(ValueError, match="T1"):
-        check_gaps(result.gaps, windows_frame((1500, 1600)))
-    assert check_gaps(result.gaps, windows_frame((2000, 2600))) == []
+        check_gaps(result.gaps, windows_frame((1500, 1600)), allow=False, max_gap_s=600.0)
+    assert check_gaps(result.gaps, windows_frame((2000, 2600)), allow=False, max_gap_s=600.0) == []
 
 
 # ----------------------------------------------------------------------------- windows
@@ -396,17 +398,17 @@ def test_window_mean_and_start_of_a_ramp_are_exact():
 def test_window_mean_of_a_step_weights_by_time():
     frame = pd.DataFrame({"time": at([0, 10, 20, 30, 40]), "T1": [0.0, 0.0, 10.0, 10.0, 10.0]})
     # piecewise linear: 0 until 10 s, ramps to 10 at 20 s; mean over [0, 40] = (5*10 + 10*20) / 40
-    mean = temperatures_in_windows(frame, windows_frame((0, 40)))
+    mean = temperatures_in_windows(frame, windows_frame((0, 40)), how="mean")
     assert mean["T1"].iloc[0] == pytest.approx(6.25)
 
 
 def test_window_mean_skips_a_nan_stretch_and_window_outside_raises():
     frame = pd.DataFrame({"time": at([0, 10, 20, 30]), "T1": [1.0, 1.0, np.nan, 3.0]})
-    assert temperatures_in_windows(frame, windows_frame((0, 30)))["T1"].iloc[0] == pytest.approx(
-        1.0
-    )
+    assert temperatures_in_windows(frame, windows_frame((0, 30)), how="mean")["T1"].iloc[
+        0
+    ] == pytest.approx(1.0)
     with pytest.raises(ValueError, match="outside the temperature record"):
-        temperatures_in_windows(frame, windows_frame((20, 40)))
+        temperatures_in_windows(frame, windows_frame((20, 40)), how="mean")
     with pytest.raises(ValueError, match="how"):
         temperatures_in_windows(frame, windows_frame((0, 10)), how="median")
 

@@ -17,7 +17,7 @@ def test_hand_worked_line():
     # x = 185, 205, 225 mm -> shifted 0, 0.02, 0.04 m; e = 1, 2, 4 um.
     # xbar = 0.02, ebar = 7/3; Sxy = (-0.02)(1-7/3) + 0 + (0.02)(4-7/3) = 0.06
     # Sxx = 0.0008 -> k = 75 um/m; b = 7/3 - 75*0.02 = 5/6 um.
-    fit = decouple_measurement([185, 205, 225], [1, 2, 4])
+    fit = decouple_measurement([185, 205, 225], [1, 2, 4], degree=1)
     assert fit.k_um_per_m == pytest.approx(75.0, abs=1e-12)
     assert fit.b_um == pytest.approx(5 / 6, abs=1e-12)
     # residuals: 1-5/6, 2-(5/6+1.5), 4-(5/6+3) = 1/6, -1/3, 1/6 -> SSres = 1/6; SStot = 14/3
@@ -27,7 +27,7 @@ def test_hand_worked_line():
 
 def test_origin_is_kept_when_first_target_missing():
     x = np.array([205.0, 225.0, 245.0])
-    fit = decouple_measurement(x, -12.0 * (x - 185.0) / 1000 + 0.5, origin_mm=185.0)
+    fit = decouple_measurement(x, -12.0 * (x - 185.0) / 1000 + 0.5, degree=1, origin_mm=185.0)
     assert fit.k_um_per_m == pytest.approx(-12.0, abs=1e-12)
     assert fit.b_um == pytest.approx(0.5, abs=1e-12)
 
@@ -51,7 +51,7 @@ def test_compose_curve_is_eq7():
 
 def test_rejects_too_few_positions():
     with pytest.raises(ValueError, match="at least 2 distinct positions"):
-        decouple_measurement([185.0], [1.0])
+        decouple_measurement([185.0], [1.0], degree=1)
 
 
 def test_exact_lines_from_raw_files_are_recovered_to_1e9(tmp_path):
@@ -67,7 +67,7 @@ def test_exact_lines_from_raw_files_are_recovered_to_1e9(tmp_path):
         clean_and_assemble_run(dataset, read_run(dataset, run), DEFAULTS.cleaning).errors
         for run in dataset.run_ids
     ]
-    kb, _ = decouple_table(pd.concat(frames, ignore_index=True))
+    kb, _ = decouple_table(pd.concat(frames, ignore_index=True), degree=1)
     for row in kb.itertuples():
         key = (int(row.run[1:]) - 1, row.measurement - 1)
         assert abs(row.k_um_per_m - ks[key]) < 1e-9

@@ -43,6 +43,11 @@ def test_safe_names_pass(name):
         ("dataset", ("properties", "sensors", "items", "properties", "source")),
         ("dataset", ("properties", "sources", "items", "properties", "name")),
         ("runs", ("properties", "run")),
+        ("import_mapping", ("properties", "name")),
+        ("import_mapping", ("properties", "source_name")),
+        ("import_mapping", ("properties", "sensors", "items", "properties", "id")),
+        ("import_mapping", ("properties", "signals", "items", "properties", "id")),
+        ("import_mapping", ("properties", "runs", "items", "properties", "name")),
     ],
 )
 def test_every_sheet_schema_uses_the_one_name_pattern(schema, path):
@@ -313,7 +318,7 @@ def test_a_rule_writing_outside_the_dataset_folders_is_named():
         safety.check_rule_outputs([inside, escaping], roots)
 
 
-def _raw_run(starts, temperature_c):
+def _raw_run(starts, temperature_c, root=None):
     from thermaxis.dataset.reader import RawRun
 
     t0 = pd.Timestamp("2022-05-10T09:00:00")
@@ -330,7 +335,8 @@ def _raw_run(starts, temperature_c):
     box = pd.DataFrame(
         {"time": [t0, t0 + pd.Timedelta(minutes=60)], "T1": [temperature_c, temperature_c + 1.0]}
     )
-    return RawRun(run="E1", sources={"box": box}, measurements=measurements)
+    files = {name: root / "E1" / "errors" / f"{name}.csv" for name in measurements} if root else {}
+    return RawRun(run="E1", sources={"box": box}, measurements=measurements, error_files=files)
 
 
 def _plausibility_config(interval_s=10.0):
@@ -344,7 +350,7 @@ def test_run_plausibility_warns_of_fahrenheit_unless_the_dataset_logs_rises(tmp_
     from types import SimpleNamespace
 
     # Median of 85 and 86 °F is 85.5 °F = 29.72 °C.
-    absolute = SimpleNamespace(root=tmp_path, meta={})
+    absolute = SimpleNamespace(root=tmp_path, temperature_kind="absolute")
     (note,) = plausibility.check_run_plausibility(
         absolute, _raw_run([0, 20], 85.0), _plausibility_config()
     )
@@ -352,7 +358,7 @@ def test_run_plausibility_warns_of_fahrenheit_unless_the_dataset_logs_rises(tmp_
         f"{tmp_path / 'E1' / 'temperatures' / 'box.csv'}: sensor T1: median 85.5 °C"
     )
     assert "that is 29.7 °C" in note
-    rise = SimpleNamespace(root=tmp_path, meta={"temperature_kind": "rise"})
+    rise = SimpleNamespace(root=tmp_path, temperature_kind="rise")
     assert (
         plausibility.check_run_plausibility(rise, _raw_run([0, 20], 0.5), _plausibility_config())
         == []
@@ -362,7 +368,7 @@ def test_run_plausibility_warns_of_fahrenheit_unless_the_dataset_logs_rises(tmp_
 def test_run_plausibility_refuses_overlaps_and_a_grid_step_longer_than_the_run(tmp_path):
     from types import SimpleNamespace
 
-    dataset = SimpleNamespace(root=tmp_path, meta={})
+    dataset = SimpleNamespace(root=tmp_path, temperature_kind="absolute")
     # M2 starts 1 min after M1, which lasts 2 min.
     with pytest.raises(
         DataError,
@@ -371,7 +377,9 @@ def test_run_plausibility_refuses_overlaps_and_a_grid_step_longer_than_the_run(t
             "readings from 2022-05-10 09:01:00 overlap measurement M1"
         ),
     ):
-        plausibility.check_run_plausibility(dataset, _raw_run([0, 1], 20.0), _plausibility_config())
+        plausibility.check_run_plausibility(
+            dataset, _raw_run([0, 1], 20.0, tmp_path), _plausibility_config()
+        )
     # The run spans 0 to 22 min = 1320 s.
     with pytest.raises(
         DataError,

@@ -12,15 +12,15 @@ from threadpoolctl import threadpool_limits
 from helpers.builders import synthetic_temperatures
 from helpers.truth import EQ8, EQ9_B, EQ9_K, POSITIONS, SENSORS, eq8_errors, eq9_errors, eq9_truth
 from thermaxis.method.models import (
-    ALGORITHMS,
     DecoupledAxisModel,
     PointwiseAxisModel,
-    fit_svr_by_group_search,
+    fit_by_group_search,
     linear_terms,
     make_regressor,
     predict_with_std,
     relative_temperatures,
 )
+from thermaxis.vocabulary import ALGORITHMS
 
 pytestmark = pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
 
@@ -168,7 +168,7 @@ def test_held_out_errors_do_not_reach_the_fold_model(algorithm, approach):
     pd.testing.assert_frame_equal(
         original[held_out][0].coefficients(), changed[held_out][0].coefficients()
     )
-    assert original[held_out][0].svr_params_ == changed[held_out][0].svr_params_
+    assert original[held_out][0].searched_params_ == changed[held_out][0].searched_params_
     # The perturbation is large enough to show up wherever E3 IS used for training.
     assert any(not np.allclose(original[f][1], changed[f][1]) for f in original if f != held_out)
 
@@ -198,14 +198,14 @@ def _noisy_linear(n=40, seed=0):
 def test_mlr_matches_plain_least_squares_and_is_unit_invariant():
     X, y = _noisy_linear()
     names = ["a", "b", "c"]
-    terms = linear_terms(make_regressor("mlr").fit(X, y), names)
+    terms = linear_terms(make_regressor("mlr", random_state=0).fit(X, y), names)
     design = np.column_stack([np.ones(len(X)), X])
     direct, *_ = np.linalg.lstsq(design, y, rcond=None)
     np.testing.assert_allclose([terms[n] for n in ("const", *names)], direct, rtol=1e-9, atol=1e-9)
 
     # Same data in degrees Fahrenheit: identical predictions, slopes divided by 1.8.
     X_f = X * 1.8 + 32.0
-    model_f = make_regressor("mlr").fit(X_f, y)
+    model_f = make_regressor("mlr", random_state=0).fit(X_f, y)
     np.testing.assert_allclose(model_f.predict(X_f), design @ direct, atol=1e-9)
     terms_f = linear_terms(model_f, names)
     np.testing.assert_allclose([terms_f[n] for n in names], direct[1:] / 1.8, rtol=1e-9)
@@ -226,7 +226,9 @@ def _to_original(beta_s, stats):
 def test_ridge_linear_terms_match_closed_form():
     X, y = _noisy_linear()
     alpha = 7.0
-    terms = linear_terms(make_regressor("ridge", {"alpha": alpha}).fit(X, y), ["a", "b", "c"])
+    terms = linear_terms(
+        make_regressor("ridge", {"alpha": alpha}, random_state=0).fit(X, y), ["a", "b", "c"]
+    )
     Xs, ys, stats = _standardised(X, y)
     beta_s = np.linalg.solve(Xs.T @ Xs + alpha * np.eye(3), Xs.T @ ys)
     np.testing.assert_allclose(
@@ -236,7 +238,9 @@ def test_ridge_linear_terms_match_closed_form():
 
 def test_pls_linear_terms_match_one_component_closed_form():
     X, y = _noisy_linear()
-    terms = linear_terms(make_regressor("pls", {"n_components": 1}).fit(X, y), ["a", "b", "c"])
+    terms = linear_terms(
+        make_regressor("pls", {"n_components": 1}, random_state=0).fit(X, y), ["a", "b", "c"]
+    )
     Xs, ys, stats = _standardised(X, y)
     w = Xs.T @ ys
     w /= np.linalg.norm(w)
@@ -249,7 +253,7 @@ def test_pls_linear_terms_match_one_component_closed_form():
 
 def test_pls_with_all_components_is_least_squares():
     X, y = _noisy_linear()
-    model = make_regressor("pls", {"n_components": 5}, n_features=3).fit(X, y)
+    model = make_regressor("pls", {"n_components": 5}, random_state=0, n_features=3).fit(X, y)
     direct, *_ = np.linalg.lstsq(np.column_stack([np.ones(len(X)), X]), y, rcond=None)
     np.testing.assert_allclose(
         list(linear_terms(model, ["a", "b", "c"]).values()), direct, rtol=1e-7, atol=1e-7
@@ -259,13 +263,16 @@ def test_pls_with_all_components_is_least_squares():
 def test_linear_terms_is_none_for_nonlinear_algorithms():
     X, y = _noisy_linear()
     for algorithm in ("svr", "gpr"):
-        assert linear_terms(make_regressor(algorithm).fit(X, y), ["a", "b", "c"]) is None
+        assert (
+            linear_terms(make_regressor(algorithm, random_state=0).fit(X, y), ["a", "b", "c"])
+            is None
+        )
 
 
 def test_gpr_interval_contains_mean_and_widens_away_from_data():
     x = np.linspace(0.0, 3.0, 15)[:, None]
     y = np.sin(x).ravel()
-    model = make_regressor("gpr").fit(x, y)
+    model = make_regressor("gpr", random_state=0).fit(x, y)
     mean, std = predict_with_std(model, np.array([[1.5], [9.0]]))
     np.testing.assert_allclose(mean, model.predict(np.array([[1.5], [9.0]])), atol=1e-9)
     assert np.all(std > 0)
@@ -283,8 +290,8 @@ def test_decoupled_gpr_interval_brackets_prediction_and_widens_far_from_training
         mean = model.predict(X_new)
         assert lower.shape == mean.shape == (8, 14)
         assert np.all(lower < mean) and np.all(mean < upper)
-    width_near = np.subtract(*model.predict_interval(X_near)[::-1])
-    width_far = np.subtract(*model.predict_interval(X_far)[::-1])
+    width_near = np.subtract(*model.predict_interval(X_near, level=0.95)[::-1])
+    width_far = np.subtract(*model.predict_interval(X_far, level=0.95)[::-1])
     # k uses absolute temperatures, so the far run's slope is uncertain: wider at the far end.
     assert np.all(width_far[:, -1] > width_near[:, -1])
     # Independence of k and b: half-width z*sd(b) at the origin,
@@ -305,14 +312,14 @@ def test_decoupled_gpr_interval_brackets_prediction_and_widens_far_from_training
 def test_pointwise_gpr_interval_and_non_gpr_refusal():
     X, Y = _noisy_eq9()
     model = PointwiseAxisModel(algorithm="gpr").fit(X, Y.iloc[:, ::4])
-    lower, upper = model.predict_interval(X.iloc[:8])
+    lower, upper = model.predict_interval(X.iloc[:8], level=0.95)
     mean = model.predict(X.iloc[:8])
     assert mean.shape == (8, 4)
     assert np.all(lower < mean) and np.all(mean < upper)
     with pytest.raises(NotImplementedError):
-        PointwiseAxisModel().fit(X, Y).predict_interval(X)
+        PointwiseAxisModel().fit(X, Y).predict_interval(X, level=0.95)
     with pytest.raises(NotImplementedError):
-        DecoupledAxisModel().fit(X, Y).predict_interval(X)
+        DecoupledAxisModel().fit(X, Y).predict_interval(X, level=0.95)
     with pytest.raises(NotImplementedError):
         DecoupledAxisModel().fit(X, Y).predict_kb(X, return_std=True)
 
@@ -324,7 +331,7 @@ def test_svr_group_search_picks_the_known_best_point():
     groups = np.repeat(["a", "b", "c"], 10)
     # C = 1e-3 keeps the prediction near the mean; C = 100 follows the curve.
     grid = {"C": [1e-3, 100.0], "epsilon": [0.01]}
-    model, chosen = fit_svr_by_group_search(x, y, groups, grid)
+    model, chosen = fit_by_group_search("svr", x, y, groups, grid, random_state=0, inner=(12, 5))
     assert chosen == {"C": 100.0, "epsilon": 0.01}
 
     # Independent leave-one-group-out computation of the mean fold RMSE per grid point.
@@ -332,12 +339,12 @@ def test_svr_group_search_picks_the_known_best_point():
         scores = []
         for g in "abc":
             test = groups == g
-            fitted = make_regressor("svr", params).fit(x[~test], y[~test])
+            fitted = make_regressor("svr", params, random_state=0).fit(x[~test], y[~test])
             scores.append(np.sqrt(np.mean((fitted.predict(x[test]) - y[test]) ** 2)))
         return np.mean(scores)
 
     assert mean_rmse({"C": 100.0, "epsilon": 0.01}) < mean_rmse({"C": 1e-3, "epsilon": 0.01})
-    refit = make_regressor("svr", chosen).fit(x, y)
+    refit = make_regressor("svr", chosen, random_state=0).fit(x, y)
     np.testing.assert_allclose(model.predict(x), refit.predict(x))
 
 
@@ -352,9 +359,9 @@ def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
     groups = np.repeat(["r1", "r2", "r3", "r4"], 10)
     # Two identical C values make a tie: the earlier grid point must win, as in GridSearchCV.
     grid = {"C": [10.0, 0.1, 10.0], "epsilon": [0.01, 0.1], "gamma": ["scale", 0.1]}
-    model, chosen = fit_svr_by_group_search(x, y, groups, grid)
+    model, chosen = fit_by_group_search("svr", x, y, groups, grid, random_state=0, inner=(12, 5))
     search = GridSearchCV(
-        make_regressor("svr"),
+        make_regressor("svr", random_state=0),
         {f"regress__regressor__{k}": v for k, v in grid.items()},
         scoring="neg_root_mean_squared_error",
         cv=LeaveOneGroupOut(),
@@ -367,13 +374,19 @@ def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
 
 def test_svr_group_search_falls_back_to_first_grid_point_with_one_group():
     x = np.linspace(0.0, 1.0, 10)[:, None]
-    _, chosen = fit_svr_by_group_search(
-        x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]}
+    _, chosen = fit_by_group_search(
+        "svr",
+        x,
+        x.ravel(),
+        ["a"] * 10,
+        {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]},
+        random_state=0,
+        inner=(12, 5),
     )
     assert chosen == {"C": 100.0, "epsilon": 0.2}
 
 
-def test_svr_coefficients_are_empty_but_svr_params_recorded():
+def test_svr_coefficients_are_empty_but_searched_params_recorded():
     X, Y = _noisy_eq9()
     model = DecoupledAxisModel(algorithm="svr", svr_grid=SMALL_GRID).fit(X, Y)
     assert model.coefficients().empty
@@ -384,8 +397,8 @@ def test_svr_coefficients_are_empty_but_svr_params_recorded():
         "temperature",
         "value",
     ]
-    assert set(model.svr_params_) == {"k", "b"}
-    assert model.svr_params_["k"]["C"] in (1.0, 10.0)
+    assert set(model.searched_params_) == {"k", "b"}
+    assert model.searched_params_["k"]["C"] in (1.0, 10.0)
 
 
 # --------------------------------------------------------------------------- bad input
@@ -395,9 +408,9 @@ def test_bad_input_raises_value_error():
     X = synthetic_temperatures()
     Y = eq9_errors(X)
     with pytest.raises(ValueError, match="unknown algorithm"):
-        make_regressor("lasso")
+        make_regressor("elasticnet", random_state=0)
     with pytest.raises(ValueError, match="unknown parameter"):
-        make_regressor("ridge", {"C": 1.0})
+        make_regressor("ridge", {"C": 1.0}, random_state=0)
     with pytest.raises(ValueError, match="rows"):
         DecoupledAxisModel().fit(X, Y.iloc[:-1])
     with pytest.raises(ValueError, match="lacks column"):
@@ -408,3 +421,73 @@ def test_bad_input_raises_value_error():
     X_missing.loc[4, "T1"] = np.nan
     with pytest.raises(ValueError, match="missing temperatures"):
         DecoupledAxisModel().fit(X_missing, Y)
+
+
+@pytest.mark.parametrize(
+    "algorithm, grid, splitter",
+    [
+        ("ridge", {"alpha": [100.0, 0.01, 1.0]}, "logo"),
+        ("lasso", {"alpha": [0.3, 0.001, 0.03]}, "logo"),
+        ("pls", {"n_components": [1, 3, 2]}, "logo"),
+        ("ridge", {"alpha": [100.0, 0.01, 1.0]}, "groupkfold"),
+    ],
+)
+def test_searched_strength_is_what_gridsearchcv_chooses(algorithm, grid, splitter):
+    # The reference: scikit-learn's GridSearchCV over the same pipeline and group splitter.
+    from sklearn.model_selection import GridSearchCV, GroupKFold, LeaveOneGroupOut
+
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=(60, 4))
+    x[:, 3] = x[:, 2] + rng.normal(0.0, 0.05, 60)  # nearly collinear, where the strength matters
+    y = x @ np.array([1.0, -0.5, 0.2, 0.2]) + rng.normal(0.0, 0.3, 60)
+    groups = np.repeat([f"r{i}" for i in range(6)], 10)
+    # Up to 12 runs leave one out; with the limit at 4, the 6 runs go into 3 group folds.
+    inner, cv = (
+        ((12, 3), LeaveOneGroupOut()) if splitter == "logo" else ((4, 3), GroupKFold(n_splits=3))
+    )
+    model, chosen = fit_by_group_search(algorithm, x, y, groups, grid, random_state=0, inner=inner)
+    search = GridSearchCV(
+        make_regressor(algorithm, random_state=0),
+        {f"regress__regressor__{k}": v for k, v in grid.items()},
+        scoring="neg_root_mean_squared_error",
+        cv=cv,
+    ).fit(x, y, groups=groups)
+    assert chosen == {
+        k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()
+    }
+    np.testing.assert_allclose(
+        model.predict(x), search.best_estimator_.predict(x), rtol=1e-12, atol=1e-12
+    )
+
+
+def test_a_searched_model_records_its_choice_and_a_fixed_one_does_not():
+    X = synthetic_temperatures()
+    Y = eq9_errors(X)
+    searched = PointwiseAxisModel(algorithm="ridge", search_grid={"alpha": [0.01, 10.0]}).fit(X, Y)
+    assert set(searched.searched_params_) == {float(p) for p in Y.columns}
+    assert (
+        PointwiseAxisModel(algorithm="ridge", params={"alpha": 1.0}).fit(X, Y).searched_params_
+        == {}
+    )
+
+
+def test_gpr_beyond_its_sample_limit_is_fitted_on_evenly_spaced_rows():
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(40, 1))
+    y = np.sin(x).ravel()
+    X = pd.DataFrame(
+        {
+            "run": np.repeat(["a", "b"], 20),
+            "measurement": np.tile(np.arange(20), 2),
+            "T1": x.ravel(),
+        }
+    )
+    Y = pd.DataFrame({0.0: y})
+    model = PointwiseAxisModel(sensors=("T1",), algorithm="gpr", gpr_max_samples=10).fit(X, Y)
+    # The fitted GP holds 10 training rows: 0, 4, 9, 13, ..., 39 (evenly spaced, both ends).
+    gp = model.estimators_[0].named_steps["regress"].regressor_
+    assert gp.X_train_.shape == (10, 1)
+    kept = np.unique(np.linspace(0, 39, 10).round().astype(int))
+    relative = x.ravel() - np.repeat(x.ravel()[[0, 20]], 20)  # the model's inputs are rises
+    scaler = model.estimators_[0].named_steps["standardise"]
+    np.testing.assert_allclose(scaler.inverse_transform(gp.X_train_).ravel(), relative[kept])

@@ -78,8 +78,9 @@ def test_a_record_that_ends_early_is_named_as_such_with_its_file():
         check_gaps(
             cleaned.gaps,
             windows,
-            files={"T1": "data/raw/x/R1/temperatures/box.csv"},
+            allow=False,
             max_gap_s=600.0,
+            files={"T1": "data/raw/x/R1/temperatures/box.csv"},
         )
     message = str(info.value)
     assert message.startswith(

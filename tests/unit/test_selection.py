@@ -28,6 +28,11 @@ from thermaxis.method.selection import (
     similarity_matrix,
 )
 
+# The paper's choices (Pearson similarity, Deng's grade, rho 0.5 on min-max sequences),
+# spelled out: the library takes them from config ``selection``, never from defaults.
+DENG = {"rho": 0.5, "normalisation": "minmax"}
+PAPER = {"similarity": "pearson", "grade": "deng", **DENG}
+
 # --------------------------------------------------------------------------- #
 # published worked examples: fuzzy equivalence clustering
 # --------------------------------------------------------------------------- #
@@ -189,7 +194,7 @@ def test_similarity_pearson_and_printed_by_hand():
         ],
         dtype=float,
     )
-    np.testing.assert_allclose(similarity_matrix(X), expected_pearson, atol=1e-12)
+    np.testing.assert_allclose(similarity_matrix(X, "pearson"), expected_pearson, atol=1e-12)
     # Printed Eq. 1: sum |da||de| / (2*2) = 4/4 = 1 although a and e are uncorrelated.
     np.testing.assert_allclose(similarity_matrix(X, method="printed"), np.ones((4, 4)), atol=1e-12)
 
@@ -198,9 +203,9 @@ def test_similarity_pearson_matches_numpy_corrcoef_and_accepts_dataframe():
     rng = np.random.default_rng(20240501)
     X = rng.normal(size=(8, 5)).cumsum(axis=0)
     expected = np.abs(np.corrcoef(X, rowvar=False))
-    np.testing.assert_allclose(similarity_matrix(X), expected, atol=1e-12)
+    np.testing.assert_allclose(similarity_matrix(X, "pearson"), expected, atol=1e-12)
     frame = pd.DataFrame(X, columns=[f"T{i}" for i in range(1, 6)])
-    np.testing.assert_allclose(similarity_matrix(frame), expected, atol=1e-12)
+    np.testing.assert_allclose(similarity_matrix(frame, "pearson"), expected, atol=1e-12)
 
 
 def test_similarity_printed_is_never_below_pearson():
@@ -212,7 +217,7 @@ def test_similarity_printed_is_never_below_pearson():
 def test_similarity_constant_column_warns_and_is_isolated():
     X = np.array([[1.0, 20.0, 3.0], [2.0, 20.0, 1.0], [3.0, 20.0, 2.0]])
     with pytest.warns(UserWarning, match=r"constant sensor column\(s\) \[1\]"):
-        R = similarity_matrix(X)
+        R = similarity_matrix(X, "pearson")
     assert R[1, 1] == 1.0
     assert R[1, 0] == R[0, 1] == R[1, 2] == R[2, 1] == 0.0
     # r(col0, col2): deviations (-1,0,1) and (1,-1,0) -> -1/2.
@@ -328,10 +333,14 @@ def test_deng_grade_minmax_by_hand_uses_global_two_level_extremes():
     # xi = (0 + .5*1)/(D + .5*1): x1 -> (1, .5, 1) mean 5/6; x2 -> (1/3, 1, 1/3) mean 5/9.
     # (Per-sensor extremes would give x1 (1, 1/3, 1) -> 7/9 instead.)
     X = np.array([[0.0, 2.0], [2.0, 1.0], [2.0, 0.0]])
-    np.testing.assert_allclose(grey_relational_grade([0, 1, 2], X), [5 / 6, 5 / 9], rtol=1e-12)
+    np.testing.assert_allclose(
+        grey_relational_grade([0, 1, 2], X, **DENG), [5 / 6, 5 / 9], rtol=1e-12
+    )
     # rho = 1: xi = 1/(D + 1): x1 -> (1, 2/3, 1) -> 8/9; x2 -> (1/2, 1, 1/2) -> 2/3.
     np.testing.assert_allclose(
-        grey_relational_grade([0, 1, 2], X, rho=1.0), [8 / 9, 2 / 3], rtol=1e-12
+        grey_relational_grade([0, 1, 2], X, rho=1.0, normalisation="minmax"),
+        [8 / 9, 2 / 3],
+        rtol=1e-12,
     )
 
 
@@ -341,14 +350,16 @@ def test_deng_grade_initial_and_mean_normalisation_by_hand():
     # x1: (1, 1, 1/2) -> 5/6; x2: (1, 1/2, 1/3) -> 11/18.
     X = np.array([[1.0, 4.0], [2.0, 4.0], [4.0, 4.0]])
     np.testing.assert_allclose(
-        grey_relational_grade([2, 4, 6], X, normalisation="initial"), [5 / 6, 11 / 18], rtol=1e-12
+        grey_relational_grade([2, 4, 6], X, rho=0.5, normalisation="initial"),
+        [5 / 6, 11 / 18],
+        rtol=1e-12,
     )
     # mean: x0 (1,2,3) -> (.5,1,1.5); x1 (2,2,2) -> (1,1,1); x2 (3,6,9) -> (.5,1,1.5).
     # D1 = (.5,0,.5), D2 = 0; min 0, max .5, rho*max = .25.
     # x1: (1/3, 1, 1/3) -> 5/9; x2: 1.
     X = np.array([[2.0, 3.0], [2.0, 6.0], [2.0, 9.0]])
     np.testing.assert_allclose(
-        grey_relational_grade([1, 2, 3], X, normalisation="mean"), [5 / 9, 1.0], rtol=1e-12
+        grey_relational_grade([1, 2, 3], X, rho=0.5, normalisation="mean"), [5 / 9, 1.0], rtol=1e-12
     )
 
 
@@ -410,7 +421,7 @@ def test_deng_grade_initial_normalisation_rejects_zero_first_value():
     # Relative temperatures (as used for the intercept b) start at 0.
     relative = np.array([[0.0, 0.0], [0.4, 0.1], [0.9, 0.3]])
     with pytest.raises(ValueError, match="initial-value normalisation.*non-zero first value"):
-        grey_relational_grade([1.0, 2.0, 3.0], relative, normalisation="initial")
+        grey_relational_grade([1.0, 2.0, 3.0], relative, rho=0.5, normalisation="initial")
 
 
 def test_deng_grade_minmax_constant_sensor_warns_and_scores_as_zeros():
@@ -418,13 +429,13 @@ def test_deng_grade_minmax_constant_sensor_warns_and_scores_as_zeros():
     # min 0, max 1: x1 -> (1, .5, 1/3) -> 11/18; x2 -> 1.
     X = np.array([[5.0, 0.0], [5.0, 1.0], [5.0, 2.0]])
     with pytest.warns(UserWarning, match=r"constant sequence\(s\) \[1\]"):
-        grades = grey_relational_grade([0, 1, 2], X)
+        grades = grey_relational_grade([0, 1, 2], X, **DENG)
     np.testing.assert_allclose(grades, [11 / 18, 1.0], rtol=1e-12)
 
 
 def test_deng_grade_identical_sequences_give_one():
     X = np.column_stack([np.arange(4.0), 2 * np.arange(4.0) + 1])
-    np.testing.assert_array_equal(grey_relational_grade(np.arange(4.0), X), [1.0, 1.0])
+    np.testing.assert_array_equal(grey_relational_grade(np.arange(4.0), X, **DENG), [1.0, 1.0])
 
 
 @pytest.mark.parametrize(
@@ -437,12 +448,14 @@ def test_deng_grade_identical_sequences_give_one():
 )
 def test_deng_grade_rejects_bad_parameters(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        grey_relational_grade([1.0, 2.0, 3.0], np.ones((3, 2)) + np.arange(3)[:, None], **kwargs)
+        grey_relational_grade(
+            [1.0, 2.0, 3.0], np.ones((3, 2)) + np.arange(3)[:, None], **{**DENG, **kwargs}
+        )
 
 
 def test_deng_grade_rejects_length_mismatch():
     with pytest.raises(ValueError, match="x0 must be a 1-D sequence of 3 samples"):
-        grey_relational_grade([1.0, 2.0], np.ones((3, 2)))
+        grey_relational_grade([1.0, 2.0], np.ones((3, 2)), **DENG)
 
 
 # --------------------------------------------------------------------------- #
@@ -485,7 +498,7 @@ def _three_group_readings():
 def test_select_sensitive_points_on_constructed_groups():
     X = _three_group_readings()
     y = 3.0 * X["T2"] + 5.0  # the target has exactly T2's shape
-    result = select_sensitive_points(X, y, n_clusters=3)
+    result = select_sensitive_points(X, y, n_clusters=3, **PAPER)
     assert isinstance(result, SensitivePoints)
     assert result.clusters == (("T1", "T2"), ("T3", "T4"), ("T5",))
     # T2 matches y after min-max scaling -> every coefficient 1 -> grade 1.
@@ -501,7 +514,7 @@ def test_select_sensitive_points_on_constructed_groups():
 def test_select_sensitive_points_with_absolute_degree():
     X = _three_group_readings()
     y = X["T2"].to_numpy() + 100.0  # same zero-started image as T2 -> degree 1
-    result = select_sensitive_points(X, y, n_clusters=3, grade="absolute")
+    result = select_sensitive_points(X, y, **{**PAPER, "grade": "absolute"}, n_clusters=3)
     assert result.grades["T2"] == pytest.approx(1.0, abs=1e-12)
     assert result.selected[0] == "T2"
     assert result.clusters == (("T1", "T2"), ("T3", "T4"), ("T5",))
@@ -510,7 +523,7 @@ def test_select_sensitive_points_with_absolute_degree():
 def test_select_sensitive_points_selected_follows_column_order():
     X = _three_group_readings()[["T5", "T3", "T4", "T1", "T2"]]
     y = 3.0 * X["T2"] + 5.0
-    result = select_sensitive_points(X, y, n_clusters=3)
+    result = select_sensitive_points(X, y, n_clusters=3, **PAPER)
     assert result.clusters == (("T5",), ("T3", "T4"), ("T1", "T2"))
     assert result.selected == ("T5", "T3", "T2")
 
@@ -518,13 +531,15 @@ def test_select_sensitive_points_selected_follows_column_order():
 def test_select_sensitive_points_rejects_bad_input():
     X = _three_group_readings()
     with pytest.raises(ValueError, match="grade"):
-        select_sensitive_points(X, X["T1"], grade="pearson")
+        select_sensitive_points(X, X["T1"], n_clusters=3, **{**PAPER, "grade": "pearson"})
     with pytest.raises(ValueError, match="y must be a 1-D sequence of 8 samples"):
-        select_sensitive_points(X, X["T1"].to_numpy()[:5])
+        select_sensitive_points(X, X["T1"].to_numpy()[:5], n_clusters=3, **PAPER)
     with pytest.raises(ValueError, match="DataFrame"):
-        select_sensitive_points(X.to_numpy(), X["T1"])
+        select_sensitive_points(X.to_numpy(), X["T1"], n_clusters=3, **PAPER)
     with pytest.raises(ValueError, match="initial-value"):
-        select_sensitive_points(X, X["T1"] + 1.0, normalisation="initial")  # T1 starts at 0
+        select_sensitive_points(
+            X, X["T1"] + 1.0, n_clusters=3, **{**PAPER, "normalisation": "initial"}
+        )  # T1 starts at 0
 
 
 # --------------------------------------------------------------------------- #

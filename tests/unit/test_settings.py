@@ -100,9 +100,14 @@ def test_each_section_builds_from_its_config_section():
         {
             "algorithms": ["mlr"],
             "ridge_alpha": 2,
+            "lasso_alpha": 0.5,
             "pls_components": 1,
             "svr_kernel": "linear",
             "svr_grid": {"gamma": ["scale"], "C": [3], "epsilon": [0.5]},
+            "searched": ["lasso"],
+            "search_grids": {"lasso": {"alpha": [0.1, 1]}, "ridge": {"alpha": [2]}},
+            "inner_search": {"max_loco_runs": 4, "group_folds": 3},
+            "gpr_max_samples": 50,
             "interval_level": 0.9,
             "random_state": 7,
             "signals": ["spindle_rpm"],
@@ -110,6 +115,13 @@ def test_each_section_builds_from_its_config_section():
     )
     assert models.grid() == {"C": [3], "epsilon": [0.5], "gamma": ["scale"]}
     assert models.params_for("ridge") == {"alpha": 2.0} and models.params_for("mlr") is None
+    assert models.params_for("lasso") == {"alpha": 0.5}
+    # Only the searched algorithms search; the others keep their fixed strength.
+    assert (
+        models.search_grid_for("lasso") == {"alpha": [0.1, 1]}
+        and models.search_grid_for("ridge") is None
+    )
+    assert (models.inner_search, models.gpr_max_samples) == ((4, 3), 50)
     assert models.signals == ("spindle_rpm",)
     cleaning = CleaningSettings.from_sections(
         {

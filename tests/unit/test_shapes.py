@@ -9,6 +9,7 @@ or counts worked out by hand).
 
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -145,20 +146,89 @@ def test_single_position_common_set_follows_the_ranking_not_the_names(tmp_path):
     assert selection.pointwise == ("Z9", "Z1")
 
 
+def _into_one_errors_file(root, run, edit=lambda frame: frame):
+    """Move a run's measurement files into one ``<run>/errors.csv`` (the fl_thermal layout);
+    ``edit`` may change its rows."""
+    frames = []
+    for f in sorted((root / run / "errors").glob("*.csv")):
+        frames.append(pd.read_csv(f, dtype=str).assign(measurement=f.stem))
+        f.unlink()
+    (root / run / "errors").rmdir()
+    edit(pd.concat(frames, ignore_index=True)).to_csv(root / run / "errors.csv", index=False)
+    return root / run / "errors.csv"
+
+
 def test_errors_in_one_file_per_run_read_like_one_file_per_measurement(tmp_path):
     root = write_dataset(tmp_path / "ds", runs=("A", "B"), n_measurements=(3, 2))
     dataset = load_dataset(root)
     before = read_run(dataset, "A").measurements
-    frames = []
-    for f in sorted((root / "A" / "errors").glob("*.csv")):
-        frames.append(pd.read_csv(f, dtype=str).assign(measurement=f.stem))
-        f.unlink()
-    (root / "A" / "errors").rmdir()
-    pd.concat(frames).to_csv(root / "A" / "errors.csv", index=False)
+    _into_one_errors_file(root, "A")
     after = read_run(dataset, "A").measurements
     assert list(after) == list(before) == ["M01", "M02", "M03"]
     for name in before:
         pd.testing.assert_frame_equal(after[name], before[name])
+
+
+def _one_file_run(tmp_path, edit=lambda frame: frame):
+    """Runs A (one file per measurement) and B (one errors.csv, rows changed by ``edit``)."""
+    root = write_dataset(
+        tmp_path / "ds", runs=("A", "B"), n_measurements=3, positions=(0.0, 50.0, 100.0, 150.0)
+    )
+    return load_dataset(root), _into_one_errors_file(root, "B", edit)
+
+
+def test_cleaning_messages_of_a_run_in_one_errors_file_name_that_file(tmp_path):
+    def edit(f):
+        # M02 loses its backward reading at 50 mm, M03 every reading but those at 0 mm.
+        position = f["position_mm"].astype(float)
+        m02_gap = (f["measurement"] == "M02") & (f["direction"] == "-") & (position == 50.0)
+        return f[~(m02_gap | ((f["measurement"] == "M03") & (position != 0.0)))]
+
+    dataset, one_file = _one_file_run(tmp_path, edit)
+    raw = read_run(dataset, "B")
+    assert raw.error_files == dict.fromkeys(["M01", "M02", "M03"], one_file)
+    with pytest.raises(
+        ValueError,
+        match=re.escape(f"measurement M03 in {one_file}: 3 of 4 targets have no reading"),
+    ):
+        clean_and_assemble_run(dataset, raw, CLEANING)
+    relaxed = replace(CLEANING, errors=replace(CLEANING.errors, max_missing_fraction=1.0))
+    notes = clean_and_assemble_run(dataset, raw, relaxed).notes
+    assert (
+        f"measurement M02 in {one_file}: position 50 mm has no - reading; using the + reading alone"
+        in notes
+    )
+    # A measurement in its own file is named by that file.
+    (dataset.root / "A" / "errors" / "M02.csv").write_text(
+        "time,position_mm,error_um\n2022-05-10T09:20:00,0,0\n"
+    )
+    own = dataset.root / "A" / "errors" / "M02.csv"
+    with pytest.raises(
+        ValueError, match=re.escape(f"measurement {own}: 3 of 4 targets have no reading")
+    ):
+        clean_and_assemble_run(dataset, read_run(dataset, "A"), CLEANING)
+
+
+def test_checks_of_a_run_in_one_errors_file_name_that_file_and_the_line(tmp_path):
+    from thermaxis.dataset.plausibility import check_run_plausibility, check_same_targets
+
+    def edit(f):
+        f.loc[f.index[-2], "error_um"] = "5000"  # M03's last-but-one reading
+        return f
+
+    dataset, one_file = _one_file_run(tmp_path, edit)
+    lines = one_file.read_text().splitlines()
+    line = next(i for i, row in enumerate(lines, start=1) if ",5000," in row)
+    assert line == len(lines) - 1
+    with pytest.raises(
+        DataError, match=re.escape(f"{one_file}: line {line}, column 'error_um': 5000 um is beyond")
+    ):
+        check_run_plausibility(dataset, read_run(dataset, "B"), CLEANING)
+    errors = pd.DataFrame({"run": ["A", "A", "B"], "position_mm": [0.0, 50.0, 0.0]})
+    with pytest.raises(
+        DataError, match=re.escape(f"{one_file}: run B reads 1 target positions, run A 2")
+    ):
+        check_same_targets(errors, dataset.root)
 
 
 def test_condition_is_a_label_and_feed_optional(tmp_path):

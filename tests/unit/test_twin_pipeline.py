@@ -67,7 +67,7 @@ def test_cleaned_temperatures_match_truth_at_measurement_times(twin_tables):
 def test_k_and_b_match_noise_free_truth(twin_tables):
     _, tables = twin_tables
     errors = pd.concat([t.errors for t in tables.values()], ignore_index=True)
-    kb, _ = decouple_table(errors)
+    kb, _ = decouple_table(errors, degree=1)
     truth = pd.read_csv(TRUTH / "kb_truth.csv")
     merged = kb.merge(truth, on=["run", "measurement"], suffixes=("", "_truth"))
     assert len(merged) == 32
@@ -80,7 +80,7 @@ def test_k_and_b_match_noise_free_truth(twin_tables):
 def test_error_curves_are_strongly_but_not_perfectly_linear(twin_tables):
     _, tables = twin_tables
     errors = pd.concat([t.errors for t in tables.values()], ignore_index=True)
-    kb, _ = decouple_table(errors)
+    kb, _ = decouple_table(errors, degree=1)
     assert (kb["rms_um"] > 0.01).all()
     assert kb["r2"].median() > 0.9
 

@@ -143,7 +143,7 @@ def _valid_samples(obj) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
-def estimate_clock_offset(series, reference, max_offset_s: float = 120.0, step_s: float = 1.0) -> float:
+def estimate_clock_offset(series, reference, max_offset_s: float, step_s: float) -> float:
     """Seconds to ADD to ``series``' timestamps to put it on ``reference``'s clock.
 
     For every candidate lag L (a multiple of ``step_s`` within ``+/- max_offset_s``)
@@ -156,7 +156,8 @@ def estimate_clock_offset(series, reference, max_offset_s: float = 120.0, step_s
     series : pd.Series indexed by time (DatetimeIndex), NaN = missing.
     reference : pd.Series or pd.DataFrame indexed by time; with several columns the
         column whose correlation peak is highest decides.
-    max_offset_s, step_s : search range and resolution, seconds.
+    max_offset_s, step_s : search range and resolution, seconds (the cleaning uses
+        :class:`thermaxis.config.TemperatureCleaning`'s ``max_offset_s`` and ``offset_step_s``).
 
     Returns
     -------

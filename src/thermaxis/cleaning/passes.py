@@ -102,31 +102,7 @@ def combine_passes(
     measurement = measurement[~repeated.to_numpy()]
     passes = {d: _pass_at_targets(rows, targets, label, d) for d, rows in _passes(measurement, label).items()}
 
-    warnings: list[str] = []
-    if settings.direction in ("+", "-") and "single" not in passes:
-        if settings.direction not in passes:
-            (other,) = passes
-            raise ValueError(
-                f"{label}: no {settings.direction} pass (only {other}); expected errors.direction 'mean' or {other!r}"
-            )
-        combined = passes[settings.direction]
-    elif len(passes) == 1:
-        # One pass only (unlabelled, or every row in one direction): nothing to average.
-        (combined,) = passes.values()
-    else:
-        forward = passes.get("+", np.full(targets.size, np.nan))
-        backward = passes.get("-", np.full(targets.size, np.nan))
-        combined = np.where(
-            np.isfinite(forward) & np.isfinite(backward),
-            0.5 * (forward + backward),
-            np.where(np.isfinite(forward), forward, backward),
-        )
-        for k in np.flatnonzero(np.isfinite(forward) != np.isfinite(backward)):
-            have, lack = ("+", "-") if np.isfinite(forward[k]) else ("-", "+")
-            warnings.append(
-                f"{label}: position {targets[k]:g} mm has no {lack} reading; using the {have} reading alone"
-            )
-
+    combined, warnings = _combine(passes, settings.direction, targets, label)
     missing = ~np.isfinite(combined)
     for k in np.flatnonzero(missing):
         warnings.append(f"{label}: position {targets[k]:g} mm has no reading; dropped from this measurement")
@@ -138,3 +114,28 @@ def combine_passes(
     result = pd.Series(combined, index=pd.Index(targets, name="position_mm"), name="error_um")
     result.attrs["n_duplicate_rows"] = int(repeated.sum())
     return result, warnings
+
+
+def _combine(passes: dict[str, np.ndarray], direction: str, targets: np.ndarray, label: str) -> tuple[np.ndarray, list[str]]:
+    """The configured pass, or (``direction="mean"``) the mean of both where both read a target."""
+    if direction in ("+", "-") and "single" not in passes:
+        if direction not in passes:
+            (other,) = passes
+            raise ValueError(f"{label}: no {direction} pass (only {other}); expected errors.direction 'mean' or {other!r}")
+        return passes[direction], []
+    if len(passes) == 1:
+        # One pass only (unlabelled, or every row in one direction): nothing to average.
+        (combined,) = passes.values()
+        return combined, []
+    forward = passes.get("+", np.full(targets.size, np.nan))
+    backward = passes.get("-", np.full(targets.size, np.nan))
+    combined = np.where(
+        np.isfinite(forward) & np.isfinite(backward),
+        0.5 * (forward + backward),
+        np.where(np.isfinite(forward), forward, backward),
+    )
+    warnings = []
+    for k in np.flatnonzero(np.isfinite(forward) != np.isfinite(backward)):
+        have, lack = ("+", "-") if np.isfinite(forward[k]) else ("-", "+")
+        warnings.append(f"{label}: position {targets[k]:g} mm has no {lack} reading; using the {have} reading alone")
+    return combined, warnings

@@ -118,61 +118,17 @@ def tidy_temperatures(run: str, condition: str, windows: pd.DataFrame, at_measur
 
 def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSettings) -> RunTables:
     """Clean one run's logs and assemble its unzeroed errors and measurement temperatures."""
-    t_settings, e_settings = cleaning.temperatures, cleaning.errors
-    run = raw.run
+    run, windows = raw.run, raw.windows()
     condition = dataset.condition_of(run)
-    windows = raw.windows()
-    notes: list[str] = []
-
-    targets = _targets(raw)
-    combined = []
-    for name, measurement in raw.measurements.items():
-        label = str(dataset.root / run / "errors" / f"{name}.csv")
-        curve, warns = passes.combine_passes(measurement, targets, e_settings, name=label)
-        notes.extend(warns)
-        combined.append(curve)
-
-    # The grid spans the measurements with a margin so window means never extrapolate.
-    margin = pd.Timedelta(seconds=max(60.0, 3 * t_settings.interval_s))
-    start = windows["start"].min() - margin
-    end = windows["end"].max() + margin
-    temp_dir = dataset.root / run / "temperatures"
-    try:
-        cleaned = temperature_cleaning.clean_temperatures(raw.sources, dataset.clock_offsets_s(), t_settings, start=start, end=end)
-    except ValueError as exc:
-        raise DataError(f"{temp_dir}: {exc}") from None
-    try:
-        gap_notes = temperature_cleaning.check_gaps(
-            cleaned.gaps,
-            windows,
-            allow=cleaning.allow_long_gaps,
-            files={s: temp_dir / f"{source}.csv" for source in raw.sources for s in dataset.sensors_of(source)},
-            max_gap_s=t_settings.max_gap_s,
-        )
-    except ValueError as exc:
-        raise DataError(str(exc)) from None  # the message starts with the sensor's file
+    combined, notes = _combined_errors(raw, cleaning)
+    cleaned, gap_notes = _cleaned_temperatures(dataset, raw, windows, cleaning)
     notes.extend(f"{run}: {n}" for n in gap_notes)
-    how = cleaning.window
-    at_measurements = temperature_cleaning.temperatures_in_windows(cleaned.frame, windows, how=how)
+    at_measurements = temperature_cleaning.temperatures_in_windows(cleaned.frame, windows, how=cleaning.window)
     sensors = [s for s in dataset.sensors if s in at_measurements.columns]
-    missing = at_measurements[sensors].isna()
-    if missing.any().any():
-        sensor = missing.any()[missing.any()].index[0]
-        window = windows.loc[missing[sensor].to_numpy()].iloc[0]
-        source = next(src for src in raw.sources if sensor in dataset.sensors_of(src))
-        raise DataError(
-            f"{temp_dir / f'{source}.csv'}: sensor {sensor!r} of run {run!r} has no usable reading during measurement "
-            f"{window['measurement']} ({window['name']}, {window['start']} to {window['end']}); "
-            "expected readings within temperatures.max_gap_s of every measurement (raise max_gap_s, or drop the sensor "
-            "from dataset.yaml)"
-        )
+    _check_every_window_read(dataset, raw, windows, at_measurements[sensors])
     signal_frame = temperature_cleaning.signals_on_grid(raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"])
-    signal_values = temperature_cleaning.temperatures_in_windows(signal_frame, windows, how=how)
-
-    series = cleaned.frame.copy()
-    series.insert(1, "elapsed_min", minutes_since_first(series["time"], windows))
-    signal_series = signal_frame.copy()
-    signal_series.insert(1, "elapsed_min", series["elapsed_min"].to_numpy())
+    signal_values = temperature_cleaning.temperatures_in_windows(signal_frame, windows, how=cleaning.window)
+    series = _with_elapsed(cleaned.frame, windows)
     return RunTables(
         run=run,
         series=series,
@@ -182,9 +138,67 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
         temperatures=tidy_temperatures(run, condition, windows, at_measurements[sensors]),
         windows=_with_run(windows, run),
         signals=tidy_signals(run, condition, windows, signal_values.drop(columns=["start", "end"])),
-        signal_series=signal_series,
+        signal_series=_with_elapsed(signal_frame, windows),
         notes=tuple(notes),
     )
+
+
+def _combined_errors(raw: RawRun, cleaning: CleaningSettings) -> tuple[list[pd.Series], list[str]]:
+    """Every measurement's passes combined at the run's targets, and the warnings of doing so."""
+    targets = _targets(raw)
+    combined, notes = [], []
+    for name, measurement in raw.measurements.items():
+        curve, warns = passes.combine_passes(measurement, targets, cleaning.errors, name=raw.error_origin(name))
+        notes.extend(warns)
+        combined.append(curve)
+    return combined, notes
+
+
+def _temperature_file(dataset: Dataset, run: str, source: str):
+    return dataset.root / run / "temperatures" / f"{source}.csv"
+
+
+def _cleaned_temperatures(dataset: Dataset, raw: RawRun, windows: pd.DataFrame, cleaning: CleaningSettings):
+    """The run's temperatures on the grid, and the long gaps allowed during a measurement (as warnings)."""
+    settings = cleaning.temperatures
+    # The grid spans the measurements with a margin so window means never extrapolate.
+    margin = pd.Timedelta(seconds=max(60.0, 3 * settings.interval_s))
+    start, end = windows["start"].min() - margin, windows["end"].max() + margin
+    try:
+        cleaned = temperature_cleaning.clean_temperatures(raw.sources, dataset.clock_offsets_s(), settings, start=start, end=end)
+    except ValueError as exc:
+        raise DataError(f"{dataset.root / raw.run / 'temperatures'}: {exc}") from None
+    files = {s: _temperature_file(dataset, raw.run, source) for source in raw.sources for s in dataset.sensors_of(source)}
+    try:
+        gap_notes = temperature_cleaning.check_gaps(
+            cleaned.gaps, windows, allow=cleaning.allow_long_gaps, max_gap_s=settings.max_gap_s, files=files
+        )
+    except ValueError as exc:
+        raise DataError(str(exc)) from None  # the message starts with the sensor's file
+    return cleaned, gap_notes
+
+
+def _check_every_window_read(dataset: Dataset, raw: RawRun, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> None:
+    """Every sensor has a temperature during every measurement, or the run cannot be modelled."""
+    missing = at_measurements.isna()
+    if not missing.any().any():
+        return
+    sensor = missing.any()[missing.any()].index[0]
+    window = windows.loc[missing[sensor].to_numpy()].iloc[0]
+    source = next(src for src in raw.sources if sensor in dataset.sensors_of(src))
+    raise DataError(
+        f"{_temperature_file(dataset, raw.run, source)}: sensor {sensor!r} of run {raw.run!r} has no usable reading "
+        f"during measurement {window['measurement']} ({window['name']}, {window['start']} to {window['end']}); "
+        "expected readings within temperatures.max_gap_s of every measurement (raise max_gap_s, or drop the sensor "
+        "from dataset.yaml)"
+    )
+
+
+def _with_elapsed(frame: pd.DataFrame, windows: pd.DataFrame) -> pd.DataFrame:
+    """``frame`` (time first) with the minutes since the run's first measurement beside its time."""
+    out = frame.copy()
+    out.insert(1, "elapsed_min", minutes_since_first(out["time"], windows))
+    return out
 
 
 def _with_run(frame: pd.DataFrame, run: str) -> pd.DataFrame:

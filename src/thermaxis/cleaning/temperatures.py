@@ -1,4 +1,4 @@
-"""Cleaning of one run's raw temperature logs and interferometer readings (issue 4).
+"""Cleaning of one run's raw temperature logs.
 
 Temperatures
 ------------
@@ -34,10 +34,9 @@ The order of the steps matters:
 Removed spikes and out-of-range values leave short gaps that step 7 fills; the QC
 table says how many grid points each repair touched.
 
-Errors
-------
-:func:`combine_passes` turns one measurement (one or two passes over the targets)
-into one error per target.
+The interferometer readings are cleaned by :mod:`thermaxis.cleaning.passes` (one error
+per target from a measurement's one or two passes), the clock offsets of step 6 are
+estimated by :mod:`thermaxis.cleaning.clock`.
 """
 
 from __future__ import annotations
@@ -109,7 +108,7 @@ class CleanedTemperatures:
 # ----------------------------------------------------------------------------- spikes
 
 
-def hampel_outliers(values, window: int = 7, threshold: float = 4.0, min_deviation: float = 0.0) -> np.ndarray:
+def hampel_outliers(values, window: int, threshold: float, min_deviation: float) -> np.ndarray:
     """Boolean mask of the samples a Hampel filter calls spikes.
 
     A sample is a spike when it deviates from the median of the ``window`` samples
@@ -119,9 +118,10 @@ def hampel_outliers(values, window: int = 7, threshold: float = 4.0, min_deviati
     Parameters
     ----------
     values : 1-D array of valid (finite) samples in time order.
-    window : odd number of samples.
-    threshold : in scaled MADs (normal-noise standard deviations).
-    min_deviation : deviations up to this are never spikes (quantised data has MAD 0).
+    window : odd number of samples (config ``temperatures.hampel_window``).
+    threshold : in scaled MADs (normal-noise standard deviations; ``hampel_threshold``).
+    min_deviation : deviations up to this are never spikes (quantised data has MAD 0;
+        ``hampel_min_deviation_c``).
 
     Notes
     -----
@@ -332,6 +332,28 @@ def clean_temperatures(
     """
     if not sources:
         raise ValueError("no temperature sources: expected at least one source DataFrame")
+    natives = _native_series(sources, clock_offsets_s, settings)
+    if settings.estimate_clock_offsets and len(sources) > 1:
+        _estimate_offsets(natives, list(sources), settings)
+    grid = _grid(*_grid_span(natives, start, end), int(round(settings.interval_s * _NS)))
+    columns = {"time": grid.astype("datetime64[ns]")}
+    qc_rows, gap_rows = [], []
+    for native in natives:
+        values, counts, gaps = _onto_grid(native, grid, settings.max_gap_s)
+        columns[native.sensor] = values
+        qc_rows.append(_qc_row(native, counts))
+        gap_rows.extend((native.sensor, a, b, (b - a) / _NS, kind) for a, b, kind in gaps)
+    return CleanedTemperatures(
+        frame=pd.DataFrame(columns),
+        qc=pd.DataFrame(qc_rows, columns=QC_COLUMNS),
+        gaps=_gap_table(gap_rows),
+    )
+
+
+def _native_series(
+    sources: Mapping[str, pd.DataFrame], clock_offsets_s: Mapping[str, float], settings: TemperatureCleaning
+) -> list[_Native]:
+    """Every sensor's repaired native series (steps 1-5), each sensor in exactly one source."""
     natives: list[_Native] = []
     seen: dict[str, str] = {}
     for name, frame in sources.items():
@@ -342,45 +364,41 @@ def clean_temperatures(
                 )
             seen[native.sensor] = name
             natives.append(native)
-    if settings.estimate_clock_offsets and len(sources) > 1:
-        _estimate_offsets(natives, list(sources), settings)
+    return natives
 
+
+def _grid_span(natives: list[_Native], start, end) -> tuple[int, int]:
+    """The grid's span in ns: ``start`` and ``end`` where given, else the first and last valid sample."""
     valid_times = [n.t for n in natives if n.t.size]
-    if start is None or end is None:
-        if not valid_times:
-            raise ValueError("no valid temperature sample in any source: cannot place the time grid")
+    if (start is None or end is None) and not valid_times:
+        raise ValueError("no valid temperature sample in any source: cannot place the time grid")
     start_ns = _timestamp_ns(start) if start is not None else int(min(t[0] for t in valid_times))
     end_ns = _timestamp_ns(end) if end is not None else int(max(t[-1] for t in valid_times))
-    grid = _grid(start_ns, end_ns, int(round(settings.interval_s * _NS)))
+    return start_ns, end_ns
 
-    columns = {"time": grid.astype("datetime64[ns]")}
-    qc_rows, gap_rows = [], []
-    for native in natives:
-        values, counts, gaps = _onto_grid(native, grid, settings.max_gap_s)
-        columns[native.sensor] = values
-        qc_rows.append(
-            dict(
-                sensor=native.sensor,
-                source=native.source,
-                n_raw=native.n_raw,
-                n_duplicates=native.n_duplicates,
-                n_out_of_range=native.n_out_of_range,
-                n_spikes=native.n_spikes,
-                **counts,
-                clock_offset_s=native.clock_offset_s,
-                offset_estimated=native.offset_estimated,
-            )
-        )
-        gap_rows.extend((native.sensor, a, b, (b - a) / _NS, kind) for a, b, kind in gaps)
+
+def _qc_row(native: _Native, counts: dict) -> dict:
+    """One sensor's row of the QC table: the native repairs' counts, then the grid's."""
+    return dict(
+        sensor=native.sensor,
+        source=native.source,
+        n_raw=native.n_raw,
+        n_duplicates=native.n_duplicates,
+        n_out_of_range=native.n_out_of_range,
+        n_spikes=native.n_spikes,
+        **counts,
+        clock_offset_s=native.clock_offset_s,
+        offset_estimated=native.offset_estimated,
+    )
+
+
+def _gap_table(gap_rows: list[tuple]) -> pd.DataFrame:
+    """The long gaps as a table (:data:`GAP_COLUMNS`), in time order."""
     gaps = pd.DataFrame(gap_rows, columns=GAP_COLUMNS)
     gaps["start"] = gaps["start"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
     gaps["end"] = gaps["end"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
     gaps["duration_s"] = gaps["duration_s"].astype(float)
-    return CleanedTemperatures(
-        frame=pd.DataFrame(columns),
-        qc=pd.DataFrame(qc_rows, columns=QC_COLUMNS),
-        gaps=sort_naturally(gaps, ["start", "sensor"]),
-    )
+    return sort_naturally(gaps, ["start", "sensor"])
 
 
 def signals_on_grid(
@@ -426,9 +444,9 @@ def _check_windows(windows: pd.DataFrame) -> None:
         raise ValueError("measurement windows: a window ends before it starts; expected start <= end")
 
 
-def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float | None) -> str:
+def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float) -> str:
     """What a gap is, in the words a user can act on."""
-    limit = f" (max_gap_s {max_gap_s:g})" if max_gap_s is not None else ""
+    limit = f" (max_gap_s {max_gap_s:g})"
     if gap.get("kind", "interior") == "no readings":
         return "has no valid reading at all (empty, or every value out of range or a spike)"
     if gap.get("kind", "interior") == "record start":
@@ -447,9 +465,10 @@ def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float | None) -> str:
 def check_gaps(
     gaps: pd.DataFrame,
     windows: pd.DataFrame,
-    allow: bool = False,
+    *,
+    allow: bool,
+    max_gap_s: float,
     files: Mapping[str, object] | None = None,
-    max_gap_s: float | None = None,
 ) -> list[str]:
     """Long temperature gaps that overlap a measurement window.
 
@@ -458,9 +477,10 @@ def check_gaps(
     gaps : ``CleanedTemperatures.gaps``.
     windows : one row per measurement: ``measurement``, ``start``, ``end`` (optionally
         ``name``).
-    allow : when False an overlap is an error; when True it is returned as a warning.
+    allow : when False an overlap is an error; when True it is returned as a warning
+        (config ``temperatures.allow_long_gaps``).
+    max_gap_s : the limit in force, named in the messages (``temperatures.max_gap_s``).
     files : sensor -> the file its readings came from, named in the messages.
-    max_gap_s : the limit in force, named in the messages.
 
     Returns
     -------
@@ -525,14 +545,14 @@ def _window_mean(grid_ns: np.ndarray, values: np.ndarray, start: int, end: int) 
     return np.divide(total, covered, out=np.full(values.shape[1], np.nan), where=covered > 0)
 
 
-def temperatures_in_windows(frame: pd.DataFrame, windows: pd.DataFrame, how: str = "mean") -> pd.DataFrame:
+def temperatures_in_windows(frame: pd.DataFrame, windows: pd.DataFrame, how: str) -> pd.DataFrame:
     """Each sensor's temperature during each measurement.
 
     Parameters
     ----------
     frame : ``CleanedTemperatures.frame`` (``time`` + sensor columns on a regular grid).
     windows : ``measurement``, ``start``, ``end`` per measurement.
-    how : "mean" - time average of the linearly interpolated series over [start, end]
+    how : (config ``temperatures.window``) "mean" - time average of the linearly interpolated series over [start, end]
         (exact for a linear ramp: its value at the window's middle); NaN stretches are
         left out of the average.  "start" - the value at the window's start.
 

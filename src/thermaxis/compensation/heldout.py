@@ -45,7 +45,7 @@ def pass_deviations(raw_run, targets: Sequence[float], max_missing_fraction: flo
 
     out = {}
     for number, (name, measurement) in enumerate(raw_run.measurements.items(), start=1):
-        label = f"{raw_run.run}/errors/{name}.csv"
+        label = raw_run.error_origin(name)
         passes = {}
         for direction in sorted(set(measurement["direction"]), reverse=True):  # "+" before "-"
             settings = ErrorCleaning(direction=direction, max_missing_fraction=max_missing_fraction)
@@ -90,55 +90,78 @@ def held_out_tables(
     The pitch table is the first measurement's; compensation is what the controller
     computes from the exported K0, tan(beta), P0.
     """
-    from thermaxis.compensation.iso230 import (
-        NEEDS_CYCLES,
-        NOT_COMPUTED,
-        QUANTITIES,
-        single_pass_quantities,
-    )
+    from thermaxis.compensation.iso230 import single_pass_quantities
 
     positions = np.asarray(positions_mm, dtype=float)
     table = _pitch_table(deviations[1])
-    siemens, tc, residuals, iso, summary = [], [], [], [], []
+    names = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
+    tables: dict[str, list[dict]] = {name: [] for name in names}
     for number, (step, minutes, reference) in enumerate(zip(steps, time_min, final), start=1):
         label = {"fold": fold, "run": fold, "measurement": number, "time_min": float(minutes)}
-        reasons = "; ".join(step.reasons)
-        siemens += _controller_rows(label, siemens_840d(step.parameters), siemens_840d(reference), step.status)
-        tc_rows = _controller_rows(label, twincat(step.parameters), twincat(reference), step.status)
-        for row in tc_rows:
-            row["register"] = int(round(row["value"]))
-        tc += tc_rows
+        siemens = _controller_rows(label, siemens_840d(step.parameters), siemens_840d(reference), step.status)
+        tables["siemens_840d"] += siemens
+        tables["twincat"] += _twincat_rows(label, step, reference)
         applied = step.parameters.at(positions)
-        before, after = {}, {}
-        for direction, values in deviations[number].items():
-            drift = values - table
-            before[direction], after[direction] = drift, drift + applied
-            for x, d, c in zip(positions, drift, applied):
-                residuals.append({**label, "direction": direction, "position_mm": x, "uncompensated_um": d, "compensation_um": c, "residual_um": d + c, "status": step.status})
+        # The drift since the pitch table was taken, before and after the compensation is applied.
+        before = {direction: values - table for direction, values in deviations[number].items()}
+        after = {direction: drift + applied for direction, drift in before.items()}
+        tables["residuals"] += _residual_rows(label, positions, before, applied, step.status)
         q_before = single_pass_quantities(before.get("+"), before.get("-"))
         q_after = single_pass_quantities(after.get("+"), after.get("-"))
-        for name, description in QUANTITIES.items():
-            iso.append({**label, "quantity": name, "description": description, "uncompensated_um": q_before[name], "compensated_um": q_after[name], "computed": bool(np.isfinite(q_before[name])), "note": ""})
-        for name, description in NOT_COMPUTED.items():
-            iso.append({**label, "quantity": name, "description": description, "uncompensated_um": np.nan, "compensated_um": np.nan, "computed": False, "note": NEEDS_CYCLES})
-        all_before = np.concatenate(list(before.values()))
-        all_after = np.concatenate(list(after.values()))
-        summary.append(
-            {
-                **label,
-                "status": step.status,
-                "largest_abs_uncompensated_um": float(np.nanmax(np.abs(all_before))),
-                "largest_abs_compensated_um": float(np.nanmax(np.abs(all_after))),
-                "E_uncompensated_um": _systematic(q_before),
-                "E_compensated_um": _systematic(q_after),
-                "line_gap_um": step.parameters.line_gap_um,
-                "reasons": reasons,
-            }
-        )
+        tables["iso230_2"] += _iso_rows(label, q_before, q_after)
+        tables["summary"].append(_summary_row(label, step, before, after, q_before, q_after))
+    return {name: pd.DataFrame(rows) for name, rows in tables.items()}
+
+
+def _twincat_rows(label: dict, step: Step, reference: ControllerParameters) -> list[dict]:
+    """The TwinCAT parameters of one measurement, with the integer each register holds."""
+    rows = _controller_rows(label, twincat(step.parameters), twincat(reference), step.status)
+    for row in rows:
+        row["register"] = int(round(row["value"]))
+    return rows
+
+
+def _residual_rows(label: dict, positions: np.ndarray, drifts: Mapping[str, np.ndarray], applied, status: str):
+    """Per pass and target: the uncompensated drift, the compensation applied, and what remains."""
+    return [
+        {
+            **label,
+            "direction": direction,
+            "position_mm": x,
+            "uncompensated_um": d,
+            "compensation_um": c,
+            "residual_um": d + c,
+            "status": status,
+        }
+        for direction, drift in drifts.items()
+        for x, d, c in zip(positions, drift, applied)
+    ]
+
+
+def _iso_rows(label: dict, q_before: Mapping[str, float], q_after: Mapping[str, float]) -> list[dict]:
+    """The ISO 230-2 quantities one measurement gives, before and after, and those it cannot give."""
+    from thermaxis.compensation.iso230 import NEEDS_CYCLES, NOT_COMPUTED, QUANTITIES
+
+    def row(name, description, before, after, computed, note):
+        return {**label, "quantity": name, "description": description, "uncompensated_um": before,
+                "compensated_um": after, "computed": computed, "note": note}  # fmt: skip
+
+    computed = [
+        row(name, description, q_before[name], q_after[name], bool(np.isfinite(q_before[name])), "")
+        for name, description in QUANTITIES.items()
+    ]
+    return computed + [row(name, description, np.nan, np.nan, False, NEEDS_CYCLES) for name, description in NOT_COMPUTED.items()]
+
+
+def _summary_row(label: dict, step: Step, before, after, q_before, q_after) -> dict:
+    """One measurement's largest deviation and E, uncompensated and compensated, and the model's state."""
     return {
-        "siemens_840d": pd.DataFrame(siemens),
-        "twincat": pd.DataFrame(tc),
-        "residuals": pd.DataFrame(residuals),
-        "iso230_2": pd.DataFrame(iso),
-        "summary": pd.DataFrame(summary),
+        **label,
+        "status": step.status,
+        "largest_abs_uncompensated_um": float(np.nanmax(np.abs(np.concatenate(list(before.values()))))),
+        "largest_abs_compensated_um": float(np.nanmax(np.abs(np.concatenate(list(after.values()))))),
+        "E_uncompensated_um": _systematic(q_before),
+        "E_compensated_um": _systematic(q_after),
+        "line_gap_um": step.parameters.line_gap_um,
+        "reasons": "; ".join(step.reasons),
     }

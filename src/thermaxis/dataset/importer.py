@@ -18,7 +18,6 @@ import argparse
 import shutil
 import sys
 import tempfile
-from dataclasses import dataclass
 from pathlib import Path
 
 import jsonschema
@@ -30,18 +29,7 @@ from thermaxis.errors import DataError
 from thermaxis.dataset.reader import load_dataset
 from thermaxis.schemas import load_schema
 
-__all__ = ["ImportedRun", "load_mapping", "read_table", "split_runs", "measurements_of", "import_dataset", "main"]
-
-
-@dataclass(frozen=True)
-class ImportedRun:
-    """One run cut from the record: its rows and what the mapping says of it."""
-
-    name: str
-    condition: str
-    description: str
-    rows: pd.DataFrame  # seconds since the record's start in column "_t", then the source columns
-    descriptors: dict
+__all__ = ["load_mapping", "read_table", "split_runs", "measurements_of", "import_dataset", "main"]
 
 
 def load_mapping(path) -> dict:

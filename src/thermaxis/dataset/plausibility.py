@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from thermaxis.dataset.layout import error_source
 from thermaxis.dataset.safety import _error, check_inside, check_name, check_regular_file
 
 __all__ = [
@@ -76,26 +77,24 @@ def check_dataset_shape(dataset, config) -> None:
 def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
     """Refuse implausible readings or a grid step longer than the run; warn of implausible medians."""
     folder = dataset.root / raw.run
-
-    def file_of(name):
-        # One file per measurement, or the run's one errors.csv.
-        return raw.error_source if raw.error_source is not None and raw.error_source.is_file() else folder / "errors" / f"{name}.csv"
-
     for name, measurement in raw.measurements.items():
-        path, positions = file_of(name), measurement["position_mm"].to_numpy()
-        check_error_readings(path, measurement["error_um"].to_numpy(), cleaning.max_abs_error_um)
+        # The file and its lines as read; a run built in memory has neither.
+        path = raw.error_files.get(name, name)
+        lines, positions = raw.error_lines.get(name), measurement["position_mm"].to_numpy()
+        check_error_readings(path, measurement["error_um"].to_numpy(), cleaning.max_abs_error_um, lines)
         _refuse_first_row(
             path,
             np.abs(positions) > MAX_ABS_POSITION_MM,
             "position_mm",
             lambda i: f"expected a position within ±{MAX_ABS_POSITION_MM:g} mm, got {positions[i]:g}",
+            lines,
         )
     windows = raw.windows()
     overlapping = np.flatnonzero(windows["start"].to_numpy()[1:] < windows["end"].to_numpy()[:-1])
     if overlapping.size:
         earlier, later = windows.iloc[overlapping[0]], windows.iloc[overlapping[0] + 1]
         raise _error(
-            file_of(later["name"]),
+            raw.error_origin(later["name"]),
             f"readings from {later['start']} overlap measurement {earlier['name']} ({earlier['start']} to "
             f"{earlier['end']}); expected one measurement at a time (a copied file?)",
         )
@@ -110,7 +109,7 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
     median_c = cleaning.plausible_median_c
     if not median_c[0] < median_c[1]:
         raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got [{median_c[0]:g}, {median_c[1]:g}]")
-    if dataset.meta.get("temperature_kind", "absolute") == "rise":
+    if dataset.temperature_kind == "rise":
         return []  # rises since the start sit near 0 °C by design: no structure-temperature median to judge
     notes = []
     for source, frame in raw.sources.items():
@@ -132,7 +131,7 @@ def check_same_targets(errors: pd.DataFrame, dataset_root) -> None:
             lacking = np.setdiff1d(reference, positions)
             detail = f"{extra[0]:g} mm is not a target of run {first_run}" if extra.size else f"{lacking[0]:g} mm is never read"
             raise _error(
-                Path(dataset_root) / run / "errors",
+                error_source(Path(dataset_root) / run),
                 f"run {run} reads {positions.size} target positions, run {first_run} {reference.size} "
                 f"({detail}); expected the same targets in every run",
             )
@@ -154,8 +153,8 @@ def check_time_range(path, parsed: pd.Series, values: pd.Series, column: str = "
     )
 
 
-def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float) -> None:
-    """Interferometer errors are finite and within ``max_abs_um`` (row i is file line i + 2)."""
+def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float, lines=None) -> None:
+    """Interferometer errors are finite and within ``max_abs_um`` (``lines``: as :func:`_refuse_first_row`)."""
     errors_um = np.asarray(errors_um, dtype=float)
     bad = ~np.isfinite(errors_um) | (np.abs(errors_um) > max_abs_um)
     _refuse_first_row(
@@ -163,14 +162,16 @@ def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float) -> None
         bad,
         "error_um",
         lambda i: f"{errors_um[i]:g} um is beyond the plausible ±{max_abs_um:g} um (config errors.max_abs_error_um)",
+        lines,
     )
 
 
-def _refuse_first_row(path, bad: np.ndarray, column: str, what) -> None:
-    """The first flagged row as a file line (row i is line i + 2: the header is line 1)."""
+def _refuse_first_row(path, bad: np.ndarray, column: str, what, lines=None) -> None:
+    """The first flagged row as a file line: ``lines[i]``, or i + 2 (the header is line 1) for a whole file."""
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise _error(path, f"line {i + 2}, column {column!r}: {what(i)}")
+        line = int(lines[i]) if lines is not None else i + 2
+        raise _error(path, f"line {line}, column {column!r}: {what(i)}")
 
 
 def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: str) -> list[str]:

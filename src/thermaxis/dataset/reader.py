@@ -17,7 +17,7 @@ import jsonschema
 import numpy as np
 import pandas as pd
 
-from thermaxis.dataset import plausibility
+from thermaxis.dataset import layout, plausibility
 from thermaxis.dataset import safety
 from thermaxis.labels import natural_key
 from thermaxis.schemas import load_schema
@@ -34,11 +34,8 @@ __all__ = [
     "read_measurements",
     "read_measurements_of",
     "read_first_measurement",
-    "NAME_PATTERN",
 ]
 
-# Names that become folder or file names: no separators, no leading dot or dash.
-NAME_PATTERN = r"[A-Za-z0-9_][A-Za-z0-9_.-]*"
 RUN_COLUMNS = ("run", "condition", "description")
 ERROR_COLUMNS = ("time", "position_mm", "error_um")
 # One file per run holding every measurement, told apart by this column.
@@ -373,25 +370,31 @@ def read_measurements(path) -> dict[str, pd.DataFrame]:
     Readings of one measurement must not go back in time; measurements may interleave
     only in the sense that the file is grouped by label, in any order.
     """
-    path = Path(path)
+    return _read_run_file(Path(path))[0]
+
+
+def _read_run_file(path: Path) -> tuple[dict[str, pd.DataFrame], dict[str, np.ndarray]]:
+    """:func:`read_measurements`, and the file line of each measurement's readings (header = line 1)."""
     frame = _read_csv(path)
     _require_error_columns(path, frame, (MEASUREMENT_COLUMN, *ERROR_COLUMNS))
     labels = frame[MEASUREMENT_COLUMN].str.strip()
-    bad = ~labels.str.fullmatch(NAME_PATTERN)
+    # A label names the measurement as a file stem would, so it obeys the same rule.
+    bad = ~labels.str.fullmatch(safety.NAME_PATTERN)
     if bad.any():
         i = int(np.flatnonzero(bad.to_numpy())[0])
         raise DataError(
             f"{path}: line {i + 2}, column {MEASUREMENT_COLUMN!r}: expected a measurement name matching "
-            f"{NAME_PATTERN}, got {frame[MEASUREMENT_COLUMN].iloc[i]!r}"
+            f"{safety.NAME_PATTERN}, got {frame[MEASUREMENT_COLUMN].iloc[i]!r}"
         )
     readings = _parse_readings(path, frame)
-    out = {}
+    out, lines = {}, {}
     for label in dict.fromkeys(labels):
         rows = readings[(labels == label).to_numpy()]
         _check_time_order(path, rows["time"], f" within measurement {label!r}")
         _check_repeated_positions(path, rows.reset_index(drop=True), f"measurement {label!r}: ")
         out[label] = rows.reset_index(drop=True)
-    return out
+        lines[label] = rows.index.to_numpy() + 2
+    return out, lines
 
 
 def _check_repeated_positions(path: Path, frame: pd.DataFrame, where: str = "") -> None:
@@ -416,7 +419,18 @@ class RawRun:
     sources: Mapping[str, pd.DataFrame]
     measurements: Mapping[str, pd.DataFrame]  # ordered by first reading's time
     signals: Mapping[str, pd.DataFrame] = field(default_factory=dict)
-    error_source: Path | None = None  # the file or folder the measurements came from
+    # Measurement -> the file its readings are in (its own CSV, or the run's one errors.csv)
+    # and the file line of each reading (header = line 1), so messages point at real lines.
+    error_files: Mapping[str, Path] = field(default_factory=dict)
+    error_lines: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    def error_origin(self, name: str) -> str:
+        """Measurement ``name`` as messages name it: its file, with its label when the run's
+        measurements share one errors.csv (a measurement's own file is named after it)."""
+        path = self.error_files.get(name)
+        if path is None:
+            return name  # a run built in memory
+        return str(path) if path.stem == name else f"{name} in {path}"
 
     def windows(self) -> pd.DataFrame:
         """Measurement number, name and time window (first to last reading)."""
@@ -450,10 +464,10 @@ def _read_logs(folder: Path, dataset: Dataset, kind: str) -> dict[str, pd.DataFr
 def _measurement_source(dataset: Dataset, run: str) -> tuple[Path, list[Path]]:
     """Where a run's measurements are: ``<run>/errors.csv`` (one file) or ``<run>/errors/*.csv``."""
     folder = dataset.root / run
-    err_dir, err_file = folder / "errors", folder / "errors.csv"
+    err_dir, err_file = folder / layout.ERRORS_FOLDER, folder / layout.ERRORS_FILE
     if err_dir.is_dir() and err_file.exists():
         raise DataError(f"{err_file}: the run also has a folder {err_dir}; expected one of the two layouts")
-    if err_file.exists():
+    if layout.error_source(folder) == err_file:
         return err_file, [safety.check_inside(err_file, dataset.root, what="measurement file")]
     if not err_dir.is_dir():
         raise DataError(f"{err_dir}: folder not found (expected one CSV per interferometer measurement, or {err_file})")
@@ -464,24 +478,28 @@ def _measurement_source(dataset: Dataset, run: str) -> tuple[Path, list[Path]]:
     return err_dir, files
 
 
-def _read_measurement_files(source: Path, files: list[Path]) -> dict[str, pd.DataFrame]:
+def _read_measurement_files(source: Path, files: list[Path]) -> tuple[dict, dict, dict]:
+    """Measurements, the file of each and the file line of each reading, in either layout."""
     if source.is_file():
-        return read_measurements(files[0])
-    return {f.stem: read_measurement(f) for f in files}
+        measurements, lines = _read_run_file(files[0])
+        return measurements, dict.fromkeys(measurements, files[0]), lines
+    measurements = {f.stem: read_measurement(f) for f in files}
+    lines = {name: np.arange(len(m)) + 2 for name, m in measurements.items()}
+    return measurements, {f.stem: f for f in files}, lines
 
 
-def read_measurements_of(dataset: Dataset, run: str, min_measurements: int = 1) -> tuple[dict[str, pd.DataFrame], Path]:
-    """A run's measurements, ordered by their first reading's time, and the file or folder they came from.
+def read_measurements_of(dataset: Dataset, run: str, min_measurements: int = 1) -> tuple[dict, dict, dict]:
+    """A run's measurements, ordered by their first reading's time; the file of each; its file lines.
 
     Measurements come either from ``<run>/errors/<measurement>.csv`` (one file each) or
     from ``<run>/errors.csv`` with a ``measurement`` column (one file for the run).
     """
     source, files = _measurement_source(dataset, run)
-    measurements = _read_measurement_files(source, files)
+    measurements, error_files, lines = _read_measurement_files(source, files)
     if len(measurements) < min_measurements:
         raise DataError(f"{source}: {len(measurements)} measurement(s), expected at least {min_measurements}")
     ordered = dict(sorted(measurements.items(), key=lambda kv: (kv[1]["time"].iloc[0], natural_key(kv[0]))))
-    return ordered, source
+    return ordered, error_files, lines
 
 
 def read_first_measurement(dataset: Dataset, run: str) -> pd.DataFrame:
@@ -489,7 +507,7 @@ def read_first_measurement(dataset: Dataset, run: str) -> pd.DataFrame:
     source, files = _measurement_source(dataset, run)
     if not files:
         raise DataError(f"{source}: no measurement files (expected one CSV per interferometer measurement)")
-    return next(iter(_read_measurement_files(source, files[:1]).values()))
+    return next(iter(_read_measurement_files(source, files[:1])[0].values()))
 
 
 def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
@@ -500,5 +518,5 @@ def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
     safety.check_inside(dataset.root / run, dataset.root, what="run folder")
     sources = _read_logs(temp_dir, dataset, "sensor")
     signals = _read_logs(dataset.root / run / "signals", dataset, "signal") if dataset.signals else {}
-    measurements, source = read_measurements_of(dataset, run, min_measurements)
-    return RawRun(run=run, sources=sources, measurements=measurements, signals=signals, error_source=source)
+    measurements, error_files, lines = read_measurements_of(dataset, run, min_measurements)
+    return RawRun(run, sources, measurements, signals, error_files=error_files, error_lines=lines)

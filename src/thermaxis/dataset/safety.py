@@ -1,7 +1,7 @@
-"""Defences against hostile or broken datasets (issue 13).
+"""Defences against hostile or broken datasets.
 
-Datasets are untrusted input; config files and the workflow are trusted code (README,
-"Security and trust").  Everything here turns a dataset that could escape the results
+Datasets are untrusted input; config files and the workflow are trusted code (the trust
+model of docs/security.md).  Everything here turns a dataset that could escape the results
 folder, hang the workflow, exhaust memory or slip an implausible value into a model
 into ONE line naming the file, the line or column and what was expected
 (:class:`thermaxis.errors.DataError`).  Checks run before a file is parsed: a FIFO is
@@ -54,8 +54,7 @@ _INTEGER_PART = re.compile(r"^\s*[-+]?\d+$")
 _FRACTION_PART = re.compile(r"^\d+\s*$")
 
 
-def _error(path, message: str) -> ValueError:
-    # io imports this module at load time, so its error class is looked up on use.
+def _error(path, message: str) -> DataError:
     return DataError(f"{path}: {message}")
 
 

@@ -17,7 +17,7 @@ SIMULATED_NOTE = "Simulated data (thermal twin), not the paper's measurements."
 # How the model labels of the tables (thermaxis.method.models) read in legends and captions;
 # unknown labels are shown as they are.
 DISPLAY_NAMES = {
-    "mlr": "MLR", "svr": "SVR", "gpr": "GPR", "pls": "PLS", "ridge": "ridge",
+    "mlr": "MLR", "svr": "SVR", "gpr": "GPR", "pls": "PLS", "ridge": "ridge", "lasso": "lasso",
     "decoupled": "decoupled", "pointwise": "point-by-point",
 }  # fmt: skip
 

@@ -400,21 +400,7 @@ def fig10_temperature_rise(
     """
     _require_columns(series, ("elapsed_min",), "series")
     signal_names = [] if signals is None else [c for c in signals.columns if c not in ("time", "elapsed_min")]
-    available = [
-        c for c in series.columns if c not in ("time", "elapsed_min") and pd.api.types.is_numeric_dtype(series[c])
-    ]
-    if sensors is None:
-        sensors = available
-    else:
-        sensors = [sensors] if isinstance(sensors, str) else list(sensors)
-        unknown = [s for s in sensors if s not in available]
-        if unknown:
-            raise ValueError(
-                f"series table has no sensor column(s) {', '.join(unknown)}; available: {', '.join(available)}"
-            )
-    elapsed = series["elapsed_min"].to_numpy(dtype=float)
-    order = np.argsort(elapsed, kind="stable")
-    elapsed = elapsed[order]
+    sensors = _requested_sensors(series, sensors)
     if signal_names:
         fig = _new_figure(SINGLE_COLUMN_IN, 3.8)
         ax, ax_signal = fig.subplots(2, 1, sharex=True, height_ratios=(3, 1.3))
@@ -422,6 +408,35 @@ def fig10_temperature_rise(
     else:
         fig = _new_figure(SINGLE_COLUMN_IN, 2.6)
         ax = fig.subplots()
+    if _draw_rises(ax, series, sensors) == 0:
+        raise ValueError("series table has no finite sample in any requested sensor; expected at least one")
+    ax.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
+    if not signal_names:
+        ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel("Temperature rise (°C)")
+    _top_legend(fig, ax)
+    return fig
+
+
+def _requested_sensors(series: pd.DataFrame, sensors) -> list:
+    """The sensor columns to draw: ``sensors`` (one name or several), checked, or every numeric column."""
+    available = [
+        c for c in series.columns if c not in ("time", "elapsed_min") and pd.api.types.is_numeric_dtype(series[c])
+    ]
+    if sensors is None:
+        return available
+    sensors = [sensors] if isinstance(sensors, str) else list(sensors)
+    unknown = [s for s in sensors if s not in available]
+    if unknown:
+        raise ValueError(f"series table has no sensor column(s) {', '.join(unknown)}; available: {', '.join(available)}")
+    return sensors
+
+
+def _draw_rises(ax, series: pd.DataFrame, sensors: Sequence[str]) -> int:
+    """Each sensor's rise since ``elapsed_min == 0`` (interpolated there); returns how many were drawn."""
+    elapsed = series["elapsed_min"].to_numpy(dtype=float)
+    order = np.argsort(elapsed, kind="stable")
+    elapsed = elapsed[order]
     drawn = 0
     for i, sensor in enumerate(sensors):
         values = series[sensor].to_numpy(dtype=float)[order]
@@ -437,14 +452,7 @@ def fig10_temperature_rise(
             **_categorical_style(i),
         )
         drawn += 1
-    if drawn == 0:
-        raise ValueError("series table has no finite sample in any requested sensor; expected at least one")
-    ax.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
-    if not signal_names:
-        ax.set_xlabel(TIME_LABEL)
-    ax.set_ylabel("Temperature rise (°C)")
-    _top_legend(fig, ax)
-    return fig
+    return drawn
 
 
 def _signal_panel(ax, signals: pd.DataFrame, names: Sequence[str], units: dict) -> None:

@@ -161,42 +161,45 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
             axes[0, col].set_title(f"Held-out run {run}", loc="left")
         return fig
     for col, run in enumerate(runs):
-        ax_curve, ax_res = axes[0, col], axes[1, col]
-        run_rows = rows[rows["run"] == run]
-        times = _measurement_times(run_rows)
-        norm = _ordered_norm(times.to_numpy())
-        for i, (measurement, group) in enumerate(run_rows.groupby("measurement", sort=True)):
-            group = group.sort_values("position_mm", kind="stable")
-            x = group["position_mm"].to_numpy(dtype=float)
-            t = float(times.loc[measurement])
-            color = ORDERED_CMAP(norm(t))
-            marker = MARKERS[i % len(MARKERS)]
-            if _has_band(group):
-                ax_curve.fill_between(
-                    x,
-                    group["lower"].to_numpy(dtype=float),
-                    group["upper"].to_numpy(dtype=float),
-                    color=color,
-                    alpha=0.15,
-                    linewidth=0,
-                )
-            ax_curve.plot(x, group["measured"].to_numpy(dtype=float), color=color, marker=marker)
-            ax_curve.plot(x, group["predicted"].to_numpy(dtype=float), color=color, linestyle="--")
-            ax_res.plot(x, group["residual"].to_numpy(dtype=float), color=color, marker=marker, label=_time_label(t))
-        ax_res.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
-        ax_curve.set_title(f"Held-out run {run}", loc="left")
-        ax_curve.set_ylabel(ERROR_LABEL if col == 0 else "")
-        ax_res.set_ylabel("Residual (µm)" if col == 0 else "")
-        ax_res.set_xlabel(POSITION_LABEL)
-        handles = [
-            Line2D([], [], color="0.2", marker="o", label="Measured"),
-            Line2D([], [], color="0.2", linestyle="--", label=f"Predicted ({_display(algorithm)})"),
-        ]
-        if _has_band(run_rows):
-            handles.append(Patch(facecolor="0.2", alpha=0.15, label="Prediction interval"))
-        ax_curve.legend(handles=handles, loc="best")
-        _ordered_key(fig, ax_res, norm, len(times), TIME_LABEL)
+        _prediction_along_stroke(fig, axes[0, col], axes[1, col], run, rows[rows["run"] == run], algorithm, first=col == 0)
     return fig
+
+
+def _prediction_along_stroke(fig, ax_curve, ax_res, run, run_rows: pd.DataFrame, algorithm: str, first: bool) -> None:
+    """One held-out run: measured and predicted curves over the stroke, coloured by time, and residuals."""
+    times = _measurement_times(run_rows)
+    norm = _ordered_norm(times.to_numpy())
+    for i, (measurement, group) in enumerate(run_rows.groupby("measurement", sort=True)):
+        group = group.sort_values("position_mm", kind="stable")
+        x = group["position_mm"].to_numpy(dtype=float)
+        t = float(times.loc[measurement])
+        color = ORDERED_CMAP(norm(t))
+        marker = MARKERS[i % len(MARKERS)]
+        if _has_band(group):
+            ax_curve.fill_between(
+                x,
+                group["lower"].to_numpy(dtype=float),
+                group["upper"].to_numpy(dtype=float),
+                color=color,
+                alpha=0.15,
+                linewidth=0,
+            )
+        ax_curve.plot(x, group["measured"].to_numpy(dtype=float), color=color, marker=marker)
+        ax_curve.plot(x, group["predicted"].to_numpy(dtype=float), color=color, linestyle="--")
+        ax_res.plot(x, group["residual"].to_numpy(dtype=float), color=color, marker=marker, label=_time_label(t))
+    ax_res.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
+    ax_curve.set_title(f"Held-out run {run}", loc="left")
+    ax_curve.set_ylabel(ERROR_LABEL if first else "")
+    ax_res.set_ylabel("Residual (µm)" if first else "")
+    ax_res.set_xlabel(POSITION_LABEL)
+    handles = [
+        Line2D([], [], color="0.2", marker="o", label="Measured"),
+        Line2D([], [], color="0.2", linestyle="--", label=f"Predicted ({_display(algorithm)})"),
+    ]
+    if _has_band(run_rows):
+        handles.append(Patch(facecolor="0.2", alpha=0.15, label="Prediction interval"))
+    ax_curve.legend(handles=handles, loc="best")
+    _ordered_key(fig, ax_res, norm, len(times), TIME_LABEL)
 
 
 def _prediction_in_time(ax_value, ax_res, rows: pd.DataFrame, algorithm: str, first: bool) -> None:

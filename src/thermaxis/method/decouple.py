@@ -40,10 +40,8 @@ def stroke_powers(position_mm, origin_mm: float, degree: int) -> np.ndarray:
     return np.vander(shifted_m, degree + 1, increasing=True)
 
 
-def decouple_measurement(
-    position_mm, error_um, degree: int = 1, origin_mm: float | None = None
-) -> DecoupledFit:
-    """Least-squares fit of one measurement's error curve.
+def decouple_measurement(position_mm, error_um, degree: int, origin_mm: float | None = None) -> DecoupledFit:
+    """Least-squares fit of one measurement's error curve by a polynomial of ``degree`` (1: the paper's line).
 
     ``origin_mm`` defaults to the smallest position (the first target); pass the
     dataset's first target explicitly when a measurement lost its first reading,
@@ -80,7 +78,7 @@ def decouple_measurement(
     )
 
 
-def decouple_curves(position_mm, errors, degree: int = 1, origin_mm: float | None = None, labels=None) -> list[DecoupledFit]:
+def decouple_curves(position_mm, errors, degree: int, origin_mm: float | None = None, labels=None) -> list[DecoupledFit]:
     """Decouple each row of an (n_measurements, n_positions) error matrix.
 
     Missing readings (NaN, or any non-finite value) are left out of their row's fit; ``origin_mm`` defaults to
@@ -111,7 +109,7 @@ def compose_curve(coefficients, position_mm, origin_mm: float) -> np.ndarray:
     return coefficients @ stroke_powers(position_mm, origin_mm, coefficients.shape[1] - 1).T
 
 
-def decouple_table(errors, degree: int = 1):
+def decouple_table(errors, degree: int):
     """Decouple every measurement of a tidy errors table (run, measurement, time_min, position_mm, error_um).
 
     Returns ``(kb, coefficients)``: the Table 5 frame (run, measurement, time_min,

@@ -221,6 +221,9 @@ def _build_model(approach: str, algorithm: str, selection: FoldSelection, model:
         algorithm=algorithm,
         params=model.params_for(algorithm),
         svr_grid=model.grid(),
+        search_grid=model.search_grid_for(algorithm),
+        inner_search=model.inner_search,
+        gpr_max_samples=model.gpr_max_samples,
         random_state=model.random_state,
         signals=model.signals,
     )
@@ -246,53 +249,78 @@ def evaluate_configuration(
     ``degree`` is the decoupling's (config ``decoupling.degree``); the point-by-point
     approach never decouples and ignores it (``None`` allowed).
     """
+    X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
+    estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
+    label = {"fold": fold, "approach": approach, "algorithm": algorithm}
+    measured = Y_test.to_numpy(dtype=float)
+    predicted, lower, upper = _predicted_errors(estimator, X_test, algorithm, model.interval_level)
+    if approach == "decoupled":
+        metric_rows, kb_frame = _kb_tables(estimator, X_test, Y_test, label, model.interval_level, degree)
+    else:
+        metric_rows, kb_frame = [], _empty_kb()
+    metric_rows.append({**label, "target": "error", **prediction_metrics(measured, predicted)})
+    return FoldResult(
+        metrics=pd.DataFrame(metric_rows),
+        coefficients=_coefficient_table(estimator, label),
+        kb_predictions=kb_frame,
+        error_predictions=_error_table(label, X_test, np.asarray(Y.columns, dtype=float), measured, predicted, lower, upper),
+    )
+
+
+def _split_fold(X: pd.DataFrame, Y: pd.DataFrame, fold: str):
+    """X and Y of the training runs (every run but ``fold``), then of ``fold``, each indexed from 0."""
     test = (X["run"] == fold).to_numpy()
     if not test.any():
         raise ValueError(f"fold {fold!r}: no measurements of that run")
-    X_train, Y_train = X.loc[~test].reset_index(drop=True), Y.loc[~test].reset_index(drop=True)
-    X_test, Y_test = X.loc[test].reset_index(drop=True), Y.loc[test].reset_index(drop=True)
-    estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
+    train = X.loc[~test].reset_index(drop=True), Y.loc[~test].reset_index(drop=True)
+    return (*train, X.loc[test].reset_index(drop=True), Y.loc[test].reset_index(drop=True))
 
+
+def _predicted_errors(estimator, X_test: pd.DataFrame, algorithm: str, level: float):
+    """Predicted error curves of the held-out measurements, with the GPR's interval (NaN otherwise)."""
     predicted = np.asarray(estimator.predict(X_test), dtype=float)
-    measured = Y_test.to_numpy(dtype=float)
     lower = upper = np.full_like(predicted, np.nan)
     if algorithm == "gpr":
-        lower, upper = estimator.predict_interval(X_test, level=model.interval_level)
+        lower, upper = estimator.predict_interval(X_test, level=level)
+    return predicted, lower, upper
 
-    label = {"fold": fold, "approach": approach, "algorithm": algorithm}
-    metric_rows = []
-    kb_rows = []
-    if approach == "decoupled":
-        kb_measured = decouple_rows(X_test, Y_test, degree=degree)
-        kb_predicted = estimator.predict_kb(X_test)
-        kb_interval = estimator.predict_kb_interval(X_test, model.interval_level) if algorithm == "gpr" else None
-        for target, column in (("k", "k_um_per_m"), ("b", "b_um")):
-            m = kb_measured[column].to_numpy()
-            p = kb_predicted[column].to_numpy()
-            metric_rows.append({**label, "target": target, **prediction_metrics(m, p)})
-            lo, hi = kb_interval[column] if kb_interval is not None else (np.full_like(p, np.nan),) * 2
-            kb_rows.append(
-                pd.DataFrame(
-                    {
-                        **label,
-                        "run": fold,
-                        "measurement": X_test["measurement"].to_numpy(),
-                        "time_min": X_test["time_min"].to_numpy(),
-                        "target": target,
-                        "measured": m,
-                        "predicted": p,
-                        "lower": lo,
-                        "upper": hi,
-                    }
-                )
+
+def _kb_tables(estimator, X_test, Y_test, label: dict, level: float, degree: int) -> tuple[list[dict], pd.DataFrame]:
+    """Metrics and predictions of the slope k and the intercept b of the held-out measurements."""
+    kb_measured = decouple_rows(X_test, Y_test, degree=degree)
+    kb_predicted = estimator.predict_kb(X_test)
+    kb_interval = estimator.predict_kb_interval(X_test, level) if label["algorithm"] == "gpr" else None
+    metric_rows, frames = [], []
+    for target, column in (("k", "k_um_per_m"), ("b", "b_um")):
+        measured = kb_measured[column].to_numpy()
+        predicted = kb_predicted[column].to_numpy()
+        metric_rows.append({**label, "target": target, **prediction_metrics(measured, predicted)})
+        lower, upper = kb_interval[column] if kb_interval is not None else (np.full_like(predicted, np.nan),) * 2
+        frames.append(
+            pd.DataFrame(
+                {
+                    **label,
+                    "run": label["fold"],
+                    "measurement": X_test["measurement"].to_numpy(),
+                    "time_min": X_test["time_min"].to_numpy(),
+                    "target": target,
+                    "measured": measured,
+                    "predicted": predicted,
+                    "lower": lower,
+                    "upper": upper,
+                }
             )
-    metric_rows.append({**label, "target": "error", **prediction_metrics(measured, predicted)})
-    positions = np.asarray(Y.columns, dtype=float)
+        )
+    return metric_rows, pd.concat(frames, ignore_index=True)
+
+
+def _error_table(label: dict, X_test, positions: np.ndarray, measured, predicted, lower, upper) -> pd.DataFrame:
+    """One row per held-out measurement and target position: measured, predicted, residual, interval."""
     n, p = measured.shape
-    errors = pd.DataFrame(
+    return pd.DataFrame(
         {
             **label,
-            "run": fold,
+            "run": label["fold"],
             "measurement": np.repeat(X_test["measurement"].to_numpy(), p),
             "time_min": np.repeat(X_test["time_min"].to_numpy(), p),
             "position_mm": np.tile(positions, n),
@@ -303,17 +331,12 @@ def evaluate_configuration(
             "upper": np.asarray(upper, dtype=float).ravel(),
         }
     )
-    coefficients = estimator.coefficients()
-    coefficients = coefficients.assign(**label)[
-        ["fold", "approach", "algorithm", "target", "position_mm", "term", "temperature", "value"]
-    ]
-    kb_frame = pd.concat(kb_rows, ignore_index=True) if kb_rows else _empty_kb()
-    return FoldResult(
-        metrics=pd.DataFrame(metric_rows),
-        coefficients=coefficients,
-        kb_predictions=kb_frame,
-        error_predictions=errors,
-    )
+
+
+def _coefficient_table(estimator, label: dict) -> pd.DataFrame:
+    """The fitted terms (the paper's Eq. 8 or Eq. 9), labelled with the fold and the model."""
+    coefficients = estimator.coefficients().assign(**label)
+    return coefficients[["fold", "approach", "algorithm", "target", "position_mm", "term", "temperature", "value"]]
 
 
 def _empty_kb() -> pd.DataFrame:

@@ -36,21 +36,21 @@ from sklearn.compose import TransformedTargetRegressor
 from sklearn.cross_decomposition import PLSRegression
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
-from sklearn.linear_model import LinearRegression, Ridge
+from sklearn.linear_model import Lasso, LinearRegression, Ridge
 from sklearn.metrics import root_mean_squared_error
-from sklearn.model_selection import LeaveOneGroupOut, ParameterGrid
+from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, ParameterGrid
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
 
 from thermaxis.method.decouple import compose_curve, decouple_curves, stroke_powers
-from thermaxis.vocabulary import ALGORITHMS
+from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
 
 __all__ = [
-    "ALGORITHMS",
     "COEFFICIENT_COLUMNS",
     "make_regressor",
-    "fit_svr_by_group_search",
+    "inner_group_splitter",
+    "fit_by_group_search",
     "linear_terms",
     "predict_with_std",
     "relative_temperatures",
@@ -62,10 +62,12 @@ __all__ = [
 
 COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
 
+
 _ID_COLUMNS = ("run", "measurement")
 _ALLOWED_PARAMS = {
     "mlr": set(),
     "ridge": {"alpha"},
+    "lasso": {"alpha"},
     "pls": {"n_components"},
     "svr": {"C", "epsilon", "gamma", "kernel"},
     "gpr": {"length_scale", "noise_level", "n_restarts_optimizer"},
@@ -99,21 +101,22 @@ def _check_params(algorithm: str, params: Mapping | None) -> dict:
 def _base_regressor(algorithm: str, params: dict, random_state: int, n_features: int | None):
     if algorithm == "mlr":
         return LinearRegression()
+    # A hyper-parameter left out keeps scikit-learn's default: the workflow's come from config.
     if algorithm == "ridge":
-        return Ridge(alpha=float(params.get("alpha", 1.0)))
+        return Ridge(**{name: float(value) for name, value in params.items()})
+    if algorithm == "lasso":
+        # Coordinate descent in its fixed (cyclic) order: deterministic; a generous
+        # iteration cap because weak penalties on correlated temperatures converge slowly.
+        return Lasso(max_iter=100_000, **{name: float(value) for name, value in params.items()})
     if algorithm == "pls":
-        n_components = int(params.get("n_components", 2))
-        if n_features is not None:
-            n_components = min(n_components, n_features)
         # Inputs and target are already standardised by the pipeline.
-        return PLSRegression(n_components=n_components, scale=False)
+        pls = PLSRegression(scale=False, **{name: int(value) for name, value in params.items()})
+        if n_features is not None:
+            pls.set_params(n_components=min(pls.n_components, n_features))
+        return pls
     if algorithm == "svr":
-        return SVR(
-            kernel=params.get("kernel", "rbf"),
-            C=float(params.get("C", 1.0)),
-            epsilon=float(params.get("epsilon", 0.1)),
-            gamma=params.get("gamma", "scale"),
-        )
+        numbers = {name: float(params[name]) for name in ("C", "epsilon") if name in params}
+        return SVR(**{**params, **numbers})
     # gpr: bounds are in standardised units.  A nearly linear response drives the RBF
     # towards long length scales and large amplitudes, hence the wide upper bounds; a
     # noise floor of 1e-6 keeps exact (noise-free) training data well posed.
@@ -129,7 +132,7 @@ def _base_regressor(algorithm: str, params: dict, random_state: int, n_features:
 
 
 def make_regressor(
-    algorithm: str, params: Mapping | None = None, random_state: int = 0, n_features: int | None = None
+    algorithm: str, params: Mapping | None = None, *, random_state: int, n_features: int | None = None
 ) -> Pipeline:
     """An unfitted regressor with standardised inputs and standardised target.
 
@@ -139,12 +142,14 @@ def make_regressor(
         Multiple linear regression, support-vector regression, ridge, partial least
         squares, Gaussian-process regression.
     params : mapping, optional
-        Hyper-parameters: ridge ``alpha`` (1.0); pls ``n_components`` (2); svr ``C`` (1.0),
-        ``epsilon`` (0.1, in standardised target units), ``gamma`` ("scale"), ``kernel``
-        ("rbf"); gpr ``length_scale`` (1.0), ``noise_level`` (0.1), ``n_restarts_optimizer``
-        (0).  Unknown keys raise ``ValueError``.
+        Hyper-parameters: ridge ``alpha``; pls ``n_components``; svr ``C``, ``epsilon`` (in
+        standardised target units), ``gamma``, ``kernel`` (the workflow sets them from config
+        ``models``; one left out keeps scikit-learn's default); gpr ``length_scale`` (1.0),
+        ``noise_level`` (0.1), ``n_restarts_optimizer`` (0), the starting point of this
+        module's kernel.  Unknown keys raise ``ValueError``.
     random_state : int
-        Seed of the GPR optimiser restarts (the other algorithms are deterministic).
+        Seed of the GPR optimiser restarts (config ``models.random_state``; the other
+        algorithms are deterministic).
     n_features : int, optional
         Number of inputs; caps PLS ``n_components`` (PLS cannot use more components than
         inputs).
@@ -166,24 +171,42 @@ def make_regressor(
     )
 
 
-def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
-    """Fit an SVR whose hyper-parameters are chosen by leave-one-group-out search.
+def inner_group_splitter(groups, max_loco_groups: int, group_folds: int):
+    """The inner search's split of the training runs: leave one out, or k group folds.
+
+    Leave-one-condition-out costs one fit per run and candidate: above
+    ``max_loco_groups`` runs (config ``models.inner_search.max_loco_runs``) the runs are
+    dealt into ``group_folds`` folds instead (scikit-learn's GroupKFold, deterministic).
+    """
+    n_groups = np.unique(groups).size
+    if n_groups <= max_loco_groups:
+        return LeaveOneGroupOut()
+    return GroupKFold(n_splits=min(group_folds, n_groups))
+
+
+def fit_by_group_search(algorithm: str, X, y, groups, grid: Mapping, random_state: int, inner: tuple[int, int]):
+    """Fit a regressor whose hyper-parameters are chosen by a group search on the runs.
 
     Only the data passed in is used, so calling this on the training conditions of an
     outer leave-one-condition-out fold keeps the held-out condition unseen.
 
     Parameters
     ----------
+    algorithm : {"svr", "ridge", "lasso", "pls"}
     X : array-like, shape (n, f)
     y : array-like, shape (n,)
     groups : array-like, shape (n,)
-        Group label per row (the run id): each group is held out once in the inner search.
+        Group label per row (the run id): each group is held out once in the inner search
+        (or each of k group folds, see :func:`inner_group_splitter`).
     grid : mapping of str to list
-        Candidate values per SVR parameter (``C``, ``epsilon``, ``gamma``, ``kernel``).
+        Candidate values per parameter (svr ``C``, ``epsilon``, ``gamma``, ``kernel``:
         C and epsilon act on the STANDARDISED target, so epsilon 0.05 means 5 % of the
-        target's spread. The workflow's grid is config ``models.svr_grid``.
+        target's spread; ridge and lasso ``alpha``; pls ``n_components``). The
+        workflow's grids are config ``models.svr_grid`` and ``models.search_grids``.
     random_state : int
-        Passed to :func:`make_regressor` for symmetry (SVR itself is deterministic).
+        Passed to :func:`make_regressor` for symmetry (these algorithms are deterministic).
+    inner : (int, int)
+        ``(max_loco_groups, group_folds)`` of :func:`inner_group_splitter`.
 
     Returns
     -------
@@ -195,35 +218,36 @@ def fit_svr_by_group_search(X, y, groups, grid: Mapping, random_state: int = 0):
         used without search.  Scoring is RMSE; ties go to the earlier grid point.
     """
     grid = dict(grid)
-    _check_params("svr", grid)
+    _check_params(algorithm, grid)
     if not grid or any(len(values) == 0 for values in grid.values()):
-        raise ValueError("SVR grid must give at least one value for each listed parameter")
+        raise ValueError(f"{algorithm} search grid must give at least one value for each listed parameter")
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float)
     groups = np.asarray(groups)
     candidates = list(ParameterGrid(grid))
-    n_groups = np.unique(groups).size
-    if n_groups < 2:
+    n_features = X.shape[1]
+    if np.unique(groups).size < 2:
         chosen = dict(candidates[0])
-        return make_regressor("svr", chosen, random_state).fit(X, y), chosen
+        return make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features).fit(X, y), chosen
     # GridSearchCV over make_regressor's pipeline, without its per-candidate cloning,
-    # re-validation and scorer calls: each hold-out is standardised once, the SVR fitted
-    # per candidate on the same arrays the pipeline would give it, so the scores, the
-    # choice and the refitted model are the ones GridSearchCV gives (test_models checks).
-    scores = np.empty((len(candidates), n_groups))
-    for split, (train, test) in enumerate(LeaveOneGroupOut().split(X, y, groups)):
+    # re-validation and scorer calls: each hold-out is standardised once, the regressor
+    # fitted per candidate on the same arrays the pipeline would give it, so the scores,
+    # the choice and the refitted model are the ones GridSearchCV gives (test_models checks).
+    splits = list(inner_group_splitter(groups, *inner).split(X, y, groups))
+    scores = np.empty((len(candidates), len(splits)))
+    for split, (train, test) in enumerate(splits):
         x_scaler = StandardScaler().fit(X[train])
         X_train, X_test = x_scaler.transform(X[train]), x_scaler.transform(X[test])
         y_scaler = StandardScaler().fit(y[train].reshape(-1, 1))
         y_train = y_scaler.transform(y[train].reshape(-1, 1)).squeeze(axis=1)
         for c, params in enumerate(candidates):
-            svr = _base_regressor("svr", params, random_state, None).fit(X_train, y_train)
-            predicted = y_scaler.inverse_transform(svr.predict(X_test).reshape(-1, 1)).squeeze(axis=1)
+            regressor = _base_regressor(algorithm, params, random_state, n_features).fit(X_train, y_train)
+            predicted = y_scaler.inverse_transform(np.asarray(regressor.predict(X_test)).reshape(-1, 1)).squeeze(axis=1)
             scores[c, split] = -root_mean_squared_error(y[test], predicted)
     means = np.average(scores, axis=1)
     # The first best candidate, NaN scores last, as GridSearchCV ranks them.
     chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
-    return make_regressor("svr", chosen, random_state).fit(X, y), chosen
+    return make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features).fit(X, y), chosen
 
 
 def _final_regressor(fitted):
@@ -363,16 +387,30 @@ def _features(X: pd.DataFrame, sensors: Sequence[str], temperature: str, signals
     return values
 
 
-def _fit_one(features, target, groups, algorithm, params, svr_grid, random_state):
-    """One regression; returns (fitted pipeline, chosen SVR parameters or None)."""
+def _evenly_spaced(n: int, at_most: int) -> np.ndarray:
+    """Indices of at most ``at_most`` of ``n`` rows, spread evenly (the first and last kept)."""
+    return np.unique(np.linspace(0, n - 1, at_most).round().astype(int))
+
+
+def _fit_one(features, target, groups, estimator):
+    """One regression; returns (fitted pipeline, chosen searched parameters or None)."""
+    algorithm, params = estimator.algorithm, estimator.params
+    inner = tuple(estimator.inner_search)
     if algorithm == "svr":
-        if svr_grid is None:
+        if estimator.svr_grid is None:
             # No default grid here: the one default is the schema's (config models.svr_grid).
             raise ValueError("algorithm 'svr' needs svr_grid (the workflow passes config models.svr_grid)")
         # Fixed parameters (e.g. kernel) apply to every grid point unless the grid varies them.
-        grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(svr_grid)}
-        return fit_svr_by_group_search(features, target, groups, grid, random_state)
-    model = make_regressor(algorithm, params, random_state, n_features=features.shape[1])
+        grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(estimator.svr_grid)}
+        return fit_by_group_search("svr", features, target, groups, grid, estimator.random_state, inner)
+    if estimator.search_grid is not None and algorithm in SEARCHABLE:
+        return fit_by_group_search(algorithm, features, target, groups, estimator.search_grid, estimator.random_state, inner)
+    model = make_regressor(algorithm, params, random_state=estimator.random_state, n_features=features.shape[1])
+    if algorithm == "gpr" and len(target) > estimator.gpr_max_samples:
+        # An exact GP costs n^3: beyond the limit it is fitted on evenly spaced training
+        # rows (config models.gpr_max_samples; the model report says so).
+        keep = _evenly_spaced(len(target), estimator.gpr_max_samples)
+        return model.fit(features[keep], target[keep]), None
     return model.fit(features, target), None
 
 
@@ -405,7 +443,7 @@ def _z_score(level: float) -> float:
 # --------------------------------------------------------------------------- decoupled
 
 
-def decouple_rows(X: pd.DataFrame, Y: pd.DataFrame, degree: int = 1) -> pd.DataFrame:
+def decouple_rows(X: pd.DataFrame, Y: pd.DataFrame, degree: int) -> pd.DataFrame:
     """Decoupling of every row of Y (Eq. 6): run, measurement, k_um_per_m, b_um (c2, c3), r2, rms_um.
 
     The origin is Y's first position, so b means the same for every measurement.
@@ -442,6 +480,16 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
     svr_grid : dict, optional
         SVR search grid (inner leave-one-run-out on the training runs); required for
         ``algorithm="svr"`` (the workflow passes config ``models.svr_grid``).
+    search_grid : dict, optional
+        For ridge, lasso and pls: a grid of their strength (``alpha``, ``n_components``)
+        chosen by the same inner search; None fits ``params`` as given.
+    inner_search : (int, int)
+        ``(max_loco_runs, group_folds)``: the inner search leaves one run out up to
+        ``max_loco_runs`` training runs and uses ``group_folds`` group folds above
+        (config ``models.inner_search``).
+    gpr_max_samples : int
+        An exact Gaussian process is fitted on at most this many training rows, evenly
+        spaced, beyond it (config ``models.gpr_max_samples``).
     degree : {1, 2, 3}
         Decoupling polynomial degree; 1 is the paper's straight line.
     random_state : int
@@ -460,10 +508,13 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         c3_um_per_m3 for higher degrees), r2, rms_um.
     estimators_ : dict
         Fitted pipeline per target ("k", "b", "c2", "c3").
-    svr_params_ : dict
-        Chosen SVR parameters per target (empty for other algorithms).
+    searched_params_ : dict
+        Parameters chosen by the inner search per target (empty without a search).
     """
 
+    # Every parameter has a default because scikit-learn asks it of an estimator (clone,
+    # get_params, construction without arguments); the defaults are the paper's Eq. 9 model.
+    # The workflow sets each one from the settings (thermaxis.method.folds).
     def __init__(
         self,
         k_sensors=("T1", "T6", "T12"),
@@ -474,12 +525,18 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         degree=1,
         random_state=0,
         signals=(),
+        search_grid=None,
+        inner_search=(12, 5),
+        gpr_max_samples=600,
     ):
         self.k_sensors = k_sensors
         self.b_sensors = b_sensors
         self.algorithm = algorithm
         self.params = params
         self.svr_grid = svr_grid
+        self.search_grid = search_grid
+        self.inner_search = inner_search
+        self.gpr_max_samples = gpr_max_samples
         self.degree = degree
         self.random_state = random_state
         self.signals = signals
@@ -500,16 +557,14 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         self.origin_mm_ = float(self.positions_mm_[0])
         self.kb_ = decouple_rows(X, Y, self.degree)
         groups = X["run"].to_numpy()
-        self.estimators_, self.svr_params_ = {}, {}
+        self.estimators_, self.searched_params_ = {}, {}
         for target, sensors, temperature in self._targets():
             features = _features(X, sensors, temperature, self.signals)
             y = self.kb_[_KB_COLUMNS[target]].to_numpy(dtype=float)
-            model, chosen = _fit_one(
-                features, y, groups, self.algorithm, self.params, self.svr_grid, self.random_state
-            )
+            model, chosen = _fit_one(features, y, groups, self)
             self.estimators_[target] = model
             if chosen is not None:
-                self.svr_params_[target] = chosen
+                self.searched_params_[target] = chosen
         return self
 
     def predict_kb(self, X: pd.DataFrame, return_std: bool = False) -> pd.DataFrame:
@@ -550,14 +605,14 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         )
         return compose_curve(coefficients, self.positions_mm_, self.origin_mm_)
 
-    def predict_kb_interval(self, X: pd.DataFrame, level: float = 0.95) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    def predict_kb_interval(self, X: pd.DataFrame, level: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Gaussian interval of each decoupling coefficient (gpr only): column -> (lower, upper)."""
         z = _z_score(level)
         kb = self.predict_kb(X, return_std=True)
         columns = [c for c in kb.columns if not c.endswith("_std")]
         return {c: (kb[c].to_numpy() - z * kb[f"{c}_std"].to_numpy(), kb[c].to_numpy() + z * kb[f"{c}_std"].to_numpy()) for c in columns}
 
-    def predict_interval(self, X: pd.DataFrame, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    def predict_interval(self, X: pd.DataFrame, level: float) -> tuple[np.ndarray, np.ndarray]:
         """Pointwise prediction interval of the error curves (gpr only).
 
         The k, b (and c2, c3) models are fitted separately, so their predictive
@@ -611,7 +666,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
     ----------
     sensors : tuple of str
         Sensitive points used for every position (the paper: T1, T11, T12).
-    algorithm, params, svr_grid, random_state, signals
+    algorithm, params, svr_grid, search_grid, inner_search, gpr_max_samples, random_state, signals
         As for :class:`DecoupledAxisModel`.
 
     Attributes
@@ -619,17 +674,30 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
     positions_mm_ : ndarray
     estimators_ : list
         Fitted pipeline per position.
-    svr_params_ : dict
-        Chosen SVR parameters per position (empty for other algorithms).
+    searched_params_ : dict
+        Parameters chosen by the inner search per position (empty without a search).
     """
 
+    # Defaults for scikit-learn, as for DecoupledAxisModel: the paper's Eq. 8 model.
     def __init__(
-        self, sensors=("T1", "T11", "T12"), algorithm="mlr", params=None, svr_grid=None, random_state=0, signals=()
+        self,
+        sensors=("T1", "T11", "T12"),
+        algorithm="mlr",
+        params=None,
+        svr_grid=None,
+        random_state=0,
+        signals=(),
+        search_grid=None,
+        inner_search=(12, 5),
+        gpr_max_samples=600,
     ):
         self.sensors = sensors
         self.algorithm = algorithm
         self.params = params
         self.svr_grid = svr_grid
+        self.search_grid = search_grid
+        self.inner_search = inner_search
+        self.gpr_max_samples = gpr_max_samples
         self.random_state = random_state
         self.signals = signals
 
@@ -641,25 +709,17 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         features = _features(X, self.sensors, "relative", self.signals)
         groups = X["run"].to_numpy()
         errors = Y.to_numpy(dtype=float)
-        self.estimators_, self.svr_params_ = [], {}
+        self.estimators_, self.searched_params_ = [], {}
         for j, position in enumerate(self.positions_mm_):
             valid = np.isfinite(errors[:, j])
             if valid.sum() < 2:
                 raise ValueError(
                     f"position {position:g} mm has {valid.sum()} error reading(s); need at least 2"
                 )
-            model, chosen = _fit_one(
-                features[valid],
-                errors[valid, j],
-                groups[valid],
-                self.algorithm,
-                self.params,
-                self.svr_grid,
-                self.random_state,
-            )
+            model, chosen = _fit_one(features[valid], errors[valid, j], groups[valid], self)
             self.estimators_.append(model)
             if chosen is not None:
-                self.svr_params_[float(position)] = chosen
+                self.searched_params_[float(position)] = chosen
         return self
 
     def predict(self, X: pd.DataFrame) -> np.ndarray:
@@ -668,7 +728,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         features = _features(X, self.sensors, "relative", self.signals)
         return np.column_stack([np.asarray(m.predict(features)).ravel() for m in self.estimators_])
 
-    def predict_interval(self, X: pd.DataFrame, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    def predict_interval(self, X: pd.DataFrame, level: float) -> tuple[np.ndarray, np.ndarray]:
         """Pointwise Gaussian prediction interval (gpr only; else NotImplementedError)."""
         if self.algorithm != "gpr":
             raise NotImplementedError("prediction intervals are only available for algorithm 'gpr'")

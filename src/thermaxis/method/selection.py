@@ -115,7 +115,7 @@ def _unit_deviations(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return unit, constant
 
 
-def similarity_matrix(X, method: str = "pearson") -> np.ndarray:
+def similarity_matrix(X, method: str) -> np.ndarray:
     """Fuzzy similarity matrix between sensors (the paper's Eq. 1).
 
     Parameters
@@ -358,7 +358,7 @@ def _normalise(seqs: np.ndarray, normalisation: str) -> np.ndarray:
     return np.where(flat, 0.0, (seqs - seqs.min(axis=0)) / np.where(flat, 1.0, span))
 
 
-def grey_relational_grade(x0, X, rho: float = 0.5, normalisation: str = "minmax") -> np.ndarray:
+def grey_relational_grade(x0, X, rho: float, normalisation: str) -> np.ndarray:
     """Deng's grey relational grade of each sensor sequence to the target x0 (Eq. 4).
 
     After making every sequence dimensionless,
@@ -479,11 +479,12 @@ class SensitivePoints:
 def select_sensitive_points(
     X: pd.DataFrame,
     y,
-    n_clusters: int = 3,
-    similarity: str = "pearson",
-    grade: str = "deng",
-    rho: float = 0.5,
-    normalisation: str = "minmax",
+    *,
+    n_clusters: int,
+    similarity: str,
+    grade: str,
+    rho: float,
+    normalisation: str,
 ) -> SensitivePoints:
     """Temperature-sensitive points: fuzzy clustering, then the best-graded sensor per class.
 
@@ -495,6 +496,8 @@ def select_sensitive_points(
     y : array-like, shape (n_samples,)
         Target sequence: the slope k, the intercept b, or the error at one
         position.
+    n_clusters, similarity, grade, rho, normalisation
+        As config ``selection`` (:class:`thermaxis.config.SelectionSettings`) gives them.
     n_clusters : int
         Requested number of classes (3 in the paper).  If ties make it
         impossible, the nearest achievable count is used and a warning is

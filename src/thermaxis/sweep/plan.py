@@ -33,11 +33,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from thermaxis.vocabulary import APPROACHES
+from thermaxis.vocabulary import ALGORITHMS, APPROACHES
 
 __all__ = [
     "FACTORS",
-    "APPROACHES",
     "LEVEL_ORDER",
     "SelectionSpec",
     "Configuration",
@@ -60,7 +59,7 @@ LEVEL_ORDER = {
     "similarity": ("pearson", "printed"),
     "grade": ("deng", "absolute"),
     "approach": APPROACHES,
-    "algorithm": ("mlr", "svr", "ridge", "pls", "gpr"),
+    "algorithm": ALGORITHMS,
 }
 
 

@@ -41,6 +41,8 @@ SERVO_ON_S = -300
 ZERO_S = -30
 #: Reciprocation stops this long before a measurement and resumes this long after it.
 MOTION_GUARD_S = 10
+#: Step of the simulation grid, s (the network is integrated and sampled on it).
+STEP_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -135,7 +137,7 @@ def reading_times(start_s: float) -> tuple[np.ndarray, np.ndarray]:
     return forward, backward
 
 
-def timeline(condition: Condition, step_s: float = 10.0) -> Timeline:
+def timeline(condition: Condition, step_s: float = STEP_S) -> Timeline:
     """The run's schedule: measurements, log window and the simulation grid."""
     starts = MEASUREMENT_PERIOD_S * np.arange(N_MEASUREMENTS) + np.asarray(condition.jitter_s, dtype=float)
     ends = np.array([reading_times(s)[1][-1] for s in starts])

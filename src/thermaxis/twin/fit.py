@@ -43,7 +43,6 @@ __all__ = [
     "TOLERANCE_B",
     "RunObservables",
     "FitResult",
-    "noise_free_runs",
     "target_residuals",
     "OBJECTIVE_FACTOR",
     "acceptance_bounds",
@@ -240,12 +239,6 @@ def _runs_from_bases(params: mdl.TwinParams, problem: _Problem, bases: _Bases) -
     return out
 
 
-def noise_free_runs(params: mdl.TwinParams, step_s: float = mdl.STEP_S) -> dict[str, RunObservables]:
-    """Noise-free k, b, pass-mean curves and sensor temperatures of the 8 measurements of every run."""
-    problem = _problem(step_s)
-    return _runs_from_bases(params, problem, _bases(problem, params.values, step_s))
-
-
 def target_residuals(runs: dict[str, RunObservables], targets: PublishedTargets) -> dict[str, dict[str, np.ndarray]]:
     """Differences from every published target, per run (um/m for k, um otherwise).
 
@@ -310,7 +303,7 @@ def rms_by_target(residuals: dict[str, dict[str, np.ndarray]]) -> dict[str, floa
 
 
 def calibrate(
-    start: mdl.TwinParams | None = None, step_s: float = mdl.STEP_S, max_evaluations: int = 4000
+    start: mdl.TwinParams | None = None, step_s: float = cond.STEP_S, max_evaluations: int = 4000
 ) -> FitResult:
     """Fit the free parameters to the published targets (deterministic trust-region least squares).
 

@@ -110,7 +110,8 @@ def _laser(params: mdl.TwinParams, state: mdl.RunState, rng: np.random.Generator
         readings = interferometer_readings(params.values, state, start, datum_read, rng)
         true_rel = readings.true_um + datum_read - datum_true
         pass_mean = 0.5 * (true_rel[:n] + true_rel[n:][::-1])
-        fit = decouple_measurement(cond.TARGETS_MM, pass_mean, origin_mm=cond.FIRST_TARGET_MM)
+        # The true k and b: the paper's straight line (Eq. 6) through the noise-free readings.
+        fit = decouple_measurement(cond.TARGETS_MM, pass_mean, degree=1, origin_mm=cond.FIRST_TARGET_MM)
         measurements.append(readings)
         kb_truth.append((0.5 * (start + end) / 60.0, fit.k_um_per_m, fit.b_um))
     return measurements, kb_truth
@@ -238,7 +239,7 @@ def _write_truth(truth_root: Path, records: list[RunRecord], params: mdl.TwinPar
 def _geometric_line(values: dict[str, float]) -> tuple[float, float]:
     """k and b of the geometric error alone (relative to the first target)."""
     g = mdl.geometric_error(values, cond.TARGETS_MM) - mdl.geometric_error(values, cond.FIRST_TARGET_MM)
-    fit = decouple_measurement(cond.TARGETS_MM, g, origin_mm=cond.FIRST_TARGET_MM)
+    fit = decouple_measurement(cond.TARGETS_MM, g, degree=1, origin_mm=cond.FIRST_TARGET_MM)
     return fit.k_um_per_m, fit.b_um
 
 

@@ -222,7 +222,6 @@ PITCH_PERIOD_MM = 130.0
 PITCH_PHASE_RAD = 1.4
 #: Temperature at which the geometric error is defined (and the laser normalises to).
 REFERENCE_C = 20.0
-STEP_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -347,7 +346,7 @@ def simulate_timeline(
     return RunState(timeline=tl, nodes=nodes, ambient=ambient(tl.grid_s))
 
 
-def simulate_run(condition: cond.Condition, params: TwinParams, step_s: float = STEP_S) -> RunState:
+def simulate_run(condition: cond.Condition, params: TwinParams, step_s: float = cond.STEP_S) -> RunState:
     """Integrate the network over one paper run's log window."""
     tl = cond.timeline(condition, step_s)
     ambient = lambda t: cond.ambient_at(condition, t)  # noqa: E731

@@ -26,7 +26,6 @@ __all__ = ["ScaleSpec", "generate_scale"]
 MEASUREMENT_PERIOD_S = 1800.0
 FIRST_MEASUREMENT_S = 300.0  # after the log start
 STROKE_MM = (185.0, 445.0)
-STEP_S = 10.0
 _SURFACES = NODES + ("ambient",)
 
 
@@ -70,8 +69,8 @@ def _timeline(spec: ScaleSpec) -> cond.Timeline:
     starts = np.arange(FIRST_MEASUREMENT_S, total - duration - 60.0, MEASUREMENT_PERIOD_S) - FIRST_MEASUREMENT_S
     # Times are relative to the first measurement, as in the paper's runs.
     log_start = -FIRST_MEASUREMENT_S
-    n_steps = int(np.ceil(total / STEP_S))
-    grid = log_start + STEP_S * np.arange(n_steps + 1)
+    n_steps = int(np.ceil(total / cond.STEP_S))
+    grid = log_start + cond.STEP_S * np.arange(n_steps + 1)
     return cond.Timeline(
         log_start_s=log_start,
         log_end_s=float(grid[-1]),
@@ -137,7 +136,7 @@ def _run(spec: ScaleSpec, index: int, params: mdl.TwinParams, mixes, root: Path)
             w * (state.ambient if name == "ambient" else state.nodes[:, NODES.index(name)])
             for name, w in weights.items()
         )
-        slow = lagged(surface, STEP_S, lag_s)
+        slow = lagged(surface, cond.STEP_S, lag_s)
         values = np.interp(t, tl.grid_s, slow) + offset + rng.normal(0.0, 0.01, n_rows)
         columns[f"T{i + 1}"] = np.round(values, 3)
     _write_table(temps / "box.csv", list(columns), columns)

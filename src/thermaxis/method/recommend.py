@@ -1,0 +1,331 @@
+"""Which model a user's own runs support: a nested leave-one-condition-out choice.
+
+A *candidate* is one configuration the main workflow or the sweep can express: an
+approach, an algorithm, a sensitive-point selection and the inputs it may use
+(temperatures, their time-aware lags, the operating signals). The question a machine
+builder asks is which candidate to deploy and how much error it leaves on a condition
+it has not seen. Answering it honestly needs two loops:
+
+* the *outer* loop holds out one condition (run) at a time: it is the unseen condition;
+* the *inner* loop, on the remaining training runs alone, scores every candidate by
+  leave-one-condition-out (or by k group folds above ``max_loco_runs`` training runs)
+  and chooses the one with the best mean inner score; ties go to the candidate listed
+  first, which the default list orders from simple to complex.
+
+The chosen candidate's error on the outer held-out run is the estimate of what the
+pipeline would deploy; the held-out run reaches no choice. The final recommendation is
+the same choice made on all runs, whose scores are the candidates' own
+leave-one-condition-out errors.
+
+Every evaluation is :func:`thermaxis.method.folds.evaluate_configuration` after
+:func:`~thermaxis.method.folds.select_for_fold`: the function the main workflow and the
+sweep use, with sensitive points always chosen on the training runs only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pandas as pd
+
+from thermaxis.config import ModelSettings, SelectionSettings
+from thermaxis.labels import natural_sorted
+from thermaxis.method.folds import META, evaluate_configuration, select_for_fold
+
+__all__ = [
+    "SCORES",
+    "Candidate",
+    "Recommendation",
+    "candidate_view",
+    "inner_splits",
+    "held_out_scores",
+    "recommend",
+    "default_candidates",
+    "candidate_table",
+    "summary_of",
+]
+
+# What the inner loop minimises: the mean over inner folds of the held-out error curves'
+# largest |residual| (what a compensation must bound) or their RMSE.
+SCORES = {"max_abs": "max_abs", "rmse": "rmse"}
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One configuration the recommendation may choose.
+
+    ``time_inputs`` lets the candidate's selection and model see the time-aware input
+    columns of X (their names hold ``@``, e.g. ``T5@lag30min``); without it they are
+    dropped. ``models.signals`` are the operating signals it uses as inputs.
+    """
+
+    name: str
+    approach: str
+    algorithm: str
+    selection: SelectionSettings
+    models: ModelSettings
+    time_inputs: bool
+
+
+@dataclass(frozen=True)
+class Recommendation:
+    """The outcome: per outer fold the choice and its honest error, and the final choice.
+
+    ``folds`` has one row per outer fold: fold, chosen, inner_score (the chosen
+    candidate's mean inner score), rmse_um, max_abs_um (the chosen candidate on the
+    held-out run), paper_rmse_um, paper_max_abs_um (the reference candidate there).
+    ``inner`` has one row per outer fold x candidate x inner held-out run.
+    ``loco`` has one row per candidate x run: each candidate's leave-one-condition-out
+    error on all runs, whose means choose ``final``.
+    """
+
+    folds: pd.DataFrame
+    inner: pd.DataFrame
+    loco: pd.DataFrame
+    final: str
+    score: str
+
+
+def _base(column: str) -> str:
+    """The logged signal a derived input comes from: ``T5@lag30min`` -> ``T5``."""
+    return str(column).split("@", 1)[0]
+
+
+def candidate_view(X: pd.DataFrame, candidate: Candidate, signals: Sequence[str]):
+    """What a candidate may use: (X's columns it sees, those selection may choose, its settings).
+
+    Temperatures, and with ``time_inputs`` their lags, are candidates for the sensitive
+    points; the operating signals the candidate uses (and their lags) are added to every
+    model's inputs, as ``models.signals`` does, never selected.
+    """
+    derived = [c for c in X.columns if "@" in str(c)]
+    temperatures = [c for c in X.columns if c not in META and c not in signals and c not in derived]
+    if candidate.time_inputs:
+        temperatures += [c for c in derived if _base(c) not in signals]
+    used = [s for s in candidate.models.signals if s in X.columns]
+    if candidate.time_inputs:
+        used += [c for c in derived if _base(c) in candidate.models.signals]
+    keys = [c for c in X.columns if c in META]
+    return X[keys + temperatures + used], keys + temperatures, replace(candidate.models, signals=tuple(used))
+
+
+def inner_splits(runs: Sequence[str], max_loco_runs: int, n_group_folds: int) -> list[tuple[str, ...]]:
+    """Held-out run groups of an inner loop: one run each, or k group folds when runs are many.
+
+    Above ``max_loco_runs`` runs, leave-one-condition-out would cost one fit per run per
+    candidate; k contiguous groups in natural run order (which usually follows the
+    order the conditions were measured in) keep the cost fixed.
+    """
+    runs = natural_sorted(runs)
+    if len(runs) <= max_loco_runs:
+        return [(run,) for run in runs]
+    k = min(n_group_folds, len(runs))
+    return [tuple(chunk) for chunk in np.array_split(np.array(runs, dtype=object), k)]
+
+
+def _error_metrics(X, Y, test_run, candidate, degree, signals, cache) -> dict[str, float]:
+    """Select on the training rows of X, fit, predict ``test_run``: its error metrics.
+
+    Candidates that differ only in their algorithm share the selection (``cache``),
+    as the main workflow's algorithms share a fold's.
+    """
+    view, selectable, models = candidate_view(X, candidate, signals)
+    # The recommendation never lets the held-out run into the choice of sensitive points.
+    selection_settings = replace(candidate.selection, scope="training")
+    decoupled = candidate.approach == "decoupled"
+    key = (tuple(sorted(pd.unique(X["run"]))), test_run, tuple(selectable), selection_settings, decoupled)
+    if key not in cache:
+        cache[key] = select_for_fold(
+            view[selectable], Y, test_run, selection_settings, degree if decoupled else None,
+            decoupled=decoupled, pointwise=not decoupled,
+        )  # fmt: skip
+    result = evaluate_configuration(
+        view, Y, test_run, candidate.approach, candidate.algorithm, cache[key], models, degree if decoupled else None
+    )
+    row = result.metrics.loc[result.metrics["target"] == "error"].iloc[0]
+    return {"rmse": float(row["rmse"]), "max_abs": float(row["max_abs"])}
+
+
+def held_out_scores(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    train_runs: Sequence[str],
+    held_out: Sequence[Sequence[str]],
+    candidate: Candidate,
+    degree: int,
+    signals: Sequence[str],
+    cache: dict,
+) -> list[dict]:
+    """Each held-out run's error when ``candidate`` is fitted on the rest of ``train_runs``.
+
+    Rows of X and Y outside ``train_runs`` are never seen: not by the selection, the
+    fit or the scaling.
+    """
+    rows = []
+    for group in held_out:
+        fit_runs = [r for r in train_runs if r not in group]
+        for run in group:
+            keep = X["run"].isin([*fit_runs, run]).to_numpy()
+            metrics = _error_metrics(
+                X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True), run, candidate, degree, signals, cache
+            )
+            rows.append({"candidate": candidate.name, "held_out": run, **metrics})
+    return rows
+
+
+def _choose(scores: pd.DataFrame, order: Sequence[str], score: str) -> tuple[str, float]:
+    """The candidate with the lowest mean score; ties (to 1e-12 relative) go to the first listed."""
+    means = scores.groupby("candidate")[score].mean()
+    best = min(means.loc[list(order)])
+    for name in order:
+        if np.isclose(means[name], best, rtol=1e-12, atol=0.0):
+            return name, float(means[name])
+    raise AssertionError("unreachable: the minimum is one of the candidates")
+
+
+def recommend(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    candidates: Sequence[Candidate],
+    reference: str,
+    degree: int,
+    score: str,
+    max_loco_runs: int,
+    n_group_folds: int,
+    signals: Sequence[str] = (),
+    outer_folds: Sequence[str] | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> Recommendation:
+    """Nested leave-one-condition-out choice among ``candidates`` (simplest first).
+
+    ``reference`` names the candidate reported beside the choice (the paper's
+    configuration). ``outer_folds`` default to every run.
+    """
+    if score not in SCORES:
+        raise ValueError(f"config recommend.score: {score!r} is not one of {', '.join(SCORES)}")
+    names = [c.name for c in candidates]
+    if len(set(names)) != len(names):
+        raise ValueError(f"candidate names must be unique, got {names}")
+    if reference not in names:
+        raise ValueError(f"reference candidate {reference!r} is not one of {names}")
+    runs = natural_sorted(pd.unique(X["run"]).tolist())
+    if len(runs) < 3:
+        raise ValueError(
+            f"{len(runs)} runs: a nested leave-one-condition-out choice needs at least 3 "
+            "(one held out, and at least two to compare candidates on)"
+        )
+    outer = list(outer_folds) if outer_folds is not None else runs
+    say = progress or (lambda message: None)
+    cache: dict = {}
+
+    # Each candidate's error on each run when fitted on all the others: the outer
+    # evaluations of every fold, and the scores of the final choice.
+    loco_rows = []
+    for candidate in candidates:
+        say(f"leave-one-condition-out of {candidate.name}")
+        loco_rows += held_out_scores(X, Y, runs, [(r,) for r in runs], candidate, degree, signals, cache)
+    loco = pd.DataFrame(loco_rows)
+
+    fold_rows, inner_rows = [], []
+    for fold in outer:
+        train = [r for r in runs if r != fold]
+        splits = inner_splits(train, max_loco_runs, n_group_folds)
+        fold_scores = []
+        for candidate in candidates:
+            say(f"fold {fold}: inner choice, {candidate.name}")
+            rows = held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)
+            fold_scores += rows
+            inner_rows += [{"fold": fold, **row} for row in rows]
+        chosen, inner_score = _choose(pd.DataFrame(fold_scores), names, score)
+        at = loco.set_index(["candidate", "held_out"])
+        fold_rows.append(
+            {
+                "fold": fold,
+                "chosen": chosen,
+                "inner_score": inner_score,
+                "rmse_um": at.loc[(chosen, fold), "rmse"],
+                "max_abs_um": at.loc[(chosen, fold), "max_abs"],
+                "paper_rmse_um": at.loc[(reference, fold), "rmse"],
+                "paper_max_abs_um": at.loc[(reference, fold), "max_abs"],
+            }
+        )
+    final, _ = _choose(loco, names, score)
+    return Recommendation(
+        folds=pd.DataFrame(fold_rows),
+        inner=pd.DataFrame(inner_rows, columns=["fold", "candidate", "held_out", "rmse", "max_abs"]),
+        loco=loco,
+        final=final,
+        score=score,
+    )
+
+
+def candidate_table(candidates: Sequence[Candidate]) -> pd.DataFrame:
+    """One row per candidate: what it is, in words a reader of the table needs."""
+    return pd.DataFrame(
+        [
+            {
+                "candidate": c.name,
+                "approach": c.approach,
+                "algorithm": c.algorithm,
+                "selection": c.selection.method,
+                "n_clusters": c.selection.n_clusters if c.selection.method in ("fuzzy_grey", "correlation") else np.nan,
+                "time_inputs": c.time_inputs,
+                "signals": " ".join(c.models.signals),
+            }
+            for c in candidates
+        ]
+    )
+
+
+def summary_of(recommendation: Recommendation) -> Mapping[str, float]:
+    """Mean held-out errors of the nested choice and of the reference over the outer folds."""
+    f = recommendation.folds
+    return {
+        "rmse_um": float(f["rmse_um"].mean()),
+        "max_abs_um": float(f["max_abs_um"].mean()),
+        "paper_rmse_um": float(f["paper_rmse_um"].mean()),
+        "paper_max_abs_um": float(f["paper_max_abs_um"].mean()),
+    }
+
+
+def default_candidates(
+    selection: SelectionSettings, models: ModelSettings, decoupled: bool, signals: Sequence[str], time_inputs: bool
+) -> list[Candidate]:
+    """The default list, simplest first: the paper's configuration, its variants, regularised models.
+
+    * ``paper``: the configured selection, the decoupled approach (point by point for a
+      single-position dataset) and MLR, as the paper models;
+    * the same selection with the other approach and with the SVR;
+    * MLR over every sensor, and ridge, lasso and PLS over every sensor with their
+      strength chosen by an inner search on the training runs;
+    * with ``time_inputs``, the MLR and regularised candidates again with the lags;
+    * with operating ``signals``, the regularised candidates again with them as inputs
+      (and their lags with ``time_inputs``).
+    """
+    approaches = ["decoupled", "pointwise"] if decoupled else ["pointwise"]
+    plain = replace(models, signals=(), searched=())
+    searched = replace(plain, searched=("ridge", "lasso", "pls"))
+    every_sensor = replace(selection, method="all")
+    candidates = [Candidate("paper", approaches[0], "mlr", selection, plain, False)]
+    for approach in approaches:
+        for algorithm in ("mlr", "svr"):
+            if (approach, algorithm) != (approaches[0], "mlr"):
+                candidates.append(Candidate(f"{approach}-{algorithm}", approach, algorithm, selection, plain, False))
+    regularised = [
+        Candidate(f"{approach}-{algorithm}-all", approach, algorithm, every_sensor, searched, False)
+        for approach in approaches
+        for algorithm in ("mlr", "ridge", "lasso", "pls")
+    ]
+    candidates += regularised
+    if time_inputs:
+        linear = [c for c in candidates if c.algorithm != "svr"]
+        candidates += [replace(c, name=f"{c.name}+lags", time_inputs=True) for c in linear]
+    if signals:
+        with_signals = replace(searched, signals=tuple(signals))
+        for c in regularised:
+            candidates.append(replace(c, name=f"{c.name}+signals", models=with_signals))
+            if time_inputs:
+                candidates.append(replace(c, name=f"{c.name}+signals+lags", models=with_signals, time_inputs=True))
+    return candidates

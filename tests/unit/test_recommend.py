@@ -1,0 +1,138 @@
+"""The nested leave-one-condition-out recommendation, on data whose best model is known."""
+
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from thermaxis.config import Settings
+from thermaxis.method.recommend import Candidate, candidate_view, inner_splits, recommend
+
+DEFAULTS = Settings.from_config({})
+POSITIONS = (0.0, 200.0, 400.0)
+
+
+def make_runs(n_runs=5, n_measurements=8, seed=0, driver="T1"):
+    """Errors driven by ``driver``'s rise alone (plus 0.05 um noise); T1..T4 wander
+    independently."""
+    rng = np.random.default_rng(seed)
+    rows, errors = [], []
+    for r in range(1, n_runs + 1):
+        walk = 20 + np.cumsum(rng.normal(0.4, 0.3, size=(n_measurements, 4)), axis=0)
+        for m in range(n_measurements):
+            rows.append({"run": f"R{r}", "measurement": m + 1, "time_min": 20.0 * m,
+                         **{f"T{s + 1}": walk[m, s] for s in range(4)}})  # fmt: skip
+        rise = walk[:, int(driver[1]) - 1] - walk[0, int(driver[1]) - 1]
+        slope = np.array([1.0, 2.0, 3.0])
+        errors.append(
+            rise[:, None] * slope[None, :] + rng.normal(0, 0.05, size=(n_measurements, 3))
+        )
+    X = pd.DataFrame(rows)
+    Y = pd.DataFrame(np.vstack(errors), columns=list(POSITIONS))
+    return X, Y
+
+
+def fixed(sensor):
+    selection = replace(
+        DEFAULTS.selection,
+        method="fixed",
+        fixed=(("b", (sensor,)), ("k", (sensor,)), ("pointwise", (sensor,))),
+    )
+    return Candidate(
+        name=f"pointwise-mlr-{sensor}",
+        approach="pointwise",
+        algorithm="mlr",
+        selection=selection,
+        models=DEFAULTS.models,
+        time_inputs=False,
+    )
+
+
+CANDIDATES = [fixed("T3"), fixed("T2"), fixed("T1"), fixed("T4")]
+
+
+def run(X, Y, **kwargs):
+    return recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, score="max_abs",
+                     max_loco_runs=12, n_group_folds=5, **kwargs)  # fmt: skip
+
+
+def test_the_candidate_that_made_the_data_is_chosen_on_every_fold():
+    X, Y = make_runs()
+    result = run(X, Y)
+    assert result.final == "pointwise-mlr-T1"
+    assert list(result.folds["chosen"]) == ["pointwise-mlr-T1"] * 5
+    # The chosen candidate's held-out error is that of T1 fitted on the other four runs:
+    # about the noise, far below the reference (T3, unrelated to the errors).
+    assert (result.folds["rmse_um"] < 0.2).all()
+    assert (result.folds["paper_rmse_um"] > 5 * result.folds["rmse_um"]).all()
+
+
+def test_the_held_out_run_never_reaches_the_inner_choice():
+    X, Y = make_runs()
+    honest = run(X, Y)
+    # Make R3's errors follow T2 instead of T1: only R3 changes.
+    X2, Y2 = make_runs(driver="T1")
+    rise = X2.loc[X2.run == "R3", "T2"].to_numpy() - X2.loc[X2.run == "R3", "T2"].to_numpy()[0]
+    Y2.loc[(X2.run == "R3").to_numpy()] = rise[:, None] * np.array([[1.0, 2.0, 3.0]])
+    poisoned = run(X2, Y2)
+    fold = honest.folds.set_index("fold")
+    other = poisoned.folds.set_index("fold")
+    # Fold R3's choice is made on R1, R2, R4, R5 alone: it cannot see the change ...
+    assert other.loc["R3", "chosen"] == fold.loc["R3", "chosen"]
+    assert other.loc["R3", "inner_score"] == pytest.approx(fold.loc["R3", "inner_score"], rel=1e-12)
+    # ... but its held-out error does (R3 no longer follows T1).
+    assert other.loc["R3", "rmse_um"] > 10 * fold.loc["R3", "rmse_um"]
+    inner = poisoned.inner
+    assert not ((inner["fold"] == "R3") & (inner["held_out"] == "R3")).any()
+
+
+def test_ties_go_to_the_candidate_listed_first():
+    X, Y = make_runs()
+    twin = replace(fixed("T1"), name="pointwise-mlr-T1-again")
+    result = recommend(
+        X,
+        Y,
+        [fixed("T3"), twin, fixed("T1")],
+        reference="pointwise-mlr-T3",
+        degree=1,
+        score="rmse",
+        max_loco_runs=12,
+        n_group_folds=5,
+    )
+    assert result.final == "pointwise-mlr-T1-again"
+
+
+def test_inner_splits_become_group_folds_above_the_limit():
+    runs = [f"R{i}" for i in range(1, 12)]
+    assert inner_splits(runs[:4], 12, 5) == [("R1",), ("R2",), ("R3",), ("R4",)]
+    groups = inner_splits(runs, 6, 5)
+    assert len(groups) == 5
+    assert sorted(r for g in groups for r in g) == sorted(runs)
+    assert groups[0] == ("R1", "R2", "R3")  # contiguous, in natural order
+
+
+def test_time_inputs_and_signals_are_seen_only_by_candidates_that_use_them():
+    X = pd.DataFrame({"run": ["R1"], "measurement": [1], "time_min": [0.0], "T1": [20.0],
+                      "T1@lag30min": [19.0], "S": [100.0], "S@lag30min": [90.0]})  # fmt: skip
+    keys = ["run", "measurement", "time_min"]
+    plain = fixed("T1")
+    view, selectable, models = candidate_view(X, plain, ["S"])
+    assert list(view.columns) == selectable == [*keys, "T1"] and models.signals == ()
+    lagged = replace(plain, time_inputs=True)
+    view, selectable, _ = candidate_view(X, lagged, ["S"])
+    assert list(view.columns) == selectable == [*keys, "T1", "T1@lag30min"]
+    both = replace(lagged, models=replace(DEFAULTS.models, signals=("S",)))
+    view, selectable, models = candidate_view(X, both, ["S"])
+    # The signal and its lag go into every model's inputs; only temperatures are selected.
+    assert list(view.columns) == [*keys, "T1", "T1@lag30min", "S", "S@lag30min"]
+    assert selectable == [*keys, "T1", "T1@lag30min"]
+    assert models.signals == ("S", "S@lag30min")
+
+
+def test_too_few_runs_are_refused_with_the_reason():
+    X, Y = make_runs(n_runs=2)
+    with pytest.raises(
+        ValueError, match="2 runs: a nested leave-one-condition-out choice needs at least 3"
+    ):
+        run(X, Y)
