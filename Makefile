@@ -15,15 +15,20 @@ export PYTHONHASHSEED := 0
 .PHONY: env results import test lint fmt clean twin twin-calibrate report sweep bench help
 
 help:
-	@echo "make results   set up .venv if needed, run the whole workflow on every embedded dataset (simulated twin, measured fl_thermal)"
-	@echo "make import    re-import data/raw/fl_thermal from the public record with data/import/fl_thermal.yaml"
-	@echo "make test      set up .venv if needed, run the test suite"
-	@echo "make lint      snakemake --lint and snakefmt --check"
-	@echo "make twin      regenerate data/raw/twin (byte-identical) from the committed twin parameters"
-	@echo "make report    Snakemake report: results/<dataset>/report.zip"
-	@echo "make sweep     sweep cluster counts x selection x algorithms x decoupling degree"
-	@echo "make bench     benchmark; writes results/bench/bench.json and bench.md"
-	@echo "make clean     remove results/, logs/, benchmarks/, .snakemake/"
+	@echo "make help            this list"
+	@echo "make env             create .venv from the pinned envs/requirements.txt (every target that needs it does this first)"
+	@echo "make slurm-env       create .venv-slurm for cluster runs and tests/slurm: .venv's pins plus envs/requirements-slurm.txt"
+	@echo "make results         set up .venv if needed, run the whole workflow on every embedded dataset (simulated twin, measured fl_thermal)"
+	@echo "make import          re-import data/raw/fl_thermal from the public record with data/import/fl_thermal.yaml"
+	@echo "make test            set up .venv if needed, run the test suite (PYTEST_WORKERS=2 pytest-xdist workers)"
+	@echo "make lint            ruff check over src/, tools/, workflow/scripts/ and tests/, then snakemake --lint and snakefmt --check"
+	@echo "make fmt             snakefmt over Snakefile and workflow/rules/"
+	@echo "make twin            regenerate data/raw/twin (byte-identical) from the committed twin parameters"
+	@echo "make twin-calibrate  refit src/thermaxis/twin_params.json to the paper's published targets, then regenerate data/raw/twin"
+	@echo "make report          Snakemake report: results/<dataset>/report.zip"
+	@echo "make sweep           sweep cluster counts x selection x algorithms x decoupling degree"
+	@echo "make bench           benchmark; writes results/bench/bench.json and bench.md"
+	@echo "make clean           remove results/, logs/, benchmarks/, .snakemake/"
 
 # The stamp holds a hash of the pins and the package metadata; any change reinstalls.
 env:
@@ -88,7 +93,10 @@ PYTEST_WORKERS ?= 2
 test: env
 	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup
 
+# ruff's rules are in pyproject.toml ([tool.ruff]); the Snakemake rule files get Snakemake's
+# own linter and snakefmt.
 lint: env
+	$(BIN)/ruff check src tools workflow/scripts tests
 	$(BIN)/snakemake --lint
 	$(BIN)/snakefmt --check Snakefile workflow/rules/
 

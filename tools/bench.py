@@ -77,7 +77,9 @@ TARGETS = {
     "test_suite": "make test after set-up <= 150 s",
 }
 # The smallest workflow Snakemake can run: its no-op is the floor a no-op rerun is measured against.
-ONE_RULE_SNAKEFILE = 'rule all:\n    output:\n        "done.txt"\n    shell:\n        "touch {output}"\n'
+ONE_RULE_SNAKEFILE = (
+    'rule all:\n    output:\n        "done.txt"\n    shell:\n        "touch {output}"\n'
+)
 
 
 # --------------------------------------------------------------------------- measuring
@@ -179,7 +181,9 @@ def measure(
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open(log_path, "wb") as log:
         start = time.perf_counter()
-        proc = subprocess.Popen(command, cwd=cwd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        proc = subprocess.Popen(
+            command, cwd=cwd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True
+        )
         sampler = _TreeSampler(proc.pid)
         sampler.start()
         timer = None
@@ -271,7 +275,8 @@ def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
             growth = "cost grows about quadratically (or faster) with the number of runs"
         growth += f" (quadratic share at {top:g} runs {share:.2f})"
     statement = (
-        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run (least squares, R^2 = {r2:.3f}); {growth}; "
+        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run "
+        f"(least squares, R^2 = {r2:.3f}); {growth}; "
         f"marginal cost {', '.join(f'{v:.2f}' for v in marginal)} s per added run"
     )
     return ScaleFit(float(intercept), float(slope), r2, marginal, share, statement)
@@ -281,7 +286,8 @@ def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
 
 
 def prepare_workdir(root: Path, repo: Path = REPO) -> Path:
-    """A scratch work folder whose Snakefile, config, workflow, notebooks and data link to ``repo``."""
+    """A scratch work folder whose Snakefile, config, workflow, notebooks and data link to
+    ``repo``."""
     root.mkdir(parents=True, exist_ok=True)
     for name in ("Snakefile", "config", "workflow", "notebooks", "data"):
         target = root / name
@@ -326,7 +332,9 @@ def _machine() -> dict:
 
 def _git_commit(repo: Path) -> str | None:
     try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True, timeout=10)
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True, timeout=10
+        )
         return out.stdout.strip() or None
     except (OSError, subprocess.SubprocessError):
         return None
@@ -334,7 +342,9 @@ def _git_commit(repo: Path) -> str | None:
 
 def _default_dataset_name(repo: Path) -> str:
     """The dataset a plain ``snakemake`` run builds: the first of config ``datasets``."""
-    meta = load_yaml(repo / load_config(repo / "config" / "config.yaml")["dataset"] / "dataset.yaml")
+    meta = load_yaml(
+        repo / load_config(repo / "config" / "config.yaml")["dataset"] / "dataset.yaml"
+    )
     return meta["name"]
 
 
@@ -366,7 +376,12 @@ def run_bench(
     doc = {
         "machine": _machine(),
         "git_commit": _git_commit(REPO),
-        "settings": {"cores": cores, "scale_runs": list(runs), "scale_shape": SCALE_SHAPE, "steps": list(steps)},
+        "settings": {
+            "cores": cores,
+            "scale_runs": list(runs),
+            "scale_shape": SCALE_SHAPE,
+            "steps": list(steps),
+        },
         "measurements": [],
     }
     measurements: list[Measurement] = []
@@ -375,7 +390,10 @@ def run_bench(
         _add_jobs(m)
         measurements.append(m)
         status = "ok" if m.ok else f"FAILED (exit {m.returncode}, log {m.log})"
-        progress(f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, {m.peak_rss_mib:.0f} MiB peak; {status}")
+        progress(
+            f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, "
+            f"{m.peak_rss_mib:.0f} MiB peak; {status}"
+        )
         return m
 
     try:
@@ -383,59 +401,166 @@ def run_bench(
             work = prepare_workdir(scratch / "default")
             dataset_name = _default_dataset_name(REPO)
         if "results" in steps:
-            record(measure("results_cold", _snakemake(cores), work, logs / "results_cold.log",
-                                  "snakemake --cores N on nothing (make results after set-up)", env, timeout_s))  # fmt: skip
+            record(
+                measure(
+                    "results_cold",
+                    _snakemake(cores),
+                    work,
+                    logs / "results_cold.log",
+                    "snakemake --cores N on nothing (make results after set-up)",
+                    env,
+                    timeout_s,
+                )
+            )
             record(measure("results_noop", _snakemake(cores), work, logs / "results_noop.log",
                            "the same again: nothing to do", env, timeout_s))  # fmt: skip
             baseline = scratch / "one_rule"
             baseline.mkdir(parents=True, exist_ok=True)
             (baseline / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
-            subprocess.run(_snakemake(cores), cwd=baseline, env=env, capture_output=True, check=True, timeout=timeout_s)
-            record(measure("one_rule_noop", _snakemake(cores), baseline, logs / "one_rule_noop.log",
-                           "a one-rule Snakemake workflow with nothing to do (the floor)", env, timeout_s))  # fmt: skip
+            subprocess.run(
+                _snakemake(cores),
+                cwd=baseline,
+                env=env,
+                capture_output=True,
+                check=True,
+                timeout=timeout_s,
+            )
+            record(
+                measure(
+                    "one_rule_noop",
+                    _snakemake(cores),
+                    baseline,
+                    logs / "one_rule_noop.log",
+                    "a one-rule Snakemake workflow with nothing to do (the floor)",
+                    env,
+                    timeout_s,
+                )
+            )
             base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
             alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
-            (work / "bench_param.yaml").write_text(yaml.safe_dump({"models": {"ridge_alpha": alpha}}))
-            record(measure("results_model_param",
-                                     _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
-                                     work, logs / "results_model_param.log",
-                                     f"after changing one model parameter (models.ridge_alpha -> {alpha:g})", env,
-                                     timeout_s))  # fmt: skip
+            (work / "bench_param.yaml").write_text(
+                yaml.safe_dump({"models": {"ridge_alpha": alpha}})
+            )
+            record(
+                measure(
+                    "results_model_param",
+                    _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
+                    work,
+                    logs / "results_model_param.log",
+                    f"after changing one model parameter (models.ridge_alpha -> {alpha:g})",
+                    env,
+                    timeout_s,
+                )
+            )
         if "sweep" in steps:
-            m = record(measure("sweep_default", _snakemake(cores, "sweep"), work, logs / "sweep_default.log",
-                               "snakemake sweep, default grid (assembled data present)", env, timeout_s))  # fmt: skip
+            m = record(
+                measure(
+                    "sweep_default",
+                    _snakemake(cores, "sweep"),
+                    work,
+                    logs / "sweep_default.log",
+                    "snakemake sweep, default grid (assembled data present)",
+                    env,
+                    timeout_s,
+                )
+            )
             m.extra.update(_sweep_size(work, dataset_name))
         if "scale" in steps:
             for n in runs:
                 data = scratch / "scale" / f"data_{n}"
                 shutil.rmtree(data, ignore_errors=True)
-                generate = [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(data), "--runs", str(n),
-                            "--sensors", str(SCALE_SHAPE["sensors"]), "--positions", str(SCALE_SHAPE["positions"]),
-                            "--hours", str(SCALE_SHAPE["hours"]), "--rate-hz", str(SCALE_SHAPE["rate_hz"]),
-                            "--seed", str(SCALE_SHAPE["seed"])]  # fmt: skip
-                record(measure(f"scale_generate_{n}", generate, scratch, logs / f"scale_generate_{n}.log",
-                               f"python -m thermaxis.twin scale: {n} runs (not part of the fit)", env, timeout_s,
-                               runs=n))  # fmt: skip
+                generate = [
+                    sys.executable,
+                    "-m",
+                    "thermaxis.twin",
+                    "scale",
+                    "--out",
+                    str(data),
+                    "--runs",
+                    str(n),
+                    "--sensors",
+                    str(SCALE_SHAPE["sensors"]),
+                    "--positions",
+                    str(SCALE_SHAPE["positions"]),
+                    "--hours",
+                    str(SCALE_SHAPE["hours"]),
+                    "--rate-hz",
+                    str(SCALE_SHAPE["rate_hz"]),
+                    "--seed",
+                    str(SCALE_SHAPE["seed"]),
+                ]
+                record(
+                    measure(
+                        f"scale_generate_{n}",
+                        generate,
+                        scratch,
+                        logs / f"scale_generate_{n}.log",
+                        f"python -m thermaxis.twin scale: {n} runs (not part of the fit)",
+                        env,
+                        timeout_s,
+                        runs=n,
+                    )
+                )
                 work_n = prepare_workdir(scratch / "scale" / f"work_{n}")
-                override = {"dataset": str(data), "ambient_sensor": "T1", "models": {"algorithms": ["mlr"]},
-                            "folds": ["S001"], "paper_fold": "S001"}  # fmt: skip
+                override = {
+                    "dataset": str(data),
+                    "ambient_sensor": "T1",
+                    "models": {"algorithms": ["mlr"]},
+                    "folds": ["S001"],
+                    "paper_fold": "S001",
+                }
                 (work_n / "bench_scale.yaml").write_text(yaml.safe_dump(override))
-                targets = ["results/twin_scale/tables/metrics.csv", "results/twin_scale/tables/table5_slope_intercept.csv"]
-                m = record(measure(f"scale_{n}",
-                                   _snakemake(cores, "--configfile", "config/config.yaml", "bench_scale.yaml", "--",
-                                              *targets),
-                                   work_n, logs / f"scale_{n}.log",
-                                   f"{n} runs: cleaning to metrics.csv and Table 5 (MLR, fold S001)", env, timeout_s,
-                                   runs=n))  # fmt: skip
+                targets = [
+                    "results/twin_scale/tables/metrics.csv",
+                    "results/twin_scale/tables/table5_slope_intercept.csv",
+                ]
+                m = record(
+                    measure(
+                        f"scale_{n}",
+                        _snakemake(
+                            cores,
+                            "--configfile",
+                            "config/config.yaml",
+                            "bench_scale.yaml",
+                            "--",
+                            *targets,
+                        ),
+                        work_n,
+                        logs / f"scale_{n}.log",
+                        f"{n} runs: cleaning to metrics.csv and Table 5 (MLR, fold S001)",
+                        env,
+                        timeout_s,
+                        runs=n,
+                    )
+                )
                 if not keep:
                     shutil.rmtree(data, ignore_errors=True)
                     shutil.rmtree(work_n, ignore_errors=True)
         if "test" in steps:
             workers = os.environ.get("PYTEST_WORKERS", "2")  # as the Makefile's test target
-            suite = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", workers, "--dist", "loadgroup"]
-            record(measure("test_suite", suite, REPO,
-                           logs / "test_suite.log", "the test suite, as make test runs it (set-up done)", env,
-                           timeout_s))  # fmt: skip
+            suite = [
+                sys.executable,
+                "-m",
+                "pytest",
+                "-q",
+                "-p",
+                "no:cacheprovider",
+                "-n",
+                workers,
+                "--dist",
+                "loadgroup",
+            ]
+            record(
+                measure(
+                    "test_suite",
+                    suite,
+                    REPO,
+                    logs / "test_suite.log",
+                    "the test suite, as make test runs it (set-up done)",
+                    env,
+                    timeout_s,
+                )
+            )
     finally:
         if not keep and workdir is None:
             shutil.rmtree(scratch, ignore_errors=True)
@@ -444,29 +569,41 @@ def run_bench(
 
 
 def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
-    """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and bench.md."""
+    """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and
+    bench.md."""
     doc["measurements"] = [{**asdict(m), "ok": m.ok} for m in measurements]
-    scale = [m for m in measurements if m.name.startswith("scale_") and not m.name.startswith("scale_generate") and m.ok]
+    scale = [
+        m
+        for m in measurements
+        if m.name.startswith("scale_") and not m.name.startswith("scale_generate") and m.ok
+    ]
     doc.pop("scale_fit", None)
     doc.pop("scale_fit_cpu", None)
     if len({m.runs for m in scale}) >= 2:
         doc["scale_fit"] = asdict(fit_scaling([m.runs for m in scale], [m.wall_s for m in scale]))
-        doc["scale_fit_cpu"] = asdict(fit_scaling([m.runs for m in scale], [m.cpu_s for m in scale], "CPU time"))
+        doc["scale_fit_cpu"] = asdict(
+            fit_scaling([m.runs for m in scale], [m.cpu_s for m in scale], "CPU time")
+        )
     doc["targets"] = _targets(measurements)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "bench.json").write_text(json.dumps(doc, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    (out / "bench.json").write_text(
+        json.dumps(doc, indent=1, sort_keys=True) + "\n", encoding="utf-8"
+    )
     (out / "bench.md").write_text(bench_markdown(doc), encoding="utf-8")
     return doc
 
 
 def render(out: Path) -> dict:
-    """Re-derive the fits, targets and bench.md from an existing ``out/bench.json`` (nothing is rerun)."""
+    """Re-derive the fits, targets and bench.md from an existing ``out/bench.json`` (nothing is
+    rerun)."""
     path = out / "bench.json"
     if not path.is_file():
         raise ValueError(f"{path}: not found; run the benchmark first")
     doc = json.loads(path.read_text(encoding="utf-8"))
     names = {f.name for f in fields(Measurement)}
-    measurements = [Measurement(**{k: v for k, v in d.items() if k in names}) for d in doc["measurements"]]
+    measurements = [
+        Measurement(**{k: v for k, v in d.items() if k in names}) for d in doc["measurements"]
+    ]
     for m in measurements:
         _add_jobs(m)
     return finish(doc, measurements, out)
@@ -481,7 +618,11 @@ def _count_jobs(log: Path) -> int | None:
     """Jobs Snakemake ran, from its 'N of M steps' lines."""
     if not log.is_file():
         return None
-    done = [line for line in log.read_text(errors="replace").splitlines() if "steps (" in line and " of " in line]
+    done = [
+        line
+        for line in log.read_text(errors="replace").splitlines()
+        if "steps (" in line and " of " in line
+    ]
     if not done:
         return 0
     try:
@@ -503,19 +644,30 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
     if "results_noop" in by_name and "one_rule_noop" in by_name:
         m, floor = by_name["results_noop"], by_name["one_rule_noop"]
         ratio = m.wall_s / floor.wall_s
-        add("results_noop", m.ok and ratio <= 1.25, f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x")
+        add(
+            "results_noop",
+            m.ok and ratio <= 1.25,
+            f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x",
+        )
     if "sweep_default" in by_name:
         m = by_name["sweep_default"]
         n = m.extra.get("configurations", 0)
-        add("sweep_default", m.ok and m.wall_s <= 30.0,
-            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s")  # fmt: skip
+        add(
+            "sweep_default",
+            m.ok and m.wall_s <= 30.0,
+            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s",
+        )
     if "test_suite" in by_name:
         m = by_name["test_suite"]
         add("test_suite", m.ok and m.wall_s <= 150.0, f"{m.wall_s:.1f} s")
     if "scale_50" in by_name:
         m = by_name["scale_50"]
         peak = m.peak_tree_rss_mib if m.peak_tree_rss_mib is not None else m.peak_rss_mib
-        add("scale_50", m.ok and m.wall_s <= 300.0 and peak <= 4096.0, f"{m.wall_s:.1f} s, peak {peak:.0f} MiB")
+        add(
+            "scale_50",
+            m.ok and m.wall_s <= 300.0 and peak <= 4096.0,
+            f"{m.wall_s:.1f} s, peak {peak:.0f} MiB",
+        )
     return rows
 
 
@@ -526,12 +678,14 @@ def bench_markdown(doc: dict) -> str:
         "# thermaxis benchmark",
         "",
         f"Machine: {machine['usable_cores']} usable cores ({machine['cpu_count']} CPUs), "
-        f"{machine.get('memory_gib')} GiB memory, {machine['platform']}, Python {machine['python']}. "
+        f"{machine.get('memory_gib')} GiB memory, {machine['platform']}, "
+        f"Python {machine['python']}. "
         f"Snakemake ran with `--cores {doc['settings']['cores']}`. Load average at start "
         f"{machine['load_average_at_start']}, at end {machine.get('load_average_at_end')} "
         "(other work on the machine inflates wall times).",
         "",
-        "| measurement | wall (s) | CPU (s) | peak RSS, largest process (MiB) | peak RSS, process tree (MiB) | jobs | ok | what |",
+        "| measurement | wall (s) | CPU (s) | peak RSS, largest process (MiB) "
+        "| peak RSS, process tree (MiB) | jobs | ok | what |",
         "|---|---:|---:|---:|---:|---:|---|---|",
     ]
     for m in doc["measurements"]:
@@ -541,7 +695,8 @@ def bench_markdown(doc: dict) -> str:
         if "configurations" in m["extra"]:
             what += f"; {m['extra']['configurations']} configurations x {m['extra']['folds']} folds"
         lines.append(
-            f"| {m['name']} | {m['wall_s']:.1f} | {m['cpu_s']:.1f} | {m['peak_rss_mib']:.0f} | {tree} | "
+            f"| {m['name']} | {m['wall_s']:.1f} | {m['cpu_s']:.1f} | "
+            f"{m['peak_rss_mib']:.0f} | {tree} | "
             f"{'' if jobs is None else jobs} | {'yes' if m['ok'] else 'NO'} | {what} |"
         )
     if "scale_fit" in doc:
@@ -549,12 +704,16 @@ def bench_markdown(doc: dict) -> str:
                   f"{doc['scale_fit_cpu']['statement']}."]  # fmt: skip
     if doc.get("targets"):
         lines += ["", "| target | measured | met |", "|---|---|---|"]
-        lines += [f"| {t['target']} | {t['measured']} | {'yes' if t['met'] else 'no'} |" for t in doc["targets"]]
+        lines += [
+            f"| {t['target']} | {t['measured']} | {'yes' if t['met'] else 'no'} |"
+            for t in doc["targets"]
+        ]
     lines += [
         "",
-        "Scale runs: twin-generated datasets (64 sensors, 100 positions, 8 h at 1 Hz), main pipeline from "
-        "cleaning to `tables/metrics.csv` and Table 5 with MLR and one held-out run (S001); figures and "
-        "reports are not included. Peak RSS of the process tree is sampled every 0.2 s (psutil).",
+        "Scale runs: twin-generated datasets (64 sensors, 100 positions, 8 h at 1 Hz), main "
+        "pipeline from cleaning to `tables/metrics.csv` and Table 5 with MLR and one held-out "
+        "run (S001); figures and reports are not included. Peak RSS of the process tree is "
+        "sampled every 0.2 s (psutil).",
     ]
     return "\n".join(lines) + "\n"
 
@@ -563,15 +722,35 @@ def bench_markdown(doc: dict) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m tools.bench", description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("results/bench"), help="folder of bench.json and bench.md")
-    parser.add_argument("--cores", type=int, default=None, help="cores given to Snakemake (default: all usable)")
-    parser.add_argument("--runs", type=int, nargs="+", default=list(SCALE_RUNS), help="runs of the scale datasets")
-    parser.add_argument("--steps", nargs="+", choices=STEPS, default=list(STEPS), help="what to measure")
-    parser.add_argument("--workdir", type=Path, default=None, help="scratch folder (default: a new temporary one)")
-    parser.add_argument("--keep", action="store_true", help="keep the scratch work folders and scale datasets")
-    parser.add_argument("--timeout-s", type=float, default=3600.0, help="stop any one measurement after this long")
-    parser.add_argument("--render-only", action="store_true", help="rewrite bench.md from --out/bench.json, rerun nothing")
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.bench", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "--out", type=Path, default=Path("results/bench"), help="folder of bench.json and bench.md"
+    )
+    parser.add_argument(
+        "--cores", type=int, default=None, help="cores given to Snakemake (default: all usable)"
+    )
+    parser.add_argument(
+        "--runs", type=int, nargs="+", default=list(SCALE_RUNS), help="runs of the scale datasets"
+    )
+    parser.add_argument(
+        "--steps", nargs="+", choices=STEPS, default=list(STEPS), help="what to measure"
+    )
+    parser.add_argument(
+        "--workdir", type=Path, default=None, help="scratch folder (default: a new temporary one)"
+    )
+    parser.add_argument(
+        "--keep", action="store_true", help="keep the scratch work folders and scale datasets"
+    )
+    parser.add_argument(
+        "--timeout-s", type=float, default=3600.0, help="stop any one measurement after this long"
+    )
+    parser.add_argument(
+        "--render-only",
+        action="store_true",
+        help="rewrite bench.md from --out/bench.json, rerun nothing",
+    )
     args = parser.parse_args(argv)
     if args.render_only:
         try:

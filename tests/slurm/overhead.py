@@ -94,7 +94,9 @@ def main(argv=None) -> int:
     times = sacct_times(jobs["slurm_id"])
     jobs = jobs.merge(times, on="slurm_id")
     jobs = jobs[jobs["state"] == "COMPLETED"].copy()
-    jobs["rule_s"] = [float(pd.read_csv(args.workdir / b, sep="\t")["s"].iloc[0]) for b in jobs["benchmark"]]
+    jobs["rule_s"] = [
+        float(pd.read_csv(args.workdir / b, sep="\t")["s"].iloc[0]) for b in jobs["benchmark"]
+    ]
     jobs["queue_s"] = (jobs["start"] - jobs["submit"]).dt.total_seconds()
     jobs["elapsed_s"] = (jobs["end"] - jobs["start"]).dt.total_seconds()
     jobs["startup_s"] = jobs["elapsed_s"] - jobs["rule_s"]

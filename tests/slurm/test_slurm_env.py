@@ -11,7 +11,7 @@ import re
 
 from packaging.utils import canonicalize_name
 
-from conftest import REPO
+from helpers import REPO
 
 ENVS = REPO / "envs"
 PLUGIN_PREFIX = "snakemake_executor_plugin_"
@@ -30,7 +30,10 @@ def _pins(name: str) -> dict[str, str]:
 def test_the_main_pins_have_no_executor_plugin_and_the_slurm_pins_add_only_the_plugin():
     main, slurm = _pins("requirements.txt"), _pins("requirements-slurm.txt")
     assert [p for p in main if p.startswith("snakemake-executor-plugin-")] == []
-    assert set(slurm) == {"snakemake-executor-plugin-slurm", "snakemake-executor-plugin-slurm-jobstep"}
+    assert set(slurm) == {
+        "snakemake-executor-plugin-slurm",
+        "snakemake-executor-plugin-slurm-jobstep",
+    }
     assert set(main) & set(slurm) == set()  # installed together: one pin per package
 
 
@@ -42,4 +45,6 @@ def test_the_conda_environment_takes_the_main_pins_only():
 
 def test_this_environment_has_no_executor_plugin_for_snakemake_to_import():
     found = sorted(m.name for m in pkgutil.iter_modules() if m.name.startswith(PLUGIN_PREFIX))
-    assert found == [], f"executor plugins in the main environment (belong in envs/requirements-slurm.txt): {found}"
+    assert found == [], (
+        f"executor plugins in the main environment (belong in envs/requirements-slurm.txt): {found}"
+    )

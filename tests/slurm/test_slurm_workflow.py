@@ -21,7 +21,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import REPO, run_snakemake, snakemake_env, workflow_workdir
+from helpers import REPO
+from helpers.workflow import run_snakemake, snakemake_env, workflow_workdir
 
 pytestmark = pytest.mark.slurm
 
@@ -58,10 +59,13 @@ CONFIG = {
 def slurm():
     """The one-node cluster; stopped afterwards if this fixture started it."""
     if os.geteuid() != 0:
-        pytest.skip("Slurm test: needs root to start the one-node cluster (tests/slurm/start_slurm.sh)")
-    was_up = shutil.which("scontrol") is not None and "UP" in subprocess.run(
-        ["scontrol", "ping"], capture_output=True, text=True
-    ).stdout
+        pytest.skip(
+            "Slurm test: needs root to start the one-node cluster (tests/slurm/start_slurm.sh)"
+        )
+    was_up = (
+        shutil.which("scontrol") is not None
+        and "UP" in subprocess.run(["scontrol", "ping"], capture_output=True, text=True).stdout
+    )
     proc = subprocess.run(["bash", str(START)], capture_output=True, text=True, timeout=300)
     if proc.returncode != 0:
         reason = (proc.stderr.strip().splitlines() or ["no message"])[-1]
@@ -94,9 +98,21 @@ def _workdir(tmp_path: Path) -> tuple[Path, Path]:
 
 def _slurm_command(config: Path, *extra: str) -> list[str]:
     # Status checks every few seconds instead of the profile's 20 s: the jobs are short.
-    return [str(SLURM_BIN / "snakemake"), "--profile", "profiles/slurm", "--nolock", "--configfile", str(config),
-            "--slurm-init-seconds-before-status-checks", "2", "--latency-wait", "10", *extra,
-            "--", *TARGETS]  # fmt: skip
+    return [
+        str(SLURM_BIN / "snakemake"),
+        "--profile",
+        "profiles/slurm",
+        "--nolock",
+        "--configfile",
+        str(config),
+        "--slurm-init-seconds-before-status-checks",
+        "2",
+        "--latency-wait",
+        "10",
+        *extra,
+        "--",
+        *TARGETS,
+    ]
 
 
 def _results(work: Path) -> dict[str, bytes]:
@@ -128,7 +144,9 @@ def test_slurm_run_is_byte_identical_to_the_local_run(slurm_env, local_results, 
     # The estimate before the start: 8 evaluations x 0.065 s on 2 batches = 0.26 s wall.
     assert "8 evaluations in 2 batches; estimated 0.00 CPU-hours at 0.065 s each" in proc.stderr
     # The cluster plan: 8 evaluations in batches of 4.
-    batches = sorted(p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir())
+    batches = sorted(
+        p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir()
+    )
     assert batches == ["0.parquet", "1.parquet"]
     ours = _results(work)
     assert sorted(ours) == sorted(local_results)
@@ -137,10 +155,13 @@ def test_slurm_run_is_byte_identical_to_the_local_run(slurm_env, local_results, 
 
 
 def _running_job(rule: str, timeout: float = 300.0) -> str:
-    """The Slurm id of the first RUNNING job of ``rule`` (the plugin puts the rule in the comment)."""
+    """The Slurm id of the first RUNNING job of ``rule`` (the plugin puts the rule in the
+    comment)."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        out = subprocess.run(["squeue", "-h", "-t", "RUNNING", "-o", "%i|%k"], capture_output=True, text=True).stdout
+        out = subprocess.run(
+            ["squeue", "-h", "-t", "RUNNING", "-o", "%i|%k"], capture_output=True, text=True
+        ).stdout
         for line in out.splitlines():
             job, _, comment = line.partition("|")
             if f"rule_{rule}" in comment:
@@ -160,7 +181,9 @@ def _finish(run: subprocess.Popen, log: Path) -> str:
     return log.read_text()
 
 
-def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(slurm_env, local_results, tmp_path):
+def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(
+    slurm_env, local_results, tmp_path
+):
     work, config = _workdir(tmp_path)
     # 1. Without retries the killed job fails the run, with the job and its state named.
     run = _start(work, _slurm_command(config, "--retries", "0"), tmp_path / "run.log", slurm_env)

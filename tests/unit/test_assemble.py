@@ -19,7 +19,10 @@ def windows(n=3):
 
 
 def test_rezeroed_is_each_measurement_minus_its_own_first_reading():
-    curves = [pd.Series([0.0, -1.0, -2.0], index=[185.0, 205.0, 225.0]), pd.Series([-1.5, -2.0, np.nan], index=[185.0, 205.0, 225.0])]
+    curves = [
+        pd.Series([0.0, -1.0, -2.0], index=[185.0, 205.0, 225.0]),
+        pd.Series([-1.5, -2.0, np.nan], index=[185.0, 205.0, 225.0]),
+    ]
     e = tidy_errors("E1", 1, windows(2), curves)
     assert e["error_um"].tolist()[:5] == [0.0, -1.0, -2.0, -1.5, -2.0]
     assert e["rezeroed_um"].tolist()[:5] == [0.0, -1.0, -2.0, 0.0, -0.5]
@@ -38,7 +41,9 @@ def test_relative_temperatures_start_at_zero():
 def test_model_inputs_align_rows_and_order_sensors_naturally():
     curves = [pd.Series([0.0, 1.0], index=[0.0, 100.0]) for _ in range(3)]
     errors = tidy_errors("R", 1, windows(), curves)
-    temps = tidy_temperatures("R", 1, windows(), pd.DataFrame({"T10": [1.0, 2, 3], "T2": [4.0, 5, 6], "T1": [7.0, 8, 9]}))
+    temps = tidy_temperatures(
+        "R", 1, windows(), pd.DataFrame({"T10": [1.0, 2, 3], "T2": [4.0, 5, 6], "T1": [7.0, 8, 9]})
+    )
     X, Y = model_inputs(errors, temps)
     assert list(X.columns) == ["run", "measurement", "time_min", "T1", "T2", "T10"]
     assert list(Y.columns) == [0.0, 100.0]

@@ -6,7 +6,13 @@ from sklearn.linear_model import Ridge
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
-from thermaxis.benchmark.chronological import _ridge_path_mae, block, choose, evaluate_channel, input_sets
+from thermaxis.benchmark.chronological import (
+    _ridge_path_mae,
+    block,
+    choose,
+    evaluate_channel,
+    input_sets,
+)
 
 
 def test_blocks_are_floors_of_the_fractions():
@@ -24,13 +30,14 @@ def test_ridge_path_equals_scikit_learn_at_every_alpha():
     fit, score = np.arange(150), np.arange(150, 200)
     alphas = np.array([100.0, 1.0, 0.01])
     path = _ridge_path_mae(X, y, fit, score, alphas)
-    for alpha, mae in zip(alphas, path):
+    for alpha, mae in zip(alphas, path, strict=True):
         model = make_pipeline(StandardScaler(), Ridge(alpha=alpha)).fit(X[fit], y[fit])
         assert mae == pytest.approx(np.mean(np.abs(model.predict(X[score]) - y[score])), rel=1e-9)
 
 
 def lagged_record(tau_min=60.0, n=3000, seed=0):
-    """A drift that follows a 60 min lag of a wandering temperature; the test block is never looked at."""
+    """A drift that follows a 60 min lag of a wandering temperature; the test block is never
+    looked at."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) * 60.0
     u = 20 + np.cumsum(rng.normal(0, 0.05, n))
@@ -45,7 +52,9 @@ def lagged_record(tau_min=60.0, n=3000, seed=0):
 def test_the_time_constant_that_made_the_data_is_chosen():
     t, temperatures, y = lagged_record()
     sets = input_sets(t, temperatures, {}, ["temperatures", "signals"], [[], [15], [60], [240]])
-    assert [s.lags_min for s in sets[:1]] == [()]  # simplest first; signals fall back to temperatures
+    assert [s.lags_min for s in sets[:1]] == [
+        ()
+    ]  # simplest first; signals fall back to temperatures
     inputs, alpha, _ = choose(sets, y, slice(0, 1800), [0.01, 1.0, 100.0], 5)
     assert inputs.lags_min == (60.0,)
     result = evaluate_channel(sets, y, slice(0, 1800), slice(1800, 2400), [0.01, 1.0, 100.0], 5)
@@ -57,4 +66,7 @@ def test_the_test_block_reaches_no_choice():
     sets = input_sets(t, temperatures, {}, ["temperatures"], [[], [15], [60]])
     poisoned = y.copy()
     poisoned[1800:] = 1e3  # nothing after the training part may change the choice
-    assert choose(sets, y, slice(0, 1800), [1.0], 5)[0].label == choose(sets, poisoned, slice(0, 1800), [1.0], 5)[0].label
+    assert (
+        choose(sets, y, slice(0, 1800), [1.0], 5)[0].label
+        == choose(sets, poisoned, slice(0, 1800), [1.0], 5)[0].label
+    )

@@ -8,7 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import DEFAULTS
+from helpers import DEFAULTS
+from thermaxis.cleaning.clock import estimate_clock_offset
+from thermaxis.cleaning.passes import combine_passes
 from thermaxis.cleaning.temperatures import (
     CleanedTemperatures,
     check_gaps,
@@ -16,8 +18,6 @@ from thermaxis.cleaning.temperatures import (
     hampel_outliers,
     temperatures_in_windows,
 )
-from thermaxis.cleaning.passes import combine_passes
-from thermaxis.cleaning.clock import estimate_clock_offset
 
 T0 = pd.Timestamp("2022-05-10T09:00:00")  # a whole multiple of 10 s since the epoch
 SETTINGS = DEFAULTS.cleaning.temperatures
@@ -48,7 +48,9 @@ def qc_of(result: CleanedTemperatures, sensor: str) -> pd.Series:
 
 
 def clean(sources, offsets=None, **settings):
-    return clean_temperatures(sources, offsets or {}, replace(DEFAULTS.cleaning.temperatures, **settings))
+    return clean_temperatures(
+        sources, offsets or {}, replace(DEFAULTS.cleaning.temperatures, **settings)
+    )
 
 
 # ----------------------------------------------------------------------------- grid and ramps
@@ -67,7 +69,9 @@ def test_grid_is_aligned_to_whole_intervals_and_ramp_is_exact():
 
 def test_explicit_start_and_end_span_the_grid():
     s = np.arange(0, 1000, 10.0)
-    result = clean_temperatures({"box": source(s, T1=ramp(s))}, {}, SETTINGS, start=at([95])[0], end=at([305])[0])
+    result = clean_temperatures(
+        {"box": source(s, T1=ramp(s))}, {}, SETTINGS, start=at([95])[0], end=at([305])[0]
+    )
     np.testing.assert_array_equal(grid_seconds(result.frame), np.arange(100, 301, 10))
 
 
@@ -83,7 +87,10 @@ def test_irregular_sampling_with_lost_packets_is_resampled_exactly():
     assert qc["n_raw"] == 196 and qc["n_long_gap"] == 0
     # grid points inside the three holes (each longer than 1.5 x the median spacing)
     kept = s[~lost]
-    holes = [(kept[i], kept[i + 1]) for i in np.flatnonzero(np.diff(kept) > 1.5 * np.median(np.diff(kept)))]
+    holes = [
+        (kept[i], kept[i + 1])
+        for i in np.flatnonzero(np.diff(kept) > 1.5 * np.median(np.diff(kept)))
+    ]
     expected = sum(((t > a) & (t < b)).sum() for a, b in holes)
     assert qc["n_interpolated"] == expected > 0
 
@@ -91,7 +98,9 @@ def test_irregular_sampling_with_lost_packets_is_resampled_exactly():
 def test_sources_at_different_rates_share_one_grid():
     box_s = np.arange(0, 1200, 10.0)
     hmi_s = np.arange(5, 1200, 60.0)
-    result = clean({"box": source(box_s, T1=ramp(box_s)), "hmi": source(hmi_s, T12=2 * ramp(hmi_s))})
+    result = clean(
+        {"box": source(box_s, T1=ramp(box_s)), "hmi": source(hmi_s, T12=2 * ramp(hmi_s))}
+    )
     t = grid_seconds(result.frame)
     assert list(result.frame.columns) == ["time", "T1", "T12"]
     inside = (t >= hmi_s[0]) & (t <= hmi_s[-1])
@@ -105,7 +114,9 @@ def test_sources_at_different_rates_share_one_grid():
 def test_exact_duplicate_rows_are_dropped_and_counted():
     s = np.arange(0, 300, 10.0)
     frame = source(s, T1=ramp(s), T2=ramp(s) + 1)
-    frame = pd.concat([frame, frame.iloc[[4, 9, 9]]]).sort_values("time", kind="stable", ignore_index=True)
+    frame = pd.concat([frame, frame.iloc[[4, 9, 9]]]).sort_values(
+        "time", kind="stable", ignore_index=True
+    )
     result = clean({"box": frame})
     t = grid_seconds(result.frame)
     np.testing.assert_allclose(result.frame["T1"], ramp(t), atol=1e-9)
@@ -126,7 +137,9 @@ def test_open_circuit_value_at_a_repeated_timestamp_never_enters_the_mean():
     s = np.array([0, 10, 20, 20, 30, 40.0])
     values = np.array([20.0, 20.1, 850.0, 20.25, 20.3, 20.4])
     result = clean({"box": source(s, T1=values)})
-    assert result.frame["T1"].iloc[2] == pytest.approx(20.25)  # the valid reading, not an interpolation
+    assert result.frame["T1"].iloc[2] == pytest.approx(
+        20.25
+    )  # the valid reading, not an interpolation
     assert qc_of(result, "T1")["n_out_of_range"] == 1
     assert qc_of(result, "T1")["n_duplicates"] == 0  # only one valid reading at 20 s
 
@@ -159,7 +172,9 @@ def test_clock_offset_is_estimated_on_a_shared_transient(true_offset):
     ref_s = np.arange(0, 9600, 10.0)
     reference = pd.Series(warm_up(ref_s) + rng.normal(0, 0.02, ref_s.size), index=at(ref_s))
     true_s = np.arange(0, 9600, 10.0)
-    series = pd.Series(warm_up(true_s) + rng.normal(0, 0.02, true_s.size), index=at(true_s - true_offset))
+    series = pd.Series(
+        warm_up(true_s) + rng.normal(0, 0.02, true_s.size), index=at(true_s - true_offset)
+    )
     assert estimate_clock_offset(series, reference, 120, 1.0) == pytest.approx(true_offset, abs=0.5)
     # The same with the roles reversed (dense series, sparse reference): the sign flips.
     sparse = reference.iloc[::6]
@@ -170,7 +185,10 @@ def test_clock_offset_of_quantised_sparse_hmi_is_found_within_a_few_seconds():
     rng = np.random.default_rng(5)
     ref_s = np.arange(0, 9600, 10.0)
     box = pd.DataFrame(
-        {"T7": warm_up(ref_s) + rng.normal(0, 0.02, ref_s.size), "T10": 30 + rng.normal(0, 0.02, ref_s.size)},
+        {
+            "T7": warm_up(ref_s) + rng.normal(0, 0.02, ref_s.size),
+            "T10": 30 + rng.normal(0, 0.02, ref_s.size),
+        },
         index=at(ref_s),
     )
     true_s = np.arange(13, 9600, 60.0)
@@ -315,7 +333,10 @@ def test_sensor_starting_late_is_held_briefly_then_reported():
     late = source(nut_s + 700, T11=ramp(nut_s + 700))  # first sample at 725 s > max_gap_s / 2
     result = clean({"box": source(box_s, T1=ramp(box_s)), "nut": late})
     t = grid_seconds(result.frame)
-    assert result.frame["T11"][t < 425].isna().all() and result.frame["T11"][(t >= 425) & (t < 725)].notna().all()
+    assert (
+        result.frame["T11"][t < 425].isna().all()
+        and result.frame["T11"][(t >= 425) & (t < 725)].notna().all()
+    )
     gap = result.gaps.iloc[0]
     assert (gap["sensor"], gap["start"], gap["end"]) == ("T11", at([0])[0], at([725])[0])
 
@@ -341,7 +362,9 @@ def test_long_gap_overlapping_a_measurement_raises_unless_allowed():
     warnings = check_gaps(gaps, windows, allow=True, max_gap_s=600.0)
     assert len(warnings) == 1 and "T11" in warnings[0] and "m02" in warnings[0]
     # A gap that ends exactly when a measurement starts has a real sample there.
-    assert check_gaps(gaps, windows_frame((0, 600), (1900, 2400)), allow=False, max_gap_s=600.0) == []
+    assert (
+        check_gaps(gaps, windows_frame((0, 600), (1900, 2400)), allow=False, max_gap_s=600.0) == []
+    )
 
 
 def test_gaps_of_clean_temperatures_feed_check_gaps():
@@ -359,7 +382,9 @@ def test_gaps_of_clean_temperatures_feed_check_gaps():
 def test_window_mean_and_start_of_a_ramp_are_exact():
     s = np.arange(0, 3600, 10.0)
     frame = clean({"box": source(s, T1=ramp(s), T2=2 * ramp(s))}).frame
-    windows = windows_frame((103, 887), (1000, 1000), (2004, 2006))  # off-grid, empty, shorter than a step
+    windows = windows_frame(
+        (103, 887), (1000, 1000), (2004, 2006)
+    )  # off-grid, empty, shorter than a step
     mean = temperatures_in_windows(frame, windows, how="mean")
     start = temperatures_in_windows(frame, windows, how="start")
     mid = np.array([495.0, 1000.0, 2005.0])
@@ -379,7 +404,9 @@ def test_window_mean_of_a_step_weights_by_time():
 
 def test_window_mean_skips_a_nan_stretch_and_window_outside_raises():
     frame = pd.DataFrame({"time": at([0, 10, 20, 30]), "T1": [1.0, 1.0, np.nan, 3.0]})
-    assert temperatures_in_windows(frame, windows_frame((0, 30)), how="mean")["T1"].iloc[0] == pytest.approx(1.0)
+    assert temperatures_in_windows(frame, windows_frame((0, 30)), how="mean")["T1"].iloc[
+        0
+    ] == pytest.approx(1.0)
     with pytest.raises(ValueError, match="outside the temperature record"):
         temperatures_in_windows(frame, windows_frame((20, 40)), how="mean")
     with pytest.raises(ValueError, match="how"):
@@ -420,7 +447,9 @@ def test_all_faults_together_meet_the_acceptance_criterion():
     box = source(box_s, T1=truth["T1"](box_s) + rng.normal(0, 0.02, box_s.size))
     box.loc[[100, 900], "T1"] += [4.0, -3.0]  # spikes
     box.loc[1500, "T1"] = 850.0  # open circuit
-    box = pd.concat([box, box.iloc[[200, 201]]]).sort_values("time", kind="stable", ignore_index=True)
+    box = pd.concat([box, box.iloc[[200, 201]]]).sort_values(
+        "time", kind="stable", ignore_index=True
+    )
     nut_s = np.cumsum(rng.uniform(22, 38, 400))
     nut_s = nut_s[(nut_s < duration) & rng.uniform(size=nut_s.size).__ge__(0.05)]  # lost packets
     nut_s = nut_s[(nut_s < 5000) | (nut_s > 5400)]  # a 400 s outage
@@ -437,7 +466,11 @@ def test_all_faults_together_meet_the_acceptance_criterion():
         err = np.abs(result.frame[sensor].to_numpy()[in_window] - f(t[in_window]))
         assert np.mean(err <= 0.1) >= 0.99, sensor
     qc = result.qc.set_index("sensor")
-    assert (qc.loc["T1", "n_spikes"], qc.loc["T1", "n_out_of_range"], qc.loc["T1", "n_duplicates"]) == (2, 1, 2)
+    assert (
+        qc.loc["T1", "n_spikes"],
+        qc.loc["T1", "n_out_of_range"],
+        qc.loc["T1", "n_duplicates"],
+    ) == (2, 1, 2)
     assert qc.loc["T12", "n_spikes"] == 0 and result.gaps.empty
 
 
@@ -454,8 +487,12 @@ TARGETS = [185.0, 205.0, 225.0, 245.0, 265.0]
 
 
 def two_passes(forward, backward):
-    rows = [(p, e, "+") for p, e in zip(TARGETS, forward) if e is not None]
-    rows += [(p, e, "-") for p, e in zip(reversed(TARGETS), reversed(backward)) if e is not None]
+    rows = [(p, e, "+") for p, e in zip(TARGETS, forward, strict=True) if e is not None]
+    rows += [
+        (p, e, "-")
+        for p, e in zip(reversed(TARGETS), reversed(backward), strict=True)
+        if e is not None
+    ]
     return measurement(rows)
 
 
@@ -468,7 +505,8 @@ def test_mean_of_both_passes():
 
 
 @pytest.mark.parametrize(
-    "direction, expected", [("+", [0.0, -1.0, -2.0, -3.0, -4.0]), ("-", [1.0, 0.0, -1.0, -2.0, -2.0])]
+    "direction, expected",
+    [("+", [0.0, -1.0, -2.0, -3.0, -4.0]), ("-", [1.0, 0.0, -1.0, -2.0, -2.0])],
 )
 def test_one_direction(direction, expected):
     m = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [1.0, 0.0, -1.0, -2.0, -2.0])
@@ -478,7 +516,9 @@ def test_one_direction(direction, expected):
 
 def test_single_unlabelled_pass_is_used_as_is():
     m = measurement([(p, -float(i), None) for i, p in enumerate(TARGETS)], direction=False)
-    curve, warnings = combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, direction="mean"))
+    curve, warnings = combine_passes(
+        m, TARGETS, replace(DEFAULTS.cleaning.errors, direction="mean")
+    )
     np.testing.assert_allclose(curve.to_numpy(), [0.0, -1.0, -2.0, -3.0, -4.0])
     assert warnings == []
 
@@ -492,7 +532,9 @@ def test_target_read_in_one_pass_only_keeps_that_reading_with_a_warning():
 
 def test_missing_target_reading_is_dropped_with_a_warning():
     m = two_passes([0.0, -1.0, None, -3.0, -4.0], [1.0, 0.0, None, -2.0, -2.0])
-    curve, warnings = combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.2), name="m03")
+    curve, warnings = combine_passes(
+        m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.2), name="m03"
+    )
     assert np.isnan(curve[225.0]) and curve.notna().sum() == 4
     assert len(warnings) == 1 and "225" in warnings[0] and "no reading" in warnings[0]
     # a NaN reading is as missing as an absent row
@@ -504,19 +546,27 @@ def test_missing_target_reading_is_dropped_with_a_warning():
 def test_too_many_missing_targets_raise():
     m = two_passes([0.0, None, None, -3.0, -4.0], [1.0, None, None, -2.0, -2.0])
     with pytest.raises(ValueError, match=r"measurement m05: 2 of 5 targets"):
-        combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.2), name="m05")
-    curve, _ = combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.4), name="m05")
+        combine_passes(
+            m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.2), name="m05"
+        )
+    curve, _ = combine_passes(
+        m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=0.4), name="m05"
+    )
     assert curve.isna().sum() == 2
 
 
 def test_measurement_with_one_direction_only():
     # what thermaxis.dataset.reader makes of a file without a direction column: every row "+"
     forward_only = two_passes([0.0, -1.0, -2.0, -3.0, -4.0], [None] * 5)
-    curve, warnings = combine_passes(forward_only, TARGETS, replace(DEFAULTS.cleaning.errors, direction="mean"))
+    curve, warnings = combine_passes(
+        forward_only, TARGETS, replace(DEFAULTS.cleaning.errors, direction="mean")
+    )
     np.testing.assert_allclose(curve.to_numpy(), [0.0, -1.0, -2.0, -3.0, -4.0])
     assert warnings == []
     with pytest.raises(ValueError, match=r"m02: no - pass"):
-        combine_passes(forward_only, TARGETS, replace(DEFAULTS.cleaning.errors, direction="-"), name="m02")
+        combine_passes(
+            forward_only, TARGETS, replace(DEFAULTS.cleaning.errors, direction="-"), name="m02"
+        )
 
 
 def test_conflicting_duplicate_position_raises():

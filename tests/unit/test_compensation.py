@@ -1,4 +1,5 @@
-"""Compensation: K0/tan(beta)/P0 from k and b worked by hand, the fallback policy, the residual tables."""
+"""Compensation: K0/tan(beta)/P0 from k and b worked by hand, the fallback policy, the residual
+tables."""
 
 import json
 import math
@@ -7,47 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from thermaxis.compensation.runtime import ControllerParameters, Compensator, Step
+from helpers.builders import HOLD, TARGETS, hand_model
+from thermaxis.compensation.exports import siemens_840d, twincat
 from thermaxis.compensation.heldout import held_out_tables
 from thermaxis.compensation.model import line_weights, model_record
-from thermaxis.compensation.exports import siemens_840d, twincat
+from thermaxis.compensation.runtime import Compensator, ControllerParameters, Step
 from thermaxis.config import FallbackSettings
 from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
-
-TARGETS = [185.0 + 20.0 * i for i in range(14)]  # the paper's stroke; shifted origin 185 mm
-HOLD = FallbackSettings(
-    range_margin_c=2.0, plausible_c=(-20.0, 120.0), max_rate_c_per_min=0.5, max_sensor_age_s=60.0, policy="hold", ramp_to_zero_min=30.0
-)
-
-
-def hand_model(fallback=HOLD, positions=TARGETS):
-    """k = -300 + 13 T1 [um/m] (absolute T1), b = -0.5 - 11 dT2 [um] (T2 relative to homing)."""
-    s = [(x - positions[0]) / 1000.0 for x in positions]
-    return {
-        "schema": "thermaxis-compensation-model",
-        "schema_version": 1,
-        "convention": "e = actual - target",
-        "approach": "decoupled",
-        "algorithm": "mlr",
-        "degree": 1,
-        "sensors": ["T1", "T2"],
-        "inputs": [
-            {"sensor": "T1", "temperature": "absolute", "training_min_c": 28.0, "training_max_c": 34.0},
-            {"sensor": "T2", "temperature": "relative", "training_min_c": 0.0, "training_max_c": 3.0},
-        ],
-        "reference": {"temperatures": "at homing", "static_pitch_table": "at homing", "reference_position_mm": positions[0]},
-        "positions_mm": list(positions),
-        "units": {},
-        "regressions": [
-            {"target": "k", "position_mm": None, "inputs": [0], "form": "affine", "constant": -300.0, "coefficients": [13.0]},
-            {"target": "b", "position_mm": None, "inputs": [1], "form": "affine", "constant": -0.5, "coefficients": [-11.0]},
-        ],
-        # b row, k row: the line through k*s + b is that line.
-        "line_weights": [[0.0, 1.0], [1.0, 0.0]],
-        "curve_basis": [[si, 1.0] for si in s],
-        "fallback": {**fallback.__dict__, "plausible_c": list(fallback.plausible_c)},
-    }
-
 
 REF = {"T1": 30.0, "T2": 25.0}
 WARM = {"T1": 32.0, "T2": 26.5}
@@ -121,7 +88,9 @@ def test_out_of_range_holds_the_last_good_value_and_says_why():
 def test_stale_and_missing_sensors_hold():
     comp = Compensator(hand_model())
     ages = [{}, {"T2": 120.0}, {}]
-    steps = comp.run([0.0, 600.0, 1200.0], [WARM, WARM, {"T1": math.nan, "T2": 26.5}], REF, ages_s=ages)
+    steps = comp.run(
+        [0.0, 600.0, 1200.0], [WARM, WARM, {"T1": math.nan, "T2": 26.5}], REF, ages_s=ages
+    )
     assert [s.status for s in steps] == ["ok", "hold", "hold"]
     assert "stale" in steps[1].reasons[0] and "missing" in steps[2].reasons[0]
     assert steps[2].parameters.k0_mm == pytest.approx(0.0165)
@@ -158,11 +127,13 @@ def test_bad_model_json_is_one_line(tmp_path):
     model = hand_model()
     del model["regressions"]
     path.write_text(json.dumps(model))
-    with pytest.raises(ValueError, match=r"model.json: top level: 'regressions' is a required property"):
+    with pytest.raises(
+        ValueError, match=r"model.json: top level: 'regressions' is a required property"
+    ):
         Compensator.from_json(path)
 
 
-# --------------------------------------------------------------------------- JSON evaluation vs estimator
+# ----------------------------------------------------------------- JSON evaluation vs estimator
 
 
 def _training_data():
@@ -173,7 +144,9 @@ def _training_data():
         for m in range(6):
             t1 = 28.0 + r + 0.8 * m + rng.normal(0, 0.05)
             t2 = 25.0 + 0.3 * r + 0.5 * m + rng.normal(0, 0.05)
-            rows.append({"run": f"R{r}", "measurement": m + 1, "time_min": 20.0 * m, "T1": t1, "T2": t2})
+            rows.append(
+                {"run": f"R{r}", "measurement": m + 1, "time_min": 20.0 * m, "T1": t1, "T2": t2}
+            )
             k = -300.0 + 13.0 * t1 + 0.4 * np.sin(t1)
             b = -11.0 * (0.5 * m + rng.normal(0, 0.05))
             curves.append(k * (x - x[0]) / 1000.0 + b)
@@ -185,23 +158,31 @@ def test_model_json_predicts_what_the_estimator_predicts(algorithm):
     X, Y = _training_data()
     grid = {"C": [10.0], "epsilon": [0.05], "gamma": ["scale"]}
     estimator = DecoupledAxisModel(("T1",), ("T2",), algorithm=algorithm, svr_grid=grid).fit(X, Y)
-    comp = Compensator(json.loads(json.dumps(model_record(estimator, "decoupled", algorithm, X, HOLD))))
+    comp = Compensator(
+        json.loads(json.dumps(model_record(estimator, "decoupled", algorithm, X, HOLD)))
+    )
     run = X[X["run"] == "R1"].reset_index(drop=True)
     predicted = estimator.predict(run)
     reference = {"T1": run.loc[0, "T1"], "T2": run.loc[0, "T2"]}
     for i in range(len(run)):
         now = {"T1": run.loc[i, "T1"], "T2": run.loc[i, "T2"]}
-        np.testing.assert_allclose(comp.predicted_change(now, reference), predicted[i] - predicted[0], atol=1e-9)
+        np.testing.assert_allclose(
+            comp.predicted_change(now, reference), predicted[i] - predicted[0], atol=1e-9
+        )
 
 
 def test_pointwise_curve_gets_a_fitted_line_and_its_gap():
     X, Y = _training_data()
-    Y = Y + 0.02 * ((np.asarray(TARGETS) - 315.0) ** 2 / 100.0) * (X["T2"].to_numpy()[:, None] - 25.0)  # a bow
+    Y = Y + 0.02 * ((np.asarray(TARGETS) - 315.0) ** 2 / 100.0) * (
+        X["T2"].to_numpy()[:, None] - 25.0
+    )  # a bow
     estimator = PointwiseAxisModel(("T2",), algorithm="mlr").fit(X, Y)
     comp = Compensator(json.loads(json.dumps(model_record(estimator, "pointwise", "mlr", X, HOLD))))
     p = comp.parameters({"T1": 30.0, "T2": 27.0}, {"T1": 29.0, "T2": 25.0})
     curve = np.asarray(p.curve_um)
-    slope, intercept = np.polyfit((np.asarray(TARGETS) - 185.0) / 1000.0, curve, 1)  # plain numpy line
+    slope, intercept = np.polyfit(
+        (np.asarray(TARGETS) - 185.0) / 1000.0, curve, 1
+    )  # plain numpy line
     assert p.k0_mm * 1000.0 == pytest.approx(intercept, abs=1e-9)
     assert p.tan_beta * 1e6 == pytest.approx(slope, abs=1e-7)
     line = intercept + slope * (np.asarray(TARGETS) - 185.0) / 1000.0
@@ -223,7 +204,14 @@ def test_residuals_and_summary_by_hand():
         1: {"+": np.array([0.0, 2.0]), "-": np.array([0.0, 0.0])},
         2: {"+": np.array([-1.0, 3.0]), "-": np.array([-1.0, 1.0])},
     }
-    tables = held_out_tables("E9", [Step(0.0, zero, "ok"), Step(600.0, comp, "ok")], [0.0, 10.0], deviations, [0.0, 100.0], [zero, comp])
+    tables = held_out_tables(
+        "E9",
+        [Step(0.0, zero, "ok"), Step(600.0, comp, "ok")],
+        [0.0, 10.0],
+        deviations,
+        [0.0, 100.0],
+        [zero, comp],
+    )
     res = tables["residuals"]
     m2 = res[res["measurement"] == 2].set_index(["direction", "position_mm"])
     assert m2.loc[("+", 100.0), "uncompensated_um"] == pytest.approx(2.0)
@@ -240,7 +228,12 @@ def test_residuals_and_summary_by_hand():
     assert not iso.loc[(1, "R"), "computed"]
     siemens = tables["siemens_840d"].set_index(["measurement", "parameter"])
     assert siemens.loc[(2, "SD43910"), "value"] == pytest.approx(-1e-5)
-    assert tables["twincat"].set_index(["measurement", "parameter"]).loc[(2, "P-AXIS-00273"), "register"] == 10
+    assert (
+        tables["twincat"]
+        .set_index(["measurement", "parameter"])
+        .loc[(2, "P-AXIS-00273"), "register"]
+        == 10
+    )
 
 
 def test_pass_deviations_split_the_passes_per_measurement():
@@ -261,7 +254,10 @@ def test_pass_deviations_split_the_passes_per_measurement():
     raw = RawRun(
         run="R",
         sources={},
-        measurements={"M1": measurement("2022-01-01T09:00", (0.0, 2.0), (0.5, 1.5)), "M2": measurement("2022-01-01T09:20", (1.0, 3.0), (1.5, 2.5))},
+        measurements={
+            "M1": measurement("2022-01-01T09:00", (0.0, 2.0), (0.5, 1.5)),
+            "M2": measurement("2022-01-01T09:20", (1.0, 3.0), (1.5, 2.5)),
+        },
     )
     out = pass_deviations(raw, [0.0, 100.0], max_missing_fraction=0.2)
     np.testing.assert_array_equal(out[1]["+"], [0.0, 2.0])

@@ -2,7 +2,7 @@
 
 import pytest
 
-from conftest import REPO
+from helpers import REPO
 from thermaxis.config import load_config, validate_config
 
 
@@ -20,7 +20,11 @@ def test_default_config_is_valid_and_is_the_papers_protocol():
 def test_paper_sensors_preset_merges():
     config = load_config(REPO / "config" / "config.yaml", REPO / "config" / "paper_sensors.yaml")
     assert config["selection"]["method"] == "fixed"
-    assert config["selection"]["fixed"] == {"k": ["T1", "T6", "T12"], "b": ["T2", "T7", "T11"], "pointwise": ["T1", "T11", "T12"]}
+    assert config["selection"]["fixed"] == {
+        "k": ["T1", "T6", "T12"],
+        "b": ["T2", "T7", "T11"],
+        "pointwise": ["T1", "T11", "T12"],
+    }
     assert config["selection"]["n_clusters"] == 3  # untouched keys survive the merge
 
 

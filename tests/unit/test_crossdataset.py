@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from thermaxis.reports import crossdataset
 from thermaxis.errors import DataError
+from thermaxis.reports import crossdataset
 
 HEADER = "fold,approach,algorithm,target,rmse,max_abs,mae,residual_min,residual_max\n"
 
@@ -52,17 +52,29 @@ def test_summary_means_and_worst_over_folds_by_hand(two_datasets):
     table = pd.read_csv(out / "summary.csv")
     assert list(table.columns) == list(crossdataset.SUMMARY_COLUMNS)
     rows = {(r.dataset, r.approach, r.algorithm): r for r in table.itertuples()}
-    assert sorted(rows) == [("fl_thermal", "pointwise", "mlr"), ("twin", "decoupled", "mlr"), ("twin", "pointwise", "svr")]
+    assert sorted(rows) == [
+        ("fl_thermal", "pointwise", "mlr"),
+        ("twin", "decoupled", "mlr"),
+        ("twin", "pointwise", "svr"),
+    ]
     twin_mlr = rows["twin", "decoupled", "mlr"]
     # (1 + 3) / 2 = 2; (2 + 6) / 2 = 4; worst 6; the k row (90) is left out.
-    assert (twin_mlr.n_folds, twin_mlr.mean_rmse_um, twin_mlr.mean_max_abs_um, twin_mlr.worst_max_abs_um) == (2, 2.0, 4.0, 6.0)
+    assert (
+        twin_mlr.n_folds,
+        twin_mlr.mean_rmse_um,
+        twin_mlr.mean_max_abs_um,
+        twin_mlr.worst_max_abs_um,
+    ) == (2, 2.0, 4.0, 6.0)
     assert twin_mlr.data == "simulated"
     fl = rows["fl_thermal", "pointwise", "mlr"]
     # (0.3 + 0.6 + 0.9) / 3 = 0.6; (0.6 + 0.9 + 1.5) / 3 = 1.0; worst 1.5.
     assert (fl.n_folds, fl.data) == (3, "measured")
     assert fl.mean_rmse_um == pytest.approx(0.6) and fl.mean_max_abs_um == pytest.approx(1.0)
     assert fl.worst_max_abs_um == 1.5
-    assert (rows["twin", "pointwise", "svr"].mean_max_abs_um, rows["twin", "pointwise", "svr"].worst_max_abs_um) == (4.5, 5.0)
+    assert (
+        rows["twin", "pointwise", "svr"].mean_max_abs_um,
+        rows["twin", "pointwise", "svr"].worst_max_abs_um,
+    ) == (4.5, 5.0)
     markdown = (out / "summary.md").read_text()
     assert "SIMULATED data: twin" in markdown and "fl_thermal" in markdown
     assert (out / "heldout_error.png").stat().st_size > 0
@@ -81,7 +93,10 @@ def test_bad_metrics_cell_is_one_line_naming_file_line_and_column(two_datasets, 
     path.write_text(HEADER + "E1,decoupled,mlr,error,1.0,n/a,0.5,-2.0,1.0\n")
     assert crossdataset.main(["--results", str(two_datasets)]) == 1
     message = capsys.readouterr().err.strip()
-    assert message == f"thermaxis error: {path}: line 2, column 'max_abs': expected a number, got 'n/a'"
+    assert (
+        message
+        == f"thermaxis error: {path}: line 2, column 'max_abs': expected a number, got 'n/a'"
+    )
     assert not (two_datasets / "_datasets").exists()
 
 
@@ -91,5 +106,7 @@ def test_missing_column_and_missing_provenance_are_named(two_datasets):
     with pytest.raises(DataError, match="column 'max_abs' missing"):
         crossdataset.read_metrics(path)
     (two_datasets / "fl_thermal" / "provenance.json").unlink()
-    with pytest.raises(DataError, match="fl_thermal/provenance.json: expected the workflow's provenance"):
+    with pytest.raises(
+        DataError, match="fl_thermal/provenance.json: expected the workflow's provenance"
+    ):
         crossdataset.dataset_kind(two_datasets / "fl_thermal")

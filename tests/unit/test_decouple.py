@@ -6,10 +6,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import DEFAULTS, write_dataset
+from helpers import DEFAULTS
+from helpers.builders import write_dataset
 from thermaxis.cleaning.run import clean_and_assemble_run
-from thermaxis.method.decouple import compose_curve, decouple_measurement, decouple_table
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.method.decouple import compose_curve, decouple_measurement, decouple_table
+
 
 def test_hand_worked_line():
     # x = 185, 205, 225 mm -> shifted 0, 0.02, 0.04 m; e = 1, 2, 4 um.
@@ -42,7 +44,9 @@ def test_compose_curve_is_eq7():
     # Rows (b, k): k = 10 um/m over the 0.26 m stroke adds 2.6 um; (b, k, c2) adds c2 * 0.26**2.
     curves = compose_curve([[1.0, 10.0], [0.0, -20.0]], [185.0, 445.0], origin_mm=185.0)
     np.testing.assert_allclose(curves, [[1.0, 1.0 + 2.6], [0.0, -5.2]])
-    np.testing.assert_allclose(compose_curve([0.0, 0.0, 100.0], [185.0, 445.0], 185.0), [[0.0, 100.0 * 0.0676]])
+    np.testing.assert_allclose(
+        compose_curve([0.0, 0.0, 100.0], [185.0, 445.0], 185.0), [[0.0, 100.0 * 0.0676]]
+    )
 
 
 def test_rejects_too_few_positions():
@@ -59,7 +63,10 @@ def test_exact_lines_from_raw_files_are_recovered_to_1e9(tmp_path):
 
     root = write_dataset(tmp_path / "lines", curve=curve, positions=np.arange(185.0, 446.0, 20.0))
     dataset = load_dataset(root)
-    frames = [clean_and_assemble_run(dataset, read_run(dataset, run), DEFAULTS.cleaning).errors for run in dataset.run_ids]
+    frames = [
+        clean_and_assemble_run(dataset, read_run(dataset, run), DEFAULTS.cleaning).errors
+        for run in dataset.run_ids
+    ]
     kb, _ = decouple_table(pd.concat(frames, ignore_index=True), degree=1)
     for row in kb.itertuples():
         key = (int(row.run[1:]) - 1, row.measurement - 1)

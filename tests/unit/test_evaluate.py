@@ -26,7 +26,13 @@ def test_metrics_pool_all_cells_of_error_curves():
     # residuals -1, 0, 2, 0: rmse sqrt(5/4), mae 3/4
     metrics = prediction_metrics(measured, predicted)
     assert metrics == pytest.approx(
-        {"rmse": np.sqrt(1.25), "max_abs": 2.0, "mae": 0.75, "residual_min": -1.0, "residual_max": 2.0}
+        {
+            "rmse": np.sqrt(1.25),
+            "max_abs": 2.0,
+            "mae": 0.75,
+            "residual_min": -1.0,
+            "residual_max": 2.0,
+        }
     )
     assert METRICS_CSV_COLUMNS[4:] == tuple(metrics)
 

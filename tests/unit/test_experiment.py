@@ -8,7 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import DEFAULTS, EQ9_B, EQ9_K, POSITIONS, eq9_errors, synthetic_temperatures
+from helpers import DEFAULTS
+from helpers.builders import synthetic_temperatures
+from helpers.truth import EQ9_B, EQ9_K, POSITIONS, eq9_errors
 from thermaxis.method.folds import (
     evaluate_configuration,
     select_for_fold,
@@ -17,7 +19,9 @@ from thermaxis.method.folds import (
     selection_to_dict,
 )
 
-SMALL_SVR = replace(DEFAULTS.models, svr_grid=(("C", (1.0, 10.0)), ("epsilon", (0.1,)), ("gamma", ("scale",))))
+SMALL_SVR = replace(
+    DEFAULTS.models, svr_grid=(("C", (1.0, 10.0)), ("epsilon", (0.1,)), ("gamma", ("scale",)))
+)
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +51,9 @@ def test_selection_ignores_the_held_out_run(eq9_data):
     assert selection_to_dict(before) == selection_to_dict(after)
     # ...but the paper's way (scope all) does look at it.
     all_before = select_for_fold(X, Y, "E4", replace(DEFAULTS.selection, scope="all"), 1)
-    all_after = select_for_fold(X, perturb_run(Y, X, "E4"), "E4", replace(DEFAULTS.selection, scope="all"), 1)
+    all_after = select_for_fold(
+        X, perturb_run(Y, X, "E4"), "E4", replace(DEFAULTS.selection, scope="all"), 1
+    )
     assert selection_to_dict(all_before) != selection_to_dict(all_after)
 
 
@@ -58,17 +64,34 @@ def test_fold_models_ignore_the_held_out_errors(eq9_data, approach, algorithm):
     selection = select_for_fold(X, Y, "E2", DEFAULTS.selection, 1)
     a = evaluate_configuration(X, Y, "E2", approach, algorithm, selection, SMALL_SVR, 1)
     Y2 = perturb_run(Y, X, "E2")
-    b = evaluate_configuration(X, Y2, "E2", approach, algorithm, select_for_fold(X, Y2, "E2", DEFAULTS.selection, 1), SMALL_SVR, 1)
+    b = evaluate_configuration(
+        X,
+        Y2,
+        "E2",
+        approach,
+        algorithm,
+        select_for_fold(X, Y2, "E2", DEFAULTS.selection, 1),
+        SMALL_SVR,
+        1,
+    )
     pd.testing.assert_frame_equal(a.coefficients, b.coefficients)
-    np.testing.assert_array_equal(a.error_predictions["predicted"], b.error_predictions["predicted"])
+    np.testing.assert_array_equal(
+        a.error_predictions["predicted"], b.error_predictions["predicted"]
+    )
     assert not np.allclose(a.error_predictions["measured"], b.error_predictions["measured"])
 
 
 def test_fixed_paper_points_recover_eq9(eq9_data):
     X, _ = eq9_data
     Y = eq9_errors(X).reset_index(drop=True)  # exact, noise-free
-    fixed = (("b", ("T2", "T7", "T11")), ("k", ("T1", "T6", "T12")), ("pointwise", ("T1", "T11", "T12")))
-    selection = select_for_fold(X, Y, "E4", replace(DEFAULTS.selection, method="fixed", fixed=fixed), 1)
+    fixed = (
+        ("b", ("T2", "T7", "T11")),
+        ("k", ("T1", "T6", "T12")),
+        ("pointwise", ("T1", "T11", "T12")),
+    )
+    selection = select_for_fold(
+        X, Y, "E4", replace(DEFAULTS.selection, method="fixed", fixed=fixed), 1
+    )
     assert selection.k_sensors == ("T1", "T6", "T12") and selection.b_sensors == ("T2", "T7", "T11")
     result = evaluate_configuration(X, Y, "E4", "decoupled", "mlr", selection, DEFAULTS.models, 1)
     coef = result.coefficients.set_index(["target", "term"])["value"]
@@ -96,7 +119,9 @@ def test_selection_round_trips_through_json_and_tables(eq9_data):
     table = selection_table(selection)
     assert set(table["target"]) == {"k", "b", "error", "pointwise_common"}
     assert table.loc[table["target"] == "k", "cluster"].nunique() == 4
-    assert set(table.loc[(table["target"] == "k") & table["selected"], "sensor"]) == set(selection.k_sensors)
+    assert set(table.loc[(table["target"] == "k") & table["selected"], "sensor"]) == set(
+        selection.k_sensors
+    )
     assert table.loc[table["target"] == "error", "position_mm"].nunique() == len(POSITIONS)
     assert len(selection.pointwise) == 3
 

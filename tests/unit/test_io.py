@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import set_csv_cell
-from thermaxis.errors import DataError
+from helpers.builders import set_csv_cell
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.errors import DataError
 
 
 def one_line(excinfo) -> str:
@@ -44,7 +44,12 @@ def test_wrong_type_in_runs_sheet(tiny_dataset):
     with pytest.raises(DataError) as exc:
         load_dataset(tiny_dataset)
     msg = one_line(exc)
-    assert "runs.tsv" in msg and "line 3" in msg and "'feed_mm_min'" in msg and "a finite number" in msg
+    assert (
+        "runs.tsv" in msg
+        and "line 3" in msg
+        and "'feed_mm_min'" in msg
+        and "a finite number" in msg
+    )
 
 
 def test_negative_feed_violates_schema(tiny_dataset):
@@ -152,7 +157,13 @@ def test_non_numeric_value(tiny_dataset):
     with pytest.raises(DataError) as exc:
         read_run(ds, "R2")
     msg = one_line(exc)
-    assert "box.csv" in msg and "line 11" in msg and "'S2'" in msg and "expected a number" in msg and "warm" in msg
+    assert (
+        "box.csv" in msg
+        and "line 11" in msg
+        and "'S2'" in msg
+        and "expected a number" in msg
+        and "warm" in msg
+    )
 
 
 def test_empty_cell_is_a_missing_sample_not_an_error(tiny_dataset):

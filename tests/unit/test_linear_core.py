@@ -36,7 +36,13 @@ def pipeline(algorithm, n_inputs, n_components=COMPONENTS, alpha=ALPHA):
     else:
         regressor = PLSRegression(n_components=min(n_components, n_inputs), scale=False)
     return Pipeline(
-        [("standardise", StandardScaler()), ("regress", TransformedTargetRegressor(regressor=regressor, transformer=StandardScaler()))]
+        [
+            ("standardise", StandardScaler()),
+            (
+                "regress",
+                TransformedTargetRegressor(regressor=regressor, transformer=StandardScaler()),
+            ),
+        ]
     )
 
 
@@ -49,7 +55,9 @@ def reference(algorithm, X, Y, X_new, n_components=COMPONENTS, alpha=ALPHA):
         scaler = fitted.named_steps["standardise"]
         target = fitted.named_steps["regress"].transformer_
         # The regressor is affine in standardised units: probe it there, then compose.
-        probe = np.ravel(fitted.named_steps["regress"].regressor_.predict(np.vstack([np.zeros(s), np.eye(s)])))
+        probe = np.ravel(
+            fitted.named_steps["regress"].regressor_.predict(np.vstack([np.zeros(s), np.eye(s)]))
+        )
         slope = (probe[1:] - probe[0]) * target.scale_[0] / scaler.scale_
         intercept.append(target.mean_[0] + target.scale_[0] * probe[0] - scaler.mean_ @ slope)
         slopes.append(slope)
@@ -80,7 +88,9 @@ def check_against_reference(algorithm, X, Y, X_new, intercept, slopes, predictio
 def thermal_data(rng, n=60, p=5, m=6, correlation=0.0):
     """Temperatures near 20 degrees C (optionally with equicorrelated sensors) and outputs."""
     common = rng.normal(size=(n, 1))
-    X = 20.0 + 2.0 * (np.sqrt(correlation) * common + np.sqrt(1.0 - correlation) * rng.normal(size=(n, p)))
+    X = 20.0 + 2.0 * (
+        np.sqrt(correlation) * common + np.sqrt(1.0 - correlation) * rng.normal(size=(n, p))
+    )
     Y = 3.0 + (X - 20.0) @ rng.normal(size=(p, m)) + 0.3 * rng.normal(size=(n, m))
     return X, Y
 
@@ -93,7 +103,11 @@ def thermal_data(rng, n=60, p=5, m=6, correlation=0.0):
 def test_standardised_fit_equals_one_pipeline_per_output(algorithm, correlation):
     X, Y = thermal_data(np.random.default_rng(1), n=80, p=5, m=14, correlation=correlation)
     fit = standardised_fit(X, Y, algorithm, alpha=ALPHA, n_components=COMPONENTS)
-    assert fit.intercept.shape == (14,) and fit.slopes.shape == (5, 14) and fit.predictions.shape == (80, 14)
+    assert (
+        fit.intercept.shape == (14,)
+        and fit.slopes.shape == (5, 14)
+        and fit.predictions.shape == (80, 14)
+    )
     assert not fit.refitted
     check_against_reference(algorithm, X, Y, X, fit.intercept, fit.slopes, fit.predictions)
 
@@ -114,13 +128,15 @@ def test_constant_sensor_and_constant_output_behave_as_standard_scaler(algorithm
 def test_pls_components_are_capped_at_the_subset_size():
     X, Y = thermal_data(np.random.default_rng(3), n=30, p=3, m=2)
     fit = standardised_fit(X, Y, "pls", n_components=5)
-    check_against_reference("pls", X, Y, X, fit.intercept, fit.slopes, fit.predictions, n_components=3)
+    check_against_reference(
+        "pls", X, Y, X, fit.intercept, fit.slopes, fit.predictions, n_components=3
+    )
     # With all components PLS is least squares.
     mlr = standardised_fit(X, Y, "mlr")
     np.testing.assert_allclose(fit.slopes, mlr.slopes, rtol=1e-9)
 
 
-# --------------------------------------------------------------------------- many sensitive-point subsets
+# -------------------------------------------------------------- many sensitive-point subsets
 
 
 @pytest.mark.parametrize("algorithm", ALGORITHMS)
@@ -136,7 +152,13 @@ def test_every_subset_equals_its_own_pipelines(algorithm, correlation):
     for q, subset in enumerate(subsets):
         cols = list(subset)
         check_against_reference(
-            algorithm, X[:, cols], Y, X_new[:, cols], fit.intercept[q], fit.slopes[q], fit.predictions[:, q]
+            algorithm,
+            X[:, cols],
+            Y,
+            X_new[:, cols],
+            fit.intercept[q],
+            fit.slopes[q],
+            fit.predictions[:, q],
         )
 
 
@@ -148,13 +170,17 @@ def test_subsets_must_share_one_size():
         subset_fit(X, Y, [(0, 1)], "svr")
 
 
-# --------------------------------------------------------------------------- leave one condition out
+# ------------------------------------------------------------------- leave one condition out
 
 
 def conditions(rng, sizes, p, m):
     """Runs of unequal length, each at its own temperature level (the conditions)."""
     groups = np.repeat([f"E{i + 1}" for i in range(len(sizes))], sizes)
-    X = 20.0 + rng.normal(size=(len(groups), p)) + np.repeat(3.0 * rng.normal(size=(len(sizes), p)), sizes, axis=0)
+    X = (
+        20.0
+        + rng.normal(size=(len(groups), p))
+        + np.repeat(3.0 * rng.normal(size=(len(sizes), p)), sizes, axis=0)
+    )
     X[:, 1] = 0.999 * X[:, 0] + 0.02 + 0.05 * rng.normal(size=len(groups))  # near-collinear pair
     Y = (X - 20.0) @ rng.normal(size=(p, m)) + 0.5 * rng.normal(size=(len(groups), m))
     return groups, X, Y
@@ -175,8 +201,13 @@ def test_loco_equals_a_pipeline_per_fold_subset_and_output(algorithm):
         for q, subset in enumerate(subsets):
             cols = list(subset)
             check_against_reference(
-                algorithm, X[train][:, cols], Y[train], X[held][:, cols],
-                fit.intercept[f, q], fit.slopes[f, q], fit.predictions[held, q],
+                algorithm,
+                X[train][:, cols],
+                Y[train],
+                X[held][:, cols],
+                fit.intercept[f, q],
+                fit.slopes[f, q],
+                fit.predictions[held, q],
             )
 
 
@@ -191,7 +222,15 @@ def test_loco_downdates_the_full_statistics_instead_of_refitting(monkeypatch):
     assert sorted(summed) == sorted([len(groups), 30, 12, 21])
     for f, label in enumerate(labels):
         train, held = groups != label, groups == label
-        check_against_reference("mlr", X[train], Y[train], X[held], fit.intercept[f, 0], fit.slopes[f, 0], fit.predictions[held, 0])
+        check_against_reference(
+            "mlr",
+            X[train],
+            Y[train],
+            X[held],
+            fit.intercept[f, 0],
+            fit.slopes[f, 0],
+            fit.predictions[held, 0],
+        )
 
 
 def test_loco_sums_a_fold_from_its_rows_where_the_downdate_would_cancel(monkeypatch):
@@ -206,7 +245,15 @@ def test_loco_sums_a_fold_from_its_rows_where_the_downdate_would_cancel(monkeypa
     assert sorted(summed) == [25, 25, 25, 50, 75]
     for f, label in enumerate(labels):
         train, held = groups != label, groups == label
-        check_against_reference("ridge", X[train], Y[train], X[held], fit.intercept[f, 0], fit.slopes[f, 0], fit.predictions[held, 0])
+        check_against_reference(
+            "ridge",
+            X[train],
+            Y[train],
+            X[held],
+            fit.intercept[f, 0],
+            fit.slopes[f, 0],
+            fit.predictions[held, 0],
+        )
 
 
 # --------------------------------------------------------------------------- singular systems
@@ -237,14 +284,23 @@ def test_duplicated_sensor_is_refitted_where_singular_and_matches(algorithm, ref
         for q in np.flatnonzero(both):
             cols = list(subsets[q])
             check_against_reference(
-                algorithm, X[train][:, cols], Y[train], X[held][:, cols],
-                fit.intercept[f, q], fit.slopes[f, q], fit.predictions[held, q],
+                algorithm,
+                X[train][:, cols],
+                Y[train],
+                X[held][:, cols],
+                fit.intercept[f, q],
+                fit.slopes[f, q],
+                fit.predictions[held, q],
             )
 
 
 @pytest.mark.filterwarnings("ignore:An ill-conditioned matrix")
-@pytest.mark.parametrize(("algorithm", "options"), [("ridge", {"alpha": 0.0}), ("pls", {"n_components": 3})])
-def test_singular_ridge_without_penalty_and_pls_with_all_components_are_refitted(algorithm, options):
+@pytest.mark.parametrize(
+    ("algorithm", "options"), [("ridge", {"alpha": 0.0}), ("pls", {"n_components": 3})]
+)
+def test_singular_ridge_without_penalty_and_pls_with_all_components_are_refitted(
+    algorithm, options
+):
     # scikit-learn's answer here is rounding noise (slopes ~1e16 for pls); the core hands
     # those subsets to scikit-learn rather than solve them from the Gram matrix.
     groups, X, Y, subsets, both = duplicated_sensor()

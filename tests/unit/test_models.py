@@ -1,4 +1,5 @@
-"""Tests of thermaxis.method.models against coefficients known by construction or computed directly."""
+"""Tests of thermaxis.method.models against coefficients known by construction or computed
+directly."""
 
 from __future__ import annotations
 
@@ -8,7 +9,8 @@ import pytest
 from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
-from thermaxis.vocabulary import ALGORITHMS
+from helpers.builders import synthetic_temperatures
+from helpers.truth import EQ8, EQ9_B, EQ9_K, POSITIONS, SENSORS, eq8_errors, eq9_errors, eq9_truth
 from thermaxis.method.models import (
     DecoupledAxisModel,
     PointwiseAxisModel,
@@ -18,8 +20,7 @@ from thermaxis.method.models import (
     predict_with_std,
     relative_temperatures,
 )
-
-from conftest import EQ8, EQ9_B, EQ9_K, POSITIONS, SENSORS, eq8_errors, eq9_errors, eq9_truth, synthetic_temperatures
+from thermaxis.vocabulary import ALGORITHMS
 
 pytestmark = pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
 
@@ -101,8 +102,12 @@ def test_decoupled_degree_two_models_curvature_on_absolute_temperatures():
         assert coefs.loc[("c2", term), "temperature"] == "absolute"
     assert coefs.loc[("k", "T1"), "value"] == pytest.approx(EQ9_K["T1"], abs=1e-6)
     X_new = synthetic_temperatures(runs=("E5",), seed=3)
-    c2_new = c2_terms["const"] + sum(v * X_new[s].to_numpy() for s, v in c2_terms.items() if s != "const")
-    np.testing.assert_allclose(model.predict(X_new), eq9_errors(X_new, c2=c2_new).to_numpy(), atol=1e-6)
+    c2_new = c2_terms["const"] + sum(
+        v * X_new[s].to_numpy() for s, v in c2_terms.items() if s != "const"
+    )
+    np.testing.assert_allclose(
+        model.predict(X_new), eq9_errors(X_new, c2=c2_new).to_numpy(), atol=1e-6
+    )
 
 
 def test_pointwise_mlr_recovers_eq8_per_position():
@@ -141,9 +146,9 @@ def test_held_out_errors_do_not_reach_the_fold_model(algorithm, approach):
     held_out = "E3"
     perturbed = Y.copy()
     rows = (X["run"] == held_out).to_numpy()
-    perturbed.loc[rows, :] = perturbed.loc[rows, :].to_numpy() + 50.0 * np.random.default_rng(1).normal(
-        size=(rows.sum(), Y.shape[1])
-    )
+    perturbed.loc[rows, :] = perturbed.loc[rows, :].to_numpy() + 50.0 * np.random.default_rng(
+        1
+    ).normal(size=(rows.sum(), Y.shape[1]))
     cls = DecoupledAxisModel if approach == "decoupled" else PointwiseAxisModel
     estimator = cls(algorithm=algorithm, svr_grid=SMALL_GRID)
 
@@ -152,13 +157,17 @@ def test_held_out_errors_do_not_reach_the_fold_model(algorithm, approach):
         out = {}
         for fold in sorted(set(X["run"])):
             test = (X["run"] == fold).to_numpy()
-            model = clone(estimator).fit(X[~test].reset_index(drop=True), Y[~test].reset_index(drop=True))
+            model = clone(estimator).fit(
+                X[~test].reset_index(drop=True), Y[~test].reset_index(drop=True)
+            )
             out[fold] = model, np.asarray(model.predict(X[test].reset_index(drop=True)))
         return out
 
     original, changed = folds(Y), folds(perturbed)
     np.testing.assert_array_equal(original[held_out][1], changed[held_out][1])
-    pd.testing.assert_frame_equal(original[held_out][0].coefficients(), changed[held_out][0].coefficients())
+    pd.testing.assert_frame_equal(
+        original[held_out][0].coefficients(), changed[held_out][0].coefficients()
+    )
     assert original[held_out][0].searched_params_ == changed[held_out][0].searched_params_
     # The perturbation is large enough to show up wherever E3 IS used for training.
     assert any(not np.allclose(original[f][1], changed[f][1]) for f in original if f != held_out)
@@ -170,7 +179,9 @@ def test_prediction_uses_only_the_predicted_runs_temperatures():
     model = DecoupledAxisModel(algorithm="ridge").fit(X, Y)
     alone = model.predict(X[X["run"] == "E2"])
     shuffled = X.sample(frac=1.0, random_state=0)
-    together = pd.DataFrame(model.predict(shuffled), index=shuffled.index).loc[X.index[X["run"] == "E2"]]
+    together = pd.DataFrame(model.predict(shuffled), index=shuffled.index).loc[
+        X.index[X["run"] == "E2"]
+    ]
     np.testing.assert_allclose(together.to_numpy(), alone, rtol=0, atol=1e-12)
 
 
@@ -215,21 +226,29 @@ def _to_original(beta_s, stats):
 def test_ridge_linear_terms_match_closed_form():
     X, y = _noisy_linear()
     alpha = 7.0
-    terms = linear_terms(make_regressor("ridge", {"alpha": alpha}, random_state=0).fit(X, y), ["a", "b", "c"])
+    terms = linear_terms(
+        make_regressor("ridge", {"alpha": alpha}, random_state=0).fit(X, y), ["a", "b", "c"]
+    )
     Xs, ys, stats = _standardised(X, y)
     beta_s = np.linalg.solve(Xs.T @ Xs + alpha * np.eye(3), Xs.T @ ys)
-    np.testing.assert_allclose(list(terms.values()), _to_original(beta_s, stats), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(
+        list(terms.values()), _to_original(beta_s, stats), rtol=1e-9, atol=1e-9
+    )
 
 
 def test_pls_linear_terms_match_one_component_closed_form():
     X, y = _noisy_linear()
-    terms = linear_terms(make_regressor("pls", {"n_components": 1}, random_state=0).fit(X, y), ["a", "b", "c"])
+    terms = linear_terms(
+        make_regressor("pls", {"n_components": 1}, random_state=0).fit(X, y), ["a", "b", "c"]
+    )
     Xs, ys, stats = _standardised(X, y)
     w = Xs.T @ ys
     w /= np.linalg.norm(w)
     t = Xs @ w
     q = (t @ ys) / (t @ t)
-    np.testing.assert_allclose(list(terms.values()), _to_original(w * q, stats), rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(
+        list(terms.values()), _to_original(w * q, stats), rtol=1e-8, atol=1e-8
+    )
 
 
 def test_pls_with_all_components_is_least_squares():
@@ -244,7 +263,10 @@ def test_pls_with_all_components_is_least_squares():
 def test_linear_terms_is_none_for_nonlinear_algorithms():
     X, y = _noisy_linear()
     for algorithm in ("svr", "gpr"):
-        assert linear_terms(make_regressor(algorithm, random_state=0).fit(X, y), ["a", "b", "c"]) is None
+        assert (
+            linear_terms(make_regressor(algorithm, random_state=0).fit(X, y), ["a", "b", "c"])
+            is None
+        )
 
 
 def test_gpr_interval_contains_mean_and_widens_away_from_data():
@@ -272,7 +294,8 @@ def test_decoupled_gpr_interval_brackets_prediction_and_widens_far_from_training
     width_far = np.subtract(*model.predict_interval(X_far, level=0.95)[::-1])
     # k uses absolute temperatures, so the far run's slope is uncertain: wider at the far end.
     assert np.all(width_far[:, -1] > width_near[:, -1])
-    # Independence of k and b: half-width z*sd(b) at the origin, z*sqrt(sd(b)^2 + (0.26 m sd(k))^2) at 445 mm.
+    # Independence of k and b: half-width z*sd(b) at the origin,
+    # z*sqrt(sd(b)^2 + (0.26 m sd(k))^2) at 445 mm.
     kb = model.predict_kb(X_near, return_std=True)
     np.testing.assert_allclose(kb[["k_um_per_m", "b_um"]], model.predict_kb(X_near), atol=1e-9)
     assert (kb["k_um_per_m_std"] > 0).all() and (kb["b_um_std"] > 0).all()
@@ -343,13 +366,23 @@ def test_svr_group_search_chooses_what_gridsearchcv_chooses(seed):
         scoring="neg_root_mean_squared_error",
         cv=LeaveOneGroupOut(),
     ).fit(x, y, groups=groups)
-    assert chosen == {k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()}
+    assert chosen == {
+        k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()
+    }
     np.testing.assert_array_equal(model.predict(x), search.best_estimator_.predict(x))
 
 
 def test_svr_group_search_falls_back_to_first_grid_point_with_one_group():
     x = np.linspace(0.0, 1.0, 10)[:, None]
-    _, chosen = fit_by_group_search("svr", x, x.ravel(), ["a"] * 10, {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]}, random_state=0, inner=(12, 5))
+    _, chosen = fit_by_group_search(
+        "svr",
+        x,
+        x.ravel(),
+        ["a"] * 10,
+        {"C": [100.0, 1.0], "epsilon": [0.2, 0.01]},
+        random_state=0,
+        inner=(12, 5),
+    )
     assert chosen == {"C": 100.0, "epsilon": 0.2}
 
 
@@ -357,7 +390,13 @@ def test_svr_coefficients_are_empty_but_searched_params_recorded():
     X, Y = _noisy_eq9()
     model = DecoupledAxisModel(algorithm="svr", svr_grid=SMALL_GRID).fit(X, Y)
     assert model.coefficients().empty
-    assert list(model.coefficients().columns) == ["target", "position_mm", "term", "temperature", "value"]
+    assert list(model.coefficients().columns) == [
+        "target",
+        "position_mm",
+        "term",
+        "temperature",
+        "value",
+    ]
     assert set(model.searched_params_) == {"k", "b"}
     assert model.searched_params_["k"]["C"] in (1.0, 10.0)
 
@@ -403,7 +442,9 @@ def test_searched_strength_is_what_gridsearchcv_chooses(algorithm, grid, splitte
     y = x @ np.array([1.0, -0.5, 0.2, 0.2]) + rng.normal(0.0, 0.3, 60)
     groups = np.repeat([f"r{i}" for i in range(6)], 10)
     # Up to 12 runs leave one out; with the limit at 4, the 6 runs go into 3 group folds.
-    inner, cv = ((12, 3), LeaveOneGroupOut()) if splitter == "logo" else ((4, 3), GroupKFold(n_splits=3))
+    inner, cv = (
+        ((12, 3), LeaveOneGroupOut()) if splitter == "logo" else ((4, 3), GroupKFold(n_splits=3))
+    )
     model, chosen = fit_by_group_search(algorithm, x, y, groups, grid, random_state=0, inner=inner)
     search = GridSearchCV(
         make_regressor(algorithm, random_state=0),
@@ -411,8 +452,12 @@ def test_searched_strength_is_what_gridsearchcv_chooses(algorithm, grid, splitte
         scoring="neg_root_mean_squared_error",
         cv=cv,
     ).fit(x, y, groups=groups)
-    assert chosen == {k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()}
-    np.testing.assert_allclose(model.predict(x), search.best_estimator_.predict(x), rtol=1e-12, atol=1e-12)
+    assert chosen == {
+        k.removeprefix("regress__regressor__"): v for k, v in search.best_params_.items()
+    }
+    np.testing.assert_allclose(
+        model.predict(x), search.best_estimator_.predict(x), rtol=1e-12, atol=1e-12
+    )
 
 
 def test_a_searched_model_records_its_choice_and_a_fixed_one_does_not():
@@ -420,14 +465,23 @@ def test_a_searched_model_records_its_choice_and_a_fixed_one_does_not():
     Y = eq9_errors(X)
     searched = PointwiseAxisModel(algorithm="ridge", search_grid={"alpha": [0.01, 10.0]}).fit(X, Y)
     assert set(searched.searched_params_) == {float(p) for p in Y.columns}
-    assert PointwiseAxisModel(algorithm="ridge", params={"alpha": 1.0}).fit(X, Y).searched_params_ == {}
+    assert (
+        PointwiseAxisModel(algorithm="ridge", params={"alpha": 1.0}).fit(X, Y).searched_params_
+        == {}
+    )
 
 
 def test_gpr_beyond_its_sample_limit_is_fitted_on_evenly_spaced_rows():
     rng = np.random.default_rng(0)
     x = rng.normal(size=(40, 1))
     y = np.sin(x).ravel()
-    X = pd.DataFrame({"run": np.repeat(["a", "b"], 20), "measurement": np.tile(np.arange(20), 2), "T1": x.ravel()})
+    X = pd.DataFrame(
+        {
+            "run": np.repeat(["a", "b"], 20),
+            "measurement": np.tile(np.arange(20), 2),
+            "T1": x.ravel(),
+        }
+    )
     Y = pd.DataFrame({0.0: y})
     model = PointwiseAxisModel(sensors=("T1",), algorithm="gpr", gpr_max_samples=10).fit(X, Y)
     # The fitted GP holds 10 training rows: 0, 4, 9, 13, ..., 39 (evenly spaced, both ends).

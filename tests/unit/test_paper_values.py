@@ -311,9 +311,9 @@ def test_residual_ranges_are_consistent_with_the_max_abs_residuals():
 def test_slope_induced_error_is_the_max_slope_residual_over_the_stroke(values):
     k_max = values.loc["table7/k/max_abs", "value"]  # um/m
     stroke_m = (445 - 185) / 1000
-    assert values.loc["text/decoupled_mlr/error/max_error_from_k_residual", "value"] == pytest.approx(
-        k_max * stroke_m, abs=0.005
-    )
+    assert values.loc[
+        "text/decoupled_mlr/error/max_error_from_k_residual", "value"
+    ] == pytest.approx(k_max * stroke_m, abs=0.005)
 
 
 # ----------------------------------------------------------------------------- Eq. 8, Eq. 9
@@ -321,17 +321,24 @@ def test_slope_induced_error_is_the_max_slope_residual_over_the_stroke(values):
 def test_eq8_matches_digest_and_full_text(values):
     digest_text = _digest_paragraph("Eq. 8", "3. Decoupling")
     parts = re.split(r"dx(\d+) =", digest_text)[1:]
-    digest = {int(row): _linear_terms(expr.split(";")[0]) for row, expr in zip(parts[::2], parts[1::2])}
+    digest = {
+        int(row): _linear_terms(expr.split(";")[0])
+        for row, expr in zip(parts[::2], parts[1::2], strict=True)
+    }
     assert sorted(digest) == [1, 2, 3, 14]
 
-    line = next(l for l in _full_text().splitlines() if "dx_1 =" in l)
+    line = next(row for row in _full_text().splitlines() if "dx_1 =" in row)
     full_parts = re.split(r"dx_\{?(\d+)\}? =", line.split("(8)")[0] + line.split("\\vdots")[1])[1:]
-    full = {int(row): _latex_terms(expr) for row, expr in zip(full_parts[::2], full_parts[1::2])}
+    full = {
+        int(row): _latex_terms(expr)
+        for row, expr in zip(full_parts[::2], full_parts[1::2], strict=True)
+    }
     assert full == digest
 
     eq8 = published.load_table("eq8")
     ours = {
-        int(row): dict(zip(g["term"], g["value"])) for row, g in eq8.groupby("equation_row")
+        int(row): dict(zip(g["term"], g["value"], strict=True))
+        for row, g in eq8.groupby("equation_row")
     }
     assert ours == digest
     for row, group in eq8.groupby("equation_row"):
@@ -347,14 +354,14 @@ def test_eq9_matches_digest_and_full_text(values):
     assert set(digest["k"]) == {"const", "T1", "T6", "T12"}
     assert set(digest["b"]) == {"const", "T2", "T7", "T11"}
 
-    line = next(l for l in _full_text().splitlines() if "k = -306" in l)
+    line = next(row for row in _full_text().splitlines() if "k = -306" in row)
     full_k, full_b = line.split("b =")
     assert {"k": _latex_terms(full_k.split("k =")[1]), "b": _latex_terms(full_b)} == digest
 
     eq9 = published.load_table("eq9")
     for target, terms in digest.items():
         sub = eq9[eq9["target"] == target]
-        assert dict(zip(sub["term"], sub["value"])) == terms
+        assert dict(zip(sub["term"], sub["value"], strict=True)) == terms
         for term, value in terms.items():
             assert values.loc[f"eq9/{target}/{term}", "value"] == value
     assert set(eq9.loc[eq9["target"] == "k", "temperature"]) == {"absolute"}
@@ -370,17 +377,37 @@ def test_published_values_shape_and_unique_keys(values):
     # Counts follow from the paper's layout: 4 runs x 4 numbers; 14 positions x 3 points;
     # 3 metrics; 32 measurements x (k, b); 11 + 12 clustered sensors + 2 x 3 points;
     # 3 targets x 3 metrics (twice); 4 printed rows x 4 terms; 2 x 4 terms; 7 text numbers.
-    expected = {"table1": 16, "table3": 42, "table4": 3, "table5": 64, "table6": 29,
-                "table7": 9, "table8": 9, "eq8": 16, "eq9": 8, "text": 7}
+    expected = {
+        "table1": 16,
+        "table3": 42,
+        "table4": 3,
+        "table5": 64,
+        "table6": 29,
+        "table7": 9,
+        "table8": 9,
+        "eq8": 16,
+        "eq9": 8,
+        "text": 7,
+    }
     assert frame["table"].value_counts().to_dict() == expected
     assert str(frame["measurement"].dtype) == "Int64" and str(frame["position_mm"].dtype) == "Int64"
 
 
 def test_published_values_item_encodes_its_describing_columns(values):
     table5 = values[values["table"] == "table5"]
-    rebuilt = "table5/" + table5["run"] + "/m" + table5["measurement"].astype(str) + "/" + table5["target"]
+    rebuilt = (
+        "table5/"
+        + table5["run"]
+        + "/m"
+        + table5["measurement"].astype(str)
+        + "/"
+        + table5["target"]
+    )
     assert list(rebuilt) == list(table5.index)
-    assert values.loc["table3/445mm/T12", ["quantity", "value"]].tolist() == ["sensitive_point", 1.0]
+    assert values.loc["table3/445mm/T12", ["quantity", "value"]].tolist() == [
+        "sensitive_point",
+        1.0,
+    ]
     assert values.loc["table6/b/T7/cluster", "value"] == 3.0
     assert "table6/k/T7/cluster" not in values.index  # T7 is in no k cluster as printed
 

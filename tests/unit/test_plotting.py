@@ -23,10 +23,9 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from thermaxis.figures import captions
+from thermaxis.figures import captions, style
 from thermaxis.figures import paper as paper_figures
 from thermaxis.figures import predictions as prediction_figures
-from thermaxis.figures import style
 
 STEP_MIN = 20.0
 
@@ -40,7 +39,8 @@ def intercept(m: int) -> float:
 
 
 def make_dataset(n_runs: int, positions, n_meas: int) -> dict:
-    """All tables the figure functions take, for runs R1..Rn (natural order differs from string order at R10)."""
+    """All tables the figure functions take, for runs R1..Rn (natural order differs from
+    string order at R10)."""
     positions = np.asarray(positions, dtype=float)
     x0 = positions[0]
     runs = [f"R{r + 1}" for r in range(n_runs)]
@@ -62,7 +62,15 @@ def make_dataset(n_runs: int, positions, n_meas: int) -> dict:
                     )
                 )
             kb_rows.append(
-                dict(run=run, measurement=m, time_min=t, k_um_per_m=slope(r), b_um=intercept(m), r2=1.0, rms_um=0.0)
+                dict(
+                    run=run,
+                    measurement=m,
+                    time_min=t,
+                    k_um_per_m=slope(r),
+                    b_um=intercept(m),
+                    r2=1.0,
+                    rms_um=0.0,
+                )
             )
         for e_min in np.arange(-10.0, STEP_MIN * n_meas, 5.0):
             amb_rows.append(dict(run=run, elapsed_min=e_min, temperature_c=30.0 - r + 0.01 * e_min))
@@ -125,7 +133,10 @@ def make_dataset(n_runs: int, positions, n_meas: int) -> dict:
 
     elapsed = np.arange(-10.0, STEP_MIN * n_meas, 2.5)
     series = pd.DataFrame(
-        {"time": pd.Timestamp("2022-05-10T09:00:00") + pd.to_timedelta(elapsed, unit="min"), "elapsed_min": elapsed}
+        {
+            "time": pd.Timestamp("2022-05-10T09:00:00") + pd.to_timedelta(elapsed, unit="min"),
+            "elapsed_min": elapsed,
+        }
     )
     for i in range(3):
         series[f"T{i + 1}"] = 20.0 + i + 0.05 * (i + 1) * elapsed
@@ -172,17 +183,25 @@ def all_figures(d: dict) -> dict:
         "fig8": lambda: paper_figures.fig8_rezeroed(d["errors"], first),
         "fig9": lambda: paper_figures.fig9_other_runs(d["errors"], d["runs"]),
         "fig10": lambda: paper_figures.fig10_temperature_rise(d["series"]),
-        "fig11": lambda: prediction_figures.fig_error_prediction(d["err_pred"], last, "pointwise", "mlr"),
+        "fig11": lambda: prediction_figures.fig_error_prediction(
+            d["err_pred"], last, "pointwise", "mlr"
+        ),
         "fig12": lambda: paper_figures.fig12_slope_intercept(d["kb"]),
-        "kb_prediction": lambda: prediction_figures.fig_kb_prediction(d["kb_pred"], last, "decoupled", "gpr"),
-        "error_prediction": lambda: prediction_figures.fig_error_prediction(d["err_pred"], last, "decoupled", "gpr"),
+        "kb_prediction": lambda: prediction_figures.fig_kb_prediction(
+            d["kb_pred"], last, "decoupled", "gpr"
+        ),
+        "error_prediction": lambda: prediction_figures.fig_error_prediction(
+            d["err_pred"], last, "decoupled", "gpr"
+        ),
         "fold_comparison": lambda: prediction_figures.fig_fold_comparison(d["metrics"]),
     }
 
 
 def lines_of(ax):
     """Data lines only: the zero reference lines drawn with axhline span axes coordinates."""
-    return [line for line in ax.get_lines() if line.get_label() and not line.get_label().startswith("_")]
+    return [
+        line for line in ax.get_lines() if line.get_label() and not line.get_label().startswith("_")
+    ]
 
 
 # ---------------------------------------------------------------------------- rendering
@@ -215,7 +234,7 @@ def test_save_figure_is_byte_identical_across_renders(tiny, tmp_path, name):
         paths = [tmp_path / attempt / f"{name}.{suffix}" for suffix in ("png", "pdf", "svg")]
         style.save_figure(make(), paths)
         outputs.append([p.read_bytes() for p in paths])
-    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs):
+    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs, strict=True):
         assert first, suffix
         assert first == second, f"{name}.{suffix} differs between two renders"
     svg = outputs[0][2].decode()
@@ -372,7 +391,12 @@ def test_fig12_k_on_top_and_b_below_one_line_per_run(tiny):
 
 def test_fig12_orders_runs_naturally():
     kb = pd.DataFrame(
-        dict(run=["E10", "E2", "E10", "E2"], measurement=[1, 1, 2, 2], k_um_per_m=[1.0, 2.0, 3.0, 4.0], b_um=0.0)
+        dict(
+            run=["E10", "E2", "E10", "E2"],
+            measurement=[1, 1, 2, 2],
+            k_um_per_m=[1.0, 2.0, 3.0, 4.0],
+            b_um=0.0,
+        )
     )
     ax_k = paper_figures.fig12_slope_intercept(kb).axes[0]
     assert [line.get_label() for line in lines_of(ax_k)] == ["Run E2", "Run E10"]
@@ -490,7 +514,12 @@ def test_caption_has_the_simulated_phrase_iff_simulated(figure_id, simulated):
 def test_caption_fills_details_and_names_the_paper_figure():
     caption = captions.figure_caption("fig9", "lab", False, runs=["E2", "E3"])
     assert "runs E2, E3" in caption and "paper's Fig. 9." in caption
-    assert captions.figure_caption("fig16", "lab", False, fold="E4", approach="decoupled", algorithm="svr").count("SVR") == 1
+    assert (
+        captions.figure_caption(
+            "fig16", "lab", False, fold="E4", approach="decoupled", algorithm="svr"
+        ).count("SVR")
+        == 1
+    )
 
 
 @pytest.mark.parametrize(
@@ -521,7 +550,9 @@ def test_stamp_provenance_adds_the_note_once(tiny, name):
 def test_save_figure_dpi_sets_the_png_size(tiny, tmp_path):
     from PIL import Image
 
-    style.save_figure(paper_figures.fig2_positioning_error(tiny["errors"], "R1"), tmp_path / "f.png", dpi=100)
+    style.save_figure(
+        paper_figures.fig2_positioning_error(tiny["errors"], "R1"), tmp_path / "f.png", dpi=100
+    )
     # fig2 is 3.5 in x 2.4 in.
     assert Image.open(tmp_path / "f.png").size == (350, 240)
 

@@ -1,4 +1,5 @@
-"""Measured data: cleaning that keeps real trends, gap messages, the table importer, the embedded record."""
+"""Measured data: cleaning that keeps real trends, gap messages, the table importer, the
+embedded record."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import DEFAULTS
+from helpers import DEFAULTS
 from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.cleaning.temperatures import (
     check_gaps,
@@ -19,10 +20,10 @@ from thermaxis.cleaning.temperatures import (
     signals_on_grid,
 )
 from thermaxis.config import Settings, load_config
-from thermaxis.method.folds import evaluate_configuration, select_for_fold
 from thermaxis.dataset.importer import import_dataset, measurements_of
-from thermaxis.errors import DataError
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.errors import DataError
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
 
 REPO = Path(__file__).resolve().parents[2]
 FL_THERMAL = REPO / "data" / "raw" / "fl_thermal"
@@ -40,7 +41,8 @@ def test_hampel_still_flags_a_spike_at_the_end():
 
 
 def test_hampel_threshold_tie_is_not_a_spike():
-    # 0.1 C quantised readings: 20.6 is exactly 0.2 from the window median 20.4, the minimum deviation.
+    # 0.1 C quantised readings: 20.6 is exactly 0.2 from the window median 20.4, the minimum
+    # deviation.
     values = np.array([20.4, 20.4, 20.4, 20.6, 20.4, 20.4, 20.4])
     assert float(abs(values[3] - 20.4)) > 0.2  # the rounding the comparison must forgive
     assert not hampel_outliers(values, 7, 4.0, 0.2).any()
@@ -48,7 +50,9 @@ def test_hampel_threshold_tie_is_not_a_spike():
 
 def _log(minutes, values):
     t0 = pd.Timestamp("2024-01-01T00:00:00")
-    return pd.DataFrame({"time": t0 + pd.to_timedelta(np.asarray(minutes, float), unit="min"), "T1": values})
+    return pd.DataFrame(
+        {"time": t0 + pd.to_timedelta(np.asarray(minutes, float), unit="min"), "T1": values}
+    )
 
 
 def test_a_record_that_ends_early_is_named_as_such_with_its_file():
@@ -64,13 +68,29 @@ def test_a_record_that_ends_early_is_named_as_such_with_its_file():
     )
     assert cleaned.gaps["kind"].tolist() == ["record end"]
     windows = pd.DataFrame(
-        {"measurement": [1], "start": [pd.Timestamp("2024-01-01T00:58:00")], "end": [pd.Timestamp("2024-01-01T00:59:00")]}
+        {
+            "measurement": [1],
+            "start": [pd.Timestamp("2024-01-01T00:58:00")],
+            "end": [pd.Timestamp("2024-01-01T00:59:00")],
+        }
     )
     with pytest.raises(ValueError) as info:
-        check_gaps(cleaned.gaps, windows, allow=False, max_gap_s=600.0, files={"T1": "data/raw/x/R1/temperatures/box.csv"})
+        check_gaps(
+            cleaned.gaps,
+            windows,
+            allow=False,
+            max_gap_s=600.0,
+            files={"T1": "data/raw/x/R1/temperatures/box.csv"},
+        )
     message = str(info.value)
-    assert message.startswith("data/raw/x/R1/temperatures/box.csv: sensor T1 has no reading after 2024-01-01T00:50:00")
-    assert "record ends too early" in message and "max_gap_s / 2" in message and "measurement 1" in message
+    assert message.startswith(
+        "data/raw/x/R1/temperatures/box.csv: sensor T1 has no reading after 2024-01-01T00:50:00"
+    )
+    assert (
+        "record ends too early" in message
+        and "max_gap_s / 2" in message
+        and "measurement 1" in message
+    )
 
 
 def _wide_record(path: Path) -> Path:
@@ -101,9 +121,16 @@ def _mapping(tmp_path: Path, **changes) -> Path:
         "time": {"column": "t (s)", "start": "2030-01-01T00:00:00"},
         "sensors": [{"column": "temp A", "id": "TA"}, {"column": "temp B", "id": "TB"}],
         "signals": [{"column": "speed", "id": "spindle_rpm", "unit": "rpm"}],
-        "errors": {"columns": [{"column": "disp", "position_mm": 0}], "every_s": 300, "rereference": "run_start"},
+        "errors": {
+            "columns": [{"column": "disp", "position_mm": 0}],
+            "every_s": 300,
+            "rereference": "run_start",
+        },
         "split": {"by": "signal", "signal": "spindle_rpm", "rest": 0},
-        "runs": [{"name": f"B{i}", "condition": f"{1000 * i} rpm", "description": "block"} for i in (1, 2, 3)],
+        "runs": [
+            {"name": f"B{i}", "condition": f"{1000 * i} rpm", "description": "block"}
+            for i in (1, 2, 3)
+        ],
         **changes,
     }
     _wide_record(tmp_path / "wide.csv")
@@ -116,10 +143,12 @@ def test_importer_splits_by_signal_rereferences_and_states_its_assumptions(tmp_p
     out = import_dataset(_mapping(tmp_path), tmp_path / "raw" / "wide")
     dataset = load_dataset(out)
     assert dataset.run_ids == ("B1", "B2", "B3")
-    # Run 1 keeps the record's start (0 s); runs 2 and 3 start at their first active sample: 1500 s and 2700 s.
+    # Run 1 keeps the record's start (0 s); runs 2 and 3 start at their first active sample:
+    # 1500 s and 2700 s.
     errors = pd.read_csv(out / "B2" / "errors.csv")
     assert errors["time"].iloc[0] == "2030-01-01T00:25:00"
-    # Re-referenced to the run's first sample, 0.01 um/s: measurements every 300 s are 0, 3, 6, ... um.
+    # Re-referenced to the run's first sample, 0.01 um/s: measurements every 300 s are
+    # 0, 3, 6, ... um.
     np.testing.assert_allclose(errors["error_um"].to_numpy(), 3.0 * np.arange(len(errors)))
     assert len(errors) == 4  # 1500 .. 2640 s: samples at 1500, 1800, 2100, 2400
     description = dataset.meta["description"]
@@ -152,7 +181,12 @@ def test_fl_thermal_pointwise_mlr_equals_plain_least_squares():
     """The embedded measured record: held-out run R6, all 16 sensors plus a constant, by numpy."""
     dataset = load_dataset(FL_THERMAL)
     config = load_config()
-    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), Settings.from_config(config).cleaning) for run in dataset.run_ids]
+    tables = [
+        clean_and_assemble_run(
+            dataset, read_run(dataset, run), Settings.from_config(config).cleaning
+        )
+        for run in dataset.run_ids
+    ]
     X, Y = model_inputs(
         pd.concat([t.errors for t in tables], ignore_index=True),
         pd.concat([t.temperatures for t in tables], ignore_index=True),
@@ -160,21 +194,29 @@ def test_fl_thermal_pointwise_mlr_equals_plain_least_squares():
     sensors = tuple(c for c in X.columns if c.startswith("T"))
     assert len(sensors) == 16 and Y.shape[1] == 1
     fold = "R6_variable"
-    selection = select_for_fold(X, Y, fold, replace(DEFAULTS.selection, method="all"), 1, decoupled=False)
+    selection = select_for_fold(
+        X, Y, fold, replace(DEFAULTS.selection, method="all"), 1, decoupled=False
+    )
     result = evaluate_configuration(X, Y, fold, "pointwise", "mlr", selection, DEFAULTS.models, 1)
 
-    first = X.sort_values("measurement").groupby("run")[list(sensors)].transform("first").loc[X.index]
+    first = (
+        X.sort_values("measurement").groupby("run")[list(sensors)].transform("first").loc[X.index]
+    )
     T = X[list(sensors)].to_numpy(float) - first.to_numpy(float)
     train = (X["run"] != fold).to_numpy()
     A = np.column_stack([np.ones(train.sum()), T[train]])
     coef, *_ = np.linalg.lstsq(A, Y.to_numpy(float)[train, 0], rcond=None)
     expected = np.column_stack([np.ones((~train).sum()), T[~train]]) @ coef
-    np.testing.assert_allclose(result.error_predictions["predicted"].to_numpy(), expected, atol=1e-6)
+    np.testing.assert_allclose(
+        result.error_predictions["predicted"].to_numpy(), expected, atol=1e-6
+    )
 
 
 def test_signals_are_held_as_steps_on_the_grid():
     t0 = pd.Timestamp("2024-01-01T00:00:00")
-    log = pd.DataFrame({"time": t0 + pd.to_timedelta([0, 95, 200], unit="s"), "rpm": [0.0, 3000.0, 0.0]})
+    log = pd.DataFrame(
+        {"time": t0 + pd.to_timedelta([0, 95, 200], unit="s"), "rpm": [0.0, 3000.0, 0.0]}
+    )
     grid = t0 + pd.to_timedelta(np.arange(-20, 240, 20), unit="s")
     held = signals_on_grid({"plc": log}, {}, grid)
     # Before the first sample: its value; from 95 s to 200 s: 3000; no ramp in between.
@@ -185,9 +227,9 @@ def test_importer_takes_one_file_per_run_without_a_time_column(tmp_path):
     # Two runs in their own tables, no time column: row i is i x 30 s after the start.
     for name, slope in (("a.csv", 0.01), ("b.csv", 0.02)):
         rows = np.arange(20)
-        pd.DataFrame({"temp A": 20 + 0.1 * rows, "temp B": 21 + 0.05 * rows, "disp": slope * 30 * rows}).to_csv(
-            tmp_path / name, index=False
-        )
+        pd.DataFrame(
+            {"temp A": 20 + 0.1 * rows, "temp B": 21 + 0.05 * rows, "disp": slope * 30 * rows}
+        ).to_csv(tmp_path / name, index=False)
     mapping = _mapping(
         tmp_path,
         source=".",
@@ -195,12 +237,15 @@ def test_importer_takes_one_file_per_run_without_a_time_column(tmp_path):
         signals=[],
         split={"by": "files"},
         errors={"columns": [{"column": "disp", "position_mm": 0}], "every_s": 150},
-        runs=[{"name": "A", "condition": "a", "description": "x", "file": "a.csv"},
-              {"name": "B", "condition": "b", "description": "y", "file": "b.csv"}],  # fmt: skip
+        runs=[
+            {"name": "A", "condition": "a", "description": "x", "file": "a.csv"},
+            {"name": "B", "condition": "b", "description": "y", "file": "b.csv"},
+        ],  # fmt: skip
     )
     dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "files"))
     errors = pd.read_csv(dataset.root / "B" / "errors.csv")
-    # Samples every 30 s, a measurement every 150 s: rows 0, 5, 10, 15 -> 0, 3, 6, 9 um at 0.02 um/s.
+    # Samples every 30 s, a measurement every 150 s: rows 0, 5, 10, 15 -> 0, 3, 6, 9 um at
+    # 0.02 um/s.
     np.testing.assert_allclose(errors["error_um"], [0.0, 3.0, 6.0, 9.0])
     assert errors["time"].tolist()[1] == "2030-01-01T00:02:30"
     assert "an invented clock" in dataset.meta["description"]
@@ -210,9 +255,13 @@ def test_importer_cuts_explicit_time_ranges(tmp_path):
     mapping = _mapping(
         tmp_path,
         split={"by": "ranges"},
-        runs=[{"name": "early", "condition": "a", "description": "x", "start_s": 0, "end_s": 1200},
-              {"name": "late", "condition": "b", "description": "y", "start_s": 2400, "end_s": 3600}],  # fmt: skip
+        runs=[
+            {"name": "early", "condition": "a", "description": "x", "start_s": 0, "end_s": 1200},
+            {"name": "late", "condition": "b", "description": "y", "start_s": 2400, "end_s": 3600},
+        ],  # fmt: skip
     )
     dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "ranges"))
     late = pd.read_csv(dataset.root / "late" / "errors.csv")
-    assert late["time"].iloc[0] == "2030-01-01T00:40:00" and len(late) == 4  # 2400 .. 3540 s every 300 s
+    assert (
+        late["time"].iloc[0] == "2030-01-01T00:40:00" and len(late) == 4
+    )  # 2400 .. 3540 s every 300 s

@@ -14,7 +14,8 @@ POSITIONS = (0.0, 200.0, 400.0)
 
 
 def make_runs(n_runs=5, n_measurements=8, seed=0, driver="T1"):
-    """Errors driven by ``driver``'s rise alone (plus 0.05 um noise); T1..T4 wander independently."""
+    """Errors driven by ``driver``'s rise alone (plus 0.05 um noise); T1..T4 wander
+    independently."""
     rng = np.random.default_rng(seed)
     rows, errors = [], []
     for r in range(1, n_runs + 1):
@@ -24,7 +25,9 @@ def make_runs(n_runs=5, n_measurements=8, seed=0, driver="T1"):
                          **{f"T{s + 1}": walk[m, s] for s in range(4)}})  # fmt: skip
         rise = walk[:, int(driver[1]) - 1] - walk[0, int(driver[1]) - 1]
         slope = np.array([1.0, 2.0, 3.0])
-        errors.append(rise[:, None] * slope[None, :] + rng.normal(0, 0.05, size=(n_measurements, 3)))
+        errors.append(
+            rise[:, None] * slope[None, :] + rng.normal(0, 0.05, size=(n_measurements, 3))
+        )
     X = pd.DataFrame(rows)
     Y = pd.DataFrame(np.vstack(errors), columns=list(POSITIONS))
     return X, Y
@@ -87,8 +90,16 @@ def test_the_held_out_run_never_reaches_the_inner_choice():
 def test_ties_go_to_the_candidate_listed_first():
     X, Y = make_runs()
     twin = replace(fixed("T1"), name="pointwise-mlr-T1-again")
-    result = recommend(X, Y, [fixed("T3"), twin, fixed("T1")], reference="pointwise-mlr-T3", degree=1,
-                       score="rmse", max_loco_runs=12, n_group_folds=5)  # fmt: skip
+    result = recommend(
+        X,
+        Y,
+        [fixed("T3"), twin, fixed("T1")],
+        reference="pointwise-mlr-T3",
+        degree=1,
+        score="rmse",
+        max_loco_runs=12,
+        n_group_folds=5,
+    )
     assert result.final == "pointwise-mlr-T1-again"
 
 
@@ -121,5 +132,7 @@ def test_time_inputs_and_signals_are_seen_only_by_candidates_that_use_them():
 
 def test_too_few_runs_are_refused_with_the_reason():
     X, Y = make_runs(n_runs=2)
-    with pytest.raises(ValueError, match="2 runs: a nested leave-one-condition-out choice needs at least 3"):
+    with pytest.raises(
+        ValueError, match="2 runs: a nested leave-one-condition-out choice needs at least 3"
+    ):
         run(X, Y)

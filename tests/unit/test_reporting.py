@@ -9,19 +9,17 @@ import os
 import re
 import shutil
 import subprocess
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 
-import thermaxis  # noqa: F401  first: nbformat's jsonschema import is seconds faster (thermaxis/__init__.py)
 import nbformat
 import pandas as pd
 import pytest
 
-from conftest import FIXED_EPOCH, REPO
+from helpers import REPO
+from helpers.workflow import FIXED_EPOCH
 from thermaxis.reports import html as rep
 from thermaxis.reports import index as index_page
-from thermaxis.reports import notebooks
-from thermaxis.reports import provenance
-from thermaxis.reports import summaries
+from thermaxis.reports import notebooks, provenance, summaries
 
 NOTEBOOKS = ("dataset_report", "condition_report", "model_report", "paper_report")
 
@@ -34,9 +32,13 @@ def test_notebook_is_committed_without_outputs_and_has_a_parameters_cell(name):
     nb = nbformat.read(REPO / "notebooks" / f"{name}.ipynb", as_version=4)
     nbformat.validate(nb)
     code = [c for c in nb.cells if c.cell_type == "code"]
-    assert all(c.outputs == [] and c.execution_count is None for c in code), f"{name}: clear the outputs before committing"
+    assert all(c.outputs == [] and c.execution_count is None for c in code), (
+        f"{name}: clear the outputs before committing"
+    )
     tagged = [c for c in code if "parameters" in c.metadata.get("tags", [])]
-    assert len(tagged) == 1 and tagged[0] is code[0], f"{name}: the first code cell must be the only one tagged 'parameters'"
+    assert len(tagged) == 1 and tagged[0] is code[0], (
+        f"{name}: the first code cell must be the only one tagged 'parameters'"
+    )
     assert nb.metadata["kernelspec"]["name"] == "python3"
     assert "papermill" not in nb.metadata
 
@@ -48,7 +50,10 @@ def test_sha256_of_a_known_file(tmp_path):
     path = tmp_path / "abc.txt"
     path.write_bytes(b"abc")
     # FIPS 180-2 test vector for "abc".
-    assert provenance.sha256_file(path) == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    assert (
+        provenance.sha256_file(path)
+        == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    )
 
 
 def test_manifest_hashes_every_file_and_matches_sha256sum(tmp_path):
@@ -58,11 +63,19 @@ def test_manifest_hashes_every_file_and_matches_sha256sum(tmp_path):
     (tmp_path / "R1" / "notes.txt").write_bytes(b"")
     manifest = provenance.data_manifest(tmp_path)
     assert list(manifest) == ["R1/errors/M01.csv", "R1/notes.txt", "runs.tsv"]
-    assert manifest["R1/errors/M01.csv"] == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    assert (
+        manifest["R1/errors/M01.csv"]
+        == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    )
     # SHA-256 of the empty string (FIPS 180-2).
-    assert manifest["R1/notes.txt"] == "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855"
+    assert (
+        manifest["R1/notes.txt"]
+        == "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855"
+    )
     if shutil.which("sha256sum"):
-        listing = subprocess.run(["sha256sum", *manifest], cwd=tmp_path, capture_output=True, check=True).stdout
+        listing = subprocess.run(
+            ["sha256sum", *manifest], cwd=tmp_path, capture_output=True, check=True
+        ).stdout
         assert provenance.manifest_sha256(manifest) == hashlib.sha256(listing).hexdigest()
 
 
@@ -88,17 +101,27 @@ def test_run_time_honours_source_date_epoch(monkeypatch):
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
     with pytest.raises(ValueError, match="SOURCE_DATE_EPOCH"):
         provenance.run_time()
-    assert provenance.run_time(datetime(2024, 2, 29, 12, 0, 5, tzinfo=timezone.utc)) == "2024-02-29T12:00:05Z"
+    assert (
+        provenance.run_time(datetime(2024, 2, 29, 12, 0, 5, tzinfo=UTC)) == "2024-02-29T12:00:05Z"
+    )
 
 
 @pytest.mark.skipif(shutil.which("git") is None, reason="git is not installed")
 def test_git_state_commit_and_dirty_flag(tmp_path):
     repo = tmp_path / "repo"
     repo.mkdir()
-    env = {**os.environ, "GIT_AUTHOR_NAME": "t", "GIT_AUTHOR_EMAIL": "t@t", "GIT_COMMITTER_NAME": "t", "GIT_COMMITTER_EMAIL": "t@t"}
+    env = {
+        **os.environ,
+        "GIT_AUTHOR_NAME": "t",
+        "GIT_AUTHOR_EMAIL": "t@t",
+        "GIT_COMMITTER_NAME": "t",
+        "GIT_COMMITTER_EMAIL": "t@t",
+    }
 
     def git(*args):
-        return subprocess.run(["git", "-C", str(repo), *args], capture_output=True, text=True, check=True, env=env).stdout
+        return subprocess.run(
+            ["git", "-C", str(repo), *args], capture_output=True, text=True, check=True, env=env
+        ).stdout
 
     git("init", "-q")
     (repo / "a.txt").write_text("1\n")
@@ -115,7 +138,9 @@ def test_git_state_commit_and_dirty_flag(tmp_path):
 
 def test_collect_has_every_required_key(tmp_path):
     (tmp_path / "runs.tsv").write_bytes(b"abc")
-    record = provenance.collect(tmp_path, {"b": 1, "a": {"x": 2}}, tmp_path, git={"commit": "c0ffee", "dirty": False})
+    record = provenance.collect(
+        tmp_path, {"b": 1, "a": {"x": 2}}, tmp_path, git={"commit": "c0ffee", "dirty": False}
+    )
     assert set(provenance.REQUIRED_KEYS) <= set(record)
     assert record["git"] == {"commit": "c0ffee", "dirty": False}
     assert record["data"]["n_files"] == 1
@@ -133,7 +158,8 @@ def test_remote_loads_finds_scripts_styles_images_but_not_links():
         '<img src="http://example.org/x.png">'
         "<style>@import url(https://example.org/b.css); .x{background:url('http://e.org/i.png')}</style>"
         '<a href="https://doi.org/10.19650/j.cnki.cjsi.J2209628">paper</a>'
-        '<img src="data:image/png;base64,AAAA"><link rel="icon" href="data:,"><a href="../index.html">i</a>'
+        '<img src="data:image/png;base64,AAAA"><link rel="icon" href="data:,">'
+        '<a href="../index.html">i</a>'
     )
     found = notebooks.remote_loads(page)
     assert len(found) == 5
@@ -142,9 +168,22 @@ def test_remote_loads_finds_scripts_styles_images_but_not_links():
 
 def test_strip_volatile_drops_time_stamps_and_fixes_the_injected_cell_id():
     nb = {
-        "metadata": {"papermill": {"start_time": "t0", "end_time": "t1", "duration": 1.5, "parameters": {"a": 1}}},
+        "metadata": {
+            "papermill": {
+                "start_time": "t0",
+                "end_time": "t1",
+                "duration": 1.5,
+                "parameters": {"a": 1},
+            }
+        },
         "cells": [
-            {"id": "random-uuid", "metadata": {"tags": ["injected-parameters"], "papermill": {"duration": 0.1, "status": "completed"}}},
+            {
+                "id": "random-uuid",
+                "metadata": {
+                    "tags": ["injected-parameters"],
+                    "papermill": {"duration": 0.1, "status": "completed"},
+                },
+            },
             {"id": "keep", "metadata": {"execution": {"iopub.status.busy": "t"}}},
         ],
     }
@@ -196,13 +235,17 @@ def test_figure_html_embeds_the_bytes():
 def test_banner_flags_simulated_and_measured_data():
     simulated = rep.banner_html("Report", "Dataset `twin`: SIMULATED data.", True)
     measured = rep.banner_html("Report", "Dataset `lab`: measured data.", False)
-    assert "SIMULATED DATA" in simulated and "Dataset <code>twin</code>: SIMULATED data." in simulated
+    assert (
+        "SIMULATED DATA" in simulated and "Dataset <code>twin</code>: SIMULATED data." in simulated
+    )
     assert "MEASURED DATA" in measured and "SIMULATED" not in measured
 
 
 def test_index_page_links_and_states_the_data():
     sections = [
-        index_page.IndexSection("Reports", (index_page.IndexRow("paper", (("html", "reports/paper_report.html"),)),)),
+        index_page.IndexSection(
+            "Reports", (index_page.IndexRow("paper", (("html", "reports/paper_report.html"),)),)
+        ),
         index_page.IndexSection("Empty", ()),
     ]
     page = index_page.render_index("twin", "Dataset `twin`: SIMULATED data.", True, sections)

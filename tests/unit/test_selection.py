@@ -70,7 +70,8 @@ SIVANANDAM_CLOSURE = np.array(
 )
 
 # Classic textbook example of fuzzy clustering of five objects (Chinese fuzzy
-# mathematics courses, e.g. the lecture "模糊聚类分析", max.book118.com/html/2016/0807/50629140.shtm,
+# mathematics courses, e.g. the lecture "模糊聚类分析",
+# max.book118.com/html/2016/0807/50629140.shtm,
 # which prints the maximum tree x1-x3 (0.8), x4-x5 (0.6), then edges of 0.5
 # and 0.4, and the partitions lambda = 0.8: {x1,x3},{x2},{x4},{x5} and
 # lambda = 0.6: {x1,x3},{x2},{x4,x5}).
@@ -265,7 +266,9 @@ LEVELS = [round(0.1 * i, 1) for i in range(11)]
 @st.composite
 def similarity_matrices(draw):
     n = draw(st.integers(min_value=1, max_value=7))
-    upper = draw(st.lists(st.sampled_from(LEVELS), min_size=n * (n - 1) // 2, max_size=n * (n - 1) // 2))
+    upper = draw(
+        st.lists(st.sampled_from(LEVELS), min_size=n * (n - 1) // 2, max_size=n * (n - 1) // 2)
+    )
     R = np.eye(n)
     R[np.triu_indices(n, k=1)] = upper
     return np.maximum(R, R.T)
@@ -330,9 +333,15 @@ def test_deng_grade_minmax_by_hand_uses_global_two_level_extremes():
     # xi = (0 + .5*1)/(D + .5*1): x1 -> (1, .5, 1) mean 5/6; x2 -> (1/3, 1, 1/3) mean 5/9.
     # (Per-sensor extremes would give x1 (1, 1/3, 1) -> 7/9 instead.)
     X = np.array([[0.0, 2.0], [2.0, 1.0], [2.0, 0.0]])
-    np.testing.assert_allclose(grey_relational_grade([0, 1, 2], X, **DENG), [5 / 6, 5 / 9], rtol=1e-12)
+    np.testing.assert_allclose(
+        grey_relational_grade([0, 1, 2], X, **DENG), [5 / 6, 5 / 9], rtol=1e-12
+    )
     # rho = 1: xi = 1/(D + 1): x1 -> (1, 2/3, 1) -> 8/9; x2 -> (1/2, 1, 1/2) -> 2/3.
-    np.testing.assert_allclose(grey_relational_grade([0, 1, 2], X, rho=1.0, normalisation="minmax"), [8 / 9, 2 / 3], rtol=1e-12)
+    np.testing.assert_allclose(
+        grey_relational_grade([0, 1, 2], X, rho=1.0, normalisation="minmax"),
+        [8 / 9, 2 / 3],
+        rtol=1e-12,
+    )
 
 
 def test_deng_grade_initial_and_mean_normalisation_by_hand():
@@ -341,7 +350,9 @@ def test_deng_grade_initial_and_mean_normalisation_by_hand():
     # x1: (1, 1, 1/2) -> 5/6; x2: (1, 1/2, 1/3) -> 11/18.
     X = np.array([[1.0, 4.0], [2.0, 4.0], [4.0, 4.0]])
     np.testing.assert_allclose(
-        grey_relational_grade([2, 4, 6], X, rho=0.5, normalisation="initial"), [5 / 6, 11 / 18], rtol=1e-12
+        grey_relational_grade([2, 4, 6], X, rho=0.5, normalisation="initial"),
+        [5 / 6, 11 / 18],
+        rtol=1e-12,
     )
     # mean: x0 (1,2,3) -> (.5,1,1.5); x1 (2,2,2) -> (1,1,1); x2 (3,6,9) -> (.5,1,1.5).
     # D1 = (.5,0,.5), D2 = 0; min 0, max .5, rho*max = .25.
@@ -397,7 +408,9 @@ def test_deng_grade_reproduces_gdp_worked_example():
     """
     x0, X = GDP_RAW[:, 0], GDP_RAW[:, 1:]
     # Our mean normalisation reproduces the published table ...
-    np.testing.assert_allclose(GDP_RAW / GDP_RAW.mean(axis=0), GDP_MEAN_NORMALISED_PUBLISHED, atol=5e-5)
+    np.testing.assert_allclose(
+        GDP_RAW / GDP_RAW.mean(axis=0), GDP_MEAN_NORMALISED_PUBLISHED, atol=5e-5
+    )
     # ... and the grades match the hand arithmetic above.
     grades = grey_relational_grade(x0, X, rho=0.5, normalisation="mean")
     np.testing.assert_allclose(grades, [0.5088, 0.6247, 0.7577], atol=1e-3)
@@ -435,7 +448,9 @@ def test_deng_grade_identical_sequences_give_one():
 )
 def test_deng_grade_rejects_bad_parameters(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        grey_relational_grade([1.0, 2.0, 3.0], np.ones((3, 2)) + np.arange(3)[:, None], **{**DENG, **kwargs})
+        grey_relational_grade(
+            [1.0, 2.0, 3.0], np.ones((3, 2)) + np.arange(3)[:, None], **{**DENG, **kwargs}
+        )
 
 
 def test_deng_grade_rejects_length_mismatch():
@@ -457,7 +472,9 @@ def test_absolute_grey_incidence_by_hand():
     # X2 = X0 + 100 has the same zero-started image -> eps = 1.
     # X3 = 2*X0: s3 = 29, |s3 - s0| = 14.5 -> eps = (1+14.5+29)/(1+14.5+29+14.5) = 44.5/59.
     X = np.column_stack([X1, np.add(x0, 100), np.multiply(x0, 2)])
-    np.testing.assert_allclose(absolute_grey_incidence(x0, X), [143 / 256, 1.0, 44.5 / 59], rtol=1e-12)
+    np.testing.assert_allclose(
+        absolute_grey_incidence(x0, X), [143 / 256, 1.0, 44.5 / 59], rtol=1e-12
+    )
 
 
 # --------------------------------------------------------------------------- #
@@ -473,7 +490,9 @@ def _three_group_readings():
     k = np.arange(8.0)
     wiggle = np.array([0.0, 0.1, 0.0, -0.1, 0.0, 0.1, 0.0, -0.1])
     quad = (k - 3.5) ** 2
-    return pd.DataFrame({"T1": k, "T2": k + wiggle, "T3": quad, "T4": 2 * quad + 1, "T5": (-1.0) ** k})
+    return pd.DataFrame(
+        {"T1": k, "T2": k + wiggle, "T3": quad, "T4": 2 * quad + 1, "T5": (-1.0) ** k}
+    )
 
 
 def test_select_sensitive_points_on_constructed_groups():
@@ -518,7 +537,9 @@ def test_select_sensitive_points_rejects_bad_input():
     with pytest.raises(ValueError, match="DataFrame"):
         select_sensitive_points(X.to_numpy(), X["T1"], n_clusters=3, **PAPER)
     with pytest.raises(ValueError, match="initial-value"):
-        select_sensitive_points(X, X["T1"] + 1.0, n_clusters=3, **{**PAPER, "normalisation": "initial"})  # T1 starts at 0
+        select_sensitive_points(
+            X, X["T1"] + 1.0, n_clusters=3, **{**PAPER, "normalisation": "initial"}
+        )  # T1 starts at 0
 
 
 # --------------------------------------------------------------------------- #

@@ -7,8 +7,6 @@ import dataclasses
 import pytest
 import yaml
 
-from conftest import REPO
-from thermaxis.schemas import schema_path
 from thermaxis.config import (
     CleaningSettings,
     CompensationSettings,
@@ -19,6 +17,7 @@ from thermaxis.config import (
     SweepSettings,
     load_config,
 )
+from thermaxis.schemas import schema_path
 
 SCHEMA = yaml.safe_load(schema_path("config").read_text(encoding="utf-8"))
 
@@ -36,9 +35,15 @@ def test_values_missing_from_the_config_get_the_schema_defaults():
     assert settings.selection.rho == schema_default("selection", "rho")
     assert settings.decoupling.degree == schema_default("decoupling", "degree")
     for name in ("C", "epsilon", "gamma"):
-        assert list(dict(settings.models.svr_grid)[name]) == schema_default("models", "svr_grid", name)
-    assert settings.cleaning.temperatures.hampel_window == schema_default("temperatures", "hampel_window")
-    assert list(settings.cleaning.plausible_median_c) == schema_default("temperatures", "plausible_median_c")
+        assert list(dict(settings.models.svr_grid)[name]) == schema_default(
+            "models", "svr_grid", name
+        )
+    assert settings.cleaning.temperatures.hampel_window == schema_default(
+        "temperatures", "hampel_window"
+    )
+    assert list(settings.cleaning.plausible_median_c) == schema_default(
+        "temperatures", "plausible_median_c"
+    )
     assert settings.compensation.fallback.policy == schema_default("compensation", "fallback")
     assert list(settings.figures.formats) == schema_default("figures", "formats")
     assert list(settings.reports.model_algorithms) == schema_default("reports", "model_algorithms")
@@ -48,9 +53,19 @@ def test_values_missing_from_the_config_get_the_schema_defaults():
 
 
 def test_the_dataclasses_have_no_defaults_of_their_own():
-    for cls in (DecouplingSettings, SelectionSettings, ModelSettings, CompensationSettings, CleaningSettings, SweepSettings):
+    for cls in (
+        DecouplingSettings,
+        SelectionSettings,
+        ModelSettings,
+        CompensationSettings,
+        CleaningSettings,
+        SweepSettings,
+    ):
         fields = dataclasses.fields(cls)
-        assert all(f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING for f in fields), cls
+        assert all(
+            f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+            for f in fields
+        ), cls
     with pytest.raises(TypeError):
         SelectionSettings()
 
@@ -67,38 +82,79 @@ def test_settings_are_frozen():
 def test_each_section_builds_from_its_config_section():
     assert DecouplingSettings.from_section({"degree": 3}).degree == 3
     selection = SelectionSettings.from_section(
-        {"method": "fixed", "scope": "all", "n_clusters": 2, "similarity": "printed", "grade": "absolute",
-         "rho": 0.25, "normalisation": "mean", "pointwise_common": 2, "fixed": {"k": ["T2"], "b": ["T1", "T3"]}}
-    )  # fmt: skip
+        {
+            "method": "fixed",
+            "scope": "all",
+            "n_clusters": 2,
+            "similarity": "printed",
+            "grade": "absolute",
+            "rho": 0.25,
+            "normalisation": "mean",
+            "pointwise_common": 2,
+            "fixed": {"k": ["T2"], "b": ["T1", "T3"]},
+        }
+    )
     assert selection.fixed == (("b", ("T1", "T3")), ("k", ("T2",)))
     assert selection.fixed_for("k") == ("T2",)
     models = ModelSettings.from_section(
-        {"algorithms": ["mlr"], "ridge_alpha": 2, "lasso_alpha": 0.5, "pls_components": 1, "svr_kernel": "linear",
-         "svr_grid": {"gamma": ["scale"], "C": [3], "epsilon": [0.5]}, "searched": ["lasso"],
-         "search_grids": {"lasso": {"alpha": [0.1, 1]}, "ridge": {"alpha": [2]}}, "inner_search":
-         {"max_loco_runs": 4, "group_folds": 3}, "inputs": {"lags_min": [30], "rates_min": []}, "gpr_max_samples": 50, "interval_level": 0.9, "random_state": 7,
-         "signals": ["spindle_rpm"]}
-    )  # fmt: skip
+        {
+            "algorithms": ["mlr"],
+            "ridge_alpha": 2,
+            "lasso_alpha": 0.5,
+            "pls_components": 1,
+            "svr_kernel": "linear",
+            "svr_grid": {"gamma": ["scale"], "C": [3], "epsilon": [0.5]},
+            "searched": ["lasso"],
+            "search_grids": {"lasso": {"alpha": [0.1, 1]}, "ridge": {"alpha": [2]}},
+            "inner_search": {"max_loco_runs": 4, "group_folds": 3},
+            "inputs": {"lags_min": [30], "rates_min": []},
+            "gpr_max_samples": 50,
+            "interval_level": 0.9,
+            "random_state": 7,
+            "signals": ["spindle_rpm"],
+        }
+    )
     assert models.grid() == {"C": [3], "epsilon": [0.5], "gamma": ["scale"]}
     assert models.params_for("ridge") == {"alpha": 2.0} and models.params_for("mlr") is None
     assert models.params_for("lasso") == {"alpha": 0.5}
     # Only the searched algorithms search; the others keep their fixed strength.
-    assert models.search_grid_for("lasso") == {"alpha": [0.1, 1]} and models.search_grid_for("ridge") is None
+    assert (
+        models.search_grid_for("lasso") == {"alpha": [0.1, 1]}
+        and models.search_grid_for("ridge") is None
+    )
     assert (models.inner_search, models.gpr_max_samples) == ((4, 3), 50)
     assert (models.input_lags_min, models.input_rates_min) == ((30.0,), ())
     assert models.signals == ("spindle_rpm",)
     cleaning = CleaningSettings.from_sections(
-        {"interval_s": 30, "hampel_window": 5, "hampel_threshold": 3, "hampel_min_deviation_c": 0.1,
-         "limits_c": [-10, 90], "max_gap_s": 120, "plausible_median_c": [0, 50], "allow_long_gaps": True,
-         "estimate_clock_offsets": False, "window": "start"},
+        {
+            "interval_s": 30,
+            "hampel_window": 5,
+            "hampel_threshold": 3,
+            "hampel_min_deviation_c": 0.1,
+            "limits_c": [-10, 90],
+            "max_gap_s": 120,
+            "plausible_median_c": [0, 50],
+            "allow_long_gaps": True,
+            "estimate_clock_offsets": False,
+            "window": "start",
+        },
         {"direction": "+", "max_missing_fraction": 0.5, "max_abs_error_um": 200},
-    )  # fmt: skip
-    assert (cleaning.temperatures.interval_s, cleaning.temperatures.limits_c) == (30.0, (-10.0, 90.0))
-    assert (cleaning.errors.direction, cleaning.max_abs_error_um, cleaning.window) == ("+", 200.0, "start")
+    )
+    assert (cleaning.temperatures.interval_s, cleaning.temperatures.limits_c) == (
+        30.0,
+        (-10.0, 90.0),
+    )
+    assert (cleaning.errors.direction, cleaning.max_abs_error_um, cleaning.window) == (
+        "+",
+        200.0,
+        "start",
+    )
 
 
 def test_the_sweep_takes_the_models_grid_when_asked():
-    settings = Settings.from_config({"sweep": {"svr_grid": "models"}, "models": {"svr_grid": {"C": [2.0]}}})
+    settings = Settings.from_config(
+        {"sweep": {"svr_grid": "models"}, "models": {"svr_grid": {"C": [2.0]}}}
+    )
     # C from the config, epsilon and gamma from the schema's models.svr_grid.
     expected = {"C": [2.0], "epsilon": schema_default("models", "svr_grid", "epsilon"),
                 "gamma": schema_default("models", "svr_grid", "gamma")}  # fmt: skip
@@ -107,7 +163,11 @@ def test_the_sweep_takes_the_models_grid_when_asked():
 
 def test_the_papers_preset_parses_once():
     settings = Settings.from_config(load_config())
-    assert (settings.selection.method, settings.selection.n_clusters, settings.decoupling.degree) == ("fuzzy_grey", 3, 1)
+    assert (
+        settings.selection.method,
+        settings.selection.n_clusters,
+        settings.decoupling.degree,
+    ) == ("fuzzy_grey", 3, 1)
 
 
 def test_a_bad_value_is_one_line():

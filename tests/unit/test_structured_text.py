@@ -9,25 +9,34 @@ import pandas as pd
 import pytest
 from blark.parse import parse_source_code
 
-from thermaxis.compensation.model import CONVENTION, model_record
-from thermaxis.compensation.runtime import Compensator
 from thermaxis.compensation.exports import twincat
+from thermaxis.compensation.model import CONVENTION, model_record
+from thermaxis.compensation.plc import st_real, structured_text
+from thermaxis.compensation.runtime import Compensator
 from thermaxis.config import FallbackSettings
 from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
-from thermaxis.compensation.plc import st_real, structured_text
 
 TARGETS = np.array([185.0 + 20.0 * i for i in range(14)])
 RAMP = FallbackSettings(1.5, (-10.0, 90.0), 0.25, 30.0, "ramp_to_zero", 20.0)
 
 
 def exact_runs(wobble_um: float = 0.0):
-    """k = -300 + 13 T1 [um/m] on absolute T1, b = -0.5 - 11 dT2 [um] on T2's rise; noise-free unless wobbled."""
+    """k = -300 + 13 T1 [um/m] on absolute T1, b = -0.5 - 11 dT2 [um] on T2's rise; noise-free
+    unless wobbled."""
     rows, curves = [], []
     for r in range(3):
         for m in range(6):
             t1 = 28.0 + r + 0.8 * m + 0.3 * m * m
             rise = 0.5 * m + 0.05 * r * m
-            rows.append({"run": f"R{r}", "measurement": m + 1, "time_min": 20.0 * m, "T1": t1, "T2": 25.0 + 0.4 * r + rise})
+            rows.append(
+                {
+                    "run": f"R{r}",
+                    "measurement": m + 1,
+                    "time_min": 20.0 * m,
+                    "T1": t1,
+                    "T2": 25.0 + 0.4 * r + rise,
+                }
+            )
             k = -300.0 + 13.0 * t1 + 10.0 * wobble_um * np.cos(5.0 * m + r)
             b = -0.5 - 11.0 * rise + wobble_um * np.sin(7.0 * m + 3.0 * r)
             curves.append(k * (TARGETS - 185.0) / 1000.0 + b)
@@ -87,7 +96,9 @@ def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray) -> dict
     if "COEFF" in c:
         change = np.asarray(c["COEFF"]).reshape(c["N_REGRESSIONS"], c["N_INPUTS"]) @ (now - ref)
     else:
-        change = np.array([rbf(c, r, now) - rbf(c, r, ref) for r in range(1, c["N_REGRESSIONS"] + 1)])
+        change = np.array(
+            [rbf(c, r, now) - rbf(c, r, ref) for r in range(1, c["N_REGRESSIONS"] + 1)]
+        )
     b = np.dot(c["LINE_B"], change)
     k = np.dot(c["LINE_K"], change)
     return {
@@ -98,13 +109,16 @@ def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray) -> dict
 
 
 def rbf(c: dict, r: int, inputs: np.ndarray) -> float:
-    """Regression r of a kernel block: (sum_i w_i exp(-gamma |z - z_i|^2) + offset) * scale + mean."""
+    """Regression r of a kernel block:
+    (sum_i w_i exp(-gamma |z - z_i|^2) + offset) * scale + mean."""
     name = f"R{r}_"
     chosen = np.asarray(c[name + "INPUTS"]) - 1
     z = (inputs[chosen] - np.asarray(c[name + "MEAN"])) / np.asarray(c[name + "SCALE"])
     centres = np.asarray(c[name + "CENTRES"]).reshape(-1, chosen.size)
     kernel = np.exp(-c[name + "GAMMA"] * ((z - centres) ** 2).sum(axis=1))
-    return (kernel @ np.asarray(c[name + "WEIGHTS"]) + c[name + "OFFSET"]) * c[name + "TARGET_SCALE"] + c[name + "TARGET_MEAN"]
+    return (kernel @ np.asarray(c[name + "WEIGHTS"]) + c[name + "OFFSET"]) * c[
+        name + "TARGET_SCALE"
+    ] + c[name + "TARGET_MEAN"]
 
 
 def test_constants_read_back_exactly(exported):
@@ -115,7 +129,13 @@ def test_constants_read_back_exactly(exported):
     assert c["INPUT_MAX"] == [i["training_max_c"] for i in model["inputs"]]
     assert c["LINE_B"] + c["LINE_K"] == [w for row in model["line_weights"] for w in row]
     assert c["P0_MM"] == 185.0
-    assert (c["RANGE_MARGIN"], c["PLAUSIBLE_MIN"], c["PLAUSIBLE_MAX"], c["MAX_RATE"], c["MAX_AGE"]) == (1.5, -10.0, 90.0, 0.25, 30.0)
+    assert (
+        c["RANGE_MARGIN"],
+        c["PLAUSIBLE_MIN"],
+        c["PLAUSIBLE_MAX"],
+        c["MAX_RATE"],
+        c["MAX_AGE"],
+    ) == (1.5, -10.0, 90.0, 0.25, 30.0)
     assert c["POLICY_RAMP"] is True and c["RAMP_TIME"] == 1200.0
 
 
@@ -125,7 +145,14 @@ def test_constants_read_back_exactly(exported):
 )
 def test_st_values_equal_compensator(exported, now, ref):
     _, comp, _, c = exported
-    expected = {row[0]: row[2] for row in twincat(comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref))))}
+    expected = {
+        row[0]: row[2]
+        for row in twincat(
+            comp.parameters(
+                dict(zip(("T1", "T2"), now, strict=True)), dict(zip(("T1", "T2"), ref, strict=True))
+            )
+        )
+    }
     got = st_twincat(c, np.array(now), np.array(ref))
     for parameter, value in expected.items():
         assert got[parameter] == pytest.approx(value, abs=1e-9), parameter
@@ -133,10 +160,13 @@ def test_st_values_equal_compensator(exported, now, ref):
 
 def test_hand_worked_signs(exported):
     # T1 30 -> 32: k rises 26 um/m; T2 rises 1.5: b falls 16.5 um. Compensation = -change:
-    # offset_0 = +16.5 um = 165 (0.1 um), coefficient = -26 um/m, position_0 = 185 mm = 1850000 (0.1 um).
+    # offset_0 = +16.5 um = 165 (0.1 um), coefficient = -26 um/m,
+    # position_0 = 185 mm = 1850000 (0.1 um).
     _, _, source, c = exported
     got = st_twincat(c, np.array([32.0, 26.5]), np.array([30.0, 25.0]))
-    assert got == pytest.approx({"P-AXIS-00272": 1_850_000.0, "P-AXIS-00273": 165.0, "P-AXIS-00274": -26.0}, abs=1e-6)
+    assert got == pytest.approx(
+        {"P-AXIS-00272": 1_850_000.0, "P-AXIS-00273": 165.0, "P-AXIS-00274": -26.0}, abs=1e-6
+    )
     assert CONVENTION in source and "P-AXIS-00273 temp_comp_offset_0 [0.1 um]" in source
     assert "SIMULATED" in source
 
@@ -145,7 +175,9 @@ def test_single_position_block_has_no_slope():
     X, Y = exact_runs()
     Y = Y[[TARGETS[3]]]
     estimator = PointwiseAxisModel(("T2",), algorithm="mlr").fit(X, Y)
-    c = parsed_constants(structured_text(model_record(estimator, "pointwise", "mlr", X, RAMP), "SIMULATED"))
+    c = parsed_constants(
+        structured_text(model_record(estimator, "pointwise", "mlr", X, RAMP), "SIMULATED")
+    )
     assert c["LINE_K"] == [0.0] and c["LINE_B"] == [1.0] and c["P0_MM"] == TARGETS[3]
 
 
@@ -160,7 +192,15 @@ def test_kernel_blocks_equal_compensator(algorithm):
     c = parsed_constants(structured_text(model, "SIMULATED"))
     assert "COEFF" not in c and c["R1_GAMMA"] == model["regressions"][0]["gamma"]
     for now, ref in (((32.0, 26.5), (30.0, 25.0)), ((29.25, 24.1), (30.5, 25.3))):
-        expected = {row[0]: row[2] for row in twincat(comp.parameters(dict(zip(("T1", "T2"), now)), dict(zip(("T1", "T2"), ref))))}
+        expected = {
+            row[0]: row[2]
+            for row in twincat(
+                comp.parameters(
+                    dict(zip(("T1", "T2"), now, strict=True)),
+                    dict(zip(("T1", "T2"), ref, strict=True)),
+                )
+            )
+        }
         got = st_twincat(c, np.array(now), np.array(ref))
         assert got == pytest.approx(expected, abs=1e-9)
         assert abs(got["P-AXIS-00274"]) > 1.0  # a real slope, not an empty model

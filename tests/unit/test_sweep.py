@@ -1,4 +1,5 @@
-"""Tests of thermaxis.sweep.run (the `sweep` target end to end: tests/workflow/test_sweep_workflow.py).
+"""Tests of thermaxis.sweep.run (the `sweep` target end to end:
+tests/workflow/test_sweep_workflow.py).
 
 Counts, partitions, rankings and factor effects are checked against numbers worked
 out by hand in the comments; the sweep's metrics are checked against the library
@@ -17,16 +18,20 @@ import pandas as pd
 import pytest
 from threadpoolctl import threadpool_limits
 
-from conftest import DEFAULTS, REPO
-from thermaxis.schemas import schema_path
+from helpers import DEFAULTS
+from thermaxis.config import Settings, load_config
 from thermaxis.method import folds
+from thermaxis.method.folds import evaluate_configuration, select_for_fold
+from thermaxis.method.metrics import METRIC_COLUMNS
+from thermaxis.schemas import schema_path
 from thermaxis.sweep import plan as sweep_plan
 from thermaxis.sweep import run as sweep_run
-from thermaxis.config import Settings, load_config
-from thermaxis.method.metrics import METRIC_COLUMNS
-from thermaxis.method.folds import evaluate_configuration, select_for_fold
 
-PAPER_FIXED = (("b", ("T2", "T7", "T11")), ("k", ("T1", "T6", "T12")), ("pointwise", ("T1", "T11", "T12")))
+PAPER_FIXED = (
+    ("b", ("T2", "T7", "T11")),
+    ("k", ("T1", "T6", "T12")),
+    ("pointwise", ("T1", "T11", "T12")),
+)
 TWELVE = [f"T{i}" for i in range(1, 13)]
 
 
@@ -67,10 +72,20 @@ def test_schema_fills_defaults_and_rejects_bad_levels():
     validate(config, schema, set_default=True)
     assert config["sweep"]["methods"] == ["fuzzy_grey", "correlation", "all", "fixed"]
     assert config["sweep"]["batches"] == 0
-    assert Settings.from_config(config).sweep.svr_grid == (("C", (1.0, 10.0)), ("epsilon", (0.1,)), ("gamma", ("scale",)))
+    assert Settings.from_config(config).sweep.svr_grid == (
+        ("C", (1.0, 10.0)),
+        ("epsilon", (0.1,)),
+        ("gamma", ("scale",)),
+    )
     settings = Settings.from_config({"sweep": {"svr_grid": "models"}})
     assert settings.sweep.svr_grid == settings.models.svr_grid
-    for bad in ({"degrees": [4]}, {"methods": ["lasso"]}, {"svr_grid": "mine"}, {"batches": -1}, {"colour": 1}):
+    for bad in (
+        {"degrees": [4]},
+        {"methods": ["lasso"]},
+        {"svr_grid": "mine"},
+        {"batches": -1},
+        {"colour": 1},
+    ):
         with pytest.raises(Exception, match="sweep|valid"):
             validate({"dataset": "x", "sweep": bad}, schema, set_default=True)
 
@@ -118,7 +133,9 @@ def test_batch_count_follows_the_cores_unless_set():
 def test_progress_prints_whole_tqdm_like_lines():
     ticks = iter([0.0, 1.0, 2.0, 3.0, 4.0, 4.0])
     out = io.StringIO()
-    progress = sweep_run.Progress(4, "sweep batch 1/2", stream=out, every_s=10.0, clock=lambda: next(ticks))
+    progress = sweep_run.Progress(
+        4, "sweep batch 1/2", stream=out, every_s=10.0, clock=lambda: next(ticks)
+    )
     for _ in range(4):
         progress.update()
     # Only the last update is printed (10 s never pass); 4 configurations in 4 s.
@@ -146,23 +163,39 @@ def _inputs(n_runs=3, n_measurements=6, seed=0):
             rows.append({"run": f"R{r + 1}", "measurement": m + 1, "time_min": t, **temps})
             k = -10 + 3 * (temps["S1"] - 20) - (temps["S3"] - 22)
             b = -1.5 * (temps["S2"] - 21 - 0.5 * r)
-            errors.append(k * positions / 1000 + b + 0.02 * (positions / 100) ** 2 + rng.normal(0, 0.05, positions.size))
+            errors.append(
+                k * positions / 1000
+                + b
+                + 0.02 * (positions / 100) ** 2
+                + rng.normal(0, 0.05, positions.size)
+            )
     return pd.DataFrame(rows), pd.DataFrame(np.array(errors), columns=positions)
 
 
 def test_batch_rows_are_the_library_functions_metrics():
     X, Y = _inputs()
-    grid = replace(DEFAULTS.sweep.grid, methods=("fuzzy_grey",), n_clusters=(2,), similarities=("pearson",), grades=("deng",),
-                           degrees=(1,), algorithms=("mlr", "ridge"))  # fmt: skip
+    grid = replace(
+        DEFAULTS.sweep.grid,
+        methods=("fuzzy_grey",),
+        n_clusters=(2,),
+        similarities=("pearson",),
+        grades=("deng",),
+        degrees=(1,),
+        algorithms=("mlr", "ridge"),
+    )
     units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
     base = replace(DEFAULTS.selection, pointwise_common=2)
     rows = sweep_run.run_batch(X, Y, units, grid, base, DEFAULTS.models)
     # 1 unit x (decoupled d1 + pointwise) x 2 algorithms; decoupled has k, b, error rows.
     assert len(rows) == 2 * 3 + 2 * 1
     assert (rows["status"] == "ok").all()
-    selection = select_for_fold(X, Y, "R2", replace(DEFAULTS.selection, n_clusters=2, pointwise_common=2), 1)
+    selection = select_for_fold(
+        X, Y, "R2", replace(DEFAULTS.selection, n_clusters=2, pointwise_common=2), 1
+    )
     for approach in ("decoupled", "pointwise"):
-        expected = evaluate_configuration(X, Y, "R2", approach, "ridge", selection, DEFAULTS.models, 1).metrics
+        expected = evaluate_configuration(
+            X, Y, "R2", approach, "ridge", selection, DEFAULTS.models, 1
+        ).metrics
         got = rows[(rows["approach"] == approach) & (rows["algorithm"] == "ridge")]
         pd.testing.assert_frame_equal(
             got[["target", *METRIC_COLUMNS]].reset_index(drop=True),
@@ -188,7 +221,9 @@ def test_identical_model_inputs_are_evaluated_once(monkeypatch):
     grid = replace(DEFAULTS.sweep.grid, methods=("all", "fixed"), degrees=(1,), algorithms=("mlr",),
                            fixed=(("b", every), ("k", every), ("pointwise", every)))  # fmt: skip
     units, _ = sweep_plan.plan_units(grid, ["R1"], list(every))
-    rows = sweep_run.run_batch(X, Y, units, grid, replace(DEFAULTS.selection, pointwise_common=4), DEFAULTS.models)
+    rows = sweep_run.run_batch(
+        X, Y, units, grid, replace(DEFAULTS.selection, pointwise_common=4), DEFAULTS.models
+    )
     assert len(calls) == 2
     assert rows["config_id"].nunique() == 4
     a = rows[rows["method"] == "all"][list(METRIC_COLUMNS)].to_numpy()
@@ -198,14 +233,25 @@ def test_identical_model_inputs_are_evaluated_once(monkeypatch):
 
 def test_summary_does_not_depend_on_the_batch_count():
     X, Y = _inputs()
-    grid = replace(DEFAULTS.sweep.grid, methods=("fuzzy_grey", "correlation"), n_clusters=(2, 3), similarities=("pearson",),
-                           grades=("deng", "absolute"), degrees=(1, 2), algorithms=("mlr",))  # fmt: skip
+    grid = replace(
+        DEFAULTS.sweep.grid,
+        methods=("fuzzy_grey", "correlation"),
+        n_clusters=(2, 3),
+        similarities=("pearson",),
+        grades=("deng", "absolute"),
+        degrees=(1, 2),
+        algorithms=("mlr",),
+    )
     units, _ = sweep_plan.plan_units(grid, ["R1", "R2", "R3"], ["S1", "S2", "S3", "S4"])
     base = replace(DEFAULTS.selection, pointwise_common=2)
     one = sweep_run.collect_summary([sweep_run.run_batch(X, Y, units, grid, base, DEFAULTS.models)])
-    parts = [sweep_run.run_batch(X, Y, sweep_plan.batch_units(units, 3, b), grid, base, DEFAULTS.models) for b in range(3)]
+    parts = [
+        sweep_run.run_batch(X, Y, sweep_plan.batch_units(units, 3, b), grid, base, DEFAULTS.models)
+        for b in range(3)
+    ]
     pd.testing.assert_frame_equal(sweep_run.collect_summary(parts[::-1]), one)
-    # 3 folds x (2 fuzzy x 2 grades + 2 correlation) settings x (2 degrees + pointwise) x 1 algorithm.
+    # 3 folds x (2 fuzzy x 2 grades + 2 correlation) settings x (2 degrees + pointwise)
+    # x 1 algorithm.
     assert one.groupby("config_id")["fold"].nunique().eq(3).all()
     assert one["config_id"].nunique() == 6 * 3
 
@@ -215,7 +261,13 @@ def test_a_configuration_the_data_cannot_support_is_recorded_not_fatal():
     # Degree 3 needs four targets per measurement: there are four, so make one NaN in
     # every row of run R1 -> its decoupling fails for degree 3 only.
     Y.loc[X["run"] == "R1", 50.0] = np.nan
-    grid = replace(DEFAULTS.sweep.grid, methods=("all",), approaches=("decoupled",), degrees=(1, 3), algorithms=("mlr",))
+    grid = replace(
+        DEFAULTS.sweep.grid,
+        methods=("all",),
+        approaches=("decoupled",),
+        degrees=(1, 3),
+        algorithms=("mlr",),
+    )
     units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
     rows = sweep_run.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
     by_degree = rows.groupby("degree")["status"].first()
@@ -228,27 +280,52 @@ def test_a_configuration_the_data_cannot_support_is_recorded_not_fatal():
 
 def _summary_rows():
     def row(config_id, method, algorithm, fold, max_abs, rmse):
-        return {"config_id": config_id, "method": method, "n_clusters": 3 if method == "fuzzy_grey" else None,
-                "similarity": "pearson" if method == "fuzzy_grey" else None,
-                "grade": "deng" if method == "fuzzy_grey" else None, "approach": "decoupled", "degree": 1,
-                "algorithm": algorithm, "fold": fold, "target": "error", "rmse": rmse, "max_abs": max_abs,
-                "mae": rmse, "residual_min": -max_abs, "residual_max": max_abs, "sensors": "", "status": "ok"}  # fmt: skip
+        return {
+            "config_id": config_id,
+            "method": method,
+            "n_clusters": 3 if method == "fuzzy_grey" else None,
+            "similarity": "pearson" if method == "fuzzy_grey" else None,
+            "grade": "deng" if method == "fuzzy_grey" else None,
+            "approach": "decoupled",
+            "degree": 1,
+            "algorithm": algorithm,
+            "fold": fold,
+            "target": "error",
+            "rmse": rmse,
+            "max_abs": max_abs,
+            "mae": rmse,
+            "residual_min": -max_abs,
+            "residual_max": max_abs,
+            "sensors": "",
+            "status": "ok",
+        }
 
     rows = [
-        row("A", "fuzzy_grey", "mlr", "E1", 1.0, 0.5), row("A", "fuzzy_grey", "mlr", "E2", 3.0, 1.5),
-        row("B", "all", "mlr", "E1", 2.0, 1.0), row("B", "all", "mlr", "E2", 2.0, 1.0),
+        row("A", "fuzzy_grey", "mlr", "E1", 1.0, 0.5),
+        row("A", "fuzzy_grey", "mlr", "E2", 3.0, 1.5),
+        row("B", "all", "mlr", "E1", 2.0, 1.0),
+        row("B", "all", "mlr", "E2", 2.0, 1.0),
         row("C", "all", "svr", "E1", 0.5, 0.2),
-        row("D", "all", "svr", "E1", 4.0, 2.0), row("D", "all", "svr", "E2", 6.0, 3.0),
-    ]  # fmt: skip
+        row("D", "all", "svr", "E1", 4.0, 2.0),
+        row("D", "all", "svr", "E2", 6.0, 3.0),
+    ]
     # A k row must not count: only the error curves rank configurations.
     rows.append({**rows[0], "target": "k", "max_abs": 100.0})
     frame = sweep_run._as_summary_frame(rows)
-    frame.loc[len(frame)] = {**rows[4], "fold": "E2", "status": "failed", "rmse": np.nan, "max_abs": np.nan}
+    frame.loc[len(frame)] = {
+        **rows[4],
+        "fold": "E2",
+        "status": "failed",
+        "rmse": np.nan,
+        "max_abs": np.nan,
+    }
     return frame
 
 
 def test_ranking_by_mean_max_residual_incomplete_last_ties_by_id():
-    main = replace(DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="pearson", grade="deng")
+    main = replace(
+        DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="pearson", grade="deng"
+    )
     ranking = sweep_run.rank_configurations(_summary_rows(), main, 1)
     # A: (1 + 3) / 2 = 2, B: (2 + 2) / 2 = 2 (tie -> id order), D: 5, C: one fold only -> last.
     assert ranking["config_id"].tolist() == ["A", "B", "D", "C"]
@@ -265,7 +342,9 @@ def test_factor_effects_by_hand():
     ranking = sweep_run.rank_configurations(_summary_rows(), main, 1)
     effects = sweep_run.factor_effects(ranking).set_index(["factor", "level"])
     # Complete configurations: A (fuzzy_grey, mlr, 2), B (all, mlr, 2), D (all, svr, 5).
-    assert effects.loc[("method", "all"), ["n_configurations", "best", "median", "worst"]].tolist() == [2, 2.0, 3.5, 5.0]
+    assert effects.loc[
+        ("method", "all"), ["n_configurations", "best", "median", "worst"]
+    ].tolist() == [2, 2.0, 3.5, 5.0]
     assert effects.loc[("algorithm", "mlr"), "mean"] == 2.0
     assert effects.loc[("algorithm", "svr"), "n_configurations"] == 1
     # n_clusters applies to A only.
@@ -279,12 +358,28 @@ def test_heatmap_holds_the_other_factors_at_the_main_configuration():
         for similarity in ("pearson", "printed"):
             for degree in (1, 2):
                 for algorithm in ("svr", "mlr"):
-                    value = n * 10 + (0 if similarity == "pearson" else 100) + degree + (0.5 if algorithm == "svr" else 0)
-                    rows.append({"method": "fuzzy_grey", "n_clusters": n, "similarity": similarity, "grade": "deng",
-                                 "approach": "decoupled", "degree": degree, "algorithm": algorithm,
-                                 "mean_max_abs": value})  # fmt: skip
+                    value = (
+                        n * 10
+                        + (0 if similarity == "pearson" else 100)
+                        + degree
+                        + (0.5 if algorithm == "svr" else 0)
+                    )
+                    rows.append(
+                        {
+                            "method": "fuzzy_grey",
+                            "n_clusters": n,
+                            "similarity": similarity,
+                            "grade": "deng",
+                            "approach": "decoupled",
+                            "degree": degree,
+                            "algorithm": algorithm,
+                            "mean_max_abs": value,
+                        }
+                    )
     ranking = pd.DataFrame(rows)
-    main = replace(DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="printed", grade="deng")
+    main = replace(
+        DEFAULTS.selection, method="fuzzy_grey", n_clusters=3, similarity="printed", grade="deng"
+    )
     table = sweep_run.heatmap_table(ranking, "decoupled", main, 2)
     assert table.columns.tolist() == ["mlr", "svr"] and table.index.tolist() == [2, 3]
     # printed (+100), degree 2 (+2): n=2 -> 122, n=3 -> 132; svr adds 0.5.
@@ -300,13 +395,21 @@ def test_scaling_fit_by_hand():
 
     # 5 s + 2 s per run exactly: slope 2, intercept 5, marginal 2 and 2, no quadratic term.
     fit = fit_scaling([10, 5, 20], [25.0, 15.0, 45.0])
-    assert (round(fit.slope_s_per_run, 9), round(fit.intercept_s, 9), round(fit.r2, 9)) == (2.0, 5.0, 1.0)
+    assert (round(fit.slope_s_per_run, 9), round(fit.intercept_s, 9), round(fit.r2, 9)) == (
+        2.0,
+        5.0,
+        1.0,
+    )
     assert fit.marginal_s_per_run == [2.0, 2.0] and abs(fit.quadratic_share) < 1e-9
     assert "grows linearly" in fit.statement
     # Pure n^2: the parabola is n^2 itself, so its quadratic term is all of the cost at
     # n = 8; marginal costs (4-1)/1 = 3, (16-4)/2 = 6, (64-16)/4 = 12.
     quadratic = fit_scaling([1, 2, 4, 8], [1.0, 4.0, 16.0, 64.0])
-    assert round(quadratic.quadratic_share, 9) == 1.0 and quadratic.marginal_s_per_run == [3.0, 6.0, 12.0]
+    assert round(quadratic.quadratic_share, 9) == 1.0 and quadratic.marginal_s_per_run == [
+        3.0,
+        6.0,
+        12.0,
+    ]
     assert "about quadratically" in quadratic.statement
     # 10 s + n + 0.1 n^2 at n = 10: the quadratic term is 10 of 30 s -> share 1/3.
     some = fit_scaling([2, 5, 10], [10 + n + 0.1 * n * n for n in (2, 5, 10)])
@@ -321,7 +424,8 @@ def test_measure_counts_the_whole_process_tree(tmp_path):
 
     # A grandchild (python under sh) holds 300 MiB and spins 0.4 s of CPU.
     script = (
-        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); t = time.process_time()\n"
+        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); "
+        "t = time.process_time()\n"
         "while time.process_time() - t < 0.4: pass"
     )
     command = ["sh", "-c", f'"{sys.executable}" -c "$0"; exit 3', script]
@@ -336,13 +440,30 @@ def test_bench_markdown_names_the_cores_and_the_targets():
     from tools.bench import bench_markdown
 
     doc = {
-        "machine": {"usable_cores": 2, "cpu_count": 2, "memory_gib": 8.0, "platform": "Linux", "python": "3.11",
-                    "load_average_at_start": [0.1, 0.1, 0.1], "load_average_at_end": [0.2, 0.1, 0.1]},
+        "machine": {
+            "usable_cores": 2,
+            "cpu_count": 2,
+            "memory_gib": 8.0,
+            "platform": "Linux",
+            "python": "3.11",
+            "load_average_at_start": [0.1, 0.1, 0.1],
+            "load_average_at_end": [0.2, 0.1, 0.1],
+        },
         "settings": {"cores": 2},
-        "measurements": [{"name": "results_noop", "wall_s": 1.5, "cpu_s": 1.2, "peak_rss_mib": 200.0,
-                          "peak_tree_rss_mib": 210.0, "extra": {"jobs": 0}, "ok": True, "description": "again"}],
+        "measurements": [
+            {
+                "name": "results_noop",
+                "wall_s": 1.5,
+                "cpu_s": 1.2,
+                "peak_rss_mib": 200.0,
+                "peak_tree_rss_mib": 210.0,
+                "extra": {"jobs": 0},
+                "ok": True,
+                "description": "again",
+            }
+        ],
         "targets": [{"target": "no-op rerun <= 2 s", "measured": "1.5 s", "met": True}],
-    }  # fmt: skip
+    }
     text = bench_markdown(doc)
     assert "2 usable cores" in text and "--cores 2" in text
     assert "| results_noop | 1.5 | 1.2 | 200 | 210 | 0 | yes | again |" in text

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from threadpoolctl import threadpool_limits
 
-from conftest import DEFAULTS
+from helpers import DEFAULTS
 from thermaxis.sweep import plan as sweep_plan
 from thermaxis.sweep import run as sweep_run
 
@@ -18,7 +18,9 @@ TWELVE = [f"T{i}" for i in range(1, 13)]
 
 
 def subset_grid(sizes=(3,), cap=1000, **kw):
-    return replace(DEFAULTS.sweep.grid, methods=("subset",), n_clusters=tuple(sizes), max_subsets=cap, **kw)
+    return replace(
+        DEFAULTS.sweep.grid, methods=("subset",), n_clusters=tuple(sizes), max_subsets=cap, **kw
+    )
 
 
 def test_every_subset_once_counted_by_hand():
@@ -37,7 +39,10 @@ def test_every_subset_once_counted_by_hand():
 
 
 def test_more_subsets_than_the_cap_stop_the_plan_with_the_count():
-    with pytest.raises(ValueError, match="would evaluate 220 subsets of 3 of 12 sensors; the cap sweep.max_subsets is 219"):
+    with pytest.raises(
+        ValueError,
+        match="would evaluate 220 subsets of 3 of 12 sensors; the cap sweep.max_subsets is 219",
+    ):
         sweep_plan.plan_units(subset_grid((3,), cap=219), ["E1"], TWELVE)
     units, _ = sweep_plan.plan_units(subset_grid((3,), cap=220), ["E1", "E2"], TWELVE)
     assert len(units) == 440
@@ -48,7 +53,10 @@ def test_a_subset_is_the_fixed_choice_for_k_b_and_pointwise():
     settings = spec.settings(DEFAULTS.selection, ())
     assert settings.method == "fixed"
     assert [settings.fixed_for(t) for t in ("k", "b", "pointwise")] == [("T4", "T9")] * 3
-    assert sweep_plan.Configuration(spec, "pointwise", None, "mlr").config_id == "subset:n2:T4+T9/pointwise/mlr"
+    assert (
+        sweep_plan.Configuration(spec, "pointwise", None, "mlr").config_id
+        == "subset:n2:T4+T9/pointwise/mlr"
+    )
 
 
 def test_cluster_batches_follow_the_evaluation_count():
@@ -73,7 +81,11 @@ def _lines(n_runs=3, n_measurements=5, seed=1):
     rows, errors = [], []
     for r in range(n_runs):
         for m in range(n_measurements):
-            temps = {"S1": 20 + r + 0.7 * m + 0.1 * m * m, "S2": 21 + 0.4 * m + 0.3 * r * m, "S3": 22 + rng.normal(0, 0.2)}
+            temps = {
+                "S1": 20 + r + 0.7 * m + 0.1 * m * m,
+                "S2": 21 + 0.4 * m + 0.3 * r * m,
+                "S3": 22 + rng.normal(0, 0.2),
+            }
             rows.append({"run": f"R{r + 1}", "measurement": m + 1, "time_min": 20.0 * m, **temps})
             errors.append(rng.normal(0, 0.1, positions.size))
     X = pd.DataFrame(rows)
@@ -91,8 +103,10 @@ def test_pointwise_mlr_of_a_subset_matches_plain_least_squares():
     with threadpool_limits(limits=1):
         rows = sweep_run.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
     assert rows["config_id"].tolist() == [
-        "subset:n2:S1+S2/pointwise/mlr", "subset:n2:S1+S3/pointwise/mlr", "subset:n2:S2+S3/pointwise/mlr"
-    ]  # fmt: skip
+        "subset:n2:S1+S2/pointwise/mlr",
+        "subset:n2:S1+S3/pointwise/mlr",
+        "subset:n2:S2+S3/pointwise/mlr",
+    ]
     got = rows.set_index("config_id").loc["subset:n2:S1+S2/pointwise/mlr"]
     # Plain numpy: per position, least squares on relative S1, S2 with an intercept,
     # fitted on R1-R2, residuals on R3.
@@ -113,7 +127,9 @@ def test_pointwise_mlr_of_a_subset_matches_plain_least_squares():
 def test_batch_time_limit_by_hand():
     # 27 units of 4 approach-degrees x 5 algorithms = 20 evaluations; 3 batches of 9 units
     # = 180 evaluations x 2 s = 360 s; five times that is 1800 s = 30 min.
-    grid = replace(DEFAULTS.sweep.grid, fixed=(("b", ("T1",)), ("k", ("T1",)), ("pointwise", ("T1",))))
+    grid = replace(
+        DEFAULTS.sweep.grid, fixed=(("b", ("T1",)), ("k", ("T1",)), ("pointwise", ("T1",)))
+    )
     units, _ = sweep_plan.plan_units(grid, ["E1"], TWELVE)
     assert len(units) == 27
     assert sweep_plan.batch_minutes(grid, units, 3, 0, 2.0) == 30

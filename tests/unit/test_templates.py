@@ -1,4 +1,5 @@
-"""The template files: package data, valid string.Template text, every placeholder filled by its code."""
+"""The template files: package data, valid string.Template text, every placeholder filled by
+its code."""
 
 from __future__ import annotations
 
@@ -25,15 +26,28 @@ def test_the_templates_are_where_the_package_data_globs_look():
 def test_each_template_is_valid_and_names_only_placeholders_its_code_passes(path):
     template = string.Template(path.read_text(encoding="utf-8"))
     assert template.is_valid(), path
-    # The module that fills it passes each placeholder by keyword (dict(...) or fill(..., name=...)).
-    filler = {"compensation": SRC / "compensation" / "plc.py", "twin": SRC / "twin" / "report.py"}[path.parent.parent.name]
-    passed = {k.arg for node in ast.walk(ast.parse(filler.read_text())) if isinstance(node, ast.Call) for k in node.keywords}
+    # The module that fills it passes each placeholder by keyword (dict(...) or
+    # fill(..., name=...)).
+    filler = {"compensation": SRC / "compensation" / "plc.py", "twin": SRC / "twin" / "report.py"}[
+        path.parent.parent.name
+    ]
+    passed = {
+        k.arg
+        for node in ast.walk(ast.parse(filler.read_text()))
+        if isinstance(node, ast.Call)
+        for k in node.keywords
+    }
     assert set(template.get_identifiers()) <= passed, set(template.get_identifiers()) - passed
 
 
 def test_fill_refuses_a_missing_value():
     with pytest.raises(KeyError, match="n_inputs"):
-        templates.fill("thermaxis.compensation", "affine_constants.st.tmpl", n_regressions=1, coefficients="[1.0]")
+        templates.fill(
+            "thermaxis.compensation",
+            "affine_constants.st.tmpl",
+            n_regressions=1,
+            coefficients="[1.0]",
+        )
 
 
 def test_generated_texts_keep_no_placeholder():
@@ -41,12 +55,24 @@ def test_generated_texts_keep_no_placeholder():
     from thermaxis.twin.report import _readme
 
     readme = _readme()
-    assert "${" not in readme and readme == (SRC.parents[1] / "data" / "raw" / "twin" / "README.md").read_text(encoding="utf-8")
+    assert "${" not in readme and readme == (
+        SRC.parents[1] / "data" / "raw" / "twin" / "README.md"
+    ).read_text(encoding="utf-8")
     affine = {
         "sensors": ["T1", "T2"],
         "inputs": [
-            {"sensor": "T1", "temperature": "absolute", "training_min_c": 20.0, "training_max_c": 30.0},
-            {"sensor": "T2", "temperature": "relative", "training_min_c": 0.0, "training_max_c": 5.0},
+            {
+                "sensor": "T1",
+                "temperature": "absolute",
+                "training_min_c": 20.0,
+                "training_max_c": 30.0,
+            },
+            {
+                "sensor": "T2",
+                "temperature": "relative",
+                "training_min_c": 0.0,
+                "training_max_c": 5.0,
+            },
         ],
         "regressions": [
             {"target": "k", "form": "affine", "inputs": [0], "coefficients": [13.0]},
@@ -55,9 +81,20 @@ def test_generated_texts_keep_no_placeholder():
         "line_weights": [[0.0, 1.0], [1.0, 0.0]],
         "positions_mm": [185.0, 205.0],
         "reference": {"reference_position_mm": 185.0},
-        "fallback": {"range_margin_c": 2.0, "plausible_c": [-20.0, 120.0], "max_rate_c_per_min": 0.5,
-                     "max_sensor_age_s": 60.0, "policy": "hold", "ramp_to_zero_min": 30.0},
-        "approach": "decoupled", "algorithm": "mlr", "schema_version": 1,
-    }  # fmt: skip
+        "fallback": {
+            "range_margin_c": 2.0,
+            "plausible_c": [-20.0, 120.0],
+            "max_rate_c_per_min": 0.5,
+            "max_sensor_age_s": 60.0,
+            "policy": "hold",
+            "ramp_to_zero_min": 30.0,
+        },
+        "approach": "decoupled",
+        "algorithm": "mlr",
+        "schema_version": 1,
+    }
     text = structured_text(affine, "SIMULATED")
-    assert "${" not in text and "COEFF : ARRAY[1..2, 1..2] OF LREAL := [13.0, 0.0, 0.0, -11.0];" in text
+    assert (
+        "${" not in text
+        and "COEFF : ARRAY[1..2, 1..2] OF LREAL := [13.0, 0.0, 0.0, -11.0];" in text
+    )

@@ -41,7 +41,8 @@ def test_step_response_is_one_minus_exp(tau):
 
 @pytest.mark.parametrize("tau", [30.0, 1800.0])
 def test_ramp_response_is_exact_on_an_irregular_grid(tau):
-    # u = r t from rest: y = r (t - tau (1 - exp(-t / tau))), the solution of tau y' = r t - y, y(0) = 0.
+    # u = r t from rest: y = r (t - tau (1 - exp(-t / tau))), the solution of
+    # tau y' = r t - y, y(0) = 0.
     t = irregular(500, seed=2)
     r = 0.013  # degC per second
     y = lag_filter(t, r * t, tau)
@@ -60,7 +61,9 @@ def test_result_does_not_depend_on_how_finely_a_piecewise_linear_signal_is_sampl
 
 def test_starts_at_the_first_value_and_a_constant_stays_constant():
     t = irregular(50, seed=5)
-    np.testing.assert_allclose(lag_filter(t, np.full(t.size, 21.5), 600.0), 21.5, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        lag_filter(t, np.full(t.size, 21.5), 600.0), 21.5, rtol=0, atol=1e-12
+    )
 
 
 def test_filters_columns_independently():
@@ -77,7 +80,7 @@ def test_online_lag_equals_offline(initial):
     u = 20.0 + np.random.default_rng(7).normal(0, 0.3, t.size).cumsum()
     offline = lag_filter(t, u, 1200.0, initial=initial)
     state = LagState(1200.0, initial=initial)
-    online = np.array([state.update(ti, ui) for ti, ui in zip(t, u)])
+    online = np.array([state.update(ti, ui) for ti, ui in zip(t, u, strict=True)])
     np.testing.assert_allclose(online, offline, rtol=0, atol=1e-9)
     assert state.y == pytest.approx(offline[-1], abs=1e-9)
 
@@ -102,7 +105,7 @@ def test_online_rate_equals_offline():
     u = np.random.default_rng(9).normal(0, 0.2, t.size).cumsum()
     for window in (60.0, 600.0, 1e6):
         state = RateState(window)
-        online = np.array([state.update(ti, ui) for ti, ui in zip(t, u)])
+        online = np.array([state.update(ti, ui) for ti, ui in zip(t, u, strict=True)])
         np.testing.assert_allclose(online, rate_of_change(t, u, window), rtol=0, atol=1e-9)
 
 
@@ -238,7 +241,12 @@ def test_inputs_at_measurements_equal_closed_forms(at, pick):
     # Windows not on the 10 s grid and given out of time order; the result keeps their order.
     starts, ends = [5000.0, 123.4, 3000.0], [5400.0, 500.7, 3000.0]
     out = inputs_at_measurements(ramp_frame(), windows(starts, ends), [1800, 45], [600], at=at)
-    instants = np.array([(a, b)[pick] if pick is not None else (a + b) / 2 for a, b in zip(starts, ends)])
+    instants = np.array(
+        [
+            (a, b)[pick] if pick is not None else (a + b) / 2
+            for a, b in zip(starts, ends, strict=True)
+        ]
+    )
     assert list(out.columns) == [
         "measurement", "start", "end", "time",
         "T1@lag30min", "T1@lag45s", "T1@rate10min", "T2@lag30min", "T2@lag45s", "T2@rate10min",
@@ -247,7 +255,9 @@ def test_inputs_at_measurements_equal_closed_forms(at, pick):
     np.testing.assert_allclose((out["time"] - T0).dt.total_seconds(), instants, rtol=0, atol=1e-6)
     np.testing.assert_allclose(out["T1@lag30min"], ramp_lag(instants, 1800.0), rtol=0, atol=1e-9)
     np.testing.assert_allclose(out["T1@lag45s"], ramp_lag(instants, 45.0), rtol=0, atol=1e-9)
-    np.testing.assert_allclose(out["T1@rate10min"], 0.002 * 60 * np.minimum(instants, 600) / 600, atol=1e-12)
+    np.testing.assert_allclose(
+        out["T1@rate10min"], 0.002 * 60 * np.minimum(instants, 600) / 600, atol=1e-12
+    )
     np.testing.assert_allclose(out[["T2@lag30min", "T2@lag45s"]], 25.0, rtol=0, atol=1e-12)
     np.testing.assert_allclose(out["T2@rate10min"], 0.0, atol=1e-12)
 
@@ -256,7 +266,9 @@ def test_inputs_at_instants_and_chosen_columns():
     instants = list(T0 + pd.to_timedelta([600.0, 3605.0], unit="s"))
     out = inputs_at_measurements(ramp_frame(), instants, [900], columns=["T1"])
     assert list(out.columns) == ["time", "T1@lag15min"]
-    np.testing.assert_allclose(out["T1@lag15min"], ramp_lag(np.array([600.0, 3605.0]), 900.0), atol=1e-9)
+    np.testing.assert_allclose(
+        out["T1@lag15min"], ramp_lag(np.array([600.0, 3605.0]), 900.0), atol=1e-9
+    )
 
 
 def test_a_gap_after_the_last_measurement_is_harmless_and_one_before_is_refused():
@@ -265,8 +277,12 @@ def test_a_gap_after_the_last_measurement_is_harmless_and_one_before_is_refused(
     frame.loc[seconds > 2000.0, "T2"] = np.nan
     out = inputs_at_measurements(frame, windows([100.0], [1995.0]), [600])
     assert np.isfinite(out["T2@lag10min"]).all()
-    with pytest.raises(ValueError, match=r"signal 'T2' has no value at 2022-05-10 09:33:30.*measurement 1 "):
-        inputs_at_measurements(frame, windows([100.0, 1000.0, 2500.0], [1995.0, 2005.0, 2600.0]), [600])
+    with pytest.raises(
+        ValueError, match=r"signal 'T2' has no value at 2022-05-10 09:33:30.*measurement 1 "
+    ):
+        inputs_at_measurements(
+            frame, windows([100.0, 1000.0, 2500.0], [1995.0, 2005.0, 2600.0]), [600]
+        )
 
 
 def test_refusals_at_measurements():

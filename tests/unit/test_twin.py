@@ -14,11 +14,11 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import REPO
+from helpers import REPO
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.twin import ScaleSpec, generate_dataset, generate_scale
-from thermaxis.twin.network import CONDUCTANCE_W_PER_K, NODES, discretise, simulate
 from thermaxis.twin import model as twin_model
+from thermaxis.twin.network import CONDUCTANCE_W_PER_K, NODES, discretise, simulate
 from thermaxis.twin.observe import calibrated_sensors, lagged
 from thermaxis.twin.published import PublishedModel
 
@@ -44,16 +44,23 @@ TABLE1_AMBIENT = {"E1": (30.4, 31.6), "E2": (30.1, 31.2), "E3": (27.4, 28.3), "E
 
 
 def _files(root: Path) -> dict[str, bytes]:
-    return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+    return {
+        p.relative_to(root).as_posix(): p.read_bytes()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
 
 
 def _measurements(run: str) -> list[pd.DataFrame]:
-    frames = [pd.read_csv(p, parse_dates=["time"]) for p in sorted((RAW / run / "errors").glob("*.csv"))]
+    frames = [
+        pd.read_csv(p, parse_dates=["time"]) for p in sorted((RAW / run / "errors").glob("*.csv"))
+    ]
     return sorted(frames, key=lambda f: f["time"].iloc[0])
 
 
 def _polyfit_line(frame: pd.DataFrame) -> tuple[float, float, float]:
-    """k (um/m), b (um at 185 mm) and R^2 of the pass-mean curve (a target read in one pass keeps that reading)."""
+    """k (um/m), b (um at 185 mm) and R^2 of the pass-mean curve (a target read in one pass
+    keeps that reading)."""
     wide = frame.pivot(index="position_mm", columns="direction", values="error_um")
     x_m = (wide.index.to_numpy(float) - 185.0) / 1000.0
     y = wide.mean(axis=1).to_numpy()
@@ -94,8 +101,16 @@ def test_calibration_report_states_the_figures_recomputed_here(raw_lines):
     text = (RAW / "CALIBRATION.md").read_text(encoding="utf-8")
     rms_k = np.sqrt(np.mean((raw_lines["k"] - raw_lines["k_paper"]) ** 2))
     rms_b = np.sqrt(np.mean((raw_lines["b"] - raw_lines["b_paper"]) ** 2))
-    reported_k = float(re.search(r"Table 5 slope k \(twin minus paper\) \|[^|]*\|[^|]*\| ([0-9.]+) \|", text).group(1))
-    reported_b = float(re.search(r"Table 5 intercept b \(twin minus paper\) \|[^|]*\|[^|]*\| ([0-9.]+) \|", text).group(1))
+    reported_k = float(
+        re.search(
+            r"Table 5 slope k \(twin minus paper\) \|[^|]*\|[^|]*\| ([0-9.]+) \|", text
+        ).group(1)
+    )
+    reported_b = float(
+        re.search(
+            r"Table 5 intercept b \(twin minus paper\) \|[^|]*\|[^|]*\| ([0-9.]+) \|", text
+        ).group(1)
+    )
     assert reported_k == pytest.approx(rms_k, abs=1e-3)
     assert reported_b == pytest.approx(rms_b, abs=1e-3)
     assert (RAW / "calibration.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -145,7 +160,9 @@ def test_ambient_spans_table1_within_0_2_degrees_and_falls_with_cooling():
             assert abs(series.min() - lo) <= 0.2 and abs(series.max() - hi) <= 0.2, run
         if run in ("E3", "E4"):
             late = hidden.loc[hidden["minute"] > 150, "ambient"]
-            assert hidden["ambient"].max() - late.max() >= 0.5, f"{run}: air does not fall with the cooling"
+            assert hidden["ambient"].max() - late.max() >= 0.5, (
+                f"{run}: air does not fall with the cooling"
+            )
 
 
 def test_box_log_has_duplicated_rows_spikes_and_an_open_circuit():
@@ -220,7 +237,13 @@ def test_lag_acts_on_every_column_of_a_table_of_ramps():
 def test_mounting_keeps_the_clamped_part_s_share_and_splits_the_rest_by_softmax():
     values = {name: p.prior for name, p in twin_model.GLOBAL_PARAMETERS.items()}
     # T7: 60 % motor; the other 40 % split 1 : 3 between bearing seat and air.
-    values.update({"mount_T7_share": 0.6, "mount_T7_bearing_seat": float(np.log(1.0 / 3.0)), "mount_T7_ambient": 0.0})
+    values.update(
+        {
+            "mount_T7_share": 0.6,
+            "mount_T7_bearing_seat": float(np.log(1.0 / 3.0)),
+            "mount_T7_ambient": 0.0,
+        }
+    )
     weights, _ = twin_model.mounting(values, "T7")
     assert weights == pytest.approx({"motor": 0.6, "bearing_seat": 0.1, "ambient": 0.3})
     # T12 has one neighbour: it takes all that the motor leaves.
@@ -228,9 +251,15 @@ def test_mounting_keeps_the_clamped_part_s_share_and_splits_the_rest_by_softmax(
     weights, offset = twin_model.mounting(values, "T12")
     assert weights == pytest.approx({"motor": 0.75, "ambient": 0.25}) and offset == -0.2
     sensor = next(s for s in calibrated_sensors(values) if s.id == "T12")
-    assert sensor.weights == pytest.approx({"motor": 0.75, "ambient": 0.25}) and sensor.offset_c == -0.2
+    assert (
+        sensor.weights == pytest.approx({"motor": 0.75, "ambient": 0.25})
+        and sensor.offset_c == -0.2
+    )
     # Sensors without a calibrated mounting keep their design.
-    assert next(s for s in calibrated_sensors(values) if s.id == "T8").weights == {"bed_inner": 0.95, "ambient": 0.05}
+    assert next(s for s in calibrated_sensors(values) if s.id == "T8").weights == {
+        "bed_inner": 0.95,
+        "ambient": 0.05,
+    }
     assert twin_model.GLOBAL_PARAMETERS["mount_T1_share"].lower == 0.5
 
 
@@ -253,7 +282,11 @@ def test_network_steady_state_balances_the_heat_input():
     # Fixed point of one exact step = the continuous steady state.
     final = np.linalg.solve(np.eye(n) - disc.Ad, disc.Bd @ u)
     # Steady state: all 12 W leave through the conductances to the air.
-    to_air = sum(g * (final[NODES.index(a)] - 25.0) for (a, b), g in CONDUCTANCE_W_PER_K.items() if b == "ambient")
+    to_air = sum(
+        g * (final[NODES.index(a)] - 25.0)
+        for (a, b), g in CONDUCTANCE_W_PER_K.items()
+        if b == "ambient"
+    )
     assert to_air == pytest.approx(12.0, rel=1e-9)
     assert (final > 25.0).all()
     # Without heat every node relaxes to the air.

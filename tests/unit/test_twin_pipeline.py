@@ -12,24 +12,31 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import REPO
+from helpers import REPO
 from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.config import Settings, load_config
-from thermaxis.method.decouple import decouple_table
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.method.decouple import decouple_table
 from thermaxis.method.models import DecoupledAxisModel
 
 TWIN = REPO / "data" / "raw" / "twin"
 TRUTH = REPO / "data" / "twin_truth"
 
-pytestmark = pytest.mark.skipif(not (TWIN / "dataset.yaml").is_file(), reason="data/raw/twin not generated")
+pytestmark = pytest.mark.skipif(
+    not (TWIN / "dataset.yaml").is_file(), reason="data/raw/twin not generated"
+)
 
 
 @pytest.fixture(scope="module")
 def twin_tables():
     config = load_config()
     dataset = load_dataset(TWIN)
-    return dataset, {run: clean_and_assemble_run(dataset, read_run(dataset, run), Settings.from_config(config).cleaning) for run in dataset.run_ids}
+    return dataset, {
+        run: clean_and_assemble_run(
+            dataset, read_run(dataset, run), Settings.from_config(config).cleaning
+        )
+        for run in dataset.run_ids
+    }
 
 
 def test_twin_is_labelled_simulated(twin_tables):
@@ -84,7 +91,9 @@ def test_papers_mlr_does_not_reproduce_the_twin_exactly(twin_tables):
     temperatures = pd.concat([t.temperatures for t in tables.values()], ignore_index=True)
     X, Y = model_inputs(errors, temperatures)
     train = (X["run"] != "E4").to_numpy()
-    model = DecoupledAxisModel(k_sensors=("T1", "T6", "T12"), b_sensors=("T2", "T7", "T11"), algorithm="mlr")
+    model = DecoupledAxisModel(
+        k_sensors=("T1", "T6", "T12"), b_sensors=("T2", "T7", "T11"), algorithm="mlr"
+    )
     model.fit(X.loc[train], Y.loc[train])
     residual = Y.loc[~train].to_numpy() - model.predict(X.loc[~train])
     rmse = float(np.sqrt(np.nanmean(residual**2)))
@@ -156,6 +165,8 @@ def test_papers_eq8_reproduces_the_twins_errors_at_the_printed_positions(assembl
     for run, frame in X.groupby("run", sort=True):
         measured = Y.loc[frame.index]
         miss[run] = [_apply(EQ8[x], frame, relative=True) - measured[x].to_numpy() for x in EQ8]
-    assert _rms([np.concatenate(v) for v in miss.values()]) <= TABLE7_ERROR, {r: _rms(v) for r, v in miss.items()}
+    assert _rms([np.concatenate(v) for v in miss.values()]) <= TABLE7_ERROR, {
+        r: _rms(v) for r, v in miss.items()
+    }
     for run, values in miss.items():
         assert _rms(values) <= 2 * TABLE7_ERROR, run

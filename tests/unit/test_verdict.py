@@ -40,9 +40,10 @@ def test_a_run_made_worse_withdraws_the_recommendation_and_says_why():
     assert verdict["E"]["worst_increase_um"] == pytest.approx(2.0)
     assert verdict["recommended_for_deployment"] is False
     assert verdict["reasons"] == [
-        "held-out run R2: largest |deviation| over the stroke 8.30 -> 16.00 um (+7.70 um, more than "
-        "compensation.max_worsening_um = 0.1 um)",
-        "held-out run R2: E of ISO 230-2 1.00 -> 3.00 um (+2.00 um, more than compensation.max_worsening_um = 0.1 um)",
+        "held-out run R2: largest |deviation| over the stroke 8.30 -> 16.00 um "
+        "(+7.70 um, more than compensation.max_worsening_um = 0.1 um)",
+        "held-out run R2: E of ISO 230-2 1.00 -> 3.00 um "
+        "(+2.00 um, more than compensation.max_worsening_um = 0.1 um)",
     ]
     assert "NOT recommended for deployment" in verdict_sentence(verdict)
 

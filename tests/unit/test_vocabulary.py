@@ -26,7 +26,8 @@ def _nodes(node, path=()):
 
 
 def _inlined(node, defs):
-    """The schema with every local ``$ref`` replaced by its target: the schema as it was before ``$defs``."""
+    """The schema with every local ``$ref`` replaced by its target: the schema as it was
+    before ``$defs``."""
     if isinstance(node, dict):
         ref = node.get("$ref")
         own = {k: _inlined(v, defs) for k, v in node.items() if k not in ("$ref", "$defs")}
@@ -52,7 +53,9 @@ def test_the_schemas_define_the_vocabulary_once_as_the_code_does(schema):
 
 def test_every_algorithm_and_approach_setting_of_the_config_refers_to_the_vocabulary():
     refs = {path: node["$ref"] for path, node in _nodes(load_schema("config")) if "$ref" in node}
-    assert sorted("/".join(p for p in path if p not in ("properties", "items")) for path in refs) == [
+    assert sorted(
+        "/".join(p for p in path if p not in ("properties", "items")) for path in refs
+    ) == [
         "compensation/algorithm",
         "compensation/approach",
         "figures/algorithms",
@@ -75,7 +78,13 @@ def test_every_algorithm_and_approach_setting_of_the_config_refers_to_the_vocabu
 
 @pytest.mark.parametrize(
     "override",
-    [{"models": {"algorithms": ["svr"]}, "compensation": {"algorithm": "svr", "approach": "pointwise"}}, {}],
+    [
+        {
+            "models": {"algorithms": ["svr"]},
+            "compensation": {"algorithm": "svr", "approach": "pointwise"},
+        },
+        {},
+    ],
 )
 def test_refs_fill_defaults_exactly_as_the_inlined_schema_did(tmp_path, override):
     import yaml
@@ -116,7 +125,10 @@ def test_the_model_schema_refuses_an_unknown_algorithm():
     import jsonschema
 
     validator = jsonschema.Draft202012Validator(load_schema("compensation_model"))
-    errors = [e.message for e in validator.iter_errors({"approach": "pointwise", "algorithm": "elasticnet"})]
+    errors = [
+        e.message
+        for e in validator.iter_errors({"approach": "pointwise", "algorithm": "elasticnet"})
+    ]
     assert "'elasticnet' is not one of ['mlr', 'svr', 'ridge', 'lasso', 'pls', 'gpr']" in errors
     assert not any("'pointwise'" in message for message in errors)
 

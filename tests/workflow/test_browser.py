@@ -21,8 +21,13 @@ import pytest
 
 pytestmark = pytest.mark.browser
 
-CHROMIUM = next((p for p in (shutil.which("chromium"), "/usr/bin/chromium") if p and Path(p).is_file()), None)
-CHROMEDRIVER = next((p for p in (shutil.which("chromedriver"), "/usr/bin/chromedriver") if p and Path(p).is_file()), None)
+CHROMIUM = next(
+    (p for p in (shutil.which("chromium"), "/usr/bin/chromium") if p and Path(p).is_file()), None
+)
+CHROMEDRIVER = next(
+    (p for p in (shutil.which("chromedriver"), "/usr/bin/chromedriver") if p and Path(p).is_file()),
+    None,
+)
 FIRST_SCREEN_PX = 800
 
 
@@ -34,7 +39,9 @@ class _QuietHandler(SimpleHTTPRequestHandler):
 @pytest.fixture(scope="module")
 def server(built):
     """The built dataset's results folder over http://127.0.0.1:<free port>/."""
-    httpd = ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(built.out)))
+    httpd = ThreadingHTTPServer(
+        ("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(built.out))
+    )
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
     thread.start()
     yield f"http://127.0.0.1:{httpd.server_address[1]}"
@@ -45,8 +52,13 @@ def server(built):
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory):
     if CHROMIUM is None or CHROMEDRIVER is None:
-        pytest.skip("headless Chromium not found: install the Debian packages chromium and chromium-driver (.ci/run does)")
-    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (envs/requirements.txt pins it)")
+        pytest.skip(
+            "headless Chromium not found: install the Debian packages chromium and "
+            "chromium-driver (.ci/run does)"
+        )
+    webdriver = pytest.importorskip(
+        "selenium.webdriver", reason="selenium is not installed (envs/requirements.txt pins it)"
+    )
     from selenium.webdriver.chrome.service import Service
 
     options = webdriver.ChromeOptions()
@@ -99,7 +111,8 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
     assert browser.execute_script("return document.readyState") == "complete"
 
     images = browser.execute_script(
-        "return Array.from(document.images).map(i => [i.alt.slice(0, 60), i.complete, i.naturalWidth])"
+        "return Array.from(document.images)"
+        ".map(i => [i.alt.slice(0, 60), i.complete, i.naturalWidth])"
     )
     broken = [alt for alt, complete, width in images if not (complete and width > 0)]
     assert broken == [], f"{page}: images that did not load: {broken}"
@@ -110,17 +123,22 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
     assert errors == [], f"{page}: console errors: {errors}"
 
     # Chromium's own chrome:// pages show up in the log too; the network is http(s) and ws(s).
-    network = [u for u in requested_urls(browser) if u.split(":", 1)[0] in ("http", "https", "ws", "wss")]
+    network = [
+        u for u in requested_urls(browser) if u.split(":", 1)[0] in ("http", "https", "ws", "wss")
+    ]
     foreign = [u for u in network if not u.startswith(f"{server}/")]
     assert foreign == [], f"{page}: requests beyond the local server: {foreign[:5]}"
 
     banner = browser.execute_script(
         "const b = document.querySelector('.tx-banner'); "
-        "return b ? [b.getBoundingClientRect().top, b.getBoundingClientRect().bottom, b.innerText] : null"
+        "return b ? [b.getBoundingClientRect().top, b.getBoundingClientRect().bottom, "
+        "b.innerText] : null"
     )
     assert banner is not None, f"{page}: no data statement banner"
     top, bottom, text = banner
-    assert 0 <= top and bottom <= FIRST_SCREEN_PX, f"{page}: the data statement is not on the first screen ({top}-{bottom} px)"
+    assert 0 <= top and bottom <= FIRST_SCREEN_PX, (
+        f"{page}: the data statement is not on the first screen ({top}-{bottom} px)"
+    )
     assert "SIMULATED DATA" in text and "SIMULATED data" in text
 
     shot = tmp_path / (page.replace("/", "_").removesuffix(".html") + ".png")

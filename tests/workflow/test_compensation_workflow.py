@@ -7,14 +7,18 @@ import json
 import pandas as pd
 import yaml
 
-from conftest import LINES_RUNS, planned_rules, run_snakemake, tiny_config, workflow_workdir, write_dataset
+from helpers.builders import write_dataset
+from helpers.runs import LINES_RUNS
+from helpers.workflow import planned_rules, run_snakemake, tiny_config, workflow_workdir
 
 TABLES = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
 
 
 def targets(name: str, runs) -> list[str]:
     out = f"results/{name}/compensation"
-    return [f"{out}/{table}.csv" for table in TABLES] + [f"results/{name}/figures/compensation_drift_{run}.png" for run in runs]
+    return [f"{out}/{table}.csv" for table in TABLES] + [
+        f"results/{name}/figures/compensation_drift_{run}.png" for run in runs
+    ]
 
 
 # The session's `lines_run` builds everything, the compensation outputs among them.
@@ -28,7 +32,9 @@ def test_outputs_carry_their_conventions(lines_run):
     assert {row["fold"] for row in model["held_out_accuracy"]} == {"R1", "R2", "R3"}
     for table in TABLES:
         text = (out / f"{table}.csv").read_text()
-        assert text.startswith("# thermaxis compensation") and "compensation c = -(predicted e" in text
+        assert (
+            text.startswith("# thermaxis compensation") and "compensation c = -(predicted e" in text
+        )
         assert "SIMULATED" in text.splitlines()[1]
     summary = pd.read_csv(out / "summary.csv", comment="#")
     assert sorted(summary["fold"].unique()) == ["R1", "R2", "R3"] and len(summary) == 15
@@ -46,7 +52,12 @@ def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run, 
     model_change = work / "model_change.yaml"
     model_change.write_text(yaml.safe_dump({**doc, "models": {**doc["models"], "random_state": 7}}))
     rules = planned_rules(run_snakemake(work, *wanted, "-n", "--configfile", str(model_change)))
-    assert {"compensation_model", "compensation_fold", "compensation_collect", "compensation_plc"} <= rules, rules
+    assert {
+        "compensation_model",
+        "compensation_fold",
+        "compensation_collect",
+        "compensation_plc",
+    } <= rules, rules
 
     figure_change = work / "figure_change.yaml"
     figure_change.write_text(yaml.safe_dump({**doc, "figures": {**doc["figures"], "dpi": 120}}))
@@ -56,7 +67,9 @@ def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run, 
 
 def test_single_position_dataset_exports_an_offset_only(tmp_path):
     runs = ("R1", "R2", "R3")
-    dataset = write_dataset(tmp_path / "spot", runs=runs, positions=(120.0,), name="spot", n_measurements=4)
+    dataset = write_dataset(
+        tmp_path / "spot", runs=runs, positions=(120.0,), name="spot", n_measurements=4
+    )
     work = workflow_workdir(tmp_path)
     config = tiny_config(work, dataset, models={"algorithms": ["mlr"]})
     run_snakemake(work, *targets("spot", runs), "--configfile", str(config))
@@ -71,8 +84,13 @@ def test_single_position_dataset_exports_an_offset_only(tmp_path):
 def test_compensation_algorithm_outside_the_fitted_ones_stops_with_one_line(tmp_path):
     dataset = write_dataset(tmp_path / "tiny", name="tiny")
     work = workflow_workdir(tmp_path)
-    config = tiny_config(work, dataset, models={"algorithms": ["mlr"]}, compensation={"algorithm": "gpr"})
+    config = tiny_config(
+        work, dataset, models={"algorithms": ["mlr"]}, compensation={"algorithm": "gpr"}
+    )
     proc = run_snakemake(work, "-n", "--configfile", str(config), check=False)
     assert proc.returncode != 0
-    line = "thermaxis error: config compensation.algorithm: 'gpr' is not one of models.algorithms (mlr)"
+    line = (
+        "thermaxis error: config compensation.algorithm: 'gpr' is not one of "
+        "models.algorithms (mlr)"
+    )
     assert line in proc.stderr

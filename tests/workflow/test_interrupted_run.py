@@ -18,15 +18,18 @@ import sys
 import time
 from pathlib import Path
 
-
-from conftest import SNAKEMAKE, snakemake_env, workflow_workdir
+from helpers.workflow import SNAKEMAKE, snakemake_env, workflow_workdir
 
 # Waiting for the killed run to reach the middle of the workflow; a bound, not a measurement.
 WAIT_S = 300
 
 
 def _digests(root: Path) -> dict[str, str]:
-    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(root.rglob("*")) if p.is_file()}
+    return {
+        str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
 
 
 def _wait_for(path: Path, proc: subprocess.Popen) -> None:
@@ -39,22 +42,37 @@ def _wait_for(path: Path, proc: subprocess.Popen) -> None:
 
 def test_sigkill_then_plain_rerun_completes_byte_identical(lines_run, tmp_path):
     work = workflow_workdir(tmp_path / "killed")
-    config = Path(shutil.copy(lines_run.config, work / lines_run.config.name))  # same dataset, same config
+    config = Path(
+        shutil.copy(lines_run.config, work / lines_run.config.name)
+    )  # same dataset, same config
     # The make results recipe, with the test's cores and configuration.
-    command = [sys.executable, "-m", "thermaxis.pipeline.resume", SNAKEMAKE, "--cores", "2", "--configfile", config.name]
+    command = [
+        sys.executable,
+        "-m",
+        "thermaxis.pipeline.resume",
+        SNAKEMAKE,
+        "--cores",
+        "2",
+        "--configfile",
+        config.name,
+    ]
     first = subprocess.Popen(command, cwd=work, env=snakemake_env(), start_new_session=True,
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
     try:
         _wait_for(work / "results" / "lines" / "assembled" / "errors.parquet", first)
         # A second start while the first runs is refused and changes nothing.
-        second = subprocess.run(command, cwd=work, env=snakemake_env(), capture_output=True, text=True)
+        second = subprocess.run(
+            command, cwd=work, env=snakemake_env(), capture_output=True, text=True
+        )
         assert second.returncode == 1
         assert f"is already running in {work}" in second.stderr
         assert first.poll() is None and list((work / ".snakemake" / "locks").glob("*.lock"))
     finally:
         os.killpg(first.pid, signal.SIGKILL)
         first.wait()
-    assert list((work / ".snakemake" / "locks").glob("*.lock")), "SIGKILL should leave Snakemake's lock behind"
+    assert list((work / ".snakemake" / "locks").glob("*.lock")), (
+        "SIGKILL should leave Snakemake's lock behind"
+    )
 
     rerun = subprocess.run(command, cwd=work, env=snakemake_env(), capture_output=True, text=True)
     assert rerun.returncode == 0, rerun.stderr[-3000:]
@@ -64,4 +82,6 @@ def test_sigkill_then_plain_rerun_completes_byte_identical(lines_run, tmp_path):
     reference = {k: v for k, v in _digests(lines_run.out).items() if not k.startswith("sweep/")}
     assert ours.keys() == reference.keys()
     assert [name for name in ours if ours[name] != reference[name]] == []
-    assert any(name.endswith(".png") for name in ours) and any(name.endswith(".pdf") for name in ours)
+    assert any(name.endswith(".png") for name in ours) and any(
+        name.endswith(".pdf") for name in ours
+    )

@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import yaml
-from conftest import run_snakemake, workflow_workdir, write_dataset
+
+from helpers.builders import write_dataset
+from helpers.workflow import run_snakemake, workflow_workdir
 
 RUNS = ("cold_start_morning_1250rpm", "warm_afternoon_2500rpm", "night_cooldown_variable")
 
@@ -19,12 +21,21 @@ def _measured_like(root):
     def curve(r, m, x):
         return np.full(x.shape, -1.5 * (1 + r) * (1 - np.exp(-m / 8.0)))
 
-    write_dataset(root, runs=RUNS, n_measurements=(9, 14, 6), positions=(0.0,), curve=curve, two_passes=False, kind="measured")
+    write_dataset(
+        root,
+        runs=RUNS,
+        n_measurements=(9, 14, 6),
+        positions=(0.0,),
+        curve=curve,
+        two_passes=False,
+        kind="measured",
+    )
     meta = yaml.safe_load((root / "dataset.yaml").read_text())
     meta["signals"] = [{"id": "spindle_rpm", "unit": "rpm", "source": "box"}]
     (root / "dataset.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
     (root / "runs.tsv").write_text(
-        "run\tcondition\tdescription\n" + "".join(f"{r}\t{r.split('_')[-1]}\trun {r}\n" for r in RUNS)
+        "run\tcondition\tdescription\n"
+        + "".join(f"{r}\t{r.split('_')[-1]}\trun {r}\n" for r in RUNS)
     )
     for i, run in enumerate(RUNS):
         folder = root / run
@@ -36,9 +47,9 @@ def _measured_like(root):
         pd.concat(frames).to_csv(folder / "errors.csv", index=False)
         log = pd.read_csv(folder / "temperatures" / "box.csv", usecols=["time"])
         (folder / "signals").mkdir()
-        log.assign(spindle_rpm=np.where(np.arange(len(log)) < len(log) // 2, 1250.0 * (i + 1), 0.0)).to_csv(
-            folder / "signals" / "box.csv", index=False
-        )
+        log.assign(
+            spindle_rpm=np.where(np.arange(len(log)) < len(log) // 2, 1250.0 * (i + 1), 0.0)
+        ).to_csv(folder / "signals" / "box.csv", index=False)
     return root
 
 

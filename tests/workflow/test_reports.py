@@ -11,12 +11,14 @@ import sys
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
-import thermaxis  # noqa: F401  first: nbformat's jsonschema import is seconds faster (thermaxis/__init__.py)
 import nbformat
 import yaml
 
-from conftest import REPO, planned_rules, reports_snakemake as snakemake, run_snakemake
+from helpers import REPO
+from helpers.runs import reports_snakemake as snakemake
+from helpers.workflow import planned_rules, run_snakemake
 from thermaxis.reports import provenance
+
 
 def report_pages(out: Path) -> list[Path]:
     names = ["paper_report", "dataset_report", "condition_R1", "condition_R2", "model_R2"]
@@ -42,7 +44,10 @@ def test_first_screen_says_the_data_are_simulated(built):
         banner = body.index('class="tx-banner')
         assert banner < first_content, page.name
         first_screen = body[banner:first_content]
-        assert "SIMULATED DATA" in first_screen and "Dataset <code>rep</code>: SIMULATED data" in first_screen, page.name
+        assert (
+            "SIMULATED DATA" in first_screen
+            and "Dataset <code>rep</code>: SIMULATED data" in first_screen
+        ), page.name
 
 
 def test_pages_load_nothing_from_the_network(built):
@@ -75,17 +80,26 @@ def test_provenance_json_records_code_config_data_and_software(built):
     record = json.loads((built.out / "provenance.json").read_text(encoding="utf-8"))
     assert set(provenance.REQUIRED_KEYS) <= set(record)
     files = record["data"]["files"]
-    on_disk = sorted(p.relative_to(built.dataset).as_posix() for p in built.dataset.rglob("*") if p.is_file())
+    on_disk = sorted(
+        p.relative_to(built.dataset).as_posix() for p in built.dataset.rglob("*") if p.is_file()
+    )
     assert sorted(files) == on_disk
-    assert files["runs.tsv"] == hashlib.sha256((built.dataset / "runs.tsv").read_bytes()).hexdigest()
-    assert files["R2/errors/M03.csv"] == hashlib.sha256((built.dataset / "R2/errors/M03.csv").read_bytes()).hexdigest()
+    assert (
+        files["runs.tsv"] == hashlib.sha256((built.dataset / "runs.tsv").read_bytes()).hexdigest()
+    )
+    assert (
+        files["R2/errors/M03.csv"]
+        == hashlib.sha256((built.dataset / "R2/errors/M03.csv").read_bytes()).hexdigest()
+    )
     assert record["config"]["selection"]["n_clusters"] == 2
     canonical = json.dumps(record["config"], sort_keys=True, separators=(",", ":")).encode()
     assert record["config_sha256"] == hashlib.sha256(canonical).hexdigest()
     assert record["run_time"] == "2023-11-14T22:13:20Z"
     assert record["python"]["version"] == ".".join(map(str, sys.version_info[:3]))
     if shutil.which("git"):
-        head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True, text=True)
+        head = subprocess.run(
+            ["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True, text=True
+        )
         if head.returncode == 0:
             assert record["git"]["commit"] == head.stdout.strip()
 
@@ -97,7 +111,10 @@ def test_index_links_every_report_figure_and_table(built):
     assert all(t.is_file() for t in targets), [str(t) for t in targets if not t.is_file()]
     expected = {p.resolve() for p in report_pages(built.out)}
     expected |= {p.resolve() for p in (built.out / "figures").iterdir()}
-    expected |= {(built.out / "tables" / n).resolve() for n in ("metrics.csv", "paper_comparison.md", "table5_slope_intercept.csv")}
+    expected |= {
+        (built.out / "tables" / n).resolve()
+        for n in ("metrics.csv", "paper_comparison.md", "table5_slope_intercept.csv")
+    }
     assert expected <= targets, sorted(str(p) for p in expected - targets)
     assert (built.out / "provenance.json").resolve() in targets
 
@@ -110,7 +127,9 @@ def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built, library_un
     before = [(page.read_bytes(), page.with_suffix(".ipynb").read_bytes()) for page in pages]
     rules = ("dataset_report", "model_report")
     snakemake(built, "--forcerun", *rules, "--until", *rules)
-    assert [(page.read_bytes(), page.with_suffix(".ipynb").read_bytes()) for page in pages] == before
+    assert [
+        (page.read_bytes(), page.with_suffix(".ipynb").read_bytes()) for page in pages
+    ] == before
 
 
 def test_changing_n_clusters_reruns_only_the_affected_reports(built, library_unchanged):
@@ -118,7 +137,21 @@ def test_changing_n_clusters_reruns_only_the_affected_reports(built, library_unc
     doc = yaml.safe_load(built.config.read_text())
     doc["selection"]["n_clusters"] = 3
     changed.write_text(yaml.safe_dump(doc))
-    proc = run_snakemake(built.work, "-n", "--configfile", str(changed), check=False, env=built.env, timeout=300)
+    proc = run_snakemake(
+        built.work, "-n", "--configfile", str(changed), check=False, env=built.env, timeout=300
+    )
     rules = planned_rules(proc) - {"all"}
-    assert {"select_sensitive_points", "model_report", "paper_report", "provenance", "index"} <= rules, rules
-    assert not rules & {"dataset_report", "condition_report", "clean_run", "assemble", "fig_data"}, rules
+    assert {
+        "select_sensitive_points",
+        "model_report",
+        "paper_report",
+        "provenance",
+        "index",
+    } <= rules, rules
+    assert not rules & {
+        "dataset_report",
+        "condition_report",
+        "clean_run",
+        "assemble",
+        "fig_data",
+    }, rules

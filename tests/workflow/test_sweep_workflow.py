@@ -1,19 +1,26 @@
-"""The `sweep` target end to end: its rows for the main configuration equal the main workflow's metrics."""
+"""The `sweep` target end to end: its rows for the main configuration equal the main
+workflow's metrics."""
 
 from __future__ import annotations
 
 import pandas as pd
 import yaml
 
-from conftest import run_snakemake
+from helpers.workflow import run_snakemake
 from thermaxis.method.metrics import METRIC_COLUMNS
 
 
-def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines_run, library_unchanged):
-    """The sweep on the session's `lines_run`, whose config carries the sweep grid (conftest.LINES_SWEEP)."""
+def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(
+    lines_run, library_unchanged
+):
+    """The sweep on the session's `lines_run`, whose config carries the sweep grid
+    (helpers.runs.LINES_SWEEP)."""
     work, path, out = lines_run.work, lines_run.config, lines_run.out
     config = yaml.safe_load(path.read_text())
-    assert config["selection"] == {"n_clusters": 2} and config["models"]["algorithms"] == ["mlr", "svr"]
+    assert config["selection"] == {"n_clusters": 2} and config["models"]["algorithms"] == [
+        "mlr",
+        "svr",
+    ]
     assert config["sweep"]["svr_grid"] == "models"
     proc = run_snakemake(work, "--configfile", str(path), "--", "sweep")
     assert "sweep batch 2/2: 100%" in proc.stderr

@@ -10,9 +10,12 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import b_true, k_true, planned_rules, run_snakemake, set_csv_cell, tiny_config, write_dataset
-from conftest import REPO, library_lock
-from conftest import workflow_workdir as workdir
+from helpers import REPO
+from helpers.builders import set_csv_cell, write_dataset
+from helpers.locks import library_lock
+from helpers.truth import b_true, k_true
+from helpers.workflow import planned_rules, run_snakemake, tiny_config
+from helpers.workflow import workflow_workdir as workdir
 from thermaxis.config import merge
 from thermaxis.errors import DataError
 from thermaxis.pipeline.preflight import check_before_jobs
@@ -20,13 +23,27 @@ from thermaxis.pipeline.preflight import check_before_jobs
 
 def test_tables_exist_and_decouple_exact_lines(lines_run):
     tables = lines_run.out / "tables"
-    for name in ("dataset_summary.csv", "cleaning_qc.csv", "table5_slope_intercept.csv", "metrics.csv",
-                 "coefficients.csv", "sensitive_points.csv"):
+    for name in (
+        "dataset_summary.csv",
+        "cleaning_qc.csv",
+        "table5_slope_intercept.csv",
+        "metrics.csv",
+        "coefficients.csv",
+        "sensitive_points.csv",
+    ):
         assert (tables / name).is_file(), name
     # The dataset does not declare that it reproduces the paper: no audit against it.
     assert not (tables / "paper_comparison.csv").exists()
     kb = pd.read_csv(tables / "table5_slope_intercept.csv")
-    assert list(kb.columns) == ["run", "measurement", "time_min", "k_um_per_m", "b_um", "r2", "rms_um"]
+    assert list(kb.columns) == [
+        "run",
+        "measurement",
+        "time_min",
+        "k_um_per_m",
+        "b_um",
+        "r2",
+        "rms_um",
+    ]
     assert len(kb) == 15
     r = kb["run"].str[1:].astype(int) - 1
     m = kb["measurement"] - 1
@@ -38,9 +55,24 @@ def test_tables_exist_and_decouple_exact_lines(lines_run):
 
 def test_metrics_cover_every_fold_approach_algorithm(lines_run):
     metrics = pd.read_csv(lines_run.out / "tables" / "metrics.csv")
-    assert list(metrics.columns) == ["fold", "approach", "algorithm", "target", "rmse", "max_abs", "mae", "residual_min", "residual_max"]
-    combos = set(zip(metrics["fold"], metrics["approach"], metrics["algorithm"]))
-    assert combos == {(f, a, g) for f in ("R1", "R2", "R3") for a in ("decoupled", "pointwise") for g in ("mlr", "svr")}
+    assert list(metrics.columns) == [
+        "fold",
+        "approach",
+        "algorithm",
+        "target",
+        "rmse",
+        "max_abs",
+        "mae",
+        "residual_min",
+        "residual_max",
+    ]
+    combos = set(zip(metrics["fold"], metrics["approach"], metrics["algorithm"], strict=True))
+    assert combos == {
+        (f, a, g)
+        for f in ("R1", "R2", "R3")
+        for a in ("decoupled", "pointwise")
+        for g in ("mlr", "svr")
+    }
     decoupled = metrics[metrics["approach"] == "decoupled"]
     assert set(decoupled["target"]) == {"k", "b", "error"}
     assert (metrics["rmse"] <= metrics["max_abs"] + 1e-12).all()
@@ -60,7 +92,9 @@ def test_bad_input_stops_with_one_line_and_leaves_no_output(tmp_path):
     assert proc.returncode != 0
     expected = f"thermaxis error: {path}: line 4, column 'error_um': expected a number, got 'n/a'"
     assert expected in proc.stderr
-    assert not (work / "results" / "bad" / "clean" / "R2").exists() or not any((work / "results" / "bad" / "clean" / "R2").iterdir())
+    assert not (work / "results" / "bad" / "clean" / "R2").exists() or not any(
+        (work / "results" / "bad" / "clean" / "R2").iterdir()
+    )
     assert not (work / "results" / "bad" / "tables" / "table5_slope_intercept.csv").exists()
 
 
@@ -73,18 +107,25 @@ def _parse_time_check(work: Path, config: Path):
 
 def test_bad_sheet_stops_before_any_job(tmp_path):
     dataset = write_dataset(tmp_path / "sheet", name="sheet")
-    (dataset / "runs.tsv").write_text((dataset / "runs.tsv").read_text().replace("R2\t2\t2000", "R2\t2\tx"))
+    (dataset / "runs.tsv").write_text(
+        (dataset / "runs.tsv").read_text().replace("R2\t2\t2000", "R2\t2\tx")
+    )
     work = workdir(tmp_path)
     with pytest.raises(DataError) as refused:
         _parse_time_check(work, tiny_config(work, dataset))
-    assert str(refused.value) == f"{dataset / 'runs.tsv'}: line 3, column 'feed_mm_min': expected a finite number, got 'x'"
+    expected = (
+        f"{dataset / 'runs.tsv'}: line 3, column 'feed_mm_min': expected a finite number, got 'x'"
+    )
+    assert str(refused.value) == expected
     assert not (work / "results").exists()
 
 
 def test_bad_config_value_is_rejected_by_schema(tmp_path):
     dataset = write_dataset(tmp_path / "cfg", name="cfg")
     work = workdir(tmp_path)
-    with pytest.raises(ValueError, match="config decoupling/degree: 7 is greater than the maximum of 3"):
+    with pytest.raises(
+        ValueError, match="config decoupling/degree: 7 is greater than the maximum of 3"
+    ):
         _parse_time_check(work, tiny_config(work, dataset, decoupling={"degree": 7}))
 
 
@@ -98,11 +139,16 @@ def test_plot_option_reruns_only_figure_rules(lines_run, library_unchanged):
     assert rules, proc.stdout
     # Reports embed the figures and the index links them, so they follow; nothing upstream does.
     # provenance.json records the hash of the effective config, so it is rewritten too.
-    assert all(r.startswith("fig") or r.endswith("_report") or r in ("all", "index", "provenance") for r in rules), rules
+    assert all(
+        r.startswith("fig") or r.endswith("_report") or r in ("all", "index", "provenance")
+        for r in rules
+    ), rules
     assert "fig_data" in rules
 
 
-def test_editing_a_module_selection_imports_indirectly_reruns_selection(lines_run, tmp_path_factory):
+def test_editing_a_module_selection_imports_indirectly_reruns_selection(
+    lines_run, tmp_path_factory
+):
     """models.py is named in no rule; select.py reaches it through experiment.select_for_fold.
 
     Snakemake compares checksums of inputs newer than the outputs, so the edit must

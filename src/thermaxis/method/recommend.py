@@ -382,12 +382,14 @@ def extra_candidates(settings, selection: SelectionSettings, models: ModelSettin
     return out
 
 
-def candidates_for(settings, decoupled: bool, signals: Sequence[str]) -> list[Candidate]:
-    """The configured candidate list: the defaults, then the user's (``settings`` is a Settings)."""
-    time_inputs = bool(settings.recommend.lags_min)
+def candidates_for(
+    selection: SelectionSettings, models: ModelSettings, recommend_settings, decoupled: bool, signals: Sequence[str]
+) -> list[Candidate]:
+    """The configured candidate list: the defaults, then the user's (config ``recommend``)."""
+    time_inputs = bool(recommend_settings.lags_min)
     return [
-        *default_candidates(settings.selection, settings.models, decoupled, signals, time_inputs),
-        *extra_candidates(settings.recommend, settings.selection, settings.models, signals),
+        *default_candidates(selection, models, decoupled, signals, time_inputs),
+        *extra_candidates(recommend_settings, selection, models, signals),
     ]
 
 

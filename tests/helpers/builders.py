@@ -1,0 +1,199 @@
+"""Tiny datasets in the documented raw layout, written from known truth, and table edits."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from helpers.truth import SENSORS
+from thermaxis.config import FallbackSettings
+
+
+def write_dataset(
+    root: Path,
+    *,
+    runs=("R1", "R2"),
+    sensors=("S1", "S2", "S3"),
+    positions=(0.0, 50.0, 100.0, 150.0),
+    n_measurements=4,
+    interval_min=20.0,
+    curve=None,
+    temperature=None,
+    name="tiny",
+    kind="simulated",
+    two_passes=True,
+    reproduces=None,
+) -> Path:
+    """Write a small, fault-free dataset.
+
+    ``n_measurements`` is one count for every run, or one count per run (runs of
+    unequal length).  ``curve(run_index, measurement_index, positions) -> errors`` gives
+    the error of each measurement; ``temperature(run_index, sensor_index, minutes) -> degC``
+    the sensor logs (sampled every 10 s). Defaults: exact lines and smooth ramps.
+    """
+    root = Path(root)
+    root.mkdir(parents=True, exist_ok=True)
+    positions = np.asarray(positions, dtype=float)
+    if curve is None:
+
+        def curve(r, m, x):
+            return (-10.0 + 0.5 * m + r) * (x - x[0]) / 1000.0 + (-0.7 * m - 0.1 * r)
+
+    if temperature is None:
+
+        def temperature(r, s, minutes):
+            rise = (1.0 + 0.3 * s) * (1.0 - np.exp(-minutes / (60.0 + 10 * s)))
+            return 20.0 + r + 0.5 * s + rise
+
+    meta = {
+        "name": name,
+        "description": "Tiny test dataset.",
+        "provenance": {"kind": kind, "citation": "tests"},
+        **({"reproduces": reproduces} if reproduces else {}),
+        "axis": {"name": "X"},
+        "sensors": [{"id": s, "location": f"loc {s}", "source": "box"} for s in sensors],
+        "sources": [{"name": "box", "clock_note": "reference", "clock_offset_s": 0}],
+    }
+    (root / "dataset.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    lines = ["run\tcondition\tfeed_mm_min\tdescription"]
+    for i, run in enumerate(runs, start=1):
+        lines.append(f"{run}\t{i}\t{1000 * i}\trun {run}")
+    (root / "runs.tsv").write_text("\n".join(lines) + "\n")
+    t0 = pd.Timestamp("2022-05-10T09:00:00")
+    counts = [n_measurements] * len(runs) if np.ndim(n_measurements) == 0 else list(n_measurements)
+    for r, (run, n_run) in enumerate(zip(runs, counts, strict=True)):
+        total = interval_min * (n_run - 1) + 10
+        (root / run / "temperatures").mkdir(parents=True, exist_ok=True)
+        (root / run / "errors").mkdir(parents=True, exist_ok=True)
+        seconds = np.arange(-300, total * 60 + 300, 10.0)
+        times = t0 + pd.to_timedelta(seconds, unit="s")
+        frame = pd.DataFrame({"time": times.strftime("%Y-%m-%dT%H:%M:%S")})
+        for s, sensor in enumerate(sensors):
+            frame[sensor] = temperature(r, s, seconds / 60.0)
+        frame.to_csv(root / run / "temperatures" / "box.csv", index=False, float_format="%.6f")
+        for m in range(n_run):
+            start = t0 + pd.Timedelta(minutes=interval_min * m)
+            err = curve(r, m, positions)
+            passes = [("+", positions, err)]
+            if two_passes:
+                passes.append(("-", positions[::-1], err[::-1]))
+            rows = []
+            k = 0
+            for direction, xs, es in passes:
+                for x, e in zip(xs, es, strict=True):
+                    when = (start + pd.Timedelta(seconds=5 * k)).strftime("%Y-%m-%dT%H:%M:%S")
+                    rows.append((when, x, e, direction))
+                    k += 1
+            table = pd.DataFrame(rows, columns=["time", "position_mm", "error_um", "direction"])
+            table.to_csv(
+                root / run / "errors" / f"M{m + 1:02d}.csv", index=False, float_format="%.12g"
+            )
+    return root
+
+
+def set_csv_cell(path: Path, line: int, field: int, value: str) -> None:
+    """Overwrite one cell of a CSV file (``line`` is the 0-based line index, header = 0)."""
+    lines = Path(path).read_text().splitlines()
+    fields = lines[line].split(",")
+    fields[field] = value
+    lines[line] = ",".join(fields)
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
+def synthetic_temperatures(
+    runs=("E1", "E2", "E3", "E4"), n_measurements=8, seed=20220510
+) -> pd.DataFrame:
+    """Smooth warming curves plus a slow random walk per sensor, so sensors are not collinear.
+
+    The columns are the paper's sensors (``helpers.truth.SENSORS``), one row per measurement.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(n_measurements) / (n_measurements - 1)
+    rows = []
+    for run in runs:
+        base = rng.uniform(26.0, 32.0) + rng.normal(0.0, 1.0, len(SENSORS))
+        rise = rng.uniform(0.5, 6.0, len(SENSORS))
+        tau = rng.uniform(0.2, 1.0, len(SENSORS))
+        walk = np.cumsum(rng.normal(0.0, 0.15, (n_measurements, len(SENSORS))), axis=0)
+        temps = base + rise * (1.0 - np.exp(-t[:, None] / tau)) + walk
+        for m in range(n_measurements):
+            rows.append(
+                {"run": run, "measurement": m + 1, **dict(zip(SENSORS, temps[m], strict=True))}
+            )
+    return pd.DataFrame(rows)
+
+
+# --------------------------------------------------------------------------- a model.json by hand
+
+TARGETS = [185.0 + 20.0 * i for i in range(14)]  # the paper's stroke; shifted origin 185 mm
+HOLD = FallbackSettings(
+    range_margin_c=2.0,
+    plausible_c=(-20.0, 120.0),
+    max_rate_c_per_min=0.5,
+    max_sensor_age_s=60.0,
+    policy="hold",
+    ramp_to_zero_min=30.0,
+)
+
+
+def hand_model(fallback=HOLD, positions=TARGETS) -> dict:
+    """A ``model.json`` record written by hand (tests/unit/test_compensation.py works its
+    controller values out from it; tests/packaging/test_wheel.py validates it):
+    k = -300 + 13 T1 [um/m] (absolute T1), b = -0.5 - 11 dT2 [um] (T2 relative to homing).
+    """
+    s = [(x - positions[0]) / 1000.0 for x in positions]
+    return {
+        "schema": "thermaxis-compensation-model",
+        "schema_version": 1,
+        "convention": "e = actual - target",
+        "approach": "decoupled",
+        "algorithm": "mlr",
+        "degree": 1,
+        "sensors": ["T1", "T2"],
+        "inputs": [
+            {
+                "sensor": "T1",
+                "temperature": "absolute",
+                "training_min_c": 28.0,
+                "training_max_c": 34.0,
+            },
+            {
+                "sensor": "T2",
+                "temperature": "relative",
+                "training_min_c": 0.0,
+                "training_max_c": 3.0,
+            },
+        ],
+        "reference": {
+            "temperatures": "at homing",
+            "static_pitch_table": "at homing",
+            "reference_position_mm": positions[0],
+        },
+        "positions_mm": list(positions),
+        "units": {},
+        "regressions": [
+            {
+                "target": "k",
+                "position_mm": None,
+                "inputs": [0],
+                "form": "affine",
+                "constant": -300.0,
+                "coefficients": [13.0],
+            },
+            {
+                "target": "b",
+                "position_mm": None,
+                "inputs": [1],
+                "form": "affine",
+                "constant": -0.5,
+                "coefficients": [-11.0],
+            },
+        ],
+        # b row, k row: the line through k*s + b is that line.
+        "line_weights": [[0.0, 1.0], [1.0, 0.0]],
+        "curve_basis": [[si, 1.0] for si in s],
+        "fallback": {**fallback.__dict__, "plausible_c": list(fallback.plausible_c)},
+    }

@@ -1,0 +1,82 @@
+"""Truth worked out independently of the library: what the builders write and the tests expect."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+# ------------------------------------------------------------------ Eq. 8 and Eq. 9 by construction
+
+POSITIONS = np.arange(185.0, 446.0, 20.0)  # the paper's 14 targets
+SENSORS = [f"T{i}" for i in range(1, 13)]
+
+# Eq. 9 as printed: k [um/m] on absolute, b [um] on relative temperatures.
+EQ9_K = {"const": -306.494, "T1": 13.247, "T6": -6.629, "T12": 3.326}
+EQ9_B = {"const": -0.576, "T2": -11.058, "T7": 0.974, "T11": -1.915}
+
+# Eq. 8 prints rows 1-3 and 14; rows 4-13 are interpolated linearly between row 3 and row 14.
+_EQ8_PRINTED = {
+    0: (-0.421, -7.417, -2.961, 1.180),
+    1: (-0.708, -7.288, -2.706, 1.066),
+    2: (-1.131, -7.237, -2.548, 1.001),
+    13: (-4.544, -4.908, 2.436, -1.032),
+}
+EQ8 = np.array(
+    [
+        (
+            _EQ8_PRINTED[j]
+            if j in _EQ8_PRINTED
+            else tuple(
+                np.array(_EQ8_PRINTED[2])
+                + (j - 2) / 11 * (np.array(_EQ8_PRINTED[13]) - np.array(_EQ8_PRINTED[2]))
+            )
+        )
+        for j in range(14)
+    ]
+)  # columns const, T1, T11, T12
+
+
+def eq9_truth(X: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """k and b straight from Eq. 9, relative temperatures computed here by hand."""
+    k = EQ9_K["const"] + sum(c * X[s].to_numpy() for s, c in EQ9_K.items() if s != "const")
+    b = np.full(len(X), EQ9_B["const"])
+    for s, c in EQ9_B.items():
+        if s == "const":
+            continue
+        first = X.loc[X["measurement"] == 1].set_index("run")[s]
+        b = b + c * (X[s].to_numpy() - first.loc[X["run"]].to_numpy())
+    return k, b
+
+
+def eq9_errors(X: pd.DataFrame, c2=None) -> pd.DataFrame:
+    k, b = eq9_truth(X)
+    shifted_m = (POSITIONS - POSITIONS[0]) / 1000.0
+    errors = k[:, None] * shifted_m + b[:, None]
+    if c2 is not None:
+        errors = errors + c2[:, None] * shifted_m**2
+    return pd.DataFrame(errors, columns=POSITIONS, index=X.index)
+
+
+def eq8_errors(X: pd.DataFrame) -> pd.DataFrame:
+    first = X.loc[X["measurement"] == 1].set_index("run")
+    rel = np.column_stack(
+        [X[s].to_numpy() - first.loc[X["run"], s].to_numpy() for s in ("T1", "T11", "T12")]
+    )
+    design = np.column_stack([np.ones(len(X)), rel])
+    return pd.DataFrame(design @ EQ8.T, columns=POSITIONS, index=X.index)
+
+
+# --------------------------------------------------------------------------- the `lines` dataset
+
+
+# k and b of each (run, measurement) of the `lines` dataset: exact lines the pipeline must recover.
+def k_true(r, m):
+    return -10.0 + 0.5 * m + r + 0.1 * m * m
+
+
+def b_true(r, m):
+    return -0.7 * m - 0.1 * r + 0.05 * r * m
+
+
+def exact_line(r, m, x):
+    return k_true(r, m) * (x - x[0]) / 1000.0 + b_true(r, m)
