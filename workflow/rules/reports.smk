@@ -1,9 +1,134 @@
-# Reports: parametrised notebooks executed by papermill and turned into
-# self-contained HTML, the dataset's provenance record and the index page.
-# Constants and helpers (and why provenance does not rerun every report): reports_common.smk.
+# Reports: parametrised notebooks executed by papermill and turned into self-contained
+# HTML (RUN_NOTEBOOK), the dataset's provenance record and the index page. The notebooks
+# only read tables the workflow wrote; they recompute nothing.
+#
+# Provenance and reruns: provenance.json (the whole configuration, the raw-data
+# manifest, the git commit and dirty flag, versions, run time) is rewritten when the
+# raw files, the configuration or the git state change, and only the index reads it.
+# Each notebook records its own provenance when it runs, hashing only the
+# configuration sections its inputs depend on, so changing selection.n_clusters
+# reruns the model and paper reports but leaves the dataset and condition reports
+# alone. The run time is the only field that differs between two builds from the
+# same inputs; SOURCE_DATE_EPOCH fixes it.
 
 
-include: "reports_common.smk"
+def dataset_report_figures():
+    figures = {"fig5_unzeroed": embedded("fig5_unzeroed", run=FIG_RUN)}
+    if AMBIENT:
+        figures["fig3_ambient"] = embedded("fig3_ambient")
+    if OTHER_RUNS:
+        figures["fig9_other_runs"] = embedded("fig9_other_runs", runs=OTHER_RUNS)
+    if DECOUPLED:
+        figures["fig12_slope_intercept"] = embedded("fig12_slope_intercept")
+    return figures
+
+
+def paper_report_figures():
+    figures = {
+        "fig2_positioning_error": embedded("fig2_positioning_error", run=FIG_RUN),
+        **dataset_report_figures(),
+        "fig6_error_vs_time": embedded("fig6_error_vs_time", run=FIG_RUN),
+        "fig7_error_surface": embedded("fig7_error_surface", run=FIG_RUN),
+        "fig8_rezeroed": embedded("fig8_rezeroed", run=FIG_RUN),
+        "fig10_temperature_rise": embedded("fig10_temperature_rise", run=FIG_RUN),
+        "fold_comparison": embedded("fold_comparison", target="error"),
+    }
+    for algorithm in PAPER_ALGORITHMS:
+        kinds = [("error_prediction", a) for a in APPROACHES]
+        kinds += [("kb_prediction", "decoupled")] if DECOUPLED else []
+        for kind, approach in kinds:
+            figure = embedded(
+                kind, fold=REPORT_FOLD, approach=approach, algorithm=algorithm
+            )
+            figures[Path(figure["path"]).stem] = figure
+    return figures
+
+
+def condition_captions(wildcards):
+    """Captions of the figures a condition report draws for its run."""
+    return {
+        f: figure_caption(f, DATASET.name, SIMULATED, run=wildcards.run)
+        for f in (
+            "fig5_unzeroed",
+            "fig6_error_vs_time",
+            "fig8_rezeroed",
+            "fig10_temperature_rise",
+        )
+    }
+
+
+def model_report_figures(fold):
+    """The workflow figures a model report embeds: its models' predictions and the drift."""
+    figures = {}
+    for approach, algorithm in REPORT_MODELS:
+        kinds = ["error_prediction"] + ["kb_prediction"] * (approach == "decoupled")
+        for kind in kinds:
+            figures[f"{kind}_{approach}_{algorithm}"] = embedded(
+                kind, fold=fold, approach=approach, algorithm=algorithm
+            )
+    figures["compensation_drift"] = embedded("compensation_drift", fold=fold)
+    return figures
+
+
+def index_sections():
+    """What the index links, in order: (title, intro, rows of (label, [(text, path)]))."""
+    reports = [
+        (
+            "The paper, figure by figure and table by table",
+            [("paper report", f"{OUT}/reports/paper_report.html")],
+        )
+    ] * PAPER + [
+        (
+            "Dataset: runs, sensors, cleaning",
+            [("dataset report", f"{OUT}/reports/dataset_report.html")],
+        ),
+    ]
+    reports += [
+        (f"Run {run}", [("condition report", f"{OUT}/reports/condition_{run}.html")])
+        for run in RUNS
+    ]
+    models = [
+        (f"Fold {fold} (held-out run)", [("model report", path)])
+        for fold, path in zip(FOLDS, model_reports())
+    ]
+    figures = [
+        (stem, [(ext, f"{OUT}/figures/{stem}.{ext}") for ext in FIG_FORMATS])
+        for stem in figure_stems()
+    ]
+    tables = [(Path(p).name, [(Path(p).suffix[1:], p)]) for p in linked_tables()]
+    compensation = {}
+    for p in compensation_outputs():
+        compensation.setdefault(Path(p).stem, []).append((Path(p).suffix[1:], p))
+    return [
+        ("Reports", "", reports),
+        (
+            "Model reports",
+            "Metrics, sensitive points, coefficients, predictions and compensation of one fold, "
+            f"every approach with each algorithm of config `reports.model_algorithms` "
+            f"({', '.join(REPORT_ALGORITHMS)}) side by side.",
+            models,
+        ),
+        ("Figures", "", figures),
+        ("Tables", "", tables),
+        (
+            "Compensation",
+            f"The {COMP_APPROACH} {COMP_ALGORITHM} model fitted on all runs (model.json), the controller "
+            "exports of each fold's model on its held-out run and the error left after compensating; "
+            "the thermal-drift figures are under Figures (README: Compensating a machine).",
+            list(compensation.items()),
+        ),
+    ]
+
+
+def index_inputs():
+    return sorted(
+        {
+            path
+            for _, _, rows in index_sections()
+            for _, links in rows
+            for _, path in links
+        }
+    )
 
 
 rule provenance:
@@ -20,13 +145,12 @@ rule provenance:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("provenance"),
     params:
         config_json=json.dumps(config, sort_keys=True),
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         repo=REPO,
-        git=GIT_STATE,
+        git=lambda w: git_of_checkout(),
     script:
         "../scripts/provenance.py"
 
@@ -43,11 +167,11 @@ rule dataset_report:
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         figures=[f["path"] for f in dataset_report_figures().values()],
     output:
-        notebook=f"{REPORTS}/dataset_report.ipynb",
+        notebook=f"{OUT}/reports/dataset_report.ipynb",
         html=report(
-            f"{REPORTS}/dataset_report.html",
+            f"{OUT}/reports/dataset_report.html",
             caption="../report/notebook_report.rst",
-            category="7. Reports",
+            category=CATEGORY["reports"],
             labels={"report": "dataset"},
         ),
     log:
@@ -57,8 +181,7 @@ rule dataset_report:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 750 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("dataset_report"),
     params:
         title=f"Dataset report: {DATASET.name}",
         statement=DATA_STATEMENT,
@@ -84,11 +207,11 @@ rule condition_report:
         windows=f"{OUT}/clean/{{run}}/windows.csv",
         kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
     output:
-        notebook=f"{REPORTS}/condition_{{run}}.ipynb",
+        notebook=f"{OUT}/reports/condition_{{run}}.ipynb",
         html=report(
-            f"{REPORTS}/condition_{{run}}.html",
+            f"{OUT}/reports/condition_{{run}}.html",
             caption="../report/notebook_report.rst",
-            category="7. Reports",
+            category=CATEGORY["reports"],
             subcategory="Conditions",
             labels={"report": "condition", "run": "{run}"},
         ),
@@ -99,8 +222,7 @@ rule condition_report:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 750 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("condition_report"),
     params:
         title=lambda w: f"Condition report: run {w.run} ({DATASET.name})",
         statement=DATA_STATEMENT,
@@ -125,16 +247,16 @@ rule model_report:
         kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
         errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
         compensation=lambda w: [
-            f"{COMP}/folds/{w.fold}/{n}.csv"
+            f"{OUT}/compensation/folds/{w.fold}/{n}.csv"
             for n in ("summary", "iso230_2", "siemens_840d", "twincat")
         ],
         figures=lambda w: [f["path"] for f in model_report_figures(w.fold).values()],
     output:
-        notebook=f"{REPORTS}/model_{{fold}}.ipynb",
+        notebook=f"{OUT}/reports/model_{{fold}}.ipynb",
         html=report(
-            f"{REPORTS}/model_{{fold}}.html",
+            f"{OUT}/reports/model_{{fold}}.html",
             caption="../report/notebook_report.rst",
-            category="7. Reports",
+            category=CATEGORY["reports"],
             subcategory="Models",
             labels={"report": "model", "fold": "{fold}"},
         ),
@@ -145,8 +267,7 @@ rule model_report:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 750 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("model_report"),
     params:
         title=lambda w: f"Model report: fold {w.fold} ({DATASET.name})",
         statement=DATA_STATEMENT,
@@ -184,11 +305,11 @@ rule paper_report:
         paper=PAPER_FILES,
         figures=[f["path"] for f in paper_report_figures().values()],
     output:
-        notebook=f"{REPORTS}/paper_report.ipynb",
+        notebook=f"{OUT}/reports/paper_report.ipynb",
         html=report(
-            f"{REPORTS}/paper_report.html",
+            f"{OUT}/reports/paper_report.html",
             caption="../report/notebook_report.rst",
-            category="7. Reports",
+            category=CATEGORY["reports"],
             labels={"report": "paper"},
         ),
     log:
@@ -198,8 +319,7 @@ rule paper_report:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 750 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("paper_report"),
     params:
         title=f"Paper report: Xu et al. reproduced on {DATASET.name}",
         statement=DATA_STATEMENT,
@@ -231,8 +351,7 @@ rule index:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("index"),
     params:
         dataset_name=DATASET.name,
         simulated=SIMULATED,

@@ -13,7 +13,7 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
-__all__ = ["PACKAGE", "library_modules"]
+__all__ = ["PACKAGE", "library_modules", "named_modules"]
 
 # The thermaxis package folder (this module lives in its pipeline subpackage).
 PACKAGE = Path(__file__).resolve().parents[1]
@@ -86,3 +86,18 @@ def library_modules(*entries) -> list[str]:
     # A package's submodule runs its package's __init__ first.
     seen.update(p.parent / "__init__.py" for p in list(seen) if (p.parent / "__init__.py").is_file())
     return sorted(str(p) for p in seen)
+
+
+def named_modules(*names: str) -> list[str]:
+    """The package files of the modules ``names`` (``thermaxis.figures.paper``) and every file they import.
+
+    What a script runs that it imports by name at run time (the figure table's drawing
+    functions), sorted.
+    """
+    files = []
+    for name in names:
+        found = _module_file(name)
+        if found is None:
+            raise ValueError(f"{name}: not a module of {PACKAGE}")
+        files.append(found)
+    return sorted({str(f) for f in files} | set(library_modules(*files)))

@@ -11,6 +11,10 @@ blocks are reproducible::
 prints one line per rule: its benchmarks, the measured peaks and the requests.
 Which benchmark files belong to which rule is read from the rule files
 (``benchmark:`` paths), so a new rule needs no entry here.
+
+Every rule declares its requests through :func:`per_attempt` (``workflow/rules/common.smk``
+keeps the per-rule values, beside the floors :data:`MIN_MEMORY_MB` and
+:data:`MIN_RUNTIME_MIN` every rule gets at least).
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ import pandas as pd
 
 from thermaxis.errors import DataError
 
-__all__ = ["Request", "benchmark_globs", "request", "requests_from_benchmarks", "main"]
+__all__ = ["Request", "benchmark_globs", "request", "requests_from_benchmarks", "per_attempt", "main"]
 
 # Headroom: memory grows with the data and differs between nodes; a time limit hit
 # kills a job, so it is generous and never below a few minutes of queue-side slack.
@@ -73,6 +77,19 @@ def request(max_s: float, max_rss_mb: float) -> tuple[int, int]:
     mem = max(MIN_MEMORY_MB, math.ceil(MEMORY_FACTOR * max_rss_mb / MEMORY_STEP_MB) * MEMORY_STEP_MB)
     runtime = max(MIN_RUNTIME_MIN, math.ceil(RUNTIME_FACTOR * max_s / 60.0))
     return int(mem), int(runtime)
+
+
+def per_attempt(mem_mb: int, runtime_min) -> dict:
+    """Snakemake ``resources`` of a rule: memory (MB) and runtime (minutes) of its first attempt.
+
+    A retry (``--retries``) asks for the attempt number times both. ``runtime_min`` may be
+    a function of the job's wildcards (the sweep's batches: their share of the grid).
+    """
+    minutes = runtime_min if callable(runtime_min) else (lambda wildcards: runtime_min)
+    return {
+        "mem_mb": lambda wildcards, attempt: mem_mb * attempt,
+        "runtime": lambda wildcards, attempt: minutes(wildcards) * attempt,
+    }
 
 
 def _read(path: Path) -> pd.DataFrame:

@@ -8,7 +8,8 @@ mean RMSE, mean and worst max |residual|.  Whether a dataset is simulated comes 
 its own ``dataset.yaml`` (found through ``provenance.json``), so the summary says so
 for every row.
 
-Command line (writes ``summary.csv``, ``summary.md`` and ``heldout_error.{png,pdf}``)::
+Command line (writes ``summary.csv``, ``summary.md`` and the figure table's ``heldout_error``
+in every format, ``heldout_error.{png,pdf}`` by default)::
 
     python -m thermaxis.reports.crossdataset --results results --out results/_datasets
 """
@@ -27,8 +28,10 @@ import pandas as pd
 import yaml
 
 from thermaxis.errors import DataError
+from thermaxis.figures import registry
 
-from thermaxis.figures.crossdataset import fig_heldout_error
+# The figure table's entry of the one figure this command draws.
+FIGURE = registry.entry("heldout_error")
 
 __all__ = [
     "SUMMARY_COLUMNS",
@@ -177,7 +180,7 @@ def main(argv=None) -> int:
         metrics = {d.name: read_metrics(d / "tables" / "metrics.csv") for d in dirs}
         kinds = {d.name: dataset_kind(d) for d in dirs}
         summary = summarise(metrics, kinds)
-        fig = fig_heldout_error(summary)
+        fig = registry.function(FIGURE.draw)(summary)
     except DataError as exc:
         print(f"thermaxis error: {exc}", file=sys.stderr)
         return 1
@@ -194,7 +197,7 @@ def _write(summary: pd.DataFrame, fig, out: Path, formats) -> None:
     with ExitStack() as stack:
         table = stack.enter_context(atomic_path(out / "summary.csv"))
         markdown = stack.enter_context(atomic_path(out / "summary.md"))
-        figures = [stack.enter_context(atomic_path(out / f"heldout_error.{ext}")) for ext in formats]
+        figures = [stack.enter_context(atomic_path(out / f"{FIGURE.id}.{ext}")) for ext in formats]
         summary.to_csv(table, index=False, float_format="%.6f", lineterminator="\n")
         markdown.write_text(to_markdown(summary), encoding="utf-8")
         save_figure(fig, figures)
