@@ -458,23 +458,19 @@ def test_fig9_needs_a_run(tiny):
 # ---------------------------------------------------------------------------- captions
 
 CAPTION_DETAILS = {
-    "fig2": dict(run="E1"),
-    "fig3": {},
-    "fig5": dict(run="E1"),
-    "fig6": dict(run="E1"),
-    "fig7": dict(run="E1"),
-    "fig8": dict(run="E1"),
-    "fig9": dict(runs=["E2", "E3", "E4"]),
-    "fig10": dict(run="E1"),
-    "fig11": dict(fold="E4", algorithm="mlr"),
-    "fig12": {},
-    "fig14": dict(fold="E4", approach="decoupled", algorithm="mlr"),
-    "fig15": dict(fold="E4", approach="decoupled", algorithm="mlr"),
-    "fig16": dict(fold="E4", approach="decoupled", algorithm="svr"),
-    "fig17": dict(fold="E4", approach="decoupled", algorithm="svr"),
+    "fig2_positioning_error": dict(run="E1"),
+    "fig3_ambient": {},
+    "fig5_unzeroed": dict(run="E1"),
+    "fig6_error_vs_time": dict(run="E1"),
+    "fig7_error_surface": dict(run="E1"),
+    "fig8_rezeroed": dict(run="E1"),
+    "fig9_other_runs": dict(runs=["E2", "E3", "E4"]),
+    "fig10_temperature_rise": dict(run="E1"),
+    "fig12_slope_intercept": {},
     "kb_prediction": dict(fold="E4", approach="decoupled", algorithm="gpr"),
     "error_prediction": dict(fold="E4", approach="decoupled", algorithm="gpr"),
     "fold_comparison": dict(target="error"),
+    "compensation_drift": dict(fold="E4"),
 }
 PHRASE = "Simulated data (thermal twin), not the paper's measurements."
 
@@ -488,18 +484,23 @@ def test_caption_has_the_simulated_phrase_iff_simulated(figure_id, simulated):
 
 
 def test_caption_fills_details_and_names_the_paper_figure():
-    caption = captions.figure_caption("fig9", "lab", False, runs=["E2", "E3"])
+    caption = captions.figure_caption("fig9_other_runs", "lab", False, runs=["E2", "E3"])
     assert "runs E2, E3" in caption and "paper's Fig. 9." in caption
-    assert captions.figure_caption("fig16", "lab", False, fold="E4", approach="decoupled", algorithm="svr").count("SVR") == 1
+    svr = captions.figure_caption("kb_prediction", "lab", False, fold="E4", approach="decoupled", algorithm="svr")
+    assert svr.count("SVR") == 1 and "paper's Fig. 14/16." in svr
+    # The point-by-point error prediction is the paper's Fig. 11, which names no approach.
+    pointwise = captions.figure_caption("error_prediction", "lab", False, fold="E4", approach="pointwise", algorithm="mlr")
+    assert pointwise.startswith("Point-by-point prediction (MLR)") and "paper's Fig. 11." in pointwise
 
 
 @pytest.mark.parametrize(
     "args, kwargs, match",
     [
         (("fig99", "twin", True), {}, "unknown figure id"),
-        (("fig5", "twin", True), {}, "missing \\['run'\\]"),
-        (("fig5", "twin", True), dict(run="E1", rn="E1"), "unexpected \\['rn'\\]"),
-        (("fig3", "", True), {}, "dataset_name"),
+        (("fig5_unzeroed", "twin", True), {}, "missing \\['run'\\]"),
+        (("fig5_unzeroed", "twin", True), dict(run="E1", rn="E1"), "unexpected \\['rn'\\]"),
+        (("fig3_ambient", "", True), {}, "dataset_name"),
+        (("fig5", "twin", True), dict(run="E1"), "unknown figure id"),
     ],
 )
 def test_caption_rejects_bad_requests(args, kwargs, match):
