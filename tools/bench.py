@@ -16,7 +16,11 @@ so the repository's own ``results/`` are never touched):
   so they would hide how the pipeline itself scales.  Generating a dataset is timed
   separately (``scale_generate_<n>``) and is not part of the fit;
 * ``test_suite``: ``python -m pytest`` in the repository, as ``make test`` runs it once
-  the environment exists.
+  the environment exists;
+* ``dryrun_twin`` beside ``dryrun_one_rule``: ``snakemake -n`` of the twin in an empty
+  work folder (every job planned, nothing run: what parsing the workflow and building its
+  DAG cost, which every Snakemake start pays, each Slurm job included) and of a one-rule
+  workflow (the floor: Snakemake's own start-up); the best of three each.
 
 Each command runs in its own process group.  Wall time is measured around it; CPU time
 (user + system) and the largest single process's peak RSS come from ``os.wait4``, which
@@ -68,13 +72,15 @@ SCALE_SHAPE = {"sensors": 64, "positions": 100, "hours": 8.0, "rate_hz": 1.0, "s
 MIB = 1024.0 * 1024.0
 # Linux reports ru_maxrss in KiB, macOS in bytes.
 _MAXRSS_UNIT = 1.0 if sys.platform == "darwin" else 1024.0
-STEPS = ("results", "sweep", "scale", "test")
+STEPS = ("dryrun", "results", "sweep", "scale", "test")
+DRYRUN_REPEATS = 3
 TARGETS = {
     "results_cold": "cold full regeneration of the twin <= 30 s",
     "results_noop": "no-op rerun <= 1.25 x a one-rule workflow's no-op",
     "sweep_default": "default sweep (all configurations x all folds) <= 30 s",
     "scale_50": "50 runs <= 5 min within 4 GiB",
     "test_suite": "make test after set-up <= 150 s",
+    "dryrun_twin": "dry run of the twin <= the one-rule dry run + 2 s CPU",
 }
 # The smallest workflow Snakemake can run: its no-op is the floor a no-op rerun is measured against.
 ONE_RULE_SNAKEFILE = 'rule all:\n    output:\n        "done.txt"\n    shell:\n        "touch {output}"\n'
@@ -379,6 +385,9 @@ def run_bench(
         return m
 
     try:
+        if "dryrun" in steps:
+            for m in _dry_runs(scratch, cores, env, logs, timeout_s):
+                record(m)
         if "results" in steps or "sweep" in steps:
             work = prepare_workdir(scratch / "default")
             dataset_name = _default_dataset_name(REPO)
@@ -443,6 +452,26 @@ def run_bench(
     return finish(doc, measurements, out)
 
 
+def _dry_runs(scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float) -> list[Measurement]:
+    """``snakemake -n`` of the twin in an empty work folder and of a one-rule workflow, best of DRYRUN_REPEATS."""
+    twin = prepare_workdir(scratch / "dryrun_twin")
+    one_rule = scratch / "dryrun_one_rule"
+    one_rule.mkdir(parents=True, exist_ok=True)
+    (one_rule / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
+    cases = [
+        ("dryrun_twin", twin, ["--config", "dataset=data/raw/twin"], "snakemake -n of the twin, nothing built"),
+        ("dryrun_one_rule", one_rule, [], "snakemake -n of a one-rule workflow (the floor)"),
+    ]
+    best = []
+    for name, cwd, args, description in cases:
+        runs = [
+            measure(name, _snakemake(cores, "-n", *args), cwd, logs / f"{name}_{i}.log", description, env, timeout_s)
+            for i in range(DRYRUN_REPEATS)
+        ]
+        best.append(min(runs, key=lambda m: (not m.ok, m.wall_s)))
+    return best
+
+
 def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
     """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and bench.md."""
     doc["measurements"] = [{**asdict(m), "ok": m.ok} for m in measurements]
@@ -481,9 +510,12 @@ def _count_jobs(log: Path) -> int | None:
     """Jobs Snakemake ran, from its 'N of M steps' lines."""
     if not log.is_file():
         return None
-    done = [line for line in log.read_text(errors="replace").splitlines() if "steps (" in line and " of " in line]
+    lines = log.read_text(errors="replace").splitlines()
+    done = [line for line in lines if "steps (" in line and " of " in line]
     if not done:
-        return 0
+        # A dry run plans jobs and runs none: its job stats end with "total <n>".
+        planned = [line.split()[1] for line in lines if line.startswith("total ") and line.split()[1:2] != []]
+        return int(planned[-1]) if planned and planned[-1].isdigit() else 0
     try:
         return int(done[-1].split(" of ")[1].split()[0])
     except (IndexError, ValueError):
@@ -509,6 +541,12 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
         n = m.extra.get("configurations", 0)
         add("sweep_default", m.ok and m.wall_s <= 30.0,
             f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s")  # fmt: skip
+    if "dryrun_twin" in by_name and "dryrun_one_rule" in by_name:
+        m, floor = by_name["dryrun_twin"], by_name["dryrun_one_rule"]
+        extra = m.cpu_s - floor.cpu_s
+        add("dryrun_twin", m.ok and extra <= 2.0,
+            f"{m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU vs {floor.wall_s:.1f} s, {floor.cpu_s:.1f} s: "
+            f"+{m.wall_s - floor.wall_s:.1f} s wall, +{extra:.1f} s CPU")  # fmt: skip
     if "test_suite" in by_name:
         m = by_name["test_suite"]
         add("test_suite", m.ok and m.wall_s <= 150.0, f"{m.wall_s:.1f} s")

@@ -217,6 +217,16 @@ def figure_stems(figures=FIGURES):
     ]
 
 
+def figure_files(figures=FIGURES):
+    """Every file of ``figures``, a per-fold figure's for every fold, in table order."""
+    return [
+        f"{OUT}/{fig.folder}/{fig.stem.format(fold=fold)}.{ext}"
+        for fig in figures
+        for fold in (FOLDS if fig.per_fold else [None])
+        for ext in FIG_FORMATS
+    ]
+
+
 def figure_specs(figures, wildcards):
     """What plot.py draws: per figure its function, tables, arguments, files and caption."""
     specs = []
@@ -321,7 +331,11 @@ def condition_reports():
 
 
 def model_reports():
-    return expand(f"{OUT}/reports/model_{{fold}}.html", fold=FOLDS) if REPORT_MODELS else []
+    return (
+        expand(f"{OUT}/reports/model_{{fold}}.html", fold=FOLDS)
+        if REPORT_MODELS
+        else []
+    )
 
 
 def report_html():
@@ -378,7 +392,10 @@ COMP_PARAMS = dict(
 
 def compensation_outputs():
     """model.json, the ST block and the tables; the drift figures are figures."""
-    paths = [f"{OUT}/compensation/model.json", f"{OUT}/compensation/ThermalCompensation.st"]
+    paths = [
+        f"{OUT}/compensation/model.json",
+        f"{OUT}/compensation/ThermalCompensation.st",
+    ]
     return paths + [f"{OUT}/compensation/{name}.csv" for name in COMP_TABLES]
 
 
@@ -394,9 +411,7 @@ def compensation_outputs():
 # cluster run is given --jobs (a profile's `jobs:`; locally --jobs means --cores), and
 # that a job the cluster runs parses the workflow again in remote mode: it must find
 # the same plan (preflight.sweep_plan).
-SWEEP_ON_CLUSTER = (
-    workflow.remote_exec or workflow.resource_settings.nodes is not None
-)
+SWEEP_ON_CLUSTER = workflow.remote_exec or workflow.resource_settings.nodes is not None
 SWEEP_EMBED = next((f for f in ("png", "svg") if f in FIG_FORMATS), None)
 
 
@@ -438,9 +453,11 @@ def sweep_report_parameters(wildcards, input):
             simulated=SIMULATED,
             statement=DATA_STATEMENT,
             figures={
-                fig.id: f"{OUT}/{fig.folder}/{fig.stem}.{SWEEP_EMBED}"
-                if SWEEP_EMBED
-                else ""
+                fig.id: (
+                    f"{OUT}/{fig.folder}/{fig.stem}.{SWEEP_EMBED}"
+                    if SWEEP_EMBED
+                    else ""
+                )
                 for fig in SWEEP_FIGURES
             },
             grid=config["sweep"],
@@ -505,7 +522,7 @@ def rule_resources(name):
 # --------------------------------------------------------------------------- targets
 def all_outputs():
     return [
-        *(p for fig in FIGURES for p in figure_paths_of_folds(fig)),
+        *figure_files(FIGURES),
         f"{OUT}/tables/dataset_summary.csv",
         f"{OUT}/assembled/errors.parquet",
         f"{OUT}/tables/cleaning_qc.csv",
@@ -515,12 +532,6 @@ def all_outputs():
         *compensation_outputs(),
         *report_outputs(),
     ]
-
-
-def figure_paths_of_folds(figure):
-    """A figure's files, a per-fold figure's for every fold."""
-    folds = FOLDS if figure.per_fold else [None]
-    return [p for fold in folds for p in figure_paths(figure, **({"fold": fold} if fold else {}))]
 
 
 def check_rules(rules):

@@ -58,7 +58,10 @@ rule compensation_fold:
         sheets=dataset_sheets(),
         raw=lambda w: raw_files(w.fold),
     output:
-        **{name: f"{OUT}/compensation/folds/{{fold}}/{name}.csv" for name in COMP_TABLES},
+        **{
+            name: f"{OUT}/compensation/folds/{{fold}}/{name}.csv"
+            for name in COMP_TABLES
+        },
         model=f"{OUT}/compensation/folds/{{fold}}/model.json",
     log:
         f"{LOGS}/compensation/{{fold}}.log",

@@ -61,7 +61,7 @@ rule sweep_report:
         summary=f"{OUT}/sweep/summary.csv",
         ranking=f"{OUT}/sweep/ranking.csv",
         effects=f"{OUT}/sweep/factor_effects.csv",
-        figures=[p for fig in SWEEP_FIGURES for p in figure_paths(fig)],
+        figures=figure_files(SWEEP_FIGURES),
         benchmarks=sweep_batch_benchmarks,
     output:
         notebook=f"{OUT}/sweep/sweep_report.ipynb",
@@ -93,5 +93,5 @@ rule sweep:
         f"{OUT}/sweep/summary.csv",
         f"{OUT}/sweep/ranking.csv",
         f"{OUT}/sweep/factor_effects.csv",
-        [p for fig in SWEEP_FIGURES for p in figure_paths(fig)],
+        figure_files(SWEEP_FIGURES),
         f"{OUT}/sweep/sweep_report.html",
