@@ -30,7 +30,8 @@ TWIN_STEMS = [
     "kb_prediction_{fold}_decoupled_mlr",
     "error_prediction_{fold}_decoupled_svr", "error_prediction_{fold}_pointwise_svr",
     "kb_prediction_{fold}_decoupled_svr",
-    "compensation_drift_E1", "compensation_drift_E2", "compensation_drift_E3", "compensation_drift_E4",
+    "compensation_drift_E1", "compensation_drift_E2", "compensation_drift_E3",
+    "compensation_drift_E4",
 ]  # fmt: skip
 # figures.sweep, a library module, names this one without its id's prefix.
 NAMED_OTHERWISE = {"sweep_factor_effects": "fig_factor_effects"}
@@ -66,7 +67,10 @@ def test_the_twins_figures_keep_their_stems_and_order():
     assert [f.stem for f in figures] == TWIN_STEMS
     per_fold = {f.family for f in figures if f.per_fold}
     assert per_fold == {"fig_predictions"}
-    assert [f.stem for f in registry.expand(FACTS, "sweep")] == ["sweep_heatmap", "sweep_factor_effects"]
+    assert [f.stem for f in registry.expand(FACTS, "sweep")] == [
+        "sweep_heatmap",
+        "sweep_factor_effects",
+    ]
     assert [f.stem for f in registry.expand(None, "datasets")] == ["heldout_error"]
 
 
@@ -74,7 +78,8 @@ def test_the_twins_figures_keep_their_stems_and_order():
     "change, gone",
     [
         ({"decoupled": False, "approaches": ["pointwise"]},
-         {"fig2_positioning_error", "fig7_error_surface", "fig8_rezeroed", "fig12_slope_intercept", "kb_prediction"}),
+         {"fig2_positioning_error", "fig7_error_surface", "fig8_rezeroed", "fig12_slope_intercept",
+          "kb_prediction"}),
         ({"ambient": False}, {"fig3_ambient"}),
         ({"other_runs": []}, {"fig9_other_runs"}),
     ],
@@ -91,14 +96,19 @@ def test_a_figure_gets_its_facts_and_its_caption():
     assert fig9.arguments == {"runs": ["E2", "E3", "E4"]}
     assert fig9.labels == {"figure": "Fig. 9", "run": "others"}
     fig10 = by_stem["fig10_temperature_rise"]
-    assert fig10.tables == {"series": "clean/E1/temperatures.parquet", "signals": "clean/E1/signals.parquet"}
+    assert fig10.tables == {
+        "series": "clean/E1/temperatures.parquet",
+        "signals": "clean/E1/signals.parquet",
+    }
     pointwise = by_stem["error_prediction_{fold}_pointwise_mlr"]
     caption = registry.caption_of(pointwise, FACTS, {"fold": "E4"})
-    assert caption == captions.figure_caption("error_prediction", "twin", True, fold="E4", approach="pointwise",
-                                              algorithm="mlr")  # fmt: skip
+    details = dict(fold="E4", approach="pointwise", algorithm="mlr")
+    assert caption == captions.figure_caption("error_prediction", "twin", True, **details)
     assert "paper's Fig. 11." in caption and "fold E4" in caption
     drift = by_stem["compensation_drift_E2"]
-    assert drift.arguments == {"fold": "E2"} and drift.tables == {"summary": "compensation/folds/E2/summary.csv"}
-    assert registry.stem_of("kb_prediction", fold="E4", approach="decoupled", algorithm="svr", run="E1") == (
-        "kb_prediction_E4_decoupled_svr"
-    )
+    assert drift.arguments == {"fold": "E2"} and drift.tables == {
+        "summary": "compensation/folds/E2/summary.csv"
+    }
+    assert registry.stem_of(
+        "kb_prediction", fold="E4", approach="decoupled", algorithm="svr", run="E1"
+    ) == ("kb_prediction_E4_decoupled_svr")

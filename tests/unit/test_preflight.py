@@ -29,7 +29,11 @@ def base_config(**overrides) -> dict:
     [
         {},
         {"dataset": str(REPO / "data" / "raw" / "fl_thermal")},
-        {"models": {"algorithms": ["mlr"]}, "sweep": {"svr_grid": "models"}, "figures": {"dpi": 100}},
+        {
+            "models": {"algorithms": ["mlr"]},
+            "sweep": {"svr_grid": "models"},
+            "figures": {"dpi": 100},
+        },
     ],
 )
 def test_the_one_validation_fills_what_snakemakes_validate_filled(overrides):
@@ -62,8 +66,14 @@ def test_the_config_is_validated_once(monkeypatch):
             "config compensation.algorithm: 'svr' is not one of models.algorithms (mlr); "
             "its held-out metrics go into model.json",
         ),
-        ({"sweep": {"folds": ["E9"]}}, f"config sweep.folds: 'E9' is not a run of {TWIN / 'runs.tsv'}"),
-        ({"temperatures": {"limits_c": [120, -20]}}, "limits_c must be (low, high) with low < high"),
+        (
+            {"sweep": {"folds": ["E9"]}},
+            f"config sweep.folds: 'E9' is not a run of {TWIN / 'runs.tsv'}",
+        ),
+        (
+            {"temperatures": {"limits_c": [120, -20]}},
+            "limits_c must be (low, high) with low < high",
+        ),
     ],
 )
 def test_checks_that_were_the_rule_files_own_are_the_gates(overrides, message):
@@ -76,7 +86,9 @@ def test_the_sweep_plan_waits_for_the_sweep_and_refuses_a_grid_that_fits_nothing
     fixed = {"k": ["X1"], "b": ["X2"], "pointwise": ["X3"]}
     # The default run does not plan the sweep: a grid that fits nothing passes the gate.
     checked = preflight.check_before_jobs(base_config(sweep={"methods": ["fixed"], "fixed": fixed}))
-    with pytest.raises(DataError, match=r"^config sweep: no selection setting fits the dataset \(fixed: "):
+    with pytest.raises(
+        DataError, match=r"^config sweep: no selection setting fits the dataset \(fixed: "
+    ):
         preflight.sweep_plan(checked, cores=2, on_cluster=False)
 
 

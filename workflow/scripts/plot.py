@@ -1,4 +1,5 @@
-"""One family of figures per job: for each figure of the rule's table entries, read its tables, call the function it names, save."""
+"""One family of figures per job: for each figure of the rule's table entries, read its
+tables, call the function it names, save."""
 
 from importlib import import_module
 
@@ -9,7 +10,7 @@ from thermaxis.pipeline.runner import run_script
 
 
 def function(path):
-    """The figure table's "<module>.<function>" under thermaxis (thermaxis.figures.registry.function).
+    """The figure table's "<module>.<function>" under thermaxis (as registry.function).
 
     Resolved here rather than imported with the table, so that a family's code inputs are
     plot.py's imports and its own figures' modules (common.smk, figure_code).
@@ -31,7 +32,9 @@ def main(snakemake):
     tables = {path: _read(path, readers.get(path)) for path in snakemake.input.tables}
     for figure in figures:
         draw = function(figure["draw"])
-        fig = draw(**{arg: tables[path] for arg, path in figure["tables"].items()}, **figure["arguments"])
+        fig = draw(
+            **{arg: tables[path] for arg, path in figure["tables"].items()}, **figure["arguments"]
+        )
         if snakemake.params.simulated:
             style.stamp_provenance(fig, captions.SIMULATED_NOTE)
         style.save_figure(fig, figure["paths"], dpi=snakemake.params.dpi)

@@ -27,14 +27,27 @@ nor pandas: the workflow reads it while Snakemake parses.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import import_module
 from itertools import groupby, product
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 from thermaxis.figures.captions import figure_caption
 
-__all__ = ["Fact", "Facts", "FigureEntry", "Figure", "FIGURES", "entry", "stem_of", "expand", "function", "caption_of", "sweep_heatmap"]
+__all__ = [
+    "Fact",
+    "Facts",
+    "FigureEntry",
+    "Figure",
+    "FIGURES",
+    "entry",
+    "stem_of",
+    "expand",
+    "function",
+    "caption_of",
+    "sweep_heatmap",
+]
 
 
 @dataclass(frozen=True)
@@ -56,7 +69,7 @@ class Facts:
     other_runs: Sequence[str]  # the other runs (Fig. 9 when there is one)
     folds: Sequence[str]  # held-out runs
     approaches: Sequence[str]  # decoupled and/or pointwise
-    prediction_algorithms: Sequence[str]  # whose predictions are drawn (figures and model reports)
+    prediction_algorithms: Sequence[str]  # whose predictions are drawn (figures, model reports)
     units: Mapping = field(default_factory=dict)  # operating signals' units (Fig. 10)
     selection: Mapping = field(default_factory=dict)  # config selection (the sweep's heat map)
     degree: int = 1  # config decoupling.degree (the sweep's heat map)
@@ -72,22 +85,23 @@ class FigureEntry:
     family: str
     when: str  # an attribute of Facts
     target: str  # "all", "sweep" or "datasets"
-    tables: Mapping[str, str]  # argument -> path under results/<dataset>/ ({run}: Facts.run, {fold}: the fold)
-    category: str | None = None  # key of the workflow's report categories; None: not in the report
+    # argument -> path under results/<dataset>/ ({run}: Facts.run, {fold}: the fold)
+    tables: Mapping[str, str]
+    category: str | None = None  # a key of the workflow's report categories; None: no report
     subcategory: str | None = None
     label: str = ""  # the report's "figure" label
     labels: Mapping[str, Any] = field(default_factory=dict)  # its other labels
-    arguments: Mapping[str, Any] = field(default_factory=dict)  # besides the tables (and a job's fold)
-    caption: Mapping[str, Any] | None = field(default_factory=dict)  # caption details; None: no caption
+    arguments: Mapping[str, Any] = field(default_factory=dict)  # besides tables and a job's fold
+    caption: Mapping[str, Any] | None = field(default_factory=dict)  # details; None: no caption
     each: Mapping[str, Any] = field(default_factory=dict)  # variable -> its values (or a Fact)
     stem: str = "{id}"
     folder: str = "figures"  # relative to results/<dataset>/ (target "datasets": to results/)
-    reader: str | None = None  # "<module>.<function>" under thermaxis that reads its tables; default by suffix
+    reader: str | None = None  # "<module>.<function>" reading its tables; default by suffix
 
 
 @dataclass(frozen=True)
 class Figure:
-    """An entry of the table for one dataset: its condition decided, its facts and values filled in."""
+    """An entry of the table for one dataset: condition decided, facts and values filled in."""
 
     id: str
     draw: str
@@ -158,7 +172,10 @@ FIGURES: tuple[FigureEntry, ...] = (
     FigureEntry(
         "fig10_temperature_rise", "figures.paper.fig10_temperature_rise", family="fig_data",
         when="always", target="all",
-        tables={"series": "clean/{run}/temperatures.parquet", "signals": "clean/{run}/signals.parquet"},
+        tables={
+            "series": "clean/{run}/temperatures.parquet",
+            "signals": "clean/{run}/signals.parquet",
+        },
         category="data", label="Fig. 10", labels={"run": RUN}, arguments={"units": Fact("units")},
         caption={"run": RUN},
     ),
@@ -217,12 +234,12 @@ def entry(figure_id: str) -> FigureEntry:
 
 
 def stem_of(figure_id: str, **values) -> str:
-    """The file stem of one figure of ``figure_id``; ``values`` fill its stem's fields (more are ignored)."""
+    """The file stem of one figure of ``figure_id``; ``values`` fill its fields (others ignored)."""
     return _fill(entry(figure_id).stem, {"id": figure_id, **values})
 
 
 def _resolve(value, facts: Facts | None, values: Mapping[str, Any]):
-    """``value`` with its Facts filled in: a variable of ``each``, a job's fold (``{fold}``) or a fact."""
+    """``value`` with its Facts filled in: an ``each`` variable, a job's fold or a fact."""
     if isinstance(value, Fact):
         if value.name in values:
             return values[value.name]
@@ -266,7 +283,9 @@ def expand(facts: Facts | None, target: str = "all") -> list[Figure]:
     (each algorithm's error and k, b predictions side by side). ``facts`` is None for
     target ``"datasets"``, which belongs to no dataset.
     """
-    chosen = [e for e in FIGURES if e.target == target and (facts is None or getattr(facts, e.when))]
+    chosen = [
+        e for e in FIGURES if e.target == target and (facts is None or getattr(facts, e.when))
+    ]
     out: list[Figure] = []
     for outer, group in groupby(chosen, key=lambda e: next(iter(e.each), None)):
         group = list(group)
@@ -277,25 +296,30 @@ def expand(facts: Facts | None, target: str = "all") -> list[Figure]:
             for e in group:
                 inner = [n for n in e.each if n != outer]
                 lists = [_resolve(e.each[n], facts, {}) for n in inner]
-                out += [_figure(e, facts, {outer: value, **dict(zip(inner, c))}) for c in product(*lists)]
+                for combination in product(*lists):
+                    values = {outer: value, **dict(zip(inner, combination, strict=True))}
+                    out.append(_figure(e, facts, values))
     return out
 
 
 def function(path: str):
-    """The function ``"<module>.<function>"`` under :mod:`thermaxis` (a drawing function imports matplotlib)."""
+    """The function ``"<module>.<function>"`` under :mod:`thermaxis` (a drawing one: matplotlib)."""
     module, name = path.rsplit(".", 1)
     return getattr(import_module(f"thermaxis.{module}"), name)
 
 
-def caption_of(figure: Figure, facts: Facts, wildcards: Mapping[str, str] | None = None) -> str | None:
+def caption_of(figure: Figure, facts: Facts, wildcards: Mapping[str, str] | None = None):
     """The figure's caption; a per-fold figure's fold comes from the job's ``wildcards``."""
     if figure.caption is None:
         return None
-    details = {k: _fill(v, wildcards) if isinstance(v, str) and wildcards else v for k, v in figure.caption.items()}
+    details = {
+        k: _fill(v, wildcards) if isinstance(v, str) and wildcards else v
+        for k, v in figure.caption.items()
+    }
     return figure_caption(figure.id, facts.dataset_name, facts.simulated, **details)
 
 
-# --------------------------------------------------------------------------- drawing functions named by their id
+# --------------------------------------------------------------------------- drawn by their id
 
 
 def sweep_heatmap(ranking, selection: Mapping, degree: int):
@@ -305,5 +329,6 @@ def sweep_heatmap(ranking, selection: Mapping, degree: int):
     from thermaxis.sweep.run import heatmap_table
 
     settings = SelectionSettings.from_section(selection)
-    tables = {a: heatmap_table(ranking, a, settings, int(degree)) for a in dict.fromkeys(ranking["approach"])}
+    approaches = dict.fromkeys(ranking["approach"])
+    tables = {a: heatmap_table(ranking, a, settings, int(degree)) for a in approaches}
     return fig_sweep_heatmap(tables)

