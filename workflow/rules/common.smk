@@ -1,6 +1,6 @@
-# All of the workflow's state: every global and every helper the rule files share, in
-# blocks (dataset, paths, vocabulary, figures, reports, compensation, sweep, resources,
-# targets). The other rule files define rules and their input functions only; their
+# All of the workflow's state: every global and every function the rules call, in blocks
+# (dataset, paths, vocabulary, figures, reports, compensation, sweep, resources, targets).
+# The other rule files define rules only (snakemake --lint wants functions here); their
 # paths start with OUT, LOGS or BENCH.
 import functools
 import json
@@ -186,7 +186,7 @@ def figure_paths(figure, **wildcards):
 def figure_code(figures):
     """plot.py's library modules, and those of its figures' drawing functions and readers."""
     names = {
-        "thermaxis." + path.rsplit(".", 1)[0]
+        f"thermaxis.{path.rsplit('.', 1)[0]}"
         for fig in figures
         for path in (fig.draw, fig.reader)
         if path
@@ -370,6 +370,126 @@ def linked_tables():
         *(["paper_comparison.csv", "paper_comparison.md"] if PAPER else []),
     ]
     return [f"{OUT}/tables/{name}" for name in tables]
+
+
+# The figures and captions each report embeds, and what the index links.
+def dataset_report_figures():
+    figures = {"fig5_unzeroed": embedded("fig5_unzeroed", run=FIG_RUN)}
+    if AMBIENT:
+        figures["fig3_ambient"] = embedded("fig3_ambient")
+    if OTHER_RUNS:
+        figures["fig9_other_runs"] = embedded("fig9_other_runs", runs=OTHER_RUNS)
+    if DECOUPLED:
+        figures["fig12_slope_intercept"] = embedded("fig12_slope_intercept")
+    return figures
+
+
+def paper_report_figures():
+    figures = {
+        "fig2_positioning_error": embedded("fig2_positioning_error", run=FIG_RUN),
+        **dataset_report_figures(),
+        "fig6_error_vs_time": embedded("fig6_error_vs_time", run=FIG_RUN),
+        "fig7_error_surface": embedded("fig7_error_surface", run=FIG_RUN),
+        "fig8_rezeroed": embedded("fig8_rezeroed", run=FIG_RUN),
+        "fig10_temperature_rise": embedded("fig10_temperature_rise", run=FIG_RUN),
+        "fold_comparison": embedded("fold_comparison", target="error"),
+    }
+    for algorithm in PAPER_ALGORITHMS:
+        kinds = [("error_prediction", a) for a in APPROACHES]
+        kinds += [("kb_prediction", "decoupled")] if DECOUPLED else []
+        for kind, approach in kinds:
+            figure = embedded(
+                kind, fold=REPORT_FOLD, approach=approach, algorithm=algorithm
+            )
+            figures[Path(figure["path"]).stem] = figure
+    return figures
+
+
+def condition_captions(wildcards):
+    """Captions of the figures a condition report draws for its run."""
+    return {
+        f: figure_caption(f, DATASET.name, SIMULATED, run=wildcards.run)
+        for f in (
+            "fig5_unzeroed",
+            "fig6_error_vs_time",
+            "fig8_rezeroed",
+            "fig10_temperature_rise",
+        )
+    }
+
+
+def model_report_figures(fold):
+    """The workflow figures a model report embeds: its models' predictions and the drift."""
+    figures = {}
+    for approach, algorithm in REPORT_MODELS:
+        kinds = ["error_prediction"] + ["kb_prediction"] * (approach == "decoupled")
+        for kind in kinds:
+            figures[f"{kind}_{approach}_{algorithm}"] = embedded(
+                kind, fold=fold, approach=approach, algorithm=algorithm
+            )
+    figures["compensation_drift"] = embedded("compensation_drift", fold=fold)
+    return figures
+
+
+def index_sections():
+    """What the index links, in order: (title, intro, rows of (label, [(text, path)]))."""
+    reports = [
+        (
+            "The paper, figure by figure and table by table",
+            [("paper report", f"{OUT}/reports/paper_report.html")],
+        )
+    ] * PAPER + [
+        (
+            "Dataset: runs, sensors, cleaning",
+            [("dataset report", f"{OUT}/reports/dataset_report.html")],
+        ),
+    ]
+    reports += [
+        (f"Run {run}", [("condition report", f"{OUT}/reports/condition_{run}.html")])
+        for run in RUNS
+    ]
+    models = [
+        (f"Fold {fold} (held-out run)", [("model report", path)])
+        for fold, path in zip(FOLDS, model_reports())
+    ]
+    figures = [
+        (stem, [(ext, f"{OUT}/figures/{stem}.{ext}") for ext in FIG_FORMATS])
+        for stem in figure_stems()
+    ]
+    tables = [(Path(p).name, [(Path(p).suffix[1:], p)]) for p in linked_tables()]
+    compensation = {}
+    for p in compensation_outputs():
+        compensation.setdefault(Path(p).stem, []).append((Path(p).suffix[1:], p))
+    return [
+        ("Reports", "", reports),
+        (
+            "Model reports",
+            "Metrics, sensitive points, coefficients, predictions and compensation of one fold, "
+            f"every approach with each algorithm of config `reports.model_algorithms` "
+            f"({', '.join(REPORT_ALGORITHMS)}) side by side.",
+            models,
+        ),
+        ("Figures", "", figures),
+        ("Tables", "", tables),
+        (
+            "Compensation",
+            f"The {COMP_APPROACH} {COMP_ALGORITHM} model fitted on all runs (model.json), the controller "
+            "exports of each fold's model on its held-out run and the error left after compensating; "
+            "the thermal-drift figures are under Figures (README: Compensating a machine).",
+            list(compensation.items()),
+        ),
+    ]
+
+
+def index_inputs():
+    return sorted(
+        {
+            path
+            for _, _, rows in index_sections()
+            for _, links in rows
+            for _, path in links
+        }
+    )
 
 
 # --------------------------------------------------------------------------- compensation
