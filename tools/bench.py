@@ -83,7 +83,9 @@ TARGETS = {
     "dryrun_twin": "dry run of the twin <= the one-rule dry run + 2 s CPU",
 }
 # The smallest workflow Snakemake can run: its no-op is the floor a no-op rerun is measured against.
-ONE_RULE_SNAKEFILE = 'rule all:\n    output:\n        "done.txt"\n    shell:\n        "touch {output}"\n'
+ONE_RULE_SNAKEFILE = (
+    'rule all:\n    output:\n        "done.txt"\n    shell:\n        "touch {output}"\n'
+)
 
 
 # --------------------------------------------------------------------------- measuring
@@ -185,7 +187,9 @@ def measure(
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open(log_path, "wb") as log:
         start = time.perf_counter()
-        proc = subprocess.Popen(command, cwd=cwd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        proc = subprocess.Popen(
+            command, cwd=cwd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True
+        )
         sampler = _TreeSampler(proc.pid)
         sampler.start()
         timer = None
@@ -332,7 +336,9 @@ def _machine() -> dict:
 
 def _git_commit(repo: Path) -> str | None:
     try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True, timeout=10)
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True, timeout=10
+        )
         return out.stdout.strip() or None
     except (OSError, subprocess.SubprocessError):
         return None
@@ -340,7 +346,9 @@ def _git_commit(repo: Path) -> str | None:
 
 def _default_dataset_name(repo: Path) -> str:
     """The dataset a plain ``snakemake`` run builds: the first of config ``datasets``."""
-    meta = load_yaml(repo / load_config(repo / "config" / "config.yaml")["dataset"] / "dataset.yaml")
+    meta = load_yaml(
+        repo / load_config(repo / "config" / "config.yaml")["dataset"] / "dataset.yaml"
+    )
     return meta["name"]
 
 
@@ -372,7 +380,12 @@ def run_bench(
     doc = {
         "machine": _machine(),
         "git_commit": _git_commit(REPO),
-        "settings": {"cores": cores, "scale_runs": list(runs), "scale_shape": SCALE_SHAPE, "steps": list(steps)},
+        "settings": {
+            "cores": cores,
+            "scale_runs": list(runs),
+            "scale_shape": SCALE_SHAPE,
+            "steps": list(steps),
+        },
         "measurements": [],
     }
     measurements: list[Measurement] = []
@@ -381,7 +394,9 @@ def run_bench(
         _add_jobs(m)
         measurements.append(m)
         status = "ok" if m.ok else f"FAILED (exit {m.returncode}, log {m.log})"
-        progress(f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, {m.peak_rss_mib:.0f} MiB peak; {status}")
+        progress(
+            f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, {m.peak_rss_mib:.0f} MiB peak; {status}"
+        )
         return m
 
     try:
@@ -399,12 +414,21 @@ def run_bench(
             baseline = scratch / "one_rule"
             baseline.mkdir(parents=True, exist_ok=True)
             (baseline / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
-            subprocess.run(_snakemake(cores), cwd=baseline, env=env, capture_output=True, check=True, timeout=timeout_s)
+            subprocess.run(
+                _snakemake(cores),
+                cwd=baseline,
+                env=env,
+                capture_output=True,
+                check=True,
+                timeout=timeout_s,
+            )
             record(measure("one_rule_noop", _snakemake(cores), baseline, logs / "one_rule_noop.log",
                            "a one-rule Snakemake workflow with nothing to do (the floor)", env, timeout_s))  # fmt: skip
             base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
             alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
-            (work / "bench_param.yaml").write_text(yaml.safe_dump({"models": {"ridge_alpha": alpha}}))
+            (work / "bench_param.yaml").write_text(
+                yaml.safe_dump({"models": {"ridge_alpha": alpha}})
+            )
             record(measure("results_model_param",
                                      _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
                                      work, logs / "results_model_param.log",
@@ -429,7 +453,10 @@ def run_bench(
                 override = {"dataset": str(data), "ambient_sensor": "T1", "models": {"algorithms": ["mlr"]},
                             "folds": ["S001"], "paper_fold": "S001"}  # fmt: skip
                 (work_n / "bench_scale.yaml").write_text(yaml.safe_dump(override))
-                targets = ["results/twin_scale/tables/metrics.csv", "results/twin_scale/tables/table5_slope_intercept.csv"]
+                targets = [
+                    "results/twin_scale/tables/metrics.csv",
+                    "results/twin_scale/tables/table5_slope_intercept.csv",
+                ]
                 m = record(measure(f"scale_{n}",
                                    _snakemake(cores, "--configfile", "config/config.yaml", "bench_scale.yaml", "--",
                                               *targets),
@@ -441,7 +468,18 @@ def run_bench(
                     shutil.rmtree(work_n, ignore_errors=True)
         if "test" in steps:
             workers = os.environ.get("PYTEST_WORKERS", "2")  # as the Makefile's test target
-            suite = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", workers, "--dist", "loadgroup"]
+            suite = [
+                sys.executable,
+                "-m",
+                "pytest",
+                "-q",
+                "-p",
+                "no:cacheprovider",
+                "-n",
+                workers,
+                "--dist",
+                "loadgroup",
+            ]
             record(measure("test_suite", suite, REPO,
                            logs / "test_suite.log", "the test suite, as make test runs it (set-up done)", env,
                            timeout_s))  # fmt: skip
@@ -452,20 +490,35 @@ def run_bench(
     return finish(doc, measurements, out)
 
 
-def _dry_runs(scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float) -> list[Measurement]:
+def _dry_runs(
+    scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float
+) -> list[Measurement]:
     """``snakemake -n`` of the twin in an empty work folder and of a one-rule workflow, best of DRYRUN_REPEATS."""
     twin = prepare_workdir(scratch / "dryrun_twin")
     one_rule = scratch / "dryrun_one_rule"
     one_rule.mkdir(parents=True, exist_ok=True)
     (one_rule / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
     cases = [
-        ("dryrun_twin", twin, ["--config", "dataset=data/raw/twin"], "snakemake -n of the twin, nothing built"),
+        (
+            "dryrun_twin",
+            twin,
+            ["--config", "dataset=data/raw/twin"],
+            "snakemake -n of the twin, nothing built",
+        ),
         ("dryrun_one_rule", one_rule, [], "snakemake -n of a one-rule workflow (the floor)"),
     ]
     best = []
     for name, cwd, args, description in cases:
         runs = [
-            measure(name, _snakemake(cores, "-n", *args), cwd, logs / f"{name}_{i}.log", description, env, timeout_s)
+            measure(
+                name,
+                _snakemake(cores, "-n", *args),
+                cwd,
+                logs / f"{name}_{i}.log",
+                description,
+                env,
+                timeout_s,
+            )
             for i in range(DRYRUN_REPEATS)
         ]
         best.append(min(runs, key=lambda m: (not m.ok, m.wall_s)))
@@ -475,15 +528,23 @@ def _dry_runs(scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float
 def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
     """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and bench.md."""
     doc["measurements"] = [{**asdict(m), "ok": m.ok} for m in measurements]
-    scale = [m for m in measurements if m.name.startswith("scale_") and not m.name.startswith("scale_generate") and m.ok]
+    scale = [
+        m
+        for m in measurements
+        if m.name.startswith("scale_") and not m.name.startswith("scale_generate") and m.ok
+    ]
     doc.pop("scale_fit", None)
     doc.pop("scale_fit_cpu", None)
     if len({m.runs for m in scale}) >= 2:
         doc["scale_fit"] = asdict(fit_scaling([m.runs for m in scale], [m.wall_s for m in scale]))
-        doc["scale_fit_cpu"] = asdict(fit_scaling([m.runs for m in scale], [m.cpu_s for m in scale], "CPU time"))
+        doc["scale_fit_cpu"] = asdict(
+            fit_scaling([m.runs for m in scale], [m.cpu_s for m in scale], "CPU time")
+        )
     doc["targets"] = _targets(measurements)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "bench.json").write_text(json.dumps(doc, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    (out / "bench.json").write_text(
+        json.dumps(doc, indent=1, sort_keys=True) + "\n", encoding="utf-8"
+    )
     (out / "bench.md").write_text(bench_markdown(doc), encoding="utf-8")
     return doc
 
@@ -495,7 +556,9 @@ def render(out: Path) -> dict:
         raise ValueError(f"{path}: not found; run the benchmark first")
     doc = json.loads(path.read_text(encoding="utf-8"))
     names = {f.name for f in fields(Measurement)}
-    measurements = [Measurement(**{k: v for k, v in d.items() if k in names}) for d in doc["measurements"]]
+    measurements = [
+        Measurement(**{k: v for k, v in d.items() if k in names}) for d in doc["measurements"]
+    ]
     for m in measurements:
         _add_jobs(m)
     return finish(doc, measurements, out)
@@ -514,7 +577,11 @@ def _count_jobs(log: Path) -> int | None:
     done = [line for line in lines if "steps (" in line and " of " in line]
     if not done:
         # A dry run plans jobs and runs none: its job stats end with "total <n>".
-        planned = [line.split()[1] for line in lines if line.startswith("total ") and line.split()[1:2] != []]
+        planned = [
+            line.split()[1]
+            for line in lines
+            if line.startswith("total ") and line.split()[1:2] != []
+        ]
         return int(planned[-1]) if planned and planned[-1].isdigit() else 0
     try:
         return int(done[-1].split(" of ")[1].split()[0])
@@ -535,7 +602,11 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
     if "results_noop" in by_name and "one_rule_noop" in by_name:
         m, floor = by_name["results_noop"], by_name["one_rule_noop"]
         ratio = m.wall_s / floor.wall_s
-        add("results_noop", m.ok and ratio <= 1.25, f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x")
+        add(
+            "results_noop",
+            m.ok and ratio <= 1.25,
+            f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x",
+        )
     if "sweep_default" in by_name:
         m = by_name["sweep_default"]
         n = m.extra.get("configurations", 0)
@@ -553,7 +624,11 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
     if "scale_50" in by_name:
         m = by_name["scale_50"]
         peak = m.peak_tree_rss_mib if m.peak_tree_rss_mib is not None else m.peak_rss_mib
-        add("scale_50", m.ok and m.wall_s <= 300.0 and peak <= 4096.0, f"{m.wall_s:.1f} s, peak {peak:.0f} MiB")
+        add(
+            "scale_50",
+            m.ok and m.wall_s <= 300.0 and peak <= 4096.0,
+            f"{m.wall_s:.1f} s, peak {peak:.0f} MiB",
+        )
     return rows
 
 
@@ -587,7 +662,10 @@ def bench_markdown(doc: dict) -> str:
                   f"{doc['scale_fit_cpu']['statement']}."]  # fmt: skip
     if doc.get("targets"):
         lines += ["", "| target | measured | met |", "|---|---|---|"]
-        lines += [f"| {t['target']} | {t['measured']} | {'yes' if t['met'] else 'no'} |" for t in doc["targets"]]
+        lines += [
+            f"| {t['target']} | {t['measured']} | {'yes' if t['met'] else 'no'} |"
+            for t in doc["targets"]
+        ]
     lines += [
         "",
         "Scale runs: twin-generated datasets (64 sensors, 100 positions, 8 h at 1 Hz), main pipeline from "
@@ -601,15 +679,35 @@ def bench_markdown(doc: dict) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m tools.bench", description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("results/bench"), help="folder of bench.json and bench.md")
-    parser.add_argument("--cores", type=int, default=None, help="cores given to Snakemake (default: all usable)")
-    parser.add_argument("--runs", type=int, nargs="+", default=list(SCALE_RUNS), help="runs of the scale datasets")
-    parser.add_argument("--steps", nargs="+", choices=STEPS, default=list(STEPS), help="what to measure")
-    parser.add_argument("--workdir", type=Path, default=None, help="scratch folder (default: a new temporary one)")
-    parser.add_argument("--keep", action="store_true", help="keep the scratch work folders and scale datasets")
-    parser.add_argument("--timeout-s", type=float, default=3600.0, help="stop any one measurement after this long")
-    parser.add_argument("--render-only", action="store_true", help="rewrite bench.md from --out/bench.json, rerun nothing")
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.bench", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "--out", type=Path, default=Path("results/bench"), help="folder of bench.json and bench.md"
+    )
+    parser.add_argument(
+        "--cores", type=int, default=None, help="cores given to Snakemake (default: all usable)"
+    )
+    parser.add_argument(
+        "--runs", type=int, nargs="+", default=list(SCALE_RUNS), help="runs of the scale datasets"
+    )
+    parser.add_argument(
+        "--steps", nargs="+", choices=STEPS, default=list(STEPS), help="what to measure"
+    )
+    parser.add_argument(
+        "--workdir", type=Path, default=None, help="scratch folder (default: a new temporary one)"
+    )
+    parser.add_argument(
+        "--keep", action="store_true", help="keep the scratch work folders and scale datasets"
+    )
+    parser.add_argument(
+        "--timeout-s", type=float, default=3600.0, help="stop any one measurement after this long"
+    )
+    parser.add_argument(
+        "--render-only",
+        action="store_true",
+        help="rewrite bench.md from --out/bench.json, rerun nothing",
+    )
     args = parser.parse_args(argv)
     if args.render_only:
         try:

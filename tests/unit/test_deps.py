@@ -43,7 +43,11 @@ def test_the_statement_walk_finds_every_import_ast_walk_finds():
 
     from thermaxis.pipeline import deps
 
-    sources = [*PACKAGE.rglob("*.py"), *(REPO / "workflow" / "scripts").glob("*.py"), *(REPO / "notebooks").glob("*.ipynb")]
+    sources = [
+        *PACKAGE.rglob("*.py"),
+        *(REPO / "workflow" / "scripts").glob("*.py"),
+        *(REPO / "notebooks").glob("*.ipynb"),
+    ]
     for path in sources:
         if path.suffix == ".ipynb":
             cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
@@ -52,5 +56,7 @@ def test_the_statement_walk_finds_every_import_ast_walk_finds():
             text = path.read_text(encoding="utf-8")
         tree = ast.parse(text)
         every = [n for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))]
-        found = [n for n in deps._statements(tree.body) if isinstance(n, (ast.Import, ast.ImportFrom))]
+        found = [
+            n for n in deps._statements(tree.body) if isinstance(n, (ast.Import, ast.ImportFrom))
+        ]
         assert len(found) == len(every), path

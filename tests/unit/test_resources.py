@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from thermaxis.pipeline import resources
 
-RULES = '''
+RULES = """
 rule clean_run:
     output:
         f"{OUT}/clean/{{run}}/qc.csv",
@@ -22,11 +22,14 @@ rule sweep:
 rule sweep_batch:
     benchmark:
         f"{BENCH}/sweep/batch_{{n_batches}}_{{batch}}.tsv"
-'''
+"""
 
 
 def test_benchmark_globs_follow_the_rule_files():
-    assert resources.benchmark_globs([RULES]) == {"clean_run": "clean/*.tsv", "sweep_batch": "sweep/batch_*_*.tsv"}
+    assert resources.benchmark_globs([RULES]) == {
+        "clean_run": "clean/*.tsv",
+        "sweep_batch": "sweep/batch_*_*.tsv",
+    }
 
 
 def test_requests_by_hand():
@@ -42,7 +45,9 @@ def test_requests_take_the_worst_benchmark_of_a_rule(tmp_path):
     header = "s\th:m:s\tmax_rss\tmax_vms\n"
     (bench / "R1.tsv").write_text(header + "10.0\t0:00:10\t200.0\t900\n")
     (bench / "R2.tsv").write_text(header + "90.0\t0:01:30\t-\t900\n")  # memory not sampled
-    [req] = resources.requests_from_benchmarks(tmp_path, {"clean_run": "clean/*.tsv", "sweep_batch": "sweep/*.tsv"})
+    [req] = resources.requests_from_benchmarks(
+        tmp_path, {"clean_run": "clean/*.tsv", "sweep_batch": "sweep/*.tsv"}
+    )
     # Worst: 90 s and 200 MB -> 2 x 200 = 400 -> 500 floor; 5 x 90 = 450 s -> 7.5 -> 8 min.
     assert (req.rule, req.n_benchmarks, req.max_s, req.max_rss_mb, req.mem_mb, req.runtime_min) == (
         "clean_run", 2, 90.0, 200.0, 500, 8,

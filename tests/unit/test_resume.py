@@ -18,8 +18,18 @@ from thermaxis.pipeline import resume
         (["/usr/bin/python3", "/x/.venv/bin/snakemake"], True),
         (["python3", "-m", "snakemake", "--cores", "1"], True),
         # make's shell and this wrapper name snakemake without being it.
-        (["/bin/bash", "-c", ".venv/bin/python -m thermaxis.pipeline.resume .venv/bin/snakemake"], False),
-        (["/x/.venv/bin/python", "-m", "thermaxis.pipeline.resume", "/x/.venv/bin/snakemake"], False),
+        (
+            [
+                "/bin/bash",
+                "-c",
+                ".venv/bin/python -m thermaxis.pipeline.resume .venv/bin/snakemake",
+            ],
+            False,
+        ),
+        (
+            ["/x/.venv/bin/python", "-m", "thermaxis.pipeline.resume", "/x/.venv/bin/snakemake"],
+            False,
+        ),
         # A rule's script job.
         (["/x/.venv/bin/python", "/w/.snakemake/scripts/tmpab12.clean_run.py"], False),
         ([], False),
@@ -52,7 +62,12 @@ def test_orphaned_temporaries_match_atomic_writes_only(tmp_path):
     results = tmp_path / "results" / "twin" / "tables"
     results.mkdir(parents=True)
     orphans = [results / ".metrics.csv.k2j_9x0a.csv", results / ".errors.parquet.abcdefgh.parquet"]
-    keep = [results / "metrics.csv", results / ".gitignore", results / ".metrics.csv.short.csv", results / ".a.csv.abcdefgh.png"]
+    keep = [
+        results / "metrics.csv",
+        results / ".gitignore",
+        results / ".metrics.csv.short.csv",
+        results / ".a.csv.abcdefgh.png",
+    ]
     for path in orphans + keep:
         path.write_text("x")
     assert resume.orphaned_temporaries(tmp_path / "results") == sorted(orphans)

@@ -1,8 +1,8 @@
 import pandas as pd
 
 from thermaxis.method.decouple import decouple_table
-from thermaxis.pipeline.runner import run_script, write_csv, write_text
 from thermaxis.paper.table5 import table5_markdown
+from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
 
 def main(snakemake):

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import string
 
-
 __all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption"]
 
 
@@ -26,7 +25,6 @@ def _display(label) -> str:
     return DISPLAY_NAMES.get(str(label), str(label))
 
 
-
 # --------------------------------------------------------------------------- captions
 
 # figure id (thermaxis.figures.registry) -> (the paper's figure, caption body with {detail}
@@ -37,7 +35,10 @@ _CAPTIONS: dict[str, tuple[str | None, str]] = {
         "Positioning error of the axis in the first measurement of run {run}, before the axis warms up "
         "(forward and backward passes combined).",
     ),
-    "fig3_ambient": ("3", "Ambient temperature of every run against the time since the run's first measurement."),
+    "fig3_ambient": (
+        "3",
+        "Ambient temperature of every run against the time since the run's first measurement.",
+    ),
     "fig5_unzeroed": (
         "5",
         "Unzeroed thermal positioning error of run {run}: one curve per measurement, labelled by the time "
@@ -48,13 +49,19 @@ _CAPTIONS: dict[str, tuple[str | None, str]] = {
         "Unzeroed thermal positioning error of run {run} at every target position against the time since "
         "the first measurement.",
     ),
-    "fig7_error_surface": ("7", "Unzeroed thermal positioning error of run {run} over position and time."),
+    "fig7_error_surface": (
+        "7",
+        "Unzeroed thermal positioning error of run {run} over position and time.",
+    ),
     "fig8_rezeroed": (
         "8",
         "Re-zeroed thermal positioning error of run {run}: each measurement minus its own reading at the "
         "first position, which hides the drift between measurements and leaves the expansion along the stroke.",
     ),
-    "fig9_other_runs": ("9", "Unzeroed thermal positioning error of runs {runs}, one panel per run, one curve per measurement."),
+    "fig9_other_runs": (
+        "9",
+        "Unzeroed thermal positioning error of runs {runs}, one panel per run, one curve per measurement.",
+    ),
     "fig10_temperature_rise": (
         "10",
         "Temperature rise of the sensors of run {run} relative to their values at the start of the first "
@@ -146,7 +153,9 @@ def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details
     missing = sorted(needed - details.keys())
     extra = sorted(details.keys() - needed)
     if missing or extra:
-        raise ValueError(f"caption {figure_id} needs details {sorted(needed)}; missing {missing}, unexpected {extra}")
+        raise ValueError(
+            f"caption {figure_id} needs details {sorted(needed)}; missing {missing}, unexpected {extra}"
+        )
     parts = [body.format(**{k: _detail_text(k, v) for k, v in details.items()})]
     if paper_figure is not None:
         parts.append(f"Counterpart of the paper's Fig. {paper_figure}.")

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import ast
 import json
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 __all__ = ["PACKAGE", "library_modules", "named_modules"]
@@ -76,7 +76,7 @@ def _source(path: Path) -> str:
     return path.read_text(encoding="utf-8")
 
 
-@lru_cache(maxsize=None)
+@cache
 def _direct(path: Path) -> tuple[Path, ...]:
     inside = PACKAGE in path.parents
     tree = ast.parse(_source(path), filename=str(path))
@@ -95,7 +95,9 @@ def library_modules(*entries) -> list[str]:
         seen.add(path)
         stack.extend(_direct(path))
     # A package's submodule runs its package's __init__ first.
-    seen.update(p.parent / "__init__.py" for p in list(seen) if (p.parent / "__init__.py").is_file())
+    seen.update(
+        p.parent / "__init__.py" for p in list(seen) if (p.parent / "__init__.py").is_file()
+    )
     return sorted(str(p) for p in seen)
 
 

@@ -76,7 +76,10 @@ def run_script(main, snakemake) -> None:
     except Exception as exc:  # noqa: BLE001 - an unforeseen input must still end in one line
         logger.exception("unexpected error")
         first = str(exc).splitlines()[0] if str(exc) else ""
-        print(f"thermaxis error: unexpected {type(exc).__name__}: {first} (traceback in {log or 'stderr'})", file=sys.stderr)
+        print(
+            f"thermaxis error: unexpected {type(exc).__name__}: {first} (traceback in {log or 'stderr'})",
+            file=sys.stderr,
+        )
         sys.exit(1)
 
 
