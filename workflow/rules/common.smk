@@ -125,7 +125,7 @@ def dataset_files():
 
 
 # --------------------------------------------------------------------------- vocabulary
-APPROACHES = ["decoupled", "pointwise"] if DECOUPLED else ["pointwise"]
+APPROACHES = list(vocabulary.APPROACHES) if DECOUPLED else ["pointwise"]
 ALGORITHMS = list(SETTINGS.models.algorithms)
 FIG_ALGORITHMS = [a for a in SETTINGS.figures.algorithms if a in ALGORITHMS]
 REPORT_ALGORITHMS = [a for a in SETTINGS.reports.model_algorithms if a in ALGORITHMS]
@@ -422,7 +422,9 @@ def model_report_figures(fold):
     """The workflow figures a model report embeds: its models' predictions and the drift."""
     figures = {}
     for approach, algorithm in REPORT_MODELS:
-        kinds = ["error_prediction"] + ["kb_prediction"] * (approach == "decoupled")
+        kinds = ["error_prediction"]
+        if approach == "decoupled":
+            kinds.append("kb_prediction")
         for kind in kinds:
             figures[f"{kind}_{approach}_{algorithm}"] = embedded(
                 kind, fold=fold, approach=approach, algorithm=algorithm
@@ -433,17 +435,20 @@ def model_report_figures(fold):
 
 def index_sections():
     """What the index links, in order: (title, intro, rows of (label, [(text, path)]))."""
-    reports = [
-        (
-            "The paper, figure by figure and table by table",
-            [("paper report", f"{OUT}/reports/paper_report.html")],
+    reports = []
+    if PAPER:
+        reports.append(
+            (
+                "The paper, figure by figure and table by table",
+                [("paper report", f"{OUT}/reports/paper_report.html")],
+            )
         )
-    ] * PAPER + [
+    reports.append(
         (
             "Dataset: runs, sensors, cleaning",
             [("dataset report", f"{OUT}/reports/dataset_report.html")],
-        ),
-    ]
+        )
+    )
     reports += [
         (f"Run {run}", [("condition report", f"{OUT}/reports/condition_{run}.html")])
         for run in RUNS
