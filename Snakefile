@@ -1,25 +1,13 @@
 # thermaxis: thermal positioning error of a linear axis, from raw runs to the paper's
 # figures and tables (Xu et al., decoupling and step-by-step modelling).
-import sys
-
-import thermaxis  # first: keeps jsonschema imports fast (see thermaxis/__init__.py)
-from snakemake.utils import min_version, validate
-from thermaxis.config import Settings
-from thermaxis.schemas import schema_path
+from snakemake.utils import min_version
 
 min_version("9.0")
 
 
+# The config; common.smk validates it once (thermaxis.pipeline.preflight) and fills
+# its defaults, before any rule is defined.
 configfile: "config/config.yaml"
-
-
-# The same schema twice: first for one line naming the key (and every stage's settings,
-# parsed once), then for Snakemake's defaults.
-try:
-    SETTINGS = Settings.from_config(config)
-except ValueError as exc:
-    sys.exit(f"thermaxis error: {exc}")
-validate(config, str(schema_path("config")), set_default=True)
 
 
 report: "workflow/report/workflow.rst"
@@ -45,9 +33,6 @@ rule all:
         all_outputs(),
 
 
-# Every output, log and benchmark stays in this dataset's folders (names are checked
-# too, but a rule edited later must not be able to write elsewhere either).
-try:
-    check_rule_outputs(workflow.rules, (OUT, LOGS, BENCH))
-except DataError as exc:
-    sys.exit(f"thermaxis error: {exc}")
+# Validation's last step, once every rule exists: no output, log or benchmark outside
+# this dataset's folders.
+check_rules(workflow.rules)

@@ -16,7 +16,11 @@ so the repository's own ``results/`` are never touched):
   so they would hide how the pipeline itself scales.  Generating a dataset is timed
   separately (``scale_generate_<n>``) and is not part of the fit;
 * ``test_suite``: ``python -m pytest`` in the repository, as ``make test`` runs it once
-  the environment exists.
+  the environment exists;
+* ``dryrun_twin`` beside ``dryrun_one_rule``: ``snakemake -n`` of the twin in an empty
+  work folder (every job planned, nothing run: what parsing the workflow and building its
+  DAG cost, which every Snakemake start pays, each Slurm job included) and of a one-rule
+  workflow (the floor: Snakemake's own start-up); the best of three each.
 
 Each command runs in its own process group.  Wall time is measured around it; CPU time
 (user + system) and the largest single process's peak RSS come from ``os.wait4``, which
@@ -68,13 +72,15 @@ SCALE_SHAPE = {"sensors": 64, "positions": 100, "hours": 8.0, "rate_hz": 1.0, "s
 MIB = 1024.0 * 1024.0
 # Linux reports ru_maxrss in KiB, macOS in bytes.
 _MAXRSS_UNIT = 1.0 if sys.platform == "darwin" else 1024.0
-STEPS = ("results", "sweep", "scale", "test")
+STEPS = ("dryrun", "results", "sweep", "scale", "test")
+DRYRUN_REPEATS = 3
 TARGETS = {
     "results_cold": "cold full regeneration of the twin <= 30 s",
     "results_noop": "no-op rerun <= 1.25 x a one-rule workflow's no-op",
     "sweep_default": "default sweep (all configurations x all folds) <= 30 s",
     "scale_50": "50 runs <= 5 min within 4 GiB",
     "test_suite": "make test after set-up <= 150 s",
+    "dryrun_twin": "dry run of the twin <= the one-rule dry run + 2 s CPU",
 }
 # The smallest workflow Snakemake can run: its no-op is the floor a no-op rerun is measured against.
 ONE_RULE_SNAKEFILE = (
@@ -275,8 +281,7 @@ def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
             growth = "cost grows about quadratically (or faster) with the number of runs"
         growth += f" (quadratic share at {top:g} runs {share:.2f})"
     statement = (
-        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run "
-        f"(least squares, R^2 = {r2:.3f}); {growth}; "
+        f"{quantity} = {intercept:.1f} s + {slope:.2f} s per run (least squares, R^2 = {r2:.3f}); {growth}; "
         f"marginal cost {', '.join(f'{v:.2f}' for v in marginal)} s per added run"
     )
     return ScaleFit(float(intercept), float(slope), r2, marginal, share, statement)
@@ -286,8 +291,7 @@ def fit_scaling(runs, seconds, quantity: str = "wall time") -> ScaleFit:
 
 
 def prepare_workdir(root: Path, repo: Path = REPO) -> Path:
-    """A scratch work folder whose Snakefile, config, workflow, notebooks and data link to
-    ``repo``."""
+    """A scratch work folder whose Snakefile, config, workflow, notebooks and data link to ``repo``."""
     root.mkdir(parents=True, exist_ok=True)
     for name in ("Snakefile", "config", "workflow", "notebooks", "data"):
         target = root / name
@@ -391,27 +395,20 @@ def run_bench(
         measurements.append(m)
         status = "ok" if m.ok else f"FAILED (exit {m.returncode}, log {m.log})"
         progress(
-            f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, "
-            f"{m.peak_rss_mib:.0f} MiB peak; {status}"
+            f"bench {m.name}: {m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU, {m.peak_rss_mib:.0f} MiB peak; {status}"
         )
         return m
 
     try:
+        if "dryrun" in steps:
+            for m in _dry_runs(scratch, cores, env, logs, timeout_s):
+                record(m)
         if "results" in steps or "sweep" in steps:
             work = prepare_workdir(scratch / "default")
             dataset_name = _default_dataset_name(REPO)
         if "results" in steps:
-            record(
-                measure(
-                    "results_cold",
-                    _snakemake(cores),
-                    work,
-                    logs / "results_cold.log",
-                    "snakemake --cores N on nothing (make results after set-up)",
-                    env,
-                    timeout_s,
-                )
-            )
+            record(measure("results_cold", _snakemake(cores), work, logs / "results_cold.log",
+                                  "snakemake --cores N on nothing (make results after set-up)", env, timeout_s))  # fmt: skip
             record(measure("results_noop", _snakemake(cores), work, logs / "results_noop.log",
                            "the same again: nothing to do", env, timeout_s))  # fmt: skip
             baseline = scratch / "one_rule"
@@ -425,114 +422,47 @@ def run_bench(
                 check=True,
                 timeout=timeout_s,
             )
-            record(
-                measure(
-                    "one_rule_noop",
-                    _snakemake(cores),
-                    baseline,
-                    logs / "one_rule_noop.log",
-                    "a one-rule Snakemake workflow with nothing to do (the floor)",
-                    env,
-                    timeout_s,
-                )
-            )
+            record(measure("one_rule_noop", _snakemake(cores), baseline, logs / "one_rule_noop.log",
+                           "a one-rule Snakemake workflow with nothing to do (the floor)", env, timeout_s))  # fmt: skip
             base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
             alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
             (work / "bench_param.yaml").write_text(
                 yaml.safe_dump({"models": {"ridge_alpha": alpha}})
             )
-            record(
-                measure(
-                    "results_model_param",
-                    _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
-                    work,
-                    logs / "results_model_param.log",
-                    f"after changing one model parameter (models.ridge_alpha -> {alpha:g})",
-                    env,
-                    timeout_s,
-                )
-            )
+            record(measure("results_model_param",
+                                     _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
+                                     work, logs / "results_model_param.log",
+                                     f"after changing one model parameter (models.ridge_alpha -> {alpha:g})", env,
+                                     timeout_s))  # fmt: skip
         if "sweep" in steps:
-            m = record(
-                measure(
-                    "sweep_default",
-                    _snakemake(cores, "sweep"),
-                    work,
-                    logs / "sweep_default.log",
-                    "snakemake sweep, default grid (assembled data present)",
-                    env,
-                    timeout_s,
-                )
-            )
+            m = record(measure("sweep_default", _snakemake(cores, "sweep"), work, logs / "sweep_default.log",
+                               "snakemake sweep, default grid (assembled data present)", env, timeout_s))  # fmt: skip
             m.extra.update(_sweep_size(work, dataset_name))
         if "scale" in steps:
             for n in runs:
                 data = scratch / "scale" / f"data_{n}"
                 shutil.rmtree(data, ignore_errors=True)
-                generate = [
-                    sys.executable,
-                    "-m",
-                    "thermaxis.twin",
-                    "scale",
-                    "--out",
-                    str(data),
-                    "--runs",
-                    str(n),
-                    "--sensors",
-                    str(SCALE_SHAPE["sensors"]),
-                    "--positions",
-                    str(SCALE_SHAPE["positions"]),
-                    "--hours",
-                    str(SCALE_SHAPE["hours"]),
-                    "--rate-hz",
-                    str(SCALE_SHAPE["rate_hz"]),
-                    "--seed",
-                    str(SCALE_SHAPE["seed"]),
-                ]
-                record(
-                    measure(
-                        f"scale_generate_{n}",
-                        generate,
-                        scratch,
-                        logs / f"scale_generate_{n}.log",
-                        f"python -m thermaxis.twin scale: {n} runs (not part of the fit)",
-                        env,
-                        timeout_s,
-                        runs=n,
-                    )
-                )
+                generate = [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(data), "--runs", str(n),
+                            "--sensors", str(SCALE_SHAPE["sensors"]), "--positions", str(SCALE_SHAPE["positions"]),
+                            "--hours", str(SCALE_SHAPE["hours"]), "--rate-hz", str(SCALE_SHAPE["rate_hz"]),
+                            "--seed", str(SCALE_SHAPE["seed"])]  # fmt: skip
+                record(measure(f"scale_generate_{n}", generate, scratch, logs / f"scale_generate_{n}.log",
+                               f"python -m thermaxis.twin scale: {n} runs (not part of the fit)", env, timeout_s,
+                               runs=n))  # fmt: skip
                 work_n = prepare_workdir(scratch / "scale" / f"work_{n}")
-                override = {
-                    "dataset": str(data),
-                    "ambient_sensor": "T1",
-                    "models": {"algorithms": ["mlr"]},
-                    "folds": ["S001"],
-                    "paper_fold": "S001",
-                }
+                override = {"dataset": str(data), "ambient_sensor": "T1", "models": {"algorithms": ["mlr"]},
+                            "folds": ["S001"], "paper_fold": "S001"}  # fmt: skip
                 (work_n / "bench_scale.yaml").write_text(yaml.safe_dump(override))
                 targets = [
                     "results/twin_scale/tables/metrics.csv",
                     "results/twin_scale/tables/table5_slope_intercept.csv",
                 ]
-                m = record(
-                    measure(
-                        f"scale_{n}",
-                        _snakemake(
-                            cores,
-                            "--configfile",
-                            "config/config.yaml",
-                            "bench_scale.yaml",
-                            "--",
-                            *targets,
-                        ),
-                        work_n,
-                        logs / f"scale_{n}.log",
-                        f"{n} runs: cleaning to metrics.csv and Table 5 (MLR, fold S001)",
-                        env,
-                        timeout_s,
-                        runs=n,
-                    )
-                )
+                m = record(measure(f"scale_{n}",
+                                   _snakemake(cores, "--configfile", "config/config.yaml", "bench_scale.yaml", "--",
+                                              *targets),
+                                   work_n, logs / f"scale_{n}.log",
+                                   f"{n} runs: cleaning to metrics.csv and Table 5 (MLR, fold S001)", env, timeout_s,
+                                   runs=n))  # fmt: skip
                 if not keep:
                     shutil.rmtree(data, ignore_errors=True)
                     shutil.rmtree(work_n, ignore_errors=True)
@@ -550,17 +480,9 @@ def run_bench(
                 "--dist",
                 "loadgroup",
             ]
-            record(
-                measure(
-                    "test_suite",
-                    suite,
-                    REPO,
-                    logs / "test_suite.log",
-                    "the test suite, as make test runs it (set-up done)",
-                    env,
-                    timeout_s,
-                )
-            )
+            record(measure("test_suite", suite, REPO,
+                           logs / "test_suite.log", "the test suite, as make test runs it (set-up done)", env,
+                           timeout_s))  # fmt: skip
     finally:
         if not keep and workdir is None:
             shutil.rmtree(scratch, ignore_errors=True)
@@ -568,9 +490,43 @@ def run_bench(
     return finish(doc, measurements, out)
 
 
+def _dry_runs(
+    scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float
+) -> list[Measurement]:
+    """``snakemake -n`` of the twin in an empty work folder and of a one-rule workflow, best of DRYRUN_REPEATS."""
+    twin = prepare_workdir(scratch / "dryrun_twin")
+    one_rule = scratch / "dryrun_one_rule"
+    one_rule.mkdir(parents=True, exist_ok=True)
+    (one_rule / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
+    cases = [
+        (
+            "dryrun_twin",
+            twin,
+            ["--config", "dataset=data/raw/twin"],
+            "snakemake -n of the twin, nothing built",
+        ),
+        ("dryrun_one_rule", one_rule, [], "snakemake -n of a one-rule workflow (the floor)"),
+    ]
+    best = []
+    for name, cwd, args, description in cases:
+        runs = [
+            measure(
+                name,
+                _snakemake(cores, "-n", *args),
+                cwd,
+                logs / f"{name}_{i}.log",
+                description,
+                env,
+                timeout_s,
+            )
+            for i in range(DRYRUN_REPEATS)
+        ]
+        best.append(min(runs, key=lambda m: (not m.ok, m.wall_s)))
+    return best
+
+
 def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
-    """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and
-    bench.md."""
+    """Add the measurements, the scaling fits and the targets to ``doc``; write bench.json and bench.md."""
     doc["measurements"] = [{**asdict(m), "ok": m.ok} for m in measurements]
     scale = [
         m
@@ -594,8 +550,7 @@ def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
 
 
 def render(out: Path) -> dict:
-    """Re-derive the fits, targets and bench.md from an existing ``out/bench.json`` (nothing is
-    rerun)."""
+    """Re-derive the fits, targets and bench.md from an existing ``out/bench.json`` (nothing is rerun)."""
     path = out / "bench.json"
     if not path.is_file():
         raise ValueError(f"{path}: not found; run the benchmark first")
@@ -618,13 +573,16 @@ def _count_jobs(log: Path) -> int | None:
     """Jobs Snakemake ran, from its 'N of M steps' lines."""
     if not log.is_file():
         return None
-    done = [
-        line
-        for line in log.read_text(errors="replace").splitlines()
-        if "steps (" in line and " of " in line
-    ]
+    lines = log.read_text(errors="replace").splitlines()
+    done = [line for line in lines if "steps (" in line and " of " in line]
     if not done:
-        return 0
+        # A dry run plans jobs and runs none: its job stats end with "total <n>".
+        planned = [
+            line.split()[1]
+            for line in lines
+            if line.startswith("total ") and line.split()[1:2] != []
+        ]
+        return int(planned[-1]) if planned and planned[-1].isdigit() else 0
     try:
         return int(done[-1].split(" of ")[1].split()[0])
     except (IndexError, ValueError):
@@ -652,11 +610,14 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
     if "sweep_default" in by_name:
         m = by_name["sweep_default"]
         n = m.extra.get("configurations", 0)
-        add(
-            "sweep_default",
-            m.ok and m.wall_s <= 30.0,
-            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s",
-        )
+        add("sweep_default", m.ok and m.wall_s <= 30.0,
+            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s")  # fmt: skip
+    if "dryrun_twin" in by_name and "dryrun_one_rule" in by_name:
+        m, floor = by_name["dryrun_twin"], by_name["dryrun_one_rule"]
+        extra = m.cpu_s - floor.cpu_s
+        add("dryrun_twin", m.ok and extra <= 2.0,
+            f"{m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU vs {floor.wall_s:.1f} s, {floor.cpu_s:.1f} s: "
+            f"+{m.wall_s - floor.wall_s:.1f} s wall, +{extra:.1f} s CPU")  # fmt: skip
     if "test_suite" in by_name:
         m = by_name["test_suite"]
         add("test_suite", m.ok and m.wall_s <= 150.0, f"{m.wall_s:.1f} s")
@@ -678,14 +639,12 @@ def bench_markdown(doc: dict) -> str:
         "# thermaxis benchmark",
         "",
         f"Machine: {machine['usable_cores']} usable cores ({machine['cpu_count']} CPUs), "
-        f"{machine.get('memory_gib')} GiB memory, {machine['platform']}, "
-        f"Python {machine['python']}. "
+        f"{machine.get('memory_gib')} GiB memory, {machine['platform']}, Python {machine['python']}. "
         f"Snakemake ran with `--cores {doc['settings']['cores']}`. Load average at start "
         f"{machine['load_average_at_start']}, at end {machine.get('load_average_at_end')} "
         "(other work on the machine inflates wall times).",
         "",
-        "| measurement | wall (s) | CPU (s) | peak RSS, largest process (MiB) "
-        "| peak RSS, process tree (MiB) | jobs | ok | what |",
+        "| measurement | wall (s) | CPU (s) | peak RSS, largest process (MiB) | peak RSS, process tree (MiB) | jobs | ok | what |",
         "|---|---:|---:|---:|---:|---:|---|---|",
     ]
     for m in doc["measurements"]:
@@ -695,8 +654,7 @@ def bench_markdown(doc: dict) -> str:
         if "configurations" in m["extra"]:
             what += f"; {m['extra']['configurations']} configurations x {m['extra']['folds']} folds"
         lines.append(
-            f"| {m['name']} | {m['wall_s']:.1f} | {m['cpu_s']:.1f} | "
-            f"{m['peak_rss_mib']:.0f} | {tree} | "
+            f"| {m['name']} | {m['wall_s']:.1f} | {m['cpu_s']:.1f} | {m['peak_rss_mib']:.0f} | {tree} | "
             f"{'' if jobs is None else jobs} | {'yes' if m['ok'] else 'NO'} | {what} |"
         )
     if "scale_fit" in doc:
@@ -710,10 +668,9 @@ def bench_markdown(doc: dict) -> str:
         ]
     lines += [
         "",
-        "Scale runs: twin-generated datasets (64 sensors, 100 positions, 8 h at 1 Hz), main "
-        "pipeline from cleaning to `tables/metrics.csv` and Table 5 with MLR and one held-out "
-        "run (S001); figures and reports are not included. Peak RSS of the process tree is "
-        "sampled every 0.2 s (psutil).",
+        "Scale runs: twin-generated datasets (64 sensors, 100 positions, 8 h at 1 Hz), main pipeline from "
+        "cleaning to `tables/metrics.csv` and Table 5 with MLR and one held-out run (S001); figures and "
+        "reports are not included. Peak RSS of the process tree is sampled every 0.2 s (psutil).",
     ]
     return "\n".join(lines) + "\n"
 

@@ -1,8 +1,10 @@
 """The workflow's configuration: safe-loaded, validated, defaults filled, and its settings.
 
-The Snakefile validates with ``snakemake.utils.validate``; this module applies the same
-schema (``thermaxis/schemas/config.schema.yaml``) so that the library, the sweep and the
-tests see exactly the configuration the workflow sees.
+The workflow validates its config once, while Snakemake parses it, with
+:func:`validate_config` (``thermaxis.pipeline.preflight``), and its rules read the
+dict that returns; the library, the sweep and the tests apply the same schema
+(``thermaxis/schemas/config.schema.yaml``), so they see exactly the configuration the
+workflow sees.
 
 The settings model: one frozen dataclass per stage (cleaning, decoupling, selection,
 models, compensation, figures, reports, sweep), each built from its own config section
@@ -516,7 +518,11 @@ class Settings:
     @classmethod
     def from_config(cls, config: Mapping) -> "Settings":
         """The settings of ``config``, validated and with the schema's defaults filled first."""
-        c = validate_config(dict(config))
+        return cls.from_validated(validate_config(dict(config)))
+
+    @classmethod
+    def from_validated(cls, c: Mapping) -> "Settings":
+        """The settings of a config that :func:`validate_config` returned (not validated again)."""
         models = ModelSettings.from_section(c["models"])
         return cls(
             cleaning=CleaningSettings.from_sections(c["temperatures"], c["errors"]),

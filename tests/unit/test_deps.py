@@ -35,3 +35,28 @@ def test_notebook_code_cells_count(tmp_path):
     )
     found = names(notebook)
     assert "paper/published.py" in found and "figures/paper.py" not in found
+
+
+def test_the_statement_walk_finds_every_import_ast_walk_finds():
+    import ast
+    import json
+
+    from thermaxis.pipeline import deps
+
+    sources = [
+        *PACKAGE.rglob("*.py"),
+        *(REPO / "workflow" / "scripts").glob("*.py"),
+        *(REPO / "notebooks").glob("*.ipynb"),
+    ]
+    for path in sources:
+        if path.suffix == ".ipynb":
+            cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+            text = "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
+        else:
+            text = path.read_text(encoding="utf-8")
+        tree = ast.parse(text)
+        every = [n for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))]
+        found = [
+            n for n in deps._statements(tree.body) if isinstance(n, (ast.Import, ast.ImportFrom))
+        ]
+        assert len(found) == len(every), path

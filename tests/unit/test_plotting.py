@@ -39,8 +39,7 @@ def intercept(m: int) -> float:
 
 
 def make_dataset(n_runs: int, positions, n_meas: int) -> dict:
-    """All tables the figure functions take, for runs R1..Rn (natural order differs from
-    string order at R10)."""
+    """All tables the figure functions take, for runs R1..Rn (natural order differs from string order at R10)."""
     positions = np.asarray(positions, dtype=float)
     x0 = positions[0]
     runs = [f"R{r + 1}" for r in range(n_runs)]
@@ -234,7 +233,7 @@ def test_save_figure_is_byte_identical_across_renders(tiny, tmp_path, name):
         paths = [tmp_path / attempt / f"{name}.{suffix}" for suffix in ("png", "pdf", "svg")]
         style.save_figure(make(), paths)
         outputs.append([p.read_bytes() for p in paths])
-    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs, strict=True):
+    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs):
         assert first, suffix
         assert first == second, f"{name}.{suffix} differs between two renders"
     svg = outputs[0][2].decode()
@@ -482,23 +481,19 @@ def test_fig9_needs_a_run(tiny):
 # ---------------------------------------------------------------------------- captions
 
 CAPTION_DETAILS = {
-    "fig2": dict(run="E1"),
-    "fig3": {},
-    "fig5": dict(run="E1"),
-    "fig6": dict(run="E1"),
-    "fig7": dict(run="E1"),
-    "fig8": dict(run="E1"),
-    "fig9": dict(runs=["E2", "E3", "E4"]),
-    "fig10": dict(run="E1"),
-    "fig11": dict(fold="E4", algorithm="mlr"),
-    "fig12": {},
-    "fig14": dict(fold="E4", approach="decoupled", algorithm="mlr"),
-    "fig15": dict(fold="E4", approach="decoupled", algorithm="mlr"),
-    "fig16": dict(fold="E4", approach="decoupled", algorithm="svr"),
-    "fig17": dict(fold="E4", approach="decoupled", algorithm="svr"),
+    "fig2_positioning_error": dict(run="E1"),
+    "fig3_ambient": {},
+    "fig5_unzeroed": dict(run="E1"),
+    "fig6_error_vs_time": dict(run="E1"),
+    "fig7_error_surface": dict(run="E1"),
+    "fig8_rezeroed": dict(run="E1"),
+    "fig9_other_runs": dict(runs=["E2", "E3", "E4"]),
+    "fig10_temperature_rise": dict(run="E1"),
+    "fig12_slope_intercept": {},
     "kb_prediction": dict(fold="E4", approach="decoupled", algorithm="gpr"),
     "error_prediction": dict(fold="E4", approach="decoupled", algorithm="gpr"),
     "fold_comparison": dict(target="error"),
+    "compensation_drift": dict(fold="E4"),
 }
 PHRASE = "Simulated data (thermal twin), not the paper's measurements."
 
@@ -512,13 +507,18 @@ def test_caption_has_the_simulated_phrase_iff_simulated(figure_id, simulated):
 
 
 def test_caption_fills_details_and_names_the_paper_figure():
-    caption = captions.figure_caption("fig9", "lab", False, runs=["E2", "E3"])
+    caption = captions.figure_caption("fig9_other_runs", "lab", False, runs=["E2", "E3"])
     assert "runs E2, E3" in caption and "paper's Fig. 9." in caption
+    svr = captions.figure_caption(
+        "kb_prediction", "lab", False, fold="E4", approach="decoupled", algorithm="svr"
+    )
+    assert svr.count("SVR") == 1 and "paper's Fig. 14/16." in svr
+    # The point-by-point error prediction is the paper's Fig. 11, which names no approach.
+    pointwise = captions.figure_caption(
+        "error_prediction", "lab", False, fold="E4", approach="pointwise", algorithm="mlr"
+    )
     assert (
-        captions.figure_caption(
-            "fig16", "lab", False, fold="E4", approach="decoupled", algorithm="svr"
-        ).count("SVR")
-        == 1
+        pointwise.startswith("Point-by-point prediction (MLR)") and "paper's Fig. 11." in pointwise
     )
 
 
@@ -526,9 +526,10 @@ def test_caption_fills_details_and_names_the_paper_figure():
     "args, kwargs, match",
     [
         (("fig99", "twin", True), {}, "unknown figure id"),
-        (("fig5", "twin", True), {}, "missing \\['run'\\]"),
-        (("fig5", "twin", True), dict(run="E1", rn="E1"), "unexpected \\['rn'\\]"),
-        (("fig3", "", True), {}, "dataset_name"),
+        (("fig5_unzeroed", "twin", True), {}, "missing \\['run'\\]"),
+        (("fig5_unzeroed", "twin", True), dict(run="E1", rn="E1"), "unexpected \\['rn'\\]"),
+        (("fig3_ambient", "", True), {}, "dataset_name"),
+        (("fig5", "twin", True), dict(run="E1"), "unknown figure id"),
     ],
 )
 def test_caption_rejects_bad_requests(args, kwargs, match):

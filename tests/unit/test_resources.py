@@ -52,3 +52,12 @@ def test_requests_take_the_worst_benchmark_of_a_rule(tmp_path):
     assert (req.rule, req.n_benchmarks, req.max_s, req.max_rss_mb, req.mem_mb, req.runtime_min) == (
         "clean_run", 2, 90.0, 200.0, 500, 8,
     )  # fmt: skip
+
+
+def test_per_attempt_scales_memory_and_runtime_with_the_attempt():
+    fixed = resources.per_attempt(750, 5)
+    assert fixed["mem_mb"]({}, 1) == 750 and fixed["mem_mb"]({}, 3) == 2250
+    assert fixed["runtime"]({}, 2) == 10
+    # A runtime from the job's wildcards (a sweep batch's share of the grid).
+    derived = resources.per_attempt(500, lambda wildcards: int(wildcards["batch"]) + 1)
+    assert derived["runtime"]({"batch": "2"}, 2) == 6

@@ -1,4 +1,4 @@
-"""The bad-input catalogue (issue 13): hostile and broken datasets and config values.
+"""The bad-input catalogue: hostile and broken datasets and config values.
 
 Each case copies a two-run cut of the twin and breaks one thing. Every refusal must be
 ONE ``thermaxis error:`` line naming the offending file (and line or column where one
@@ -7,11 +7,13 @@ file written outside ``results/<dataset>/``, ``logs/`` and ``benchmarks/``. Legi
 oddities must pass, implausible values must warn.
 
 ``test_bad_input`` runs every case in-process, the way the workflow does: the parse-time
-checks through :func:`thermaxis.pipeline.preflight.check_before_jobs` (the one call common.smk
-makes), then the scripts of the rules up to the first one that must refuse (the case's
-target), with the params the rules give them. ``test_bad_input_end_to_end`` runs a
-representative set (``END_TO_END``) through Snakemake itself and checks that it prints
-the very same line.
+gate, :mod:`thermaxis.pipeline.preflight` (``check_before_jobs``, the first call of
+common.smk; the workflow parsed in-process, which ends with ``check_rules``; for the
+sweep ``sweep_plan``), then the scripts of the rules up to the first one that must
+refuse (the case's target). Which script a rule runs and what it hands the script
+(input, output, params, log, wildcards) come from the workflow Snakemake parsed with the
+case's config. ``test_bad_input_end_to_end`` runs a representative set (``END_TO_END``)
+through Snakemake itself and checks that it prints the very same line.
 
 With ``THERMAXIS_CATALOGUE=<folder>`` each case also writes its message there;
 ``PYTHONPATH=tests python tests/workflow/test_bad_input_catalogue.py <folder> tests/workflow/CATALOGUE.md``
@@ -40,7 +42,7 @@ import yaml
 
 from conftest import REPO, run_snakemake, workflow_workdir
 from thermaxis.config import merge
-from thermaxis.pipeline.preflight import check_before_jobs
+from thermaxis.pipeline import preflight
 
 TWIN = REPO / "data" / "raw" / "twin"
 NAME = "cut"
@@ -55,7 +57,7 @@ class Case:
     expect: str  # substring of the message (regex when it starts with "re:")
     file: str | None = None  # offending file, relative to the dataset ("" = the dataset folder)
     line: int | None = None
-    target: str = "parse"  # "parse", "summary", "clean:<run>", "select:<fold>"
+    target: str = "parse"  # "parse", "summary", "clean:<run>", "assemble", "select:<fold>", "sweep"
     fails: bool = True
     config: dict = field(default_factory=dict)
 
@@ -371,10 +373,24 @@ CASES = [
     Case("config_degree_out_of_range", lambda ds, w: None, "config decoupling/degree: 7 is greater than the maximum of 3", config={"decoupling": {"degree": 7}}),
     Case("config_unknown_key", lambda ds, w: None, "config top level: Additional properties are not allowed ('bogus' was unexpected)", config={"bogus": 1}),
     Case("config_wrong_type", lambda ds, w: None, "config selection/n_clusters: 'three' is not of type 'integer'", config={"selection": {"n_clusters": "three"}}),
-    Case("config_limits_reversed", lambda ds, w: None, "limits_c must be (low, high) with low < high", target="clean:E2", config={"temperatures": {"limits_c": [120, -20]}}),
+    Case("config_limits_reversed", lambda ds, w: None, "limits_c must be (low, high) with low < high", config={"temperatures": {"limits_c": [120, -20]}}),
     Case("config_median_reversed", lambda ds, w: None, "config temperatures.plausible_median_c: expected [low, high]", target="clean:E2", config={"temperatures": {"plausible_median_c": [60, 5]}}),
     Case("config_dataset_missing", lambda ds, w: shutil.rmtree(ds), "dataset folder not found", ""),
     Case("config_unknown_fold", lambda ds, w: None, "config folds: 'E9'", config={"folds": ["E9"]}),
+    Case(
+        "config_compensation_algorithm_not_modelled",
+        lambda ds, w: None,
+        "config compensation.algorithm: 'svr' is not one of models.algorithms (mlr)",
+        config={"models": {"algorithms": ["mlr"]}, "compensation": {"algorithm": "svr"}},
+    ),
+    Case("config_sweep_unknown_fold", lambda ds, w: None, "config sweep.folds: 'E9' is not a run of", "runs.tsv", config={"sweep": {"folds": ["E9"]}}),
+    Case(
+        "config_sweep_nothing_fits",
+        lambda ds, w: None,
+        "config sweep: no selection setting fits the dataset (fixed: sensor(s) X1, X2, X3 of sweep.fixed are not in the dataset)",
+        target="sweep",
+        config={"sweep": {"methods": ["fixed"], "fixed": {"k": ["X1"], "b": ["X2"], "pointwise": ["X3"]}}},
+    ),
     Case(
         "constant_sensor",
         lambda ds, w: _column(ds / E2_BOX, "T3", lambda v: "25.000") or _column(ds / "E1/temperatures/box.csv", "T3", lambda v: "25.000"),
@@ -400,11 +416,13 @@ CASES = [
 
 
 # Run end to end through Snakemake as well: at least one case of every stage that can
-# refuse (the Snakefile's config check, each check of thermaxis.pipeline.preflight, a job of each
+# refuse (the config, each kind of check of thermaxis.pipeline.preflight, a job of each
 # rule that refuses or warns) and every case that could hang or write outside the
 # dataset's folders. Each also checks that the in-process message is Snakemake's.
 END_TO_END = {
-    "config_degree_out_of_range",  # the Snakefile's validate_config, before anything else
+    "config_degree_out_of_range",  # preflight's validate_config, before anything else
+    "config_compensation_algorithm_not_modelled",  # preflight: a check that was the compensation rules' own
+    "config_sweep_nothing_fits",  # preflight.sweep_plan, when the sweep's DAG is built
     "name_dotdot",  # preflight: a name that would escape results/
     "first_error_fifo",  # preflight: the one data file read at parse time; a FIFO must not hang
     "yaml_list_property",  # accepted: both runs cleaned, the summary job
@@ -439,6 +457,7 @@ def _broken(case: Case, two_runs: Path, tmp_path: Path) -> tuple[Path, Path, dic
     work = workflow_workdir(tmp_path)
     case.break_it(ds, work)
     config = {"dataset": str(ds), "ambient_sensor": "T10", "selection": {"n_clusters": 3}, **case.config}
+    (work / "case.yaml").write_text(yaml.safe_dump(config))
     return ds, work, config
 
 
@@ -451,6 +470,7 @@ def _targets(case: Case, name: str) -> list[str]:
         "clean": [f"{out}/clean/{arg}/qc.csv"],
         "select": [f"{out}/selection/{arg}.json"],
         "assemble": [f"{out}/assembled/errors.parquet"],
+        "sweep": [f"{out}/sweep/summary.csv"],
     }[kind]
 
 
@@ -475,13 +495,7 @@ def _record(case: Case, message: str, status: str) -> None:
         (Path(folder) / f"{case.id}.json").write_text(json.dumps({"id": case.id, "status": status, "message": message}))
 
 
-# ---- in process: the parse-time checks and the rules' own scripts -----------------------
-SCRIPTS = REPO / "workflow" / "scripts"
-CLEAN_OUTPUTS = ("series:temperatures.parquet", "qc:qc.csv", "gaps:gaps.csv", "errors:errors.parquet",
-                 "temperatures:measurement_temperatures.parquet", "windows:windows.csv",
-                 "signals:measurement_signals.parquet", "signal_series:signals.parquet")  # fmt: skip
-
-
+# ---- in process: the parse-time gate and the rules' own scripts ----------------------------
 class _Timeout(Exception):
     pass
 
@@ -490,70 +504,62 @@ def _alarm(signum, frame):
     raise _Timeout(f"no answer within {TIMEOUT_S} s")
 
 
-def _job(out: str, log: str, *, input=None, output=None, params=None, wildcards=None) -> SimpleNamespace:
-    """What Snakemake hands a script rule as ``snakemake`` (the fields the scripts read)."""
-    return SimpleNamespace(
-        input=SimpleNamespace(**(input or {})),
-        output=SimpleNamespace(**{k: f"{out}/{v}" for k, v in (output or {}).items()}),
-        params=SimpleNamespace(**(params or {})),
-        wildcards=SimpleNamespace(**(wildcards or {})),
-        log=[log],
-    )
-
-
-def _jobs(case: Case, checked) -> list[tuple[str, SimpleNamespace]]:
-    """The script jobs Snakemake runs for the case's target, in order, with the rules' params.
-
-    Mirrors the rules' inputs, outputs and params (clean.smk, assemble.smk, select.smk,
-    ingest.smk); the end-to-end cases run the rules themselves.
-    """
-    config, out, logs = checked.config, checked.out, f"logs/{checked.dataset.name}"
-    root, runs = str(checked.dataset.root), list(checked.dataset.run_ids)
+def _target_jobs(case: Case, runs: list[str]) -> list[tuple[str, dict]]:
+    """The (rule, wildcards) of the jobs Snakemake runs for the case's target, in order."""
     kind, _, arg = case.target.partition(":")
+    cleans = [("clean_run", {"run": run}) for run in runs]
+    return {
+        "parse": cleans + [("dataset_summary", {})],
+        "summary": cleans + [("dataset_summary", {})],
+        "clean": [("clean_run", {"run": arg})],
+        "assemble": cleans + [("assemble", {})],
+        "select": cleans + [("assemble", {}), ("select_sensitive_points", {"fold": arg})],
+        "sweep": [],
+    }[kind]
 
-    def clean(run):
-        outputs = {k: f"clean/{run}/{v}" for k, v in (o.split(":") for o in CLEAN_OUTPUTS)}
-        params = {"dataset": root, "temperatures": config["temperatures"], "errors": config["errors"]}
-        return "clean_run.py", _job(out, f"{logs}/clean/{run}.log", output=outputs, params=params, wildcards={"run": run})
 
-    def cleaned(name):
-        return [f"{out}/clean/{run}/{name}" for run in runs]
+def _parsed(work: Path, jobs: list[tuple[str, dict]]) -> tuple[dict, list[tuple[Path, SimpleNamespace]]]:
+    """Parse the workflow in ``work`` as Snakemake does (config/config.yaml, then case.yaml)
+    and take each job's wiring from its rule: the script it runs and the input, output,
+    params, log and wildcards Snakemake hands that script as ``snakemake``.
 
-    assemble = ("assemble.py", _job(
-        out, f"{logs}/assemble.log",
-        input={"errors": cleaned("errors.parquet"), "temperatures": cleaned("measurement_temperatures.parquet"),
-               "signals": cleaned("measurement_signals.parquet"), "qc": cleaned("qc.csv")},
-        output={"errors": "assembled/errors.parquet", "temperatures": "assembled/temperatures.parquet",
-                "signals": "assembled/signals.parquet", "qc": "tables/cleaning_qc.csv"},
-        params={"dataset": root},
-    ))  # fmt: skip
-    if kind == "clean":
-        return [clean(arg)]
-    if kind in ("parse", "summary"):
-        summary = ("dataset_summary.py", _job(
-            out, f"{logs}/dataset_summary.log", input={"windows": cleaned("windows.csv")},
-            output={"table": "tables/dataset_summary.csv"}, params={"dataset": root, "runs": runs},
-        ))  # fmt: skip
-        return [*map(clean, runs), summary]
-    if kind == "assemble":
-        return [*map(clean, runs), assemble]
-    select = ("select.py", _job(
-        out, f"{logs}/select/{arg}.log",
-        input={"errors": f"{out}/assembled/errors.parquet", "temperatures": f"{out}/assembled/temperatures.parquet"},
-        output={"selection": f"selection/{arg}.json", "table": f"selection/{arg}.csv"},
-        params={"selection": config["selection"], "decoupling": config["decoupling"],
-                "decoupled": checked.n_positions >= 2},
-        wildcards={"fold": arg},
-    ))  # fmt: skip
-    return [*map(clean, runs), assemble, select]
+    Returns the workflow's globals too; a refusal while parsing raises SystemExit.
+    """
+    from snakemake.api import SnakemakeApi
+    from snakemake.iocontainers import Wildcards
+    from snakemake.settings.enums import Quietness
+    from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings
+
+    with SnakemakeApi(OutputSettings(quiet={Quietness.ALL}, enable_file_logging=False)) as api:
+        parsed = api.workflow(
+            resource_settings=ResourceSettings(cores=1),
+            config_settings=ConfigSettings(configfiles=[work / "config" / "config.yaml", work / "case.yaml"]),
+            snakefile=work / "Snakefile",
+            workdir=work,
+        )._workflow
+        rules = {rule.name: rule for rule in parsed.rules}
+        wired = []
+        for name, values in jobs:
+            rule = rules[name]
+            wildcards = Wildcards(fromdict=values)
+            input, *_ = rule.expand_input(wildcards)
+            output, _ = rule.expand_output(wildcards)
+            params, _ = rule.expand_params(wildcards, input, output, None)
+            job = SimpleNamespace(
+                rule=name, input=input, output=output, params=params, wildcards=wildcards, log=rule.expand_log(wildcards)
+            )
+            wired.append((Path(rule.basedir) / rule.script, job))
+        return dict(parsed.globals), wired
 
 
 def _in_process(case: Case, work: Path, config: dict, capsys) -> tuple[bool, str, str, list[Path]]:
     """Refused?, the 'thermaxis error:' line, stderr, and the refusing job's outputs.
 
-    Parse time is thermaxis.pipeline.preflight.check_before_jobs (what common.smk calls, after the
-    Snakefile's validate_config, which it calls too) on the config files merged as
-    Snakemake merges them; the jobs run the rules' scripts as Snakemake does.
+    Parse time is thermaxis.pipeline.preflight, the one parse-time gate: check_before_jobs
+    (what common.smk calls first) on the config files merged as Snakemake merges them,
+    then the workflow parsed in-process (its last check, preflight.check_rules) and, for
+    the sweep, preflight.sweep_plan. The jobs run the rules' scripts with the wiring of
+    the parsed workflow, as Snakemake does.
     """
     base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
     old = signal.signal(signal.SIGALRM, _alarm)
@@ -562,19 +568,30 @@ def _in_process(case: Case, work: Path, config: dict, capsys) -> tuple[bool, str
     os.chdir(work)
     try:
         try:
-            checked = check_before_jobs(merge(base, config))
+            checked = preflight.check_before_jobs(merge(base, config))
         except ValueError as exc:
             assert "\n" not in str(exc), repr(str(exc))
             return True, f"thermaxis error: {exc}", capsys.readouterr().err, []
-        for script, job in _jobs(case, checked):
-            for path in vars(job.output).values():  # Snakemake makes the output folders
+        try:
+            _, jobs = _parsed(work, _target_jobs(case, checked.runs))
+            if case.target == "sweep":
+                preflight.sweep_plan(checked, cores=1, on_cluster=False)
+        except SystemExit as exc:
+            return True, str(exc.code), capsys.readouterr().err, []
+        except ValueError as exc:
+            assert "\n" not in str(exc), repr(str(exc))
+            return True, f"thermaxis error: {exc}", capsys.readouterr().err, []
+        finally:
+            os.chdir(work)  # the parse changes back to where it started
+        for script, job in jobs:
+            for path in job.output:  # Snakemake makes the output folders
                 Path(path).parent.mkdir(parents=True, exist_ok=True)
             try:
-                runpy.run_path(str(SCRIPTS / script), init_globals={"snakemake": job}, run_name="__main__")
+                runpy.run_path(str(script), init_globals={"snakemake": job}, run_name="__main__")
             except SystemExit as exc:
                 assert exc.code == 1, exc.code
                 err = capsys.readouterr().err
-                return True, _message(err), err, [work / p for p in vars(job.output).values()]
+                return True, _message(err), err, [work / p for p in job.output]
         return False, "", capsys.readouterr().err, []
     finally:
         os.chdir(cwd)
@@ -614,7 +631,6 @@ def test_bad_input(case: Case, two_runs: Path, tmp_path: Path, capsys) -> None:
 @pytest.mark.parametrize("case", [c for c in CASES if c.id in END_TO_END], ids=lambda c: c.id)
 def test_bad_input_end_to_end(case: Case, two_runs: Path, tmp_path: Path, capsys) -> None:
     ds, work, config = _broken(case, two_runs, tmp_path)
-    (work / "case.yaml").write_text(yaml.safe_dump(config))
     before = _tree(tmp_path, ("work/.snakemake",))
     proc = run_snakemake(
         work,
@@ -682,7 +698,7 @@ def write_catalogue(folder: Path, out: Path) -> None:
     """Markdown list of every kind and its message, from the records of a test run."""
     records = {r["id"]: r for r in (json.loads(p.read_text()) for p in sorted(folder.glob("*.json")))}
     lines = [
-        "# Bad-input catalogue (issue 13)",
+        "# Bad-input catalogue",
         "",
         "Generated by running `tests/workflow/test_bad_input_catalogue.py` with `THERMAXIS_CATALOGUE` set.",
         "Paths are those of the test's scratch copy (`<tmp>` stands for it) and of the repository (`<repo>`).",

@@ -14,7 +14,7 @@ rule assemble:
         qc=report(
             f"{OUT}/tables/cleaning_qc.csv",
             caption="../report/cleaning_qc.rst",
-            category="1. Dataset",
+            category=CATEGORY["dataset"],
             labels={"table": "cleaning QC"},
         ),
     log:
@@ -24,10 +24,9 @@ rule assemble:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("assemble"),
     params:
-        provenance=DATA_STATEMENT,
+        statement=DATA_STATEMENT,
         dataset=str(DATASET.root),
     script:
         "../scripts/assemble.py"

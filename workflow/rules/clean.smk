@@ -19,8 +19,7 @@ rule clean_run:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("clean_run"),
     params:
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         temperatures=config["temperatures"],

@@ -1,16 +1,25 @@
+# All of the workflow's state: every global and every function the rules call, in blocks
+# (dataset, paths, vocabulary, figures, reports, compensation, sweep, resources, targets).
+# The other rule files define rules only (snakemake --lint wants functions here); their
+# paths start with OUT, LOGS or BENCH.
+import functools
+import json
 import os
 import sys
 from pathlib import Path
 
-from thermaxis.dataset.safety import check_rule_outputs
-from thermaxis.errors import DataError
-from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
-from thermaxis.schemas import schema_path
-from thermaxis.pipeline.deps import library_modules
-from thermaxis.pipeline.preflight import check_before_jobs
-from thermaxis.figures.captions import figure_caption
+from thermaxis import vocabulary
 from thermaxis.dataset.summary import data_statement
+from thermaxis.figures import registry
+from thermaxis.figures.captions import figure_caption
+from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
+from thermaxis.pipeline import preflight
+from thermaxis.pipeline.deps import library_modules, named_modules
+from thermaxis.pipeline.resources import MIN_MEMORY_MB, MIN_RUNTIME_MIN, per_attempt
 from thermaxis.reports.index import PAPER_HEADLINE
+from thermaxis.reports.provenance import git_state
+from thermaxis.schemas import schema_path
+from thermaxis.sweep.plan import batch_minutes, cost_estimate
 
 
 envvars:
@@ -24,31 +33,21 @@ os.environ["PATH"] = (
     os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
 )
 
+# --------------------------------------------------------------------------- dataset
 # One dataset per Snakemake run: --config dataset=<folder>, else the first of `datasets`
-# (`make results` runs each listed dataset in turn).
-# The config, the dataset and its first data file are validated when the workflow is
-# parsed (thermaxis.pipeline.preflight, which the bad-input tests call too), so a bad sheet, a
-# missing run folder or a bad config value stops everything with one line before any
-# job starts.
-try:
-    CHECKED = check_before_jobs(config)
-except ValueError as exc:
-    sys.exit(f"thermaxis error: {exc}")
-config["dataset"] = CHECKED.config["dataset"]
+# (`make results` runs each listed dataset in turn). thermaxis.pipeline.preflight is the
+# one parse-time gate (the bad-input tests call it too): the config is validated once,
+# its defaults filled, and the dataset, its sheets and its first data file are checked,
+# so a bad value stops everything with one line before any job starts. The rules read
+# the validated config.
+with preflight.one_line():
+    CHECKED = preflight.check_before_jobs(config)
+config.update(CHECKED.config)
+SETTINGS = CHECKED.settings
 DATASET = CHECKED.dataset
-
-
-RUNS = list(DATASET.run_ids)
-OUT = CHECKED.out
-LOGS = f"logs/{DATASET.name}"
-BENCH = f"benchmarks/{DATASET.name}"
-ENV = "../../envs/thermaxis.yaml"
+RUNS = CHECKED.runs
+FOLDS = CHECKED.folds
 SIMULATED = DATASET.simulated
-FOLDS = list(config["folds"]) or RUNS
-ALGORITHMS = list(SETTINGS.models.algorithms)
-FIG_FORMATS = list(SETTINGS.figures.formats)
-FIG_RUN = SETTINGS.figures.run or RUNS[0]
-OTHER_RUNS = [r for r in RUNS if r != FIG_RUN]
 DATA_STATEMENT = data_statement(
     DATASET.name, SIMULATED, DATASET.meta["provenance"].get("citation", "")
 )
@@ -60,28 +59,15 @@ HEADLINE = (
     if PAPER
     else DATASET.meta.get("title", DATASET.meta["description"].strip().split("\n")[0])
 )
-SIGNALS = list(DATASET.signals)
-FIG_ALGORITHMS = [a for a in SETTINGS.figures.algorithms if a in ALGORITHMS]
-REPORT_ALGORITHMS = [a for a in SETTINGS.reports.model_algorithms if a in ALGORITHMS]
-# Model reports embed the prediction figures of their algorithms, so those are drawn too.
-PREDICTION_ALGORITHMS = list(dict.fromkeys(FIG_ALGORITHMS + REPORT_ALGORITHMS))
-# The paper's published values and the schemas are package data (relative paths keep the
-# executed notebooks independent of where the checkout is).
-PAPER_DIR = os.path.relpath(PUBLISHED_DIR)
-PAPER_FILES = sorted(str(p) for p in Path(PAPER_DIR).glob("*.csv"))
-MODEL_SCHEMA = os.path.relpath(schema_path("compensation_model"))
-
-
 # With one target there is no line to decouple: the point-by-point branch runs alone.
 DECOUPLED = CHECKED.n_positions >= 2
-APPROACHES = ["decoupled", "pointwise"] if DECOUPLED else ["pointwise"]
+
 if not DECOUPLED:
     print(
         "thermaxis: the dataset has a single target position; the decoupled (slope/intercept) branch is skipped, "
         "only point-by-point models run",
         file=sys.stderr,
     )
-
 if AMBIENT is None:
     print(
         f"thermaxis: dataset {DATASET.name!r} declares no ambient_sensor; the ambient figure (Fig. 3) and "
@@ -95,15 +81,22 @@ if DATASET.temperature_kind == "rise":
         file=sys.stderr,
     )
 
-
-wildcard_constraints:
-    approach="decoupled|pointwise",
-    algorithm="mlr|svr|ridge|pls|gpr",
-    run="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
-    fold="|".join(map(lambda r: r.replace(".", r"\."), RUNS)),
-
-
+# --------------------------------------------------------------------------- paths
+# Every output, log and benchmark is below OUT, LOGS or BENCH (preflight.check_rules,
+# the Snakefile's last line, refuses any other).
+OUT = CHECKED.out
+LOGS = CHECKED.logs
+BENCH = CHECKED.bench
+ENV = "../../envs/thermaxis.yaml"
 SCRIPTS = Path(workflow.current_basedir).parent / "scripts"
+# A path inside the repository, relative so the executed notebooks do not depend on
+# where the work folder is; git follows the symlinks of a test work folder.
+REPO = os.path.relpath(str(workflow.current_basedir))
+# The paper's published values and the schemas are package data (relative paths keep the
+# executed notebooks independent of where the checkout is).
+PAPER_DIR = os.path.relpath(PUBLISHED_DIR)
+PAPER_FILES = sorted(str(p) for p in Path(PAPER_DIR).glob("*.csv"))
+MODEL_SCHEMA = os.path.relpath(schema_path("compensation_model"))
 
 
 def code_of(entry):
@@ -124,30 +117,537 @@ def dataset_sheets():
     return [str(DATASET.root / "dataset.yaml"), str(DATASET.root / "runs.tsv")]
 
 
-def figure_paths(stem):
-    return [f"{OUT}/figures/{stem}.{ext}" for ext in FIG_FORMATS]
+def dataset_files():
+    """Every file of the dataset but its two sheets: what provenance.json hashes."""
+    sheets = set(dataset_sheets())
+    files = (str(p) for p in DATASET.root.rglob("*") if p.is_file())
+    return sorted(f for f in files if f not in sheets)
 
 
-def prediction_caption(kind, fold, approach, algorithm):
-    """Figs. 11/14-17 share two drawings; the caption names the paper's figure it mirrors."""
-    if kind == "error_prediction" and approach == "pointwise":
-        return figure_caption(
-            "fig11", DATASET.name, SIMULATED, fold=fold, algorithm=algorithm
-        )
-    return figure_caption(
-        kind, DATASET.name, SIMULATED, fold=fold, approach=approach, algorithm=algorithm
+# --------------------------------------------------------------------------- vocabulary
+APPROACHES = list(vocabulary.APPROACHES) if DECOUPLED else ["pointwise"]
+ALGORITHMS = list(SETTINGS.models.algorithms)
+FIG_ALGORITHMS = [a for a in SETTINGS.figures.algorithms if a in ALGORITHMS]
+REPORT_ALGORITHMS = [a for a in SETTINGS.reports.model_algorithms if a in ALGORITHMS]
+# Model reports embed the prediction figures of their algorithms, so those are drawn too.
+PREDICTION_ALGORITHMS = list(dict.fromkeys(FIG_ALGORITHMS + REPORT_ALGORITHMS))
+# The paper's report shows its two algorithms.
+PAPER_ALGORITHMS = [a for a in ("mlr", "svr") if a in FIG_ALGORITHMS]
+
+
+def _one_of(names):
+    return "|".join(name.replace(".", r"\.") for name in names)
+
+
+wildcard_constraints:
+    approach=_one_of(vocabulary.APPROACHES),
+    algorithm=_one_of(vocabulary.ALGORITHMS),
+    run=_one_of(RUNS),
+    fold=_one_of(RUNS),
+    batch=r"\d+",
+    n_batches=r"\d+",
+
+
+# --------------------------------------------------------------------------- figures
+# Every figure comes from the figure table (thermaxis.figures.registry); figures.smk
+# defines one rule per family. FACTS is what the table's conditions and arguments name.
+FIG_FORMATS = list(SETTINGS.figures.formats)
+FIG_RUN = SETTINGS.figures.run or RUNS[0]
+OTHER_RUNS = [r for r in RUNS if r != FIG_RUN]
+FACTS = registry.Facts(
+    dataset_name=DATASET.name,
+    simulated=SIMULATED,
+    decoupled=DECOUPLED,
+    ambient=AMBIENT is not None,
+    run=FIG_RUN,
+    other_runs=OTHER_RUNS,
+    folds=FOLDS,
+    approaches=APPROACHES,
+    prediction_algorithms=PREDICTION_ALGORITHMS,
+    units=DATASET.signal_units(),
+    selection=config["selection"],
+    degree=config["decoupling"]["degree"],
+)
+FIGURES = registry.expand(FACTS, "all")
+SWEEP_FIGURES = registry.expand(FACTS, "sweep")
+FIGURE_FAMILIES = {}
+for _figure in FIGURES + SWEEP_FIGURES:
+    FIGURE_FAMILIES.setdefault(_figure.family, []).append(_figure)
+# The format a report embeds.
+EMBED_FORMAT = next((f for f in ("png", "svg") if f in FIG_FORMATS), FIG_FORMATS[0])
+
+
+def figure_paths(figure, **wildcards):
+    """Every format's file of a figure (with a per-fold figure's ``{fold}`` unless given)."""
+    stem = figure.stem.format(**wildcards) if wildcards else figure.stem
+    return [f"{OUT}/{figure.folder}/{stem}.{ext}" for ext in FIG_FORMATS]
+
+
+def figure_code(figures):
+    """plot.py's library modules, and those of its figures' drawing functions and readers."""
+    names = {
+        f"thermaxis.{path.rsplit('.', 1)[0]}"
+        for fig in figures
+        for path in (fig.draw, fig.reader)
+        if path
+    }
+    return sorted(set(code_of("plot.py")) | set(named_modules(*names)))
+
+
+def figure_output(figure):
+    """A figure's files, filed in the Snakemake report when it has a category."""
+    paths = figure_paths(figure)
+    if figure.category is None:
+        return paths
+    return report(
+        paths,
+        caption="../report/figure.rst",
+        category=CATEGORY[figure.category],
+        subcategory=figure.subcategory,
+        labels=figure.labels,
     )
 
 
+def figure_stems(figures=FIGURES):
+    """Every figure's stem, a per-fold figure's once per fold, in table order."""
+    return [
+        fig.stem.format(fold=fold)
+        for fig in figures
+        for fold in (FOLDS if fig.per_fold else [None])
+    ]
+
+
+def figure_files(figures=FIGURES):
+    """Every file of ``figures``, a per-fold figure's for every fold, in table order."""
+    return [
+        f"{OUT}/{fig.folder}/{fig.stem.format(fold=fold)}.{ext}"
+        for fig in figures
+        for fold in (FOLDS if fig.per_fold else [None])
+        for ext in FIG_FORMATS
+    ]
+
+
+def figure_specs(figures, wildcards):
+    """What plot.py draws: per figure its function, tables, arguments, files and caption."""
+    specs = []
+    for fig in figures:
+        spec = dict(
+            stem=fig.stem.format(**wildcards),
+            draw=fig.draw,
+            tables={k: f"{OUT}/{v}".format(**wildcards) for k, v in fig.tables.items()},
+            arguments={**fig.arguments, **wildcards},
+            paths=figure_paths(fig, **wildcards),
+            caption=registry.caption_of(fig, FACTS, wildcards),
+        )
+        if fig.reader:
+            spec["reader"] = fig.reader
+        specs.append(spec)
+    return specs
+
+
+def embedded(figure_id, **details):
+    """A workflow figure for a report: the file to embed and its caption.
+
+    ``details`` are the caption's; those the figure's stem names (fold, approach,
+    algorithm) make the stem too.
+    """
+    stem = registry.stem_of(figure_id, **details)
+    return {
+        "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
+        "caption": figure_caption(figure_id, DATASET.name, SIMULATED, **details),
+    }
+
+
+# --------------------------------------------------------------------------- reports
+# Snakemake report categories, numbered in this order.
+CATEGORY = {
+    key: f"{number}. {title}"
+    for number, (key, title) in enumerate(
+        [
+            ("dataset", "Dataset"),
+            ("data", "Errors and temperatures"),
+            ("decoupling", "Decoupling"),
+            ("sensitive_points", "Sensitive points"),
+            ("models", "Models"),
+            ("prediction", "Prediction"),
+            ("compensation", "Compensation"),
+            ("audit", "Audit against the paper"),
+            ("reports", "Reports"),
+        ],
+        start=1,
+    )
+}
+# A report notebook: papermill executes it in a python3 kernel that must start within
+# 2 min, no cell may take over 10 min, and the same process writes its HTML
+# (thermaxis.reports.notebooks).
+RUN_NOTEBOOK = (
+    "python -m thermaxis.reports.notebooks run {input.notebook:q} {output.notebook:q} {output.html:q}"
+    " --kernel python3 --start-timeout 120 --execution-timeout 600"
+    " --title {params.title:q} --parameters {params.parameters:q} > {log:q} 2>&1"
+)
+# One model report per fold shows these side by side, as the paper compares them.
+REPORT_MODELS = [
+    [approach, algorithm] for approach in APPROACHES for algorithm in REPORT_ALGORITHMS
+]
+# The paper predicts its last condition; a dataset without that run shows its last fold.
+REPORT_FOLD = (
+    config["paper_fold"] if PAPER and config["paper_fold"] in FOLDS else FOLDS[-1]
+)
+# The config sections the dataset's own reports depend on (a notebook hashes only those
+# it is given, so changing selection.n_clusters leaves the dataset reports alone).
+DATA_SECTIONS = ("dataset", "ambient_sensor", "temperatures", "errors", "decoupling")
+
+
+@functools.cache
+def git_of_checkout():
+    """Commit and dirty flag, taken once per run and only by a job that records them."""
+    return git_state(REPO)
+
+
+def sections(*names):
+    return {name: config[name] for name in names if name in config}
+
+
+def notebook_parameters(input, sections_used, **values):
+    """The notebook's parameters as JSON: every input but the notebook and the library, and ``values``."""
+    inputs = {k: v for k, v in input.items() if k not in ("notebook", "library")}
+    return json.dumps(
+        dict(
+            dataset_name=DATASET.name,
+            simulated=SIMULATED,
+            statement=DATA_STATEMENT,
+            dataset_root=config["dataset"],
+            repo=REPO,
+            config=sections_used,
+            inputs=inputs,
+            **values,
+        ),
+        sort_keys=True,
+    )
+
+
+def condition_reports():
+    return expand(f"{OUT}/reports/condition_{{run}}.html", run=RUNS)
+
+
+def model_reports():
+    return (
+        expand(f"{OUT}/reports/model_{{fold}}.html", fold=FOLDS)
+        if REPORT_MODELS
+        else []
+    )
+
+
+def report_html():
+    return [
+        *([f"{OUT}/reports/paper_report.html"] if PAPER else []),
+        f"{OUT}/reports/dataset_report.html",
+        *condition_reports(),
+        *model_reports(),
+    ]
+
+
+def report_outputs():
+    return [f"{OUT}/provenance.json", f"{OUT}/index.html", *report_html()]
+
+
+def linked_tables():
+    """The tables the index links."""
+    tables = [
+        "dataset_summary.csv",
+        "cleaning_qc.csv",
+        *(["ambient_ranges.csv"] if AMBIENT else []),
+        *(
+            ["table5_slope_intercept.csv", "table5_slope_intercept.md"]
+            if DECOUPLED
+            else []
+        ),
+        "sensitive_points.csv",
+        "metrics.csv",
+        "coefficients.csv",
+        "kb_predictions.csv",
+        "error_predictions.csv",
+        *(["paper_comparison.csv", "paper_comparison.md"] if PAPER else []),
+    ]
+    return [f"{OUT}/tables/{name}" for name in tables]
+
+
+# The figures and captions each report embeds, and what the index links.
+def dataset_report_figures():
+    figures = {"fig5_unzeroed": embedded("fig5_unzeroed", run=FIG_RUN)}
+    if AMBIENT:
+        figures["fig3_ambient"] = embedded("fig3_ambient")
+    if OTHER_RUNS:
+        figures["fig9_other_runs"] = embedded("fig9_other_runs", runs=OTHER_RUNS)
+    if DECOUPLED:
+        figures["fig12_slope_intercept"] = embedded("fig12_slope_intercept")
+    return figures
+
+
+def paper_report_figures():
+    figures = {
+        "fig2_positioning_error": embedded("fig2_positioning_error", run=FIG_RUN),
+        **dataset_report_figures(),
+        "fig6_error_vs_time": embedded("fig6_error_vs_time", run=FIG_RUN),
+        "fig7_error_surface": embedded("fig7_error_surface", run=FIG_RUN),
+        "fig8_rezeroed": embedded("fig8_rezeroed", run=FIG_RUN),
+        "fig10_temperature_rise": embedded("fig10_temperature_rise", run=FIG_RUN),
+        "fold_comparison": embedded("fold_comparison", target="error"),
+    }
+    for algorithm in PAPER_ALGORITHMS:
+        kinds = [("error_prediction", a) for a in APPROACHES]
+        kinds += [("kb_prediction", "decoupled")] if DECOUPLED else []
+        for kind, approach in kinds:
+            figure = embedded(
+                kind, fold=REPORT_FOLD, approach=approach, algorithm=algorithm
+            )
+            figures[Path(figure["path"]).stem] = figure
+    return figures
+
+
+def condition_captions(wildcards):
+    """Captions of the figures a condition report draws for its run."""
+    return {
+        f: figure_caption(f, DATASET.name, SIMULATED, run=wildcards.run)
+        for f in (
+            "fig5_unzeroed",
+            "fig6_error_vs_time",
+            "fig8_rezeroed",
+            "fig10_temperature_rise",
+        )
+    }
+
+
+def model_report_figures(fold):
+    """The workflow figures a model report embeds: its models' predictions and the drift."""
+    figures = {}
+    for approach, algorithm in REPORT_MODELS:
+        kinds = ["error_prediction"]
+        if approach == "decoupled":
+            kinds.append("kb_prediction")
+        for kind in kinds:
+            figures[f"{kind}_{approach}_{algorithm}"] = embedded(
+                kind, fold=fold, approach=approach, algorithm=algorithm
+            )
+    figures["compensation_drift"] = embedded("compensation_drift", fold=fold)
+    return figures
+
+
+def index_sections():
+    """What the index links, in order: (title, intro, rows of (label, [(text, path)]))."""
+    reports = []
+    if PAPER:
+        reports.append(
+            (
+                "The paper, figure by figure and table by table",
+                [("paper report", f"{OUT}/reports/paper_report.html")],
+            )
+        )
+    reports.append(
+        (
+            "Dataset: runs, sensors, cleaning",
+            [("dataset report", f"{OUT}/reports/dataset_report.html")],
+        )
+    )
+    reports += [
+        (f"Run {run}", [("condition report", f"{OUT}/reports/condition_{run}.html")])
+        for run in RUNS
+    ]
+    models = [
+        (f"Fold {fold} (held-out run)", [("model report", path)])
+        for fold, path in zip(FOLDS, model_reports())
+    ]
+    figures = [
+        (stem, [(ext, f"{OUT}/figures/{stem}.{ext}") for ext in FIG_FORMATS])
+        for stem in figure_stems()
+    ]
+    tables = [(Path(p).name, [(Path(p).suffix[1:], p)]) for p in linked_tables()]
+    compensation = {}
+    for p in compensation_outputs():
+        compensation.setdefault(Path(p).stem, []).append((Path(p).suffix[1:], p))
+    return [
+        ("Reports", "", reports),
+        (
+            "Model reports",
+            "Metrics, sensitive points, coefficients, predictions and compensation of one fold, "
+            f"every approach with each algorithm of config `reports.model_algorithms` "
+            f"({', '.join(REPORT_ALGORITHMS)}) side by side.",
+            models,
+        ),
+        ("Figures", "", figures),
+        ("Tables", "", tables),
+        (
+            "Compensation",
+            f"The {COMP_APPROACH} {COMP_ALGORITHM} model fitted on all runs (model.json), the controller "
+            "exports of each fold's model on its held-out run and the error left after compensating; "
+            "the thermal-drift figures are under Figures (README: Compensating a machine).",
+            list(compensation.items()),
+        ),
+    ]
+
+
+def index_inputs():
+    return sorted(
+        {
+            path
+            for _, _, rows in index_sections()
+            for _, links in rows
+            for _, path in links
+        }
+    )
+
+
+# --------------------------------------------------------------------------- compensation
+# The deployable compensation: the configured model fitted on all runs (model.json and a
+# Structured Text block), and per held-out run the controller exports of that fold's
+# model and the error left after compensating. Folds stay for evaluation only.
+# A single target has no slope: the point-by-point model gives an offset (SD43900 alone).
+COMP_APPROACH = SETTINGS.compensation.approach if DECOUPLED else "pointwise"
+COMP_ALGORITHM = SETTINGS.compensation.algorithm
+COMP_TABLES = ["siemens_840d", "twincat", "residuals", "iso230_2", "summary"]
+COMP_PARAMS = dict(
+    approach=COMP_APPROACH,
+    sections={
+        name: config[name]
+        for name in ("selection", "decoupling", "models", "compensation")
+    },
+    about=dict(dataset=DATASET.name, simulated=SIMULATED, statement=DATA_STATEMENT),
+)
+
+
 def compensation_outputs():
-    """model.json, the ST block and the tables (compensation.smk); drift figures are figures."""
-    paths = [f"{COMP}/model.json", f"{COMP}/ThermalCompensation.st"]
-    return paths + [f"{COMP}/{name}.csv" for name in COMP_TABLES]
+    """model.json, the ST block and the tables; the drift figures are figures."""
+    paths = [
+        f"{OUT}/compensation/model.json",
+        f"{OUT}/compensation/ThermalCompensation.st",
+    ]
+    return paths + [f"{OUT}/compensation/{name}.csv" for name in COMP_TABLES]
 
 
+# --------------------------------------------------------------------------- sweep
+# The sweep (`make sweep`, i.e. `snakemake sweep`): every configuration of config `sweep`
+# on every leave-one-condition-out fold; not part of `rule all`. Batches, not one job per
+# configuration: each batch is one process that reads the assembled tables once and
+# evaluates its share of the grid with the function the main workflow uses
+# (thermaxis.method.folds.evaluate_configuration). The batch count is part of the batch
+# files' path, so runs with other counts do not mix shares of two plans.
+#
+# The executor is chosen after the Snakefile is parsed; what is known then is that a
+# cluster run is given --jobs (a profile's `jobs:`; locally --jobs means --cores), and
+# that a job the cluster runs parses the workflow again in remote mode: it must find
+# the same plan (preflight.sweep_plan).
+SWEEP_ON_CLUSTER = workflow.remote_exec or workflow.resource_settings.nodes is not None
+SWEEP_EMBED = next((f for f in ("png", "svg") if f in FIG_FORMATS), None)
+
+
+@functools.cache
+def sweep_plan():
+    """The sweep's units and batches, planned the first time a sweep job asks for them."""
+    with preflight.one_line():
+        return preflight.sweep_plan(
+            CHECKED, workflow.resource_settings.cores, SWEEP_ON_CLUSTER
+        )
+
+
+def sweep_batch_files(wildcards):
+    n = sweep_plan().batches
+    return expand(f"{OUT}/sweep/batches/{n}/{{batch}}.parquet", batch=range(n))
+
+
+def sweep_batch_benchmarks(wildcards):
+    n = sweep_plan().batches
+    return expand(f"{BENCH}/sweep/batch_{n}_{{batch}}.tsv", batch=range(n))
+
+
+def sweep_batch_minutes(wildcards):
+    return batch_minutes(
+        SETTINGS.sweep.grid,
+        sweep_plan().units,
+        int(wildcards.n_batches),
+        int(wildcards.batch),
+        SETTINGS.sweep.seconds_per_evaluation,
+        DECOUPLED,
+    )
+
+
+def sweep_report_parameters(wildcards, input):
+    """papermill parameters of the sweep report: the grid, the plan's notes, the inputs."""
+    return json.dumps(
+        dict(
+            dataset_name=DATASET.name,
+            simulated=SIMULATED,
+            statement=DATA_STATEMENT,
+            figures={
+                fig.id: (
+                    f"{OUT}/{fig.folder}/{fig.stem}.{SWEEP_EMBED}"
+                    if SWEEP_EMBED
+                    else ""
+                )
+                for fig in SWEEP_FIGURES
+            },
+            grid=config["sweep"],
+            folds=CHECKED.sweep_folds,
+            skipped=sweep_plan().skipped,
+            selection=config["selection"],
+            degree=config["decoupling"]["degree"],
+            summary=input.summary,
+            ranking=input.ranking,
+            effects=input.effects,
+            benchmarks=list(input.benchmarks),
+        ),
+        sort_keys=True,
+    )
+
+
+# The cost estimate, before the first job starts and only when batches are to run.
+onstart:
+    if any(j.rule.name == "sweep_batch" for j in workflow.dag.needrun_jobs()):
+        _plan = sweep_plan()
+        _cost = cost_estimate(
+            _plan.evaluations, SETTINGS.sweep.seconds_per_evaluation, _plan.batches
+        )
+        print(
+            f"thermaxis: sweep of {len(_plan.units)} fold x selection units, "
+            f"{_cost['evaluations']} evaluations in {_plan.batches} batches; estimated "
+            f"{_cost['cpu_hours']:.2f} CPU-hours at {_cost['seconds_per_evaluation']:g} s each "
+            "(config sweep.seconds_per_evaluation), "
+            f">= {_cost['wall_minutes']:.1f} min wall with every batch running at once",
+            file=sys.stderr,
+        )
+
+
+# --------------------------------------------------------------------------- resources
+# Memory (MB) and runtime (minutes) of a rule's first attempt; a retry (--retries) asks
+# for attempt x both. Rules not listed get the floors of the requests that
+# `python -m thermaxis.pipeline.resources benchmarks/<dataset>` derives from a run's
+# benchmarks; the sweep's batches get a runtime from their share of the grid.
+RESOURCES = {
+    "default": (MIN_MEMORY_MB, MIN_RUNTIME_MIN),
+    **{
+        name: (750, MIN_RUNTIME_MIN)
+        for name in (
+            "dataset_report",
+            "condition_report",
+            "model_report",
+            "paper_report",
+            "sweep_report",
+        )
+    },
+    "compensation_model": (1000, MIN_RUNTIME_MIN),
+    "compensation_fold": (1000, MIN_RUNTIME_MIN),
+    "sweep_batch": (MIN_MEMORY_MB, sweep_batch_minutes),
+}
+
+
+def rule_resources(name):
+    """The ``resources:`` of rule ``name`` (RESOURCES)."""
+    return per_attempt(*RESOURCES.get(name, RESOURCES["default"]))
+
+
+# --------------------------------------------------------------------------- targets
 def all_outputs():
     return [
-        *(p for stem in figure_stems() for p in figure_paths(stem)),
+        *figure_files(FIGURES),
         f"{OUT}/tables/dataset_summary.csv",
         f"{OUT}/assembled/errors.parquet",
         f"{OUT}/tables/cleaning_qc.csv",
@@ -157,3 +657,9 @@ def all_outputs():
         *compensation_outputs(),
         *report_outputs(),
     ]
+
+
+def check_rules(rules):
+    """The last parse-time check, once every rule is defined (preflight.check_rules)."""
+    with preflight.one_line():
+        preflight.check_rules(rules, CHECKED)

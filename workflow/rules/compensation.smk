@@ -1,26 +1,6 @@
-# The deployable compensation: the configured model fitted on all runs (model.json and a
-# Structured Text block), and per held-out run the controller exports of that fold's
-# model and the error left after compensating. Folds stay for evaluation only.
-
-COMPENSATION = config["compensation"]
-# A single target has no slope: the point-by-point model gives an offset (SD43900 alone).
-COMP_APPROACH = COMPENSATION["approach"] if DECOUPLED else "pointwise"
-COMP_ALGORITHM = COMPENSATION["algorithm"]
-COMP_TABLES = ["siemens_840d", "twincat", "residuals", "iso230_2", "summary"]
-COMP = f"{OUT}/compensation"
-if COMP_ALGORITHM not in ALGORITHMS:
-    sys.exit(
-        f"thermaxis error: config compensation.algorithm: {COMP_ALGORITHM!r} is not one of models.algorithms "
-        f"({', '.join(ALGORITHMS)}); its held-out metrics go into model.json"
-    )
-COMP_PARAMS = dict(
-    approach=COMP_APPROACH,
-    sections={
-        name: config[name]
-        for name in ("selection", "decoupling", "models", "compensation")
-    },
-    about=dict(dataset=DATASET.name, simulated=SIMULATED, statement=DATA_STATEMENT),
-)
+# The deployable compensation (common.smk, compensation block): model.json and its
+# Structured Text block from all runs, and per held-out run its fold's exports and the
+# error left after compensating.
 
 
 rule compensation_model:
@@ -31,7 +11,7 @@ rule compensation_model:
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         metrics=f"{OUT}/tables/metrics.csv",
     output:
-        model=f"{COMP}/model.json",
+        model=f"{OUT}/compensation/model.json",
     log:
         f"{LOGS}/compensation/model.log",
     benchmark:
@@ -39,7 +19,7 @@ rule compensation_model:
     conda:
         ENV
     resources:
-        mem_mb=1000,
+        **rule_resources("compensation_model"),
     params:
         **COMP_PARAMS,
         citation=DATASET.meta["provenance"].get("citation", ""),
@@ -50,9 +30,9 @@ rule compensation_model:
 rule compensation_plc:
     input:
         code=code_of("compensation_plc.py"),
-        model=f"{COMP}/model.json",
+        model=f"{OUT}/compensation/model.json",
     output:
-        st=f"{COMP}/ThermalCompensation.st",
+        st=f"{OUT}/compensation/ThermalCompensation.st",
     log:
         f"{LOGS}/compensation/plc.log",
     benchmark:
@@ -60,7 +40,7 @@ rule compensation_plc:
     conda:
         ENV
     resources:
-        mem_mb=500,
+        **rule_resources("compensation_plc"),
     params:
         statement=DATA_STATEMENT,
     script:
@@ -74,12 +54,15 @@ rule compensation_fold:
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         selection=f"{OUT}/selection/{{fold}}.json",
-        final=f"{COMP}/model.json",
+        final=f"{OUT}/compensation/model.json",
         sheets=dataset_sheets(),
         raw=lambda w: raw_files(w.fold),
     output:
-        **{name: f"{COMP}/folds/{{fold}}/{name}.csv" for name in COMP_TABLES},
-        model=f"{COMP}/folds/{{fold}}/model.json",
+        **{
+            name: f"{OUT}/compensation/folds/{{fold}}/{name}.csv"
+            for name in COMP_TABLES
+        },
+        model=f"{OUT}/compensation/folds/{{fold}}/model.json",
     log:
         f"{LOGS}/compensation/{{fold}}.log",
     benchmark:
@@ -87,7 +70,7 @@ rule compensation_fold:
     conda:
         ENV
     resources:
-        mem_mb=1000,
+        **rule_resources("compensation_fold"),
     params:
         **COMP_PARAMS,
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
@@ -99,16 +82,16 @@ rule compensation_fold:
 rule compensation_collect:
     input:
         **{
-            name: expand(f"{COMP}/folds/{{fold}}/{name}.csv", fold=FOLDS)
+            name: expand(f"{OUT}/compensation/folds/{{fold}}/{name}.csv", fold=FOLDS)
             for name in COMP_TABLES
         },
         code=code_of("compensation_collect.py"),
     output:
         **{
             name: report(
-                f"{COMP}/{name}.csv",
+                f"{OUT}/compensation/{name}.csv",
                 caption="../report/compensation_tables.rst",
-                category="6. Compensation",
+                category=CATEGORY["compensation"],
                 labels={"table": name},
             )
             for name in COMP_TABLES
@@ -120,7 +103,7 @@ rule compensation_collect:
     conda:
         ENV
     resources:
-        mem_mb=500,
+        **rule_resources("compensation_collect"),
     params:
         statement=DATA_STATEMENT,
         tables=COMP_TABLES,

@@ -7,7 +7,7 @@ rule decouple:
         table=report(
             f"{OUT}/tables/table5_slope_intercept.csv",
             caption="../report/table5.rst",
-            category="3. Decoupling",
+            category=CATEGORY["decoupling"],
             labels={"table": "Table 5"},
         ),
         markdown=f"{OUT}/tables/table5_slope_intercept.md",
@@ -19,11 +19,10 @@ rule decouple:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("decouple"),
     params:
         degree=config["decoupling"]["degree"],
-        provenance=DATA_STATEMENT,
+        statement=DATA_STATEMENT,
         paper=PAPER,
         paper_dir=lambda w, input: os.path.dirname(input.paper),
     script:

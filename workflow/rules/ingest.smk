@@ -7,7 +7,7 @@ rule dataset_summary:
         table=report(
             f"{OUT}/tables/dataset_summary.csv",
             caption="../report/dataset_summary.rst",
-            category="1. Dataset",
+            category=CATEGORY["dataset"],
             labels={"table": "dataset summary"},
         ),
     log:
@@ -17,11 +17,10 @@ rule dataset_summary:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("dataset_summary"),
     params:
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
-        provenance=DATA_STATEMENT,
+        statement=DATA_STATEMENT,
         runs=RUNS,
     script:
         "../scripts/dataset_summary.py"

@@ -17,8 +17,7 @@ rule fit_predict:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("fit_predict"),
     params:
         approaches=APPROACHES,
         algorithms=ALGORITHMS,

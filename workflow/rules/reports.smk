@@ -1,9 +1,15 @@
-# Reports: parametrised notebooks executed by papermill and turned into
-# self-contained HTML, the dataset's provenance record and the index page.
-# Constants and helpers (and why provenance does not rerun every report): reports_common.smk.
-
-
-include: "reports_common.smk"
+# Reports: parametrised notebooks executed by papermill and turned into self-contained
+# HTML (RUN_NOTEBOOK), the dataset's provenance record and the index page. The notebooks
+# only read tables the workflow wrote; they recompute nothing.
+#
+# Provenance and reruns: provenance.json (the whole configuration, the raw-data
+# manifest, the git commit and dirty flag, versions, run time) is rewritten when the
+# raw files, the configuration or the git state change, and only the index reads it.
+# Each notebook records its own provenance when it runs, hashing only the
+# configuration sections its inputs depend on, so changing selection.n_clusters
+# reruns the model and paper reports but leaves the dataset and condition reports
+# alone. The run time is the only field that differs between two builds from the
+# same inputs; SOURCE_DATE_EPOCH fixes it.
 
 
 rule provenance:
@@ -20,13 +26,12 @@ rule provenance:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("provenance"),
     params:
         config_json=json.dumps(config, sort_keys=True),
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         repo=REPO,
-        git=GIT_STATE,
+        git=lambda w: git_of_checkout(),
     script:
         "../scripts/provenance.py"
 
@@ -43,11 +48,11 @@ rule dataset_report:
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         figures=[f["path"] for f in dataset_report_figures().values()],
     output:
-        notebook=f"{REPORTS}/dataset_report.ipynb",
+        notebook=f"{OUT}/reports/dataset_report.ipynb",
         html=report(
-            f"{REPORTS}/dataset_report.html",
+            f"{OUT}/reports/dataset_report.html",
             caption="../report/notebook_report.rst",
-            category="7. Reports",
+            category=CATEGORY["reports"],
             labels={"report": "dataset"},
         ),
     log:
@@ -57,8 +62,7 @@ rule dataset_report:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 750 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("dataset_report"),
     params:
         title=f"Dataset report: {DATASET.name}",
         statement=DATA_STATEMENT,
@@ -84,11 +88,11 @@ rule condition_report:
         windows=f"{OUT}/clean/{{run}}/windows.csv",
         kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
     output:
-        notebook=f"{REPORTS}/condition_{{run}}.ipynb",
+        notebook=f"{OUT}/reports/condition_{{run}}.ipynb",
         html=report(
-            f"{REPORTS}/condition_{{run}}.html",
+            f"{OUT}/reports/condition_{{run}}.html",
             caption="../report/notebook_report.rst",
-            category="7. Reports",
+            category=CATEGORY["reports"],
             subcategory="Conditions",
             labels={"report": "condition", "run": "{run}"},
         ),
@@ -99,8 +103,7 @@ rule condition_report:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 750 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("condition_report"),
     params:
         title=lambda w: f"Condition report: run {w.run} ({DATASET.name})",
         statement=DATA_STATEMENT,
@@ -125,16 +128,16 @@ rule model_report:
         kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
         errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
         compensation=lambda w: [
-            f"{COMP}/folds/{w.fold}/{n}.csv"
+            f"{OUT}/compensation/folds/{w.fold}/{n}.csv"
             for n in ("summary", "iso230_2", "siemens_840d", "twincat")
         ],
         figures=lambda w: [f["path"] for f in model_report_figures(w.fold).values()],
     output:
-        notebook=f"{REPORTS}/model_{{fold}}.ipynb",
+        notebook=f"{OUT}/reports/model_{{fold}}.ipynb",
         html=report(
-            f"{REPORTS}/model_{{fold}}.html",
+            f"{OUT}/reports/model_{{fold}}.html",
             caption="../report/notebook_report.rst",
-            category="7. Reports",
+            category=CATEGORY["reports"],
             subcategory="Models",
             labels={"report": "model", "fold": "{fold}"},
         ),
@@ -145,8 +148,7 @@ rule model_report:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 750 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("model_report"),
     params:
         title=lambda w: f"Model report: fold {w.fold} ({DATASET.name})",
         statement=DATA_STATEMENT,
@@ -184,11 +186,11 @@ rule paper_report:
         paper=PAPER_FILES,
         figures=[f["path"] for f in paper_report_figures().values()],
     output:
-        notebook=f"{REPORTS}/paper_report.ipynb",
+        notebook=f"{OUT}/reports/paper_report.ipynb",
         html=report(
-            f"{REPORTS}/paper_report.html",
+            f"{OUT}/reports/paper_report.html",
             caption="../report/notebook_report.rst",
-            category="7. Reports",
+            category=CATEGORY["reports"],
             labels={"report": "paper"},
         ),
     log:
@@ -198,8 +200,7 @@ rule paper_report:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 750 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("paper_report"),
     params:
         title=f"Paper report: Xu et al. reproduced on {DATASET.name}",
         statement=DATA_STATEMENT,
@@ -231,8 +232,7 @@ rule index:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("index"),
     params:
         dataset_name=DATASET.name,
         simulated=SIMULATED,

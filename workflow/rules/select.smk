@@ -13,8 +13,7 @@ rule select_sensitive_points:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("select_sensitive_points"),
     params:
         selection=config["selection"],
         decoupling=config["decoupling"],

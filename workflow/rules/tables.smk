@@ -12,31 +12,31 @@ rule collect_model_tables:
         metrics=report(
             f"{OUT}/tables/metrics.csv",
             caption="../report/metrics.rst",
-            category="5. Prediction",
+            category=CATEGORY["prediction"],
             labels={"table": "metrics"},
         ),
         coefficients=report(
             f"{OUT}/tables/coefficients.csv",
             caption="../report/coefficients.rst",
-            category="4. Models",
+            category=CATEGORY["models"],
             labels={"table": "coefficients"},
         ),
         kb_predictions=report(
             f"{OUT}/tables/kb_predictions.csv",
             caption="../report/kb_predictions.rst",
-            category="5. Prediction",
+            category=CATEGORY["prediction"],
             labels={"table": "k and b predictions"},
         ),
         error_predictions=report(
             f"{OUT}/tables/error_predictions.csv",
             caption="../report/error_predictions.rst",
-            category="5. Prediction",
+            category=CATEGORY["prediction"],
             labels={"table": "error predictions"},
         ),
         selection=report(
             f"{OUT}/tables/sensitive_points.csv",
             caption="../report/sensitive_points.rst",
-            category="3. Sensitive points",
+            category=CATEGORY["sensitive_points"],
             labels={"table": "sensitive points"},
         ),
     log:
@@ -46,10 +46,9 @@ rule collect_model_tables:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("collect_model_tables"),
     params:
-        provenance=DATA_STATEMENT,
+        statement=DATA_STATEMENT,
     script:
         "../scripts/collect_tables.py"
 
@@ -63,7 +62,7 @@ rule ambient_ranges:
         table=report(
             f"{OUT}/tables/ambient_ranges.csv",
             caption="../report/ambient_ranges.rst",
-            category="1. Dataset",
+            category=CATEGORY["dataset"],
             labels={"table": "ambient ranges (Table 1)"},
         ),
         series=f"{OUT}/tables/ambient_series.parquet",
@@ -74,11 +73,10 @@ rule ambient_ranges:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("ambient_ranges"),
     params:
         runs=RUNS,
-        provenance=DATA_STATEMENT,
+        statement=DATA_STATEMENT,
         sensor=AMBIENT,
     script:
         "../scripts/ambient_ranges.py"
@@ -100,7 +98,7 @@ rule paper_comparison:
         csv=report(
             f"{OUT}/tables/paper_comparison.csv",
             caption="../report/paper_comparison.rst",
-            category="6. Audit against the paper",
+            category=CATEGORY["audit"],
             labels={"table": "paper comparison"},
         ),
         markdown=f"{OUT}/tables/paper_comparison.md",
@@ -111,11 +109,10 @@ rule paper_comparison:
     conda:
         ENV
     resources:
-        mem_mb=lambda w, attempt: 500 * attempt,
-        runtime=lambda w, attempt: 5 * attempt,
+        **rule_resources("paper_comparison"),
     params:
         paper_fold=config["paper_fold"],
-        provenance=DATA_STATEMENT,
+        statement=DATA_STATEMENT,
         dataset_name=DATASET.name,
         simulated=SIMULATED,
         paper_dir=lambda w, input: os.path.dirname(input.paper[0]),

@@ -14,9 +14,16 @@ def main(snakemake):
     temperatures = concat(snakemake.input.temperatures, pd.read_parquet)
     signals = concat(snakemake.input.signals, pd.read_parquet)
     qc = concat(snakemake.input.qc, pd.read_csv)
-    write_parquet(sort_naturally(errors, ["run", "measurement", "position_mm"]), snakemake.output.errors)
-    write_parquet(sort_naturally(temperatures, ["run", "measurement", "sensor"]), snakemake.output.temperatures)
-    write_parquet(sort_naturally(signals, ["run", "measurement", "signal"]), snakemake.output.signals)
+    write_parquet(
+        sort_naturally(errors, ["run", "measurement", "position_mm"]), snakemake.output.errors
+    )
+    write_parquet(
+        sort_naturally(temperatures, ["run", "measurement", "sensor"]),
+        snakemake.output.temperatures,
+    )
+    write_parquet(
+        sort_naturally(signals, ["run", "measurement", "signal"]), snakemake.output.signals
+    )
     write_csv(sort_naturally(qc, ["run", "sensor"]), snakemake.output.qc)
 
 

@@ -8,7 +8,9 @@ from thermaxis.pipeline.runner import run_script, write_csv, write_parquet
 
 
 def main(snakemake):
-    cleaning = CleaningSettings.from_sections(snakemake.params.temperatures, snakemake.params.errors)
+    cleaning = CleaningSettings.from_sections(
+        snakemake.params.temperatures, snakemake.params.errors
+    )
     dataset = load_dataset(snakemake.params.dataset)
     raw = read_run(dataset, snakemake.wildcards.run)
     log = logging.getLogger("thermaxis")

@@ -1,7 +1,7 @@
 import pandas as pd
 
-from thermaxis.method.folds import SORT_KEYS
 from thermaxis.labels import sort_naturally
+from thermaxis.method.folds import SORT_KEYS
 from thermaxis.pipeline.runner import run_script, write_csv
 
 

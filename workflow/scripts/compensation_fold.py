@@ -5,20 +5,21 @@ import logging
 
 import pandas as pd
 
-from thermaxis.compensation import heldout
-from thermaxis.compensation import model as comp_model
-from thermaxis.compensation import runtime
 from thermaxis.cleaning.run import model_inputs
+from thermaxis.compensation import heldout, runtime
+from thermaxis.compensation import model as comp_model
 from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings
-from thermaxis.method.folds import selection_from_dict
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.method.folds import selection_from_dict
 from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
 
 def main(snakemake):
     p = snakemake.params
     fold = snakemake.wildcards.fold
-    X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
+    X, Y = model_inputs(
+        pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures)
+    )
     with open(snakemake.input.selection, encoding="utf-8") as fh:
         selection = selection_from_dict(json.load(fh))
     train = (X["run"] != fold).to_numpy()
@@ -44,11 +45,15 @@ def main(snakemake):
     final_values = [final.parameters(s, final_reference) for s in final_samples]
     for step in steps:
         if step.reasons:
-            logging.getLogger("thermaxis").warning("fold %s t=%g s: %s: %s", fold, step.time_s, step.status, "; ".join(step.reasons))
+            logging.getLogger("thermaxis").warning(
+                "fold %s t=%g s: %s: %s", fold, step.time_s, step.status, "; ".join(step.reasons)
+            )
     raw = read_run(load_dataset(p.dataset), fold)
     deviations = heldout.pass_deviations(raw, list(Y.columns), p.max_missing_fraction)
     time_min = X_run.sort_values("measurement")["time_min"].tolist()
-    tables = heldout.held_out_tables(fold, steps, time_min, deviations, list(Y.columns), final_values)
+    tables = heldout.held_out_tables(
+        fold, steps, time_min, deviations, list(Y.columns), final_values
+    )
     for name, frame in tables.items():
         write_csv(frame, snakemake.output[name], float_format="%.10g")
 

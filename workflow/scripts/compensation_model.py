@@ -6,10 +6,15 @@ from importlib.metadata import version
 
 import pandas as pd
 
+from thermaxis.cleaning.run import model_inputs
 from thermaxis.compensation import heldout
 from thermaxis.compensation import model as comp_model
-from thermaxis.cleaning.run import model_inputs
-from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings, SelectionSettings
+from thermaxis.config import (
+    CompensationSettings,
+    DecouplingSettings,
+    ModelSettings,
+    SelectionSettings,
+)
 from thermaxis.method.folds import select_for_fold
 from thermaxis.pipeline.runner import run_script, write_text
 
@@ -19,7 +24,9 @@ def main(snakemake):
     sections = p.sections
     decoupling = DecouplingSettings.from_section(sections["decoupling"])
     settings = CompensationSettings.from_section(sections["compensation"])
-    X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
+    X, Y = model_inputs(
+        pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures)
+    )
     # The deployed model sees every run, its sensitive points too.
     selection = select_for_fold(
         X,

@@ -1,7 +1,7 @@
 """Write the IEC 61131-3 Structured Text block of model.json."""
 
-from thermaxis.compensation.runtime import Compensator
 from thermaxis.compensation.plc import structured_text
+from thermaxis.compensation.runtime import Compensator
 from thermaxis.pipeline.runner import run_script, write_text
 
 

@@ -5,8 +5,8 @@ import pandas as pd
 
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import DecouplingSettings, ModelSettings
-from thermaxis.method.folds import SORT_KEYS, evaluate_configuration, selection_from_dict
 from thermaxis.labels import sort_naturally
+from thermaxis.method.folds import SORT_KEYS, evaluate_configuration, selection_from_dict
 from thermaxis.pipeline.runner import run_script, write_csv
 
 
@@ -26,7 +26,9 @@ def main(snakemake):
     for approach in p.approaches:
         for algorithm in p.algorithms:
             logging.getLogger("thermaxis").info("fold %s: %s %s", fold, approach, algorithm)
-            results.append(evaluate_configuration(X, Y, fold, approach, algorithm, selection, models, degree))
+            results.append(
+                evaluate_configuration(X, Y, fold, approach, algorithm, selection, models, degree)
+            )
     for name in ("metrics", "coefficients", "kb_predictions", "error_predictions"):
         frame = pd.concat([getattr(r, name) for r in results], ignore_index=True)
         frame = sort_naturally(frame, SORT_KEYS[name])

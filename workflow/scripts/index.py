@@ -3,8 +3,8 @@
 import json
 import os
 
-from thermaxis.reports.index import IndexRow, IndexSection, render_index
 from thermaxis.pipeline.runner import run_script, write_text
+from thermaxis.reports.index import IndexRow, IndexSection, render_index
 
 
 def main(snakemake):
@@ -18,17 +18,26 @@ def main(snakemake):
         IndexSection(
             title=title,
             intro=intro,
-            rows=tuple(IndexRow(label, tuple((text, rel(path)) for text, path in links)) for label, links in rows),
+            rows=tuple(
+                IndexRow(label, tuple((text, rel(path)) for text, path in links))
+                for label, links in rows
+            ),
         )
         for title, intro, rows in p.sections
     ]
     # The sweep is optional and slow: linked when it was run, never a dependency.
     if os.path.isfile(p.sweep):
-        sweep = IndexRow("sweep report", (("html", rel(p.sweep)),), "present when the index was built (`make sweep`)")
+        sweep = IndexRow(
+            "sweep report",
+            (("html", rel(p.sweep)),),
+            "present when the index was built (`make sweep`)",
+        )
         sections.insert(1, IndexSection(title="Sweep", rows=(sweep,)))
     with open(snakemake.input.provenance, encoding="utf-8") as fh:
         provenance = json.load(fh)
-    page = render_index(p.dataset_name, p.statement, p.simulated, sections, provenance, headline=p.headline)
+    page = render_index(
+        p.dataset_name, p.statement, p.simulated, sections, provenance, headline=p.headline
+    )
     write_text(page, snakemake.output[0])
 
 

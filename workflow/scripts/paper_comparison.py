@@ -11,7 +11,11 @@ def main(snakemake):
         runs=pd.read_csv(i.summary),
         ambient=pd.read_csv(i.ambient),
         # A single-position dataset has no decoupled k and b: the Table 5 items stay empty.
-        kb=pd.read_csv(i.kb[0]) if i.kb else pd.DataFrame(columns=["run", "measurement", "k_um_per_m", "b_um"]),
+        kb=(
+            pd.read_csv(i.kb[0])
+            if i.kb
+            else pd.DataFrame(columns=["run", "measurement", "k_um_per_m", "b_um"])
+        ),
         metrics=pd.read_csv(i.metrics),
         coefficients=pd.read_csv(i.coefficients),
         sensitive_points=pd.read_csv(i.selection),
@@ -19,9 +23,14 @@ def main(snakemake):
         errors=pd.read_parquet(i.errors),
         paper_fold=p.paper_fold,
     )
-    comparison = paper_comparison(published_values(p.paper_dir), tables, p.dataset_name, p.simulated)
+    comparison = paper_comparison(
+        published_values(p.paper_dir), tables, p.dataset_name, p.simulated
+    )
     write_csv(comparison, snakemake.output.csv, float_format="%.4f")
-    write_text(comparison_markdown(comparison, p.dataset_name, p.simulated, p.paper_fold), snakemake.output.markdown)
+    write_text(
+        comparison_markdown(comparison, p.dataset_name, p.simulated, p.paper_fold),
+        snakemake.output.markdown,
+    )
 
 
 run_script(main, snakemake)

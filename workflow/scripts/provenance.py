@@ -2,8 +2,8 @@
 
 import json
 
-from thermaxis.reports.provenance import collect, to_json
 from thermaxis.pipeline.runner import run_script, write_text
+from thermaxis.reports.provenance import collect, to_json
 
 
 def main(snakemake):

@@ -9,12 +9,19 @@ from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
 
 def main(snakemake):
-    X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
+    X, Y = model_inputs(
+        pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures)
+    )
     p = snakemake.params
     settings = SelectionSettings.from_section(p.selection)
     degree = DecouplingSettings.from_section(p.decoupling).degree
-    selection = select_for_fold(X, Y, snakemake.wildcards.fold, settings, degree, decoupled=p.decoupled)
-    write_text(json.dumps(selection_to_dict(selection), indent=1, sort_keys=True) + "\n", snakemake.output.selection)
+    selection = select_for_fold(
+        X, Y, snakemake.wildcards.fold, settings, degree, decoupled=p.decoupled
+    )
+    write_text(
+        json.dumps(selection_to_dict(selection), indent=1, sort_keys=True) + "\n",
+        snakemake.output.selection,
+    )
     write_csv(selection_table(selection), snakemake.output.table, float_format="%.6f")
 
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import string
 
-
 __all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption"]
 
 
@@ -26,55 +25,59 @@ def _display(label) -> str:
     return DISPLAY_NAMES.get(str(label), str(label))
 
 
-
 # --------------------------------------------------------------------------- captions
 
-# figure id -> (the paper's figure, caption body with {detail} placeholders)
+# figure id (thermaxis.figures.registry) -> (the paper's figure, caption body with {detail}
+# placeholders). The paper repeats Figs. 14/15 for SVR as Figs. 16/17; one drawing serves both.
 _CAPTIONS: dict[str, tuple[str | None, str]] = {
-    "fig2": (
+    "fig2_positioning_error": (
         "2",
         "Positioning error of the axis in the first measurement of run {run}, before the axis warms up "
         "(forward and backward passes combined).",
     ),
-    "fig3": ("3", "Ambient temperature of every run against the time since the run's first measurement."),
-    "fig5": (
+    "fig3_ambient": (
+        "3",
+        "Ambient temperature of every run against the time since the run's first measurement.",
+    ),
+    "fig5_unzeroed": (
         "5",
         "Unzeroed thermal positioning error of run {run}: one curve per measurement, labelled by the time "
         "since the first measurement; the interferometer is zeroed only before the first measurement.",
     ),
-    "fig6": (
+    "fig6_error_vs_time": (
         "6",
         "Unzeroed thermal positioning error of run {run} at every target position against the time since "
         "the first measurement.",
     ),
-    "fig7": ("7", "Unzeroed thermal positioning error of run {run} over position and time."),
-    "fig8": (
+    "fig7_error_surface": (
+        "7",
+        "Unzeroed thermal positioning error of run {run} over position and time.",
+    ),
+    "fig8_rezeroed": (
         "8",
         "Re-zeroed thermal positioning error of run {run}: each measurement minus its own reading at the "
         "first position, which hides the drift between measurements and leaves the expansion along the stroke.",
     ),
-    "fig9": ("9", "Unzeroed thermal positioning error of runs {runs}, one panel per run, one curve per measurement."),
-    "fig10": (
+    "fig9_other_runs": (
+        "9",
+        "Unzeroed thermal positioning error of runs {runs}, one panel per run, one curve per measurement.",
+    ),
+    "fig10_temperature_rise": (
         "10",
         "Temperature rise of the sensors of run {run} relative to their values at the start of the first "
         "measurement.",
     ),
-    "fig11": (
-        "11",
-        "Point-by-point prediction ({algorithm}) of the held-out run(s) of fold {fold}: measured (solid) and "
-        "predicted (dashed) errors of every measurement, and the residuals (measured minus predicted).",
-    ),
-    "fig12": (
+    "fig12_slope_intercept": (
         "12",
         "Slope k (top) and intercept b (bottom) of the decoupled error line of every measurement, one line per run.",
     ),
-    "fig14": (
-        "14",
+    "kb_prediction": (
+        "14/16",
         "Measured and predicted slope k and intercept b of the held-out run(s) of fold {fold} "
         "({approach} approach, {algorithm}).",
     ),
-    "fig15": (
-        "15",
+    "error_prediction": (
+        "15/17",
         "Measured (solid) and predicted (dashed) thermal positioning error of the held-out run(s) of fold "
         "{fold} ({approach} approach, {algorithm}) and the residuals (measured minus predicted).",
     ),
@@ -92,11 +95,14 @@ _CAPTIONS: dict[str, tuple[str | None, str]] = {
         "are measurements where the policy held or ramped the values.",
     ),
 }
-# The paper repeats Figs. 14/15 for SVR as Figs. 16/17; the library draws both with one function.
-_CAPTIONS["fig16"] = ("16", _CAPTIONS["fig14"][1])
-_CAPTIONS["fig17"] = ("17", _CAPTIONS["fig15"][1])
-_CAPTIONS["kb_prediction"] = ("14/16", _CAPTIONS["fig14"][1])
-_CAPTIONS["error_prediction"] = ("15/17", _CAPTIONS["fig15"][1])
+# The point-by-point error prediction is the paper's Fig. 11 (it has no approach to name).
+_VARIANTS: dict[tuple[str, str], tuple[str | None, str]] = {
+    ("error_prediction", "pointwise"): (
+        "11",
+        "Point-by-point prediction ({algorithm}) of the held-out run(s) of fold {fold}: measured (solid) and "
+        "predicted (dashed) errors of every measurement, and the residuals (measured minus predicted).",
+    ),
+}
 
 
 _TARGET_NAMES = {"k": "slope k", "b": "intercept b", "error": "thermal positioning error"}
@@ -116,9 +122,10 @@ def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details
     Parameters
     ----------
     figure_id : str
-        ``"fig2"`` ... ``"fig17"`` (not 4 and 13, which are photographs/schematics),
-        ``"kb_prediction"``, ``"error_prediction"``, ``"fold_comparison"`` or
-        ``"compensation_drift"``.
+        A figure id of :mod:`thermaxis.figures.registry`: ``"fig2_positioning_error"`` ...
+        ``"fig12_slope_intercept"`` (the paper's Figs. 4 and 13 are photographs/schematics),
+        ``"kb_prediction"``, ``"error_prediction"`` (point by point: the paper's Fig. 11),
+        ``"fold_comparison"`` or ``"compensation_drift"``.
     dataset_name : str
         Name of the dataset the figure was drawn from.
     simulated : bool
@@ -136,12 +143,19 @@ def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details
         raise ValueError(f"unknown figure id {figure_id!r}; expected one of {', '.join(_CAPTIONS)}")
     if not isinstance(dataset_name, str) or not dataset_name:
         raise ValueError(f"dataset_name must be a non-empty string, got {dataset_name!r}")
-    paper_figure, body = _CAPTIONS[figure_id]
+    variant = (figure_id, details.get("approach"))
+    if variant in _VARIANTS:
+        paper_figure, body = _VARIANTS[variant]
+        details = {k: v for k, v in details.items() if k != "approach"}
+    else:
+        paper_figure, body = _CAPTIONS[figure_id]
     needed = {field for _, field, _, _ in string.Formatter().parse(body) if field}
     missing = sorted(needed - details.keys())
     extra = sorted(details.keys() - needed)
     if missing or extra:
-        raise ValueError(f"caption {figure_id} needs details {sorted(needed)}; missing {missing}, unexpected {extra}")
+        raise ValueError(
+            f"caption {figure_id} needs details {sorted(needed)}; missing {missing}, unexpected {extra}"
+        )
     parts = [body.format(**{k: _detail_text(k, v) for k, v in details.items()})]
     if paper_figure is not None:
         parts.append(f"Counterpart of the paper's Fig. {paper_figure}.")

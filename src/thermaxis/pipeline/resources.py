@@ -11,6 +11,10 @@ blocks are reproducible::
 prints one line per rule: its benchmarks, the measured peaks and the requests.
 Which benchmark files belong to which rule is read from the rule files
 (``benchmark:`` paths), so a new rule needs no entry here.
+
+Every rule declares its requests through :func:`per_attempt` (``workflow/rules/common.smk``
+keeps the per-rule values, beside the floors :data:`MIN_MEMORY_MB` and
+:data:`MIN_RUNTIME_MIN` every rule gets at least).
 """
 
 from __future__ import annotations
@@ -27,7 +31,14 @@ import pandas as pd
 
 from thermaxis.errors import DataError
 
-__all__ = ["Request", "benchmark_globs", "request", "requests_from_benchmarks", "main"]
+__all__ = [
+    "Request",
+    "benchmark_globs",
+    "request",
+    "requests_from_benchmarks",
+    "per_attempt",
+    "main",
+]
 
 # Headroom: memory grows with the data and differs between nodes; a time limit hit
 # kills a job, so it is generous and never below a few minutes of queue-side slack.
@@ -70,16 +81,33 @@ def benchmark_globs(rule_sources: Iterable[str]) -> dict[str, str]:
 
 def request(max_s: float, max_rss_mb: float) -> tuple[int, int]:
     """(mem_mb, runtime in minutes) for a job that took ``max_s`` s and ``max_rss_mb`` MB at most."""
-    mem = max(MIN_MEMORY_MB, math.ceil(MEMORY_FACTOR * max_rss_mb / MEMORY_STEP_MB) * MEMORY_STEP_MB)
+    mem = max(
+        MIN_MEMORY_MB, math.ceil(MEMORY_FACTOR * max_rss_mb / MEMORY_STEP_MB) * MEMORY_STEP_MB
+    )
     runtime = max(MIN_RUNTIME_MIN, math.ceil(RUNTIME_FACTOR * max_s / 60.0))
     return int(mem), int(runtime)
+
+
+def per_attempt(mem_mb: int, runtime_min) -> dict:
+    """Snakemake ``resources`` of a rule: memory (MB) and runtime (minutes) of its first attempt.
+
+    A retry (``--retries``) asks for the attempt number times both. ``runtime_min`` may be
+    a function of the job's wildcards (the sweep's batches: their share of the grid).
+    """
+    minutes = runtime_min if callable(runtime_min) else (lambda wildcards: runtime_min)
+    return {
+        "mem_mb": lambda wildcards, attempt: mem_mb * attempt,
+        "runtime": lambda wildcards, attempt: minutes(wildcards) * attempt,
+    }
 
 
 def _read(path: Path) -> pd.DataFrame:
     frame = pd.read_csv(path, sep="\t")
     for column in ("s", "max_rss"):
         if column not in frame.columns:
-            raise DataError(f"{path}: column {column!r} missing; expected a Snakemake benchmark table")
+            raise DataError(
+                f"{path}: column {column!r} missing; expected a Snakemake benchmark table"
+            )
     # Snakemake writes "-" where it could not measure (a job too short to sample).
     return frame[["s", "max_rss"]].apply(pd.to_numeric, errors="coerce")
 
@@ -100,22 +128,35 @@ def requests_from_benchmarks(bench_dir, globs: Mapping[str, str]) -> list[Reques
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m thermaxis.pipeline.resources", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m thermaxis.pipeline.resources", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("bench_dir", help="benchmarks/<dataset> of a finished run")
-    parser.add_argument("--rules", default="workflow/rules", help="folder of the rule files (default workflow/rules)")
+    parser.add_argument(
+        "--rules",
+        default="workflow/rules",
+        help="folder of the rule files (default workflow/rules)",
+    )
     args = parser.parse_args(argv)
-    globs = benchmark_globs(p.read_text(encoding="utf-8") for p in sorted(Path(args.rules).glob("*.smk")))
+    globs = benchmark_globs(
+        p.read_text(encoding="utf-8") for p in sorted(Path(args.rules).glob("*.smk"))
+    )
     try:
         rows = requests_from_benchmarks(args.bench_dir, globs)
     except DataError as exc:
         print(f"thermaxis error: {exc}", file=sys.stderr)
         return 1
     if not rows:
-        print(f"thermaxis error: {args.bench_dir}: no benchmark of any rule; expected a finished workflow run", file=sys.stderr)
+        print(
+            f"thermaxis error: {args.bench_dir}: no benchmark of any rule; expected a finished workflow run",
+            file=sys.stderr,
+        )
         return 1
     print("rule\tbenchmarks\tmax_s\tmax_rss_mb\tmem_mb\truntime_min")
     for r in rows:
-        print(f"{r.rule}\t{r.n_benchmarks}\t{r.max_s:.2f}\t{r.max_rss_mb:.1f}\t{r.mem_mb}\t{r.runtime_min}")
+        print(
+            f"{r.rule}\t{r.n_benchmarks}\t{r.max_s:.2f}\t{r.max_rss_mb:.1f}\t{r.mem_mb}\t{r.runtime_min}"
+        )
     return 0
 
 

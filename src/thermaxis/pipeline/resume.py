@@ -49,7 +49,11 @@ def live_snakemakes(folder: Path, proc: Path = PROC) -> list[int]:
             cwd = Path(os.readlink(entry / "cwd"))
         except OSError:
             continue  # gone, or not ours to inspect
-        if int(entry.name) != os.getpid() and cwd == folder and _is_snakemake([a.decode(errors="replace") for a in argv if a]):
+        if (
+            int(entry.name) != os.getpid()
+            and cwd == folder
+            and _is_snakemake([a.decode(errors="replace") for a in argv if a])
+        ):
             found.append(int(entry.name))
     return sorted(found)
 
@@ -86,7 +90,10 @@ def main(argv: list[str]) -> int:
         )
         return 1
     if stale_locks(folder):
-        print(f"thermaxis: clearing the lock of an interrupted run in {folder} (no Snakemake is running here)", file=sys.stderr)
+        print(
+            f"thermaxis: clearing the lock of an interrupted run in {folder} (no Snakemake is running here)",
+            file=sys.stderr,
+        )
         unlocked = subprocess.run([argv[0], "--unlock", *argv[1:]], stdout=subprocess.DEVNULL)
         if unlocked.returncode != 0:
             return unlocked.returncode

@@ -33,6 +33,10 @@ class _OneLine(logging.Formatter):
 
 def _configure_logging(log_path: str | None) -> logging.Logger:
     logger = logging.getLogger("thermaxis")
+    py_warnings = logging.getLogger("py.warnings")
+    # A second script in one process (the bad-input tests) closes the first one's log.
+    for previous in {*logger.handlers, *py_warnings.handlers}:
+        previous.close()
     logger.handlers.clear()
     logger.setLevel(logging.INFO)
     handler: logging.Handler
@@ -49,7 +53,6 @@ def _configure_logging(log_path: str | None) -> logging.Logger:
     terminal.addFilter(lambda record: record.levelno == logging.WARNING)
     logger.addHandler(handler)
     logging.captureWarnings(True)
-    py_warnings = logging.getLogger("py.warnings")
     py_warnings.handlers.clear()
     py_warnings.addHandler(handler)
     if log_path:
@@ -73,7 +76,10 @@ def run_script(main, snakemake) -> None:
     except Exception as exc:  # noqa: BLE001 - an unforeseen input must still end in one line
         logger.exception("unexpected error")
         first = str(exc).splitlines()[0] if str(exc) else ""
-        print(f"thermaxis error: unexpected {type(exc).__name__}: {first} (traceback in {log or 'stderr'})", file=sys.stderr)
+        print(
+            f"thermaxis error: unexpected {type(exc).__name__}: {first} (traceback in {log or 'stderr'})",
+            file=sys.stderr,
+        )
         sys.exit(1)
 
 

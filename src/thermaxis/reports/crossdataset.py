@@ -8,7 +8,8 @@ mean RMSE, mean and worst max |residual|.  Whether a dataset is simulated comes 
 its own ``dataset.yaml`` (found through ``provenance.json``), so the summary says so
 for every row.
 
-Command line (writes ``summary.csv``, ``summary.md`` and ``heldout_error.{png,pdf}``)::
+Command line (writes ``summary.csv``, ``summary.md`` and the figure table's ``heldout_error``
+in every format, ``heldout_error.{png,pdf}`` by default)::
 
     python -m thermaxis.reports.crossdataset --results results --out results/_datasets
 """
@@ -27,8 +28,10 @@ import pandas as pd
 import yaml
 
 from thermaxis.errors import DataError
+from thermaxis.figures import registry
 
-from thermaxis.figures.crossdataset import fig_heldout_error
+# The figure table's entry of the one figure this command draws.
+FIGURE = registry.entry("heldout_error")
 
 __all__ = [
     "SUMMARY_COLUMNS",
@@ -60,18 +63,24 @@ def read_metrics(path) -> pd.DataFrame:
     """One dataset's metrics.csv, checked for the columns the summary needs."""
     path = Path(path)
     try:
-        frame = pd.read_csv(path, keep_default_na=False, na_values=[""])  # "n/a" is an error, not a gap
+        frame = pd.read_csv(
+            path, keep_default_na=False, na_values=[""]
+        )  # "n/a" is an error, not a gap
     except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         raise DataError(f"{path}: cannot be read as CSV ({str(exc).splitlines()[0]})") from exc
     missing = [c for c in _METRICS_COLUMNS if c not in frame.columns]
     if missing:
-        raise DataError(f"{path}: column {missing[0]!r} missing; expected {', '.join(_METRICS_COLUMNS)}")
+        raise DataError(
+            f"{path}: column {missing[0]!r} missing; expected {', '.join(_METRICS_COLUMNS)}"
+        )
     for column in ("rmse", "max_abs"):
         values = pd.to_numeric(frame[column], errors="coerce")
         bad = values.isna() & frame[column].notna()
         if bad.any():
             row = int(np.flatnonzero(bad.to_numpy())[0]) + 2  # header is line 1
-            raise DataError(f"{path}: line {row}, column {column!r}: expected a number, got {frame[column].iloc[row - 2]!r}")
+            raise DataError(
+                f"{path}: line {row}, column {column!r}: expected a number, got {frame[column].iloc[row - 2]!r}"
+            )
         frame[column] = values
     return frame
 
@@ -83,14 +92,20 @@ def dataset_kind(result_dir) -> str:
     try:
         root = Path(json.loads(provenance.read_text(encoding="utf-8"))["data"]["root"])
     except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise DataError(f"{provenance}: expected the workflow's provenance record with data.root ({exc})") from exc
+        raise DataError(
+            f"{provenance}: expected the workflow's provenance record with data.root ({exc})"
+        ) from exc
     sheet = root / "dataset.yaml"
     try:
         kind = yaml.safe_load(sheet.read_text(encoding="utf-8"))["provenance"]["kind"]
     except (OSError, yaml.YAMLError, KeyError, TypeError) as exc:
-        raise DataError(f"{sheet}: expected provenance.kind (simulated or measured) ({exc})") from exc
+        raise DataError(
+            f"{sheet}: expected provenance.kind (simulated or measured) ({exc})"
+        ) from exc
     if kind not in ("simulated", "measured"):
-        raise DataError(f"{sheet}: provenance.kind: expected 'simulated' or 'measured', got {kind!r}")
+        raise DataError(
+            f"{sheet}: provenance.kind: expected 'simulated' or 'measured', got {kind!r}"
+        )
     return kind
 
 
@@ -119,10 +134,16 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
     for name in sorted(metrics):
         errors = metrics[name][metrics[name]["target"] == "error"]
         if errors.empty:
-            raise DataError(f"dataset {name}: metrics hold no row with target 'error'; expected held-out error curves")
+            raise DataError(
+                f"dataset {name}: metrics hold no row with target 'error'; expected held-out error curves"
+            )
         for approach in _order(errors["approach"], _APPROACH_ORDER):
-            for algorithm in _order(errors.loc[errors["approach"] == approach, "algorithm"], _ALGORITHM_ORDER):
-                group = errors[(errors["approach"] == approach) & (errors["algorithm"] == algorithm)]
+            for algorithm in _order(
+                errors.loc[errors["approach"] == approach, "algorithm"], _ALGORITHM_ORDER
+            ):
+                group = errors[
+                    (errors["approach"] == approach) & (errors["algorithm"] == algorithm)
+                ]
                 rows.append(
                     {
                         "dataset": name,
@@ -165,10 +186,16 @@ def _result_dirs(results: Path) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m thermaxis.reports.crossdataset", description=__doc__.splitlines()[0])
-    parser.add_argument("--results", default="results", help="folder holding results/<dataset>/ (default: results)")
+    parser = argparse.ArgumentParser(
+        prog="python -m thermaxis.reports.crossdataset", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "--results", default="results", help="folder holding results/<dataset>/ (default: results)"
+    )
     parser.add_argument("--out", default=None, help="output folder (default: <results>/_datasets)")
-    parser.add_argument("--formats", nargs="+", default=["png", "pdf"], help="figure formats (default: png pdf)")
+    parser.add_argument(
+        "--formats", nargs="+", default=["png", "pdf"], help="figure formats (default: png pdf)"
+    )
     args = parser.parse_args(argv)
     results = Path(args.results)
     out = Path(args.out) if args.out else results / "_datasets"
@@ -177,12 +204,14 @@ def main(argv=None) -> int:
         metrics = {d.name: read_metrics(d / "tables" / "metrics.csv") for d in dirs}
         kinds = {d.name: dataset_kind(d) for d in dirs}
         summary = summarise(metrics, kinds)
-        fig = fig_heldout_error(summary)
+        fig = registry.function(FIGURE.draw)(summary)
     except DataError as exc:
         print(f"thermaxis error: {exc}", file=sys.stderr)
         return 1
     _write(summary, fig, out, args.formats)
-    print(f"thermaxis: held-out error of {len(dirs)} dataset(s) -> {out}/summary.csv", file=sys.stderr)
+    print(
+        f"thermaxis: held-out error of {len(dirs)} dataset(s) -> {out}/summary.csv", file=sys.stderr
+    )
     return 0
 
 
@@ -194,7 +223,7 @@ def _write(summary: pd.DataFrame, fig, out: Path, formats) -> None:
     with ExitStack() as stack:
         table = stack.enter_context(atomic_path(out / "summary.csv"))
         markdown = stack.enter_context(atomic_path(out / "summary.md"))
-        figures = [stack.enter_context(atomic_path(out / f"heldout_error.{ext}")) for ext in formats]
+        figures = [stack.enter_context(atomic_path(out / f"{FIGURE.id}.{ext}")) for ext in formats]
         summary.to_csv(table, index=False, float_format="%.6f", lineterminator="\n")
         markdown.write_text(to_markdown(summary), encoding="utf-8")
         save_figure(fig, figures)
