@@ -294,8 +294,6 @@ class ModelSettings:
     searched: tuple[str, ...]  # ridge, lasso, pls whose strength an inner search chooses
     search_grids: tuple  # ((algorithm, ((parameter, (value, ...)), ...)), ...)
     inner_search: tuple[int, int]  # (max_loco_runs, group_folds)
-    input_lags_min: tuple[float, ...]  # time-aware inputs of every model: lag time constants
-    input_rates_min: tuple[float, ...]  # and rate-of-change windows
     gpr_max_samples: int
     interval_level: float
     random_state: int
@@ -314,8 +312,6 @@ class ModelSettings:
             searched=_searchable(m["searched"]),
             search_grids=tuple((name, _grid(grid)) for name, grid in sorted(m["search_grids"].items())),
             inner_search=(int(m["inner_search"]["max_loco_runs"]), int(m["inner_search"]["group_folds"])),
-            input_lags_min=tuple(float(v) for v in m["inputs"]["lags_min"]),
-            input_rates_min=tuple(float(v) for v in m["inputs"]["rates_min"]),
             gpr_max_samples=int(m["gpr_max_samples"]),
             interval_level=float(m["interval_level"]),
             random_state=int(m["random_state"]),

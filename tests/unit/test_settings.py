@@ -107,7 +107,6 @@ def test_each_section_builds_from_its_config_section():
             "searched": ["lasso"],
             "search_grids": {"lasso": {"alpha": [0.1, 1]}, "ridge": {"alpha": [2]}},
             "inner_search": {"max_loco_runs": 4, "group_folds": 3},
-            "inputs": {"lags_min": [30], "rates_min": []},
             "gpr_max_samples": 50,
             "interval_level": 0.9,
             "random_state": 7,
@@ -123,7 +122,6 @@ def test_each_section_builds_from_its_config_section():
         and models.search_grid_for("ridge") is None
     )
     assert (models.inner_search, models.gpr_max_samples) == ((4, 3), 50)
-    assert (models.input_lags_min, models.input_rates_min) == ((30.0,), ())
     assert models.signals == ("spindle_rpm",)
     cleaning = CleaningSettings.from_sections(
         {

@@ -6,11 +6,13 @@ rule assemble:
         ),
         signals=expand(f"{OUT}/clean/{{run}}/measurement_signals.parquet", run=RUNS),
         qc=expand(f"{OUT}/clean/{{run}}/qc.csv", run=RUNS),
+        inputs=expand(f"{OUT}/clean/{{run}}/measurement_inputs.parquet", run=RUNS),
         code=code_of("assemble.py"),
     output:
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         signals=f"{OUT}/assembled/signals.parquet",
+        inputs=f"{OUT}/assembled/inputs.parquet",
         qc=report(
             f"{OUT}/tables/cleaning_qc.csv",
             caption="../report/cleaning_qc.rst",

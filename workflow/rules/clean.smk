@@ -12,6 +12,7 @@ rule clean_run:
         windows=f"{OUT}/clean/{{run}}/windows.csv",
         signals=f"{OUT}/clean/{{run}}/measurement_signals.parquet",
         signal_series=f"{OUT}/clean/{{run}}/signals.parquet",
+        inputs=f"{OUT}/clean/{{run}}/measurement_inputs.parquet",
     log:
         f"{LOGS}/clean/{{run}}.log",
     benchmark:
@@ -24,5 +25,6 @@ rule clean_run:
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         temperatures=config["temperatures"],
         errors=config["errors"],
+        lags_min=list(SETTINGS.recommend.lags_min),
     script:
         "../scripts/clean_run.py"

@@ -507,6 +507,7 @@ COMP_ALGORITHM = SETTINGS.compensation.algorithm
 COMP_TABLES = ["siemens_840d", "twincat", "residuals", "iso230_2", "summary"]
 COMP_PARAMS = dict(
     approach=COMP_APPROACH,
+    model=SETTINGS.compensation.model,
     sections={
         name: config[name]
         for name in ("selection", "decoupling", "models", "compensation")
@@ -522,6 +523,29 @@ def compensation_outputs():
         f"{OUT}/compensation/ThermalCompensation.st",
     ]
     return paths + [f"{OUT}/compensation/{name}.csv" for name in COMP_TABLES]
+
+
+# --------------------------------------------------------------------------- recommendation
+# Which model the runs support: one job per outer fold scores every candidate (inner
+# leave-one-condition-out on the other runs, and the held-out run), one job chooses
+# (thermaxis.method.recommend). The compensation deploys its choice (compensation.model).
+RECOMMEND_PARAMS = dict(
+    recommend=config["recommend"],
+    selection=config["selection"],
+    models=config["models"],
+    decoupling=config["decoupling"],
+    decoupled=DECOUPLED,
+    signals=list(DATASET.signals),
+)
+
+
+def recommendation_outputs():
+    return [
+        f"{OUT}/tables/recommendation.csv",
+        f"{OUT}/tables/recommendation.md",
+        f"{OUT}/recommend/candidates.csv",
+        f"{OUT}/recommend/choice.json",
+    ]
 
 
 # --------------------------------------------------------------------------- sweep
@@ -635,6 +659,8 @@ RESOURCES = {
     },
     "compensation_model": (1000, MIN_RUNTIME_MIN),
     "compensation_fold": (1000, MIN_RUNTIME_MIN),
+    # Every candidate on every inner split of one fold: the heaviest jobs of a run.
+    "recommend_fold": (1000, 30),
     "sweep_batch": (MIN_MEMORY_MB, sweep_batch_minutes),
 }
 
@@ -654,6 +680,7 @@ def all_outputs():
         f"{OUT}/tables/metrics.csv",
         *([f"{OUT}/tables/paper_comparison.csv"] if PAPER else []),
         *([f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else []),
+        *recommendation_outputs(),
         *compensation_outputs(),
         *report_outputs(),
     ]

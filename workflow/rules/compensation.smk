@@ -10,8 +10,10 @@ rule compensation_model:
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         metrics=f"{OUT}/tables/metrics.csv",
+        choice=f"{OUT}/recommend/choice.json",
+        scores=expand(f"{OUT}/recommend/folds/{{fold}}.csv", fold=FOLDS),
     output:
-        model=f"{OUT}/compensation/model.json",
+        model=f"{OUT}/compensation/fitted_model.json",
     log:
         f"{LOGS}/compensation/model.log",
     benchmark:
@@ -54,7 +56,8 @@ rule compensation_fold:
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
         selection=f"{OUT}/selection/{{fold}}.json",
-        final=f"{OUT}/compensation/model.json",
+        choice=f"{OUT}/recommend/choice.json",
+        final=f"{OUT}/compensation/fitted_model.json",
         sheets=dataset_sheets(),
         raw=lambda w: raw_files(w.fold),
     output:
@@ -79,8 +82,32 @@ rule compensation_fold:
         "../scripts/compensation_fold.py"
 
 
+rule compensation_verdict:
+    input:
+        code=code_of("compensation_verdict.py"),
+        schema=MODEL_SCHEMA,
+        fitted=f"{OUT}/compensation/fitted_model.json",
+        summaries=expand(f"{OUT}/compensation/folds/{{fold}}/summary.csv", fold=FOLDS),
+        choice=f"{OUT}/recommend/choice.json",
+    output:
+        model=f"{OUT}/compensation/model.json",
+    log:
+        f"{LOGS}/compensation/verdict.log",
+    benchmark:
+        f"{BENCH}/compensation/verdict.tsv"
+    conda:
+        ENV
+    resources:
+        **rule_resources("compensation_verdict"),
+    params:
+        compensation=config["compensation"],
+    script:
+        "../scripts/compensation_verdict.py"
+
+
 rule compensation_collect:
     input:
+        model=f"{OUT}/compensation/model.json",
         **{
             name: expand(f"{OUT}/compensation/folds/{{fold}}/{name}.csv", fold=FOLDS)
             for name in COMP_TABLES

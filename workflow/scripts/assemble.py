@@ -14,6 +14,8 @@ def main(snakemake):
     temperatures = concat(snakemake.input.temperatures, pd.read_parquet)
     signals = concat(snakemake.input.signals, pd.read_parquet)
     qc = concat(snakemake.input.qc, pd.read_csv)
+    inputs = concat(snakemake.input.inputs, pd.read_parquet)
+    write_parquet(sort_naturally(inputs, ["run", "measurement", "input"]), snakemake.output.inputs)
     write_parquet(
         sort_naturally(errors, ["run", "measurement", "position_mm"]), snakemake.output.errors
     )

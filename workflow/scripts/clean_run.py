@@ -1,6 +1,6 @@
 import logging
 
-from thermaxis.cleaning.run import clean_and_assemble_run
+from thermaxis.cleaning.run import clean_and_assemble_run, derived_inputs
 from thermaxis.config import CleaningSettings
 from thermaxis.dataset.plausibility import check_run_plausibility
 from thermaxis.dataset.reader import load_dataset, read_run
@@ -29,6 +29,8 @@ def main(snakemake):
     write_csv(tables.windows, out.windows)
     write_parquet(tables.signals, out.signals)
     write_parquet(tables.signal_series, out.signal_series)
+    # The time-aware inputs of the recommendation's candidates (none without lags_min).
+    write_parquet(derived_inputs(tables, snakemake.params.lags_min, []), out.inputs)
 
 
 run_script(main, snakemake)

@@ -2,6 +2,8 @@
 
 import pandas as pd
 
+import json
+
 from thermaxis.compensation.exports import file_header
 from thermaxis.pipeline.runner import run_script, write_text
 
@@ -9,6 +11,10 @@ SORT = ["fold", "measurement"]
 
 
 def main(snakemake):
+    with open(snakemake.input.model, encoding="utf-8") as fh:
+        deployment = json.load(fh)["deployment"]
+    # Every export says in words which model it holds and whether it is recommended.
+    statement = f"{snakemake.params.statement}\n# Deployment: {deployment['sentence']}"
     for name in snakemake.params.tables:
         frame = pd.concat(
             [pd.read_csv(p, keep_default_na=False, na_values=[""]) for p in snakemake.input[name]],
@@ -16,7 +22,7 @@ def main(snakemake):
         )
         frame = frame.sort_values(SORT, kind="stable", ignore_index=True)
         body = frame.to_csv(index=False, float_format="%.10g", lineterminator="\n")
-        write_text(file_header(name, snakemake.params.statement) + body, snakemake.output[name])
+        write_text(file_header(name, statement) + body, snakemake.output[name])
 
 
 run_script(main, snakemake)

@@ -2,6 +2,7 @@
 
 import json
 import logging
+from dataclasses import replace
 
 import pandas as pd
 
@@ -10,7 +11,8 @@ from thermaxis.compensation import heldout, runtime
 from thermaxis.compensation import model as comp_model
 from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings
 from thermaxis.dataset.reader import load_dataset, read_run
-from thermaxis.method.folds import selection_from_dict
+from thermaxis.method import recommend
+from thermaxis.method.folds import select_for_fold, selection_from_dict
 from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
 
@@ -20,17 +22,38 @@ def main(snakemake):
     X, Y = model_inputs(
         pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures)
     )
-    with open(snakemake.input.selection, encoding="utf-8") as fh:
-        selection = selection_from_dict(json.load(fh))
+    decoupling = DecouplingSettings.from_section(p.sections["decoupling"])
+    settings = CompensationSettings.from_section(p.sections["compensation"])
+    models = ModelSettings.from_section(p.sections["models"])
+    with open(snakemake.input.choice, encoding="utf-8") as fh:
+        # The model the procedure would have deployed without this run (its fold's choice).
+        chosen = recommend.deployed_record(settings.model, json.load(fh), fold)
+    approach = p.approach
+    if chosen is None:
+        with open(snakemake.input.selection, encoding="utf-8") as fh:
+            selection = selection_from_dict(json.load(fh))
+    else:
+        candidate = recommend.candidate_from_record(chosen, models)
+        approach, models = candidate.approach, candidate.models
+        settings = replace(settings, algorithm=candidate.algorithm)
+        selection = select_for_fold(
+            X,
+            Y,
+            fold,
+            replace(candidate.selection, scope="training"),
+            decoupling.degree,
+            decoupled=approach == "decoupled",
+            pointwise=approach == "pointwise",
+        )
     train = (X["run"] != fold).to_numpy()
     record = comp_model.fit_model_record(
         X.loc[train].reset_index(drop=True),
         Y.loc[train].reset_index(drop=True),
         selection,
-        p.approach,
-        ModelSettings.from_section(p.sections["models"]),
-        DecouplingSettings.from_section(p.sections["decoupling"]),
-        CompensationSettings.from_section(p.sections["compensation"]),
+        approach,
+        models,
+        decoupling,
+        settings,
         **p.about,
     )
     text = json.dumps(record, indent=1) + "\n"

@@ -1,4 +1,9 @@
-"""Fit the configured model on every run and write model.json (the deployable compensation)."""
+"""Fit the deployed model on every run: compensation/fitted_model.json (the verdict comes later).
+
+The deployed model is config compensation.model: the recommendation's choice among the
+candidates the controller exports can compute, the paper's configured model, or a
+named candidate (thermaxis.method.recommend.deployed_record).
+"""
 
 import json
 from dataclasses import replace
@@ -9,12 +14,8 @@ import pandas as pd
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.compensation import heldout
 from thermaxis.compensation import model as comp_model
-from thermaxis.config import (
-    CompensationSettings,
-    DecouplingSettings,
-    ModelSettings,
-    SelectionSettings,
-)
+from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings, SelectionSettings
+from thermaxis.method import recommend
 from thermaxis.method.folds import select_for_fold
 from thermaxis.pipeline.runner import run_script, write_text
 
@@ -24,38 +25,50 @@ def main(snakemake):
     sections = p.sections
     decoupling = DecouplingSettings.from_section(sections["decoupling"])
     settings = CompensationSettings.from_section(sections["compensation"])
-    X, Y = model_inputs(
-        pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures)
-    )
+    models = ModelSettings.from_section(sections["models"])
+    X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
+    with open(snakemake.input.choice, encoding="utf-8") as fh:
+        record = recommend.deployed_record(settings.model, json.load(fh))
+    if record is None:
+        approach, selection_settings = p.approach, SelectionSettings.from_section(sections["selection"])
+        deployment = {"model": "paper", "candidate": "paper"}
+        accuracy = heldout.held_out_accuracy(pd.read_csv(snakemake.input.metrics), approach, settings.algorithm)
+    else:
+        candidate = recommend.candidate_from_record(record, models)
+        approach, selection_settings, models = candidate.approach, candidate.selection, candidate.models
+        settings = replace(settings, algorithm=candidate.algorithm)
+        deployment = {"model": p.model, "candidate": candidate.name}
+        scores = pd.concat([pd.read_csv(path) for path in snakemake.input.scores], ignore_index=True)
+        accuracy = recommend.held_out_accuracy(scores, candidate.name)
     # The deployed model sees every run, its sensitive points too.
     selection = select_for_fold(
         X,
         Y,
         "all runs",
-        replace(SelectionSettings.from_section(sections["selection"]), scope="all"),
+        replace(selection_settings, scope="all"),
         decoupling.degree,
-        decoupled=p.approach == "decoupled",
-        pointwise=p.approach == "pointwise",
+        decoupled=approach == "decoupled",
+        pointwise=approach == "pointwise",
     )
-    metrics = pd.read_csv(snakemake.input.metrics)
-    record = comp_model.fit_model_record(
+    fitted = comp_model.fit_model_record(
         X,
         Y,
         selection,
-        p.approach,
-        ModelSettings.from_section(sections["models"]),
+        approach,
+        models,
         decoupling,
         settings,
         **p.about,
-        held_out_accuracy=heldout.held_out_accuracy(metrics, p.approach, settings.algorithm),
+        held_out_accuracy=accuracy,
+        deployment={**deployment, "approach": approach, "algorithm": settings.algorithm},
         provenance={
             "citation": p.citation,
             "packages": {name: version(name) for name in ("thermaxis", "scikit-learn", "numpy")},
             "settings": sections,
         },
     )
-    comp_model.validate_model(record, where=snakemake.output.model)
-    write_text(json.dumps(record, indent=1) + "\n", snakemake.output.model)
+    comp_model.validate_model(fitted, where=snakemake.output.model)
+    write_text(json.dumps(fitted, indent=1) + "\n", snakemake.output.model)
 
 
 run_script(main, snakemake)

@@ -7,7 +7,8 @@ from thermaxis.pipeline.runner import run_script, write_text
 
 def main(snakemake):
     model = Compensator.from_json(snakemake.input.model).model
-    write_text(structured_text(model, snakemake.params.statement), snakemake.output.st)
+    statement = f"{snakemake.params.statement} Deployment: {model['deployment']['sentence']}"
+    write_text(structured_text(model, statement), snakemake.output.st)
 
 
 run_script(main, snakemake)

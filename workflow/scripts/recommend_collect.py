@@ -10,6 +10,7 @@ from thermaxis.method.recommend import (
     candidate_table,
     candidates_for,
     collect,
+    deployable,
     recommendation_markdown,
 )
 from thermaxis.pipeline.runner import run_script, write_csv, write_text
@@ -29,11 +30,20 @@ def main(snakemake):
     table = candidate_table(candidates).join(means.rename(columns=lambda c: f"loco_{c}_um"), on="candidate")
     write_csv(table, snakemake.output.candidates, float_format="%.6f")
     by_name = {c.name: c for c in candidates}
+    # The same choice among the candidates the controller exports can compute: what the
+    # compensation deploys (compensation.model: recommended).
+    exportable = [c.name for c in candidates if deployable(c)]
+    deployed = collect(scores, exportable, "paper", recommend.score)
     record = {
         "final": candidate_record(by_name[result.final]),
         "paper": candidate_record(by_name["paper"]),
         "folds": {row.fold: candidate_record(by_name[row.chosen]) for row in result.folds.itertuples()},
         "score": result.score,
+        "deployable": {
+            "final": candidate_record(by_name[deployed.final]),
+            "folds": {row.fold: candidate_record(by_name[row.chosen]) for row in deployed.folds.itertuples()},
+            "candidates": {name: candidate_record(by_name[name]) for name in exportable},
+        },
     }
     write_text(json.dumps(record, indent=1, sort_keys=True) + "\n", snakemake.output.choice)
 

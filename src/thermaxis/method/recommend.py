@@ -54,11 +54,16 @@ __all__ = [
     "candidate_from_record",
     "recommendation_markdown",
     "summary_of",
+    "deployable",
+    "deployed_record",
+    "held_out_accuracy",
 ]
 
 # What the inner loop minimises: the mean over inner folds of the held-out error curves'
 # largest |residual| (what a compensation must bound) or their RMSE.
 SCORES = {"max_abs": "max_abs", "rmse": "rmse"}
+# Every held-out score recorded (model.json's held_out_accuracy takes them all).
+METRICS = ("rmse", "max_abs", "mae", "residual_min", "residual_max")
 
 
 @dataclass(frozen=True)
@@ -154,7 +159,7 @@ def _error_metrics(X, Y, test_run, candidate, degree, signals, cache) -> dict[st
         view, Y, test_run, candidate.approach, candidate.algorithm, cache[key], models, degree if decoupled else None
     )
     row = result.metrics.loc[result.metrics["target"] == "error"].iloc[0]
-    return {"rmse": float(row["rmse"]), "max_abs": float(row["max_abs"])}
+    return {name: float(row[name]) for name in METRICS}
 
 
 def held_out_scores(
@@ -194,7 +199,7 @@ def _choose(scores: pd.DataFrame, order: Sequence[str], score: str) -> tuple[str
     raise AssertionError("unreachable: the minimum is one of the candidates")
 
 
-SCORE_COLUMNS = ["kind", "fold", "candidate", "held_out", "rmse", "max_abs"]
+SCORE_COLUMNS = ["kind", "fold", "candidate", "held_out", *METRICS]
 
 
 def fold_scores(
@@ -244,8 +249,9 @@ def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
 def collect(scores: pd.DataFrame, names: Sequence[str], reference: str, score: str) -> Recommendation:
     """The choice of every outer fold, and the final one, from the folds' scores."""
     _check_choice(names, reference, score)
-    loco = scores.loc[scores["kind"] == "loco", ["candidate", "held_out", "rmse", "max_abs"]].reset_index(drop=True)
-    inner = scores.loc[scores["kind"] == "inner", ["fold", "candidate", "held_out", "rmse", "max_abs"]]
+    scores = scores.loc[scores["candidate"].isin(names)]
+    loco = scores.loc[scores["kind"] == "loco", ["candidate", "held_out", *METRICS]].reset_index(drop=True)
+    inner = scores.loc[scores["kind"] == "inner", ["fold", "candidate", "held_out", *METRICS]]
     at = loco.set_index(["candidate", "held_out"])
     rows = []
     for fold in natural_sorted(pd.unique(scores["fold"]).tolist()):
@@ -434,3 +440,42 @@ def recommendation_markdown(recommendation: Recommendation, statement: str) -> s
         f"on the same folds.\n\n"
     )
     return head + markdown_table(f, "%.3f")
+
+
+def deployable(candidate: Candidate) -> bool:
+    """Whether the controller exports can compute the candidate: temperatures only.
+
+    ``model.json``, :class:`~thermaxis.compensation.runtime.Compensator` and the
+    Structured Text block take temperatures, absolute or relative to the homing
+    reference; neither lags nor operating signals yet.
+    """
+    return not candidate.time_inputs and not candidate.models.signals
+
+
+def deployed_record(model: str, choice: Mapping, fold: str | None = None) -> dict | None:
+    """The candidate record the compensation deploys (on ``fold``'s training runs when given).
+
+    ``model`` is config ``compensation.model``: ``paper`` (None: the configured approach
+    and algorithm), ``recommended`` (the choice among the deployable candidates: the
+    final one, or the one chosen without ``fold``) or a deployable candidate's name.
+    """
+    if model == "paper":
+        return None
+    d = choice["deployable"]
+    if model == "recommended":
+        return d["final"] if fold is None else d["folds"][fold]
+    if model in d["candidates"]:
+        return d["candidates"][model]
+    raise ValueError(
+        f"config compensation.model: {model!r} is not 'recommended', 'paper' or a deployable candidate "
+        f"({', '.join(d['candidates'])})"
+    )
+
+
+def held_out_accuracy(scores: pd.DataFrame, name: str) -> list[dict]:
+    """A candidate's leave-one-condition-out errors as model.json's held_out_accuracy."""
+    rows = scores.loc[(scores["kind"] == "loco") & (scores["candidate"] == name)]
+    return [
+        {"fold": str(r["held_out"]), "target": "error", **{m: float(r[m]) for m in METRICS}}
+        for r in rows.to_dict("records")
+    ]
