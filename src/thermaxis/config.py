@@ -17,16 +17,16 @@ scikit-learn nor pandas: the workflow builds settings while it parses the Snakef
 from __future__ import annotations
 
 import copy
+from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
-from typing import Mapping
 
 import jsonschema
 import yaml
 
 from thermaxis.schemas import schema_path
-from thermaxis.vocabulary import SEARCHABLE
 from thermaxis.sweep.plan import SweepGrid
+from thermaxis.vocabulary import SEARCHABLE
 
 __all__ = [
     "CONFIG_SCHEMA",
@@ -79,7 +79,10 @@ def validate_config(config: dict, schema_path=CONFIG_SCHEMA) -> dict:
         schema = yaml.safe_load(fh)
     filled = copy.deepcopy(config)
     _fill_defaults(filled, schema)
-    errors = sorted(jsonschema.Draft202012Validator(schema).iter_errors(filled), key=lambda e: list(e.absolute_path))
+    errors = sorted(
+        jsonschema.Draft202012Validator(schema).iter_errors(filled),
+        key=lambda e: list(e.absolute_path),
+    )
     if errors:
         where = "/".join(map(str, errors[0].absolute_path)) or "top level"
         raise ValueError(f"config {where}: {errors[0].message}")
@@ -164,11 +167,15 @@ class TemperatureCleaning:
         if not self.interval_s > 0:
             raise ValueError(f"interval_s must be > 0, got {self.interval_s}")
         if self.hampel_window < 3 or self.hampel_window % 2 == 0:
-            raise ValueError(f"hampel_window must be an odd number of samples >= 3, got {self.hampel_window}")
+            raise ValueError(
+                f"hampel_window must be an odd number of samples >= 3, got {self.hampel_window}"
+            )
         if not self.hampel_threshold > 0:
             raise ValueError(f"hampel_threshold must be > 0, got {self.hampel_threshold}")
         if not self.hampel_min_deviation_c >= 0:
-            raise ValueError(f"hampel_min_deviation_c must be >= 0, got {self.hampel_min_deviation_c}")
+            raise ValueError(
+                f"hampel_min_deviation_c must be >= 0, got {self.hampel_min_deviation_c}"
+            )
         low, high = self.limits_c
         if not low < high:
             raise ValueError(f"limits_c must be (low, high) with low < high, got {self.limits_c}")
@@ -195,7 +202,9 @@ class ErrorCleaning:
         if self.direction not in ("mean", "+", "-"):
             raise ValueError(f"direction must be 'mean', '+' or '-', got {self.direction!r}")
         if not 0 <= self.max_missing_fraction <= 1:
-            raise ValueError(f"max_missing_fraction must be in [0, 1], got {self.max_missing_fraction}")
+            raise ValueError(
+                f"max_missing_fraction must be in [0, 1], got {self.max_missing_fraction}"
+            )
 
 
 @dataclass(frozen=True)
@@ -210,7 +219,7 @@ class CleaningSettings:
     max_abs_error_um: float
 
     @classmethod
-    def from_sections(cls, temperatures: Mapping, errors: Mapping) -> "CleaningSettings":
+    def from_sections(cls, temperatures: Mapping, errors: Mapping) -> CleaningSettings:
         t, e = temperatures, errors
         return cls(
             temperatures=TemperatureCleaning(
@@ -222,7 +231,9 @@ class CleaningSettings:
                 max_gap_s=float(t["max_gap_s"]),
                 estimate_clock_offsets=bool(t["estimate_clock_offsets"]),
             ),
-            errors=ErrorCleaning(direction=e["direction"], max_missing_fraction=float(e["max_missing_fraction"])),
+            errors=ErrorCleaning(
+                direction=e["direction"], max_missing_fraction=float(e["max_missing_fraction"])
+            ),
             allow_long_gaps=bool(t["allow_long_gaps"]),
             window=t["window"],
             plausible_median_c=_pair(t["plausible_median_c"]),
@@ -235,7 +246,7 @@ class DecouplingSettings:
     degree: int  # of the polynomial each error curve is decoupled into; 1 is the paper's line
 
     @classmethod
-    def from_section(cls, decoupling: Mapping) -> "DecouplingSettings":
+    def from_section(cls, decoupling: Mapping) -> DecouplingSettings:
         return cls(degree=int(decoupling["degree"]))
 
 
@@ -252,7 +263,7 @@ class SelectionSettings:
     fixed: tuple  # ((target, (sensor, ...)), ...) for method "fixed"
 
     @classmethod
-    def from_section(cls, selection: Mapping) -> "SelectionSettings":
+    def from_section(cls, selection: Mapping) -> SelectionSettings:
         s = selection
         return cls(
             method=s["method"],
@@ -269,16 +280,20 @@ class SelectionSettings:
     def fixed_for(self, target: str) -> tuple[str, ...]:
         mapping = dict(self.fixed)
         if target not in mapping:
-            raise ValueError(f"config selection.fixed: no sensor list for {target!r} (method 'fixed' needs k, b and pointwise)")
+            raise ValueError(
+                f"config selection.fixed: no sensor list for {target!r} (method 'fixed' needs k, b and pointwise)"
+            )
         return tuple(mapping[target])
 
 
-def selection_overrides(selection: "SelectionSettings", overrides: Mapping) -> "SelectionSettings":
+def selection_overrides(selection: SelectionSettings, overrides: Mapping) -> SelectionSettings:
     """``selection`` with some of its config keys changed (a recommendation candidate's)."""
     known = {f.name for f in fields(SelectionSettings)}
     unknown = sorted(set(overrides) - known)
     if unknown:
-        raise ValueError(f"config recommend.extra_candidates: unknown selection setting {unknown[0]!r}")
+        raise ValueError(
+            f"config recommend.extra_candidates: unknown selection setting {unknown[0]!r}"
+        )
     values = {k: (_sensor_lists(v) if k == "fixed" else v) for k, v in overrides.items()}
     return replace(selection, **values)
 
@@ -300,7 +315,7 @@ class ModelSettings:
     signals: tuple[str, ...]  # operating signals added to every model's inputs
 
     @classmethod
-    def from_section(cls, models: Mapping) -> "ModelSettings":
+    def from_section(cls, models: Mapping) -> ModelSettings:
         m = models
         return cls(
             algorithms=tuple(m["algorithms"]),
@@ -310,8 +325,13 @@ class ModelSettings:
             svr_kernel=m["svr_kernel"],
             svr_grid=_svr_grid(m["svr_grid"]),
             searched=_searchable(m["searched"]),
-            search_grids=tuple((name, _grid(grid)) for name, grid in sorted(m["search_grids"].items())),
-            inner_search=(int(m["inner_search"]["max_loco_runs"]), int(m["inner_search"]["group_folds"])),
+            search_grids=tuple(
+                (name, _grid(grid)) for name, grid in sorted(m["search_grids"].items())
+            ),
+            inner_search=(
+                int(m["inner_search"]["max_loco_runs"]),
+                int(m["inner_search"]["group_folds"]),
+            ),
             gpr_max_samples=int(m["gpr_max_samples"]),
             interval_level=float(m["interval_level"]),
             random_state=int(m["random_state"]),
@@ -362,7 +382,9 @@ class FallbackSettings:
     def __post_init__(self):
         policies = ("hold", "ramp_to_zero")
         if self.policy not in policies:
-            raise ValueError(f"compensation fallback policy {self.policy!r}: expected one of {', '.join(policies)}")
+            raise ValueError(
+                f"compensation fallback policy {self.policy!r}: expected one of {', '.join(policies)}"
+            )
 
 
 @dataclass(frozen=True)
@@ -377,7 +399,7 @@ class CompensationSettings:
     fallback: FallbackSettings
 
     @classmethod
-    def from_section(cls, compensation: Mapping) -> "CompensationSettings":
+    def from_section(cls, compensation: Mapping) -> CompensationSettings:
         c = compensation
         return cls(
             model=c["model"],
@@ -416,7 +438,7 @@ class RecommendSettings:
     extra_candidates: tuple[ExtraCandidate, ...]
 
     @classmethod
-    def from_section(cls, recommend: Mapping) -> "RecommendSettings":
+    def from_section(cls, recommend: Mapping) -> RecommendSettings:
         r = recommend
         extra = tuple(
             ExtraCandidate(
@@ -446,9 +468,14 @@ class FigureSettings:
     algorithms: tuple[str, ...]  # whose held-out predictions get figures
 
     @classmethod
-    def from_section(cls, figures: Mapping) -> "FigureSettings":
+    def from_section(cls, figures: Mapping) -> FigureSettings:
         f = figures
-        return cls(formats=tuple(f["formats"]), dpi=int(f["dpi"]), run=f["run"], algorithms=tuple(f["algorithms"]))
+        return cls(
+            formats=tuple(f["formats"]),
+            dpi=int(f["dpi"]),
+            run=f["run"],
+            algorithms=tuple(f["algorithms"]),
+        )
 
 
 @dataclass(frozen=True)
@@ -456,7 +483,7 @@ class ReportSettings:
     model_algorithms: tuple[str, ...]  # algorithms the model report of each fold shows side by side
 
     @classmethod
-    def from_section(cls, reports: Mapping) -> "ReportSettings":
+    def from_section(cls, reports: Mapping) -> ReportSettings:
         return cls(model_algorithms=tuple(reports["model_algorithms"]))
 
 
@@ -470,7 +497,7 @@ class SweepSettings:
     seconds_per_evaluation: float
 
     @classmethod
-    def from_section(cls, sweep: Mapping, models: ModelSettings) -> "SweepSettings":
+    def from_section(cls, sweep: Mapping, models: ModelSettings) -> SweepSettings:
         """``models`` supplies the SVR grid when ``sweep.svr_grid`` is ``"models"``."""
         s = sweep
         return cls(
@@ -512,12 +539,12 @@ class Settings:
     sweep: SweepSettings
 
     @classmethod
-    def from_config(cls, config: Mapping) -> "Settings":
+    def from_config(cls, config: Mapping) -> Settings:
         """The settings of ``config``, validated and with the schema's defaults filled first."""
         return cls.from_validated(validate_config(dict(config)))
 
     @classmethod
-    def from_validated(cls, c: Mapping) -> "Settings":
+    def from_validated(cls, c: Mapping) -> Settings:
         """The settings of a config that :func:`validate_config` returned (not validated again)."""
         models = ModelSettings.from_section(c["models"])
         return cls(

@@ -2,11 +2,6 @@
 
 from __future__ import annotations
 
-
-
-
-
-
 __all__ = [
     "DataError",
 ]

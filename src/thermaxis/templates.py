@@ -9,13 +9,13 @@ written out and the code computes only the values.
 from __future__ import annotations
 
 import string
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 
 __all__ = ["load_template", "fill"]
 
 
-@lru_cache(maxsize=None)
+@cache
 def load_template(package: str, name: str) -> string.Template:
     """Template ``name`` from ``package``'s ``templates`` folder (e.g. ``thermaxis.twin``, ``README.md.tmpl``)."""
     text = (resources.files(package) / "templates" / name).read_text(encoding="utf-8")

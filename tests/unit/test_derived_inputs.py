@@ -19,7 +19,12 @@ TABLES = clean_and_assemble_run(DATASET, read_run(DATASET, "E2"), Settings.from_
 def at_mid(series: pd.DataFrame, column: str) -> np.ndarray:
     """The cleaned series interpolated at each measurement window's middle (plain numpy)."""
     w = TABLES.windows
-    mid = (w["start"] + (w["end"] - w["start"]) / 2).to_numpy().astype("datetime64[ns]").astype(np.int64)
+    mid = (
+        (w["start"] + (w["end"] - w["start"]) / 2)
+        .to_numpy()
+        .astype("datetime64[ns]")
+        .astype(np.int64)
+    )
     t = series["time"].to_numpy().astype("datetime64[ns]").astype(np.int64)
     return np.interp(mid, t, series[column].to_numpy(dtype=float))
 
@@ -46,8 +51,12 @@ def test_the_rate_of_a_window_is_the_temperature_change_over_it():
     t = series["time"].to_numpy().astype("datetime64[ns]").astype(np.int64)
     u = series["T5"].to_numpy(dtype=float)
     now = np.interp(mid.to_numpy().astype("datetime64[ns]").astype(np.int64), t, u)
-    before = np.interp((mid - pd.Timedelta(minutes=20)).to_numpy().astype("datetime64[ns]").astype(np.int64), t, u)
-    np.testing.assert_allclose(values(frame, "T5@rate20min"), (now - before) / 20.0, rtol=1e-9, atol=1e-12)
+    before = np.interp(
+        (mid - pd.Timedelta(minutes=20)).to_numpy().astype("datetime64[ns]").astype(np.int64), t, u
+    )
+    np.testing.assert_allclose(
+        values(frame, "T5@rate20min"), (now - before) / 20.0, rtol=1e-9, atol=1e-12
+    )
 
 
 def test_no_time_constants_give_no_rows_and_model_inputs_join_the_columns():

@@ -233,7 +233,7 @@ def test_save_figure_is_byte_identical_across_renders(tiny, tmp_path, name):
         paths = [tmp_path / attempt / f"{name}.{suffix}" for suffix in ("png", "pdf", "svg")]
         style.save_figure(make(), paths)
         outputs.append([p.read_bytes() for p in paths])
-    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs):
+    for suffix, first, second in zip(("png", "pdf", "svg"), *outputs, strict=False):
         assert first, suffix
         assert first == second, f"{name}.{suffix} differs between two renders"
     svg = outputs[0][2].decode()

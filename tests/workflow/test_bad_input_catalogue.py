@@ -21,7 +21,6 @@ lists them (``THERMAXIS_CATALOGUE=<folder> pytest tests/workflow/test_bad_input_
 is enough to fill the folder).
 """
 
-
 from __future__ import annotations
 
 import json
@@ -32,10 +31,10 @@ import runpy
 import shutil
 import signal
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Callable
 
 import pytest
 import yaml
@@ -151,28 +150,108 @@ BILLION_LAUGHS = "a: &a [x, x, x, x, x, x, x, x, x]\n" + "".join(
 
 def _dataset_with(extra: str) -> Callable:
     def edit(ds, work):
-        _yaml_text(ds, (TWIN / "dataset.yaml").read_text(encoding="utf-8").replace("name: twin", f"name: {NAME}") + extra)
+        _yaml_text(
+            ds,
+            (TWIN / "dataset.yaml")
+            .read_text(encoding="utf-8")
+            .replace("name: twin", f"name: {NAME}")
+            + extra,
+        )
 
     return edit
 
 
 CASES = [
     # ---- names that could escape the results folder -------------------------------
-    Case("name_dotdot", lambda ds, w: _meta(ds, lambda m: m.update(name="..")), "name: '..'", "dataset.yaml"),
-    Case("name_dot", lambda ds, w: _meta(ds, lambda m: m.update(name=".")), "name: '.'", "dataset.yaml"),
-    Case("name_slash", lambda ds, w: _meta(ds, lambda m: m.update(name="a/../../b")), "name: 'a/../../b'", "dataset.yaml"),
-    Case("name_leading_dash", lambda ds, w: _meta(ds, lambda m: m.update(name="-rf")), "name: '-rf'", "dataset.yaml"),
-    Case("name_absolute", lambda ds, w: _meta(ds, lambda m: m.update(name="/tmp/x")), "name: '/tmp/x'", "dataset.yaml"),
-    Case("name_trailing_newline", lambda ds, w: _meta(ds, lambda m: m.update(name="x\n")), "dataset name 'x\\n' is not a safe name", "dataset.yaml"),
-    Case("first_error_non_utf8_late", lambda ds, w: (ds / E1_M01).write_bytes((ds / E1_M01).read_bytes() + b"x" * 70000 + b"\xff\n"), "byte 0xff is not UTF-8", E1_M01),
-    Case("name_empty", lambda ds, w: _meta(ds, lambda m: m.update(name="")), "name: ''", "dataset.yaml"),
+    Case(
+        "name_dotdot",
+        lambda ds, w: _meta(ds, lambda m: m.update(name="..")),
+        "name: '..'",
+        "dataset.yaml",
+    ),
+    Case(
+        "name_dot",
+        lambda ds, w: _meta(ds, lambda m: m.update(name=".")),
+        "name: '.'",
+        "dataset.yaml",
+    ),
+    Case(
+        "name_slash",
+        lambda ds, w: _meta(ds, lambda m: m.update(name="a/../../b")),
+        "name: 'a/../../b'",
+        "dataset.yaml",
+    ),
+    Case(
+        "name_leading_dash",
+        lambda ds, w: _meta(ds, lambda m: m.update(name="-rf")),
+        "name: '-rf'",
+        "dataset.yaml",
+    ),
+    Case(
+        "name_absolute",
+        lambda ds, w: _meta(ds, lambda m: m.update(name="/tmp/x")),
+        "name: '/tmp/x'",
+        "dataset.yaml",
+    ),
+    Case(
+        "name_trailing_newline",
+        lambda ds, w: _meta(ds, lambda m: m.update(name="x\n")),
+        "dataset name 'x\\n' is not a safe name",
+        "dataset.yaml",
+    ),
+    Case(
+        "first_error_non_utf8_late",
+        lambda ds, w: (ds / E1_M01).write_bytes(
+            (ds / E1_M01).read_bytes() + b"x" * 70000 + b"\xff\n"
+        ),
+        "byte 0xff is not UTF-8",
+        E1_M01,
+    ),
+    Case(
+        "name_empty",
+        lambda ds, w: _meta(ds, lambda m: m.update(name="")),
+        "name: ''",
+        "dataset.yaml",
+    ),
     Case("run_dotdot", lambda ds, w: _rename_run(ds, "E2", ".."), "column 'run'", "runs.tsv", 3),
-    Case("run_slash", lambda ds, w: _rename_run(ds, "E2", "E2/../../x"), "column 'run'", "runs.tsv", 3),
-    Case("run_leading_dash", lambda ds, w: _rename_run(ds, "E2", "-E2"), "column 'run'", "runs.tsv", 3),
-    Case("sensor_id_slash", lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id="T1/x")), "sensors/0/id", "dataset.yaml"),
-    Case("sensor_id_dotdot", lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id="..")), "sensors/0/id", "dataset.yaml"),
-    Case("source_name_dotdot", lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(name="..")), "sources/0/name", "dataset.yaml"),
-    Case("sensor_source_slash", lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(source="../box")), "sensors/0/source", "dataset.yaml"),
+    Case(
+        "run_slash",
+        lambda ds, w: _rename_run(ds, "E2", "E2/../../x"),
+        "column 'run'",
+        "runs.tsv",
+        3,
+    ),
+    Case(
+        "run_leading_dash",
+        lambda ds, w: _rename_run(ds, "E2", "-E2"),
+        "column 'run'",
+        "runs.tsv",
+        3,
+    ),
+    Case(
+        "sensor_id_slash",
+        lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id="T1/x")),
+        "sensors/0/id",
+        "dataset.yaml",
+    ),
+    Case(
+        "sensor_id_dotdot",
+        lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id="..")),
+        "sensors/0/id",
+        "dataset.yaml",
+    ),
+    Case(
+        "source_name_dotdot",
+        lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(name="..")),
+        "sources/0/name",
+        "dataset.yaml",
+    ),
+    Case(
+        "sensor_source_slash",
+        lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(source="../box")),
+        "sensors/0/source",
+        "dataset.yaml",
+    ),
     Case(
         "measurement_leading_dash",
         lambda ds, w: (ds / "E2/errors/M03.csv").rename(ds / "E2/errors/-M03.csv"),
@@ -187,42 +266,163 @@ CASES = [
         "E2/errors/.M09.csv",
         target="clean:E2",
     ),
-    Case("measurement_symlink_outside", lambda ds, w: _link_outside(ds, E2_M03), "file resolves to", E2_M03, target="clean:E2"),
-    Case("temperature_symlink_outside", lambda ds, w: _link_outside(ds, E2_HMI), "file resolves to", E2_HMI, target="clean:E2"),
-    Case("run_folder_symlink_outside", lambda ds, w: _link_outside(ds, "E2"), "run folder resolves to", "E2", target="clean:E2"),
+    Case(
+        "measurement_symlink_outside",
+        lambda ds, w: _link_outside(ds, E2_M03),
+        "file resolves to",
+        E2_M03,
+        target="clean:E2",
+    ),
+    Case(
+        "temperature_symlink_outside",
+        lambda ds, w: _link_outside(ds, E2_HMI),
+        "file resolves to",
+        E2_HMI,
+        target="clean:E2",
+    ),
+    Case(
+        "run_folder_symlink_outside",
+        lambda ds, w: _link_outside(ds, "E2"),
+        "run folder resolves to",
+        "E2",
+        target="clean:E2",
+    ),
     # ---- dataset.yaml ------------------------------------------------------------------
-    Case("yaml_duplicate_key", _dataset_with("name: elsewhere\n"), "duplicate key 'name' (first on line 2)", "dataset.yaml"),
-    Case("yaml_alias_bomb", lambda ds, w: _yaml_text(ds, BILLION_LAUGHS), "aliases are not allowed", "dataset.yaml", 2),
-    Case("yaml_merge_key", _dataset_with("defaults: &d {a: 1}\nother:\n  <<: *d\n"), "aliases are not allowed", "dataset.yaml"),
+    Case(
+        "yaml_duplicate_key",
+        _dataset_with("name: elsewhere\n"),
+        "duplicate key 'name' (first on line 2)",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_alias_bomb",
+        lambda ds, w: _yaml_text(ds, BILLION_LAUGHS),
+        "aliases are not allowed",
+        "dataset.yaml",
+        2,
+    ),
+    Case(
+        "yaml_merge_key",
+        _dataset_with("defaults: &d {a: 1}\nother:\n  <<: *d\n"),
+        "aliases are not allowed",
+        "dataset.yaml",
+    ),
     Case(
         "yaml_python_tag",
         _dataset_with("pwn: !!python/object/apply:os.system ['touch pwned']\n"),
         "could not determine a constructor",
         "dataset.yaml",
     ),
-    Case("yaml_not_mapping", lambda ds, w: _yaml_text(ds, "- a\n- b\n"), "expected a mapping", "dataset.yaml"),
-    Case("yaml_syntax", lambda ds, w: _yaml_text(ds, "name: [unclosed\n"), "not valid YAML", "dataset.yaml"),
-    Case("yaml_deep_nesting", lambda ds, w: _yaml_text(ds, "a: " + "[" * 50000 + "]" * 50000 + "\n"), "nested too deeply", "dataset.yaml"),
-    Case("yaml_too_large", _dataset_with("pad: '" + "x" * (1 << 20) + "'\n"), "larger than the limit", "dataset.yaml"),
+    Case(
+        "yaml_not_mapping",
+        lambda ds, w: _yaml_text(ds, "- a\n- b\n"),
+        "expected a mapping",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_syntax",
+        lambda ds, w: _yaml_text(ds, "name: [unclosed\n"),
+        "not valid YAML",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_deep_nesting",
+        lambda ds, w: _yaml_text(ds, "a: " + "[" * 50000 + "]" * 50000 + "\n"),
+        "nested too deeply",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_too_large",
+        _dataset_with("pad: '" + "x" * (1 << 20) + "'\n"),
+        "larger than the limit",
+        "dataset.yaml",
+    ),
     Case(
         "yaml_utf16",
-        lambda ds, w: (ds / "dataset.yaml").write_bytes((TWIN / "dataset.yaml").read_text(encoding="utf-8").encode("utf-16")),
+        lambda ds, w: (ds / "dataset.yaml").write_bytes(
+            (TWIN / "dataset.yaml").read_text(encoding="utf-8").encode("utf-16")
+        ),
         "looks UTF-16-encoded",
         "dataset.yaml",
     ),
-    Case("yaml_not_utf8", lambda ds, w: (ds / "dataset.yaml").write_bytes(b"name: caf\xe9\n"), "line 1: byte 0xe9 is not UTF-8", "dataset.yaml"),
-    Case("yaml_fifo", lambda ds, w: _fifo(ds / "dataset.yaml"), "not a regular file (a FIFO)", "dataset.yaml"),
-    Case("yaml_directory", lambda ds, w: ((ds / "dataset.yaml").unlink(), (ds / "dataset.yaml").mkdir()), "not a regular file (a directory)", "dataset.yaml"),
-    Case("yaml_missing", lambda ds, w: (ds / "dataset.yaml").unlink(), "file not found", "dataset.yaml"),
-    Case("yaml_sensor_id_integer", lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id=1)), "sensors/0/id: 1 is not of type 'string'", "dataset.yaml"),
-    Case("sensor_id_reserved_time", lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id="time")), "sensors/0/id", "dataset.yaml"),
-    Case("sensor_id_reserved_run", lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id="run")), "sensors/0/id", "dataset.yaml"),
-    Case("yaml_duplicate_sensor", lambda ds, w: _meta(ds, lambda m: m["sensors"][1].update(id="T1")), "declared more than once", "dataset.yaml"),
-    Case("yaml_undeclared_source", lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(source="nowhere")), "is not one of the declared sources", "dataset.yaml"),
-    Case("yaml_bad_kind", lambda ds, w: _meta(ds, lambda m: m["provenance"].update(kind="guessed")), "provenance/kind", "dataset.yaml"),
-    Case("yaml_clock_offset_inf", lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s=float("inf"))), "sources/0/clock_offset_s: expected a finite number", "dataset.yaml"),
-    Case("yaml_clock_offset_huge", lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s=1e12)), "sources/0/clock_offset_s: 1000000000000.0 is greater than the maximum", "dataset.yaml"),
-    Case("yaml_clock_offset_text", lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s="ten")), "sources/0/clock_offset_s", "dataset.yaml"),
+    Case(
+        "yaml_not_utf8",
+        lambda ds, w: (ds / "dataset.yaml").write_bytes(b"name: caf\xe9\n"),
+        "line 1: byte 0xe9 is not UTF-8",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_fifo",
+        lambda ds, w: _fifo(ds / "dataset.yaml"),
+        "not a regular file (a FIFO)",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_directory",
+        lambda ds, w: ((ds / "dataset.yaml").unlink(), (ds / "dataset.yaml").mkdir()),
+        "not a regular file (a directory)",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_missing",
+        lambda ds, w: (ds / "dataset.yaml").unlink(),
+        "file not found",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_sensor_id_integer",
+        lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id=1)),
+        "sensors/0/id: 1 is not of type 'string'",
+        "dataset.yaml",
+    ),
+    Case(
+        "sensor_id_reserved_time",
+        lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id="time")),
+        "sensors/0/id",
+        "dataset.yaml",
+    ),
+    Case(
+        "sensor_id_reserved_run",
+        lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(id="run")),
+        "sensors/0/id",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_duplicate_sensor",
+        lambda ds, w: _meta(ds, lambda m: m["sensors"][1].update(id="T1")),
+        "declared more than once",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_undeclared_source",
+        lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(source="nowhere")),
+        "is not one of the declared sources",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_bad_kind",
+        lambda ds, w: _meta(ds, lambda m: m["provenance"].update(kind="guessed")),
+        "provenance/kind",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_clock_offset_inf",
+        lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s=float("inf"))),
+        "sources/0/clock_offset_s: expected a finite number",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_clock_offset_huge",
+        lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s=1e12)),
+        "sources/0/clock_offset_s: 1000000000000.0 is greater than the maximum",
+        "dataset.yaml",
+    ),
+    Case(
+        "yaml_clock_offset_text",
+        lambda ds, w: _meta(ds, lambda m: m["sources"][0].update(clock_offset_s="ten")),
+        "sources/0/clock_offset_s",
+        "dataset.yaml",
+    ),
     Case(
         "yaml_list_property",
         lambda ds, w: _meta(ds, lambda m: m["sensors"][0].update(tags=["a", "b"])),
@@ -231,100 +431,585 @@ CASES = [
         fails=False,
     ),
     # ---- runs.tsv -----------------------------------------------------------------------
-    Case("runs_utf8_bom", lambda ds, w: (ds / "runs.tsv").write_bytes(b"\xef\xbb\xbf" + (ds / "runs.tsv").read_bytes()), "", target="summary", fails=False),
+    Case(
+        "runs_utf8_bom",
+        lambda ds, w: (ds / "runs.tsv").write_bytes(
+            b"\xef\xbb\xbf" + (ds / "runs.tsv").read_bytes()
+        ),
+        "",
+        target="summary",
+        fails=False,
+    ),
     Case(
         "runs_utf16",
-        lambda ds, w: (ds / "runs.tsv").write_bytes((ds / "runs.tsv").read_text(encoding="utf-8").encode("utf-16")),
+        lambda ds, w: (ds / "runs.tsv").write_bytes(
+            (ds / "runs.tsv").read_text(encoding="utf-8").encode("utf-16")
+        ),
         "looks UTF-16-encoded",
         "runs.tsv",
     ),
-    Case("runs_comma_separated", lambda ds, w: _text(ds / "runs.tsv", "run\tcondition\tfeed_mm_min\tdescription", "run,condition,feed_mm_min,description"), "line 1: looks comma-separated; expected tab-separated", "runs.tsv", 1),
-    Case("runs_semicolon_separated", lambda ds, w: _write_lines(ds / "runs.tsv", [l.replace("\t", ";") for l in _lines(ds / "runs.tsv")]), "looks semicolon-separated", "runs.tsv", 1),
-    Case("runs_feed_inf", lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "inf"), "column 'feed_mm_min': expected a finite number, got 'inf'", "runs.tsv", 3),
-    Case("runs_feed_nan", lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "nan"), "column 'feed_mm_min': expected a finite number", "runs.tsv", 3),
-    Case("runs_feed_huge", lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "1e999"), "column 'feed_mm_min': expected a finite number", "runs.tsv", 3),
-    Case("runs_feed_negative", lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "-5"), "column 'feed_mm_min'", "runs.tsv", 3),
-    Case("runs_condition_empty", lambda ds, w: _runs_row(ds, "E2", "condition", ""), "column 'condition'", "runs.tsv", 3),
-    Case("runs_condition_label", lambda ds, w: _runs_row(ds, "E2", "condition", "warm start, 4000 mm/min"), "", fails=False),
-    Case("runs_missing_column", lambda ds, w: _write_lines(ds / "runs.tsv", ["\t".join(l.split("\t")[:1] + l.split("\t")[2:]) for l in _lines(ds / "runs.tsv")]), "missing column 'condition'", "runs.tsv"),
-    Case("runs_duplicate_run", lambda ds, w: _write_lines(ds / "runs.tsv", _lines(ds / "runs.tsv") + [_lines(ds / "runs.tsv")[1]]), "listed more than once", "runs.tsv"),
-    Case("runs_field_count", lambda ds, w: _write_lines(ds / "runs.tsv", _lines(ds / "runs.tsv")[:2] + [_lines(ds / "runs.tsv")[2] + "\textra"]), "line 3: 5 tab-separated fields but the header has 4", "runs.tsv", 3),
-    Case("runs_unlisted_folder", lambda ds, w: shutil.copytree(TWIN / "E3", ds / "E3"), "run folder is not listed", "E3"),
-    Case("runs_missing_folder", lambda ds, w: shutil.rmtree(ds / "E2"), "run 'E2' has no folder", "runs.tsv"),
-    Case("runs_empty", lambda ds, w: (ds / "runs.tsv").write_text(""), "line 1: empty header", "runs.tsv"),
-    Case("runs_fifo", lambda ds, w: _fifo(ds / "runs.tsv"), "not a regular file (a FIFO)", "runs.tsv"),
-    Case("runs_too_large", lambda ds, w: (ds / "runs.tsv").write_text((ds / "runs.tsv").read_text() + "#" * (1 << 20)), "larger than the limit", "runs.tsv"),
-    Case("runs_not_utf8", lambda ds, w: (ds / "runs.tsv").write_bytes((ds / "runs.tsv").read_bytes().replace(b"reciprocating", b"r\xe9ciprocating", 1)), "line 2: byte 0xe9 is not UTF-8", "runs.tsv", 2),
+    Case(
+        "runs_comma_separated",
+        lambda ds, w: _text(
+            ds / "runs.tsv",
+            "run\tcondition\tfeed_mm_min\tdescription",
+            "run,condition,feed_mm_min,description",
+        ),
+        "line 1: looks comma-separated; expected tab-separated",
+        "runs.tsv",
+        1,
+    ),
+    Case(
+        "runs_semicolon_separated",
+        lambda ds, w: _write_lines(
+            ds / "runs.tsv", [line.replace("\t", ";") for line in _lines(ds / "runs.tsv")]
+        ),
+        "looks semicolon-separated",
+        "runs.tsv",
+        1,
+    ),
+    Case(
+        "runs_feed_inf",
+        lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "inf"),
+        "column 'feed_mm_min': expected a finite number, got 'inf'",
+        "runs.tsv",
+        3,
+    ),
+    Case(
+        "runs_feed_nan",
+        lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "nan"),
+        "column 'feed_mm_min': expected a finite number",
+        "runs.tsv",
+        3,
+    ),
+    Case(
+        "runs_feed_huge",
+        lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "1e999"),
+        "column 'feed_mm_min': expected a finite number",
+        "runs.tsv",
+        3,
+    ),
+    Case(
+        "runs_feed_negative",
+        lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "-5"),
+        "column 'feed_mm_min'",
+        "runs.tsv",
+        3,
+    ),
+    Case(
+        "runs_condition_empty",
+        lambda ds, w: _runs_row(ds, "E2", "condition", ""),
+        "column 'condition'",
+        "runs.tsv",
+        3,
+    ),
+    Case(
+        "runs_condition_label",
+        lambda ds, w: _runs_row(ds, "E2", "condition", "warm start, 4000 mm/min"),
+        "",
+        fails=False,
+    ),
+    Case(
+        "runs_missing_column",
+        lambda ds, w: _write_lines(
+            ds / "runs.tsv",
+            [
+                "\t".join(line.split("\t")[:1] + line.split("\t")[2:])
+                for line in _lines(ds / "runs.tsv")
+            ],
+        ),
+        "missing column 'condition'",
+        "runs.tsv",
+    ),
+    Case(
+        "runs_duplicate_run",
+        lambda ds, w: _write_lines(
+            ds / "runs.tsv", _lines(ds / "runs.tsv") + [_lines(ds / "runs.tsv")[1]]
+        ),
+        "listed more than once",
+        "runs.tsv",
+    ),
+    Case(
+        "runs_field_count",
+        lambda ds, w: _write_lines(
+            ds / "runs.tsv", _lines(ds / "runs.tsv")[:2] + [_lines(ds / "runs.tsv")[2] + "\textra"]
+        ),
+        "line 3: 5 tab-separated fields but the header has 4",
+        "runs.tsv",
+        3,
+    ),
+    Case(
+        "runs_unlisted_folder",
+        lambda ds, w: shutil.copytree(TWIN / "E3", ds / "E3"),
+        "run folder is not listed",
+        "E3",
+    ),
+    Case(
+        "runs_missing_folder",
+        lambda ds, w: shutil.rmtree(ds / "E2"),
+        "run 'E2' has no folder",
+        "runs.tsv",
+    ),
+    Case(
+        "runs_empty",
+        lambda ds, w: (ds / "runs.tsv").write_text(""),
+        "line 1: empty header",
+        "runs.tsv",
+    ),
+    Case(
+        "runs_fifo", lambda ds, w: _fifo(ds / "runs.tsv"), "not a regular file (a FIFO)", "runs.tsv"
+    ),
+    Case(
+        "runs_too_large",
+        lambda ds, w: (ds / "runs.tsv").write_text((ds / "runs.tsv").read_text() + "#" * (1 << 20)),
+        "larger than the limit",
+        "runs.tsv",
+    ),
+    Case(
+        "runs_not_utf8",
+        lambda ds, w: (ds / "runs.tsv").write_bytes(
+            (ds / "runs.tsv").read_bytes().replace(b"reciprocating", b"r\xe9ciprocating", 1)
+        ),
+        "line 2: byte 0xe9 is not UTF-8",
+        "runs.tsv",
+        2,
+    ),
     Case(
         "runs_single_run",
-        lambda ds, w: (_write_lines(ds / "runs.tsv", _lines(ds / "runs.tsv")[:2]), shutil.rmtree(ds / "E2")),
+        lambda ds, w: (
+            _write_lines(ds / "runs.tsv", _lines(ds / "runs.tsv")[:2]),
+            shutil.rmtree(ds / "E2"),
+        ),
         "leave-one-condition-out needs at least 2 runs",
         "runs.tsv",
     ),
     # ---- the first error file, read when the workflow is parsed -------------------------
-    Case("first_error_no_position", lambda ds, w: _text(ds / E1_M01, "position_mm", "pos"), "missing column 'position_mm'", E1_M01),
-    Case("first_error_semicolon", lambda ds, w: _write_lines(ds / E1_M01, [l.replace(",", ";") for l in _lines(ds / E1_M01)]), "line 1: looks semicolon-separated", E1_M01, 1),
+    Case(
+        "first_error_no_position",
+        lambda ds, w: _text(ds / E1_M01, "position_mm", "pos"),
+        "missing column 'position_mm'",
+        E1_M01,
+    ),
+    Case(
+        "first_error_semicolon",
+        lambda ds, w: _write_lines(
+            ds / E1_M01, [line.replace(",", ";") for line in _lines(ds / E1_M01)]
+        ),
+        "line 1: looks semicolon-separated",
+        E1_M01,
+        1,
+    ),
     Case("first_error_empty", lambda ds, w: (ds / E1_M01).write_text(""), "empty file", E1_M01),
-    Case("first_error_header_only", lambda ds, w: _write_lines(ds / E1_M01, _lines(ds / E1_M01)[:1]), "no data rows", E1_M01),
-    Case("first_error_fifo", lambda ds, w: _fifo(ds / E1_M01), "not a regular file (a FIFO)", E1_M01),
-    Case("first_error_binary", lambda ds, w: (ds / E1_M01).write_bytes(bytes(range(256)) * 4), "not UTF-8", E1_M01),
-    Case("first_error_decimal_comma", lambda ds, w: _column(ds / E1_M01, "error_um", lambda v: f"{v:.3f}".replace(".", ",")), "looks like decimal commas", E1_M01, 2),
+    Case(
+        "first_error_header_only",
+        lambda ds, w: _write_lines(ds / E1_M01, _lines(ds / E1_M01)[:1]),
+        "no data rows",
+        E1_M01,
+    ),
+    Case(
+        "first_error_fifo", lambda ds, w: _fifo(ds / E1_M01), "not a regular file (a FIFO)", E1_M01
+    ),
+    Case(
+        "first_error_binary",
+        lambda ds, w: (ds / E1_M01).write_bytes(bytes(range(256)) * 4),
+        "not UTF-8",
+        E1_M01,
+    ),
+    Case(
+        "first_error_decimal_comma",
+        lambda ds, w: _column(ds / E1_M01, "error_um", lambda v: f"{v:.3f}".replace(".", ",")),
+        "looks like decimal commas",
+        E1_M01,
+        2,
+    ),
     # ---- interferometer readings ------------------------------------------------------
-    Case("error_huge", lambda ds, w: _cell(ds / E2_M03, 5, "error_um", "1e30"), "beyond the plausible ±1000 um", E2_M03, 5, "clean:E2"),
-    Case("error_beyond_1mm", lambda ds, w: _cell(ds / E2_M03, 6, "error_um", "-1500"), "beyond the plausible ±1000 um", E2_M03, 6, "clean:E2"),
-    Case("error_bound_configurable", lambda ds, w: _cell(ds / E2_M03, 6, "error_um", "150"), "beyond the plausible ±100 um", E2_M03, 6, "clean:E2", config={"errors": {"max_abs_error_um": 100}}),
-    Case("error_inf", lambda ds, w: _cell(ds / E2_M03, 4, "error_um", "inf"), "column 'error_um': expected a number, got 'inf'", E2_M03, 4, "clean:E2"),
-    Case("error_minus_inf", lambda ds, w: _cell(ds / E2_M03, 4, "error_um", "-Infinity"), "column 'error_um': expected a number", E2_M03, 4, "clean:E2"),
-    Case("error_nan", lambda ds, w: _cell(ds / E2_M03, 4, "error_um", "NaN"), "column 'error_um': expected a number, got 'NaN'", E2_M03, 4, "clean:E2"),
-    Case("error_empty_cell", lambda ds, w: _cell(ds / E2_M03, 4, "error_um", ""), "column 'error_um': expected a number", E2_M03, 4, "clean:E2"),
-    Case("error_text", lambda ds, w: _cell(ds / E2_M03, 4, "error_um", "n/a"), "column 'error_um': expected a number, got 'n/a'", E2_M03, 4, "clean:E2"),
-    Case("position_text", lambda ds, w: _cell(ds / E2_M03, 3, "position_mm", "x"), "column 'position_mm': expected a number", E2_M03, 3, "clean:E2"),
-    Case("position_inf", lambda ds, w: _cell(ds / E2_M03, 3, "position_mm", "inf"), "column 'position_mm': expected a number", E2_M03, 3, "clean:E2"),
-    Case("position_huge", lambda ds, w: _cell(ds / E2_M03, 3, "position_mm", "1e308"), "expected a position within ±1e+06 mm, got 1e+308", E2_M03, 3, "clean:E2"),
-    Case("error_time_year_9999", lambda ds, w: _cell(ds / E2_M03, 5, "time", "9999-03-15T13:51:21"), "expected a time between 1678 and 2261", E2_M03, 5, "clean:E2"),
-    Case("first_error_time_year_1066", lambda ds, w: _cell(ds / E1_M01, 2, "time", "1066-10-14T09:00:00"), "line 2, column 'time': expected a time between 1678 and 2261", E1_M01, 2),
-    Case("error_time_bad", lambda ds, w: _cell(ds / E2_M03, 4, "time", "yesterday"), "column 'time': expected an ISO 8601 time", E2_M03, 4, "clean:E2"),
-    Case("error_time_backwards", lambda ds, w: _cell(ds / E2_M03, 4, "time", "2000-01-01T00:00:00"), "time goes backwards", E2_M03, 4, "clean:E2"),
-    Case("error_mixed_time_zones", lambda ds, w: _cell(ds / E2_M03, 4, "time", _lines(ds / E2_M03)[3].split(",")[0] + "+02:00"), "expected a time without a time zone", E2_M03, 4, "clean:E2"),
-    Case("error_time_zone_z", lambda ds, w: _cell(ds / E2_M03, 2, "time", _lines(ds / E2_M03)[1].split(",")[0] + "Z"), "expected a time without a time zone", E2_M03, 2, "clean:E2"),
-    Case("error_direction_bad", lambda ds, w: _cell(ds / E2_M03, 4, "direction", "forward"), "column 'direction': expected '+' or '-'", E2_M03, 4, "clean:E2"),
-    Case("error_conflicting_repeat", lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03) + [_lines(ds / E2_M03)[-1].replace(",+", ",-").rsplit(",", 2)[0] + ",9.9,+"]), "appears twice", E2_M03, target="clean:E2"),
-    Case("error_extra_field", lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03)[:3] + [_lines(ds / E2_M03)[3] + ",x"] + _lines(ds / E2_M03)[4:]), "re:line 4: 5 comma-separated fields but the header has 4$", E2_M03, 4, "clean:E2"),
-    Case("error_positions_differ", lambda ds, w: [_column(p, "position_mm", lambda v: f"{v + 1:g}") for p in (ds / "E2/errors").glob("*.csv")], "expected the same targets in every run", "E2/errors", target="assemble"),
-    Case("error_decimal_comma", lambda ds, w: _column(ds / E2_M03, "error_um", lambda v: f"{v:.3f}".replace(".", ",")), "looks like decimal commas", E2_M03, 2, "clean:E2"),
-    Case("error_semicolon", lambda ds, w: _write_lines(ds / E2_M03, [l.replace(",", ";") for l in _lines(ds / E2_M03)]), "looks semicolon-separated", E2_M03, 1, "clean:E2"),
-    Case("error_utf16", lambda ds, w: (ds / E2_M03).write_bytes((ds / E2_M03).read_text().encode("utf-16")), "looks UTF-16-encoded", E2_M03, target="clean:E2"),
-    Case("error_fifo", lambda ds, w: _fifo(ds / E2_M03), "not a regular file (a FIFO)", E2_M03, target="clean:E2"),
-    Case("error_directory", lambda ds, w: (ds / "E2/errors/M09.csv").mkdir(), "not a regular file (a directory)", "E2/errors/M09.csv", target="clean:E2"),
-    Case("error_copied_measurement", lambda ds, w: shutil.copy(ds / E2_M03, ds / "E2/errors/M09.csv"), "overlap measurement M03", "E2/errors/M09.csv", target="clean:E2"),
-    Case("error_symlink_loop", lambda ds, w: os.symlink("M09.csv", ds / "E2/errors/M09.csv"), "cannot be read", "E2/errors/M09.csv"),
-    Case("error_dangling_symlink", lambda ds, w: os.symlink("nowhere.csv", ds / "E2/errors/M09.csv"), "data file not found", "E2/errors/M09.csv"),
-    Case("error_device", lambda ds, w: os.symlink("/dev/zero", ds / "E2/errors/M09.csv"), "outside", "E2/errors/M09.csv"),
-    Case("error_no_files", lambda ds, w: [p.unlink() for p in (ds / "E2/errors").glob("*.csv")], "0 measurement(s)", "E2/errors", target="clean:E2"),
+    Case(
+        "error_huge",
+        lambda ds, w: _cell(ds / E2_M03, 5, "error_um", "1e30"),
+        "beyond the plausible ±1000 um",
+        E2_M03,
+        5,
+        "clean:E2",
+    ),
+    Case(
+        "error_beyond_1mm",
+        lambda ds, w: _cell(ds / E2_M03, 6, "error_um", "-1500"),
+        "beyond the plausible ±1000 um",
+        E2_M03,
+        6,
+        "clean:E2",
+    ),
+    Case(
+        "error_bound_configurable",
+        lambda ds, w: _cell(ds / E2_M03, 6, "error_um", "150"),
+        "beyond the plausible ±100 um",
+        E2_M03,
+        6,
+        "clean:E2",
+        config={"errors": {"max_abs_error_um": 100}},
+    ),
+    Case(
+        "error_inf",
+        lambda ds, w: _cell(ds / E2_M03, 4, "error_um", "inf"),
+        "column 'error_um': expected a number, got 'inf'",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_minus_inf",
+        lambda ds, w: _cell(ds / E2_M03, 4, "error_um", "-Infinity"),
+        "column 'error_um': expected a number",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_nan",
+        lambda ds, w: _cell(ds / E2_M03, 4, "error_um", "NaN"),
+        "column 'error_um': expected a number, got 'NaN'",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_empty_cell",
+        lambda ds, w: _cell(ds / E2_M03, 4, "error_um", ""),
+        "column 'error_um': expected a number",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_text",
+        lambda ds, w: _cell(ds / E2_M03, 4, "error_um", "n/a"),
+        "column 'error_um': expected a number, got 'n/a'",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "position_text",
+        lambda ds, w: _cell(ds / E2_M03, 3, "position_mm", "x"),
+        "column 'position_mm': expected a number",
+        E2_M03,
+        3,
+        "clean:E2",
+    ),
+    Case(
+        "position_inf",
+        lambda ds, w: _cell(ds / E2_M03, 3, "position_mm", "inf"),
+        "column 'position_mm': expected a number",
+        E2_M03,
+        3,
+        "clean:E2",
+    ),
+    Case(
+        "position_huge",
+        lambda ds, w: _cell(ds / E2_M03, 3, "position_mm", "1e308"),
+        "expected a position within ±1e+06 mm, got 1e+308",
+        E2_M03,
+        3,
+        "clean:E2",
+    ),
+    Case(
+        "error_time_year_9999",
+        lambda ds, w: _cell(ds / E2_M03, 5, "time", "9999-03-15T13:51:21"),
+        "expected a time between 1678 and 2261",
+        E2_M03,
+        5,
+        "clean:E2",
+    ),
+    Case(
+        "first_error_time_year_1066",
+        lambda ds, w: _cell(ds / E1_M01, 2, "time", "1066-10-14T09:00:00"),
+        "line 2, column 'time': expected a time between 1678 and 2261",
+        E1_M01,
+        2,
+    ),
+    Case(
+        "error_time_bad",
+        lambda ds, w: _cell(ds / E2_M03, 4, "time", "yesterday"),
+        "column 'time': expected an ISO 8601 time",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_time_backwards",
+        lambda ds, w: _cell(ds / E2_M03, 4, "time", "2000-01-01T00:00:00"),
+        "time goes backwards",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_mixed_time_zones",
+        lambda ds, w: _cell(
+            ds / E2_M03, 4, "time", _lines(ds / E2_M03)[3].split(",")[0] + "+02:00"
+        ),
+        "expected a time without a time zone",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_time_zone_z",
+        lambda ds, w: _cell(ds / E2_M03, 2, "time", _lines(ds / E2_M03)[1].split(",")[0] + "Z"),
+        "expected a time without a time zone",
+        E2_M03,
+        2,
+        "clean:E2",
+    ),
+    Case(
+        "error_direction_bad",
+        lambda ds, w: _cell(ds / E2_M03, 4, "direction", "forward"),
+        "column 'direction': expected '+' or '-'",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_conflicting_repeat",
+        lambda ds, w: _write_lines(
+            ds / E2_M03,
+            _lines(ds / E2_M03)
+            + [_lines(ds / E2_M03)[-1].replace(",+", ",-").rsplit(",", 2)[0] + ",9.9,+"],
+        ),
+        "appears twice",
+        E2_M03,
+        target="clean:E2",
+    ),
+    Case(
+        "error_extra_field",
+        lambda ds, w: _write_lines(
+            ds / E2_M03,
+            _lines(ds / E2_M03)[:3] + [_lines(ds / E2_M03)[3] + ",x"] + _lines(ds / E2_M03)[4:],
+        ),
+        "re:line 4: 5 comma-separated fields but the header has 4$",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        "error_positions_differ",
+        lambda ds, w: [
+            _column(p, "position_mm", lambda v: f"{v + 1:g}")
+            for p in (ds / "E2/errors").glob("*.csv")
+        ],
+        "expected the same targets in every run",
+        "E2/errors",
+        target="assemble",
+    ),
+    Case(
+        "error_decimal_comma",
+        lambda ds, w: _column(ds / E2_M03, "error_um", lambda v: f"{v:.3f}".replace(".", ",")),
+        "looks like decimal commas",
+        E2_M03,
+        2,
+        "clean:E2",
+    ),
+    Case(
+        "error_semicolon",
+        lambda ds, w: _write_lines(
+            ds / E2_M03, [line.replace(",", ";") for line in _lines(ds / E2_M03)]
+        ),
+        "looks semicolon-separated",
+        E2_M03,
+        1,
+        "clean:E2",
+    ),
+    Case(
+        "error_utf16",
+        lambda ds, w: (ds / E2_M03).write_bytes((ds / E2_M03).read_text().encode("utf-16")),
+        "looks UTF-16-encoded",
+        E2_M03,
+        target="clean:E2",
+    ),
+    Case(
+        "error_fifo",
+        lambda ds, w: _fifo(ds / E2_M03),
+        "not a regular file (a FIFO)",
+        E2_M03,
+        target="clean:E2",
+    ),
+    Case(
+        "error_directory",
+        lambda ds, w: (ds / "E2/errors/M09.csv").mkdir(),
+        "not a regular file (a directory)",
+        "E2/errors/M09.csv",
+        target="clean:E2",
+    ),
+    Case(
+        "error_copied_measurement",
+        lambda ds, w: shutil.copy(ds / E2_M03, ds / "E2/errors/M09.csv"),
+        "overlap measurement M03",
+        "E2/errors/M09.csv",
+        target="clean:E2",
+    ),
+    Case(
+        "error_symlink_loop",
+        lambda ds, w: os.symlink("M09.csv", ds / "E2/errors/M09.csv"),
+        "cannot be read",
+        "E2/errors/M09.csv",
+    ),
+    Case(
+        "error_dangling_symlink",
+        lambda ds, w: os.symlink("nowhere.csv", ds / "E2/errors/M09.csv"),
+        "data file not found",
+        "E2/errors/M09.csv",
+    ),
+    Case(
+        "error_device",
+        lambda ds, w: os.symlink("/dev/zero", ds / "E2/errors/M09.csv"),
+        "outside",
+        "E2/errors/M09.csv",
+    ),
+    Case(
+        "error_no_files",
+        lambda ds, w: [p.unlink() for p in (ds / "E2/errors").glob("*.csv")],
+        "0 measurement(s)",
+        "E2/errors",
+        target="clean:E2",
+    ),
     Case(
         "one_measurement_per_run",
-        lambda ds, w: [p.unlink() for p in sorted(ds.glob("E*/errors/*.csv")) if p.name != "M01.csv"],
+        lambda ds, w: [
+            p.unlink() for p in sorted(ds.glob("E*/errors/*.csv")) if p.name != "M01.csv"
+        ],
         "one measurement per run",
         "",
     ),
     # ---- temperature logs -------------------------------------------------------------
-    Case("temp_semicolon", lambda ds, w: _write_lines(ds / E2_BOX, [l.replace(",", ";") for l in _lines(ds / E2_BOX)]), "looks semicolon-separated", E2_BOX, 1, "clean:E2"),
-    Case("temp_decimal_comma", lambda ds, w: _column(ds / E2_BOX, "T3", lambda v: f"{v:.3f}".replace(".", ",")), "looks like decimal commas", E2_BOX, 2, "clean:E2"),
-    Case("temp_missing_time", lambda ds, w: _text(ds / E2_BOX, "time,", "stamp,"), "missing column 'time'", E2_BOX, target="clean:E2"),
-    Case("temp_unknown_sensor", lambda ds, w: _text(ds / E2_BOX, ",T3,", ",T99,"), "column 'T99': unknown sensor id", E2_BOX, target="clean:E2"),
-    Case("temp_value_text", lambda ds, w: _cell(ds / E2_BOX, 7, "T3", "hot"), "line 7, column 'T3': expected a number, got 'hot'", E2_BOX, 7, "clean:E2"),
-    Case("temp_value_inf", lambda ds, w: _cell(ds / E2_BOX, 7, "T3", "inf"), "line 7, column 'T3': expected a number, got 'inf'", E2_BOX, 7, "clean:E2"),
-    Case("temp_mixed_time_zones", lambda ds, w: _cell(ds / E2_BOX, 9, "time", _lines(ds / E2_BOX)[8].split(",")[0] + "Z"), "expected a time without a time zone", E2_BOX, 9, "clean:E2"),
-    Case("temp_sensor_all_empty", lambda ds, w: _column(ds / E2_BOX, "T3", lambda v: ""), "T3", "E2/temperatures", target="clean:E2"),
-    Case("temp_duplicate_column", lambda ds, w: _text(ds / E2_BOX, ",T3,", ",T2,"), "line 1: column 'T2' appears twice", E2_BOX, 1, "clean:E2"),
-    Case("temp_unnamed_column", lambda ds, w: _text(ds / E2_BOX, ",T3,", ",,"), "line 1: column 4 has no name", E2_BOX, 1, "clean:E2"),
-    Case("temp_folder_missing", lambda ds, w: shutil.rmtree(ds / "E2/temperatures"), "folder not found", "E2/temperatures", target="clean:E2"),
-    Case("temp_date_only_times", lambda ds, w: _cell(ds / E2_HMI, 3, "time", "2022-03-15"), "line 3, column 'time': time goes backwards", E2_HMI, 3, "clean:E2"),
-    Case("temp_fifo", lambda ds, w: _fifo(ds / E2_HMI), "not a regular file (a FIFO)", E2_HMI, target="clean:E2"),
-    Case("temp_missing_source", lambda ds, w: (ds / E2_HMI).unlink(), "data file not found", E2_HMI, target="clean:E2"),
-    Case("temp_unknown_source", lambda ds, w: shutil.copy(ds / E2_HMI, ds / "E2/temperatures/cnc.csv"), "unknown temperature source 'cnc'", "E2/temperatures/cnc.csv", target="clean:E2"),
-    Case("temp_utf8_bom", lambda ds, w: (ds / E2_BOX).write_bytes(b"\xef\xbb\xbf" + (ds / E2_BOX).read_bytes()), "", target="clean:E2", fails=False),
-    Case("temp_crlf", lambda ds, w: (ds / E2_BOX).write_bytes((ds / E2_BOX).read_bytes().replace(b"\n", b"\r\n")), "", target="clean:E2", fails=False),
+    Case(
+        "temp_semicolon",
+        lambda ds, w: _write_lines(
+            ds / E2_BOX, [line.replace(",", ";") for line in _lines(ds / E2_BOX)]
+        ),
+        "looks semicolon-separated",
+        E2_BOX,
+        1,
+        "clean:E2",
+    ),
+    Case(
+        "temp_decimal_comma",
+        lambda ds, w: _column(ds / E2_BOX, "T3", lambda v: f"{v:.3f}".replace(".", ",")),
+        "looks like decimal commas",
+        E2_BOX,
+        2,
+        "clean:E2",
+    ),
+    Case(
+        "temp_missing_time",
+        lambda ds, w: _text(ds / E2_BOX, "time,", "stamp,"),
+        "missing column 'time'",
+        E2_BOX,
+        target="clean:E2",
+    ),
+    Case(
+        "temp_unknown_sensor",
+        lambda ds, w: _text(ds / E2_BOX, ",T3,", ",T99,"),
+        "column 'T99': unknown sensor id",
+        E2_BOX,
+        target="clean:E2",
+    ),
+    Case(
+        "temp_value_text",
+        lambda ds, w: _cell(ds / E2_BOX, 7, "T3", "hot"),
+        "line 7, column 'T3': expected a number, got 'hot'",
+        E2_BOX,
+        7,
+        "clean:E2",
+    ),
+    Case(
+        "temp_value_inf",
+        lambda ds, w: _cell(ds / E2_BOX, 7, "T3", "inf"),
+        "line 7, column 'T3': expected a number, got 'inf'",
+        E2_BOX,
+        7,
+        "clean:E2",
+    ),
+    Case(
+        "temp_mixed_time_zones",
+        lambda ds, w: _cell(ds / E2_BOX, 9, "time", _lines(ds / E2_BOX)[8].split(",")[0] + "Z"),
+        "expected a time without a time zone",
+        E2_BOX,
+        9,
+        "clean:E2",
+    ),
+    Case(
+        "temp_sensor_all_empty",
+        lambda ds, w: _column(ds / E2_BOX, "T3", lambda v: ""),
+        "T3",
+        "E2/temperatures",
+        target="clean:E2",
+    ),
+    Case(
+        "temp_duplicate_column",
+        lambda ds, w: _text(ds / E2_BOX, ",T3,", ",T2,"),
+        "line 1: column 'T2' appears twice",
+        E2_BOX,
+        1,
+        "clean:E2",
+    ),
+    Case(
+        "temp_unnamed_column",
+        lambda ds, w: _text(ds / E2_BOX, ",T3,", ",,"),
+        "line 1: column 4 has no name",
+        E2_BOX,
+        1,
+        "clean:E2",
+    ),
+    Case(
+        "temp_folder_missing",
+        lambda ds, w: shutil.rmtree(ds / "E2/temperatures"),
+        "folder not found",
+        "E2/temperatures",
+        target="clean:E2",
+    ),
+    Case(
+        "temp_date_only_times",
+        lambda ds, w: _cell(ds / E2_HMI, 3, "time", "2022-03-15"),
+        "line 3, column 'time': time goes backwards",
+        E2_HMI,
+        3,
+        "clean:E2",
+    ),
+    Case(
+        "temp_fifo",
+        lambda ds, w: _fifo(ds / E2_HMI),
+        "not a regular file (a FIFO)",
+        E2_HMI,
+        target="clean:E2",
+    ),
+    Case(
+        "temp_missing_source",
+        lambda ds, w: (ds / E2_HMI).unlink(),
+        "data file not found",
+        E2_HMI,
+        target="clean:E2",
+    ),
+    Case(
+        "temp_unknown_source",
+        lambda ds, w: shutil.copy(ds / E2_HMI, ds / "E2/temperatures/cnc.csv"),
+        "unknown temperature source 'cnc'",
+        "E2/temperatures/cnc.csv",
+        target="clean:E2",
+    ),
+    Case(
+        "temp_utf8_bom",
+        lambda ds, w: (ds / E2_BOX).write_bytes(b"\xef\xbb\xbf" + (ds / E2_BOX).read_bytes()),
+        "",
+        target="clean:E2",
+        fails=False,
+    ),
+    Case(
+        "temp_crlf",
+        lambda ds, w: (ds / E2_BOX).write_bytes((ds / E2_BOX).read_bytes().replace(b"\n", b"\r\n")),
+        "",
+        target="clean:E2",
+        fails=False,
+    ),
     Case(
         "temp_fahrenheit",
         lambda ds, w: _column(ds / E2_BOX, "T3", lambda v: f"{v * 9 / 5 + 32:.3f}"),
@@ -335,7 +1020,9 @@ CASES = [
     ),
     Case(
         "temp_90c_everywhere",
-        lambda ds, w: [_column(ds / E2_BOX, f"T{i}", lambda v: f"{v + 60:.3f}") for i in range(1, 11)],
+        lambda ds, w: [
+            _column(ds / E2_BOX, f"T{i}", lambda v: f"{v + 60:.3f}") for i in range(1, 11)
+        ],
         "sensor T1: median",
         E2_BOX,
         target="clean:E2",
@@ -351,30 +1038,149 @@ CASES = [
     ),
     Case(
         "temp_long_gap",
-        lambda ds, w: _write_lines(ds / E2_BOX, _lines(ds / E2_BOX)[:200] + _lines(ds / E2_BOX)[500:]),
+        lambda ds, w: _write_lines(
+            ds / E2_BOX, _lines(ds / E2_BOX)[:200] + _lines(ds / E2_BOX)[500:]
+        ),
         "longer than max_gap_s",
         "E2/temperatures",
         target="clean:E2",
     ),
-    Case("temp_one_row", lambda ds, w: _write_lines(ds / E2_HMI, _lines(ds / E2_HMI)[:2]), "sensor T12 has", "E2/temperatures", target="clean:E2"),
-    Case("temp_one_time_repeated", lambda ds, w: _write_lines(ds / E2_HMI, [_lines(ds / E2_HMI)[0]] + [_lines(ds / E2_HMI)[1]] * 50), "sensor T12 has", "E2/temperatures", target="clean:E2"),
-    Case("temp_huge_values", lambda ds, w: _column(ds / E2_HMI, "T12", lambda v: "1e308"), "sensor T12 has", "E2/temperatures", target="clean:E2"),
-    Case("temp_log_ends_early", lambda ds, w: _write_lines(ds / E2_BOX, _lines(ds / E2_BOX)[:30]), "sensor T1 has", "E2/temperatures", target="clean:E2"),
-    Case("error_one_row", lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03)[:2]), "13 of 14 targets have no reading", E2_M03, target="clean:E2"),
-    Case("error_zero_duration", lambda ds, w: _write_lines(ds / E2_M03, [_lines(ds / E2_M03)[0]] + [_lines(ds / E2_M03)[1].split(",")[0] + "," + ",".join(l.split(",")[1:]) for l in _lines(ds / E2_M03)[1:]]), "", target="clean:E2", fails=False),
-    Case("error_backward_pass_only", lambda ds, w: _write_lines(ds / E2_M03, [l for l in _lines(ds / E2_M03) if not l.endswith(",+")]), "", target="clean:E2", fails=False),
-    Case("every_measurement_one_position", lambda ds, w: [_write_lines(p, _lines(p)[:2]) for p in sorted(ds.glob("E*/errors/*.csv"))], "", target="select:E2", fails=False),
-    Case("error_no_direction_two_passes", lambda ds, w: [_write_lines(p, [",".join(l.split(",")[:3]) for l in _lines(p)]) for p in sorted(ds.glob("E2/errors/*.csv"))], "position 185 mm appears twice in the + pass", "E2/errors/M01.csv", target="clean:E2"),
-    Case("temp_all_out_of_limits", lambda ds, w: _column(ds / E2_BOX, "T5", lambda v: "500"), "sensor T5 has", "E2/temperatures", target="clean:E2"),
-    Case("two_runs_one_condition", lambda ds, w: _runs_row(ds, "E2", "condition", "1"), "", target="select:E2", fails=False),
+    Case(
+        "temp_one_row",
+        lambda ds, w: _write_lines(ds / E2_HMI, _lines(ds / E2_HMI)[:2]),
+        "sensor T12 has",
+        "E2/temperatures",
+        target="clean:E2",
+    ),
+    Case(
+        "temp_one_time_repeated",
+        lambda ds, w: _write_lines(
+            ds / E2_HMI, [_lines(ds / E2_HMI)[0]] + [_lines(ds / E2_HMI)[1]] * 50
+        ),
+        "sensor T12 has",
+        "E2/temperatures",
+        target="clean:E2",
+    ),
+    Case(
+        "temp_huge_values",
+        lambda ds, w: _column(ds / E2_HMI, "T12", lambda v: "1e308"),
+        "sensor T12 has",
+        "E2/temperatures",
+        target="clean:E2",
+    ),
+    Case(
+        "temp_log_ends_early",
+        lambda ds, w: _write_lines(ds / E2_BOX, _lines(ds / E2_BOX)[:30]),
+        "sensor T1 has",
+        "E2/temperatures",
+        target="clean:E2",
+    ),
+    Case(
+        "error_one_row",
+        lambda ds, w: _write_lines(ds / E2_M03, _lines(ds / E2_M03)[:2]),
+        "13 of 14 targets have no reading",
+        E2_M03,
+        target="clean:E2",
+    ),
+    Case(
+        "error_zero_duration",
+        lambda ds, w: _write_lines(
+            ds / E2_M03,
+            [_lines(ds / E2_M03)[0]]
+            + [
+                _lines(ds / E2_M03)[1].split(",")[0] + "," + ",".join(line.split(",")[1:])
+                for line in _lines(ds / E2_M03)[1:]
+            ],
+        ),
+        "",
+        target="clean:E2",
+        fails=False,
+    ),
+    Case(
+        "error_backward_pass_only",
+        lambda ds, w: _write_lines(
+            ds / E2_M03, [line for line in _lines(ds / E2_M03) if not line.endswith(",+")]
+        ),
+        "",
+        target="clean:E2",
+        fails=False,
+    ),
+    Case(
+        "every_measurement_one_position",
+        lambda ds, w: [_write_lines(p, _lines(p)[:2]) for p in sorted(ds.glob("E*/errors/*.csv"))],
+        "",
+        target="select:E2",
+        fails=False,
+    ),
+    Case(
+        "error_no_direction_two_passes",
+        lambda ds, w: [
+            _write_lines(p, [",".join(line.split(",")[:3]) for line in _lines(p)])
+            for p in sorted(ds.glob("E2/errors/*.csv"))
+        ],
+        "position 185 mm appears twice in the + pass",
+        "E2/errors/M01.csv",
+        target="clean:E2",
+    ),
+    Case(
+        "temp_all_out_of_limits",
+        lambda ds, w: _column(ds / E2_BOX, "T5", lambda v: "500"),
+        "sensor T5 has",
+        "E2/temperatures",
+        target="clean:E2",
+    ),
+    Case(
+        "two_runs_one_condition",
+        lambda ds, w: _runs_row(ds, "E2", "condition", "1"),
+        "",
+        target="select:E2",
+        fails=False,
+    ),
     # ---- dataset-level and config -------------------------------------------------------
-    Case("config_n_clusters_too_many", lambda ds, w: None, "config selection.n_clusters: 50 clusters", config={"selection": {"n_clusters": 50}}),
-    Case("config_huge_interval", lambda ds, w: None, "config temperatures.interval_s", target="clean:E2", config={"temperatures": {"interval_s": 1e12}}),
-    Case("config_degree_out_of_range", lambda ds, w: None, "config decoupling/degree: 7 is greater than the maximum of 3", config={"decoupling": {"degree": 7}}),
-    Case("config_unknown_key", lambda ds, w: None, "config top level: Additional properties are not allowed ('bogus' was unexpected)", config={"bogus": 1}),
-    Case("config_wrong_type", lambda ds, w: None, "config selection/n_clusters: 'three' is not of type 'integer'", config={"selection": {"n_clusters": "three"}}),
-    Case("config_limits_reversed", lambda ds, w: None, "limits_c must be (low, high) with low < high", config={"temperatures": {"limits_c": [120, -20]}}),
-    Case("config_median_reversed", lambda ds, w: None, "config temperatures.plausible_median_c: expected [low, high]", target="clean:E2", config={"temperatures": {"plausible_median_c": [60, 5]}}),
+    Case(
+        "config_n_clusters_too_many",
+        lambda ds, w: None,
+        "config selection.n_clusters: 50 clusters",
+        config={"selection": {"n_clusters": 50}},
+    ),
+    Case(
+        "config_huge_interval",
+        lambda ds, w: None,
+        "config temperatures.interval_s",
+        target="clean:E2",
+        config={"temperatures": {"interval_s": 1e12}},
+    ),
+    Case(
+        "config_degree_out_of_range",
+        lambda ds, w: None,
+        "config decoupling/degree: 7 is greater than the maximum of 3",
+        config={"decoupling": {"degree": 7}},
+    ),
+    Case(
+        "config_unknown_key",
+        lambda ds, w: None,
+        "config top level: Additional properties are not allowed ('bogus' was unexpected)",
+        config={"bogus": 1},
+    ),
+    Case(
+        "config_wrong_type",
+        lambda ds, w: None,
+        "config selection/n_clusters: 'three' is not of type 'integer'",
+        config={"selection": {"n_clusters": "three"}},
+    ),
+    Case(
+        "config_limits_reversed",
+        lambda ds, w: None,
+        "limits_c must be (low, high) with low < high",
+        config={"temperatures": {"limits_c": [120, -20]}},
+    ),
+    Case(
+        "config_median_reversed",
+        lambda ds, w: None,
+        "config temperatures.plausible_median_c: expected [low, high]",
+        target="clean:E2",
+        config={"temperatures": {"plausible_median_c": [60, 5]}},
+    ),
     Case("config_dataset_missing", lambda ds, w: shutil.rmtree(ds), "dataset folder not found", ""),
     Case("config_unknown_fold", lambda ds, w: None, "config folds: 'E9'", config={"folds": ["E9"]}),
     Case(
@@ -383,17 +1189,31 @@ CASES = [
         "config compensation.algorithm: 'svr' is not one of models.algorithms (mlr)",
         config={"models": {"algorithms": ["mlr"]}, "compensation": {"algorithm": "svr"}},
     ),
-    Case("config_sweep_unknown_fold", lambda ds, w: None, "config sweep.folds: 'E9' is not a run of", "runs.tsv", config={"sweep": {"folds": ["E9"]}}),
+    Case(
+        "config_sweep_unknown_fold",
+        lambda ds, w: None,
+        "config sweep.folds: 'E9' is not a run of",
+        "runs.tsv",
+        config={"sweep": {"folds": ["E9"]}},
+    ),
     Case(
         "config_sweep_nothing_fits",
         lambda ds, w: None,
         "config sweep: no selection setting fits the dataset (fixed: sensor(s) X1, X2, X3 of sweep.fixed are not in the dataset)",
         target="sweep",
-        config={"sweep": {"methods": ["fixed"], "fixed": {"k": ["X1"], "b": ["X2"], "pointwise": ["X3"]}}},
+        config={
+            "sweep": {
+                "methods": ["fixed"],
+                "fixed": {"k": ["X1"], "b": ["X2"], "pointwise": ["X3"]},
+            }
+        },
     ),
     Case(
         "constant_sensor",
-        lambda ds, w: _column(ds / E2_BOX, "T3", lambda v: "25.000") or _column(ds / "E1/temperatures/box.csv", "T3", lambda v: "25.000"),
+        lambda ds, w: (
+            _column(ds / E2_BOX, "T3", lambda v: "25.000")
+            or _column(ds / "E1/temperatures/box.csv", "T3", lambda v: "25.000")
+        ),
         "sensor T3 is constant over the training measurements; left out of the selection",
         target="select:E2",
         fails=False,
@@ -410,7 +1230,12 @@ CASES = [
         lambda ds, w: _column(ds / "E1/temperatures/box.csv", "T1", lambda v: "25.000"),
         "config selection.fixed: sensor T1 is constant",
         target="select:E2",
-        config={"selection": {"method": "fixed", "fixed": {"k": ["T1", "T6"], "b": ["T2", "T7"], "pointwise": ["T1", "T11"]}}},
+        config={
+            "selection": {
+                "method": "fixed",
+                "fixed": {"k": ["T1", "T6"], "b": ["T2", "T7"], "pointwise": ["T1", "T11"]},
+            }
+        },
     ),
 ]
 
@@ -433,6 +1258,7 @@ END_TO_END = {
     "constant_sensor_too_few_for_clusters",  # select_sensitive_points refuses
 }
 
+
 # --------------------------------------------------------------------------- #
 # running a case
 # --------------------------------------------------------------------------- #
@@ -444,9 +1270,14 @@ def two_runs(tmp_path_factory) -> Path:
     for run in ("E1", "E2"):
         shutil.copytree(TWIN / run, root / run)
     # Two of the paper's four runs no longer reproduce its experiment (no paper fold E4).
-    sheet = (TWIN / "dataset.yaml").read_text(encoding="utf-8").replace("name: twin", f"name: {NAME}")
+    sheet = (
+        (TWIN / "dataset.yaml").read_text(encoding="utf-8").replace("name: twin", f"name: {NAME}")
+    )
     _yaml_text(root, sheet.replace("reproduces: xu2023\n", ""))
-    _write_lines(root / "runs.tsv", [l for l in _lines(TWIN / "runs.tsv") if l.split("\t")[0] in ("run", "E1", "E2")])
+    _write_lines(
+        root / "runs.tsv",
+        [line for line in _lines(TWIN / "runs.tsv") if line.split("\t")[0] in ("run", "E1", "E2")],
+    )
     return root
 
 
@@ -456,7 +1287,12 @@ def _broken(case: Case, two_runs: Path, tmp_path: Path) -> tuple[Path, Path, dic
     shutil.copytree(two_runs, ds, symlinks=True)
     work = workflow_workdir(tmp_path)
     case.break_it(ds, work)
-    config = {"dataset": str(ds), "ambient_sensor": "T10", "selection": {"n_clusters": 3}, **case.config}
+    config = {
+        "dataset": str(ds),
+        "ambient_sensor": "T10",
+        "selection": {"n_clusters": 3},
+        **case.config,
+    }
     (work / "case.yaml").write_text(yaml.safe_dump(config))
     return ds, work, config
 
@@ -479,12 +1315,15 @@ def _tree(root: Path, skip: tuple[str, ...]) -> set[str]:
     for dirpath, dirnames, filenames in os.walk(root):
         rel = Path(dirpath).relative_to(root)
         dirnames[:] = [d for d in dirnames if str(rel / d) not in skip]
-        found.update(str(rel / f) for f in filenames + [d for d in dirnames if os.path.islink(Path(dirpath) / d)])
+        found.update(
+            str(rel / f)
+            for f in filenames + [d for d in dirnames if os.path.islink(Path(dirpath) / d)]
+        )
     return found
 
 
 def _message(stderr: str) -> str:
-    lines = [l for l in stderr.splitlines() if l.startswith("thermaxis error:")]
+    lines = [line for line in stderr.splitlines() if line.startswith("thermaxis error:")]
     return lines[0] if lines else ""
 
 
@@ -492,7 +1331,9 @@ def _record(case: Case, message: str, status: str) -> None:
     folder = os.environ.get("THERMAXIS_CATALOGUE")
     if folder:
         Path(folder).mkdir(parents=True, exist_ok=True)
-        (Path(folder) / f"{case.id}.json").write_text(json.dumps({"id": case.id, "status": status, "message": message}))
+        (Path(folder) / f"{case.id}.json").write_text(
+            json.dumps({"id": case.id, "status": status, "message": message})
+        )
 
 
 # ---- in process: the parse-time gate and the rules' own scripts ----------------------------
@@ -518,7 +1359,9 @@ def _target_jobs(case: Case, runs: list[str]) -> list[tuple[str, dict]]:
     }[kind]
 
 
-def _parsed(work: Path, jobs: list[tuple[str, dict]]) -> tuple[dict, list[tuple[Path, SimpleNamespace]]]:
+def _parsed(
+    work: Path, jobs: list[tuple[str, dict]]
+) -> tuple[dict, list[tuple[Path, SimpleNamespace]]]:
     """Parse the workflow in ``work`` as Snakemake does (config/config.yaml, then case.yaml)
     and take each job's wiring from its rule: the script it runs and the input, output,
     params, log and wildcards Snakemake hands that script as ``snakemake``.
@@ -533,7 +1376,9 @@ def _parsed(work: Path, jobs: list[tuple[str, dict]]) -> tuple[dict, list[tuple[
     with SnakemakeApi(OutputSettings(quiet={Quietness.ALL}, enable_file_logging=False)) as api:
         parsed = api.workflow(
             resource_settings=ResourceSettings(cores=1),
-            config_settings=ConfigSettings(configfiles=[work / "config" / "config.yaml", work / "case.yaml"]),
+            config_settings=ConfigSettings(
+                configfiles=[work / "config" / "config.yaml", work / "case.yaml"]
+            ),
             snakefile=work / "Snakefile",
             workdir=work,
         )._workflow
@@ -546,7 +1391,12 @@ def _parsed(work: Path, jobs: list[tuple[str, dict]]) -> tuple[dict, list[tuple[
             output, _ = rule.expand_output(wildcards)
             params, _ = rule.expand_params(wildcards, input, output, None)
             job = SimpleNamespace(
-                rule=name, input=input, output=output, params=params, wildcards=wildcards, log=rule.expand_log(wildcards)
+                rule=name,
+                input=input,
+                output=output,
+                params=params,
+                wildcards=wildcards,
+                log=rule.expand_log(wildcards),
             )
             wired.append((Path(rule.basedir) / rule.script, job))
         return dict(parsed.globals), wired
@@ -611,7 +1461,9 @@ def test_bad_input(case: Case, two_runs: Path, tmp_path: Path, capsys) -> None:
     before = _tree(tmp_path, ())
     refused, message, stderr, outputs = _in_process(case, work, config, capsys)
     new = _tree(tmp_path, ()) - before
-    assert "Traceback" not in stderr and not message.startswith("thermaxis error: unexpected "), stderr[-4000:]
+    assert "Traceback" not in stderr and not message.startswith("thermaxis error: unexpected "), (
+        stderr[-4000:]
+    )
     _assert_confined(new)
     if case.fails:
         _record(case, message, "refused")
@@ -622,7 +1474,9 @@ def test_bad_input(case: Case, two_runs: Path, tmp_path: Path, capsys) -> None:
         # refusing script itself leaves none of them, not even half-written.
         assert not [p for p in outputs if p.exists()], "outputs written despite the error"
         if case.target == "parse" or not outputs:
-            assert not [p for p in new if p.startswith(f"work/results/")], "parse-time refusal wrote results"
+            assert not [p for p in new if p.startswith("work/results/")], (
+                "parse-time refusal wrote results"
+            )
     else:
         assert not refused, stderr[-4000:]
         _assert_warned(case, stderr, ds)
@@ -653,7 +1507,9 @@ def test_bad_input_end_to_end(case: Case, two_runs: Path, tmp_path: Path, capsys
         _assert_names(case, message, ds)
         for target in _targets(case, NAME):
             assert not (work / target).exists(), f"{target} written despite the error"
-        assert not [p for p in new if p.startswith(f"work/results/{NAME}/") and case.target == "parse"]
+        assert not [
+            p for p in new if p.startswith(f"work/results/{NAME}/") and case.target == "parse"
+        ]
     else:
         assert proc.returncode == 0, output[-4000:]
         _assert_warned(case, proc.stderr, ds)
@@ -674,8 +1530,8 @@ def _assert_confined(new: set[str]) -> None:
 
 
 def _assert_warned(case: Case, stderr: str, ds: Path) -> None:
-    warnings = [l for l in stderr.splitlines() if l.startswith("thermaxis warning:")]
-    warning = next((l for l in warnings if case.expect and case.expect in l), "")
+    warnings = [line for line in stderr.splitlines() if line.startswith("thermaxis warning:")]
+    warning = next((line for line in warnings if case.expect and case.expect in line), "")
     _record(case, warning, "warned" if case.expect else "accepted")
     if case.expect:
         assert warning, f"no warning containing {case.expect!r} on the terminal:\n{stderr[-3000:]}"
@@ -696,7 +1552,9 @@ def _assert_names(case: Case, message: str, ds: Path) -> None:
 
 def write_catalogue(folder: Path, out: Path) -> None:
     """Markdown list of every kind and its message, from the records of a test run."""
-    records = {r["id"]: r for r in (json.loads(p.read_text()) for p in sorted(folder.glob("*.json")))}
+    records = {
+        r["id"]: r for r in (json.loads(p.read_text()) for p in sorted(folder.glob("*.json")))
+    }
     lines = [
         "# Bad-input catalogue",
         "",
@@ -709,7 +1567,11 @@ def write_catalogue(folder: Path, out: Path) -> None:
     tmp = re.compile(r"/\S*?/data/" + NAME)
     for case in CASES:
         record = records.get(case.id, {"status": "not run", "message": ""})
-        text = tmp.sub("<tmp>/" + NAME, record["message"]).replace(str(REPO), "<repo>").replace("|", "\\|")
+        text = (
+            tmp.sub("<tmp>/" + NAME, record["message"])
+            .replace(str(REPO), "<repo>")
+            .replace("|", "\\|")
+        )
         lines.append(f"| `{case.id}` | {record['status']} | {text} |")
     out.write_text("\n".join(lines) + "\n", encoding="utf-8")
 

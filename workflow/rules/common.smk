@@ -465,7 +465,17 @@ def index_sections():
     compensation = {}
     for p in compensation_outputs():
         compensation.setdefault(Path(p).stem, []).append((Path(p).suffix[1:], p))
+    answer = [
+        (
+            "recommendation",
+            [("csv", f"{OUT}/tables/recommendation.csv"), ("md", f"{OUT}/tables/recommendation.md")],
+        ),
+        ("candidates", [("csv", f"{OUT}/recommend/candidates.csv")]),
+        ("deployed model and its verdict", [("json", f"{OUT}/compensation/model.json")]),
+    ]
     return [
+        # Its intro, the answer in words, is written by the index job from these files.
+        ("Which model to deploy", "", answer),
         ("Reports", "", reports),
         (
             "Model reports",
@@ -478,7 +488,8 @@ def index_sections():
         ("Tables", "", tables),
         (
             "Compensation",
-            f"The {COMP_APPROACH} {COMP_ALGORITHM} model fitted on all runs (model.json), the controller "
+            f"The deployed model (config compensation.model: {SETTINGS.compensation.model}) fitted on all "
+            "runs (model.json), the controller "
             "exports of each fold's model on its held-out run and the error left after compensating; "
             "the thermal-drift figures are under Figures (README: Compensating a machine).",
             list(compensation.items()),

@@ -240,5 +240,9 @@ rule index:
         sections=index_sections(),
         sweep=f"{OUT}/sweep/sweep_report.html",
         headline=HEADLINE,
+        answer=dict(
+            markdown=f"{OUT}/tables/recommendation.md",
+            model=f"{OUT}/compensation/model.json",
+        ),
     script:
         "../scripts/index.py"

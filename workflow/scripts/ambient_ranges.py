@@ -8,7 +8,7 @@ def main(snakemake):
     sensor = snakemake.params.sensor
     rows, series_rows = [], []
     for run, series_path, windows_path in zip(
-        snakemake.params.runs, snakemake.input.series, snakemake.input.windows
+        snakemake.params.runs, snakemake.input.series, snakemake.input.windows, strict=False
     ):
         series = pd.read_parquet(series_path, columns=["time", "elapsed_min", sensor])
         windows = pd.read_csv(windows_path, parse_dates=["start", "end"])

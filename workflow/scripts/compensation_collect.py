@@ -1,8 +1,8 @@
 """Collect the folds' compensation tables, each file with its header of signs, units and sources."""
 
-import pandas as pd
-
 import json
+
+import pandas as pd
 
 from thermaxis.compensation.exports import file_header
 from thermaxis.pipeline.runner import run_script, write_text

@@ -14,7 +14,12 @@ import pandas as pd
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.compensation import heldout
 from thermaxis.compensation import model as comp_model
-from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings, SelectionSettings
+from thermaxis.config import (
+    CompensationSettings,
+    DecouplingSettings,
+    ModelSettings,
+    SelectionSettings,
+)
 from thermaxis.method import recommend
 from thermaxis.method.folds import select_for_fold
 from thermaxis.pipeline.runner import run_script, write_text
@@ -26,19 +31,32 @@ def main(snakemake):
     decoupling = DecouplingSettings.from_section(sections["decoupling"])
     settings = CompensationSettings.from_section(sections["compensation"])
     models = ModelSettings.from_section(sections["models"])
-    X, Y = model_inputs(pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures))
+    X, Y = model_inputs(
+        pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures)
+    )
     with open(snakemake.input.choice, encoding="utf-8") as fh:
         record = recommend.deployed_record(settings.model, json.load(fh))
     if record is None:
-        approach, selection_settings = p.approach, SelectionSettings.from_section(sections["selection"])
+        approach, selection_settings = (
+            p.approach,
+            SelectionSettings.from_section(sections["selection"]),
+        )
         deployment = {"model": "paper", "candidate": "paper"}
-        accuracy = heldout.held_out_accuracy(pd.read_csv(snakemake.input.metrics), approach, settings.algorithm)
+        accuracy = heldout.held_out_accuracy(
+            pd.read_csv(snakemake.input.metrics), approach, settings.algorithm
+        )
     else:
         candidate = recommend.candidate_from_record(record, models)
-        approach, selection_settings, models = candidate.approach, candidate.selection, candidate.models
+        approach, selection_settings, models = (
+            candidate.approach,
+            candidate.selection,
+            candidate.models,
+        )
         settings = replace(settings, algorithm=candidate.algorithm)
         deployment = {"model": p.model, "candidate": candidate.name}
-        scores = pd.concat([pd.read_csv(path) for path in snakemake.input.scores], ignore_index=True)
+        scores = pd.concat(
+            [pd.read_csv(path) for path in snakemake.input.scores], ignore_index=True
+        )
         accuracy = recommend.held_out_accuracy(scores, candidate.name)
     # The deployed model sees every run, its sensitive points too.
     selection = select_for_fold(

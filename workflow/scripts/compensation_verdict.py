@@ -16,7 +16,9 @@ def main(snakemake):
         record = json.load(fh)
     with open(snakemake.input.choice, encoding="utf-8") as fh:
         choice = json.load(fh)
-    summary = pd.concat([pd.read_csv(p, comment="#") for p in snakemake.input.summaries], ignore_index=True)
+    summary = pd.concat(
+        [pd.read_csv(p, comment="#") for p in snakemake.input.summaries], ignore_index=True
+    )
     verdict = deployment_verdict(summary, settings.max_worsening_um)
     record["deployment"] = {
         **record["deployment"],

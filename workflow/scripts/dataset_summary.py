@@ -9,7 +9,7 @@ def main(snakemake):
     dataset = load_dataset(snakemake.params.dataset)
     counts = {
         run: len(pd.read_csv(path))
-        for run, path in zip(snakemake.params.runs, snakemake.input.windows)
+        for run, path in zip(snakemake.params.runs, snakemake.input.windows, strict=False)
     }
     write_csv(dataset_summary(dataset, counts), snakemake.output.table)
 

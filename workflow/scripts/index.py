@@ -25,6 +25,19 @@ def main(snakemake):
         )
         for title, intro, rows in p.sections
     ]
+    # The answer first: the recommendation and the deployment verdict, in words.
+    with open(p.answer["markdown"], encoding="utf-8") as fh:
+        recommendation = fh.read().split("\n\n")[2]
+    with open(p.answer["model"], encoding="utf-8") as fh:
+        deployment = json.load(fh)["deployment"]
+    sections[0] = IndexSection(
+        title=sections[0].title,
+        intro=(
+            f"{recommendation} Deployed: {deployment['candidate']} "
+            f"(compensation.model: {deployment['model']}). {deployment['sentence']}"
+        ),
+        rows=sections[0].rows,
+    )
     # The sweep is optional and slow: linked when it was run, never a dependency.
     if os.path.isfile(p.sweep):
         sweep = IndexRow(

@@ -20,14 +20,20 @@ def main(snakemake):
     p = snakemake.params
     recommend = RecommendSettings.from_section(p.recommend)
     candidates = candidates_for(
-        SelectionSettings.from_section(p.selection), ModelSettings.from_section(p.models), recommend, p.decoupled, p.signals
+        SelectionSettings.from_section(p.selection),
+        ModelSettings.from_section(p.models),
+        recommend,
+        p.decoupled,
+        p.signals,
     )
     scores = pd.concat([pd.read_csv(path) for path in snakemake.input.scores], ignore_index=True)
     result = collect(scores, [c.name for c in candidates], "paper", recommend.score)
     write_csv(result.folds, snakemake.output.table, float_format="%.6f")
     write_text(recommendation_markdown(result, p.statement), snakemake.output.markdown)
     means = result.loco.groupby("candidate", sort=False)[["rmse", "max_abs"]].mean()
-    table = candidate_table(candidates).join(means.rename(columns=lambda c: f"loco_{c}_um"), on="candidate")
+    table = candidate_table(candidates).join(
+        means.rename(columns=lambda c: f"loco_{c}_um"), on="candidate"
+    )
     write_csv(table, snakemake.output.candidates, float_format="%.6f")
     by_name = {c.name: c for c in candidates}
     # The same choice among the candidates the controller exports can compute: what the
@@ -37,11 +43,16 @@ def main(snakemake):
     record = {
         "final": candidate_record(by_name[result.final]),
         "paper": candidate_record(by_name["paper"]),
-        "folds": {row.fold: candidate_record(by_name[row.chosen]) for row in result.folds.itertuples()},
+        "folds": {
+            row.fold: candidate_record(by_name[row.chosen]) for row in result.folds.itertuples()
+        },
         "score": result.score,
         "deployable": {
             "final": candidate_record(by_name[deployed.final]),
-            "folds": {row.fold: candidate_record(by_name[row.chosen]) for row in deployed.folds.itertuples()},
+            "folds": {
+                row.fold: candidate_record(by_name[row.chosen])
+                for row in deployed.folds.itertuples()
+            },
             "candidates": {name: candidate_record(by_name[name]) for name in exportable},
         },
     }

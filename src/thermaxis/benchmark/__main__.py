@@ -12,7 +12,6 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from thermaxis.benchmark.chronological import block, evaluate_channel, input_sets
@@ -30,8 +29,12 @@ def read_record(spec: dict, spec_path: Path):
     source = (mapping_path.parent / mapping["source"]).resolve()
     frame = importer.read_table(source, mapping.get("sheet", 0))
     seconds = importer._seconds(source, frame, mapping["time"])
-    temperatures = {s["id"]: importer._numeric(source, frame, s["column"], False) for s in mapping["sensors"]}
-    signals = {s["id"]: importer._numeric(source, frame, s["column"], False) for s in mapping["signals"]}
+    temperatures = {
+        s["id"]: importer._numeric(source, frame, s["column"], False) for s in mapping["sensors"]
+    }
+    signals = {
+        s["id"]: importer._numeric(source, frame, s["column"], False) for s in mapping["signals"]
+    }
     channels = {c: importer._numeric(source, frame, c, False) for c in spec["channels"]}
     return seconds, temperatures, signals, channels
 
@@ -44,8 +47,13 @@ def comparison(spec: dict, spec_path: Path) -> pd.DataFrame:
     sets = input_sets(seconds, temperatures, signals, c["inputs"], c["lag_sets_min"])
     rows = []
     for j, (channel, y) in enumerate(channels.items()):
-        print(f"thermaxis: benchmark {spec['name']}: channel {channel} ({j + 1} of {len(channels)})", file=sys.stderr)
-        result = evaluate_channel(sets, y, train, test, c["ridge_alpha"], int(c["validation_splits"]))
+        print(
+            f"thermaxis: benchmark {spec['name']}: channel {channel} ({j + 1} of {len(channels)})",
+            file=sys.stderr,
+        )
+        result = evaluate_channel(
+            sets, y, train, test, c["ridge_alpha"], int(c["validation_splits"])
+        )
         published = {m["name"]: float(m["values"][j]) for m in spec["published"]["models"]}
         best_name = min(published, key=published.get)
         rows.append(
@@ -66,7 +74,11 @@ def comparison(spec: dict, spec_path: Path) -> pd.DataFrame:
 def markdown(table: pd.DataFrame, spec: dict) -> str:
     shown = table[["channel", "mae_um", *[c for c in table.columns if c.startswith("published_mae_um: ")],
                    "inputs", "ridge_alpha"]]  # fmt: skip
-    shown = shown.rename(columns=lambda c: c.replace("published_mae_um: ", "published: ").replace("mae_um", "thermaxis MAE (um)"))
+    shown = shown.rename(
+        columns=lambda c: c.replace("published_mae_um: ", "published: ").replace(
+            "mae_um", "thermaxis MAE (um)"
+        )
+    )
     wins = int(table["below_best_published"].sum())
     head = (
         f"# {spec['name']}: the authors' protocol (train {spec['protocol']['train']}, test {spec['protocol']['test']} "
@@ -79,9 +91,18 @@ def markdown(table: pd.DataFrame, spec: dict) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m thermaxis.benchmark", description=__doc__.splitlines()[0])
-    parser.add_argument("spec", type=Path, help="benchmark spec (e.g. data/benchmarks/fl_thermal.yaml)")
-    parser.add_argument("--out", type=Path, required=True, help="output folder (e.g. results/_benchmarks/fl_thermal)")
+    parser = argparse.ArgumentParser(
+        prog="python -m thermaxis.benchmark", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "spec", type=Path, help="benchmark spec (e.g. data/benchmarks/fl_thermal.yaml)"
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="output folder (e.g. results/_benchmarks/fl_thermal)",
+    )
     args = parser.parse_args(argv)
     try:
         spec = load_yaml(args.spec)

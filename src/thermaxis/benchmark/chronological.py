@@ -71,7 +71,9 @@ def input_sets(
     """Every candidate input set, simplest first (fewer columns first)."""
     unknown = [k for k in kinds if k not in INPUT_KINDS]
     if unknown:
-        raise ValueError(f"unknown input kind {unknown[0]!r}; expected one of {', '.join(INPUT_KINDS)}")
+        raise ValueError(
+            f"unknown input kind {unknown[0]!r}; expected one of {', '.join(INPUT_KINDS)}"
+        )
     if not signals and any(k != "temperatures" for k in kinds):
         kinds = ["temperatures"]
     lagged: dict[tuple[str, float], np.ndarray] = {}
@@ -87,11 +89,17 @@ def input_sets(
                         lagged[key] = lag_filter(t_s, values, 60.0 * float(minutes))
                     names.append(f"{name}@lag{minutes:g}min")
                     columns.append(lagged[key])
-            sets.append(InputSet(kind, tuple(float(m) for m in lags), tuple(names), np.column_stack(columns)))
+            sets.append(
+                InputSet(
+                    kind, tuple(float(m) for m in lags), tuple(names), np.column_stack(columns)
+                )
+            )
     return sorted(sets, key=lambda s: len(s.names))
 
 
-def _ridge_path_mae(inputs: np.ndarray, y: np.ndarray, fit: np.ndarray, score: np.ndarray, alphas: np.ndarray):
+def _ridge_path_mae(
+    inputs: np.ndarray, y: np.ndarray, fit: np.ndarray, score: np.ndarray, alphas: np.ndarray
+):
     """Validation MAE of the ridge pipeline at every alpha, from one eigendecomposition.
 
     The pipeline standardises the inputs on the fitted rows (population deviation, a
@@ -112,7 +120,9 @@ def _ridge_path_mae(inputs: np.ndarray, y: np.ndarray, fit: np.ndarray, score: n
     return np.mean(np.abs(predictions - y[score][:, None]), axis=0)
 
 
-def choose(sets: Sequence[InputSet], y: np.ndarray, train: slice, alphas: Sequence[float], n_splits: int):
+def choose(
+    sets: Sequence[InputSet], y: np.ndarray, train: slice, alphas: Sequence[float], n_splits: int
+):
     """The (input set, alpha) of least mean validation MAE over the training part's time-series splits.
 
     Ties (to 1e-12 relative) go to the simpler candidate: fewer columns, then the
@@ -123,8 +133,10 @@ def choose(sets: Sequence[InputSet], y: np.ndarray, train: slice, alphas: Sequen
     strengths = np.array(sorted(alphas, reverse=True), dtype=float)  # strongest first
     best = None
     for inputs in sets:  # simplest first
-        scores = np.mean([_ridge_path_mae(inputs.values, y, fit, val, strengths) for fit, val in splits], axis=0)
-        for alpha, score in zip(strengths, scores):
+        scores = np.mean(
+            [_ridge_path_mae(inputs.values, y, fit, val, strengths) for fit, val in splits], axis=0
+        )
+        for alpha, score in zip(strengths, scores, strict=False):
             if best is None or score < best[2] * (1 - 1e-12):
                 best = (inputs, float(alpha), float(score))
     return best
@@ -134,7 +146,9 @@ def evaluate_channel(sets, y: np.ndarray, train: slice, test: slice, alphas, n_s
     """Choose on the training part, refit on all of it, score the test block."""
     inputs, alpha, validation = choose(sets, y, train, alphas, n_splits)
     # Ridge is deterministic: the seed is only make_regressor's uniform signature.
-    model = make_regressor("ridge", {"alpha": alpha}, random_state=0).fit(inputs.values[train], y[train])
+    model = make_regressor("ridge", {"alpha": alpha}, random_state=0).fit(
+        inputs.values[train], y[train]
+    )
     metrics = prediction_metrics(y[test], model.predict(inputs.values[test]))
     return {
         "inputs": inputs.label,

@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pandas as pd
-
-
 
 __all__ = [
     "MAD_TO_SIGMA",

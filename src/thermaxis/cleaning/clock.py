@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pandas as pd
 
-
-from thermaxis.cleaning._timebase import MAD_TO_SIGMA, _NS, _as_ns
+from thermaxis.cleaning._timebase import _NS, MAD_TO_SIGMA, _as_ns
 
 __all__ = [
     "estimate_clock_offset",
@@ -45,7 +43,9 @@ def _noise_variance(t: np.ndarray, v: np.ndarray) -> float:
     return float((MAD_TO_SIGMA * np.median(np.abs(scaled))) ** 2)
 
 
-def _lag_correlation(sparse_t, sparse_v, dense_t, dense_v, lags_s: np.ndarray, sign: int) -> np.ndarray:
+def _lag_correlation(
+    sparse_t, sparse_v, dense_t, dense_v, lags_s: np.ndarray, sign: int
+) -> np.ndarray:
     """Correlation of the detrended sparse samples with the dense series, per lag.
 
     The dense series is interpolated at the sparse series' own sample times (moved by
@@ -74,7 +74,9 @@ def _lag_correlation(sparse_t, sparse_v, dense_t, dense_v, lags_s: np.ndarray, s
         b = _detrend(t, dense_v[j] * (1 - w) + dense_v[j + 1] * w)
         norm2 = (b * b).sum(axis=1) + noise * (2 * w * (1 - w)).sum(axis=1)
         norm = np.sqrt(norm2 * (a @ a))
-        out[first : first + chunk] = np.divide(b @ a, norm, out=np.full(norm.size, np.nan), where=norm > 0)
+        out[first : first + chunk] = np.divide(
+            b @ a, norm, out=np.full(norm.size, np.nan), where=norm > 0
+        )
     return out
 
 
@@ -182,5 +184,7 @@ def estimate_clock_offset(series, reference, max_offset_s: float, step_s: float)
     """
     if not isinstance(series, pd.Series):
         raise ValueError("estimate_clock_offset expects series as a pd.Series indexed by time")
-    offset, _ = _best_offset(_valid_samples(series), _valid_samples(reference), max_offset_s, step_s)
+    offset, _ = _best_offset(
+        _valid_samples(series), _valid_samples(reference), max_offset_s, step_s
+    )
     return offset

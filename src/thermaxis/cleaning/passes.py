@@ -9,7 +9,6 @@ import pandas as pd
 
 from thermaxis.config import ErrorCleaning
 
-
 __all__ = [
     "combine_passes",
 ]
@@ -26,14 +25,20 @@ def _passes(measurement: pd.DataFrame, label: str) -> dict[str, pd.DataFrame]:
         return {"single": measurement}
     direction = measurement["direction"]
     if direction.isna().any():
-        raise ValueError(f"{label}: column 'direction' is empty in some rows; expected '+' or '-' in all or none")
+        raise ValueError(
+            f"{label}: column 'direction' is empty in some rows; expected '+' or '-' in all or none"
+        )
     bad = ~direction.isin(["+", "-"])
     if bad.any():
-        raise ValueError(f"{label}: column 'direction': expected '+' or '-', got {direction[bad].iloc[0]!r}")
+        raise ValueError(
+            f"{label}: column 'direction': expected '+' or '-', got {direction[bad].iloc[0]!r}"
+        )
     return {d: measurement[direction.to_numpy() == d] for d in ("+", "-") if (direction == d).any()}
 
 
-def _pass_at_targets(rows: pd.DataFrame, targets: np.ndarray, label: str, pass_name: str) -> np.ndarray:
+def _pass_at_targets(
+    rows: pd.DataFrame, targets: np.ndarray, label: str, pass_name: str
+) -> np.ndarray:
     """One pass's reading at each target (NaN where it has none)."""
     rows = rows[np.isfinite(rows["error_um"].to_numpy(dtype=float))]
     position = rows["position_mm"].to_numpy(dtype=float)
@@ -41,7 +46,9 @@ def _pass_at_targets(rows: pd.DataFrame, targets: np.ndarray, label: str, pass_n
     match = np.abs(position[:, None] - targets[None, :]) <= _POSITION_TOL_MM
     unmatched = ~match.any(axis=1)
     if unmatched.any():
-        raise ValueError(f"{label}: position {position[unmatched][0]:g} mm is not one of the targets")
+        raise ValueError(
+            f"{label}: position {position[unmatched][0]:g} mm is not one of the targets"
+        )
     target_of = match.argmax(axis=1)
     out = np.full(targets.size, np.nan)
     for k in np.unique(target_of):
@@ -91,21 +98,30 @@ def combine_passes(
     label = f"measurement {name}" if name else "measurement"
     targets = np.asarray(targets, dtype=float)
     if targets.ndim != 1 or targets.size == 0 or not np.isfinite(targets).all():
-        raise ValueError(f"{label}: targets must be a non-empty 1-D sequence of finite positions in mm")
+        raise ValueError(
+            f"{label}: targets must be a non-empty 1-D sequence of finite positions in mm"
+        )
     if np.unique(targets).size != targets.size:
         raise ValueError(f"{label}: targets must be distinct, got {targets.tolist()}")
     for column in ("position_mm", "error_um"):
         if column not in measurement.columns:
-            raise ValueError(f"{label}: missing column {column!r} (expected position_mm, error_um[, direction])")
+            raise ValueError(
+                f"{label}: missing column {column!r} (expected position_mm, error_um[, direction])"
+            )
 
     repeated = measurement.duplicated(keep="first")
     measurement = measurement[~repeated.to_numpy()]
-    passes = {d: _pass_at_targets(rows, targets, label, d) for d, rows in _passes(measurement, label).items()}
+    passes = {
+        d: _pass_at_targets(rows, targets, label, d)
+        for d, rows in _passes(measurement, label).items()
+    }
 
     combined, warnings = _combine(passes, settings.direction, targets, label)
     missing = ~np.isfinite(combined)
     for k in np.flatnonzero(missing):
-        warnings.append(f"{label}: position {targets[k]:g} mm has no reading; dropped from this measurement")
+        warnings.append(
+            f"{label}: position {targets[k]:g} mm has no reading; dropped from this measurement"
+        )
     if missing.sum() > settings.max_missing_fraction * targets.size:
         raise ValueError(
             f"{label}: {int(missing.sum())} of {targets.size} targets have no reading, more than "
@@ -116,12 +132,16 @@ def combine_passes(
     return result, warnings
 
 
-def _combine(passes: dict[str, np.ndarray], direction: str, targets: np.ndarray, label: str) -> tuple[np.ndarray, list[str]]:
+def _combine(
+    passes: dict[str, np.ndarray], direction: str, targets: np.ndarray, label: str
+) -> tuple[np.ndarray, list[str]]:
     """The configured pass, or (``direction="mean"``) the mean of both where both read a target."""
     if direction in ("+", "-") and "single" not in passes:
         if direction not in passes:
             (other,) = passes
-            raise ValueError(f"{label}: no {direction} pass (only {other}); expected errors.direction 'mean' or {other!r}")
+            raise ValueError(
+                f"{label}: no {direction} pass (only {other}); expected errors.direction 'mean' or {other!r}"
+            )
         return passes[direction], []
     if len(passes) == 1:
         # One pass only (unlabelled, or every row in one direction): nothing to average.
@@ -137,5 +157,7 @@ def _combine(passes: dict[str, np.ndarray], direction: str, targets: np.ndarray,
     warnings = []
     for k in np.flatnonzero(np.isfinite(forward) != np.isfinite(backward)):
         have, lack = ("+", "-") if np.isfinite(forward[k]) else ("-", "+")
-        warnings.append(f"{label}: position {targets[k]:g} mm has no {lack} reading; using the {have} reading alone")
+        warnings.append(
+            f"{label}: position {targets[k]:g} mm has no {lack} reading; using the {have} reading alone"
+        )
     return combined, warnings

@@ -14,12 +14,12 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.cleaning import passes
-from thermaxis.method import inputs as time_inputs
 from thermaxis.cleaning import temperatures as temperature_cleaning
 from thermaxis.config import CleaningSettings
-from thermaxis.labels import natural_key
-from thermaxis.errors import DataError
 from thermaxis.dataset.reader import Dataset, RawRun
+from thermaxis.errors import DataError
+from thermaxis.labels import natural_key
+from thermaxis.method import inputs as time_inputs
 
 __all__ = [
     "RunTables",
@@ -31,6 +31,7 @@ __all__ = [
     "tidy_signals",
     "derived_inputs",
 ]
+
 
 @dataclass(frozen=True)
 class RunTables:
@@ -57,25 +58,47 @@ def minutes_since_first(times, windows: pd.DataFrame):
     return (times - windows["start"].iloc[0]) / pd.Timedelta(minutes=1)
 
 
-def tidy_errors(run: str, condition: str, windows: pd.DataFrame, combined: list[pd.Series]) -> pd.DataFrame:
+def tidy_errors(
+    run: str, condition: str, windows: pd.DataFrame, combined: list[pd.Series]
+) -> pd.DataFrame:
     """Unzeroed errors (passes combined) plus the re-zeroed view, one row per reading."""
     rows = []
-    for (_, w), curve in zip(windows.iterrows(), combined):
+    for (_, w), curve in zip(windows.iterrows(), combined, strict=False):
         first = curve.dropna()
         origin = first.iloc[0] if len(first) else np.nan
         time_min = minutes_since_first(w["start"], windows)
         for position, value in curve.items():
-            rows.append((run, condition, int(w["measurement"]), time_min, float(position), value, value - origin))
+            rows.append(
+                (
+                    run,
+                    condition,
+                    int(w["measurement"]),
+                    time_min,
+                    float(position),
+                    value,
+                    value - origin,
+                )
+            )
     return pd.DataFrame(
         rows,
-        columns=["run", "condition", "measurement", "time_min", "position_mm", "error_um", "rezeroed_um"],
+        columns=[
+            "run",
+            "condition",
+            "measurement",
+            "time_min",
+            "position_mm",
+            "error_um",
+            "rezeroed_um",
+        ],
     )
 
 
 SIGNAL_COLUMNS = ["run", "condition", "measurement", "time_min", "signal", "value"]
 
 
-def tidy_signals(run: str, condition: str, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
+def tidy_signals(
+    run: str, condition: str, windows: pd.DataFrame, at_measurements: pd.DataFrame
+) -> pd.DataFrame:
     """Operating signals (window means) per measurement, one row per measurement x signal."""
     time_min = minutes_since_first(windows["start"], windows).to_numpy()
     signals = [c for c in at_measurements.columns if c not in ("measurement", "start", "end")]
@@ -95,7 +118,9 @@ def tidy_signals(run: str, condition: str, windows: pd.DataFrame, at_measurement
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=SIGNAL_COLUMNS)
 
 
-def tidy_temperatures(run: str, condition: str, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> pd.DataFrame:
+def tidy_temperatures(
+    run: str, condition: str, windows: pd.DataFrame, at_measurements: pd.DataFrame
+) -> pd.DataFrame:
     """Absolute temperatures per measurement and their rise since the run's first measurement."""
     time_min = minutes_since_first(windows["start"], windows).to_numpy()
     sensors = [c for c in at_measurements.columns if c not in ("measurement", "start", "end")]
@@ -125,11 +150,17 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     combined, notes = _combined_errors(raw, cleaning)
     cleaned, gap_notes = _cleaned_temperatures(dataset, raw, windows, cleaning)
     notes.extend(f"{run}: {n}" for n in gap_notes)
-    at_measurements = temperature_cleaning.temperatures_in_windows(cleaned.frame, windows, how=cleaning.window)
+    at_measurements = temperature_cleaning.temperatures_in_windows(
+        cleaned.frame, windows, how=cleaning.window
+    )
     sensors = [s for s in dataset.sensors if s in at_measurements.columns]
     _check_every_window_read(dataset, raw, windows, at_measurements[sensors])
-    signal_frame = temperature_cleaning.signals_on_grid(raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"])
-    signal_values = temperature_cleaning.temperatures_in_windows(signal_frame, windows, how=cleaning.window)
+    signal_frame = temperature_cleaning.signals_on_grid(
+        raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"]
+    )
+    signal_values = temperature_cleaning.temperatures_in_windows(
+        signal_frame, windows, how=cleaning.window
+    )
     series = _with_elapsed(cleaned.frame, windows)
     return RunTables(
         run=run,
@@ -167,11 +198,19 @@ def derived_inputs(tables: RunTables, lags_min, rates_min) -> pd.DataFrame:
     frame = pd.concat([frame[["time"]], values], axis=1)
     windows = tables.windows
     derived = time_inputs.inputs_at_measurements(
-        frame, windows[["measurement", "start", "end"]], [60.0 * m for m in lags_min], [60.0 * m for m in rates_min], at="mid"
+        frame,
+        windows[["measurement", "start", "end"]],
+        [60.0 * m for m in lags_min],
+        [60.0 * m for m in rates_min],
+        at="mid",
     )
     names = [c for c in derived.columns if "@" in c]
-    long = derived.melt(id_vars=["measurement"], value_vars=names, var_name="input", value_name="value")
-    time_min = dict(zip(windows["measurement"], minutes_since_first(windows["start"], windows)))
+    long = derived.melt(
+        id_vars=["measurement"], value_vars=names, var_name="input", value_name="value"
+    )
+    time_min = dict(
+        zip(windows["measurement"], minutes_since_first(windows["start"], windows), strict=False)
+    )
     long.insert(0, "run", tables.run)
     long.insert(1, "condition", tables.errors["condition"].iloc[0] if len(tables.errors) else "")
     long.insert(3, "time_min", long["measurement"].map(time_min).to_numpy(dtype=float))
@@ -183,7 +222,9 @@ def _combined_errors(raw: RawRun, cleaning: CleaningSettings) -> tuple[list[pd.S
     targets = _targets(raw)
     combined, notes = [], []
     for name, measurement in raw.measurements.items():
-        curve, warns = passes.combine_passes(measurement, targets, cleaning.errors, name=raw.error_origin(name))
+        curve, warns = passes.combine_passes(
+            measurement, targets, cleaning.errors, name=raw.error_origin(name)
+        )
         notes.extend(warns)
         combined.append(curve)
     return combined, notes
@@ -193,27 +234,41 @@ def _temperature_file(dataset: Dataset, run: str, source: str):
     return dataset.root / run / "temperatures" / f"{source}.csv"
 
 
-def _cleaned_temperatures(dataset: Dataset, raw: RawRun, windows: pd.DataFrame, cleaning: CleaningSettings):
+def _cleaned_temperatures(
+    dataset: Dataset, raw: RawRun, windows: pd.DataFrame, cleaning: CleaningSettings
+):
     """The run's temperatures on the grid, and the long gaps allowed during a measurement (as warnings)."""
     settings = cleaning.temperatures
     # The grid spans the measurements with a margin so window means never extrapolate.
     margin = pd.Timedelta(seconds=max(60.0, 3 * settings.interval_s))
     start, end = windows["start"].min() - margin, windows["end"].max() + margin
     try:
-        cleaned = temperature_cleaning.clean_temperatures(raw.sources, dataset.clock_offsets_s(), settings, start=start, end=end)
+        cleaned = temperature_cleaning.clean_temperatures(
+            raw.sources, dataset.clock_offsets_s(), settings, start=start, end=end
+        )
     except ValueError as exc:
         raise DataError(f"{dataset.root / raw.run / 'temperatures'}: {exc}") from None
-    files = {s: _temperature_file(dataset, raw.run, source) for source in raw.sources for s in dataset.sensors_of(source)}
+    files = {
+        s: _temperature_file(dataset, raw.run, source)
+        for source in raw.sources
+        for s in dataset.sensors_of(source)
+    }
     try:
         gap_notes = temperature_cleaning.check_gaps(
-            cleaned.gaps, windows, allow=cleaning.allow_long_gaps, max_gap_s=settings.max_gap_s, files=files
+            cleaned.gaps,
+            windows,
+            allow=cleaning.allow_long_gaps,
+            max_gap_s=settings.max_gap_s,
+            files=files,
         )
     except ValueError as exc:
         raise DataError(str(exc)) from None  # the message starts with the sensor's file
     return cleaned, gap_notes
 
 
-def _check_every_window_read(dataset: Dataset, raw: RawRun, windows: pd.DataFrame, at_measurements: pd.DataFrame) -> None:
+def _check_every_window_read(
+    dataset: Dataset, raw: RawRun, windows: pd.DataFrame, at_measurements: pd.DataFrame
+) -> None:
     """Every sensor has a temperature during every measurement, or the run cannot be modelled."""
     missing = at_measurements.isna()
     if not missing.any().any():
@@ -267,7 +322,9 @@ def model_inputs(
     sensors, for models asked to use them as inputs; ``inputs`` (the tidy table of
     :func:`derived_inputs`) one column per time-aware input after those.
     """
-    wide = temperatures.pivot_table(index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True)
+    wide = temperatures.pivot_table(
+        index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True
+    )
     if sensors is None:
         # Natural order (T2 before T10), so clusters and tables read like the paper's.
         sensors = sorted(wide.columns, key=natural_key)
@@ -276,13 +333,19 @@ def model_inputs(
     index = Y.index.intersection(wide.index)
     if len(index) != len(Y.index):
         missing = Y.index.difference(wide.index)[0]
-        raise DataError(f"assembled tables: run {missing[0]!r} measurement {missing[1]} has errors but no temperatures")
+        raise DataError(
+            f"assembled tables: run {missing[0]!r} measurement {missing[1]} has errors but no temperatures"
+        )
     X = wide.loc[index, list(sensors)]
     if signals is not None and len(signals):
-        signal_wide = signals.pivot_table(index=["run", "measurement"], columns="signal", values="value", sort=True)
+        signal_wide = signals.pivot_table(
+            index=["run", "measurement"], columns="signal", values="value", sort=True
+        )
         X = X.join(signal_wide.reindex(index)[sorted(signal_wide.columns, key=natural_key)])
     if inputs is not None and len(inputs):
-        derived = inputs.pivot_table(index=["run", "measurement"], columns="input", values="value", sort=True)
+        derived = inputs.pivot_table(
+            index=["run", "measurement"], columns="input", values="value", sort=True
+        )
         X = X.join(derived.reindex(index)[sorted(derived.columns, key=natural_key)])
     X = X.reset_index()
     X.insert(2, "time_min", times.loc[index].to_numpy())

@@ -48,11 +48,10 @@ import numpy as np
 import pandas as pd
 from numpy.lib.stride_tricks import sliding_window_view
 
+from thermaxis.cleaning._timebase import _NS, MAD_TO_SIGMA, _as_ns, _iso, _timestamp_ns
+from thermaxis.cleaning.clock import _best_offset
 from thermaxis.config import TemperatureCleaning
 from thermaxis.labels import sort_naturally
-
-from thermaxis.cleaning._timebase import MAD_TO_SIGMA, _NS, _as_ns, _iso, _timestamp_ns
-from thermaxis.cleaning.clock import _best_offset
 
 __all__ = [
     "CleanedTemperatures",
@@ -181,7 +180,9 @@ def _clean_source(
     values = values[~repeated]
     t = _as_ns(frame["time"])[~repeated] + int(round(offset_s * _NS))
     if np.any(np.diff(t) < 0):
-        raise ValueError(f"temperature source {name!r}: column 'time' goes backwards; expected non-decreasing times")
+        raise ValueError(
+            f"temperature source {name!r}: column 'time' goes backwards; expected non-decreasing times"
+        )
 
     low, high = settings.limits_c
     out_of_range = ~np.isnan(values) & ((values < low) | (values > high))
@@ -218,14 +219,18 @@ def _clean_source(
     return natives
 
 
-def _estimate_offsets(natives: list[_Native], sources: Sequence[str], settings: TemperatureCleaning) -> None:
+def _estimate_offsets(
+    natives: list[_Native], sources: Sequence[str], settings: TemperatureCleaning
+) -> None:
     """Shift every non-reference source by its estimated residual offset (in place)."""
     by_source = {s: [n for n in natives if n.source == s] for s in sources}
     reference = settings.reference_source
     if reference is None:
         reference = max(sources, key=lambda s: len(by_source[s]))  # first on ties
     elif reference not in by_source:
-        raise ValueError(f"reference_source {reference!r} is not one of the run's sources {list(sources)}")
+        raise ValueError(
+            f"reference_source {reference!r} is not one of the run's sources {list(sources)}"
+        )
     ref = [(n.t, n.v) for n in by_source[reference]]
     for source in sources:
         if source == reference:
@@ -234,7 +239,10 @@ def _estimate_offsets(natives: list[_Native], sources: Sequence[str], settings: 
         # reference's sensors that match best decides.
         try:
             best_offset, _ = _best_offset(
-                [(n.t, n.v) for n in by_source[source]], ref, settings.max_offset_s, settings.offset_step_s
+                [(n.t, n.v) for n in by_source[source]],
+                ref,
+                settings.max_offset_s,
+                settings.offset_step_s,
             )
         except ValueError as exc:
             raise ValueError(f"source {source!r}: {exc}") from None
@@ -264,7 +272,9 @@ def _onto_grid(native: _Native, grid: np.ndarray, max_gap_s: float):
     max_gap = max_gap_s * _NS
     n = t.size
     if n == 0:
-        counts = dict(n_interpolated=0, n_edge_held=0, n_long_gap=int(grid.size), longest_gap_s=np.nan)
+        counts = dict(
+            n_interpolated=0, n_edge_held=0, n_long_gap=int(grid.size), longest_gap_s=np.nan
+        )
         return np.full(grid.size, np.nan), counts, [(int(grid[0]), int(grid[-1]), "no readings")]
     origin = t[0]
     y = np.interp((grid - origin) / _NS, (t - origin) / _NS, v)  # holds the end values outside
@@ -351,7 +361,9 @@ def clean_temperatures(
 
 
 def _native_series(
-    sources: Mapping[str, pd.DataFrame], clock_offsets_s: Mapping[str, float], settings: TemperatureCleaning
+    sources: Mapping[str, pd.DataFrame],
+    clock_offsets_s: Mapping[str, float],
+    settings: TemperatureCleaning,
 ) -> list[_Native]:
     """Every sensor's repaired native series (steps 1-5), each sensor in exactly one source."""
     natives: list[_Native] = []
@@ -437,11 +449,17 @@ def _window_label(row) -> str:
 def _check_windows(windows: pd.DataFrame) -> None:
     for column in ("start", "end"):
         if column not in windows.columns:
-            raise ValueError(f"measurement windows: missing column {column!r} (expected measurement, start, end)")
+            raise ValueError(
+                f"measurement windows: missing column {column!r} (expected measurement, start, end)"
+            )
     if "measurement" not in windows.columns:
-        raise ValueError("measurement windows: missing column 'measurement' (expected measurement, start, end)")
+        raise ValueError(
+            "measurement windows: missing column 'measurement' (expected measurement, start, end)"
+        )
     if (_as_ns(windows["end"]) < _as_ns(windows["start"])).any():
-        raise ValueError("measurement windows: a window ends before it starts; expected start <= end")
+        raise ValueError(
+            "measurement windows: a window ends before it starts; expected start <= end"
+        )
 
 
 def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float) -> str:
@@ -501,7 +519,7 @@ def check_gaps(
     # Strict inequalities: a gap ending exactly at a window's start has a real sample there.
     hits = (g_start[:, None] < w_end[None, :]) & (g_end[:, None] > w_start[None, :])
     messages = []
-    for i, j in zip(*np.nonzero(hits)):
+    for i, j in zip(*np.nonzero(hits), strict=False):
         gap, window = gaps.iloc[i], windows.iloc[j]
         where = f"{files[gap['sensor']]}: " if gap["sensor"] in files else ""
         messages.append(
@@ -535,7 +553,11 @@ def _window_mean(grid_ns: np.ndarray, values: np.ndarray, start: int, end: int) 
     inner = (grid_ns > start) & (grid_ns < end)
     t = np.concatenate([[start], grid_ns[inner], [end]])
     v = np.vstack(
-        [_interp_at(grid_ns, values, np.array([start])), values[inner], _interp_at(grid_ns, values, np.array([end]))]
+        [
+            _interp_at(grid_ns, values, np.array([start])),
+            values[inner],
+            _interp_at(grid_ns, values, np.array([end])),
+        ]
     )
     width = np.diff(t).astype(float)[:, None]
     segment = 0.5 * (v[:-1] + v[1:])
@@ -575,7 +597,9 @@ def temperatures_in_windows(frame: pd.DataFrame, windows: pd.DataFrame, how: str
     values = frame[sensors].to_numpy(dtype=float)
     w_start, w_end = _as_ns(windows["start"]), _as_ns(windows["end"])
     if grid.size == 0:
-        raise ValueError("temperature frame is empty: expected a time grid covering the measurements")
+        raise ValueError(
+            "temperature frame is empty: expected a time grid covering the measurements"
+        )
     outside = (w_start < grid[0]) | (w_end > grid[-1])
     if outside.any():
         i = int(np.flatnonzero(outside)[0])
@@ -586,6 +610,10 @@ def temperatures_in_windows(frame: pd.DataFrame, windows: pd.DataFrame, how: str
     if how == "start":
         rows = _interp_at(grid, values, w_start)
     else:
-        rows = np.vstack([_window_mean(grid, values, a, b) for a, b in zip(w_start, w_end)])
+        rows = np.vstack(
+            [_window_mean(grid, values, a, b) for a, b in zip(w_start, w_end, strict=False)]
+        )
     out = windows[["measurement", "start", "end"]].reset_index(drop=True)
-    return pd.concat([out, pd.DataFrame(rows.reshape(len(out), len(sensors)), columns=sensors)], axis=1)
+    return pd.concat(
+        [out, pd.DataFrame(rows.reshape(len(out), len(sensors)), columns=sensors)], axis=1
+    )

@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-
-
-from thermaxis.method.decouple import MM_PER_M
-
 from thermaxis.compensation.model import CONVENTION, TENTHS_UM_PER_MM, UM_PER_MM
 from thermaxis.compensation.runtime import ControllerParameters
+from thermaxis.method.decouple import MM_PER_M
 
 __all__ = [
     "siemens_840d",
@@ -41,7 +38,9 @@ def twincat(p: ControllerParameters) -> list[tuple[str, str, float, str]]:
 
 def file_header(kind: str, statement: str) -> str:
     """The comment block every compensation CSV starts with (read them with ``comment='#'``)."""
-    lines = [f"thermaxis compensation: {kind}", statement, f"Convention: {CONVENTION}."] + HEADERS[kind]
+    lines = [f"thermaxis compensation: {kind}", statement, f"Convention: {CONVENTION}."] + HEADERS[
+        kind
+    ]
     return "".join(f"# {line}\n" for line in lines)
 
 

@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
-from thermaxis.config import ErrorCleaning
-
 from thermaxis.compensation.exports import siemens_840d, twincat
 from thermaxis.compensation.runtime import ControllerParameters, Step
+from thermaxis.config import ErrorCleaning
 
 __all__ = [
     "held_out_accuracy",
@@ -24,7 +23,9 @@ def held_out_accuracy(metrics: pd.DataFrame, approach: str, algorithm: str) -> l
     """The folds' held-out metrics of this approach and algorithm (every target), for model.json."""
     rows = metrics[(metrics["approach"] == approach) & (metrics["algorithm"] == algorithm)]
     if rows.empty:
-        raise ValueError(f"tables/metrics.csv: no rows for approach {approach!r} and algorithm {algorithm!r}")
+        raise ValueError(
+            f"tables/metrics.csv: no rows for approach {approach!r} and algorithm {algorithm!r}"
+        )
     columns = ["fold", "target", "rmse", "max_abs", "mae", "residual_min", "residual_max"]
     return [
         {c: (str(v) if c in ("fold", "target") else float(v)) for c, v in row.items()}
@@ -39,7 +40,9 @@ def run_states(X_run: pd.DataFrame, sensors: Sequence[str]):
     return (ordered["time_min"].to_numpy(dtype=float) * 60.0).tolist(), samples, samples[0]
 
 
-def pass_deviations(raw_run, targets: Sequence[float], max_missing_fraction: float) -> dict[int, dict[str, np.ndarray]]:
+def pass_deviations(
+    raw_run, targets: Sequence[float], max_missing_fraction: float
+) -> dict[int, dict[str, np.ndarray]]:
     """Per measurement (1-based, time order) and direction ("+", "-"), the deviation at each target [um]."""
     from thermaxis.cleaning.passes import combine_passes
 
@@ -49,7 +52,9 @@ def pass_deviations(raw_run, targets: Sequence[float], max_missing_fraction: flo
         passes = {}
         for direction in sorted(set(measurement["direction"]), reverse=True):  # "+" before "-"
             settings = ErrorCleaning(direction=direction, max_missing_fraction=max_missing_fraction)
-            curve, _ = combine_passes(measurement[measurement["direction"] == direction], targets, settings, name=label)
+            curve, _ = combine_passes(
+                measurement[measurement["direction"] == direction], targets, settings, name=label
+            )
             passes[direction] = curve.to_numpy(dtype=float)
         out[number] = passes
     return out
@@ -70,8 +75,16 @@ def _systematic(quantities: Mapping[str, float]) -> float:
 
 def _controller_rows(label: dict, rows, final_rows, status: str) -> list[dict]:
     return [
-        {**label, "parameter": p, "name": n, "unit": u, "value": v, "final_model_value": fv, "status": status}
-        for (p, n, v, u), (_, _, fv, _) in zip(rows, final_rows)
+        {
+            **label,
+            "parameter": p,
+            "name": n,
+            "unit": u,
+            "value": v,
+            "final_model_value": fv,
+            "status": status,
+        }
+        for (p, n, v, u), (_, _, fv, _) in zip(rows, final_rows, strict=False)
     ]
 
 
@@ -96,9 +109,13 @@ def held_out_tables(
     table = _pitch_table(deviations[1])
     names = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
     tables: dict[str, list[dict]] = {name: [] for name in names}
-    for number, (step, minutes, reference) in enumerate(zip(steps, time_min, final), start=1):
+    for number, (step, minutes, reference) in enumerate(
+        zip(steps, time_min, final, strict=False), start=1
+    ):
         label = {"fold": fold, "run": fold, "measurement": number, "time_min": float(minutes)}
-        siemens = _controller_rows(label, siemens_840d(step.parameters), siemens_840d(reference), step.status)
+        siemens = _controller_rows(
+            label, siemens_840d(step.parameters), siemens_840d(reference), step.status
+        )
         tables["siemens_840d"] += siemens
         tables["twincat"] += _twincat_rows(label, step, reference)
         applied = step.parameters.at(positions)
@@ -121,7 +138,9 @@ def _twincat_rows(label: dict, step: Step, reference: ControllerParameters) -> l
     return rows
 
 
-def _residual_rows(label: dict, positions: np.ndarray, drifts: Mapping[str, np.ndarray], applied, status: str):
+def _residual_rows(
+    label: dict, positions: np.ndarray, drifts: Mapping[str, np.ndarray], applied, status: str
+):
     """Per pass and target: the uncompensated drift, the compensation applied, and what remains."""
     return [
         {
@@ -134,11 +153,13 @@ def _residual_rows(label: dict, positions: np.ndarray, drifts: Mapping[str, np.n
             "status": status,
         }
         for direction, drift in drifts.items()
-        for x, d, c in zip(positions, drift, applied)
+        for x, d, c in zip(positions, drift, applied, strict=False)
     ]
 
 
-def _iso_rows(label: dict, q_before: Mapping[str, float], q_after: Mapping[str, float]) -> list[dict]:
+def _iso_rows(
+    label: dict, q_before: Mapping[str, float], q_after: Mapping[str, float]
+) -> list[dict]:
     """The ISO 230-2 quantities one measurement gives, before and after, and those it cannot give."""
     from thermaxis.compensation.iso230 import NEEDS_CYCLES, NOT_COMPUTED, QUANTITIES
 
@@ -150,7 +171,10 @@ def _iso_rows(label: dict, q_before: Mapping[str, float], q_after: Mapping[str, 
         row(name, description, q_before[name], q_after[name], bool(np.isfinite(q_before[name])), "")
         for name, description in QUANTITIES.items()
     ]
-    return computed + [row(name, description, np.nan, np.nan, False, NEEDS_CYCLES) for name, description in NOT_COMPUTED.items()]
+    return computed + [
+        row(name, description, np.nan, np.nan, False, NEEDS_CYCLES)
+        for name, description in NOT_COMPUTED.items()
+    ]
 
 
 def _summary_row(label: dict, step: Step, before, after, q_before, q_after) -> dict:
@@ -158,8 +182,12 @@ def _summary_row(label: dict, step: Step, before, after, q_before, q_after) -> d
     return {
         **label,
         "status": step.status,
-        "largest_abs_uncompensated_um": float(np.nanmax(np.abs(np.concatenate(list(before.values()))))),
-        "largest_abs_compensated_um": float(np.nanmax(np.abs(np.concatenate(list(after.values()))))),
+        "largest_abs_uncompensated_um": float(
+            np.nanmax(np.abs(np.concatenate(list(before.values()))))
+        ),
+        "largest_abs_compensated_um": float(
+            np.nanmax(np.abs(np.concatenate(list(after.values()))))
+        ),
         "E_uncompensated_um": _systematic(q_before),
         "E_compensated_um": _systematic(q_after),
         "line_gap_um": step.parameters.line_gap_um,

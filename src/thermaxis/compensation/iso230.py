@@ -61,11 +61,19 @@ def single_pass_quantities(up=None, down=None) -> dict[str, float]:
         raise ValueError("single_pass_quantities needs at least one pass (up or down)")
     if up is None or down is None:
         one = _span(np.asarray(up if up is not None else down, dtype=float))
-        return {"E_up": one if up is not None else nan, "E_down": one if down is not None else nan, "E": nan, "M": nan, "B": nan}
+        return {
+            "E_up": one if up is not None else nan,
+            "E_down": one if down is not None else nan,
+            "E": nan,
+            "M": nan,
+            "B": nan,
+        }
     up = np.asarray(up, dtype=float)
     down = np.asarray(down, dtype=float)
     if up.shape != down.shape:
-        raise ValueError(f"forward pass has {up.size} targets, backward pass {down.size}; expected the same targets")
+        raise ValueError(
+            f"forward pass has {up.size} targets, backward pass {down.size}; expected the same targets"
+        )
     both = np.isfinite(up) & np.isfinite(down)
     reversal = up[both] - down[both]
     return {

@@ -33,19 +33,22 @@ and one coefficient per degree C, kernel regressions (SVR, GPR) as an RBF expans
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict
-from typing import Mapping, Sequence
 
 import jsonschema
 import numpy as np
 import pandas as pd
 
-from thermaxis.schemas import schema_path
-
-from thermaxis.config import CompensationSettings, DecouplingSettings, FallbackSettings, ModelSettings
+from thermaxis.config import (
+    CompensationSettings,
+    DecouplingSettings,
+    FallbackSettings,
+    ModelSettings,
+)
 from thermaxis.method.decouple import MM_PER_M
 from thermaxis.method.models import linear_terms, relative_temperatures
-
+from thermaxis.schemas import schema_path
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -79,7 +82,7 @@ CONVENTION = (
 def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline) -> dict:
     """One fitted :func:`thermaxis.method.models.make_regressor` pipeline as plain numbers.
 
-    ``inputs`` are indices into the model's input list. Affine fits (mlr, ridge, pls) keep
+    ``inputs`` are indices into the model's input list. Affine fits (mlr, ridge, lasso, pls) keep
     the constant and one coefficient per input in physical units (target unit per degree
     C); SVR and GPR become ``offset + sum_i w_i exp(-gamma |z - z_i|^2)`` on standardised
     inputs z, scaled back to the target's unit.
@@ -87,7 +90,12 @@ def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline)
     record = {"target": target, "position_mm": position_mm, "inputs": [int(i) for i in inputs]}
     terms = linear_terms(pipeline, [str(i) for i in inputs])
     if terms is not None:
-        return {**record, "form": "affine", "constant": terms["const"], "coefficients": [terms[str(i)] for i in inputs]}
+        return {
+            **record,
+            "form": "affine",
+            "constant": terms["const"],
+            "coefficients": [terms[str(i)] for i in inputs],
+        }
     from sklearn.gaussian_process import GaussianProcessRegressor
 
     scaler = pipeline.named_steps["standardise"]
@@ -98,11 +106,15 @@ def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline)
         kernel = regressor.kernel_.k1
         gamma = 1.0 / (2.0 * float(kernel.k2.length_scale) ** 2)
         centres = regressor.X_train_
-        weights = float(kernel.k1.constant_value) * np.asarray(regressor.alpha_, dtype=float).ravel()
+        weights = (
+            float(kernel.k1.constant_value) * np.asarray(regressor.alpha_, dtype=float).ravel()
+        )
         offset = 0.0
     else:
         if regressor.kernel != "rbf":
-            raise ValueError(f"compensation: SVR kernel {regressor.kernel!r} cannot be exported; expected 'rbf'")
+            raise ValueError(
+                f"compensation: SVR kernel {regressor.kernel!r} cannot be exported; expected 'rbf'"
+            )
         gamma = float(regressor._gamma)
         centres = regressor.support_vectors_
         weights = np.asarray(regressor.dual_coef_, dtype=float).ravel()
@@ -129,7 +141,9 @@ def evaluate_regression(record: Mapping, values) -> np.ndarray:
     z = (u - np.asarray(record["input_mean"])) / np.asarray(record["input_scale"])
     centres = np.asarray(record["centres"], dtype=float)
     squared = ((z[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
-    standardised = np.exp(-record["gamma"] * squared) @ np.asarray(record["weights"]) + record["offset"]
+    standardised = (
+        np.exp(-record["gamma"] * squared) @ np.asarray(record["weights"]) + record["offset"]
+    )
     return standardised * record["target_scale"] + record["target_mean"]
 
 
@@ -151,17 +165,28 @@ def line_weights(positions_mm: Sequence[float], origin_mm: float, basis: np.ndar
 
 def _inputs_of(approach: str, estimator) -> list[tuple[str, str]]:
     if approach == "decoupled":
-        return [(s, "absolute") for s in estimator.k_sensors] + [(s, "relative") for s in estimator.b_sensors]
+        return [(s, "absolute") for s in estimator.k_sensors] + [
+            (s, "relative") for s in estimator.b_sensors
+        ]
     return [(s, "relative") for s in estimator.sensors]
 
 
 def _input_values(X: pd.DataFrame, inputs: Sequence[tuple[str, str]]) -> np.ndarray:
     sensors = sorted({s for s, _ in inputs})
     relative = relative_temperatures(X, sensors)
-    return np.column_stack([(X[s] if kind == "absolute" else relative[s]).to_numpy(dtype=float) for s, kind in inputs])
+    return np.column_stack(
+        [(X[s] if kind == "absolute" else relative[s]).to_numpy(dtype=float) for s, kind in inputs]
+    )
 
 
-def model_record(estimator, approach: str, algorithm: str, X_train: pd.DataFrame, fallback: FallbackSettings, **about) -> dict:
+def model_record(
+    estimator,
+    approach: str,
+    algorithm: str,
+    X_train: pd.DataFrame,
+    fallback: FallbackSettings,
+    **about,
+) -> dict:
     """The ``model.json`` content of a fitted Decoupled- or PointwiseAxisModel.
 
     ``about`` adds descriptive keys (dataset, provenance, held_out_accuracy, ...).
@@ -176,13 +201,15 @@ def model_record(estimator, approach: str, algorithm: str, X_train: pd.DataFrame
         b_inputs = [index[(s, "relative")] for s in estimator.b_sensors]
         for target, _, kind in estimator._targets():
             chosen = b_inputs if kind == "relative" else k_inputs
-            regressions.append(regression_record(target, None, chosen, estimator.estimators_[target]))
+            regressions.append(
+                regression_record(target, None, chosen, estimator.estimators_[target])
+            )
         power = {"b": 0, "k": 1, "c2": 2, "c3": 3}
         shifted = (positions - origin) / MM_PER_M
         basis = np.column_stack([shifted ** power[r["target"]] for r in regressions])
     else:
         chosen = [index[(s, "relative")] for s in estimator.sensors]
-        for position, pipeline in zip(positions, estimator.estimators_):
+        for position, pipeline in zip(positions, estimator.estimators_, strict=False):
             regressions.append(regression_record("error", float(position), chosen, pipeline))
         basis = np.eye(positions.size)
     values = _input_values(X_train, inputs)
@@ -196,7 +223,12 @@ def model_record(estimator, approach: str, algorithm: str, X_train: pd.DataFrame
         "degree": int(getattr(estimator, "degree", 0)),
         "sensors": list(dict.fromkeys(s for s, _ in inputs)),
         "inputs": [
-            {"sensor": s, "temperature": kind, "training_min_c": float(values[:, i].min()), "training_max_c": float(values[:, i].max())}
+            {
+                "sensor": s,
+                "temperature": kind,
+                "training_min_c": float(values[:, i].min()),
+                "training_max_c": float(values[:, i].max()),
+            }
             for i, (s, kind) in enumerate(inputs)
         ],
         "reference": {
@@ -205,7 +237,14 @@ def model_record(estimator, approach: str, algorithm: str, X_train: pd.DataFrame
             "reference_position_mm": origin,
         },
         "positions_mm": positions.tolist(),
-        "units": {"k": "um/m", "b": "um", "c2": "um/m^2", "c3": "um/m^3", "error": "um", "coefficients": "target unit per degree C"},
+        "units": {
+            "k": "um/m",
+            "b": "um",
+            "c2": "um/m^2",
+            "c3": "um/m^3",
+            "error": "um",
+            "coefficients": "target unit per degree C",
+        },
         "regressions": regressions,
         "line_weights": line_weights(positions, origin, basis).tolist(),
         "curve_basis": basis.tolist(),
@@ -217,7 +256,10 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
     """Raise ValueError with one line when ``record`` does not follow the committed schema."""
     with open(MODEL_SCHEMA, encoding="utf-8") as fh:
         schema = json.load(fh)
-    errors = sorted(jsonschema.Draft202012Validator(schema).iter_errors(record), key=lambda e: list(e.absolute_path))
+    errors = sorted(
+        jsonschema.Draft202012Validator(schema).iter_errors(record),
+        key=lambda e: list(e.absolute_path),
+    )
     if errors:
         path = "/".join(map(str, errors[0].absolute_path)) or "top level"
         raise ValueError(f"{where}: {path}: {errors[0].message}")
@@ -226,7 +268,15 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
 # --------------------------------------------------------------------------- fitting and held-out evaluation
 
 
-def fit_axis_model(X: pd.DataFrame, Y: pd.DataFrame, approach: str, algorithm: str, selection, model_settings, degree: int | None):
+def fit_axis_model(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    approach: str,
+    algorithm: str,
+    selection,
+    model_settings,
+    degree: int | None,
+):
     """The configured model fitted on the rows given (all runs, or a fold's training runs)."""
     # The estimator the folds are evaluated with, so the deployed model is the one scored.
     from thermaxis.method.folds import _build_model
@@ -250,6 +300,16 @@ def fit_model_record(
     ``settings.approach``); ``about`` adds descriptive keys. The record names the runs
     it was fitted on.
     """
-    estimator = fit_axis_model(X, Y, approach, settings.algorithm, selection, models, decoupling.degree)
+    estimator = fit_axis_model(
+        X, Y, approach, settings.algorithm, selection, models, decoupling.degree
+    )
     trained_on = sorted(X["run"].unique().tolist())
-    return model_record(estimator, approach, settings.algorithm, X, settings.fallback, trained_on=trained_on, **about)
+    return model_record(
+        estimator,
+        approach,
+        settings.algorithm,
+        X,
+        settings.fallback,
+        trained_on=trained_on,
+        **about,
+    )

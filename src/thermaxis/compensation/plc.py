@@ -18,7 +18,7 @@ The exported line is b = sum_r LINE_B[r] * change_r [um], k = sum_r LINE_K[r] * 
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -32,7 +32,9 @@ def st_real(value: float) -> str:
     """An LREAL literal that reads back as exactly ``value`` (IEC 61131-3 needs the decimal point)."""
     text = repr(float(value))
     if not np.isfinite(value):
-        raise ValueError(f"cannot write {value!r} as an IEC 61131-3 literal; expected a finite number")
+        raise ValueError(
+            f"cannot write {value!r} as an IEC 61131-3 literal; expected a finite number"
+        )
     mantissa, _, exponent = text.partition("e")
     if "." not in mantissa:
         mantissa += ".0"
@@ -58,7 +60,10 @@ def _affine_regressions(model: Mapping) -> tuple[str, str]:
     for r, record in enumerate(model["regressions"]):
         matrix[r, record["inputs"]] = record["coefficients"]
     constants = _st(
-        "affine_constants.st.tmpl", n_regressions=matrix.shape[0], n_inputs=matrix.shape[1], coefficients=_array(matrix.ravel())
+        "affine_constants.st.tmpl",
+        n_regressions=matrix.shape[0],
+        n_inputs=matrix.shape[1],
+        coefficients=_array(matrix.ravel()),
     )
     return constants, _st("affine_changes.st.tmpl")
 
@@ -99,7 +104,9 @@ def _regressions(model: Mapping) -> tuple[str, str]:
         return _affine_regressions(model)
     if forms == {"rbf"}:
         return _rbf_regressions(model)
-    raise ValueError(f"model.json: regressions mix the forms {sorted(forms)}; expected one form per model")
+    raise ValueError(
+        f"model.json: regressions mix the forms {sorted(forms)}; expected one form per model"
+    )
 
 
 def structured_text(model: Mapping, statement: str) -> str:
@@ -128,7 +135,9 @@ def _header_values(model: Mapping, statement: str) -> dict:
         convention=CONVENTION,
         single_target_note=" Single target: offset only, coefficient 0." if offset_only else "",
         sensor_list=", ".join(f"{i}: {s}" for i, s in enumerate(sensors, start=1)),
-        input_list="; ".join(f"{j}: {i['sensor']} {i['temperature']}" for j, i in enumerate(inputs, start=1)),
+        input_list="; ".join(
+            f"{j}: {i['sensor']} {i['temperature']}" for j, i in enumerate(inputs, start=1)
+        ),
         policy=policy,
         policy_effect=(
             "the last good values ramp linearly to zero over RAMP_TIME"

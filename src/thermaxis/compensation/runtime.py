@@ -4,16 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Mapping, Sequence
 
 import numpy as np
 
+from thermaxis.compensation.model import UM_PER_MM, evaluate_regression, validate_model
 from thermaxis.config import FallbackSettings
 from thermaxis.method.decouple import MM_PER_M
-
-from thermaxis.compensation.model import UM_PER_MM, evaluate_regression, validate_model
 
 __all__ = [
     "ControllerParameters",
@@ -69,7 +68,9 @@ class Compensator:
     PLC would cycle by cycle.
     """
 
-    def __init__(self, model: Mapping, fallback: FallbackSettings | None = None, where: str = "model.json"):
+    def __init__(
+        self, model: Mapping, fallback: FallbackSettings | None = None, where: str = "model.json"
+    ):
         validate_model(model, where)
         self.model = model
         self.inputs = [(i["sensor"], i["temperature"]) for i in model["inputs"]]
@@ -80,10 +81,12 @@ class Compensator:
         self.weights = np.asarray(model["line_weights"], dtype=float)
         self.basis = np.asarray(model["curve_basis"], dtype=float)
         f = model["fallback"]
-        self.fallback = fallback or FallbackSettings(**{**f, "plausible_c": tuple(f["plausible_c"])})
+        self.fallback = fallback or FallbackSettings(
+            **{**f, "plausible_c": tuple(f["plausible_c"])}
+        )
 
     @classmethod
-    def from_json(cls, path, fallback: FallbackSettings | None = None) -> "Compensator":
+    def from_json(cls, path, fallback: FallbackSettings | None = None) -> Compensator:
         path = Path(path)
         try:
             model = json.loads(path.read_text(encoding="utf-8"))
@@ -93,13 +96,20 @@ class Compensator:
             raise ValueError(f"{path}: line {exc.lineno}: not valid JSON ({exc.msg})") from exc
         return cls(model, fallback, where=str(path))
 
-    def _input_row(self, temperatures: Mapping[str, float], reference: Mapping[str, float]) -> np.ndarray:
+    def _input_row(
+        self, temperatures: Mapping[str, float], reference: Mapping[str, float]
+    ) -> np.ndarray:
         return np.array(
-            [temperatures[s] if kind == "absolute" else temperatures[s] - reference[s] for s, kind in self.inputs],
+            [
+                temperatures[s] if kind == "absolute" else temperatures[s] - reference[s]
+                for s, kind in self.inputs
+            ],
             dtype=float,
         )
 
-    def regression_changes(self, temperatures: Mapping[str, float], reference: Mapping[str, float]) -> np.ndarray:
+    def regression_changes(
+        self, temperatures: Mapping[str, float], reference: Mapping[str, float]
+    ) -> np.ndarray:
         """Each regression's prediction at the current state minus at the reference state."""
         now = self._input_row(temperatures, reference)
         then = self._input_row(reference, reference)
@@ -110,11 +120,15 @@ class Compensator:
             changes.append(pair[0] - pair[1])
         return np.asarray(changes, dtype=float)
 
-    def predicted_change(self, temperatures: Mapping[str, float], reference: Mapping[str, float]) -> np.ndarray:
+    def predicted_change(
+        self, temperatures: Mapping[str, float], reference: Mapping[str, float]
+    ) -> np.ndarray:
         """Predicted change of the error curve since the reference state, um at each target."""
         return self.basis @ self.regression_changes(temperatures, reference)
 
-    def parameters(self, temperatures: Mapping[str, float], reference: Mapping[str, float]) -> ControllerParameters:
+    def parameters(
+        self, temperatures: Mapping[str, float], reference: Mapping[str, float]
+    ) -> ControllerParameters:
         """K0 [mm], tan(beta) [-], P0 [mm] of the compensation (= -predicted change) in one state."""
         changes = self.regression_changes(temperatures, reference)
         b_um, k_um_per_m = self.weights @ changes
@@ -153,19 +167,25 @@ class Compensator:
             if not math.isfinite(value):
                 reasons.append(f"{sensor}: missing")
             elif age > f.max_sensor_age_s:
-                reasons.append(f"{sensor}: stale, last update {age:g} s ago (limit {f.max_sensor_age_s:g} s)")
+                reasons.append(
+                    f"{sensor}: stale, last update {age:g} s ago (limit {f.max_sensor_age_s:g} s)"
+                )
             elif not lo <= value <= hi:
                 reasons.append(f"{sensor}: implausible {value:g} C (plausible {lo:g} ... {hi:g} C)")
             elif last and sensor in last and time_s > last[sensor][0]:
                 rate = abs(value - last[sensor][1]) / (time_s - last[sensor][0]) * 60.0
                 if rate > f.max_rate_c_per_min:
-                    reasons.append(f"{sensor}: changes {rate:.3g} C/min (limit {f.max_rate_c_per_min:g} C/min)")
+                    reasons.append(
+                        f"{sensor}: changes {rate:.3g} C/min (limit {f.max_rate_c_per_min:g} C/min)"
+                    )
             if not (math.isfinite(ref) and lo <= ref <= hi):
                 reasons.append(f"{sensor}: reference temperature missing or implausible")
         if reasons:
             return tuple(reasons)
         row = self._input_row(temperatures, reference)
-        for (sensor, kind), spec, value in zip(self.inputs, self.model["inputs"], row):
+        for (sensor, kind), spec, value in zip(
+            self.inputs, self.model["inputs"], row, strict=False
+        ):
             low = spec["training_min_c"] - f.range_margin_c
             high = spec["training_max_c"] + f.range_margin_c
             if not low <= value <= high:
@@ -175,7 +195,9 @@ class Compensator:
                 )
         return tuple(reasons)
 
-    def _plausible_readings(self, time_s: float, sample: Mapping[str, float], ages: Mapping[str, float]) -> dict:
+    def _plausible_readings(
+        self, time_s: float, sample: Mapping[str, float], ages: Mapping[str, float]
+    ) -> dict:
         lo, hi = self.fallback.plausible_c
         return {
             s: (time_s, sample[s])
@@ -198,7 +220,7 @@ class Compensator:
         fault_since = None
         last: dict[str, tuple[float, float]] = {}
         steps = []
-        for i, (time_s, sample) in enumerate(zip(times_s, temperatures)):
+        for i, (time_s, sample) in enumerate(zip(times_s, temperatures, strict=False)):
             ages = ages_s[i] if ages_s is not None else {}
             reasons = self.faults(sample, reference, float(time_s), last, ages)
             last.update(self._plausible_readings(float(time_s), sample, ages))
@@ -212,7 +234,9 @@ class Compensator:
                 steps.append(Step(float(time_s), good, "hold", reasons))
                 continue
             elapsed_min = (float(time_s) - fault_since) / 60.0
-            scale = max(0.0, 1.0 - elapsed_min / f.ramp_to_zero_min) if f.ramp_to_zero_min > 0 else 0.0
+            scale = (
+                max(0.0, 1.0 - elapsed_min / f.ramp_to_zero_min) if f.ramp_to_zero_min > 0 else 0.0
+            )
             ramped = replace(
                 good,
                 k0_mm=good.k0_mm * scale,

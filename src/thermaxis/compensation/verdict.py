@@ -20,7 +20,12 @@ __all__ = ["QUANTITIES", "run_changes", "deployment_verdict", "verdict_sentence"
 
 # (name in the verdict, column before, column after, words)
 QUANTITIES = (
-    ("largest_abs", "largest_abs_uncompensated_um", "largest_abs_compensated_um", "largest |deviation| over the stroke"),
+    (
+        "largest_abs",
+        "largest_abs_uncompensated_um",
+        "largest_abs_compensated_um",
+        "largest |deviation| over the stroke",
+    ),
     ("E", "E_uncompensated_um", "E_compensated_um", "E of ISO 230-2"),
 )
 
@@ -48,7 +53,9 @@ def deployment_verdict(summary: pd.DataFrame, max_worsening_um: float) -> dict:
     values; ``recommended_for_deployment`` and the reasons when it is false.
     """
     if summary.empty:
-        raise ValueError("no held-out measurements: the deployment verdict needs at least one held-out run")
+        raise ValueError(
+            "no held-out measurements: the deployment verdict needs at least one held-out run"
+        )
     changes = run_changes(summary)
     verdict: dict = {"held_out_runs": len(changes), "max_worsening_um": float(max_worsening_um)}
     reasons = []
@@ -69,7 +76,8 @@ def deployment_verdict(summary: pd.DataFrame, max_worsening_um: float) -> dict:
                     f"compensation.max_worsening_um = {max_worsening_um:g} um)"
                 )
     verdict["runs"] = [
-        {k: (str(v) if k == "run" else float(v)) for k, v in row.items()} for row in changes.to_dict("records")
+        {k: (str(v) if k == "run" else float(v)) for k, v in row.items()}
+        for row in changes.to_dict("records")
     ]
     verdict["recommended_for_deployment"] = not reasons
     verdict["reasons"] = reasons

@@ -25,8 +25,8 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from thermaxis.errors import DataError
 from thermaxis.dataset.reader import load_dataset
+from thermaxis.errors import DataError
 from thermaxis.schemas import load_schema
 
 __all__ = ["load_mapping", "read_table", "split_runs", "measurements_of", "import_dataset", "main"]
@@ -43,7 +43,10 @@ def load_mapping(path) -> dict:
     if not isinstance(mapping, dict):
         raise DataError(f"{path}: expected a mapping at top level")
     schema = load_schema("import_mapping")
-    errors = sorted(jsonschema.Draft202012Validator(schema).iter_errors(mapping), key=lambda e: list(e.absolute_path))
+    errors = sorted(
+        jsonschema.Draft202012Validator(schema).iter_errors(mapping),
+        key=lambda e: list(e.absolute_path),
+    )
     if errors:
         where = "/".join(map(str, errors[0].absolute_path)) or "top level"
         raise DataError(f"{path}: {where}: {errors[0].message}")
@@ -69,15 +72,25 @@ def _check_ids(path: Path, mapping: dict) -> None:
     if dup:
         raise DataError(f"{path}: runs: run {dup[0]!r} given more than once")
     by = mapping["split"]["by"]
-    if by == "signal" and mapping["split"].get("signal") not in {s["id"] for s in mapping["signals"]}:
-        raise DataError(f"{path}: split/signal: expected the id of one of the mapping's signals, got {mapping['split'].get('signal')!r}")
+    if by == "signal" and mapping["split"].get("signal") not in {
+        s["id"] for s in mapping["signals"]
+    }:
+        raise DataError(
+            f"{path}: split/signal: expected the id of one of the mapping's signals, got {mapping['split'].get('signal')!r}"
+        )
     needed = {"ranges": ("start_s", "end_s"), "files": ("file",)}.get(by, ())
     for i, run in enumerate(mapping["runs"]):
         for key in needed:
             if key not in run:
-                raise DataError(f"{path}: runs/{i}: split by {by} needs {key!r} for run {run['name']!r}")
-    if mapping.get("ambient_sensor") and mapping["ambient_sensor"] not in {s["id"] for s in mapping["sensors"]}:
-        raise DataError(f"{path}: ambient_sensor: {mapping['ambient_sensor']!r} is not one of the mapping's sensor ids")
+                raise DataError(
+                    f"{path}: runs/{i}: split by {by} needs {key!r} for run {run['name']!r}"
+                )
+    if mapping.get("ambient_sensor") and mapping["ambient_sensor"] not in {
+        s["id"] for s in mapping["sensors"]
+    }:
+        raise DataError(
+            f"{path}: ambient_sensor: {mapping['ambient_sensor']!r} is not one of the mapping's sensor ids"
+        )
 
 
 def read_table(path, sheet=0) -> pd.DataFrame:
@@ -103,12 +116,16 @@ def read_table(path, sheet=0) -> pd.DataFrame:
 
 def _numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool) -> np.ndarray:
     if column not in frame.columns:
-        raise DataError(f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}")
+        raise DataError(
+            f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
+        )
     values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
     bad = ~np.isfinite(values) & (frame[column].notna().to_numpy() if allow_empty else True)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
-        raise DataError(f"{path}: row {i + 2}, column {column!r}: expected a finite number, got {frame[column].iloc[i]!r}")
+        raise DataError(
+            f"{path}: row {i + 2}, column {column!r}: expected a finite number, got {frame[column].iloc[i]!r}"
+        )
     return values
 
 
@@ -118,7 +135,9 @@ def _seconds(path: Path, frame: pd.DataFrame, time: dict) -> np.ndarray:
         back = np.flatnonzero(np.diff(t) <= 0)
         if back.size:
             i = int(back[0]) + 1
-            raise DataError(f"{path}: row {i + 2}, column {time['column']!r}: time does not increase ({t[i]:g} after {t[i - 1]:g})")
+            raise DataError(
+                f"{path}: row {i + 2}, column {time['column']!r}: time does not increase ({t[i]:g} after {t[i - 1]:g})"
+            )
         return t
     return np.arange(len(frame), dtype=float) * float(time["interval_s"])
 
@@ -147,12 +166,16 @@ def split_runs(rows: pd.DataFrame, mapping: dict, where: str = "mapping") -> lis
         if not active[0] and starts.size and starts[0] > 0:
             starts = starts[1:]  # the standstill before the first step belongs to the first run
         bounds = [0, *starts.tolist(), len(rows)]
-        pieces = [rows.iloc[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+        pieces = [rows.iloc[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=False)]
     else:
-        pieces = [rows[(rows["_t"] >= r["start_s"]) & (rows["_t"] < r["end_s"])] for r in mapping["runs"]]
-        for run, piece in zip(mapping["runs"], pieces):
+        pieces = [
+            rows[(rows["_t"] >= r["start_s"]) & (rows["_t"] < r["end_s"])] for r in mapping["runs"]
+        ]
+        for run, piece in zip(mapping["runs"], pieces, strict=False):
             if piece.empty:
-                raise DataError(f"{where}: run {run['name']!r}: no sample in [{run['start_s']:g}, {run['end_s']:g}) s")
+                raise DataError(
+                    f"{where}: run {run['name']!r}: no sample in [{run['start_s']:g}, {run['end_s']:g}) s"
+                )
     if len(pieces) != len(mapping["runs"]):
         raise DataError(
             f"{where}: split by signal {split['signal']!r} found {len(pieces)} run(s) but the mapping lists "
@@ -180,16 +203,30 @@ def _write_run(folder: Path, rows: pd.DataFrame, mapping: dict, start: pd.Timest
     source = mapping["source_name"]
     (folder / "temperatures").mkdir(parents=True)
     temps = pd.DataFrame({"time": times, **{s["id"]: rows[s["id"]] for s in mapping["sensors"]}})
-    temps.to_csv(folder / "temperatures" / f"{source}.csv", index=False, float_format="%.6g", lineterminator="\n")
+    temps.to_csv(
+        folder / "temperatures" / f"{source}.csv",
+        index=False,
+        float_format="%.6g",
+        lineterminator="\n",
+    )
     if mapping["signals"]:
         (folder / "signals").mkdir()
-        signals = pd.DataFrame({"time": times, **{s["id"]: rows[s["id"]] for s in mapping["signals"]}})
-        signals.to_csv(folder / "signals" / f"{source}.csv", index=False, float_format="%.6g", lineterminator="\n")
+        signals = pd.DataFrame(
+            {"time": times, **{s["id"]: rows[s["id"]] for s in mapping["signals"]}}
+        )
+        signals.to_csv(
+            folder / "signals" / f"{source}.csv",
+            index=False,
+            float_format="%.6g",
+            lineterminator="\n",
+        )
     picked = measurements_of(rows, mapping["errors"]["every_s"])
     columns = mapping["errors"]["columns"]
     reference = rows[[f"_e{j}" for j in range(len(columns))]].iloc[0].to_numpy(dtype=float)
     if mapping["errors"]["rereference"] == "run_start" and not np.isfinite(reference).all():
-        raise DataError(f"{folder.name}: the run's first error reading is missing; cannot re-reference to it")
+        raise DataError(
+            f"{folder.name}: the run's first error reading is missing; cannot re-reference to it"
+        )
     records = []
     for i, (_, sample) in enumerate(picked.iterrows(), start=1):
         for j, item in enumerate(columns):
@@ -197,7 +234,9 @@ def _write_run(folder: Path, rows: pd.DataFrame, mapping: dict, start: pd.Timest
             if mapping["errors"]["rereference"] == "run_start":
                 value -= reference[j]
             if np.isfinite(value):
-                records.append((f"M{i:03d}", _iso(start, [sample["_t"]])[0], item["position_mm"], value))
+                records.append(
+                    (f"M{i:03d}", _iso(start, [sample["_t"]])[0], item["position_mm"], value)
+                )
     errors = pd.DataFrame(records, columns=["measurement", "time", "position_mm", "error_um"])
     errors.to_csv(folder / "errors.csv", index=False, float_format="%.6g", lineterminator="\n")
     return len(picked)
@@ -224,7 +263,9 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
             f"{split['rest']:g} (the first run keeps the record's start)."
         )
     elif split["by"] == "ranges":
-        notes.append("The record was cut into runs at the time ranges listed in the import mapping.")
+        notes.append(
+            "The record was cut into runs at the time ranges listed in the import mapping."
+        )
     else:
         notes.append("Each run comes from its own file.")
     every = mapping["errors"]["every_s"]
@@ -239,13 +280,17 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
         )
     positions = [c["position_mm"] for c in mapping["errors"]["columns"]]
     if len(positions) == 1:
-        notes.append(f"The record has one measuring point; it is stored as target position {positions[0]:g} mm.")
+        notes.append(
+            f"The record has one measuring point; it is stored as target position {positions[0]:g} mm."
+        )
     return notes
 
 
 def _dataset_yaml(mapping: dict, notes: list[str]) -> dict:
-    description = mapping["description"].strip() + "\n\nAssumptions made by the import (thermaxis.dataset.importer):\n" + "\n".join(
-        f"- {n}" for n in notes
+    description = (
+        mapping["description"].strip()
+        + "\n\nAssumptions made by the import (thermaxis.dataset.importer):\n"
+        + "\n".join(f"- {n}" for n in notes)
     )
     meta = {"name": mapping["name"]}
     if mapping.get("title"):
@@ -259,10 +304,18 @@ def _dataset_yaml(mapping: dict, notes: list[str]) -> dict:
     meta["provenance"] = dict(mapping["provenance"])
     meta["axis"] = dict(mapping["axis"])
     source = mapping["source_name"]
-    meta["sensors"] = [{"id": s["id"], "location": s["location"], "source": source, "column": s["column"]} for s in mapping["sensors"]]
+    meta["sensors"] = [
+        {"id": s["id"], "location": s["location"], "source": source, "column": s["column"]}
+        for s in mapping["sensors"]
+    ]
     if mapping["signals"]:
-        meta["signals"] = [{"id": s["id"], "unit": s["unit"], "source": source, "column": s["column"]} for s in mapping["signals"]]
-    meta["sources"] = [{"name": source, "clock_note": "one logger; times from the import (see description)"}]
+        meta["signals"] = [
+            {"id": s["id"], "unit": s["unit"], "source": source, "column": s["column"]}
+            for s in mapping["signals"]
+        ]
+    meta["sources"] = [
+        {"name": source, "clock_note": "one logger; times from the import (see description)"}
+    ]
     return meta
 
 
@@ -270,10 +323,15 @@ def _runs_tsv(mapping: dict) -> str:
     descriptor_names = sorted({k for r in mapping["runs"] for k in r.get("descriptors", {})})
     lines = ["\t".join(["run", "condition", *descriptor_names, "description"])]
     for run in mapping["runs"]:
-        values = [format(run["descriptors"][k], "g") if k in run.get("descriptors", {}) else "" for k in descriptor_names]
+        values = [
+            format(run["descriptors"][k], "g") if k in run.get("descriptors", {}) else ""
+            for k in descriptor_names
+        ]
         text = [run["name"], run["condition"], *values, run["description"]]
         if any("\t" in v or "\n" in v for v in text):
-            raise DataError(f"run {run['name']!r}: names, conditions and descriptions must not hold tabs or newlines")
+            raise DataError(
+                f"run {run['name']!r}: names, conditions and descriptions must not hold tabs or newlines"
+            )
         lines.append("\t".join(text))
     return "\n".join(lines) + "\n"
 
@@ -286,7 +344,9 @@ def _runs_rows(mapping_path: Path, mapping: dict) -> list[pd.DataFrame]:
             table_path = source / run["file"]
             pieces.append(_tidy(table_path, read_table(table_path, mapping["sheet"]), mapping))
         return pieces
-    return split_runs(_tidy(source, read_table(source, mapping["sheet"]), mapping), mapping, str(mapping_path))
+    return split_runs(
+        _tidy(source, read_table(source, mapping["sheet"]), mapping), mapping, str(mapping_path)
+    )
 
 
 def import_dataset(mapping_path, out) -> Path:
@@ -300,13 +360,14 @@ def import_dataset(mapping_path, out) -> Path:
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
         counts = {}
-        for run, rows in zip(mapping["runs"], pieces):
+        for run, rows in zip(mapping["runs"], pieces, strict=False):
             # Each run keeps its place on the record's clock, so runs follow each other in time.
             counts[run["name"]] = _write_run(tmp / run["name"], rows, mapping, start)
         meta = _dataset_yaml(mapping, _assumptions(mapping, counts))
         header = f"# Written by `python -m thermaxis.dataset.importer {mapping_path.name}` -- do not edit by hand.\n"
         (tmp / "dataset.yaml").write_text(
-            header + yaml.safe_dump(meta, sort_keys=False, allow_unicode=True, width=100), encoding="utf-8"
+            header + yaml.safe_dump(meta, sort_keys=False, allow_unicode=True, width=100),
+            encoding="utf-8",
         )
         (tmp / "runs.tsv").write_text(_runs_tsv(mapping), encoding="utf-8")
         if mapping.get("licence_file"):
@@ -322,9 +383,16 @@ def import_dataset(mapping_path, out) -> Path:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m thermaxis.dataset.importer", description=__doc__.splitlines()[0])
-    parser.add_argument("mapping", help="the import mapping (YAML; schema src/thermaxis/schemas/import_mapping.schema.yaml)")
-    parser.add_argument("--out", required=True, help="the dataset folder to write, e.g. data/raw/<name>")
+    parser = argparse.ArgumentParser(
+        prog="python -m thermaxis.dataset.importer", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "mapping",
+        help="the import mapping (YAML; schema src/thermaxis/schemas/import_mapping.schema.yaml)",
+    )
+    parser.add_argument(
+        "--out", required=True, help="the dataset folder to write, e.g. data/raw/<name>"
+    )
     args = parser.parse_args(argv)
     try:
         out = import_dataset(args.mapping, args.out)

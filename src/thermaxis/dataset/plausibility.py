@@ -24,7 +24,9 @@ __all__ = [
 # No linear axis is a kilometre long: beyond this a position is a unit or logging fault.
 MAX_ABS_POSITION_MM = 1e6
 # A zone follows the clock time: "...T09:10:00Z", "... 09:10:00.5+02:00", "...T09:10-0500".
-_TIME_ZONE = re.compile(r"[T\s]\d{1,2}:\d{2}(?::\d{2}(?:\.\d*)?)?\s*(?:Z|[+-]\d{2}(?::?\d{2})?)\s*$", re.IGNORECASE)
+_TIME_ZONE = re.compile(
+    r"[T\s]\d{1,2}:\d{2}(?::\d{2}(?:\.\d*)?)?\s*(?:Z|[+-]\d{2}(?::?\d{2})?)\s*$", re.IGNORECASE
+)
 
 
 def check_dataset_shape(dataset, config) -> None:
@@ -46,7 +48,12 @@ def check_dataset_shape(dataset, config) -> None:
         for path in sorted((dataset.root / run / "errors").glob("*.csv")):
             check_name(path.stem, "measurement", path)
         folder = dataset.root / run
-        data_files = [*folder.glob("errors/*.csv"), *folder.glob("errors.csv"), *folder.glob("temperatures/*.csv"), *folder.glob("signals/*.csv")]
+        data_files = [
+            *folder.glob("errors/*.csv"),
+            *folder.glob("errors.csv"),
+            *folder.glob("temperatures/*.csv"),
+            *folder.glob("signals/*.csv"),
+        ]
         for path in sorted(data_files):
             check_inside(path, dataset.root, what="data file")
             check_regular_file(path, what="data file")
@@ -57,8 +64,13 @@ def check_dataset_shape(dataset, config) -> None:
             f"{len(dataset.run_ids)} run listed; leave-one-condition-out needs at least 2 runs",
         )
     # A run's measurements in one errors.csv are counted when it is read, not here.
-    counts = {run: len(list((dataset.root / run / "errors").glob("*.csv"))) for run in dataset.run_ids}
-    if not any((dataset.root / run / "errors.csv").exists() for run in dataset.run_ids) and max(counts.values()) < 2:
+    counts = {
+        run: len(list((dataset.root / run / "errors").glob("*.csv"))) for run in dataset.run_ids
+    }
+    if (
+        not any((dataset.root / run / "errors.csv").exists() for run in dataset.run_ids)
+        and max(counts.values()) < 2
+    ):
         raise _error(
             dataset.root,
             "one measurement per run; the drift (intercept b) and every model need at least 2 measurements "
@@ -81,12 +93,17 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
         # The file and its lines as read; a run built in memory has neither.
         path = raw.error_files.get(name, name)
         lines, positions = raw.error_lines.get(name), measurement["position_mm"].to_numpy()
-        check_error_readings(path, measurement["error_um"].to_numpy(), cleaning.max_abs_error_um, lines)
+        check_error_readings(
+            path, measurement["error_um"].to_numpy(), cleaning.max_abs_error_um, lines
+        )
         _refuse_first_row(
             path,
             np.abs(positions) > MAX_ABS_POSITION_MM,
             "position_mm",
-            lambda i: f"expected a position within ±{MAX_ABS_POSITION_MM:g} mm, got {positions[i]:g}",
+            # Called within this iteration, by _refuse_first_row.
+            lambda i: (
+                f"expected a position within ±{MAX_ABS_POSITION_MM:g} mm, got {positions[i]:g}"  # noqa: B023
+            ),
             lines,
         )
     windows = raw.windows()
@@ -108,14 +125,21 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
         )
     median_c = cleaning.plausible_median_c
     if not median_c[0] < median_c[1]:
-        raise _error("config temperatures.plausible_median_c", f"expected [low, high] with low < high, got [{median_c[0]:g}, {median_c[1]:g}]")
+        raise _error(
+            "config temperatures.plausible_median_c",
+            f"expected [low, high] with low < high, got [{median_c[0]:g}, {median_c[1]:g}]",
+        )
     if dataset.temperature_kind == "rise":
         return []  # rises since the start sit near 0 °C by design: no structure-temperature median to judge
     notes = []
     for source, frame in raw.sources.items():
-        with np.errstate(over="ignore"):  # the median of two readings near 1e308 is inf: still implausible
+        with np.errstate(
+            over="ignore"
+        ):  # the median of two readings near 1e308 is inf: still implausible
             medians = frame.drop(columns="time").median().to_dict()
-        notes += sensor_median_warnings(medians, *median_c, where=str(folder / "temperatures" / f"{source}.csv"))
+        notes += sensor_median_warnings(
+            medians, *median_c, where=str(folder / "temperatures" / f"{source}.csv")
+        )
     return notes
 
 
@@ -126,10 +150,16 @@ def check_same_targets(errors: pd.DataFrame, dataset_root) -> None:
     reference = np.sort(targets.iloc[0])
     for run, positions in targets.items():
         positions = np.sort(positions)
-        if positions.shape != reference.shape or not np.allclose(positions, reference, rtol=0, atol=1e-6):
+        if positions.shape != reference.shape or not np.allclose(
+            positions, reference, rtol=0, atol=1e-6
+        ):
             extra = np.setdiff1d(positions, reference)
             lacking = np.setdiff1d(reference, positions)
-            detail = f"{extra[0]:g} mm is not a target of run {first_run}" if extra.size else f"{lacking[0]:g} mm is never read"
+            detail = (
+                f"{extra[0]:g} mm is not a target of run {first_run}"
+                if extra.size
+                else f"{lacking[0]:g} mm is never read"
+            )
             raise _error(
                 error_source(Path(dataset_root) / run),
                 f"run {run} reads {positions.size} target positions, run {first_run} {reference.size} "
@@ -141,7 +171,12 @@ def check_time_zones(path, values: pd.Series, column: str = "time") -> None:
     """Times carry no zone (one zone per dataset); name the first that does."""
     zoned = values.astype(str).str.contains(_TIME_ZONE).to_numpy()
     _refuse_first_row(
-        path, zoned, column, lambda i: f"expected a time without a time zone (one zone per dataset), got {values.iloc[i]!r}"
+        path,
+        zoned,
+        column,
+        lambda i: (
+            f"expected a time without a time zone (one zone per dataset), got {values.iloc[i]!r}"
+        ),
     )
 
 
@@ -149,7 +184,10 @@ def check_time_range(path, parsed: pd.Series, values: pd.Series, column: str = "
     """Times the nanosecond clock of the tables can hold (pandas: 1677-09-21 to 2262-04-11)."""
     years = parsed.dt.year.to_numpy()
     _refuse_first_row(
-        path, (years < 1678) | (years > 2261), column, lambda i: f"expected a time between 1678 and 2261, got {values.iloc[i]!r}"
+        path,
+        (years < 1678) | (years > 2261),
+        column,
+        lambda i: f"expected a time between 1678 and 2261, got {values.iloc[i]!r}",
     )
 
 
@@ -161,7 +199,9 @@ def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float, lines=N
         path,
         bad,
         "error_um",
-        lambda i: f"{errors_um[i]:g} um is beyond the plausible ±{max_abs_um:g} um (config errors.max_abs_error_um)",
+        lambda i: (
+            f"{errors_um[i]:g} um is beyond the plausible ±{max_abs_um:g} um (config errors.max_abs_error_um)"
+        ),
         lines,
     )
 
@@ -180,7 +220,9 @@ def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: st
     for sensor, median in sorted(medians.items()):
         if not math.isnan(median) and not (low_c <= median <= high_c):
             # Above 200 a kelvin reading is likelier than a Fahrenheit one.
-            unit, celsius = ("kelvin", median - 273.15) if median > 200 else ("°F", (median - 32.0) * 5.0 / 9.0)
+            unit, celsius = (
+                ("kelvin", median - 273.15) if median > 200 else ("°F", (median - 32.0) * 5.0 / 9.0)
+            )
             notes.append(
                 f"{where}: sensor {sensor}: median {median:.1f} °C is outside the plausible {low_c:g}-{high_c:g} °C "
                 f"of a machine structure (config temperatures.plausible_median_c); if it is in {unit}, "

@@ -9,20 +9,18 @@ what was expected.  The reader never repairs anything: repairs belong to
 from __future__ import annotations
 
 import csv
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping
 
 import jsonschema
 import numpy as np
 import pandas as pd
 
-from thermaxis.dataset import layout, plausibility
-from thermaxis.dataset import safety
+from thermaxis.dataset import layout, plausibility, safety
+from thermaxis.errors import DataError
 from thermaxis.labels import natural_key
 from thermaxis.schemas import load_schema
-
-from thermaxis.errors import DataError
 
 __all__ = [
     "Dataset",
@@ -94,7 +92,11 @@ class Dataset:
     @property
     def descriptors(self) -> tuple[str, ...]:
         """Optional numeric columns of runs.tsv describing each run's operating condition."""
-        return tuple(c for c in self.runs.columns if c not in RUN_COLUMNS and pd.api.types.is_float_dtype(self.runs[c]))
+        return tuple(
+            c
+            for c in self.runs.columns
+            if c not in RUN_COLUMNS and pd.api.types.is_float_dtype(self.runs[c])
+        )
 
     def sensors_of(self, source: str) -> tuple[str, ...]:
         return tuple(s["id"] for s in self.meta["sensors"] if s["source"] == source)
@@ -134,7 +136,9 @@ def _validate_meta(path: Path, meta: dict) -> None:
     signals = [s["id"] for s in meta.get("signals", ())]
     clash = sorted(set(signals) & set(ids) | {i for i in signals if signals.count(i) > 1})
     if clash:
-        raise DataError(f"{path}: signals: id {clash[0]!r} declared more than once (sensor and signal ids share one namespace)")
+        raise DataError(
+            f"{path}: signals: id {clash[0]!r} declared more than once (sensor and signal ids share one namespace)"
+        )
     sources = {s["name"] for s in meta["sources"]}
     for kind, items in (("sensors", meta["sensors"]), ("signals", meta.get("signals", ()))):
         for i, item in enumerate(items):
@@ -145,7 +149,9 @@ def _validate_meta(path: Path, meta: dict) -> None:
                 )
     ambient = meta.get("ambient_sensor")
     if ambient is not None and ambient not in ids:
-        raise DataError(f"{path}: ambient_sensor: {ambient!r} is not a declared sensor id (expected one of {', '.join(ids)})")
+        raise DataError(
+            f"{path}: ambient_sensor: {ambient!r} is not a declared sensor id (expected one of {', '.join(ids)})"
+        )
 
 
 def _coerce_cell(value: str, kind: str):
@@ -173,7 +179,9 @@ def _numeric_descriptors(runs: pd.DataFrame, path: Path) -> pd.DataFrame:
             infinite = ~np.isfinite(numbers.fillna(0.0).to_numpy(dtype=float))
             if infinite.any():
                 i = int(np.flatnonzero(infinite)[0])
-                raise DataError(f"{path}: run {runs['run'].iloc[i]!r}, column {column!r}: expected a finite number, got {cells.iloc[i]!r}")
+                raise DataError(
+                    f"{path}: run {runs['run'].iloc[i]!r}, column {column!r}: expected a finite number, got {cells.iloc[i]!r}"
+                )
             runs[column] = numbers.astype(float)
     return runs
 
@@ -185,11 +193,15 @@ def _read_runs(path: Path) -> pd.DataFrame:
     with open(path, encoding="utf-8-sig", newline="") as fh:
         rows = list(csv.reader(fh, delimiter="\t"))
     if not rows:
-        raise DataError(f"{path}: empty file, expected a tab-separated header {' '.join(RUN_COLUMNS)}")
+        raise DataError(
+            f"{path}: empty file, expected a tab-separated header {' '.join(RUN_COLUMNS)}"
+        )
     header = [h.strip() for h in rows[0]]
     missing = [c for c in RUN_COLUMNS if c not in header]
     if missing:
-        raise DataError(f"{path}: missing column {missing[0]!r} (expected tab-separated columns {', '.join(RUN_COLUMNS)})")
+        raise DataError(
+            f"{path}: missing column {missing[0]!r} (expected tab-separated columns {', '.join(RUN_COLUMNS)})"
+        )
     if len(rows) < 2:
         raise DataError(f"{path}: no runs listed (expected one row per run)")
     schema = load_schema("runs")
@@ -199,9 +211,11 @@ def _read_runs(path: Path) -> pd.DataFrame:
         if not any(cell.strip() for cell in row):
             continue
         if len(row) != len(header):
-            raise DataError(f"{path}: line {lineno}: expected {len(header)} tab-separated fields, got {len(row)}")
+            raise DataError(
+                f"{path}: line {lineno}: expected {len(header)} tab-separated fields, got {len(row)}"
+            )
         record = {}
-        for name, cell in zip(header, row):
+        for name, cell in zip(header, row, strict=False):
             kind = schema["properties"].get(name, {}).get("type", "string")
             if name not in RUN_COLUMNS and not cell.strip():
                 continue  # an optional column left empty for this run
@@ -222,7 +236,9 @@ def _read_runs(path: Path) -> pd.DataFrame:
     if len(dup):
         raise DataError(f"{path}: run {dup.iloc[0]!r} listed more than once")
     runs = _numeric_descriptors(runs, path)
-    return runs.sort_values("run", kind="stable", key=lambda c: c.map(natural_key)).reset_index(drop=True)
+    return runs.sort_values("run", kind="stable", key=lambda c: c.map(natural_key)).reset_index(
+        drop=True
+    )
 
 
 def load_dataset(root) -> Dataset:
@@ -243,7 +259,11 @@ def load_dataset(root) -> Dataset:
             raise DataError(f"{root / 'runs.tsv'}: run {run!r} has no folder {root / run}")
     for child in sorted(root.iterdir()):
         if child.is_dir() and not child.name.startswith(".") and child.name not in listed:
-            if (child / "errors").is_dir() or (child / "errors.csv").exists() or (child / "temperatures").is_dir():
+            if (
+                (child / "errors").is_dir()
+                or (child / "errors.csv").exists()
+                or (child / "temperatures").is_dir()
+            ):
                 raise DataError(f"{child}: run folder is not listed in {root / 'runs.tsv'}")
     sensors = tuple(s["id"] for s in meta["sensors"])
     return Dataset(root=root, meta=meta, runs=runs, sensors=sensors)
@@ -258,7 +278,9 @@ def _read_csv(path: Path) -> pd.DataFrame:
     except pd.errors.EmptyDataError:
         raise DataError(f"{path}: empty file, expected a header and data rows") from None
     except UnicodeDecodeError as exc:
-        raise DataError(f"{path}: byte 0x{exc.object[exc.start]:02x} is not UTF-8; expected UTF-8 text") from None
+        raise DataError(
+            f"{path}: byte 0x{exc.object[exc.start]:02x} is not UTF-8; expected UTF-8 text"
+        ) from None
     except pd.errors.ParserError as exc:
         raise DataError(f"{path}: not a valid CSV file ({str(exc).splitlines()[0]})") from None
     frame.columns = [str(c).strip() for c in frame.columns]
@@ -273,9 +295,13 @@ def _parse_time(path: Path, values: pd.Series) -> pd.Series:
     bad = parsed.isna().to_numpy()
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise DataError(f"{path}: line {i + 2}, column 'time': expected an ISO 8601 time, got {values.iloc[i]!r}")
+        raise DataError(
+            f"{path}: line {i + 2}, column 'time': expected an ISO 8601 time, got {values.iloc[i]!r}"
+        )
     if getattr(parsed.dt, "tz", None) is not None:
-        raise DataError(f"{path}: column 'time': expected times without a time zone (one zone per dataset)")
+        raise DataError(
+            f"{path}: column 'time': expected times without a time zone (one zone per dataset)"
+        )
     plausibility.check_time_range(path, parsed, values)
     return parsed.astype("datetime64[ns]")
 
@@ -289,7 +315,9 @@ def _parse_numbers(path: Path, frame: pd.DataFrame, column: str, allow_empty: bo
         bad |= empty.to_numpy()
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise DataError(f"{path}: line {i + 2}, column {column!r}: expected a number, got {frame[column].iloc[i]!r}")
+        raise DataError(
+            f"{path}: line {i + 2}, column {column!r}: expected a number, got {frame[column].iloc[i]!r}"
+        )
     return numbers
 
 
@@ -304,7 +332,9 @@ def _check_time_order(path: Path, time: pd.Series, where: str = "") -> None:
         )
 
 
-def read_temperature_source(path, expected_sensors, known_sensors, kind: str = "sensor") -> pd.DataFrame:
+def read_temperature_source(
+    path, expected_sensors, known_sensors, kind: str = "sensor"
+) -> pd.DataFrame:
     """One source's log: ``time`` + one float column per sensor (or signal; NaN = missing)."""
     path = Path(path)
     frame = _read_csv(path)
@@ -313,12 +343,18 @@ def read_temperature_source(path, expected_sensors, known_sensors, kind: str = "
     columns = [c for c in frame.columns if c != "time"]
     for column in columns:
         if column not in known_sensors:
-            raise DataError(f"{path}: column {column!r}: unknown {kind} id (not declared in dataset.yaml)")
+            raise DataError(
+                f"{path}: column {column!r}: unknown {kind} id (not declared in dataset.yaml)"
+            )
         if column not in expected_sensors:
-            raise DataError(f"{path}: column {column!r}: {kind} is declared for another source in dataset.yaml")
+            raise DataError(
+                f"{path}: column {column!r}: {kind} is declared for another source in dataset.yaml"
+            )
     for sensor in expected_sensors:
         if sensor not in columns:
-            raise DataError(f"{path}: missing column {sensor!r} (declared for this source in dataset.yaml)")
+            raise DataError(
+                f"{path}: missing column {sensor!r} (declared for this source in dataset.yaml)"
+            )
     out = pd.DataFrame({"time": _parse_time(path, frame["time"])})
     _check_time_order(path, out["time"])
     for sensor in expected_sensors:
@@ -340,7 +376,9 @@ def _parse_readings(path: Path, frame: pd.DataFrame) -> pd.DataFrame:
         bad = ~direction.isin(["+", "-"])
         if bad.any():
             i = int(np.flatnonzero(bad.to_numpy())[0])
-            raise DataError(f"{path}: line {i + 2}, column 'direction': expected '+' or '-', got {frame['direction'].iloc[i]!r}")
+            raise DataError(
+                f"{path}: line {i + 2}, column 'direction': expected '+' or '-', got {frame['direction'].iloc[i]!r}"
+            )
         out["direction"] = direction.to_numpy(dtype=object)
     else:
         out["direction"] = "+"
@@ -350,7 +388,9 @@ def _parse_readings(path: Path, frame: pd.DataFrame) -> pd.DataFrame:
 def _require_error_columns(path: Path, frame: pd.DataFrame, columns) -> None:
     for column in columns:
         if column not in frame.columns:
-            raise DataError(f"{path}: missing column {column!r} (expected {', '.join(columns)}[, direction])")
+            raise DataError(
+                f"{path}: missing column {column!r} (expected {', '.join(columns)}[, direction])"
+            )
 
 
 def read_measurement(path) -> pd.DataFrame:
@@ -455,9 +495,13 @@ def _read_logs(folder: Path, dataset: Dataset, kind: str) -> dict[str, pd.DataFr
         for extra in sorted(folder.glob("*.csv")):
             if extra.stem not in dataset.sources:
                 logged = "temperature" if kind == "sensor" else kind
-                raise DataError(f"{extra}: unknown {logged} source {extra.stem!r} (not declared in dataset.yaml)")
+                raise DataError(
+                    f"{extra}: unknown {logged} source {extra.stem!r} (not declared in dataset.yaml)"
+                )
             if not of(extra.stem):
-                raise DataError(f"{extra}: source {extra.stem!r} logs no {kind} declared in dataset.yaml")
+                raise DataError(
+                    f"{extra}: source {extra.stem!r} logs no {kind} declared in dataset.yaml"
+                )
     return logs
 
 
@@ -466,11 +510,15 @@ def _measurement_source(dataset: Dataset, run: str) -> tuple[Path, list[Path]]:
     folder = dataset.root / run
     err_dir, err_file = folder / layout.ERRORS_FOLDER, folder / layout.ERRORS_FILE
     if err_dir.is_dir() and err_file.exists():
-        raise DataError(f"{err_file}: the run also has a folder {err_dir}; expected one of the two layouts")
+        raise DataError(
+            f"{err_file}: the run also has a folder {err_dir}; expected one of the two layouts"
+        )
     if layout.error_source(folder) == err_file:
         return err_file, [safety.check_inside(err_file, dataset.root, what="measurement file")]
     if not err_dir.is_dir():
-        raise DataError(f"{err_dir}: folder not found (expected one CSV per interferometer measurement, or {err_file})")
+        raise DataError(
+            f"{err_dir}: folder not found (expected one CSV per interferometer measurement, or {err_file})"
+        )
     files = sorted(err_dir.glob("*.csv"))
     for f in files:
         safety.check_name(f.stem, "measurement", f)
@@ -488,7 +536,9 @@ def _read_measurement_files(source: Path, files: list[Path]) -> tuple[dict, dict
     return measurements, {f.stem: f for f in files}, lines
 
 
-def read_measurements_of(dataset: Dataset, run: str, min_measurements: int = 1) -> tuple[dict, dict, dict]:
+def read_measurements_of(
+    dataset: Dataset, run: str, min_measurements: int = 1
+) -> tuple[dict, dict, dict]:
     """A run's measurements, ordered by their first reading's time; the file of each; its file lines.
 
     Measurements come either from ``<run>/errors/<measurement>.csv`` (one file each) or
@@ -497,8 +547,12 @@ def read_measurements_of(dataset: Dataset, run: str, min_measurements: int = 1) 
     source, files = _measurement_source(dataset, run)
     measurements, error_files, lines = _read_measurement_files(source, files)
     if len(measurements) < min_measurements:
-        raise DataError(f"{source}: {len(measurements)} measurement(s), expected at least {min_measurements}")
-    ordered = dict(sorted(measurements.items(), key=lambda kv: (kv[1]["time"].iloc[0], natural_key(kv[0]))))
+        raise DataError(
+            f"{source}: {len(measurements)} measurement(s), expected at least {min_measurements}"
+        )
+    ordered = dict(
+        sorted(measurements.items(), key=lambda kv: (kv[1]["time"].iloc[0], natural_key(kv[0])))
+    )
     return ordered, error_files, lines
 
 
@@ -506,7 +560,9 @@ def read_first_measurement(dataset: Dataset, run: str) -> pd.DataFrame:
     """One measurement of the run (its first file), validated: enough to know the targets."""
     source, files = _measurement_source(dataset, run)
     if not files:
-        raise DataError(f"{source}: no measurement files (expected one CSV per interferometer measurement)")
+        raise DataError(
+            f"{source}: no measurement files (expected one CSV per interferometer measurement)"
+        )
     return next(iter(_read_measurement_files(source, files[:1])[0].values()))
 
 
@@ -517,6 +573,8 @@ def read_run(dataset: Dataset, run: str, min_measurements: int = 1) -> RawRun:
         raise DataError(f"{temp_dir}: folder not found (expected one CSV per temperature source)")
     safety.check_inside(dataset.root / run, dataset.root, what="run folder")
     sources = _read_logs(temp_dir, dataset, "sensor")
-    signals = _read_logs(dataset.root / run / "signals", dataset, "signal") if dataset.signals else {}
+    signals = (
+        _read_logs(dataset.root / run / "signals", dataset, "signal") if dataset.signals else {}
+    )
     measurements, error_files, lines = read_measurements_of(dataset, run, min_measurements)
     return RawRun(run, sources, measurements, signals, error_files=error_files, error_lines=lines)

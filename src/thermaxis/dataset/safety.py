@@ -20,7 +20,6 @@ import yaml
 
 from thermaxis.errors import DataError
 
-
 __all__ = [
     "NAME_PATTERN",
     "MAX_SHEET_BYTES",
@@ -82,7 +81,9 @@ def check_regular_file(path, max_bytes: int = MAX_DATA_BYTES, what: str = "file"
     if not stat.S_ISREG(info.st_mode):
         raise _error(path, f"not a regular file ({_file_kind(info.st_mode)}); expected a {what}")
     if info.st_size > max_bytes:
-        raise _error(path, f"{info.st_size} bytes, larger than the limit of {max_bytes} bytes for a {what}")
+        raise _error(
+            path, f"{info.st_size} bytes, larger than the limit of {max_bytes} bytes for a {what}"
+        )
     return info.st_size
 
 
@@ -108,7 +109,9 @@ def check_inside(path, root, what: str = "path") -> Path:
 def check_within(path: str, roots, what: str) -> str:
     """A path pattern (wildcards allowed) that stays below one of ``roots`` once normalised."""
     normal = os.path.normpath(path)
-    if os.path.isabs(normal) or not any(normal.startswith(os.path.normpath(r) + os.sep) for r in roots):
+    if os.path.isabs(normal) or not any(
+        normal.startswith(os.path.normpath(r) + os.sep) for r in roots
+    ):
         raise _error(what, f"output {path!r} is outside {', '.join(roots)}")
     return path
 
@@ -131,7 +134,10 @@ class _GuardedLoader(yaml.SafeLoader):
         if self.check_event(yaml.AliasEvent):
             event = self.peek_event()
             raise yaml.composer.ComposerError(
-                None, None, f"found alias *{event.anchor}; anchors and aliases are not allowed", event.start_mark
+                None,
+                None,
+                f"found alias *{event.anchor}; anchors and aliases are not allowed",
+                event.start_mark,
             )
         return super().compose_node(parent, index)
 
@@ -145,7 +151,10 @@ class _GuardedLoader(yaml.SafeLoader):
                 continue  # unhashable: the base class names it
             if first != key_node.start_mark.line + 1:
                 raise yaml.constructor.ConstructorError(
-                    None, None, f"duplicate key {key!r} (first on line {first})", key_node.start_mark
+                    None,
+                    None,
+                    f"duplicate key {key!r} (first on line {first})",
+                    key_node.start_mark,
                 )
         return super().construct_mapping(node, deep)
 
@@ -160,7 +169,9 @@ def load_yaml(path, max_bytes: int = MAX_SHEET_BYTES):
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
-        raise _error(path, f"{line}not valid YAML ({getattr(exc, 'problem', None) or exc})") from None
+        raise _error(
+            path, f"{line}not valid YAML ({getattr(exc, 'problem', None) or exc})"
+        ) from None
     except RecursionError:
         raise _error(path, "YAML nested too deeply (expected a flat mapping of metadata)") from None
     _check_finite(path, doc, [])
@@ -170,8 +181,17 @@ def load_yaml(path, max_bytes: int = MAX_SHEET_BYTES):
 def _check_finite(path: Path, node, where: list) -> None:
     """A .inf or .nan anywhere in the sheet (an offset, a target) would poison every number after it."""
     if isinstance(node, float) and not math.isfinite(node):
-        raise _error(path, f"{'/'.join(map(str, where)) or 'top level'}: expected a finite number, got {node}")
-    children = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+        raise _error(
+            path,
+            f"{'/'.join(map(str, where)) or 'top level'}: expected a finite number, got {node}",
+        )
+    children = (
+        node.items()
+        if isinstance(node, dict)
+        else enumerate(node)
+        if isinstance(node, list)
+        else ()
+    )
     for key, child in children:
         _check_finite(path, child, [*where, key])
 
@@ -184,7 +204,9 @@ def _decode(path: Path, data: bytes) -> str:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         line = data[: exc.start].count(b"\n") + 1
-        raise _error(path, f"line {line}: byte 0x{data[exc.start]:02x} is not UTF-8; expected UTF-8 text") from None
+        raise _error(
+            path, f"line {line}: byte 0x{data[exc.start]:02x} is not UTF-8; expected UTF-8 text"
+        ) from None
 
 
 def sniff_delimited(path, delimiter: str, max_bytes: int = MAX_DATA_BYTES) -> None:
@@ -199,7 +221,9 @@ def sniff_delimited(path, delimiter: str, max_bytes: int = MAX_DATA_BYTES) -> No
     with open(path, "rb") as fh:
         head = fh.read(_SNIFF_BYTES)
     # A multi-byte character may be cut at the end of the sniffed head.
-    text = _decode(path, head if len(head) < _SNIFF_BYTES else head[: head.rfind(b"\n") + 1] or head)
+    text = _decode(
+        path, head if len(head) < _SNIFF_BYTES else head[: head.rfind(b"\n") + 1] or head
+    )
     lines = text.splitlines()
     if not lines or not lines[0].strip():
         raise _error(path, "line 1: empty header; expected a header row")
@@ -208,11 +232,15 @@ def sniff_delimited(path, delimiter: str, max_bytes: int = MAX_DATA_BYTES) -> No
     if delimiter not in header:
         for other, name in _DELIMITER_NAMES.items():
             if other != delimiter and other in header:
-                raise _error(path, f"line 1: looks {name}-separated; expected {expected}-separated columns")
+                raise _error(
+                    path, f"line 1: looks {name}-separated; expected {expected}-separated columns"
+                )
     names = [name.strip().strip('"') for name in header.split(delimiter)]
     for k, name in enumerate(names):
         if not name:
-            raise _error(path, f"line 1: column {k + 1} has no name; expected a name for every column")
+            raise _error(
+                path, f"line 1: column {k + 1} has no name; expected a name for every column"
+            )
         if name in names[:k]:
             raise _error(path, f"line 1: column {name!r} appears twice; expected each column once")
     _check_field_counts(path, lines[1:20], delimiter, len(names))
@@ -223,17 +251,26 @@ def _check_field_counts(path: Path, rows: list[str], delimiter: str, n_fields: i
 
     Decimal commas add fields to EVERY row of numbers, a stray field to one row only.
     """
-    counted = [(lineno, row.split(delimiter)) for lineno, row in enumerate(rows, start=2) if row.strip()]
-    surplus = [(lineno, fields) for lineno, fields in counted if len(fields) > n_fields and '"' not in "".join(fields)]
+    counted = [
+        (lineno, row.split(delimiter)) for lineno, row in enumerate(rows, start=2) if row.strip()
+    ]
+    surplus = [
+        (lineno, fields)
+        for lineno, fields in counted
+        if len(fields) > n_fields and '"' not in "".join(fields)
+    ]
     if not surplus:
         return
     lineno, fields = surplus[0]
-    decimal = delimiter == "," and len(surplus) == len(counted) and all(
-        _decimal_splits(row) >= len(row) - n_fields for _, row in surplus
+    decimal = (
+        delimiter == ","
+        and len(surplus) == len(counted)
+        and all(_decimal_splits(row) >= len(row) - n_fields for _, row in surplus)
     )
     hint = "; looks like decimal commas (expected '.' as the decimal mark)" if decimal else ""
     raise _error(
-        path, f"line {lineno}: {len(fields)} {_DELIMITER_NAMES[delimiter]}-separated fields but the header has {n_fields}{hint}"
+        path,
+        f"line {lineno}: {len(fields)} {_DELIMITER_NAMES[delimiter]}-separated fields but the header has {n_fields}{hint}",
     )
 
 

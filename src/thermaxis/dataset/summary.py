@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-
 import pandas as pd
 
 from thermaxis.dataset.reader import Dataset
 from thermaxis.labels import sort_naturally
-
 
 __all__ = [
     "dataset_summary",

@@ -86,6 +86,12 @@ _CAPTIONS: dict[str, tuple[str | None, str]] = {
         "Prediction accuracy of every fold (held-out run), approach and algorithm: RMSE (top) "
         "and maximum absolute residual (bottom) of the {target}.",
     ),
+    "recommendation": (
+        None,
+        "Held-out error of each fold (run): RMSE (top) and maximum absolute residual (bottom) of the "
+        "model a nested leave-one-condition-out choice picks without that run, beside the paper's "
+        "configuration on the same run.",
+    ),
     "compensation_drift": (
         None,
         "Thermal drift of held-out run {fold} (after ISO 230-3's drift plots): the largest absolute deviation "

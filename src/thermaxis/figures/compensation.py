@@ -18,16 +18,27 @@ def fig_compensation_drift(summary: pd.DataFrame, fold) -> Figure:
     or ramped the values are ringed, so a flat compensated curve is not mistaken for a
     good model.
     """
-    rows = summary[summary["fold"].astype(str) == str(fold)].sort_values("measurement", kind="stable")
+    rows = summary[summary["fold"].astype(str) == str(fold)].sort_values(
+        "measurement", kind="stable"
+    )
     if rows.empty:
         raise ValueError(f"compensation summary has no rows for fold {fold!r}")
     with matplotlib.rc_context(STYLE):
         fig = Figure(figsize=(4.2, 2.8), layout="constrained")
         ax = fig.subplots()
         t = rows["time_min"].to_numpy(dtype=float)
-        series = (("largest_abs_uncompensated_um", "Pitch table only"), ("largest_abs_compensated_um", "With temperature compensation"))
+        series = (
+            ("largest_abs_uncompensated_um", "Pitch table only"),
+            ("largest_abs_compensated_um", "With temperature compensation"),
+        )
         for i, (column, label) in enumerate(series):
-            ax.plot(t, rows[column].to_numpy(dtype=float), color=CATEGORICAL_COLORS[i], marker=MARKERS[i], label=label)
+            ax.plot(
+                t,
+                rows[column].to_numpy(dtype=float),
+                color=CATEGORICAL_COLORS[i],
+                marker=MARKERS[i],
+                label=label,
+            )
         fallback = (rows["status"] != "ok").to_numpy()
         if fallback.any():
             ax.plot(

@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pandas as pd
-
-
 
 __all__ = [
     "fig_heldout_error",
@@ -28,13 +25,15 @@ def fig_heldout_error(summary: pd.DataFrame):
     from thermaxis.figures import captions, style
 
     datasets = list(dict.fromkeys(summary["dataset"]))
-    series = list(dict.fromkeys(zip(summary["approach"], summary["algorithm"])))
+    series = list(dict.fromkeys(zip(summary["approach"], summary["algorithm"], strict=False)))
     width = 0.8 / len(series)
     with matplotlib.rc_context(style.STYLE):
         fig = Figure(figsize=(style.DOUBLE_COLUMN_IN, 2.8), layout="constrained")
         ax = fig.subplots()
         for i, (approach, algorithm) in enumerate(series):
-            rows = summary[(summary["approach"] == approach) & (summary["algorithm"] == algorithm)].set_index("dataset")
+            rows = summary[
+                (summary["approach"] == approach) & (summary["algorithm"] == algorithm)
+            ].set_index("dataset")
             rows = rows.reindex(datasets)
             x = np.arange(len(datasets)) + (i - (len(series) - 1) / 2) * width
             mean = rows["mean_max_abs_um"].to_numpy(dtype=float)
@@ -43,11 +42,23 @@ def fig_heldout_error(summary: pd.DataFrame):
             hatch = "" if approach == "decoupled" else "///"
             ax.bar(x, mean, width, color=color, hatch=hatch, edgecolor="white", linewidth=0.3,
                    label=f"{captions._display(approach)}, {captions._display(algorithm)}")  # fmt: skip
-            ax.errorbar(x, mean, yerr=[np.zeros_like(mean), worst - mean], fmt="none", ecolor="0.3", elinewidth=0.6, capsize=1.5)
+            ax.errorbar(
+                x,
+                mean,
+                yerr=[np.zeros_like(mean), worst - mean],
+                fmt="none",
+                ecolor="0.3",
+                elinewidth=0.6,
+                capsize=1.5,
+            )
         kinds = summary.drop_duplicates("dataset").set_index("dataset")["data"]
-        labels = [f"{d}\n(SIMULATED)" if kinds[d] == "simulated" else f"{d}\n(measured)" for d in datasets]
+        labels = [
+            f"{d}\n(SIMULATED)" if kinds[d] == "simulated" else f"{d}\n(measured)" for d in datasets
+        ]
         ax.set_xticks(range(len(datasets)), labels)
         ax.set_ylabel("Held-out max |residual| (µm)\nmean over folds, whisker: worst")
         ax.grid(axis="x", visible=False)
-        ax.legend(ncols=min(len(series), 5), loc="upper left", bbox_to_anchor=(0, -0.18), fontsize=6.5)
+        ax.legend(
+            ncols=min(len(series), 5), loc="upper left", bbox_to_anchor=(0, -0.18), fontsize=6.5
+        )
     return fig

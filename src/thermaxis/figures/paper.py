@@ -37,9 +37,33 @@ from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
+from thermaxis.figures.style import (
+    CATEGORICAL_COLORS,
+    DOUBLE_COLUMN_IN,
+    ERROR_LABEL,
+    MARKERS,
+    ORDERED_CMAP,
+    POSITION_LABEL,
+    SINGLE_COLUMN_IN,
+    SURFACE_CMAP,
+    TIME_LABEL,
+    _add_legend,
+    _categorical_style,
+    _markevery,
+    _measurement_times,
+    _new_figure,
+    _ordered_key,
+    _ordered_norm,
+    _panel_label,
+    _require_columns,
+    _select,
+    _series_in_time,
+    _styled,
+    _time_label,
+    _top_legend,
+    single_position,
+)
 from thermaxis.labels import natural_sorted
-
-from thermaxis.figures.style import CATEGORICAL_COLORS, DOUBLE_COLUMN_IN, ERROR_LABEL, MARKERS, ORDERED_CMAP, POSITION_LABEL, SINGLE_COLUMN_IN, SURFACE_CMAP, TIME_LABEL, _add_legend, _categorical_style, _markevery, _measurement_times, _new_figure, _ordered_key, _ordered_norm, _panel_label, _require_columns, _select, _series_in_time, _styled, _time_label, _top_legend, single_position
 
 __all__ = [
     "fig2_positioning_error",
@@ -206,7 +230,11 @@ def fig6_error_vs_time(errors: pd.DataFrame, run) -> Figure:
     ax = fig.subplots()
     for i, position in enumerate(positions):
         at = run_errors[run_errors["position_mm"] == position]
-        curve = at.groupby("measurement").agg(time_min=("time_min", "min"), error_um=("error_um", "mean")).sort_index()
+        curve = (
+            at.groupby("measurement")
+            .agg(time_min=("time_min", "min"), error_um=("error_um", "mean"))
+            .sort_index()
+        )
         ax.plot(
             curve["time_min"].to_numpy(dtype=float),
             curve["error_um"].to_numpy(dtype=float),
@@ -276,7 +304,12 @@ def fig7_error_surface(errors: pd.DataFrame, run) -> Figure:
     if quads:
         cmap = plt.get_cmap(SURFACE_CMAP)
         ax.add_collection3d(
-            Poly3DCollection(quads, facecolors=cmap(_ordered_norm(heights)(heights)), edgecolors="none", alpha=0.9)
+            Poly3DCollection(
+                quads,
+                facecolors=cmap(_ordered_norm(heights)(heights)),
+                edgecolors="none",
+                alpha=0.9,
+            )
         )
     for row in range(z.shape[0]):
         ax.plot(x[row], y[row], z[row], color="k", linewidth=0.6, marker="o", markersize=1.8)
@@ -358,7 +391,7 @@ def fig9_other_runs(errors: pd.DataFrame, runs: Sequence) -> Figure:
     nrows = math.ceil(len(runs) / ncols)
     fig = _new_figure(DOUBLE_COLUMN_IN, 2.4 * nrows)
     axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
-    for i, (run, run_errors) in enumerate(zip(runs, selected)):
+    for i, (run, run_errors) in enumerate(zip(runs, selected, strict=False)):
         ax = axes[i]
         _curves_by_measurement(fig, ax, run_errors, "error_um")
         ax.set_ylabel(ERROR_LABEL)
@@ -399,7 +432,9 @@ def fig10_temperature_rise(
     matplotlib.figure.Figure
     """
     _require_columns(series, ("elapsed_min",), "series")
-    signal_names = [] if signals is None else [c for c in signals.columns if c not in ("time", "elapsed_min")]
+    signal_names = (
+        [] if signals is None else [c for c in signals.columns if c not in ("time", "elapsed_min")]
+    )
     sensors = _requested_sensors(series, sensors)
     if signal_names:
         fig = _new_figure(SINGLE_COLUMN_IN, 3.8)
@@ -409,7 +444,9 @@ def fig10_temperature_rise(
         fig = _new_figure(SINGLE_COLUMN_IN, 2.6)
         ax = fig.subplots()
     if _draw_rises(ax, series, sensors) == 0:
-        raise ValueError("series table has no finite sample in any requested sensor; expected at least one")
+        raise ValueError(
+            "series table has no finite sample in any requested sensor; expected at least one"
+        )
     ax.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
     if not signal_names:
         ax.set_xlabel(TIME_LABEL)
@@ -421,14 +458,18 @@ def fig10_temperature_rise(
 def _requested_sensors(series: pd.DataFrame, sensors) -> list:
     """The sensor columns to draw: ``sensors`` (one name or several), checked, or every numeric column."""
     available = [
-        c for c in series.columns if c not in ("time", "elapsed_min") and pd.api.types.is_numeric_dtype(series[c])
+        c
+        for c in series.columns
+        if c not in ("time", "elapsed_min") and pd.api.types.is_numeric_dtype(series[c])
     ]
     if sensors is None:
         return available
     sensors = [sensors] if isinstance(sensors, str) else list(sensors)
     unknown = [s for s in sensors if s not in available]
     if unknown:
-        raise ValueError(f"series table has no sensor column(s) {', '.join(unknown)}; available: {', '.join(available)}")
+        raise ValueError(
+            f"series table has no sensor column(s) {', '.join(unknown)}; available: {', '.join(available)}"
+        )
     return sensors
 
 
@@ -460,7 +501,13 @@ def _signal_panel(ax, signals: pd.DataFrame, names: Sequence[str], units: dict) 
     elapsed = signals["elapsed_min"].to_numpy(dtype=float)
     for i, name in enumerate(names):
         unit = f" ({units[name]})" if units.get(name) else ""
-        ax.step(elapsed, signals[name].to_numpy(dtype=float), where="post", color=CATEGORICAL_COLORS[i % len(CATEGORICAL_COLORS)], label=f"{name}{unit}")
+        ax.step(
+            elapsed,
+            signals[name].to_numpy(dtype=float),
+            where="post",
+            color=CATEGORICAL_COLORS[i % len(CATEGORICAL_COLORS)],
+            label=f"{name}{unit}",
+        )
     ax.set_xlabel(TIME_LABEL)
     ax.set_ylabel("Operating signal")
     ax.legend(loc="best")
@@ -488,8 +535,12 @@ def fig12_slope_intercept(kb: pd.DataFrame) -> Figure:
     for i, run in enumerate(runs):
         rows = kb[kb["run"] == run].sort_values("measurement", kind="stable")
         m = rows["measurement"].to_numpy(dtype=float)
-        ax_k.plot(m, rows["k_um_per_m"].to_numpy(dtype=float), label=f"Run {run}", **_categorical_style(i))
-        ax_b.plot(m, rows["b_um"].to_numpy(dtype=float), label=f"Run {run}", **_categorical_style(i))
+        ax_k.plot(
+            m, rows["k_um_per_m"].to_numpy(dtype=float), label=f"Run {run}", **_categorical_style(i)
+        )
+        ax_b.plot(
+            m, rows["b_um"].to_numpy(dtype=float), label=f"Run {run}", **_categorical_style(i)
+        )
     ax_k.set_ylabel("Slope k (µm/m)")
     ax_b.set_ylabel("Intercept b (µm)")
     ax_b.set_xlabel("Measurement")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 import matplotlib
 
 matplotlib.use("Agg")
@@ -15,14 +14,35 @@ from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from thermaxis.figures.captions import _display
+from thermaxis.figures.style import (
+    CATEGORICAL_COLORS,
+    DOUBLE_COLUMN_IN,
+    ERROR_LABEL,
+    MARKERS,
+    ORDERED_CMAP,
+    POSITION_LABEL,
+    SINGLE_COLUMN_IN,
+    TIME_LABEL,
+    _categorical_style,
+    _markevery,
+    _measurement_times,
+    _new_figure,
+    _ordered_key,
+    _ordered_norm,
+    _require_columns,
+    _select,
+    _styled,
+    _time_label,
+    _top_legend,
+    single_position,
+)
 from thermaxis.labels import natural_key, natural_sorted
-
-from thermaxis.figures.style import CATEGORICAL_COLORS, DOUBLE_COLUMN_IN, ERROR_LABEL, MARKERS, ORDERED_CMAP, POSITION_LABEL, SINGLE_COLUMN_IN, TIME_LABEL, _categorical_style, _markevery, _measurement_times, _new_figure, _ordered_key, _ordered_norm, _require_columns, _select, _styled, _time_label, _top_legend, single_position
 
 __all__ = [
     "fig_kb_prediction",
     "fig_error_prediction",
     "fig_fold_comparison",
+    "fig_recommendation",
 ]
 
 
@@ -52,7 +72,9 @@ _KB_PRED_COLUMNS = (
 _KB_TARGETS = (("k", "Slope k (µm/m)"), ("b", "Intercept b (µm)"))
 
 
-def _measured_and_predicted(ax, x: np.ndarray, rows: pd.DataFrame, algorithm: str, markevery=None) -> None:
+def _measured_and_predicted(
+    ax, x: np.ndarray, rows: pd.DataFrame, algorithm: str, markevery=None
+) -> None:
     """Measured (solid) and predicted (dashed) against x, the prediction interval shaded where given."""
     if _has_band(rows):
         ax.fill_between(
@@ -64,7 +86,13 @@ def _measured_and_predicted(ax, x: np.ndarray, rows: pd.DataFrame, algorithm: st
             linewidth=0,
             label="Prediction interval",
         )
-    ax.plot(x, rows["measured"].to_numpy(dtype=float), label="Measured", markevery=markevery, **_categorical_style(0))
+    ax.plot(
+        x,
+        rows["measured"].to_numpy(dtype=float),
+        label="Measured",
+        markevery=markevery,
+        **_categorical_style(0),
+    )
     ax.plot(
         x,
         rows["predicted"].to_numpy(dtype=float),
@@ -103,7 +131,9 @@ def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str
     for col, run in enumerate(runs):
         for row, (target, label) in enumerate(_KB_TARGETS):
             ax = axes[row, col]
-            part = rows[(rows["run"] == run) & (rows["target"] == target)].sort_values("measurement", kind="stable")
+            part = rows[(rows["run"] == run) & (rows["target"] == target)].sort_values(
+                "measurement", kind="stable"
+            )
             _measured_and_predicted(ax, part["measurement"].to_numpy(dtype=float), part, algorithm)
             ax.set_ylabel(label if col == 0 else "")
             ax.xaxis.set_major_locator(MaxNLocator(integer=True))
@@ -157,15 +187,27 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
     axes = fig.subplots(2, len(runs), sharex="col", squeeze=False, height_ratios=(3, 2))
     if single_position(rows):
         for col, run in enumerate(runs):
-            _prediction_in_time(axes[0, col], axes[1, col], rows[rows["run"] == run], algorithm, first=col == 0)
+            _prediction_in_time(
+                axes[0, col], axes[1, col], rows[rows["run"] == run], algorithm, first=col == 0
+            )
             axes[0, col].set_title(f"Held-out run {run}", loc="left")
         return fig
     for col, run in enumerate(runs):
-        _prediction_along_stroke(fig, axes[0, col], axes[1, col], run, rows[rows["run"] == run], algorithm, first=col == 0)
+        _prediction_along_stroke(
+            fig,
+            axes[0, col],
+            axes[1, col],
+            run,
+            rows[rows["run"] == run],
+            algorithm,
+            first=col == 0,
+        )
     return fig
 
 
-def _prediction_along_stroke(fig, ax_curve, ax_res, run, run_rows: pd.DataFrame, algorithm: str, first: bool) -> None:
+def _prediction_along_stroke(
+    fig, ax_curve, ax_res, run, run_rows: pd.DataFrame, algorithm: str, first: bool
+) -> None:
     """One held-out run: measured and predicted curves over the stroke, coloured by time, and residuals."""
     times = _measurement_times(run_rows)
     norm = _ordered_norm(times.to_numpy())
@@ -186,7 +228,13 @@ def _prediction_along_stroke(fig, ax_curve, ax_res, run, run_rows: pd.DataFrame,
             )
         ax_curve.plot(x, group["measured"].to_numpy(dtype=float), color=color, marker=marker)
         ax_curve.plot(x, group["predicted"].to_numpy(dtype=float), color=color, linestyle="--")
-        ax_res.plot(x, group["residual"].to_numpy(dtype=float), color=color, marker=marker, label=_time_label(t))
+        ax_res.plot(
+            x,
+            group["residual"].to_numpy(dtype=float),
+            color=color,
+            marker=marker,
+            label=_time_label(t),
+        )
     ax_res.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
     ax_curve.set_title(f"Held-out run {run}", loc="left")
     ax_curve.set_ylabel(ERROR_LABEL if first else "")
@@ -237,11 +285,13 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    _require_columns(metrics, ("fold", "approach", "algorithm", "target", "rmse", "max_abs"), "metrics")
+    _require_columns(
+        metrics, ("fold", "approach", "algorithm", "target", "rmse", "max_abs"), "metrics"
+    )
     rows = _select(metrics, "metrics", target=target)
     folds = natural_sorted(rows["fold"])
     pairs = sorted(
-        {(str(a), str(g)) for a, g in zip(rows["approach"], rows["algorithm"])},
+        {(str(a), str(g)) for a, g in zip(rows["approach"], rows["algorithm"], strict=False)},
         key=lambda p: (natural_key(p[0]), natural_key(p[1])),
     )
     unit = _METRIC_UNITS.get(str(target))
@@ -251,7 +301,9 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     ax_rmse, ax_max = fig.subplots(2, 1, sharex=True)
     bar_width = 0.8 / len(pairs)
     centres = np.arange(len(folds), dtype=float)
-    keyed = rows.assign(approach=rows["approach"].astype(str), algorithm=rows["algorithm"].astype(str))
+    keyed = rows.assign(
+        approach=rows["approach"].astype(str), algorithm=rows["algorithm"].astype(str)
+    )
     for j, (approach, algorithm) in enumerate(pairs):
         pair_rows = keyed[(keyed["approach"] == approach) & (keyed["algorithm"] == algorithm)]
         offsets = centres + (j - (len(pairs) - 1) / 2) * bar_width
@@ -273,10 +325,32 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     labels = [str(f) for f in folds]
     # Long run names or many folds would overlap side by side: slant them.
     slanted = sum(len(label) for label in labels) > 40 or max(map(len, labels)) > 6
-    ax_max.set_xticks(centres, labels, rotation=30 if slanted else 0, ha="right" if slanted else "center")
+    ax_max.set_xticks(
+        centres, labels, rotation=30 if slanted else 0, ha="right" if slanted else "center"
+    )
     ax_max.set_xlabel("Fold (held-out run)")
     for ax in (ax_rmse, ax_max):
         ax.grid(axis="x", visible=False)
         ax.set_axisbelow(True)
     _top_legend(fig, ax_rmse)
     return fig
+
+
+def fig_recommendation(recommendation: pd.DataFrame) -> Figure:
+    """Held-out RMSE (top) and largest |residual| (bottom) per fold: the nested choice and the paper's.
+
+    ``recommendation`` is ``tables/recommendation.csv``: per fold the candidate chosen
+    without the held-out run, its error there, and the paper's configuration's.
+    """
+    _require_columns(
+        recommendation,
+        ("fold", "rmse_um", "max_abs_um", "paper_rmse_um", "paper_max_abs_um"),
+        "recommendation",
+    )
+    rows = [
+        {"fold": r["fold"], "approach": label, "algorithm": "held out", "target": "error",
+         "rmse": r[f"{prefix}rmse_um"], "max_abs": r[f"{prefix}max_abs_um"]}
+        for r in recommendation.to_dict("records")
+        for label, prefix in (("paper's configuration", "paper_"), ("recommendation", ""))
+    ]  # fmt: skip
+    return fig_fold_comparison(pd.DataFrame(rows), target="error")

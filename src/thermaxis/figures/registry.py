@@ -191,6 +191,11 @@ FIGURES: tuple[FigureEntry, ...] = (
         category="prediction", label="fold comparison", labels={"fold": "all"},
         caption={"target": "error"},
     ),
+    FigureEntry(
+        "recommendation", "figures.predictions.fig_recommendation", family="fig_fold_comparison",
+        when="always", target="all", tables={"recommendation": "tables/recommendation.csv"},
+        category="prediction", label="recommendation", labels={"fold": "all"},
+    ),
     # Figs. 11/15/17 (point by point: 11) and 14/16.
     _prediction("error_prediction", "always", {"err_pred": "tables/error_predictions.csv"},
                 "Figs. 11/15/17", approaches=Fact("approaches")),

@@ -22,7 +22,6 @@ from matplotlib.figure import Figure  # noqa: E402
 from thermaxis.figures.captions import SIMULATED_NOTE
 from thermaxis.labels import natural_sorted
 
-
 __all__ = [
     "STYLE",
     "SINGLE_COLUMN_IN",
@@ -42,7 +41,9 @@ CATEGORICAL_COLORS = (
 # Seven markers against ten colours: the (colour, marker) pair repeats only after 70 lines.
 MARKERS = ("o", "s", "^", "v", "D", "<", ">")
 # The light yellow end of viridis vanishes on white paper, hence the truncation.
-ORDERED_CMAP = ListedColormap(plt.get_cmap("viridis")(np.linspace(0.0, 0.85, 256)), name="thermaxis_ordered")
+ORDERED_CMAP = ListedColormap(
+    plt.get_cmap("viridis")(np.linspace(0.0, 0.85, 256)), name="thermaxis_ordered"
+)
 SURFACE_CMAP = "coolwarm"
 
 # More entries than this: the legend moves out of the axes; more than
@@ -128,7 +129,9 @@ def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
         hit = out[(out[column] == value) | (out[column].astype(str) == str(value))]
         if hit.empty:
             choices = ", ".join(map(str, natural_sorted(out[column]))) or "none"
-            raise ValueError(f"{name} table has no rows with {column}={value!r}; available: {choices}")
+            raise ValueError(
+                f"{name} table has no rows with {column}={value!r}; available: {choices}"
+            )
         out = hit
     return out
 
@@ -141,7 +144,10 @@ def _new_figure(width: float, height: float, **kwargs) -> Figure:
 
 
 def _categorical_style(index: int) -> dict:
-    return {"color": CATEGORICAL_COLORS[index % len(CATEGORICAL_COLORS)], "marker": MARKERS[index % len(MARKERS)]}
+    return {
+        "color": CATEGORICAL_COLORS[index % len(CATEGORICAL_COLORS)],
+        "marker": MARKERS[index % len(MARKERS)],
+    }
 
 
 def _markevery(n_points: int) -> int:
@@ -163,7 +169,12 @@ def _add_legend(ax, n_entries: int) -> None:
     if n_entries <= MAX_INSIDE_LEGEND:
         ax.legend(loc="best")
     else:
-        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, ncol=math.ceil(n_entries / 16))
+        ax.legend(
+            loc="upper left",
+            bbox_to_anchor=(1.02, 1.0),
+            borderaxespad=0.0,
+            ncol=math.ceil(n_entries / 16),
+        )
 
 
 def _top_legend(fig: Figure, ax) -> None:
@@ -206,7 +217,9 @@ def single_position(table: pd.DataFrame) -> bool:
 
 def _series_in_time(ax, run_errors: pd.DataFrame, value_column: str) -> None:
     """A single-position run: its value at each measurement against time."""
-    curve = run_errors.groupby("measurement").agg(time_min=("time_min", "min"), value=(value_column, "mean"))
+    curve = run_errors.groupby("measurement").agg(
+        time_min=("time_min", "min"), value=(value_column, "mean")
+    )
     curve = curve.sort_values("time_min", kind="stable")
     ax.plot(
         curve["time_min"].to_numpy(dtype=float),
@@ -273,12 +286,16 @@ def save_figure(fig: Figure, paths, dpi: float | None = None) -> None:
     for path in paths:
         fmt = path.suffix.lower().lstrip(".")
         if fmt not in _SAVE_METADATA:
-            raise ValueError(f"cannot save figure as {path.name!r}; expected a .png, .pdf or .svg suffix")
+            raise ValueError(
+                f"cannot save figure as {path.name!r}; expected a .png, .pdf or .svg suffix"
+            )
     try:
         with matplotlib.rc_context(STYLE):
             for path in paths:
                 fmt = path.suffix.lower().lstrip(".")
                 path.parent.mkdir(parents=True, exist_ok=True)
-                fig.savefig(path, format=fmt, metadata=_SAVE_METADATA[fmt], dpi=dpi or STYLE["savefig.dpi"])
+                fig.savefig(
+                    path, format=fmt, metadata=_SAVE_METADATA[fmt], dpi=dpi or STYLE["savefig.dpi"]
+                )
     finally:
         plt.close(fig)

@@ -13,7 +13,6 @@ import pandas as pd  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from thermaxis.figures.captions import _display
-
 from thermaxis.figures.style import CATEGORICAL_COLORS, DOUBLE_COLUMN_IN, ORDERED_CMAP, STYLE
 
 
@@ -33,15 +32,21 @@ def fig_sweep_heatmap(tables: dict[str, pd.DataFrame], titles: dict[str, str] | 
     """
     tables = {k: v for k, v in tables.items() if v.size}
     if not tables:
-        raise ValueError("sweep heat map: no configuration sweeps n_clusters; expected fuzzy_grey or correlation in sweep.methods")
+        raise ValueError(
+            "sweep heat map: no configuration sweeps n_clusters; expected fuzzy_grey or correlation in sweep.methods"
+        )
     values = np.concatenate([t.to_numpy(dtype=float).ravel() for t in tables.values()])
     values = values[np.isfinite(values)]
     with matplotlib.rc_context(STYLE):
         fig = Figure(figsize=(DOUBLE_COLUMN_IN, 2.8), layout="constrained")
         axes = np.atleast_1d(fig.subplots(1, len(tables), sharey=True))
-        norm = matplotlib.colors.Normalize(vmin=values.min(), vmax=values.max()) if values.size else None
+        norm = (
+            matplotlib.colors.Normalize(vmin=values.min(), vmax=values.max())
+            if values.size
+            else None
+        )
         image = None
-        for ax, (approach, table) in zip(axes, tables.items()):
+        for ax, (approach, table) in zip(axes, tables.items(), strict=False):
             data = table.to_numpy(dtype=float)
             image = ax.imshow(data, cmap=ORDERED_CMAP, norm=norm, aspect="auto", origin="lower")
             ax.set_xticks(range(table.shape[1]), [_display(a) for a in table.columns])
@@ -52,12 +57,16 @@ def fig_sweep_heatmap(tables: dict[str, pd.DataFrame], titles: dict[str, str] | 
                 if np.isfinite(v):
                     ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=6.5,
                             color="black" if v > threshold else "white")  # fmt: skip
-            title = (titles or {}).get(approach) or f"{_display(approach)} ({table.attrs.get('held', '')})".replace(" ()", "")
+            title = (titles or {}).get(
+                approach
+            ) or f"{_display(approach)} ({table.attrs.get('held', '')})".replace(" ()", "")
             ax.set_title(title)
             ax.set_xlabel("Algorithm")
         axes[0].set_ylabel("Number of clusters")
         if image is not None:
-            fig.colorbar(image, ax=list(axes), label="Mean held-out max |residual| (µm)", shrink=0.9)
+            fig.colorbar(
+                image, ax=list(axes), label="Mean held-out max |residual| (µm)", shrink=0.9
+            )
     return fig
 
 
@@ -82,20 +91,27 @@ def fig_factor_effects(ranking: pd.DataFrame):
     with matplotlib.rc_context(STYLE):
         fig = Figure(figsize=(DOUBLE_COLUMN_IN, 2.1 * nrows + 0.4), layout="constrained")
         axes = np.atleast_1d(fig.subplots(nrows, ncols, sharey=True)).ravel()
-        for ax, factor in zip(axes, factors):
+        for ax, factor in zip(axes, factors, strict=False):
             values = complete[[factor, "mean_max_abs"]].dropna()
             levels = factor_levels(values[factor], factor)
-            groups = [values.loc[values[factor] == level, "mean_max_abs"].to_numpy(dtype=float) for level in levels]
-            ax.boxplot(groups, widths=0.55, showfliers=False, medianprops={"color": CATEGORICAL_COLORS[3]})
+            groups = [
+                values.loc[values[factor] == level, "mean_max_abs"].to_numpy(dtype=float)
+                for level in levels
+            ]
+            ax.boxplot(
+                groups, widths=0.55, showfliers=False, medianprops={"color": CATEGORICAL_COLORS[3]}
+            )
             jitter = np.random.default_rng(0)  # fixed seed: the same figure every run
             for i, g in enumerate(groups, start=1):
                 offsets = jitter.uniform(-0.18, 0.18, len(g))
-                ax.plot(i + offsets, g, ".", color=CATEGORICAL_COLORS[0], alpha=0.35, markersize=2.0)
+                ax.plot(
+                    i + offsets, g, ".", color=CATEGORICAL_COLORS[0], alpha=0.35, markersize=2.0
+                )
             ax.set_xticks(range(1, len(levels) + 1), [_display(v) for v in levels],
                           rotation=30 if len(levels) > 3 else 0, ha="right" if len(levels) > 3 else "center")  # fmt: skip
             ax.set_title(factor.replace("_", " "))
             ax.grid(axis="x", visible=False)
-        for ax in axes[len(factors):]:
+        for ax in axes[len(factors) :]:
             ax.set_visible(False)
         for row in range(nrows):
             axes[row * ncols].set_ylabel("Mean max |residual| (µm)")

@@ -13,7 +13,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DecoupledFit", "decouple_measurement", "decouple_curves", "decouple_table", "compose_curve", "stroke_powers", "MM_PER_M"]
+__all__ = [
+    "DecoupledFit",
+    "decouple_measurement",
+    "decouple_curves",
+    "decouple_table",
+    "compose_curve",
+    "stroke_powers",
+    "MM_PER_M",
+]
 
 MM_PER_M = 1000.0
 
@@ -40,7 +48,9 @@ def stroke_powers(position_mm, origin_mm: float, degree: int) -> np.ndarray:
     return np.vander(shifted_m, degree + 1, increasing=True)
 
 
-def decouple_measurement(position_mm, error_um, degree: int, origin_mm: float | None = None) -> DecoupledFit:
+def decouple_measurement(
+    position_mm, error_um, degree: int, origin_mm: float | None = None
+) -> DecoupledFit:
     """Least-squares fit of one measurement's error curve by a polynomial of ``degree`` (1: the paper's line).
 
     ``origin_mm`` defaults to the smallest position (the first target); pass the
@@ -78,7 +88,9 @@ def decouple_measurement(position_mm, error_um, degree: int, origin_mm: float | 
     )
 
 
-def decouple_curves(position_mm, errors, degree: int, origin_mm: float | None = None, labels=None) -> list[DecoupledFit]:
+def decouple_curves(
+    position_mm, errors, degree: int, origin_mm: float | None = None, labels=None
+) -> list[DecoupledFit]:
     """Decouple each row of an (n_measurements, n_positions) error matrix.
 
     Missing readings (NaN, or any non-finite value) are left out of their row's fit; ``origin_mm`` defaults to
@@ -124,12 +136,24 @@ def decouple_table(errors, degree: int):
         origin = float(run_errors["position_mm"].min())
         for measurement, m in run_errors.groupby("measurement", sort=True):
             valid = m.dropna(subset=["error_um"])
-            fit = decouple_measurement(valid["position_mm"], valid["error_um"], degree=degree, origin_mm=origin)
+            fit = decouple_measurement(
+                valid["position_mm"], valid["error_um"], degree=degree, origin_mm=origin
+            )
             rows.append(
-                (run, int(measurement), float(m["time_min"].iloc[0]), fit.k_um_per_m, fit.b_um, fit.r2, fit.rms_um)
+                (
+                    run,
+                    int(measurement),
+                    float(m["time_min"].iloc[0]),
+                    fit.k_um_per_m,
+                    fit.b_um,
+                    fit.r2,
+                    fit.rms_um,
+                )
             )
             for power, value in enumerate(fit.coefficients):
                 coef_rows.append((run, int(measurement), power, value))
-    kb = pd.DataFrame(rows, columns=["run", "measurement", "time_min", "k_um_per_m", "b_um", "r2", "rms_um"])
+    kb = pd.DataFrame(
+        rows, columns=["run", "measurement", "time_min", "k_um_per_m", "b_um", "r2", "rms_um"]
+    )
     coefficients = pd.DataFrame(coef_rows, columns=["run", "measurement", "power", "value"])
     return kb, coefficients

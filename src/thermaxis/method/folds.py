@@ -13,15 +13,14 @@ prediction time and its measured errors only to the metrics.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 import numpy as np
 import pandas as pd
 
 from thermaxis.config import ModelSettings, SelectionSettings
 from thermaxis.method.metrics import prediction_metrics
-from thermaxis.method.selection import informative_sensors
 from thermaxis.method.models import (
     DecoupledAxisModel,
     PointwiseAxisModel,
@@ -31,6 +30,7 @@ from thermaxis.method.models import (
 from thermaxis.method.selection import (
     SensitivePoints,
     common_points,
+    informative_sensors,
     rank_by_correlation,
     select_sensitive_points,
 )
@@ -51,7 +51,15 @@ META = ("run", "measurement", "time_min")
 # Row order of the result tables, per fold and collected over folds (deterministic files).
 SORT_KEYS = {
     "metrics": ["fold", "approach", "algorithm", "target"],
-    "coefficients": ["fold", "approach", "algorithm", "target", "position_mm", "temperature", "term"],
+    "coefficients": [
+        "fold",
+        "approach",
+        "algorithm",
+        "target",
+        "position_mm",
+        "temperature",
+        "term",
+    ],
     "kb_predictions": ["fold", "approach", "algorithm", "target", "measurement"],
     "error_predictions": ["fold", "approach", "algorithm", "measurement", "position_mm"],
     "selection": ["fold", "target", "position_mm", "cluster", "sensor"],
@@ -81,7 +89,9 @@ def sensor_columns(X: pd.DataFrame) -> list[str]:
     return [c for c in X.columns if c not in META]
 
 
-def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, target: str) -> SensitivePoints:
+def _points(
+    method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, target: str
+) -> SensitivePoints:
     if method == "fuzzy_grey":
         return select_sensitive_points(
             T,
@@ -94,7 +104,12 @@ def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, t
         )
     if method == "correlation":
         chosen = rank_by_correlation(T, y, s.n_clusters)
-        return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades=_abs_correlation(T, y), eta=float("nan"))
+        return SensitivePoints(
+            clusters=tuple((c,) for c in chosen),
+            selected=chosen,
+            grades=_abs_correlation(T, y),
+            eta=float("nan"),
+        )
     if method == "all":
         names = tuple(T.columns)
         return SensitivePoints(clusters=(names,), selected=names, grades={}, eta=float("nan"))
@@ -102,8 +117,12 @@ def _points(method: str, T: pd.DataFrame, y: np.ndarray, s: SelectionSettings, t
         chosen = s.fixed_for(target)
         unknown = [c for c in chosen if c not in T.columns]
         if unknown:
-            raise ValueError(f"config selection.fixed.{target}: unknown sensor {unknown[0]!r} (dataset has {', '.join(T.columns)})")
-        return SensitivePoints(clusters=tuple((c,) for c in chosen), selected=chosen, grades={}, eta=float("nan"))
+            raise ValueError(
+                f"config selection.fixed.{target}: unknown sensor {unknown[0]!r} (dataset has {', '.join(T.columns)})"
+            )
+        return SensitivePoints(
+            clusters=tuple((c,) for c in chosen), selected=chosen, grades={}, eta=float("nan")
+        )
     raise ValueError(f"config selection.method: unknown method {method!r}")
 
 
@@ -113,8 +132,10 @@ def _abs_correlation(T: pd.DataFrame, y: np.ndarray) -> dict[str, float]:
     centred = values - values.mean(axis=0)
     yc = np.asarray(y, dtype=float) - np.mean(y)
     denominator = np.sqrt((centred**2).sum(axis=0) * (yc @ yc))
-    r = np.divide(np.abs(centred.T @ yc), denominator, out=np.zeros(values.shape[1]), where=denominator > 0)
-    return {str(name): float(v) for name, v in zip(T.columns, r)}
+    r = np.divide(
+        np.abs(centred.T @ yc), denominator, out=np.zeros(values.shape[1]), where=denominator > 0
+    )
+    return {str(name): float(v) for name, v in zip(T.columns, r, strict=False)}
 
 
 def _mean_scores(points: list[SensitivePoints]) -> dict[str, float]:
@@ -149,9 +170,13 @@ def select_for_fold(
     if settings.scope == "training":
         keep = (X["run"] != fold).to_numpy()
         X, Y = X.loc[keep], Y.loc[keep]
-    fixed = tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
+    fixed = (
+        tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
+    )
     clustered = settings.n_clusters if settings.method in ("fuzzy_grey", "correlation") else 0
-    sensors = informative_sensors(X[sensor_columns(X)], fixed, where=f"fold {fold}", n_clusters=clustered)
+    sensors = informative_sensors(
+        X[sensor_columns(X)], fixed, where=f"fold {fold}", n_clusters=clustered
+    )
     absolute = X[sensors]
     relative = relative_temperatures(X)[sensors]
     k_points = b_points = None
@@ -172,7 +197,9 @@ def select_for_fold(
         for position in Y.columns:
             y = Y[position].to_numpy(dtype=float)
             ok = ~np.isnan(y)
-            per_position[float(position)] = _points(settings.method, relative.loc[ok], y[ok], settings, "pointwise")
+            per_position[float(position)] = _points(
+                settings.method, relative.loc[ok], y[ok], settings, "pointwise"
+            )
         chosen = [p.selected for p in per_position.values()]
         distinct = len({sensor for points in chosen for sensor in points})
         n_common = min(settings.pointwise_common, distinct)
@@ -182,8 +209,12 @@ def select_for_fold(
                 f"the point-by-point common set has {n_common} instead of {settings.pointwise_common}",
                 stacklevel=2,
             )
-        common = common_points(chosen, n_common, order=sensors, scores=_mean_scores(list(per_position.values())))
-    return FoldSelection(fold=fold, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common))
+        common = common_points(
+            chosen, n_common, order=sensors, scores=_mean_scores(list(per_position.values()))
+        )
+    return FoldSelection(
+        fold=fold, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common)
+    )
 
 
 def selection_table(selection: FoldSelection) -> pd.DataFrame:
@@ -194,7 +225,15 @@ def selection_table(selection: FoldSelection) -> pd.DataFrame:
         for c, cluster in enumerate(points.clusters, start=1):
             for sensor in cluster:
                 rows.append(
-                    (selection.fold, target, position, sensor, c, sensor in points.selected, points.grades.get(sensor, np.nan))
+                    (
+                        selection.fold,
+                        target,
+                        position,
+                        sensor,
+                        c,
+                        sensor in points.selected,
+                        points.grades.get(sensor, np.nan),
+                    )
                 )
 
     if selection.k is not None:
@@ -205,7 +244,9 @@ def selection_table(selection: FoldSelection) -> pd.DataFrame:
         add("error", position, points)
     for sensor in selection.pointwise:
         rows.append((selection.fold, "pointwise_common", np.nan, sensor, 0, True, np.nan))
-    return pd.DataFrame(rows, columns=["fold", "target", "position_mm", "sensor", "cluster", "selected", "grade"])
+    return pd.DataFrame(
+        rows, columns=["fold", "target", "position_mm", "sensor", "cluster", "selected", "grade"]
+    )
 
 
 @dataclass(frozen=True)
@@ -216,7 +257,13 @@ class FoldResult:
     error_predictions: pd.DataFrame
 
 
-def _build_model(approach: str, algorithm: str, selection: FoldSelection, model: ModelSettings, degree: int | None):
+def _build_model(
+    approach: str,
+    algorithm: str,
+    selection: FoldSelection,
+    model: ModelSettings,
+    degree: int | None,
+):
     common = dict(
         algorithm=algorithm,
         params=model.params_for(algorithm),
@@ -228,7 +275,9 @@ def _build_model(approach: str, algorithm: str, selection: FoldSelection, model:
         signals=model.signals,
     )
     if approach == "decoupled":
-        return DecoupledAxisModel(k_sensors=selection.k_sensors, b_sensors=selection.b_sensors, degree=degree, **common)
+        return DecoupledAxisModel(
+            k_sensors=selection.k_sensors, b_sensors=selection.b_sensors, degree=degree, **common
+        )
     if approach == "pointwise":
         return PointwiseAxisModel(sensors=selection.pointwise, **common)
     raise ValueError(f"unknown approach {approach!r} (expected decoupled or pointwise)")
@@ -255,7 +304,9 @@ def evaluate_configuration(
     measured = Y_test.to_numpy(dtype=float)
     predicted, lower, upper = _predicted_errors(estimator, X_test, algorithm, model.interval_level)
     if approach == "decoupled":
-        metric_rows, kb_frame = _kb_tables(estimator, X_test, Y_test, label, model.interval_level, degree)
+        metric_rows, kb_frame = _kb_tables(
+            estimator, X_test, Y_test, label, model.interval_level, degree
+        )
     else:
         metric_rows, kb_frame = [], _empty_kb()
     metric_rows.append({**label, "target": "error", **prediction_metrics(measured, predicted)})
@@ -263,7 +314,9 @@ def evaluate_configuration(
         metrics=pd.DataFrame(metric_rows),
         coefficients=_coefficient_table(estimator, label),
         kb_predictions=kb_frame,
-        error_predictions=_error_table(label, X_test, np.asarray(Y.columns, dtype=float), measured, predicted, lower, upper),
+        error_predictions=_error_table(
+            label, X_test, np.asarray(Y.columns, dtype=float), measured, predicted, lower, upper
+        ),
     )
 
 
@@ -285,17 +338,25 @@ def _predicted_errors(estimator, X_test: pd.DataFrame, algorithm: str, level: fl
     return predicted, lower, upper
 
 
-def _kb_tables(estimator, X_test, Y_test, label: dict, level: float, degree: int) -> tuple[list[dict], pd.DataFrame]:
+def _kb_tables(
+    estimator, X_test, Y_test, label: dict, level: float, degree: int
+) -> tuple[list[dict], pd.DataFrame]:
     """Metrics and predictions of the slope k and the intercept b of the held-out measurements."""
     kb_measured = decouple_rows(X_test, Y_test, degree=degree)
     kb_predicted = estimator.predict_kb(X_test)
-    kb_interval = estimator.predict_kb_interval(X_test, level) if label["algorithm"] == "gpr" else None
+    kb_interval = (
+        estimator.predict_kb_interval(X_test, level) if label["algorithm"] == "gpr" else None
+    )
     metric_rows, frames = [], []
     for target, column in (("k", "k_um_per_m"), ("b", "b_um")):
         measured = kb_measured[column].to_numpy()
         predicted = kb_predicted[column].to_numpy()
         metric_rows.append({**label, "target": target, **prediction_metrics(measured, predicted)})
-        lower, upper = kb_interval[column] if kb_interval is not None else (np.full_like(predicted, np.nan),) * 2
+        lower, upper = (
+            kb_interval[column]
+            if kb_interval is not None
+            else (np.full_like(predicted, np.nan),) * 2
+        )
         frames.append(
             pd.DataFrame(
                 {
@@ -314,7 +375,9 @@ def _kb_tables(estimator, X_test, Y_test, label: dict, level: float, degree: int
     return metric_rows, pd.concat(frames, ignore_index=True)
 
 
-def _error_table(label: dict, X_test, positions: np.ndarray, measured, predicted, lower, upper) -> pd.DataFrame:
+def _error_table(
+    label: dict, X_test, positions: np.ndarray, measured, predicted, lower, upper
+) -> pd.DataFrame:
     """One row per held-out measurement and target position: measured, predicted, residual, interval."""
     n, p = measured.shape
     return pd.DataFrame(
@@ -336,12 +399,26 @@ def _error_table(label: dict, X_test, positions: np.ndarray, measured, predicted
 def _coefficient_table(estimator, label: dict) -> pd.DataFrame:
     """The fitted terms (the paper's Eq. 8 or Eq. 9), labelled with the fold and the model."""
     coefficients = estimator.coefficients().assign(**label)
-    return coefficients[["fold", "approach", "algorithm", "target", "position_mm", "term", "temperature", "value"]]
+    return coefficients[
+        ["fold", "approach", "algorithm", "target", "position_mm", "term", "temperature", "value"]
+    ]
 
 
 def _empty_kb() -> pd.DataFrame:
     return pd.DataFrame(
-        columns=["fold", "approach", "algorithm", "run", "measurement", "time_min", "target", "measured", "predicted", "lower", "upper"]
+        columns=[
+            "fold",
+            "approach",
+            "algorithm",
+            "run",
+            "measurement",
+            "time_min",
+            "target",
+            "measured",
+            "predicted",
+            "lower",
+            "upper",
+        ]
     )
 
 
@@ -373,7 +450,9 @@ def selection_to_dict(selection: FoldSelection) -> dict:
         "fold": selection.fold,
         "k": _points_to_dict(selection.k),
         "b": _points_to_dict(selection.b),
-        "per_position": {repr(float(p)): _points_to_dict(v) for p, v in sorted(selection.per_position.items())},
+        "per_position": {
+            repr(float(p)): _points_to_dict(v) for p, v in sorted(selection.per_position.items())
+        },
         "pointwise": list(selection.pointwise),
     }
 

@@ -67,7 +67,9 @@ def _series(t, u) -> tuple[np.ndarray, np.ndarray]:
     t = np.asarray(t, dtype=float)
     u = np.asarray(u, dtype=float)
     if t.ndim != 1 or t.size == 0:
-        raise ValueError(f"time base must be a non-empty 1-D sequence of seconds, got shape {t.shape}")
+        raise ValueError(
+            f"time base must be a non-empty 1-D sequence of seconds, got shape {t.shape}"
+        )
     if u.ndim not in (1, 2) or u.shape[0] != t.size:
         raise ValueError(f"values must have one row per time ({t.size}), got shape {u.shape}")
     bad = ~np.isfinite(t)
@@ -95,9 +97,13 @@ def _step_checks(t, u, t_prev: float | None, what: str) -> tuple[float, float]:
     if not math.isfinite(t):
         raise ValueError(f"{what}: time {t!r} is not finite")
     if math.isnan(u):
-        raise ValueError(f"{what}: value at t = {t!r} s is NaN; the state cannot be carried over a missing sample")
+        raise ValueError(
+            f"{what}: value at t = {t!r} s is NaN; the state cannot be carried over a missing sample"
+        )
     if t_prev is not None and not t > t_prev:
-        raise ValueError(f"{what}: time must increase strictly, got t = {t!r} s after t = {t_prev!r} s")
+        raise ValueError(
+            f"{what}: time must increase strictly, got t = {t!r} s after t = {t_prev!r} s"
+        )
     return t, u
 
 
@@ -310,7 +316,9 @@ def _duration_text(seconds: float) -> str:
         return f"{int(seconds)}s"
     text = repr(seconds)  # the shortest text that reads back as the same float
     if "e" in text:
-        raise ValueError(f"duration {seconds!r} s cannot be written in plain decimal; use whole seconds")
+        raise ValueError(
+            f"duration {seconds!r} s cannot be written in plain decimal; use whole seconds"
+        )
     return f"{text}s"
 
 
@@ -444,16 +452,22 @@ def inputs_at_measurements(
         raise ValueError(f"at must be 'end', 'start' or 'mid', got {at!r}")
     lags, rates = list(lags_s), list(rates_s)
     if not lags and not rates:
-        raise ValueError("no derived input configured: give at least one lag time constant or rate window")
+        raise ValueError(
+            "no derived input configured: give at least one lag time constant or rate window"
+        )
     columns = [c for c in frame.columns if c != "time"] if columns is None else list(columns)
     names = {c: [lag_name(c, s) for s in lags] + [rate_name(c, s) for s in rates] for c in columns}
     flat = [n for c in columns for n in names[c]]
     if len(set(flat)) < len(flat):
         twice = next(n for n in flat if flat.count(n) > 1)
-        raise ValueError(f"derived input {twice!r} configured twice; expected distinct time constants and windows")
+        raise ValueError(
+            f"derived input {twice!r} configured twice; expected distinct time constants and windows"
+        )
     absent = [c for c in columns if c not in frame.columns]
     if absent:
-        raise ValueError(f"temperature table: no column {absent[0]!r}; it has {', '.join(map(str, frame.columns))}")
+        raise ValueError(
+            f"temperature table: no column {absent[0]!r}; it has {', '.join(map(str, frame.columns))}"
+        )
 
     def ns(values) -> np.ndarray:
         return np.asarray(pd.to_datetime(values), dtype="datetime64[ns]").astype(np.int64)
@@ -461,14 +475,18 @@ def inputs_at_measurements(
     if isinstance(measurements, pd.DataFrame):
         for column in ("start", "end"):
             if column not in measurements.columns:
-                raise ValueError(f"measurement windows: missing column {column!r} (expected start, end)")
+                raise ValueError(
+                    f"measurement windows: missing column {column!r} (expected start, end)"
+                )
         start, end = ns(measurements["start"]), ns(measurements["end"])
         labels = (
             [str(m) for m in measurements["measurement"]]
             if "measurement" in measurements.columns
             else [str(i) for i in range(len(measurements))]
         )
-        out = measurements[[c for c in ("measurement", "start", "end") if c in measurements.columns]]
+        out = measurements[
+            [c for c in ("measurement", "start", "end") if c in measurements.columns]
+        ]
         out = out.reset_index(drop=True).copy()
     else:
         start = end = ns(list(measurements))
@@ -478,7 +496,9 @@ def inputs_at_measurements(
         raise ValueError("no measurement given")
     if (end < start).any():
         i = int(np.flatnonzero(end < start)[0])
-        raise ValueError(f"measurement {labels[i]}: its window ends before it starts; expected start <= end")
+        raise ValueError(
+            f"measurement {labels[i]}: its window ends before it starts; expected start <= end"
+        )
     # Half the window in integer nanoseconds: exact, no float rounding of the instant.
     when = {"end": end, "start": start, "mid": start + (end - start) // 2}[at]
 
@@ -524,7 +544,7 @@ def inputs_at_measurements(
     lagged = [lag_filter(base, u, tau)[rows] for tau in lags]
     rated = [rate_of_change(base, u, w)[rows] for w in rates]
     for j, column in enumerate(columns):
-        for name, block in zip(names[column], lagged + rated):
+        for name, block in zip(names[column], lagged + rated, strict=False):
             derived[name] = block[:, j]
     out["time"] = when.astype("datetime64[ns]")
     return pd.concat([out, pd.DataFrame(derived, index=out.index)], axis=1)

@@ -49,7 +49,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["ALGORITHMS", "COND_LIMIT", "PLS_LIMIT", "LinearFit", "loco_fit", "standardised_fit", "subset_fit"]
+__all__ = [
+    "ALGORITHMS",
+    "COND_LIMIT",
+    "PLS_LIMIT",
+    "LinearFit",
+    "loco_fit",
+    "standardised_fit",
+    "subset_fit",
+]
 
 ALGORITHMS = ("mlr", "ridge", "pls")
 COND_LIMIT = 1e5
@@ -79,14 +87,18 @@ class LinearFit(NamedTuple):
 # --------------------------------------------------------------------------- public
 
 
-def standardised_fit(X, Y, algorithm: str, *, alpha: float = 1.0, n_components: int = 2) -> LinearFit:
+def standardised_fit(
+    X, Y, algorithm: str, *, alpha: float = 1.0, n_components: int = 2
+) -> LinearFit:
     """One pipeline per output column of ``Y`` on all columns of ``X``, at once.
 
     ``X`` (n, p) sensors, ``Y`` (n, m) outputs (a 1-D ``Y`` is one output).  Returns
     intercept (m,), slopes (p, m), the fitted values (n, m) and ``refitted`` (a 0-d bool).
     """
     X, Y = _check_xy(X, Y)
-    fit = subset_fit(X, Y, [np.arange(X.shape[1])], algorithm, alpha=alpha, n_components=n_components, X_new=X)
+    fit = subset_fit(
+        X, Y, [np.arange(X.shape[1])], algorithm, alpha=alpha, n_components=n_components, X_new=X
+    )
     return LinearFit(fit.intercept[0], fit.slopes[0], fit.predictions[:, 0], fit.refitted[0])
 
 
@@ -102,12 +114,16 @@ def subset_fit(
     subsets = _check_subsets(subsets, X.shape[1])
     rows = np.arange(X.shape[0])
     stats = [_moments(np.hstack([X, Y]))]
-    intercept, slopes, level, centre, refitted = _fit_folds(X, Y, [rows], stats, subsets, algorithm, alpha, n_components)
+    intercept, slopes, level, centre, refitted = _fit_folds(
+        X, Y, [rows], stats, subsets, algorithm, alpha, n_components
+    )
     predictions = None
     if X_new is not None:
         X_new = np.asarray(X_new, dtype=float)
         if X_new.ndim != 2 or X_new.shape[1] != X.shape[1] or not np.isfinite(X_new).all():
-            raise ValueError(f"X_new must be a finite 2-D array with {X.shape[1]} columns, got shape {X_new.shape}")
+            raise ValueError(
+                f"X_new must be a finite 2-D array with {X.shape[1]} columns, got shape {X_new.shape}"
+            )
         predictions = _predict(X_new, subsets, level[0], centre[0], slopes[0])
     return LinearFit(intercept[0], slopes[0], predictions, refitted[0])
 
@@ -124,10 +140,14 @@ def loco_fit(
     (n, q, m): each row predicted by the fold that held its condition out.
     """
     X, Y = _check_xy(X, Y)
-    subsets = _check_subsets(np.arange(X.shape[1])[None, :] if subsets is None else subsets, X.shape[1])
+    subsets = _check_subsets(
+        np.arange(X.shape[1])[None, :] if subsets is None else subsets, X.shape[1]
+    )
     groups = np.asarray(groups)
     if groups.shape != (X.shape[0],):
-        raise ValueError(f"groups must hold one label per row ({X.shape[0]}), got shape {groups.shape}")
+        raise ValueError(
+            f"groups must hold one label per row ({X.shape[0]}), got shape {groups.shape}"
+        )
     labels, fold_of_row = np.unique(groups, return_inverse=True)
     if len(labels) < 2:
         raise ValueError(f"leave-one-condition-out needs at least 2 conditions, got {len(labels)}")
@@ -138,7 +158,9 @@ def loco_fit(
         held = fold_of_row == f
         train_rows.append(np.flatnonzero(~held))
         stats.append(_downdate(full, _moments(W[held]), W, ~held))
-    intercept, slopes, level, centre, refitted = _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components)
+    intercept, slopes, level, centre, refitted = _fit_folds(
+        X, Y, train_rows, stats, subsets, algorithm, alpha, n_components
+    )
     predictions = np.empty((X.shape[0], len(subsets), Y.shape[1]))
     for f in range(len(labels)):
         held = fold_of_row == f
@@ -155,9 +177,13 @@ def _check_xy(X, Y):
     if Y.ndim == 1:
         Y = Y[:, None]
     if X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0] or X.shape[0] < 2:
-        raise ValueError(f"X (n, p) and Y (n, m) must share n >= 2 rows, got shapes {X.shape} and {Y.shape}")
+        raise ValueError(
+            f"X (n, p) and Y (n, m) must share n >= 2 rows, got shapes {X.shape} and {Y.shape}"
+        )
     if not (np.isfinite(X).all() and np.isfinite(Y).all()):
-        raise ValueError("X and Y must be finite; drop or fill missing readings before the linear core")
+        raise ValueError(
+            "X and Y must be finite; drop or fill missing readings before the linear core"
+        )
     return X, Y
 
 
@@ -167,7 +193,9 @@ def _check_subsets(subsets, p: int) -> np.ndarray:
     except ValueError as exc:
         raise ValueError("subsets must all have the same size") from exc
     if subsets.ndim != 2 or subsets.shape[0] == 0 or subsets.shape[1] == 0:
-        raise ValueError(f"subsets must be a non-empty (q, s) array of column indices, got shape {subsets.shape}")
+        raise ValueError(
+            f"subsets must be a non-empty (q, s) array of column indices, got shape {subsets.shape}"
+        )
     if subsets.min() < 0 or subsets.max() >= p:
         raise ValueError(f"subset column indices must lie in 0..{p - 1}")
     return subsets
@@ -214,7 +242,9 @@ def _is_constant(variance, mean, n):
 
 def _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components):
     if algorithm not in ALGORITHMS:
-        raise ValueError(f"unknown linear algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}")
+        raise ValueError(
+            f"unknown linear algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}"
+        )
     if algorithm == "ridge" and not alpha >= 0:
         raise ValueError(f"ridge alpha must be >= 0, got {alpha}")
     p, s = X.shape[1], subsets.shape[1]
@@ -243,9 +273,11 @@ def _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components)
         w, refitted = _normal_equations(A, B, fixed, n_t, alpha if algorithm == "ridge" else 0.0)
     w = np.where(fixed[..., None], 0.0, w)
     slopes = w / scale[:, subsets][..., None]
-    level = np.broadcast_to(mean[:, None, p:], w.shape[:2] + (Y.shape[1],)).copy()  # prediction at the centre
+    level = np.broadcast_to(
+        mean[:, None, p:], w.shape[:2] + (Y.shape[1],)
+    ).copy()  # prediction at the centre
     centre = mean[:, subsets]
-    for f, q in zip(*np.nonzero(refitted)):
+    for f, q in zip(*np.nonzero(refitted), strict=False):
         level[f, q], slopes[f, q], centre[f, q] = _sklearn_fit(
             X[train_rows[f]][:, subsets[q]], Y[train_rows[f]], algorithm, alpha, k
         )
@@ -338,16 +370,24 @@ def _sklearn_fit(Xs, Y, algorithm, alpha, k):
         else:
             regressor = PLSRegression(n_components=k, scale=False)
         return Pipeline(
-            [("standardise", StandardScaler()), ("regress", TransformedTargetRegressor(regressor, transformer=StandardScaler()))]
+            [
+                ("standardise", StandardScaler()),
+                ("regress", TransformedTargetRegressor(regressor, transformer=StandardScaler())),
+            ]
         )
 
     s, m = Xs.shape[1], Y.shape[1]
     level, slopes = np.empty(m), np.empty((s, m))
     for j in range(m):
         fitted = pipeline().fit(Xs, Y[:, j])
-        scaler, target = fitted.named_steps["standardise"], fitted.named_steps["regress"].transformer_
+        scaler, target = (
+            fitted.named_steps["standardise"],
+            fitted.named_steps["regress"].transformer_,
+        )
         # The regressor is affine in standardised units; probe it at 0 and the unit vectors.
-        probe = np.ravel(fitted.named_steps["regress"].regressor_.predict(np.vstack([np.zeros(s), np.eye(s)])))
+        probe = np.ravel(
+            fitted.named_steps["regress"].regressor_.predict(np.vstack([np.zeros(s), np.eye(s)]))
+        )
         level[j] = target.mean_[0] + target.scale_[0] * probe[0]
         slopes[:, j] = (probe[1:] - probe[0]) * target.scale_[0] / scaler.scale_
     return level, slopes, scaler.mean_

@@ -46,7 +46,9 @@ def prediction_metrics(measured, predicted) -> dict[str, float]:
     residual = (measured - predicted).ravel()
     residual = residual[np.isfinite(residual)]
     if residual.size == 0:
-        raise ValueError("no pair of measured and predicted values without NaN; cannot compute metrics")
+        raise ValueError(
+            "no pair of measured and predicted values without NaN; cannot compute metrics"
+        )
     absolute = np.abs(residual)
     return {
         "rmse": float(np.sqrt(np.mean(residual**2))),

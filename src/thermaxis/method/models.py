@@ -86,7 +86,9 @@ _KB_COLUMNS = {
 
 def _check_algorithm(algorithm: str) -> None:
     if algorithm not in ALGORITHMS:
-        raise ValueError(f"unknown algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}")
+        raise ValueError(
+            f"unknown algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}"
+        )
 
 
 def _check_params(algorithm: str, params: Mapping | None) -> dict:
@@ -132,7 +134,11 @@ def _base_regressor(algorithm: str, params: dict, random_state: int, n_features:
 
 
 def make_regressor(
-    algorithm: str, params: Mapping | None = None, *, random_state: int, n_features: int | None = None
+    algorithm: str,
+    params: Mapping | None = None,
+    *,
+    random_state: int,
+    n_features: int | None = None,
 ) -> Pipeline:
     """An unfitted regressor with standardised inputs and standardised target.
 
@@ -166,7 +172,10 @@ def make_regressor(
     return Pipeline(
         [
             ("standardise", StandardScaler()),
-            ("regress", TransformedTargetRegressor(regressor=regressor, transformer=StandardScaler())),
+            (
+                "regress",
+                TransformedTargetRegressor(regressor=regressor, transformer=StandardScaler()),
+            ),
         ]
     )
 
@@ -184,7 +193,9 @@ def inner_group_splitter(groups, max_loco_groups: int, group_folds: int):
     return GroupKFold(n_splits=min(group_folds, n_groups))
 
 
-def fit_by_group_search(algorithm: str, X, y, groups, grid: Mapping, random_state: int, inner: tuple[int, int]):
+def fit_by_group_search(
+    algorithm: str, X, y, groups, grid: Mapping, random_state: int, inner: tuple[int, int]
+):
     """Fit a regressor whose hyper-parameters are chosen by a group search on the runs.
 
     Only the data passed in is used, so calling this on the training conditions of an
@@ -220,7 +231,9 @@ def fit_by_group_search(algorithm: str, X, y, groups, grid: Mapping, random_stat
     grid = dict(grid)
     _check_params(algorithm, grid)
     if not grid or any(len(values) == 0 for values in grid.values()):
-        raise ValueError(f"{algorithm} search grid must give at least one value for each listed parameter")
+        raise ValueError(
+            f"{algorithm} search grid must give at least one value for each listed parameter"
+        )
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float)
     groups = np.asarray(groups)
@@ -228,7 +241,9 @@ def fit_by_group_search(algorithm: str, X, y, groups, grid: Mapping, random_stat
     n_features = X.shape[1]
     if np.unique(groups).size < 2:
         chosen = dict(candidates[0])
-        return make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features).fit(X, y), chosen
+        return make_regressor(
+            algorithm, chosen, random_state=random_state, n_features=n_features
+        ).fit(X, y), chosen
     # GridSearchCV over make_regressor's pipeline, without its per-candidate cloning,
     # re-validation and scorer calls: each hold-out is standardised once, the regressor
     # fitted per candidate on the same arrays the pipeline would give it, so the scores,
@@ -241,13 +256,19 @@ def fit_by_group_search(algorithm: str, X, y, groups, grid: Mapping, random_stat
         y_scaler = StandardScaler().fit(y[train].reshape(-1, 1))
         y_train = y_scaler.transform(y[train].reshape(-1, 1)).squeeze(axis=1)
         for c, params in enumerate(candidates):
-            regressor = _base_regressor(algorithm, params, random_state, n_features).fit(X_train, y_train)
-            predicted = y_scaler.inverse_transform(np.asarray(regressor.predict(X_test)).reshape(-1, 1)).squeeze(axis=1)
+            regressor = _base_regressor(algorithm, params, random_state, n_features).fit(
+                X_train, y_train
+            )
+            predicted = y_scaler.inverse_transform(
+                np.asarray(regressor.predict(X_test)).reshape(-1, 1)
+            ).squeeze(axis=1)
             scores[c, split] = -root_mean_squared_error(y[test], predicted)
     means = np.average(scores, axis=1)
     # The first best candidate, NaN scores last, as GridSearchCV ranks them.
     chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
-    return make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features).fit(X, y), chosen
+    return make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features).fit(
+        X, y
+    ), chosen
 
 
 def _final_regressor(fitted):
@@ -258,7 +279,7 @@ def linear_terms(fitted_estimator, feature_names: Sequence[str]) -> dict[str, fl
     """Constant and per-feature coefficients of an affine fit, in the inputs' own units.
 
     The pipeline standardises inputs and target internally; since every step is affine
-    for mlr, ridge and pls, probing the prediction at the origin and at unit vectors
+    for mlr, ridge, lasso and pls, probing the prediction at the origin and at unit vectors
     gives the constant and the slopes in original units (per degree C).
 
     Parameters
@@ -273,7 +294,9 @@ def linear_terms(fitted_estimator, feature_names: Sequence[str]) -> dict[str, fl
     dict or None
         ``{"const": c, name: slope, ...}``; ``None`` for svr and gpr, which are not affine.
     """
-    if not isinstance(_final_regressor(fitted_estimator), (LinearRegression, Ridge, PLSRegression)):
+    if not isinstance(
+        _final_regressor(fitted_estimator), (LinearRegression, Ridge, Lasso, PLSRegression)
+    ):
         return None
     names = list(feature_names)
     n_inputs = fitted_estimator.named_steps["standardise"].n_features_in_
@@ -283,7 +306,7 @@ def linear_terms(fitted_estimator, feature_names: Sequence[str]) -> dict[str, fl
     values = np.asarray(fitted_estimator.predict(probes), dtype=float).ravel()
     const = float(values[0])
     terms = {"const": const}
-    terms.update({name: float(v - const) for name, v in zip(names, values[1:])})
+    terms.update({name: float(v - const) for name, v in zip(names, values[1:], strict=False)})
     return terms
 
 
@@ -322,7 +345,9 @@ def _check_X(X, sensors: Sequence[str]) -> None:
             f"X has missing temperatures in sensor column(s) {list(sensors)}; fill or drop those rows"
         )
     if X.duplicated(list(_ID_COLUMNS)).any():
-        raise ValueError("X has duplicate (run, measurement) rows; expected one row per measurement")
+        raise ValueError(
+            "X has duplicate (run, measurement) rows; expected one row per measurement"
+        )
 
 
 def _positions_of(X: pd.DataFrame, Y, min_positions: int = 2) -> np.ndarray:
@@ -361,11 +386,17 @@ def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None)
         reference comes from its own rows only, whatever other runs X holds.
     """
     if sensors is None:
-        sensors = [c for c in X.columns if c not in _ID_COLUMNS and pd.api.types.is_numeric_dtype(X[c].dtype)]
+        sensors = [
+            c
+            for c in X.columns
+            if c not in _ID_COLUMNS and pd.api.types.is_numeric_dtype(X[c].dtype)
+        ]
     sensors = list(sensors)
     missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
     if missing:
-        raise ValueError(f"X lacks column(s) {missing}; expected run, measurement and sensor columns")
+        raise ValueError(
+            f"X lacks column(s) {missing}; expected run, measurement and sensor columns"
+        )
     # In numpy, not a pandas sort and group-by: the sweep calls this thousands of times.
     runs, _ = pd.factorize(X["run"])
     # A stable sort by measurement puts each run's lowest measurement (the earlier row on a tie) first.
@@ -376,7 +407,9 @@ def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None)
     return pd.DataFrame(values, index=X.index, columns=sensors)
 
 
-def _features(X: pd.DataFrame, sensors: Sequence[str], temperature: str, signals: Sequence[str] = ()) -> np.ndarray:
+def _features(
+    X: pd.DataFrame, sensors: Sequence[str], temperature: str, signals: Sequence[str] = ()
+) -> np.ndarray:
     """Temperatures of the given kind, then operating signals as logged (a speed has no 'rise')."""
     if temperature == "absolute":
         values = X[list(sensors)].to_numpy(dtype=float)
@@ -399,13 +432,30 @@ def _fit_one(features, target, groups, estimator):
     if algorithm == "svr":
         if estimator.svr_grid is None:
             # No default grid here: the one default is the schema's (config models.svr_grid).
-            raise ValueError("algorithm 'svr' needs svr_grid (the workflow passes config models.svr_grid)")
+            raise ValueError(
+                "algorithm 'svr' needs svr_grid (the workflow passes config models.svr_grid)"
+            )
         # Fixed parameters (e.g. kernel) apply to every grid point unless the grid varies them.
-        grid = {**{k: [v] for k, v in _check_params("svr", params).items()}, **dict(estimator.svr_grid)}
-        return fit_by_group_search("svr", features, target, groups, grid, estimator.random_state, inner)
+        grid = {
+            **{k: [v] for k, v in _check_params("svr", params).items()},
+            **dict(estimator.svr_grid),
+        }
+        return fit_by_group_search(
+            "svr", features, target, groups, grid, estimator.random_state, inner
+        )
     if estimator.search_grid is not None and algorithm in SEARCHABLE:
-        return fit_by_group_search(algorithm, features, target, groups, estimator.search_grid, estimator.random_state, inner)
-    model = make_regressor(algorithm, params, random_state=estimator.random_state, n_features=features.shape[1])
+        return fit_by_group_search(
+            algorithm,
+            features,
+            target,
+            groups,
+            estimator.search_grid,
+            estimator.random_state,
+            inner,
+        )
+    model = make_regressor(
+        algorithm, params, random_state=estimator.random_state, n_features=features.shape[1]
+    )
     if algorithm == "gpr" and len(target) > estimator.gpr_max_samples:
         # An exact GP costs n^3: beyond the limit it is fitted on evenly spaced training
         # rows (config models.gpr_max_samples; the model report says so).
@@ -414,7 +464,9 @@ def _fit_one(features, target, groups, estimator):
     return model.fit(features, target), None
 
 
-def _coefficient_rows(target, position_mm, temperature, terms: dict | None, signals: Sequence[str] = ()) -> list[dict]:
+def _coefficient_rows(
+    target, position_mm, temperature, terms: dict | None, signals: Sequence[str] = ()
+) -> list[dict]:
     if terms is None:
         return []
     return [
@@ -449,17 +501,26 @@ def decouple_rows(X: pd.DataFrame, Y: pd.DataFrame, degree: int) -> pd.DataFrame
     The origin is Y's first position, so b means the same for every measurement.
     """
     positions = np.asarray(Y.columns, dtype=float)
-    labels = [f"run {run} measurement {measurement}" for run, measurement in zip(X["run"], X["measurement"])]
-    fits = decouple_curves(positions, Y.to_numpy(dtype=float), degree, origin_mm=float(positions[0]), labels=labels)
+    labels = [
+        f"run {run} measurement {measurement}"
+        for run, measurement in zip(X["run"], X["measurement"], strict=False)
+    ]
+    fits = decouple_curves(
+        positions, Y.to_numpy(dtype=float), degree, origin_mm=float(positions[0]), labels=labels
+    )
     rows = []
-    for run, measurement, fit in zip(X["run"], X["measurement"], fits):
-        row = {"run": run, "measurement": measurement, "k_um_per_m": fit.k_um_per_m, "b_um": fit.b_um}
+    for run, measurement, fit in zip(X["run"], X["measurement"], fits, strict=False):
+        row = {
+            "run": run,
+            "measurement": measurement,
+            "k_um_per_m": fit.k_um_per_m,
+            "b_um": fit.b_um,
+        }
         for p in range(2, degree + 1):
             row[_KB_COLUMNS[f"c{p}"]] = fit.coefficients[p]
         row.update(r2=fit.r2, rms_um=fit.rms_um)
         rows.append(row)
     return pd.DataFrame(rows, index=X.index)
-
 
 
 class DecoupledAxisModel(RegressorMixin, BaseEstimator):
@@ -543,7 +604,10 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
 
     def _targets(self) -> list[tuple[str, tuple[str, ...], str]]:
         """(target, sensors, temperature kind) per modelled coefficient."""
-        targets = [("k", tuple(self.k_sensors), "absolute"), ("b", tuple(self.b_sensors), "relative")]
+        targets = [
+            ("k", tuple(self.k_sensors), "absolute"),
+            ("b", tuple(self.b_sensors), "relative"),
+        ]
         targets += [(f"c{p}", tuple(self.k_sensors), "absolute") for p in range(2, self.degree + 1)]
         return targets
 
@@ -585,14 +649,18 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
             higher degrees), then the ``_std`` columns if asked for.
         """
         if return_std and self.algorithm != "gpr":
-            raise NotImplementedError("predictive standard deviations are only available for algorithm 'gpr'")
+            raise NotImplementedError(
+                "predictive standard deviations are only available for algorithm 'gpr'"
+            )
         _check_X(X, (*self.k_sensors, *self.b_sensors, *self.signals))
         means, stds = {}, {}
         for target, sensors, temperature in self._targets():
             features = _features(X, sensors, temperature, self.signals)
             column = _KB_COLUMNS[target]
             if return_std:
-                means[column], stds[f"{column}_std"] = predict_with_std(self.estimators_[target], features)
+                means[column], stds[f"{column}_std"] = predict_with_std(
+                    self.estimators_[target], features
+                )
             else:
                 means[column] = np.asarray(self.estimators_[target].predict(features)).ravel()
         return pd.DataFrame({**means, **stds}, index=X.index)
@@ -601,16 +669,28 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         """Predicted error curves, shape (n rows, n positions) in um."""
         kb = self.predict_kb(X)
         coefficients = np.column_stack(
-            [kb["b_um"], kb["k_um_per_m"], *(kb[_KB_COLUMNS[f"c{p}"]] for p in range(2, self.degree + 1))]
+            [
+                kb["b_um"],
+                kb["k_um_per_m"],
+                *(kb[_KB_COLUMNS[f"c{p}"]] for p in range(2, self.degree + 1)),
+            ]
         )
         return compose_curve(coefficients, self.positions_mm_, self.origin_mm_)
 
-    def predict_kb_interval(self, X: pd.DataFrame, level: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    def predict_kb_interval(
+        self, X: pd.DataFrame, level: float
+    ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Gaussian interval of each decoupling coefficient (gpr only): column -> (lower, upper)."""
         z = _z_score(level)
         kb = self.predict_kb(X, return_std=True)
         columns = [c for c in kb.columns if not c.endswith("_std")]
-        return {c: (kb[c].to_numpy() - z * kb[f"{c}_std"].to_numpy(), kb[c].to_numpy() + z * kb[f"{c}_std"].to_numpy()) for c in columns}
+        return {
+            c: (
+                kb[c].to_numpy() - z * kb[f"{c}_std"].to_numpy(),
+                kb[c].to_numpy() + z * kb[f"{c}_std"].to_numpy(),
+            )
+            for c in columns
+        }
 
     def predict_interval(self, X: pd.DataFrame, level: float) -> tuple[np.ndarray, np.ndarray]:
         """Pointwise prediction interval of the error curves (gpr only).
@@ -735,14 +815,14 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         z = _z_score(level)
         _check_X(X, (*self.sensors, *self.signals))
         features = _features(X, self.sensors, "relative", self.signals)
-        mean, std = zip(*(predict_with_std(m, features) for m in self.estimators_))
+        mean, std = zip(*(predict_with_std(m, features) for m in self.estimators_), strict=False)
         mean, std = np.column_stack(mean), np.column_stack(std)
         return mean - z * std, mean + z * std
 
     def coefficients(self) -> pd.DataFrame:
         """Fitted terms per position in um and um per degree C (Eq. 8); no rows for svr/gpr."""
         rows = []
-        for position, model in zip(self.positions_mm_, self.estimators_):
+        for position, model in zip(self.positions_mm_, self.estimators_, strict=False):
             terms = linear_terms(model, (*self.sensors, *self.signals))
             rows += _coefficient_rows("error", float(position), "relative", terms, self.signals)
         return _coefficient_frame(rows)

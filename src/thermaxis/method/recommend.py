@@ -122,10 +122,16 @@ def candidate_view(X: pd.DataFrame, candidate: Candidate, signals: Sequence[str]
     if candidate.time_inputs:
         used += [c for c in derived if _base(c) in candidate.models.signals]
     keys = [c for c in X.columns if c in META]
-    return X[keys + temperatures + used], keys + temperatures, replace(candidate.models, signals=tuple(used))
+    return (
+        X[keys + temperatures + used],
+        keys + temperatures,
+        replace(candidate.models, signals=tuple(used)),
+    )
 
 
-def inner_splits(runs: Sequence[str], max_loco_runs: int, n_group_folds: int) -> list[tuple[str, ...]]:
+def inner_splits(
+    runs: Sequence[str], max_loco_runs: int, n_group_folds: int
+) -> list[tuple[str, ...]]:
     """Held-out run groups of an inner loop: one run each, or k group folds when runs are many.
 
     Above ``max_loco_runs`` runs, leave-one-condition-out would cost one fit per run per
@@ -149,14 +155,27 @@ def _error_metrics(X, Y, test_run, candidate, degree, signals, cache) -> dict[st
     # The recommendation never lets the held-out run into the choice of sensitive points.
     selection_settings = replace(candidate.selection, scope="training")
     decoupled = candidate.approach == "decoupled"
-    key = (tuple(sorted(pd.unique(X["run"]))), test_run, tuple(selectable), selection_settings, decoupled)
+    key = (
+        tuple(sorted(pd.unique(X["run"]))),
+        test_run,
+        tuple(selectable),
+        selection_settings,
+        decoupled,
+    )
     if key not in cache:
         cache[key] = select_for_fold(
             view[selectable], Y, test_run, selection_settings, degree if decoupled else None,
             decoupled=decoupled, pointwise=not decoupled,
         )  # fmt: skip
     result = evaluate_configuration(
-        view, Y, test_run, candidate.approach, candidate.algorithm, cache[key], models, degree if decoupled else None
+        view,
+        Y,
+        test_run,
+        candidate.approach,
+        candidate.algorithm,
+        cache[key],
+        models,
+        degree if decoupled else None,
     )
     row = result.metrics.loc[result.metrics["target"] == "error"].iloc[0]
     return {name: float(row[name]) for name in METRICS}
@@ -183,7 +202,13 @@ def held_out_scores(
         for run in group:
             keep = X["run"].isin([*fit_runs, run]).to_numpy()
             metrics = _error_metrics(
-                X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True), run, candidate, degree, signals, cache
+                X.loc[keep].reset_index(drop=True),
+                Y.loc[keep].reset_index(drop=True),
+                run,
+                candidate,
+                degree,
+                signals,
+                cache,
             )
             rows.append({"candidate": candidate.name, "held_out": run, **metrics})
     return rows
@@ -232,8 +257,14 @@ def fold_scores(
     rows = []
     for candidate in candidates:
         say(f"fold {fold}: {candidate.name}")
-        rows += [{"kind": "loco", "fold": fold, **r} for r in held_out_scores(X, Y, runs, [(fold,)], candidate, degree, signals, cache)]
-        rows += [{"kind": "inner", "fold": fold, **r} for r in held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)]
+        rows += [
+            {"kind": "loco", "fold": fold, **r}
+            for r in held_out_scores(X, Y, runs, [(fold,)], candidate, degree, signals, cache)
+        ]
+        rows += [
+            {"kind": "inner", "fold": fold, **r}
+            for r in held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)
+        ]
     return pd.DataFrame(rows, columns=SCORE_COLUMNS)
 
 
@@ -246,11 +277,15 @@ def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
         raise ValueError(f"reference candidate {reference!r} is not one of {list(names)}")
 
 
-def collect(scores: pd.DataFrame, names: Sequence[str], reference: str, score: str) -> Recommendation:
+def collect(
+    scores: pd.DataFrame, names: Sequence[str], reference: str, score: str
+) -> Recommendation:
     """The choice of every outer fold, and the final one, from the folds' scores."""
     _check_choice(names, reference, score)
     scores = scores.loc[scores["candidate"].isin(names)]
-    loco = scores.loc[scores["kind"] == "loco", ["candidate", "held_out", *METRICS]].reset_index(drop=True)
+    loco = scores.loc[scores["kind"] == "loco", ["candidate", "held_out", *METRICS]].reset_index(
+        drop=True
+    )
     inner = scores.loc[scores["kind"] == "inner", ["fold", "candidate", "held_out", *METRICS]]
     at = loco.set_index(["candidate", "held_out"])
     rows = []
@@ -290,11 +325,20 @@ def recommend(
     configuration). ``outer_folds`` default to every run. The workflow runs
     :func:`fold_scores` as one job per fold and :func:`collect` once.
     """
-    folds = list(outer_folds) if outer_folds is not None else natural_sorted(pd.unique(X["run"]).tolist())
+    folds = (
+        list(outer_folds)
+        if outer_folds is not None
+        else natural_sorted(pd.unique(X["run"]).tolist())
+    )
     names = [c.name for c in candidates]
     _check_choice(names, reference, score)
     scores = pd.concat(
-        [fold_scores(X, Y, candidates, f, degree, max_loco_runs, n_group_folds, signals, progress) for f in folds],
+        [
+            fold_scores(
+                X, Y, candidates, f, degree, max_loco_runs, n_group_folds, signals, progress
+            )
+            for f in folds
+        ],
         ignore_index=True,
     )
     return collect(scores, names, reference, score)
@@ -309,7 +353,9 @@ def candidate_table(candidates: Sequence[Candidate]) -> pd.DataFrame:
                 "approach": c.approach,
                 "algorithm": c.algorithm,
                 "selection": c.selection.method,
-                "n_clusters": c.selection.n_clusters if c.selection.method in ("fuzzy_grey", "correlation") else np.nan,
+                "n_clusters": c.selection.n_clusters
+                if c.selection.method in ("fuzzy_grey", "correlation")
+                else np.nan,
                 "time_inputs": c.time_inputs,
                 "signals": " ".join(c.models.signals),
             }
@@ -330,7 +376,11 @@ def summary_of(recommendation: Recommendation) -> Mapping[str, float]:
 
 
 def default_candidates(
-    selection: SelectionSettings, models: ModelSettings, decoupled: bool, signals: Sequence[str], time_inputs: bool
+    selection: SelectionSettings,
+    models: ModelSettings,
+    decoupled: bool,
+    signals: Sequence[str],
+    time_inputs: bool,
 ) -> list[Candidate]:
     """The default list, simplest first: the paper's configuration, its variants, regularised models.
 
@@ -351,7 +401,11 @@ def default_candidates(
     for approach in approaches:
         for algorithm in ("mlr", "svr"):
             if (approach, algorithm) != (approaches[0], "mlr"):
-                candidates.append(Candidate(f"{approach}-{algorithm}", approach, algorithm, selection, plain, False))
+                candidates.append(
+                    Candidate(
+                        f"{approach}-{algorithm}", approach, algorithm, selection, plain, False
+                    )
+                )
     regularised = [
         Candidate(f"{approach}-{algorithm}-all", approach, algorithm, every_sensor, searched, False)
         for approach in approaches
@@ -366,11 +420,15 @@ def default_candidates(
         for c in regularised:
             candidates.append(replace(c, name=f"{c.name}+signals", models=with_signals))
             if time_inputs:
-                candidates.append(replace(c, name=f"{c.name}+signals+lags", models=with_signals, time_inputs=True))
+                candidates.append(
+                    replace(c, name=f"{c.name}+signals+lags", models=with_signals, time_inputs=True)
+                )
     return candidates
 
 
-def extra_candidates(settings, selection: SelectionSettings, models: ModelSettings, signals: Sequence[str]):
+def extra_candidates(
+    settings, selection: SelectionSettings, models: ModelSettings, signals: Sequence[str]
+):
     """The user's candidates (config ``recommend.extra_candidates``), after the default ones."""
     out = []
     for extra in settings.extra_candidates:
@@ -389,7 +447,11 @@ def extra_candidates(settings, selection: SelectionSettings, models: ModelSettin
 
 
 def candidates_for(
-    selection: SelectionSettings, models: ModelSettings, recommend_settings, decoupled: bool, signals: Sequence[str]
+    selection: SelectionSettings,
+    models: ModelSettings,
+    recommend_settings,
+    decoupled: bool,
+    signals: Sequence[str],
 ) -> list[Candidate]:
     """The configured candidate list: the defaults, then the user's (config ``recommend``)."""
     time_inputs = bool(recommend_settings.lags_min)
@@ -401,7 +463,9 @@ def candidates_for(
 
 def candidate_record(candidate: Candidate) -> dict:
     """A candidate as plain JSON: what the compensation refits on all runs."""
-    selection = {f: getattr(candidate.selection, f) for f in candidate.selection.__dataclass_fields__}
+    selection = {
+        f: getattr(candidate.selection, f) for f in candidate.selection.__dataclass_fields__
+    }
     selection["fixed"] = {target: list(sensors) for target, sensors in candidate.selection.fixed}
     return {
         "name": candidate.name,
@@ -422,7 +486,9 @@ def candidate_from_record(record: Mapping, models: ModelSettings) -> Candidate:
         approach=record["approach"],
         algorithm=record["algorithm"],
         selection=selection,
-        models=replace(models, signals=tuple(record["signals"]), searched=tuple(record["searched"])),
+        models=replace(
+            models, signals=tuple(record["signals"]), searched=tuple(record["searched"])
+        ),
         time_inputs=bool(record["time_inputs"]),
     )
 

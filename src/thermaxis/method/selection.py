@@ -76,7 +76,9 @@ def _as_sequence(y, n_samples: int, name: str = "y") -> np.ndarray:
     arr = np.asarray(y.to_numpy() if isinstance(y, (pd.Series, pd.DataFrame)) else y, dtype=float)
     arr = arr.reshape(-1) if arr.ndim == 2 and 1 in arr.shape else arr
     if arr.ndim != 1 or arr.size != n_samples:
-        raise ValueError(f"{name} must be a 1-D sequence of {n_samples} samples, got shape {arr.shape}")
+        raise ValueError(
+            f"{name} must be a 1-D sequence of {n_samples} samples, got shape {arr.shape}"
+        )
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} contains NaN or infinite values; drop or fill them first")
     return arr
@@ -532,7 +534,7 @@ def select_sensitive_points(
     return SensitivePoints(
         clusters=tuple(tuple(names[i] for i in members) for members in classes),
         selected=tuple(names[i] for i in best),
-        grades={name: float(g) for name, g in zip(names, grades)},
+        grades={name: float(g) for name, g in zip(names, grades, strict=False)},
         eta=float(eta),
     )
 
@@ -621,23 +623,31 @@ def common_points(
     position = {sensor: i for i, sensor in reversed(list(enumerate(tie_order)))}
     missing = [s for s in first_seen if s not in position]
     if missing:
-        raise ValueError(f"order lacks selected sensor(s) {missing}; pass the full sensor column order")
+        raise ValueError(
+            f"order lacks selected sensor(s) {missing}; pass the full sensor column order"
+        )
     if isinstance(n, bool) or int(n) != n or not (1 <= n <= len(counts)):
-        raise ValueError(f"n must be an integer in [1, {len(counts)}] (distinct sensors selected), got {n}")
+        raise ValueError(
+            f"n must be an integer in [1, {len(counts)}] (distinct sensors selected), got {n}"
+        )
     score = {sensor: float((scores or {}).get(sensor, 0.0)) for sensor in counts}
     score = {sensor: value if np.isfinite(value) else 0.0 for sensor, value in score.items()}
     ranked = sorted(counts, key=lambda s: (-counts[s], -score[s], position[s]))
     return tuple(ranked[: int(n)])
 
 
-def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str, n_clusters: int = 0) -> list[str]:
+def informative_sensors(
+    temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str, n_clusters: int = 0
+) -> list[str]:
     """Sensors that vary over the samples; a constant one is named and left out.
 
     A constant series has no correlation with anything (the fuzzy relation would hold
     NaN), so it cannot be selected; a fixed sensitive point that is constant is an error.
     """
     if len(temperatures) < 2:
-        raise _error(where, f"{len(temperatures)} training measurement; selection and models need at least 2")
+        raise _error(
+            where, f"{len(temperatures)} training measurement; selection and models need at least 2"
+        )
     spread = temperatures.max() - temperatures.min()
     constant = [str(s) for s in temperatures.columns if not spread[s] > 0]
     fixed_constant = [s for s in constant if s in fixed]
@@ -648,7 +658,10 @@ def informative_sensors(temperatures: pd.DataFrame, fixed: tuple[str, ...], wher
             "expected a sensor whose temperature varies",
         )
     if len(constant) == len(temperatures.columns):
-        raise _error(where, "every sensor is constant over the training measurements; expected temperatures that vary")
+        raise _error(
+            where,
+            "every sensor is constant over the training measurements; expected temperatures that vary",
+        )
     for sensor in constant:
         warnings.warn(
             f"{where}: sensor {sensor} is constant over the training measurements; left out of the selection",

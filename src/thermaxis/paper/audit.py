@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from thermaxis.reports.formatting import markdown_table
 from thermaxis.dataset.summary import data_statement
+from thermaxis.reports.formatting import markdown_table
 
 __all__ = ["ReproducedTables", "paper_comparison", "comparison_markdown"]
 
@@ -43,7 +43,12 @@ def _one(frame: pd.DataFrame, column: str) -> float:
 
 def _metric(t: ReproducedTables, approach, algorithm, target, quantity) -> float:
     m = t.metrics
-    sel = m[(m["fold"] == t.paper_fold) & (m["approach"] == approach) & (m["algorithm"] == algorithm) & (m["target"] == target)]
+    sel = m[
+        (m["fold"] == t.paper_fold)
+        & (m["approach"] == approach)
+        & (m["algorithm"] == algorithm)
+        & (m["target"] == target)
+    ]
     return _one(sel, quantity)
 
 
@@ -69,28 +74,49 @@ def _reproduce(row, t: ReproducedTables) -> tuple[float, str]:
         kb = t.kb
         sel = kb[(kb["run"] == row["run"]) & (kb["measurement"] == int(row["measurement"]))]
         return _one(sel, "k_um_per_m" if q == "k" else "b_um"), ""
-    if table in ("table4", "table7", "table8") or (table == "text" and q in ("residual_min", "residual_max")):
+    if table in ("table4", "table7", "table8") or (
+        table == "text" and q in ("residual_min", "residual_max")
+    ):
         target = row["target"]
         value = _metric(t, row["approach"], row["algorithm"], target, q)
         return value, f"fold {fold}"
     if table == "table3":
         sp = t.sensitive_points
-        sel = sp[(sp["fold"] == fold) & (sp["target"] == "error") & np.isclose(sp["position_mm"], float(row["position_mm"]))]
+        sel = sp[
+            (sp["fold"] == fold)
+            & (sp["target"] == "error")
+            & np.isclose(sp["position_mm"], float(row["position_mm"]))
+        ]
         if len(sel) == 0:
-            return np.nan, "position not selected by the workflow (fixed selection or missing position)"
-        return float(((sel["sensor"] == row["term"]) & sel["selected"]).any()), f"fold {fold}; 1 = also selected"
+            return (
+                np.nan,
+                "position not selected by the workflow (fixed selection or missing position)",
+            )
+        return float(
+            ((sel["sensor"] == row["term"]) & sel["selected"]).any()
+        ), f"fold {fold}; 1 = also selected"
     if table == "table6":
         sp = t.sensitive_points
-        sel = sp[(sp["fold"] == fold) & (sp["target"] == row["target"]) & (sp["sensor"] == row["term"])]
+        sel = sp[
+            (sp["fold"] == fold) & (sp["target"] == row["target"]) & (sp["sensor"] == row["term"])
+        ]
         if len(sel) == 0:
             return np.nan, "sensor not in the workflow's selection table"
         if q == "sensitive_point":
             return float(bool(sel["selected"].iloc[0])), f"fold {fold}; 1 = also selected"
-        return float(sel["cluster"].iloc[0]), f"fold {fold}; clusters numbered by their first sensor"
+        return float(
+            sel["cluster"].iloc[0]
+        ), f"fold {fold}; clusters numbered by their first sensor"
     if table in ("eq8", "eq9"):
         c = t.coefficients
         approach = "pointwise" if table == "eq8" else "decoupled"
-        sel = c[(c["fold"] == fold) & (c["approach"] == approach) & (c["algorithm"] == "mlr") & (c["target"] == row["target"]) & (c["term"] == row["term"])]
+        sel = c[
+            (c["fold"] == fold)
+            & (c["approach"] == approach)
+            & (c["algorithm"] == "mlr")
+            & (c["target"] == row["target"])
+            & (c["term"] == row["term"])
+        ]
         if table == "eq8":
             sel = sel[np.isclose(sel["position_mm"], float(row["position_mm"]))]
         if len(sel) == 0:
@@ -99,7 +125,12 @@ def _reproduce(row, t: ReproducedTables) -> tuple[float, str]:
     if table == "text":
         if q == "max_abs_residual":
             e = t.error_predictions
-            sel = e[(e["fold"] == fold) & (e["approach"] == row["approach"]) & (e["algorithm"] == row["algorithm"]) & np.isclose(e["position_mm"], float(row["position_mm"]))]
+            sel = e[
+                (e["fold"] == fold)
+                & (e["approach"] == row["approach"])
+                & (e["algorithm"] == row["algorithm"])
+                & np.isclose(e["position_mm"], float(row["position_mm"]))
+            ]
             return (float(sel["residual"].abs().max()) if len(sel) else np.nan), f"fold {fold}"
         if q == "max_abs_error":
             e = t.errors[t.errors["run"] == row["run"]]
@@ -107,11 +138,15 @@ def _reproduce(row, t: ReproducedTables) -> tuple[float, str]:
         if q == "max_error_from_k_residual":
             positions = _positions(t)
             stroke_m = (positions[-1] - positions[0]) / 1000.0
-            return _metric(t, "decoupled", "mlr", "k", "max_abs") * stroke_m, f"fold {fold}; max |k residual| x stroke"
+            return _metric(
+                t, "decoupled", "mlr", "k", "max_abs"
+            ) * stroke_m, f"fold {fold}; max |k residual| x stroke"
     return np.nan, "not reproduced"
 
 
-def paper_comparison(published: pd.DataFrame, tables: ReproducedTables, dataset_name: str, simulated: bool) -> pd.DataFrame:
+def paper_comparison(
+    published: pd.DataFrame, tables: ReproducedTables, dataset_name: str, simulated: bool
+) -> pd.DataFrame:
     """One row per published number: published, reproduced, difference."""
     rows = []
     for _, row in published.iterrows():
@@ -133,7 +168,9 @@ def paper_comparison(published: pd.DataFrame, tables: ReproducedTables, dataset_
     return pd.DataFrame(rows)
 
 
-def comparison_markdown(comparison: pd.DataFrame, dataset_name: str, simulated: bool, paper_fold: str) -> str:
+def comparison_markdown(
+    comparison: pd.DataFrame, dataset_name: str, simulated: bool, paper_fold: str
+) -> str:
     stated = data_statement(dataset_name, simulated)
     head = [
         "# Audit: the paper's published numbers beside their reproduction",
@@ -148,7 +185,17 @@ def comparison_markdown(comparison: pd.DataFrame, dataset_name: str, simulated: 
     summary = (
         comparison.assign(abs_diff=comparison["difference"].abs())
         .groupby("table", sort=True)
-        .agg(items=("item", "size"), reproduced=("reproduced", lambda s: int(s.notna().sum())), mean_abs_difference=("abs_diff", "mean"))
+        .agg(
+            items=("item", "size"),
+            reproduced=("reproduced", lambda s: int(s.notna().sum())),
+            mean_abs_difference=("abs_diff", "mean"),
+        )
         .reset_index()
     )
-    return "\n".join(head) + "## Summary per table\n\n" + markdown_table(summary, "%.3f") + "\n## Every item\n\n" + markdown_table(shown, "%.3f")
+    return (
+        "\n".join(head)
+        + "## Summary per table\n\n"
+        + markdown_table(summary, "%.3f")
+        + "\n## Every item\n\n"
+        + markdown_table(shown, "%.3f")
+    )

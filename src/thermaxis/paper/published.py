@@ -166,7 +166,9 @@ def load_table(name: str, paper_dir: str | Path | None = None) -> pd.DataFrame:
         raise ValueError(
             f"{path.name}: columns {list(raw.columns)} do not match the expected {list(schema)}"
         )
-    return pd.DataFrame({col: _convert(raw[col], dtype, path.name) for col, dtype in schema.items()})
+    return pd.DataFrame(
+        {col: _convert(raw[col], dtype, path.name) for col, dtype in schema.items()}
+    )
 
 
 def _convert(column: pd.Series, dtype: str, file_name: str) -> pd.Series:
@@ -184,7 +186,14 @@ def _convert(column: pd.Series, dtype: str, file_name: str) -> pd.Series:
 
 
 def _row(item: str, table: str, quantity: str, value: float, unit: str, **keys) -> dict:
-    return {"item": item, "table": table, "quantity": quantity, "value": float(value), "unit": unit, **keys}
+    return {
+        "item": item,
+        "table": table,
+        "quantity": quantity,
+        "value": float(value),
+        "unit": unit,
+        **keys,
+    }
 
 
 def _table1_rows(df: pd.DataFrame) -> list[dict]:
@@ -196,7 +205,9 @@ def _table1_rows(df: pd.DataFrame) -> list[dict]:
             ("ambient_min", r.ambient_min_c, "degC"),
             ("ambient_max", r.ambient_max_c, "degC"),
         ):
-            rows.append(_row(f"table1/{r.run}/{quantity}", "table1", quantity, value, unit, run=r.run))
+            rows.append(
+                _row(f"table1/{r.run}/{quantity}", "table1", quantity, value, unit, run=r.run)
+            )
     return rows
 
 
@@ -263,9 +274,20 @@ def _table6_rows(df: pd.DataFrame) -> list[dict]:
     for r in df.itertuples(index=False):
         prefix = f"table6/{r.target}/{r.sensor}"
         keys = {"approach": "decoupled", "target": r.target, "term": r.sensor}
-        rows.append(_row(f"{prefix}/cluster", "table6", "cluster", r.cluster, _DIMENSIONLESS, **keys))
+        rows.append(
+            _row(f"{prefix}/cluster", "table6", "cluster", r.cluster, _DIMENSIONLESS, **keys)
+        )
         if r.selected:
-            rows.append(_row(f"{prefix}/sensitive_point", "table6", "sensitive_point", 1, _DIMENSIONLESS, **keys))
+            rows.append(
+                _row(
+                    f"{prefix}/sensitive_point",
+                    "table6",
+                    "sensitive_point",
+                    1,
+                    _DIMENSIONLESS,
+                    **keys,
+                )
+            )
     return rows
 
 
@@ -398,9 +420,21 @@ def published_values(paper_dir: str | Path | None = None) -> pd.DataFrame:
     out = pd.DataFrame(rows).reindex(columns=list(PUBLISHED_COLUMNS))
     duplicated = out["item"][out["item"].duplicated()]
     if not duplicated.empty:
-        raise ValueError(f"published values: item keys must be unique, repeated: {sorted(set(duplicated))}")
+        raise ValueError(
+            f"published values: item keys must be unique, repeated: {sorted(set(duplicated))}"
+        )
     for col in ("measurement", "position_mm"):
         out[col] = out[col].astype("Int64")
-    for col in ("item", "table", "approach", "algorithm", "target", "run", "term", "quantity", "unit"):
+    for col in (
+        "item",
+        "table",
+        "approach",
+        "algorithm",
+        "target",
+        "run",
+        "term",
+        "quantity",
+        "unit",
+    ):
         out[col] = out[col].astype("str")
     return out

@@ -9,7 +9,6 @@ import pandas as pd
 
 from thermaxis.reports.formatting import markdown_table
 
-
 __all__ = [
     "table5_markdown",
 ]
@@ -23,7 +22,11 @@ def table5_markdown(kb: pd.DataFrame, statement: str, paper_dir=None) -> str:
     paper_file = Path(paper_dir) / "table5_slope_intercept.csv" if paper_dir else None
     if paper_file is not None and paper_file.is_file():
         paper = pd.read_csv(paper_file).rename(columns={"k_um_per_m": "paper_k", "b_um": "paper_b"})
-        table = table.merge(paper[["run", "measurement", "paper_k", "paper_b"]], on=["run", "measurement"], how="left")
+        table = table.merge(
+            paper[["run", "measurement", "paper_k", "paper_b"]],
+            on=["run", "measurement"],
+            how="left",
+        )
         table["diff_k"] = table["k_um_per_m"] - table["paper_k"]
         table["diff_b"] = table["b_um"] - table["paper_b"]
         lines.append(
@@ -32,7 +35,9 @@ def table5_markdown(kb: pd.DataFrame, statement: str, paper_dir=None) -> str:
             f"b {np.sqrt(np.nanmean(table['diff_b'] ** 2)):.2f} um)."
         )
         lines.append("")
-    lines.append("k in um/m, b in um (at the first target), r2 and rms_um of the least-squares line.")
+    lines.append(
+        "k in um/m, b in um (at the first target), r2 and rms_um of the least-squares line."
+    )
     lines.append("")
     lines.append(markdown_table(table, float_format="%.2f"))
     return "\n".join(lines)

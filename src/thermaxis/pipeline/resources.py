@@ -72,7 +72,7 @@ def benchmark_globs(rule_sources: Iterable[str]) -> dict[str, str]:
     globs = {}
     for text in rule_sources:
         starts = [(m.start(), m.group(1)) for m in _RULE.finditer(text)] + [(len(text), None)]
-        for (start, rule), (end, _) in zip(starts, starts[1:]):
+        for (start, rule), (end, _) in zip(starts, starts[1:], strict=False):
             found = _BENCHMARK.search(text, start, end)
             if found:
                 globs[rule] = re.sub(r"\{+[^{}]*\}+", "*", found.group(1))

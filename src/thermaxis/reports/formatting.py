@@ -27,5 +27,8 @@ def format_cell(value, float_format: str) -> str:
 def markdown_table(frame: pd.DataFrame, float_format: str = "%.2f") -> str:
     header = "| " + " | ".join(map(str, frame.columns)) + " |"
     rule = "|" + "|".join("---" for _ in frame.columns) + "|"
-    body = ["| " + " | ".join(format_cell(v, float_format) for v in row) + " |" for row in frame.itertuples(index=False)]
+    body = [
+        "| " + " | ".join(format_cell(v, float_format) for v in row) + " |"
+        for row in frame.itertuples(index=False)
+    ]
     return "\n".join([header, rule, *body]) + "\n"

@@ -34,7 +34,6 @@ import pandas as pd
 
 from thermaxis.reports.formatting import format_cell
 
-
 __all__ = [
     "REPORT_CSS",
     "load_table",
@@ -70,7 +69,9 @@ figure.tx-figure figcaption{font-size:0.9em;color:#374151;max-width:60em}
 code.tx-hash{font-size:0.85em}
 """
 
-_LINK_TO_INDEX = '<p class="tx-note"><a href="../index.html">All reports and figures of this dataset</a></p>'
+_LINK_TO_INDEX = (
+    '<p class="tx-note"><a href="../index.html">All reports and figures of this dataset</a></p>'
+)
 
 
 # --------------------------------------------------------------------------- tables
@@ -83,7 +84,9 @@ def load_table(path) -> pd.DataFrame:
         return pd.read_parquet(path)
     if path.suffix == ".csv":
         return pd.read_csv(path)
-    raise ValueError(f"{path}: cannot read a {path.suffix or 'suffix-less'} file as a table; expected .csv or .parquet")
+    raise ValueError(
+        f"{path}: cannot read a {path.suffix or 'suffix-less'} file as a table; expected .csv or .parquet"
+    )
 
 
 def _code_spans(text: str) -> str:
@@ -121,7 +124,9 @@ def banner_html(title: str, statement: str, simulated: bool, subtitle: str = "")
 
 
 def _short(digest: str | None, n: int = 12) -> str:
-    return "unknown" if not digest else f'<code class="tx-hash" title="{digest}">{digest[:n]}</code>'
+    return (
+        "unknown" if not digest else f'<code class="tx-hash" title="{digest}">{digest[:n]}</code>'
+    )
 
 
 def provenance_html(record: dict, full_record_href: str | None = "../provenance.json") -> str:
@@ -135,14 +140,20 @@ def provenance_html(record: dict, full_record_href: str | None = "../provenance.
     if git.get("commit") is None:
         commit = "unknown (not a git checkout)"
     else:
-        state = {True: "dirty: uncommitted changes", False: "clean", None: "state unknown"}[git.get("dirty")]
+        state = {True: "dirty: uncommitted changes", False: "clean", None: "state unknown"}[
+            git.get("dirty")
+        ]
         commit = f"{_short(git['commit'])} ({state})"
     sections = record.get("config_sections_sha256", {})
     config = f"{_short(record.get('config_sha256'))} over sections " + ", ".join(
         f"{html.escape(name)} {_short(digest, 8)}" for name, digest in sorted(sections.items())
     )
     data = record.get("data", {})
-    packages = ", ".join(f"{html.escape(k)} {html.escape(str(v))}" for k, v in sorted(record.get("packages", {}).items()) if v)
+    packages = ", ".join(
+        f"{html.escape(k)} {html.escape(str(v))}"
+        for k, v in sorted(record.get("packages", {}).items())
+        if v
+    )
     python = record.get("python", {})
     plat = record.get("platform", {})
     rows = [
@@ -153,13 +164,23 @@ def provenance_html(record: dict, full_record_href: str | None = "../provenance.
             f"<code>{html.escape(str(data.get('root', '')))}</code>: {data.get('n_files', 0)} files, "
             f"manifest {_short(data.get('manifest_sha256'))}",
         ),
-        ("Python", html.escape(f"{python.get('version', '?')} ({python.get('implementation', '?')})")),
-        ("Platform", html.escape(" ".join(str(plat.get(k, "")) for k in ("system", "release", "machine")).strip())),
+        (
+            "Python",
+            html.escape(f"{python.get('version', '?')} ({python.get('implementation', '?')})"),
+        ),
+        (
+            "Platform",
+            html.escape(
+                " ".join(str(plat.get(k, "")) for k in ("system", "release", "machine")).strip()
+            ),
+        ),
         ("Packages", packages),
         ("Built (UTC)", html.escape(str(record.get("run_time", "")))),
     ]
     body = "".join(f"<tr><th>{name}</th><td>{value}</td></tr>" for name, value in rows)
-    link = f' <a href="{html.escape(full_record_href)}">Full record</a>.' if full_record_href else ""
+    link = (
+        f' <a href="{html.escape(full_record_href)}">Full record</a>.' if full_record_href else ""
+    )
     return f'<table class="tx-table"><caption>Provenance.{link}</caption>{body}</table>'
 
 
@@ -167,7 +188,12 @@ def _cell_text(value, float_format: str) -> str:
     return html.escape(format_cell(value, float_format))
 
 
-def table_html(frame: pd.DataFrame, float_format: str = "%.3f", caption: str | None = None, max_rows: int | None = None) -> str:
+def table_html(
+    frame: pd.DataFrame,
+    float_format: str = "%.3f",
+    caption: str | None = None,
+    max_rows: int | None = None,
+) -> str:
     """A DataFrame as an HTML table: no index, a fixed float format, numbers right-aligned.
 
     Missing values are blank.  ``max_rows`` keeps the first rows and says how many were
@@ -175,14 +201,17 @@ def table_html(frame: pd.DataFrame, float_format: str = "%.3f", caption: str | N
     """
     shown = frame if max_rows is None or len(frame) <= max_rows else frame.head(max_rows)
     numeric = [
-        pd.api.types.is_numeric_dtype(dtype) and not pd.api.types.is_bool_dtype(dtype) for dtype in shown.dtypes
+        pd.api.types.is_numeric_dtype(dtype) and not pd.api.types.is_bool_dtype(dtype)
+        for dtype in shown.dtypes
     ]
     head = "".join(f"<th>{html.escape(str(c))}</th>" for c in shown.columns)
     rows = []
     for values in shown.itertuples(index=False, name=None):
         cells = "".join(
-            f'<td class="tx-num">{_cell_text(v, float_format)}</td>' if num else f"<td>{_cell_text(v, float_format)}</td>"
-            for v, num in zip(values, numeric)
+            f'<td class="tx-num">{_cell_text(v, float_format)}</td>'
+            if num
+            else f"<td>{_cell_text(v, float_format)}</td>"
+            for v, num in zip(values, numeric, strict=False)
         )
         rows.append(f"<tr>{cells}</tr>")
     cap = f"<caption>{html.escape(caption)}</caption>" if caption else ""
@@ -237,7 +266,9 @@ def figures_html(entries: dict, *names: str) -> str:
 
     Names missing from ``entries`` are skipped: a dataset with one run has no Fig. 9.
     """
-    return "".join(figure_html(entries[n]["path"], entries[n]["caption"]) for n in names if n in entries)
+    return "".join(
+        figure_html(entries[n]["path"], entries[n]["caption"]) for n in names if n in entries
+    )
 
 
 def plot_html(fig, caption: str, simulated: bool, dpi: float = 150) -> str:
@@ -254,4 +285,3 @@ def show(*parts: str) -> None:
     from IPython.display import HTML, display
 
     display(HTML("".join(parts)))
-

@@ -5,8 +5,6 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass, field
 
-
-
 from thermaxis.reports.html import REPORT_CSS, _code_spans, provenance_html, statement_html
 
 __all__ = [
@@ -94,11 +92,16 @@ def render_index(
             parts.append(f'<p class="tx-note">{_code_spans(section.intro)}</p>')
         parts.append('<ul class="tx-index">')
         for row in section.rows:
-            links = " · ".join(f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>' for text, href in row.links)
+            links = " · ".join(
+                f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>'
+                for text, href in row.links
+            )
             note = f' <span class="tx-note">{_code_spans(row.note)}</span>' if row.note else ""
             parts.append(f"<li>{html.escape(row.label)}: {links}{note}</li>")
         parts.append("</ul></section>")
     if provenance is not None:
-        parts.append(f"<section><h2>Provenance</h2>{provenance_html(provenance, 'provenance.json')}</section>")
+        parts.append(
+            f"<section><h2>Provenance</h2>{provenance_html(provenance, 'provenance.json')}</section>"
+        )
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"

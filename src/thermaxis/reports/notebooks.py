@@ -10,9 +10,6 @@ import json
 import re
 import sys
 
-
-
-
 __all__ = [
     "strip_volatile",
     "remote_loads",
@@ -48,7 +45,7 @@ def strip_volatile(nb: dict) -> dict:
     if isinstance(meta, dict):
         for key in _VOLATILE_KEYS:
             meta.pop(key, None)
-    for i, cell in enumerate(nb.get("cells", [])):
+    for cell in nb.get("cells", []):
         cell_meta = cell.get("metadata", {})
         cell_meta.pop("execution", None)
         if isinstance(cell_meta.get("papermill"), dict):
@@ -101,7 +98,9 @@ def notebook_to_html(nb, title: str) -> str:
     body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title}})
     remote = remote_loads(body)
     if remote:
-        raise ValueError(f"report {title!r} would load {remote[0]!r} from the network; expected a self-contained page")
+        raise ValueError(
+            f"report {title!r} would load {remote[0]!r} from the network; expected a self-contained page"
+        )
     return body
 
 
@@ -161,7 +160,9 @@ def execute(
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m thermaxis.reports.notebooks", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m thermaxis.reports.notebooks", description=__doc__.splitlines()[0]
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="execute a report notebook with papermill and write its HTML")
     run.add_argument("notebook")
@@ -172,7 +173,9 @@ def main(argv=None) -> int:
     run.add_argument("--kernel", default="python3")
     run.add_argument("--start-timeout", type=float, default=120)
     run.add_argument("--execution-timeout", type=float, default=600)
-    to_html = sub.add_parser("html", help="normalise an executed notebook and write its self-contained HTML")
+    to_html = sub.add_parser(
+        "html", help="normalise an executed notebook and write its self-contained HTML"
+    )
     to_html.add_argument("notebook")
     to_html.add_argument("html")
     to_html.add_argument("--title", required=True)
@@ -196,7 +199,10 @@ def main(argv=None) -> int:
         return 1
     except Exception as exc:  # papermill's execution error: the traceback of the failing cell
         print(exc, file=sys.stderr)
-        print(f"thermaxis error: {args.notebook}: {type(exc).__name__} while executing the notebook", file=sys.stderr)
+        print(
+            f"thermaxis error: {args.notebook}: {type(exc).__name__} while executing the notebook",
+            file=sys.stderr,
+        )
         return 1
     return 0
 

@@ -27,7 +27,7 @@ import os
 import platform
 import subprocess
 import sys
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
 
@@ -102,7 +102,9 @@ def data_manifest(dataset_root) -> dict[str, str]:
     """
     root = Path(dataset_root)
     if not root.is_dir():
-        raise ValueError(f"{root}: dataset folder not found; expected the folder holding dataset.yaml")
+        raise ValueError(
+            f"{root}: dataset folder not found; expected the folder holding dataset.yaml"
+        )
     files = sorted(p for p in root.rglob("*") if p.is_file())
     return {p.relative_to(root).as_posix(): sha256_file(p) for p in files}
 
@@ -120,7 +122,9 @@ def manifest_sha256(manifest: dict[str, str]) -> str:
 def _canonical(value) -> bytes:
     # Sorted keys and no whitespace: the same mapping always gives the same bytes,
     # whatever order the YAML file or the command line listed its keys in.
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False).encode("utf-8")
+    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False).encode(
+        "utf-8"
+    )
 
 
 def config_sha256(config) -> str:
@@ -185,17 +189,21 @@ def run_time(now: datetime | None = None) -> str:
         epoch = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
         if epoch:
             try:
-                now = datetime.fromtimestamp(int(epoch), tz=timezone.utc)
+                now = datetime.fromtimestamp(int(epoch), tz=UTC)
             except ValueError:
-                raise ValueError(f"SOURCE_DATE_EPOCH: expected whole seconds since 1970, got {epoch!r}") from None
+                raise ValueError(
+                    f"SOURCE_DATE_EPOCH: expected whole seconds since 1970, got {epoch!r}"
+                ) from None
         else:
-            now = datetime.now(timezone.utc)
+            now = datetime.now(UTC)
     if now.tzinfo is None:
         raise ValueError(f"run time {now.isoformat()} has no time zone; expected an aware datetime")
-    return now.astimezone(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return now.astimezone(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def collect(repo_root, config, dataset_root, *, now: datetime | None = None, git: dict | None = None) -> dict:
+def collect(
+    repo_root, config, dataset_root, *, now: datetime | None = None, git: dict | None = None
+) -> dict:
     """The provenance record of a result.
 
     Parameters
@@ -231,7 +239,11 @@ def collect(repo_root, config, dataset_root, *, now: datetime | None = None, git
         },
         "git": dict(git) if git is not None else git_state(repo_root),
         "packages": package_versions(),
-        "platform": {"system": platform.system(), "release": platform.release(), "machine": platform.machine()},
+        "platform": {
+            "system": platform.system(),
+            "release": platform.release(),
+            "machine": platform.machine(),
+        },
         "python": {"version": platform.python_version(), "implementation": sys.implementation.name},
         "run_time": run_time(now),
     }

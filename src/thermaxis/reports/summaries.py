@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-
 import pandas as pd
 
 from thermaxis.labels import sort_naturally
-
 from thermaxis.reports.html import table_html
 
 __all__ = [
@@ -20,7 +18,14 @@ __all__ = [
 
 # --------------------------------------------------------------------------- overviews
 
-_REPAIR_COLUMNS = ("n_duplicates", "n_out_of_range", "n_spikes", "n_interpolated", "n_edge_held", "n_long_gap")
+_REPAIR_COLUMNS = (
+    "n_duplicates",
+    "n_out_of_range",
+    "n_spikes",
+    "n_interpolated",
+    "n_edge_held",
+    "n_long_gap",
+)
 
 
 def cleaning_repairs(qc: pd.DataFrame) -> pd.DataFrame:
@@ -39,7 +44,9 @@ def cleaning_repairs(qc: pd.DataFrame) -> pd.DataFrame:
     """
     missing = [c for c in ("run", "sensor", "source", *_REPAIR_COLUMNS) if c not in qc.columns]
     if missing:
-        raise ValueError(f"cleaning QC table lacks column(s) {', '.join(missing)}; expected the columns of tables/cleaning_qc.csv")
+        raise ValueError(
+            f"cleaning QC table lacks column(s) {', '.join(missing)}; expected the columns of tables/cleaning_qc.csv"
+        )
     table = qc[["run", "sensor", "source", *_REPAIR_COLUMNS]].copy()
     table["repaired"] = table[list(_REPAIR_COLUMNS)].sum(axis=1)
     return sort_naturally(table[table["repaired"] > 0], ["run", "sensor"])
@@ -53,15 +60,19 @@ def temperature_overview(temperatures: pd.DataFrame) -> pd.DataFrame:
     """
     t = sort_naturally(temperatures, ["run", "sensor", "measurement"])
     grouped = t.groupby(["run", "sensor"], sort=True)
-    return pd.DataFrame(
-        {
-            "first_c": grouped["absolute_c"].first(),
-            "last_c": grouped["absolute_c"].last(),
-            "min_c": grouped["absolute_c"].min(),
-            "max_c": grouped["absolute_c"].max(),
-            "max_rise_c": grouped["relative_c"].max(),
-        }
-    ).reset_index().pipe(sort_naturally, ["run", "sensor"])
+    return (
+        pd.DataFrame(
+            {
+                "first_c": grouped["absolute_c"].first(),
+                "last_c": grouped["absolute_c"].last(),
+                "min_c": grouped["absolute_c"].min(),
+                "max_c": grouped["absolute_c"].max(),
+                "max_rise_c": grouped["relative_c"].max(),
+            }
+        )
+        .reset_index()
+        .pipe(sort_naturally, ["run", "sensor"])
+    )
 
 
 def error_overview(errors: pd.DataFrame) -> pd.DataFrame:
@@ -102,9 +113,16 @@ def audit_summary(comparison: pd.DataFrame) -> pd.DataFrame:
     ).reset_index()
 
 
-def audit_html(comparison: pd.DataFrame, *tables: str, caption: str | None = None, max_rows: int | None = None) -> str:
+def audit_html(
+    comparison: pd.DataFrame, *tables: str, caption: str | None = None, max_rows: int | None = None
+) -> str:
     """The audit rows of some tables of the paper (``"table4"``, ``"eq9"``, ...): published beside reproduced."""
     rows = comparison[comparison["table"].isin(tables)][_AUDIT_COLUMNS]
     if rows.empty:
         return f'<p class="tx-note">The audit has no number of {", ".join(tables)}.</p>'
-    return table_html(rows, "%.3f", caption=caption or f"Audit of {', '.join(tables)}: published and reproduced", max_rows=max_rows)
+    return table_html(
+        rows,
+        "%.3f",
+        caption=caption or f"Audit of {', '.join(tables)}: published and reproduced",
+        max_rows=max_rows,
+    )

@@ -6,7 +6,7 @@ They are package data, so an installed wheel validates exactly as a checkout doe
 from __future__ import annotations
 
 import json
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import yaml
@@ -25,7 +25,7 @@ def schema_path(name: str) -> Path:
     raise FileNotFoundError(f"no schema {name!r} in {SCHEMA_DIR}")
 
 
-@lru_cache(maxsize=None)
+@cache
 def load_schema(name: str) -> dict:
     path = schema_path(name)
     with open(path, encoding="utf-8") as fh:

@@ -87,10 +87,12 @@ class SelectionSpec:
         return ":".join(parts)
 
     @classmethod
-    def of(cls, selection) -> "SelectionSpec":
+    def of(cls, selection) -> SelectionSpec:
         """The spec of a :class:`thermaxis.config.SelectionSettings` (the main configuration's)."""
         if selection.method == "fuzzy_grey":
-            return cls(selection.method, selection.n_clusters, selection.similarity, selection.grade)
+            return cls(
+                selection.method, selection.n_clusters, selection.similarity, selection.grade
+            )
         if selection.method == "correlation":
             return cls(selection.method, selection.n_clusters)
         return cls(selection.method)
@@ -168,13 +170,21 @@ class SweepGrid:
             if method == "fuzzy_grey":
                 for n in self.n_clusters:
                     if n > n_sensors:
-                        notes.append(f"fuzzy_grey with {n} clusters: the dataset has only {n_sensors} sensors")
+                        notes.append(
+                            f"fuzzy_grey with {n} clusters: the dataset has only {n_sensors} sensors"
+                        )
                         continue
-                    specs += [SelectionSpec(method, n, s, g) for s in self.similarities for g in self.grades]
+                    specs += [
+                        SelectionSpec(method, n, s, g)
+                        for s in self.similarities
+                        for g in self.grades
+                    ]
             elif method == "correlation":
                 for n in self.n_clusters:
                     if n > n_sensors:
-                        notes.append(f"correlation ranking of {n} sensors: the dataset has only {n_sensors} sensors")
+                        notes.append(
+                            f"correlation ranking of {n} sensors: the dataset has only {n_sensors} sensors"
+                        )
                         continue
                     specs.append(SelectionSpec(method, n))
             elif method == "subset":
@@ -187,16 +197,23 @@ class SweepGrid:
                     )
                 for n in self.n_clusters:
                     if n > n_sensors:
-                        notes.append(f"subsets of {n} sensors: the dataset has only {n_sensors} sensors")
+                        notes.append(
+                            f"subsets of {n} sensors: the dataset has only {n_sensors} sensors"
+                        )
                         continue
-                    specs += [SelectionSpec(method, n, sensors=c) for c in itertools.combinations(sensors, n)]
+                    specs += [
+                        SelectionSpec(method, n, sensors=c)
+                        for c in itertools.combinations(sensors, n)
+                    ]
             elif method == "fixed":
                 wanted = sorted({s for _, chosen in self.fixed for s in chosen})
                 missing = [s for s in wanted if s not in sensors]
                 if not self.fixed:
                     notes.append("fixed: config sweep.fixed lists no sensors")
                 elif missing:
-                    notes.append(f"fixed: sensor(s) {', '.join(missing)} of sweep.fixed are not in the dataset")
+                    notes.append(
+                        f"fixed: sensor(s) {', '.join(missing)} of sweep.fixed are not in the dataset"
+                    )
                 else:
                     specs.append(SelectionSpec(method))
             else:
@@ -213,7 +230,9 @@ class SweepGrid:
                 pairs.append(("pointwise", None))
         return pairs
 
-    def unit_configurations(self, spec: SelectionSpec, decoupled: bool = True) -> list[Configuration]:
+    def unit_configurations(
+        self, spec: SelectionSpec, decoupled: bool = True
+    ) -> list[Configuration]:
         return [
             Configuration(spec, approach, degree, algorithm)
             for approach, degree in self.approach_degrees(decoupled)
@@ -237,7 +256,9 @@ class Unit:
     selection: SelectionSpec
 
 
-def plan_units(grid: SweepGrid, folds: Sequence[str], sensors: Sequence[str]) -> tuple[list[Unit], list[str]]:
+def plan_units(
+    grid: SweepGrid, folds: Sequence[str], sensors: Sequence[str]
+) -> tuple[list[Unit], list[str]]:
     """Units in fold order, then grid order, and the notes of settings left out."""
     specs, notes = grid.selection_specs(sensors)
     return [Unit(fold, spec) for fold in folds for spec in specs], notes
@@ -246,7 +267,9 @@ def plan_units(grid: SweepGrid, folds: Sequence[str], sensors: Sequence[str]) ->
 def batch_count(requested: int, cores: int | None, n_units: int) -> int:
     """How many batches: ``requested`` if positive, else one per core; never more than units."""
     if requested < 0:
-        raise ValueError(f"config sweep.batches: expected 0 (one per core) or a positive count, got {requested}")
+        raise ValueError(
+            f"config sweep.batches: expected 0 (one per core) or a positive count, got {requested}"
+        )
     wanted = requested if requested > 0 else (cores or 1)
     return max(1, min(int(wanted), max(n_units, 1)))
 
@@ -265,13 +288,21 @@ def cluster_batch_count(requested: int, evaluations_per_unit: Sequence[int], per
 
 
 def batch_minutes(
-    grid: SweepGrid, units: Sequence[Unit], n_batches: int, batch: int, seconds_per_evaluation: float, decoupled: bool = True
+    grid: SweepGrid,
+    units: Sequence[Unit],
+    n_batches: int,
+    batch: int,
+    seconds_per_evaluation: float,
+    decoupled: bool = True,
 ) -> int:
     """Time limit (minutes) of one batch job: its evaluations at the given cost, with the
     headroom :func:`thermaxis.pipeline.resources.request` gives every rule."""
     from thermaxis.pipeline.resources import request
 
-    evaluations = sum(len(grid.unit_configurations(u.selection, decoupled)) for u in batch_units(units, n_batches, batch))
+    evaluations = sum(
+        len(grid.unit_configurations(u.selection, decoupled))
+        for u in batch_units(units, n_batches, batch)
+    )
     return request(evaluations * seconds_per_evaluation, 0.0)[1]
 
 

@@ -74,7 +74,14 @@ class Progress:
     interleaves their output.
     """
 
-    def __init__(self, total: int, label: str, stream=None, every_s: float = 2.0, clock: Callable[[], float] = time.monotonic):
+    def __init__(
+        self,
+        total: int,
+        label: str,
+        stream=None,
+        every_s: float = 2.0,
+        clock: Callable[[], float] = time.monotonic,
+    ):
         self.total, self.label, self.every_s, self.clock = int(total), label, every_s, clock
         self.stream = stream if stream is not None else sys.stderr
         self.done = 0
@@ -124,7 +131,9 @@ def _sensors_text(inputs: tuple) -> str:
     return ";".join(f"{inputs[i]}={'+'.join(inputs[i + 1])}" for i in range(0, len(inputs), 2))
 
 
-def _unit_selections(X, Y, unit: Unit, grid: SweepGrid, base: SelectionSettings, decoupled: bool) -> dict:
+def _unit_selections(
+    X, Y, unit: Unit, grid: SweepGrid, base: SelectionSettings, decoupled: bool
+) -> dict:
     """The unit's selections: {degree: FoldSelection} for decoupled, {None: ...} for pointwise.
 
     A selection the data cannot support is kept as its one-line error message, so
@@ -142,7 +151,9 @@ def _unit_selections(X, Y, unit: Unit, grid: SweepGrid, base: SelectionSettings,
         with_pointwise = wants_pointwise and None not in out
         settings = unit.selection.settings(base, grid.fixed)
         try:
-            out[degree] = select_for_fold(X, Y, unit.fold, settings, degree, decoupled=True, pointwise=with_pointwise)
+            out[degree] = select_for_fold(
+                X, Y, unit.fold, settings, degree, decoupled=True, pointwise=with_pointwise
+            )
         except ValueError as exc:
             out[degree] = f"selection failed: {str(exc).splitlines()[0]}"
             continue
@@ -157,17 +168,28 @@ def _unit_selections(X, Y, unit: Unit, grid: SweepGrid, base: SelectionSettings,
     return out
 
 
-def _evaluate(X, Y, fold: str, config: Configuration, selection, model: ModelSettings) -> pd.DataFrame | str:
+def _evaluate(
+    X, Y, fold: str, config: Configuration, selection, model: ModelSettings
+) -> pd.DataFrame | str:
     """The metrics of one evaluation, or its one-line error message."""
     from thermaxis.method.folds import evaluate_configuration
 
     try:
-        return evaluate_configuration(X, Y, fold, config.approach, config.algorithm, selection, model, config.degree).metrics
+        return evaluate_configuration(
+            X, Y, fold, config.approach, config.algorithm, selection, model, config.degree
+        ).metrics
     except ValueError as exc:
         return str(exc).splitlines()[0]
 
 
-def _config_rows(config: Configuration, fold: str, inputs: tuple, outcome, reused: bool = False, seconds: float = 0.0) -> list[dict]:
+def _config_rows(
+    config: Configuration,
+    fold: str,
+    inputs: tuple,
+    outcome,
+    reused: bool = False,
+    seconds: float = 0.0,
+) -> list[dict]:
     """Summary rows of one configuration on one fold, and its log line."""
     label = {"config_id": config.config_id, **config.factors(), "fold": fold}
     if isinstance(outcome, str):
@@ -180,7 +202,13 @@ def _config_rows(config: Configuration, fold: str, inputs: tuple, outcome, reuse
     )  # fmt: skip
     sensors = _sensors_text(inputs)
     return [
-        {**label, "target": r["target"], **{m: r[m] for m in METRIC_COLUMNS}, "sensors": sensors, "status": "ok"}
+        {
+            **label,
+            "target": r["target"],
+            **{m: r[m] for m in METRIC_COLUMNS},
+            "sensors": sensors,
+            "status": "ok",
+        }
         for r in outcome.to_dict("records")
     ]
 
@@ -236,7 +264,9 @@ def run_batch(
                 reused = key in done
                 if not reused:
                     done[key] = _evaluate(X, Y, unit.fold, config, selection, model)
-                rows += _config_rows(config, unit.fold, inputs, done[key], reused, time.perf_counter() - started)
+                rows += _config_rows(
+                    config, unit.fold, inputs, done[key], reused, time.perf_counter() - started
+                )
             if progress is not None:
                 progress.update()
     return _as_summary_frame(rows)
@@ -269,11 +299,15 @@ def collect_summary(frames: Iterable[pd.DataFrame]) -> pd.DataFrame:
     duplicated = summary.duplicated(["config_id", "fold", "target"])
     if duplicated.any():
         row = summary.loc[duplicated].iloc[0]
-        raise ValueError(f"sweep: configuration {row['config_id']} fold {row['fold']} appears in two batches")
+        raise ValueError(
+            f"sweep: configuration {row['config_id']} fold {row['fold']} appears in two batches"
+        )
     return summary.sort_values(["config_id", "fold", "target"], kind="stable", ignore_index=True)
 
 
-def main_configuration_mask(frame: pd.DataFrame, selection: SelectionSettings, degree: int) -> pd.Series:
+def main_configuration_mask(
+    frame: pd.DataFrame, selection: SelectionSettings, degree: int
+) -> pd.Series:
     """Rows of the main workflow's configuration (config ``selection`` and ``decoupling``).
 
     The selection method's own factors must match; the degree matters for the decoupled
@@ -288,7 +322,9 @@ def main_configuration_mask(frame: pd.DataFrame, selection: SelectionSettings, d
     return (same & same_degree).astype(bool)
 
 
-def rank_configurations(summary: pd.DataFrame, main_selection: SelectionSettings, main_degree: int) -> pd.DataFrame:
+def rank_configurations(
+    summary: pd.DataFrame, main_selection: SelectionSettings, main_degree: int
+) -> pd.DataFrame:
     """Configurations ranked by their mean held-out max |residual| of the error curves.
 
     The mean is over folds; a configuration that failed on any fold is ranked after
@@ -307,7 +343,9 @@ def rank_configurations(summary: pd.DataFrame, main_selection: SelectionSettings
     complete = table["n_folds"] == n_folds
     table = (
         table.assign(_incomplete=~complete)
-        .sort_values(["_incomplete", "mean_max_abs", "config_id"], kind="stable", na_position="last")
+        .sort_values(
+            ["_incomplete", "mean_max_abs", "config_id"], kind="stable", na_position="last"
+        )
         .drop(columns="_incomplete")
         .reset_index(drop=True)
     )
@@ -335,7 +373,9 @@ def factor_effects(ranking: pd.DataFrame) -> pd.DataFrame:
                 {"factor": factor, "level": str(level), "n_configurations": len(v), "best": v.min(),
                  "median": float(np.median(v)), "mean": v.mean(), "worst": v.max()}
             )  # fmt: skip
-    return pd.DataFrame(rows, columns=["factor", "level", "n_configurations", "best", "median", "mean", "worst"])
+    return pd.DataFrame(
+        rows, columns=["factor", "level", "n_configurations", "best", "median", "mean", "worst"]
+    )
 
 
 def factor_levels(values: pd.Series, factor: str) -> list:
@@ -347,7 +387,9 @@ def factor_levels(values: pd.Series, factor: str) -> list:
     return sorted(present)
 
 
-def heatmap_table(ranking: pd.DataFrame, approach: str, selection: SelectionSettings, degree: int) -> pd.DataFrame:
+def heatmap_table(
+    ranking: pd.DataFrame, approach: str, selection: SelectionSettings, degree: int
+) -> pd.DataFrame:
     """Mean held-out max |residual| over n_clusters (rows) x algorithm (columns) for one approach.
 
     The cluster count is swept by fuzzy_grey (else correlation) selection; the other
@@ -370,7 +412,9 @@ def heatmap_table(ranking: pd.DataFrame, approach: str, selection: SelectionSett
         wanted = wanted_values.get(name) if wanted_values.get(name) in present else present[0]
         rows = rows[(rows[name] == wanted).fillna(False)]
         held.append(f"degree {wanted}" if name == "degree" else str(wanted))
-    table = rows.pivot_table(index="n_clusters", columns="algorithm", values="mean_max_abs", aggfunc="first", sort=True)
+    table = rows.pivot_table(
+        index="n_clusters", columns="algorithm", values="mean_max_abs", aggfunc="first", sort=True
+    )
     table = table[factor_levels(pd.Series(table.columns), "algorithm")]
     table.index = table.index.astype(int)
     table.attrs["held"] = ", ".join(held)

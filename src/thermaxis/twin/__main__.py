@@ -15,10 +15,14 @@ DEFAULT_TRUTH = Path("data/twin_truth")
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m thermaxis.twin", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
-    gen = sub.add_parser("generate", help="write the embedded dataset and its ground truth from twin_params.json")
+    gen = sub.add_parser(
+        "generate", help="write the embedded dataset and its ground truth from twin_params.json"
+    )
     gen.add_argument("--out", type=Path, default=DEFAULT_OUT)
     gen.add_argument("--truth", type=Path, default=DEFAULT_TRUTH)
-    cal = sub.add_parser("calibrate", help="refit twin_params.json to the published targets, then regenerate")
+    cal = sub.add_parser(
+        "calibrate", help="refit twin_params.json to the published targets, then regenerate"
+    )
     cal.add_argument("--out", type=Path, default=DEFAULT_OUT)
     cal.add_argument("--truth", type=Path, default=DEFAULT_TRUTH)
     cal.add_argument("--params", type=Path, default=mdl.PARAMS_PATH)
@@ -52,11 +56,15 @@ def main(argv: list[str] | None = None) -> int:
         mdl.save_params(result.params, args.params, summary)
         generate_dataset(args.out, args.truth, mdl.load_params(args.params))
         figures = ", ".join(f"{name} {value:.3f}" for name, value in result.rms.items())
-        print(f"calibrated (noise-free RMS): {figures}; wrote {args.params} and regenerated {args.out}")
+        print(
+            f"calibrated (noise-free RMS): {figures}; wrote {args.params} and regenerated {args.out}"
+        )
     else:
         from .scale import ScaleSpec, generate_scale
 
-        spec = ScaleSpec(args.runs, args.sensors, args.positions, args.hours, args.rate_hz, args.seed)
+        spec = ScaleSpec(
+            args.runs, args.sensors, args.positions, args.hours, args.rate_hz, args.seed
+        )
         try:
             generate_scale(args.out, spec)
         except ValueError as exc:

@@ -139,7 +139,9 @@ def reading_times(start_s: float) -> tuple[np.ndarray, np.ndarray]:
 
 def timeline(condition: Condition, step_s: float = STEP_S) -> Timeline:
     """The run's schedule: measurements, log window and the simulation grid."""
-    starts = MEASUREMENT_PERIOD_S * np.arange(N_MEASUREMENTS) + np.asarray(condition.jitter_s, dtype=float)
+    starts = MEASUREMENT_PERIOD_S * np.arange(N_MEASUREMENTS) + np.asarray(
+        condition.jitter_s, dtype=float
+    )
     ends = np.array([reading_times(s)[1][-1] for s in starts])
     log_start = starts[0] - LOG_MARGIN_S
     n_steps = int(np.ceil((ends[-1] + LOG_MARGIN_S - log_start) / step_s))
@@ -162,9 +164,9 @@ def ambient_at(condition: Condition, t_s: np.ndarray) -> np.ndarray:
 
 def motion_fraction(tl: Timeline, step_s: float) -> np.ndarray:
     """Fraction of each step spent reciprocating (between measurements M1 ... M8)."""
-    fine = tl.grid_s[0] + 0.5 + np.arange(int(round((tl.grid_s[-1] - tl.grid_s[0]))))
+    fine = tl.grid_s[0] + 0.5 + np.arange(int(round(tl.grid_s[-1] - tl.grid_s[0])))
     moving = np.zeros(fine.size, dtype=bool)
-    for end, nxt in zip(tl.measurement_end_s[:-1], tl.measurement_start_s[1:]):
+    for end, nxt in zip(tl.measurement_end_s[:-1], tl.measurement_start_s[1:], strict=False):
         moving |= (fine >= end + MOTION_GUARD_S) & (fine < nxt - MOTION_GUARD_S)
     per_step = int(round(step_s))
     return moving.reshape(-1, per_step).mean(axis=1)
@@ -172,6 +174,6 @@ def motion_fraction(tl: Timeline, step_s: float) -> np.ndarray:
 
 def servo_fraction(tl: Timeline, step_s: float) -> np.ndarray:
     """Fraction of each step with the drive enabled (standstill losses)."""
-    fine = tl.grid_s[0] + 0.5 + np.arange(int(round((tl.grid_s[-1] - tl.grid_s[0]))))
+    fine = tl.grid_s[0] + 0.5 + np.arange(int(round(tl.grid_s[-1] - tl.grid_s[0])))
     per_step = int(round(step_s))
     return (fine >= SERVO_ON_S).reshape(-1, per_step).mean(axis=1)

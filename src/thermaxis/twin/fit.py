@@ -53,10 +53,22 @@ __all__ = [
 
 #: Table 5 of the paper: slope k (um/m) and intercept b (um) of the 32 measurements.
 PAPER_TABLE5: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {
-    "E1": ((-9.8, -9.0, -8.8, -8.6, -8.2, -7.7, -7.5, -6.6), (0.1, -1.1, -1.8, -2.3, -2.6, -2.9, -3.4, -4.0)),
-    "E2": ((-23.7, -22.1, -22.1, -21.7, -21.5, -20.4, -19.6, -18.7), (-0.2, -1.2, -1.4, -1.7, -3.2, -5.1, -6.9, -8.7)),
-    "E3": ((-22.9, -22.1, -21.8, -21.3, -20.5, -20.1, -18.3, -18.0), (0.2, -1.1, -1.8, -2.5, -2.8, -3.0, -3.4, -3.2)),
-    "E4": ((-13.5, -12.8, -12.6, -11.9, -11.0, -10.0, -8.8, -7.3), (-0.1, -1.1, -1.7, -2.5, -3.4, -4.0, -4.7, -5.5)),
+    "E1": (
+        (-9.8, -9.0, -8.8, -8.6, -8.2, -7.7, -7.5, -6.6),
+        (0.1, -1.1, -1.8, -2.3, -2.6, -2.9, -3.4, -4.0),
+    ),
+    "E2": (
+        (-23.7, -22.1, -22.1, -21.7, -21.5, -20.4, -19.6, -18.7),
+        (-0.2, -1.2, -1.4, -1.7, -3.2, -5.1, -6.9, -8.7),
+    ),
+    "E3": (
+        (-22.9, -22.1, -21.8, -21.3, -20.5, -20.1, -18.3, -18.0),
+        (0.2, -1.1, -1.8, -2.5, -2.8, -3.0, -3.4, -3.2),
+    ),
+    "E4": (
+        (-13.5, -12.8, -12.6, -11.9, -11.0, -10.0, -8.8, -7.3),
+        (-0.1, -1.1, -1.7, -2.5, -3.4, -4.0, -4.7, -5.5),
+    ),
 }
 TOLERANCE_K = 0.5
 TOLERANCE_B = 0.3
@@ -64,7 +76,13 @@ TOLERANCE_B = 0.3
 #: Below 1 where the targets compete: weighted at their bounds, Eq. 8 and Eq. 9 pull
 #: Table 5's intercepts to an RMS of 0.36-0.40 um (> 0.3), and Table 5 then pushes
 #: Eq. 9's b just past its bound.
-OBJECTIVE_FACTOR: dict[str, float] = {"table5_k": 0.8, "table5_b": 0.5, "eq9_k": 1.0, "eq9_b": 0.8, "eq8": 1.0}
+OBJECTIVE_FACTOR: dict[str, float] = {
+    "table5_k": 0.8,
+    "table5_b": 0.5,
+    "eq9_k": 1.0,
+    "eq9_b": 0.8,
+    "eq8": 1.0,
+}
 
 _HEAT_BASES = ("nut", "bearing_seat", "sliders", "motor_feed", "motor_standstill")
 _HEAT_PARAMETERS = (
@@ -117,7 +135,7 @@ def _problem(step_s: float) -> _Problem:
     S0 = np.zeros((n, len(runs) * n_bases))
     air = np.zeros((n_steps + 1, len(runs) * n_bases))
     index, weight = [], []
-    for r, (c, tl) in enumerate(zip(cond.CONDITIONS, timelines)):
+    for r, (c, tl) in enumerate(zip(cond.CONDITIONS, timelines, strict=False)):
         col = r * n_bases
         grid = tl.grid_s
         steps = grid.size - 1
@@ -135,7 +153,9 @@ def _problem(step_s: float) -> _Problem:
         first_heat = col + 1 + len(mdl.INITIAL_GROUPS)
         for h, basis in enumerate(_HEAT_BASES):
             node = "motor" if basis.startswith("motor") else basis
-            U[:steps, 1 + NODES.index(node), first_heat + h] = servo if basis == "motor_standstill" else v * motion
+            U[:steps, 1 + NODES.index(node), first_heat + h] = (
+                servo if basis == "motor_standstill" else v * motion
+            )
         times = _reading_times(tl)
         j = np.searchsorted(grid, times, side="right") - 1
         index.append(j)
@@ -156,7 +176,9 @@ class _Bases:
     """Basis responses of every surface (nodes, then the air) at the reading times."""
 
     surfaces: np.ndarray  # (n_runs, n_times, n_surfaces, n_bases), the datum first
-    sensors: dict[float, np.ndarray]  # lag (s) -> lagged, mean per measurement: (n_runs, n_meas, n_surfaces, n_bases)
+    sensors: dict[
+        float, np.ndarray
+    ]  # lag (s) -> lagged, mean per measurement: (n_runs, n_meas, n_surfaces, n_bases)
 
 
 def _sample(problem: _Problem, states: np.ndarray) -> np.ndarray:
@@ -192,7 +214,9 @@ def _bases(problem: _Problem, values: dict[str, float], step_s: float) -> _Bases
 
 def _geometric_curve(values: dict[str, float]) -> np.ndarray:
     """Geometric error at the 14 targets relative to the first target (constant in time)."""
-    return mdl.geometric_error(values, cond.TARGETS_MM) - mdl.geometric_error(values, cond.FIRST_TARGET_MM)
+    return mdl.geometric_error(values, cond.TARGETS_MM) - mdl.geometric_error(
+        values, cond.FIRST_TARGET_MM
+    )
 
 
 @dataclass(frozen=True)
@@ -205,7 +229,9 @@ class RunObservables:
     temperatures: dict[str, np.ndarray]  # sensor -> mean over each measurement, degC
 
 
-def _runs_from_bases(params: mdl.TwinParams, problem: _Problem, bases: _Bases) -> dict[str, RunObservables]:
+def _runs_from_bases(
+    params: mdl.TwinParams, problem: _Problem, bases: _Bases
+) -> dict[str, RunObservables]:
     values = params.values
     operator = _decoupling_operator()
     geometric = _geometric_curve(values) + 0.5 * INTERFEROMETER.reversal_um
@@ -219,9 +245,9 @@ def _runs_from_bases(params: mdl.TwinParams, problem: _Problem, bases: _Bases) -
         offsets = np.array([params.initial[run][name] for name in mdl.INITIAL_GROUPS])
         coef = np.concatenate([[1.0], offsets, heat])
         T = bases.surfaces[r] @ coef  # (n_times, n_surfaces)
-        k_th = values["screw_gain_um_per_m_K"] * (T[:, idx["screw_core"]] - mdl.REFERENCE_C) - values[
-            "reference_gain_um_per_m_K"
-        ] * (T[:, idx[mdl.REFERENCE_NODE]] - mdl.REFERENCE_C)
+        k_th = values["screw_gain_um_per_m_K"] * (
+            T[:, idx["screw_core"]] - mdl.REFERENCE_C
+        ) - values["reference_gain_um_per_m_K"] * (T[:, idx[mdl.REFERENCE_NODE]] - mdl.REFERENCE_C)
         d = -sum(values[f"drift_{node}_um_per_K"] * T[:, idx[node]] for node in mdl.DRIFT_NODES)
         datum = k_th[0] * ref_m + d[0]
         n_meas = (k_th.size - 1) // _READINGS
@@ -239,7 +265,9 @@ def _runs_from_bases(params: mdl.TwinParams, problem: _Problem, bases: _Bases) -
     return out
 
 
-def target_residuals(runs: dict[str, RunObservables], targets: PublishedTargets) -> dict[str, dict[str, np.ndarray]]:
+def target_residuals(
+    runs: dict[str, RunObservables], targets: PublishedTargets
+) -> dict[str, dict[str, np.ndarray]]:
     """Differences from every published target, per run (um/m for k, um otherwise).
 
     ``table5_k``, ``table5_b``: twin minus Table 5; ``eq9_k``, ``eq9_b``: Eq. 9 on the
@@ -256,7 +284,10 @@ def target_residuals(runs: dict[str, RunObservables], targets: PublishedTargets)
             "eq9_k": targets.k.predict(o.temperatures) - o.k,
             "eq9_b": targets.b.predict(o.temperatures) - o.b,
             "eq8": np.column_stack(
-                [m.predict(o.temperatures) - o.curve[:, position[x]] for x, m in targets.pointwise.items()]
+                [
+                    m.predict(o.temperatures) - o.curve[:, position[x]]
+                    for x, m in targets.pointwise.items()
+                ]
             ),
         }
     return out
@@ -275,7 +306,9 @@ def acceptance_bounds(targets: PublishedTargets) -> dict[str, float]:
 
 def objective_weights(targets: PublishedTargets) -> dict[str, float]:
     """Each target's tolerance: its residuals enter the objective divided by it."""
-    return {name: bound * OBJECTIVE_FACTOR[name] for name, bound in acceptance_bounds(targets).items()}
+    return {
+        name: bound * OBJECTIVE_FACTOR[name] for name, bound in acceptance_bounds(targets).items()
+    }
 
 
 @dataclass(frozen=True)
@@ -287,7 +320,9 @@ class FitResult:
 
 
 def _prior_residuals(x: np.ndarray, runs: tuple[str, ...]) -> np.ndarray:
-    free = list(mdl.GLOBAL_PARAMETERS.values()) + [p for _ in runs for p in mdl.INITIAL_PARAMETERS.values()]
+    free = list(mdl.GLOBAL_PARAMETERS.values()) + [
+        p for _ in runs for p in mdl.INITIAL_PARAMETERS.values()
+    ]
     centre = np.array([p.prior for p in free])
     width = np.array([p.prior_width for p in free])
     return (x - centre) / width
@@ -297,7 +332,9 @@ def rms_by_target(residuals: dict[str, dict[str, np.ndarray]]) -> dict[str, floa
     """RMS of each target's residuals over all runs."""
     names = next(iter(residuals.values()))
     return {
-        name: float(np.sqrt(np.mean(np.concatenate([np.ravel(r[name]) for r in residuals.values()]) ** 2)))
+        name: float(
+            np.sqrt(np.mean(np.concatenate([np.ravel(r[name]) for r in residuals.values()]) ** 2))
+        )
         for name in names
     }
 
@@ -345,7 +382,13 @@ def calibrate(
         return np.concatenate(scaled + [_prior_residuals(x, runs)])
 
     solution = least_squares(
-        residuals, x0, bounds=(lower, upper), x_scale="jac", max_nfev=max_evaluations, xtol=1e-10, ftol=1e-10
+        residuals,
+        x0,
+        bounds=(lower, upper),
+        x_scale="jac",
+        max_nfev=max_evaluations,
+        xtol=1e-10,
+        ftol=1e-10,
     )
     return FitResult(
         params=mdl.TwinParams.from_vector(solution.x, runs),

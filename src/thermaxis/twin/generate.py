@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from thermaxis.method.decouple import decouple_measurement
+
 from . import conditions as cond
 from . import faults
 from . import model as mdl
@@ -22,8 +23,8 @@ from .observe import (
     INTERFEROMETER,
     SENSORS,
     WIRELESS_JITTER_S,
-    calibrated_sensors,
     WIRELESS_PERIOD_S,
+    calibrated_sensors,
     interferometer_readings,
     lagged,
     sensor_signal,
@@ -64,7 +65,11 @@ def _run_rng(run_index: int, stream: int) -> np.random.Generator:
 def _wireless_times(tl: cond.Timeline, rng: np.random.Generator) -> np.ndarray:
     n = int((tl.log_end_s - tl.log_start_s) / WIRELESS_PERIOD_S) + 2
     steps = WIRELESS_PERIOD_S + rng.uniform(-WIRELESS_JITTER_S, WIRELESS_JITTER_S, n)
-    t = tl.log_start_s + rng.uniform(1.0, WIRELESS_PERIOD_S) + np.concatenate([[0.0], np.cumsum(steps[:-1])])
+    t = (
+        tl.log_start_s
+        + rng.uniform(1.0, WIRELESS_PERIOD_S)
+        + np.concatenate([[0.0], np.cumsum(steps[:-1])])
+    )
     return np.round(t[t < tl.log_end_s - 1.0], 3)
 
 
@@ -74,14 +79,20 @@ def _sensor(sensor_id: str):
 
 def _box_log(run: str, grid: np.ndarray, truth: dict[str, np.ndarray], rng: np.random.Generator):
     """T1-T10 every 10 s with noise, then the box's seeded faults."""
-    clean = {s.id: truth[s.id] + rng.normal(0.0, s.noise_c, grid.size) for s in SENSORS if s.source == "box"}
+    clean = {
+        s.id: truth[s.id] + rng.normal(0.0, s.noise_c, grid.size)
+        for s in SENSORS
+        if s.source == "box"
+    }
     return faults.apply_box_faults(run, grid / 60.0, clean)
 
 
 def _wireless_log(run: str, tl: cond.Timeline, truth: np.ndarray, rng: np.random.Generator):
     """T11 at irregular ~30 s packets, with lost packets and the outage."""
     times = _wireless_times(tl, rng)
-    values = np.interp(times, tl.grid_s, truth) + rng.normal(0.0, _sensor("T11").noise_c, times.size)
+    values = np.interp(times, tl.grid_s, truth) + rng.normal(
+        0.0, _sensor("T11").noise_c, times.size
+    )
     keep = rng.uniform(size=times.size) >= faults.WIRELESS_LOSS_PROBABILITY
     out_run, first_min, last_min = faults.WIRELESS_OUTAGE
     if out_run == run:
@@ -94,24 +105,30 @@ def _hmi_log(tl: cond.Timeline, truth: np.ndarray, rng: np.random.Generator):
     first_stamp = np.ceil((tl.log_start_s - HMI_CLOCK_OFFSET_S) / HMI_PERIOD_S) * HMI_PERIOD_S
     stamps = np.arange(first_stamp, tl.log_end_s - HMI_CLOCK_OFFSET_S, HMI_PERIOD_S)
     true_time = stamps + HMI_CLOCK_OFFSET_S
-    noisy = np.interp(true_time, tl.grid_s, truth) + rng.normal(0.0, _sensor("T12").noise_c, stamps.size)
+    noisy = np.interp(true_time, tl.grid_s, truth) + rng.normal(
+        0.0, _sensor("T12").noise_c, stamps.size
+    )
     return stamps, np.round(noisy, 1)
 
 
 def _laser(params: mdl.TwinParams, state: mdl.RunState, rng: np.random.Generator):
     """The 8 measurements as read, and the noise-free (time_min, k, b) of each."""
     tl = state.timeline
-    datum_true = float(mdl.positioning_error(params.values, state, cond.FIRST_TARGET_MM, cond.ZERO_S))
+    datum_true = float(
+        mdl.positioning_error(params.values, state, cond.FIRST_TARGET_MM, cond.ZERO_S)
+    )
     # Zeroing captures one noisy reading: every later reading carries its noise.
     datum_read = datum_true + rng.normal(0.0, INTERFEROMETER.reading_noise_um)
     n = cond.TARGETS_MM.size
     measurements, kb_truth = [], []
-    for start, end in zip(tl.measurement_start_s, tl.measurement_end_s):
+    for start, end in zip(tl.measurement_start_s, tl.measurement_end_s, strict=False):
         readings = interferometer_readings(params.values, state, start, datum_read, rng)
         true_rel = readings.true_um + datum_read - datum_true
         pass_mean = 0.5 * (true_rel[:n] + true_rel[n:][::-1])
         # The true k and b: the paper's straight line (Eq. 6) through the noise-free readings.
-        fit = decouple_measurement(cond.TARGETS_MM, pass_mean, degree=1, origin_mm=cond.FIRST_TARGET_MM)
+        fit = decouple_measurement(
+            cond.TARGETS_MM, pass_mean, degree=1, origin_mm=cond.FIRST_TARGET_MM
+        )
         measurements.append(readings)
         kb_truth.append((0.5 * (start + end) / 60.0, fit.k_um_per_m, fit.b_um))
     return measurements, kb_truth
@@ -153,7 +170,7 @@ def simulate_records(params: mdl.TwinParams) -> list[RunRecord]:
 
 
 def _write_csv(path: Path, header: list[str], columns: list[list[str]]) -> None:
-    lines = [",".join(header)] + [",".join(row) for row in zip(*columns)]
+    lines = [",".join(header)] + [",".join(row) for row in zip(*columns, strict=False)]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
@@ -180,7 +197,11 @@ def _write_run(root: Path, record: RunRecord) -> None:
         ["time", "T11"],
         [list(_clock(c, record.wireless_time_s, "ms")), _fmt(record.wireless, ".2f")],
     )
-    _write_csv(temps / "hmi.csv", ["time", "T12"], [list(_clock(c, record.hmi_stamp_s, "s")), _fmt(record.hmi, ".1f")])
+    _write_csv(
+        temps / "hmi.csv",
+        ["time", "T12"],
+        [list(_clock(c, record.hmi_stamp_s, "s")), _fmt(record.hmi, ".1f")],
+    )
     miss_run, miss_meas, miss_dir, miss_pos = faults.MISSING_READING
     for m, readings in enumerate(record.measurements, start=1):
         keep = np.ones(readings.time_s.size, dtype=bool)
@@ -203,11 +224,19 @@ def _write_truth(truth_root: Path, records: list[RunRecord], params: mdl.TwinPar
     kb_rows = []
     for record in records:
         for m, (t_min, k, b) in enumerate(record.kb_truth, start=1):
-            kb_rows.append((record.condition.run, str(m), format(t_min, ".3f"), format(k, ".4f"), format(b, ".4f")))
+            kb_rows.append(
+                (
+                    record.condition.run,
+                    str(m),
+                    format(t_min, ".3f"),
+                    format(k, ".4f"),
+                    format(b, ".4f"),
+                )
+            )
     _write_csv(
         truth_root / "kb_truth.csv",
         ["run", "measurement", "time_min", "k_um_per_m", "b_um"],
-        [list(col) for col in zip(*kb_rows)],
+        [list(col) for col in zip(*kb_rows, strict=False)],
     )
     sensor_ids = [s.id for s in SENSORS]
     for record in records:
@@ -224,7 +253,11 @@ def _write_truth(truth_root: Path, records: list[RunRecord], params: mdl.TwinPar
         k_inst = mdl.thermal_slope(params.values, state, grid) + k_geo
         datum = mdl.positioning_error(params.values, state, cond.FIRST_TARGET_MM, cond.ZERO_S)
         lever = (cond.FIRST_TARGET_MM - mdl.X_FIXED_MM) / 1000.0
-        b_inst = b_geo + mdl.thermal_slope(params.values, state, grid) * lever + mdl.drift(params.values, state, grid)
+        b_inst = (
+            b_geo
+            + mdl.thermal_slope(params.values, state, grid) * lever
+            + mdl.drift(params.values, state, grid)
+        )
         b_inst = b_inst + mdl.geometric_error(params.values, cond.FIRST_TARGET_MM) - datum
         _write_csv(
             truth_root / f"{c.run}_hidden.csv",
@@ -238,7 +271,9 @@ def _write_truth(truth_root: Path, records: list[RunRecord], params: mdl.TwinPar
 
 def _geometric_line(values: dict[str, float]) -> tuple[float, float]:
     """k and b of the geometric error alone (relative to the first target)."""
-    g = mdl.geometric_error(values, cond.TARGETS_MM) - mdl.geometric_error(values, cond.FIRST_TARGET_MM)
+    g = mdl.geometric_error(values, cond.TARGETS_MM) - mdl.geometric_error(
+        values, cond.FIRST_TARGET_MM
+    )
     fit = decouple_measurement(cond.TARGETS_MM, g, degree=1, origin_mm=cond.FIRST_TARGET_MM)
     return fit.k_um_per_m, fit.b_um
 

@@ -94,27 +94,61 @@ _NO_PRIOR = float("inf")
 #: physical where the published targets do not pin a parameter down; they are wide
 #: compared with the fitted departures.
 _PHYSICAL_PARAMETERS: dict[str, FreeParameter] = {
-    "nut_heat_W_per_m_min": FreeParameter(0.0, 6.0, 1.5, 1.5, "friction heat of the ball-screw nut per m/min of feed"),
-    "bearing_heat_W_per_m_min": FreeParameter(0.0, 6.0, 1.0, 1.5, "friction heat of the fixed-end bearings per m/min"),
-    "slider_heat_W_per_m_min": FreeParameter(0.0, 6.0, 1.0, 1.5, "friction heat of the four guide carriages per m/min"),
-    "motor_heat_W_per_m_min": FreeParameter(0.0, 12.0, 2.0, 3.0, "servo motor losses per m/min (reversals, viscous)"),
-    "motor_standstill_W": FreeParameter(0.0, 40.0, 10.0, 10.0, "motor losses with the drive enabled, at standstill"),
-    "screw_gain_um_per_m_K": FreeParameter(3.0, 11.5, 9.0, 3.0, "effective expansion of the preloaded screw"),
+    "nut_heat_W_per_m_min": FreeParameter(
+        0.0, 6.0, 1.5, 1.5, "friction heat of the ball-screw nut per m/min of feed"
+    ),
+    "bearing_heat_W_per_m_min": FreeParameter(
+        0.0, 6.0, 1.0, 1.5, "friction heat of the fixed-end bearings per m/min"
+    ),
+    "slider_heat_W_per_m_min": FreeParameter(
+        0.0, 6.0, 1.0, 1.5, "friction heat of the four guide carriages per m/min"
+    ),
+    "motor_heat_W_per_m_min": FreeParameter(
+        0.0, 12.0, 2.0, 3.0, "servo motor losses per m/min (reversals, viscous)"
+    ),
+    "motor_standstill_W": FreeParameter(
+        0.0, 40.0, 10.0, 10.0, "motor losses with the drive enabled, at standstill"
+    ),
+    "screw_gain_um_per_m_K": FreeParameter(
+        3.0, 11.5, 9.0, 3.0, "effective expansion of the preloaded screw"
+    ),
     "reference_gain_um_per_m_K": FreeParameter(
         3.0, 12.0, 10.0, 3.0, "interferometer material normalisation (bed sensor)"
     ),
-    "geometric_slope_um_per_m": FreeParameter(-300.0, 300.0, 0.0, _NO_PRIOR, "slope of the geometric error at 20 degC"),
-    "drift_bearing_seat_um_per_K": FreeParameter(-3.0, 3.0, 0.0, 1.5, "table drift per K of the bearing seat"),
-    "drift_bed_inner_um_per_K": FreeParameter(-12.0, 12.0, 0.0, 6.0, "table drift per K of the bed core"),
-    "drift_bed_outer_um_per_K": FreeParameter(-12.0, 12.0, 0.0, 6.0, "table drift per K of the bed's outer walls"),
-    "drift_sliders_um_per_K": FreeParameter(-3.5, 3.5, 0.0, 1.5, "table drift per K of the carriages/table"),
-    "drift_nut_um_per_K": FreeParameter(-1.5, 1.5, 0.0, 0.75, "table drift per K of the nut housing"),
-    "log_capacity_screw_core": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the screw core's heat capacity"),
-    "log_capacity_bearing_seat": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the bearing seat's heat capacity"),
-    "log_capacity_motor": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the motor's heat capacity"),
-    "log_capacity_sliders": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the carriages' heat capacity"),
+    "geometric_slope_um_per_m": FreeParameter(
+        -300.0, 300.0, 0.0, _NO_PRIOR, "slope of the geometric error at 20 degC"
+    ),
+    "drift_bearing_seat_um_per_K": FreeParameter(
+        -3.0, 3.0, 0.0, 1.5, "table drift per K of the bearing seat"
+    ),
+    "drift_bed_inner_um_per_K": FreeParameter(
+        -12.0, 12.0, 0.0, 6.0, "table drift per K of the bed core"
+    ),
+    "drift_bed_outer_um_per_K": FreeParameter(
+        -12.0, 12.0, 0.0, 6.0, "table drift per K of the bed's outer walls"
+    ),
+    "drift_sliders_um_per_K": FreeParameter(
+        -3.5, 3.5, 0.0, 1.5, "table drift per K of the carriages/table"
+    ),
+    "drift_nut_um_per_K": FreeParameter(
+        -1.5, 1.5, 0.0, 0.75, "table drift per K of the nut housing"
+    ),
+    "log_capacity_screw_core": FreeParameter(
+        -2.3, 2.3, 0.0, 1.0, "ln factor on the screw core's heat capacity"
+    ),
+    "log_capacity_bearing_seat": FreeParameter(
+        -2.3, 2.3, 0.0, 1.0, "ln factor on the bearing seat's heat capacity"
+    ),
+    "log_capacity_motor": FreeParameter(
+        -2.3, 2.3, 0.0, 1.0, "ln factor on the motor's heat capacity"
+    ),
+    "log_capacity_sliders": FreeParameter(
+        -2.3, 2.3, 0.0, 1.0, "ln factor on the carriages' heat capacity"
+    ),
     "log_capacity_nut": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the nut's heat capacity"),
-    "log_capacity_bed_outer": FreeParameter(-2.3, 2.3, 0.0, 1.0, "ln factor on the bed walls' heat capacity"),
+    "log_capacity_bed_outer": FreeParameter(
+        -2.3, 2.3, 0.0, 1.0, "ln factor on the bed walls' heat capacity"
+    ),
 }
 
 #: Candidate surfaces of the sensors with calibrated mountings, the part they are
@@ -185,12 +219,17 @@ def mounting(values: dict[str, float], sensor: str) -> tuple[dict[str, float], f
         log_weight = np.array([values[f"mount_{sensor}_{n}"] for n in neighbours])
         split = np.exp(log_weight - log_weight.max())
         split *= (1.0 - share) / split.sum()
-    return {primary: share, **dict(zip(neighbours, (float(w) for w in split)))}, values[f"offset_{sensor}_C"]
+    return {
+        primary: share,
+        **dict(zip(neighbours, (float(w) for w in split), strict=False)),
+    }, values[f"offset_{sensor}_C"]
 
 
 #: Nodes whose capacity is calibrated (``log_capacity_<node>``).
 CAPACITY_NODES: tuple[str, ...] = tuple(
-    name.removeprefix("log_capacity_") for name in GLOBAL_PARAMETERS if name.startswith("log_capacity_")
+    name.removeprefix("log_capacity_")
+    for name in GLOBAL_PARAMETERS
+    if name.startswith("log_capacity_")
 )
 #: Nodes that carry the position-independent drift (``drift_<node>_um_per_K``).
 DRIFT_NODES: tuple[str, ...] = ("bearing_seat", "bed_inner", "bed_outer", "sliders", "nut")
@@ -234,16 +273,20 @@ class TwinParams:
     def vector(self, runs: tuple[str, ...]) -> np.ndarray:
         """Flatten: GLOBAL_PARAMETERS, then INITIAL_PARAMETERS run by run."""
         return np.array(
-            [self.values[n] for n in GLOBAL_PARAMETERS] + [self.initial[r][n] for r in runs for n in INITIAL_PARAMETERS]
+            [self.values[n] for n in GLOBAL_PARAMETERS]
+            + [self.initial[r][n] for r in runs for n in INITIAL_PARAMETERS]
         )
 
     @classmethod
-    def from_vector(cls, x: np.ndarray, runs: tuple[str, ...]) -> "TwinParams":
+    def from_vector(cls, x: np.ndarray, runs: tuple[str, ...]) -> TwinParams:
         n = len(GLOBAL_PARAMETERS)
-        values = {name: float(v) for name, v in zip(GLOBAL_PARAMETERS, x[:n])}
+        values = {name: float(v) for name, v in zip(GLOBAL_PARAMETERS, x[:n], strict=False)}
         m = len(INITIAL_PARAMETERS)
         initial = {
-            run: {name: float(v) for name, v in zip(INITIAL_PARAMETERS, x[n + i * m : n + (i + 1) * m])}
+            run: {
+                name: float(v)
+                for name, v in zip(INITIAL_PARAMETERS, x[n + i * m : n + (i + 1) * m], strict=False)
+            }
             for i, run in enumerate(runs)
         }
         return cls(values=values, initial=initial)
@@ -267,7 +310,8 @@ def load_params(path: Path | str = PARAMS_PATH) -> TwinParams:
     try:
         values = {name: float(raw["global"][name]) for name in GLOBAL_PARAMETERS}
         initial = {
-            run: {name: float(v[name]) for name in INITIAL_PARAMETERS} for run, v in raw["initial_offset_K"].items()
+            run: {name: float(v[name]) for name in INITIAL_PARAMETERS}
+            for run, v in raw["initial_offset_K"].items()
         }
     except KeyError as exc:
         raise ValueError(
@@ -276,7 +320,9 @@ def load_params(path: Path | str = PARAMS_PATH) -> TwinParams:
         ) from None
     missing = [c.run for c in cond.CONDITIONS if c.run not in initial]
     if missing:
-        raise ValueError(f"{path}: no initial offsets for run(s) {missing}; rerun `python -m thermaxis.twin calibrate`")
+        raise ValueError(
+            f"{path}: no initial offsets for run(s) {missing}; rerun `python -m thermaxis.twin calibrate`"
+        )
     return TwinParams(values=values, initial=initial)
 
 
@@ -286,14 +332,17 @@ def save_params(params: TwinParams, path: Path | str, fit_summary: dict) -> None
         "about": "Fitted free parameters of thermaxis.twin (python -m thermaxis.twin calibrate).",
         "global": {name: round(params.values[name], 6) for name in GLOBAL_PARAMETERS},
         "initial_offset_K": {
-            run: {name: round(v[name], 6) for name in INITIAL_PARAMETERS} for run, v in sorted(params.initial.items())
+            run: {name: round(v[name], 6) for name in INITIAL_PARAMETERS}
+            for run, v in sorted(params.initial.items())
         },
         "fit": fit_summary,
     }
     Path(path).write_text(json.dumps(raw, indent=2) + "\n", encoding="utf-8")
 
 
-def heat_inputs(values: dict[str, float], feed_mm_min: float, motion: np.ndarray, servo: np.ndarray) -> np.ndarray:
+def heat_inputs(
+    values: dict[str, float], feed_mm_min: float, motion: np.ndarray, servo: np.ndarray
+) -> np.ndarray:
     """Heat per node (W) on each step; friction heat grows linearly with the feed."""
     v = feed_mm_min / 1000.0  # m/min
     q = np.zeros((motion.size, len(NODES)))
@@ -301,7 +350,9 @@ def heat_inputs(values: dict[str, float], feed_mm_min: float, motion: np.ndarray
     q[:, idx["nut"]] = values["nut_heat_W_per_m_min"] * v * motion
     q[:, idx["bearing_seat"]] = values["bearing_heat_W_per_m_min"] * v * motion
     q[:, idx["sliders"]] = values["slider_heat_W_per_m_min"] * v * motion
-    q[:, idx["motor"]] = values["motor_heat_W_per_m_min"] * v * motion + values["motor_standstill_W"] * servo
+    q[:, idx["motor"]] = (
+        values["motor_heat_W_per_m_min"] * v * motion + values["motor_standstill_W"] * servo
+    )
     return q
 
 
@@ -340,13 +391,17 @@ def simulate_timeline(
     """Integrate the network over a timeline; ``ambient(t_s)`` gives the air temperature."""
     step_s = float(tl.grid_s[1] - tl.grid_s[0])
     mid = 0.5 * (tl.grid_s[:-1] + tl.grid_s[1:])
-    q = heat_inputs(values, feed_mm_min, cond.motion_fraction(tl, step_s), cond.servo_fraction(tl, step_s))
+    q = heat_inputs(
+        values, feed_mm_min, cond.motion_fraction(tl, step_s), cond.servo_fraction(tl, step_s)
+    )
     inputs = np.column_stack([ambient(mid), q])
     nodes = simulate(discretise(step_s, capacity_scale(values)), initial, inputs)
     return RunState(timeline=tl, nodes=nodes, ambient=ambient(tl.grid_s))
 
 
-def simulate_run(condition: cond.Condition, params: TwinParams, step_s: float = cond.STEP_S) -> RunState:
+def simulate_run(
+    condition: cond.Condition, params: TwinParams, step_s: float = cond.STEP_S
+) -> RunState:
     """Integrate the network over one paper run's log window."""
     tl = cond.timeline(condition, step_s)
     ambient = lambda t: cond.ambient_at(condition, t)  # noqa: E731
@@ -368,9 +423,9 @@ def drift(values: dict[str, float], state: RunState, t_s) -> np.ndarray:
 
 def geometric_error(values: dict[str, float], x_mm) -> np.ndarray:
     x = np.asarray(x_mm, dtype=float)
-    return values["geometric_slope_um_per_m"] * (x - X_FIXED_MM) / 1000.0 + PITCH_AMPLITUDE_UM * np.sin(
-        2 * np.pi * x / PITCH_PERIOD_MM + PITCH_PHASE_RAD
-    )
+    return values["geometric_slope_um_per_m"] * (
+        x - X_FIXED_MM
+    ) / 1000.0 + PITCH_AMPLITUDE_UM * np.sin(2 * np.pi * x / PITCH_PERIOD_MM + PITCH_PHASE_RAD)
 
 
 def positioning_error(values: dict[str, float], state: RunState, x_mm, t_s) -> np.ndarray:

@@ -91,7 +91,9 @@ class Discretised:
     Bd: np.ndarray
 
 
-def _continuous(capacity: dict[str, float], conductance: dict[tuple[str, str], float]) -> tuple[np.ndarray, np.ndarray]:
+def _continuous(
+    capacity: dict[str, float], conductance: dict[tuple[str, str], float]
+) -> tuple[np.ndarray, np.ndarray]:
     n = len(NODES)
     index = {name: i for i, name in enumerate(NODES)}
     laplacian = np.zeros((n, n))
@@ -117,7 +119,9 @@ def capacities(scale: dict[str, float] | None = None) -> dict[str, float]:
     scale = scale or {}
     unknown = set(scale) - set(NODES)
     if unknown:
-        raise ValueError(f"capacity scale for unknown node(s) {sorted(unknown)}; expected some of {NODES}")
+        raise ValueError(
+            f"capacity scale for unknown node(s) {sorted(unknown)}; expected some of {NODES}"
+        )
     return {name: CAPACITY_J_PER_K[name] * scale.get(name, 1.0) for name in NODES}
 
 

@@ -55,14 +55,40 @@ SENSORS: tuple[Sensor, ...] = (
     # these entries hold their design estimate, calibrated_sensors() the fitted one.
     _designed("T1", "screw sleeve, left", "box", 90.0, 0.008),
     _designed("T2", "screw sleeve, right", "box", 90.0, 0.008),
-    Sensor("T3", "screw sleeve, front", "box", {"sleeve": 0.85, "nut": 0.05, "ambient": 0.10}, 90.0, 0.09, 0.008),
-    Sensor("T4", "left slider", "box", {"sliders": 0.85, "nut": 0.10, "ambient": 0.05}, 60.0, -0.07, 0.008),
-    Sensor("T5", "right slider", "box", {"sliders": 0.85, "bed_inner": 0.10, "ambient": 0.05}, 60.0, 0.03, 0.008),
+    Sensor(
+        "T3",
+        "screw sleeve, front",
+        "box",
+        {"sleeve": 0.85, "nut": 0.05, "ambient": 0.10},
+        90.0,
+        0.09,
+        0.008,
+    ),
+    Sensor(
+        "T4",
+        "left slider",
+        "box",
+        {"sliders": 0.85, "nut": 0.10, "ambient": 0.05},
+        60.0,
+        -0.07,
+        0.008,
+    ),
+    Sensor(
+        "T5",
+        "right slider",
+        "box",
+        {"sliders": 0.85, "bed_inner": 0.10, "ambient": 0.05},
+        60.0,
+        0.03,
+        0.008,
+    ),
     _designed("T6", "bearing seat near motor", "box", 60.0, 0.008),
     # The shell sees the winding through the stator and loses heat to the air.
     _designed("T7", "motor shell, top", "box", 60.0, 0.008),
     Sensor("T8", "bed, inner side", "box", {"bed_inner": 0.95, "ambient": 0.05}, 60.0, 0.02, 0.008),
-    Sensor("T9", "bed, outer side", "box", {"bed_outer": 0.85, "ambient": 0.15}, 60.0, -0.06, 0.008),
+    Sensor(
+        "T9", "bed, outer side", "box", {"bed_outer": 0.85, "ambient": 0.15}, 60.0, -0.06, 0.008
+    ),
     Sensor("T10", "ambient", "box", {"ambient": 1.0}, 120.0, 0.08, 0.010),
     _designed("T11", "nut", "wireless", 45.0, 0.030),
     # The HMI reads the motor's own winding sensor: fast, but a coarser thermistor.
@@ -80,13 +106,18 @@ def calibrated_sensors(values: dict[str, float]) -> tuple[Sensor, ...]:
         out.append(sensor)
     return tuple(out)
 
+
 #: The HMI's clock runs this many seconds behind the box (reference) clock.
 HMI_CLOCK_OFFSET_S = 7.0
 #: Acquisition sources: (name, clock note, clock offset in s to ADD to reach the box clock).
 SOURCES: tuple[tuple[str, str, float], ...] = (
     ("box", "reference clock (acquisition box, synchronised with the interferometer PC)", 0.0),
     ("wireless", "gateway clock, synchronised with the box; irregular ~30 s packets", 0.0),
-    ("hmi", f"CNC HMI clock, runs {HMI_CLOCK_OFFSET_S:g} s behind the box clock", HMI_CLOCK_OFFSET_S),
+    (
+        "hmi",
+        f"CNC HMI clock, runs {HMI_CLOCK_OFFSET_S:g} s behind the box clock",
+        HMI_CLOCK_OFFSET_S,
+    ),
 )
 #: Wireless packets: nominal period and uniform jitter (s); HMI polling period (s).
 WIRELESS_PERIOD_S = 30.0
@@ -144,7 +175,11 @@ class Readings:
 
 
 def interferometer_readings(
-    values: dict[str, float], state: RunState, start_s: float, datum_um: float, rng: np.random.Generator
+    values: dict[str, float],
+    state: RunState,
+    start_s: float,
+    datum_um: float,
+    rng: np.random.Generator,
 ) -> Readings:
     """The 28 captures of one measurement starting at ``start_s``.
 
@@ -165,6 +200,9 @@ def interferometer_readings(
     )
     noise = rng.normal(0.0, spec.reading_noise_um, x.size)
     read = (
-        true + scale * (x - cond.FIRST_TARGET_MM) / 1000.0 + noise + np.where(direction == "-", spec.reversal_um, 0.0)
+        true
+        + scale * (x - cond.FIRST_TARGET_MM) / 1000.0
+        + noise
+        + np.where(direction == "-", spec.reversal_um, 0.0)
     )
     return Readings(time_s=t, position_mm=x, direction=direction, error_um=read, true_um=true)

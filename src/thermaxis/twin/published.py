@@ -11,8 +11,8 @@ from the pipeline's held-out results enters here.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Mapping
 
 import numpy as np
 
@@ -55,7 +55,7 @@ def _model(rows) -> PublishedModel:
     terms = rows[rows["term"] != "const"]
     return PublishedModel(
         const=const,
-        coef=dict(zip(terms["term"], terms["value"].astype(float))),
+        coef=dict(zip(terms["term"], terms["value"].astype(float), strict=False)),
         relative=bool((rows["temperature"] == "relative").all()),
     )
 
@@ -65,7 +65,9 @@ def published_targets(paper_dir=None) -> PublishedTargets:
     eq9 = load_table("eq9", paper_dir)
     eq8 = load_table("eq8", paper_dir)
     metrics = load_table("prediction_metrics", paper_dir)
-    table7 = metrics[(metrics["table"] == 7) & (metrics["algorithm"] == "mlr")].set_index("target")["rmse"]
+    table7 = metrics[(metrics["table"] == 7) & (metrics["algorithm"] == "mlr")].set_index("target")[
+        "rmse"
+    ]
     return PublishedTargets(
         k=_model(eq9[eq9["target"] == "k"]),
         b=_model(eq9[eq9["target"] == "b"]),

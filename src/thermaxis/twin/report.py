@@ -21,16 +21,30 @@ import pandas as pd
 
 from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.config import Settings, load_config
+from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.method.decouple import decouple_table
 from thermaxis.method.folds import evaluate_configuration, select_for_fold
-from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.paper.published import load_table
 from thermaxis.templates import fill
+
 from . import conditions as cond
 from . import faults
 from . import model as mdl
-from .fit import PAPER_TABLE5, RunObservables, acceptance_bounds, objective_weights, target_residuals
-from .observe import HMI_CLOCK_OFFSET_S, INTERFEROMETER, SENSORS, SOURCES, WIRELESS_JITTER_S, WIRELESS_PERIOD_S
+from .fit import (
+    PAPER_TABLE5,
+    RunObservables,
+    acceptance_bounds,
+    objective_weights,
+    target_residuals,
+)
+from .observe import (
+    HMI_CLOCK_OFFSET_S,
+    INTERFEROMETER,
+    SENSORS,
+    SOURCES,
+    WIRELESS_JITTER_S,
+    WIRELESS_PERIOD_S,
+)
 from .published import PublishedTargets, published_targets
 
 __all__ = [
@@ -102,7 +116,11 @@ def _dataset_yaml() -> str:
         lines.append(f"  - {{id: {s.id}, location: {_yaml_quote(s.location)}, source: {s.source}}}")
     lines.append("sources:")
     for name, note, offset in SOURCES:
-        lines += [f"  - name: {name}", f"    clock_note: {_yaml_quote(note)}", f"    clock_offset_s: {offset:g}"]
+        lines += [
+            f"  - name: {name}",
+            f"    clock_note: {_yaml_quote(note)}",
+            f"    clock_offset_s: {offset:g}",
+        ]
     return "\n".join(lines) + "\n"
 
 
@@ -115,7 +133,13 @@ def _runs_tsv() -> str:
 
 def _readme() -> str:
     """README.md of the embedded dataset: its runs, files, instruments and seeded faults."""
-    return fill("thermaxis.twin", "README.md.tmpl", **_instrument_values(), **_fault_values(), **_missing_reading_values())
+    return fill(
+        "thermaxis.twin",
+        "README.md.tmpl",
+        **_instrument_values(),
+        **_fault_values(),
+        **_missing_reading_values(),
+    )
 
 
 def _instrument_values() -> dict:
@@ -173,7 +197,10 @@ def _missing_reading_values() -> dict:
     """The one interferometer capture the twin leaves out, as README.md and CALIBRATION.md name it."""
     run, measurement, direction, position = faults.MISSING_READING
     return dict(
-        missing_run=run, missing_measurement=f"{measurement:02d}", missing_pass=direction, missing_position_mm=f"{position:g}"
+        missing_run=run,
+        missing_measurement=f"{measurement:02d}",
+        missing_pass=direction,
+        missing_position_mm=f"{position:g}",
     )
 
 
@@ -223,7 +250,11 @@ class PipelineView:
                 k=kb["k_um_per_m"].to_numpy(),
                 b=kb["b_um"].to_numpy(),
                 curve=self.Y.loc[rows.index].to_numpy(dtype=float),
-                temperatures={s: rows[s].to_numpy() for s in rows.columns if s not in ("run", "measurement", "time_min")},
+                temperatures={
+                    s: rows[s].to_numpy()
+                    for s in rows.columns
+                    if s not in ("run", "measurement", "time_min")
+                },
             )
         return out
 
@@ -235,14 +266,20 @@ def pipeline_view(root: Path | str) -> PipelineView:
     # The ambient sensor is the dataset's own declaration unless the config overrides it.
     config["ambient_sensor"] = config.get("ambient_sensor") or dataset.ambient_sensor
     settings = Settings.from_config(config)
-    tables = [clean_and_assemble_run(dataset, read_run(dataset, run), settings.cleaning) for run in dataset.run_ids]
+    tables = [
+        clean_and_assemble_run(dataset, read_run(dataset, run), settings.cleaning)
+        for run in dataset.run_ids
+    ]
     errors = pd.concat([t.errors for t in tables], ignore_index=True)
     kb, _ = decouple_table(errors, degree=1)  # Table 5: the paper's straight line
-    kb["n_targets"] = errors.dropna(subset=["error_um"]).groupby(["run", "measurement"]).size().to_numpy()
+    kb["n_targets"] = (
+        errors.dropna(subset=["error_um"]).groupby(["run", "measurement"]).size().to_numpy()
+    )
     X, Y = model_inputs(errors, pd.concat([t.temperatures for t in tables], ignore_index=True))
     sensor = config["ambient_sensor"]
     ambient = pd.DataFrame(
-        [(t.run, t.series[sensor].min(), t.series[sensor].max()) for t in tables], columns=["run", "min", "max"]
+        [(t.run, t.series[sensor].min(), t.series[sensor].max()) for t in tables],
+        columns=["run", "min", "max"],
     )
     return PipelineView(kb=kb, X=X, Y=Y, ambient=ambient, config=config, settings=settings)
 
@@ -272,8 +309,12 @@ def _rms(values) -> float:
 
 def _comparison(kb: pd.DataFrame) -> pd.DataFrame:
     out = kb.copy()
-    out["k_paper"] = [PAPER_TABLE5[r][0][m - 1] for r, m in zip(out["run"], out["measurement"])]
-    out["b_paper"] = [PAPER_TABLE5[r][1][m - 1] for r, m in zip(out["run"], out["measurement"])]
+    out["k_paper"] = [
+        PAPER_TABLE5[r][0][m - 1] for r, m in zip(out["run"], out["measurement"], strict=False)
+    ]
+    out["b_paper"] = [
+        PAPER_TABLE5[r][1][m - 1] for r, m in zip(out["run"], out["measurement"], strict=False)
+    ]
     out["dk"] = out["k_um_per_m"] - out["k_paper"]
     out["db"] = out["b_um"] - out["b_paper"]
     return out
@@ -289,12 +330,30 @@ def _figure(table: pd.DataFrame, eq9: dict[str, dict[str, np.ndarray]], path: Pa
     fig, axes = plt.subplots(2, 2, figsize=(10, 7), dpi=100, sharex=True)
     for run, group in table.groupby("run", sort=True):
         colour = colours.get(run, "k")
-        for col, (twin, paper, key) in enumerate((("k_um_per_m", "k_paper", "eq9_k"), ("b_um", "b_paper", "eq9_b"))):
-            axes[0, col].plot(group["time_min"], group[twin], "o-", color=colour, label=f"{run} twin")
-            axes[0, col].plot(group["time_min"], group[paper], "s--", mfc="none", color=colour, label=f"{run} Table 5")
-            axes[1, col].plot(group["time_min"], group[twin], "o-", color=colour, label=f"{run} twin")
+        for col, (twin, paper, key) in enumerate(
+            (("k_um_per_m", "k_paper", "eq9_k"), ("b_um", "b_paper", "eq9_b"))
+        ):
+            axes[0, col].plot(
+                group["time_min"], group[twin], "o-", color=colour, label=f"{run} twin"
+            )
+            axes[0, col].plot(
+                group["time_min"],
+                group[paper],
+                "s--",
+                mfc="none",
+                color=colour,
+                label=f"{run} Table 5",
+            )
             axes[1, col].plot(
-                group["time_min"], group[twin] + eq9[run][key], "^:", mfc="none", color=colour, label=f"{run} Eq. 9"
+                group["time_min"], group[twin], "o-", color=colour, label=f"{run} twin"
+            )
+            axes[1, col].plot(
+                group["time_min"],
+                group[twin] + eq9[run][key],
+                "^:",
+                mfc="none",
+                color=colour,
+                label=f"{run} Eq. 9",
             )
     for row, what in enumerate(("Table 5", "Eq. 9 on the twin's temperatures")):
         axes[row, 0].set_ylabel(f"slope k (um/m)\nvs {what}")
@@ -327,7 +386,9 @@ def _parameter_tables(params: mdl.TwinParams) -> str:
     )
     header = "| run | " + " | ".join(f"`{n}`" for n in mdl.INITIAL_PARAMETERS) + " |"
     offsets = "\n".join(
-        f"| {run} | " + " | ".join(f"{params.initial[run][n]:+.2f}" for n in mdl.INITIAL_PARAMETERS) + " |"
+        f"| {run} | "
+        + " | ".join(f"{params.initial[run][n]:+.2f}" for n in mdl.INITIAL_PARAMETERS)
+        + " |"
         for run in sorted(params.initial)
     )
     groups = "; ".join(f"`{n}`: {', '.join(nodes)}" for n, nodes in mdl.INITIAL_GROUPS.items())
@@ -358,7 +419,11 @@ def _target_rows(residuals: dict, targets: PublishedTargets) -> str:
         "table5_b": ("Table 5 intercept b (twin minus paper)", "um", False),
         "eq9_k": ("Eq. 9 k on the twin's absolute T1, T6, T12 minus the twin's k", "um/m", True),
         "eq9_b": ("Eq. 9 b on the twin's relative T2, T7, T11 minus the twin's b", "um", True),
-        "eq8": (f"Eq. 8 at {pointwise} mm on relative T1, T11, T12 minus the twin's error there", "um", True),
+        "eq8": (
+            f"Eq. 8 at {pointwise} mm on relative T1, T11, T12 minus the twin's error there",
+            "um",
+            True,
+        ),
     }
     bounds, weights = acceptance_bounds(targets), objective_weights(targets)
     rows = []
@@ -379,7 +444,8 @@ def _target_rows(residuals: dict, targets: PublishedTargets) -> str:
 def _per_run_rows(residuals: dict) -> str:
     names = ("table5_k", "table5_b", "eq9_k", "eq9_b", "eq8")
     return "\n".join(
-        f"| {run} | " + " | ".join(f"{_rms(r[name]):.3f}" for name in names) + " |" for run, r in residuals.items()
+        f"| {run} | " + " | ".join(f"{_rms(r[name]):.3f}" for name in names) + " |"
+        for run, r in residuals.items()
     )
 
 
@@ -389,24 +455,34 @@ def _ambient_rows(view: PipelineView) -> str:
     for r in view.ambient.itertuples():
         lo, hi = table1.loc[r.run, "ambient_min_c"], table1.loc[r.run, "ambient_max_c"]
         worst = max(abs(r.min - lo), abs(r.max - hi))
-        rows.append(f"| {r.run} | {lo:.1f} ... {hi:.1f} | {r.min:.2f} ... {r.max:.2f} | {worst:.2f} | {'yes' if worst <= 0.2 else '**no**'} |")
+        rows.append(
+            f"| {r.run} | {lo:.1f} ... {hi:.1f} | {r.min:.2f} ... {r.max:.2f} | {worst:.2f} | {'yes' if worst <= 0.2 else '**no**'} |"
+        )
     return "\n".join(rows)
 
 
 def _rise_table(view: PipelineView) -> tuple[str, str]:
     sensors = [c for c in view.X.columns if c not in ("run", "measurement", "time_min")]
     rise = view.X.groupby("run", sort=True)[sensors].agg(lambda t: t.iloc[-1] - t.iloc[0]).T
-    header = "| sensor | location | " + " | ".join(rise.columns) + " |\n|---|---|" + "---|" * len(rise.columns)
+    header = (
+        "| sensor | location | "
+        + " | ".join(rise.columns)
+        + " |\n|---|---|"
+        + "---|" * len(rise.columns)
+    )
     location = {s.id: s.location for s in SENSORS}
     rows = "\n".join(
-        f"| {sensor} | {location.get(sensor, '')} | " + " | ".join(f"{v:+.2f}" for v in rise.loc[sensor]) + " |"
+        f"| {sensor} | {location.get(sensor, '')} | "
+        + " | ".join(f"{v:+.2f}" for v in rise.loc[sensor])
+        + " |"
         for sensor in rise.index
     )
     ambient = view.config["ambient_sensor"]
     machine = rise.drop(index=ambient)
     first = machine.columns[0]
     similarity = ", ".join(
-        f"{run} {machine[first].corr(machine[run], method='spearman'):.2f}" for run in machine.columns[1:]
+        f"{run} {machine[first].corr(machine[run], method='spearman'):.2f}"
+        for run in machine.columns[1:]
     )
     ranking = ", ".join(machine[first].sort_values(ascending=False).index[:4])
     return f"{header}\n{rows}", (
@@ -421,7 +497,9 @@ def _heldout_rows(metrics: pd.DataFrame) -> str:
     for approach, algorithm, table in HELDOUT:
         for target in ("k", "b", "error") if approach == "decoupled" else ("error",):
             new = metrics[
-                (metrics["approach"] == approach) & (metrics["algorithm"] == algorithm) & (metrics["target"] == target)
+                (metrics["approach"] == approach)
+                & (metrics["algorithm"] == algorithm)
+                & (metrics["target"] == target)
             ].iloc[0]
             old = PREVIOUS_TWIN_HELDOUT[(approach, algorithm, target)]
             pub = paper.loc[(table, approach, algorithm, target)]
@@ -467,7 +545,9 @@ def _first_measurement_floor(targets: PublishedTargets) -> str:
 
 def _table4_tension(residuals: dict, targets: PublishedTargets, fold: str) -> str:
     """The printed Eq. 8 on the held-out run: the paper's Table 4 against the acceptance bound."""
-    table4 = load_table("prediction_metrics").set_index(["table", "approach", "algorithm", "target"])
+    table4 = load_table("prediction_metrics").set_index(
+        ["table", "approach", "algorithm", "target"]
+    )
     published = table4.loc[(4, "pointwise", "mlr", "error")]
     held_out = residuals[fold]["eq8"]
     return (

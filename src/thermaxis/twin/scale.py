@@ -42,12 +42,21 @@ class ScaleSpec:
 
     def validate(self) -> None:
         if self.runs < 1 or self.sensors < 1:
-            raise ValueError(f"runs and sensors must be >= 1, got runs={self.runs}, sensors={self.sensors}")
+            raise ValueError(
+                f"runs and sensors must be >= 1, got runs={self.runs}, sensors={self.sensors}"
+            )
         if self.positions < 2:
-            raise ValueError(f"positions must be >= 2 (a line needs two targets), got {self.positions}")
+            raise ValueError(
+                f"positions must be >= 2 (a line needs two targets), got {self.positions}"
+            )
         if not (self.hours > 0 and self.rate_hz > 0):
-            raise ValueError(f"hours and rate_hz must be positive, got hours={self.hours}, rate_hz={self.rate_hz}")
-        if self.hours * 3600.0 < FIRST_MEASUREMENT_S + 2 * self.positions * self.reading_interval_s + 60.0:
+            raise ValueError(
+                f"hours and rate_hz must be positive, got hours={self.hours}, rate_hz={self.rate_hz}"
+            )
+        if (
+            self.hours * 3600.0
+            < FIRST_MEASUREMENT_S + 2 * self.positions * self.reading_interval_s + 60.0
+        ):
             raise ValueError(
                 f"hours={self.hours} is too short for one measurement of {self.positions} targets "
                 f"(needs about {(FIRST_MEASUREMENT_S + 60.0) / 3600.0 + 2 * self.positions * self.reading_interval_s / 3600.0:.2f} h)"
@@ -66,7 +75,10 @@ class ScaleSpec:
 def _timeline(spec: ScaleSpec) -> cond.Timeline:
     total = spec.hours * 3600.0
     duration = 2 * spec.positions * spec.reading_interval_s
-    starts = np.arange(FIRST_MEASUREMENT_S, total - duration - 60.0, MEASUREMENT_PERIOD_S) - FIRST_MEASUREMENT_S
+    starts = (
+        np.arange(FIRST_MEASUREMENT_S, total - duration - 60.0, MEASUREMENT_PERIOD_S)
+        - FIRST_MEASUREMENT_S
+    )
     # Times are relative to the first measurement, as in the paper's runs.
     log_start = -FIRST_MEASUREMENT_S
     n_steps = int(np.ceil(total / cond.STEP_S))
@@ -112,13 +124,17 @@ def _write_table(path: Path, header: list[str], columns: dict[str, np.ndarray | 
         pacsv.write_csv(table, fh, pacsv.WriteOptions(include_header=False, quoting_style="none"))
 
 
-def _run(spec: ScaleSpec, index: int, params: mdl.TwinParams, mixes, root: Path) -> tuple[str, int, float]:
+def _run(
+    spec: ScaleSpec, index: int, params: mdl.TwinParams, mixes, root: Path
+) -> tuple[str, int, float]:
     rng = np.random.default_rng([spec.seed, index])
     base = cond.CONDITIONS[index % len(cond.CONDITIONS)]
     run = f"S{index + 1:03d}"
     tl = _timeline(spec)
     ambient = _ambient_profile(rng, tl)
-    initial = np.full(len(NODES), float(ambient(tl.grid_s[:1])[0])) + rng.normal(0.0, 0.5, len(NODES))
+    initial = np.full(len(NODES), float(ambient(tl.grid_s[:1])[0])) + rng.normal(
+        0.0, 0.5, len(NODES)
+    )
     state = mdl.simulate_timeline(params.values, tl, ambient, base.feed_mm_min, initial)
 
     temps = root / run / "temperatures"
@@ -159,7 +175,9 @@ def _run(spec: ScaleSpec, index: int, params: mdl.TwinParams, mixes, root: Path)
             errors / f"M{m:02d}.csv",
             ["time", "position_mm", "error_um", "direction"],
             {
-                "time": _clock(times, index, "s" if float(spec.reading_interval_s).is_integer() else "ms"),
+                "time": _clock(
+                    times, index, "s" if float(spec.reading_interval_s).is_integer() else "ms"
+                ),
                 "position_mm": lever_dir,
                 "error_um": np.round(read, 4),
                 "direction": direction,
@@ -168,7 +186,9 @@ def _run(spec: ScaleSpec, index: int, params: mdl.TwinParams, mixes, root: Path)
     return run, base.condition, base.feed_mm_min
 
 
-def generate_scale(out_dir: Path | str, spec: ScaleSpec, params: mdl.TwinParams | None = None) -> None:
+def generate_scale(
+    out_dir: Path | str, spec: ScaleSpec, params: mdl.TwinParams | None = None
+) -> None:
     """Write a benchmark dataset of ``spec`` to ``out_dir`` (one run at a time)."""
     spec.validate()
     params = params or mdl.load_params()
@@ -182,7 +202,7 @@ def generate_scale(out_dir: Path | str, spec: ScaleSpec, params: mdl.TwinParams 
     ]
     (root / "runs.tsv").write_text("\n".join(runs_tsv) + "\n", encoding="utf-8")
     sensors = "\n".join(
-        f"  - {{id: T{i + 1}, location: \"simulated surface mixing {', '.join(sorted(w))}\", source: box}}"
+        f'  - {{id: T{i + 1}, location: "simulated surface mixing {", ".join(sorted(w))}", source: box}}'
         for i, (w, _, _) in enumerate(mixes)
     )
     (root / "dataset.yaml").write_text(
