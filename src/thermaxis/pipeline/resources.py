@@ -113,11 +113,18 @@ def _read(path: Path) -> pd.DataFrame:
 
 
 def requests_from_benchmarks(bench_dir, globs: Mapping[str, str]) -> list[Request]:
-    """A :class:`Request` per rule that has at least one benchmark under ``bench_dir``."""
+    """A :class:`Request` per rule that has at least one benchmark under ``bench_dir``.
+
+    A file that one rule names exactly (``compensation/model.tsv``) is not also another
+    rule's (``compensation/*.tsv``).
+    """
     bench_dir = Path(bench_dir)
+    named = {bench_dir / pattern for pattern in globs.values() if "*" not in pattern}
     out = []
     for rule in sorted(globs):
         files = sorted(bench_dir.glob(globs[rule]))
+        if "*" in globs[rule]:
+            files = [f for f in files if f not in named]
         if not files:
             continue
         frame = pd.concat([_read(p) for p in files], ignore_index=True)
