@@ -69,7 +69,10 @@ def test_a_benchmark_one_rule_names_exactly_is_not_another_rules(tmp_path):
     header = "s\th:m:s\tmax_rss\tmax_vms\n"
     (bench / "model.tsv").write_text(header + "60.0\t0:01:00\t300.0\t900\n")
     (bench / "E1.tsv").write_text(header + "5.0\t0:00:05\t100.0\t900\n")
-    globs = {"compensation_model": "compensation/model.tsv", "compensation_fold": "compensation/*.tsv"}
+    globs = {
+        "compensation_model": "compensation/model.tsv",
+        "compensation_fold": "compensation/*.tsv",
+    }
     fold, model = resources.requests_from_benchmarks(tmp_path, globs)
     assert (fold.rule, fold.n_benchmarks, fold.max_s) == ("compensation_fold", 1, 5.0)
     assert (model.rule, model.n_benchmarks, model.max_s) == ("compensation_model", 1, 60.0)
