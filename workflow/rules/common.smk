@@ -468,10 +468,16 @@ def index_sections():
     answer = [
         (
             "recommendation",
-            [("csv", f"{OUT}/tables/recommendation.csv"), ("md", f"{OUT}/tables/recommendation.md")],
+            [
+                ("csv", f"{OUT}/tables/recommendation.csv"),
+                ("md", f"{OUT}/tables/recommendation.md"),
+            ],
         ),
         ("candidates", [("csv", f"{OUT}/recommend/candidates.csv")]),
-        ("deployed model and its verdict", [("json", f"{OUT}/compensation/model.json")]),
+        (
+            "deployed model and its verdict",
+            [("json", f"{OUT}/compensation/model.json")],
+        ),
     ]
     return [
         # Its intro, the answer in words, is written by the index job from these files.

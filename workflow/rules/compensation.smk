@@ -107,11 +107,11 @@ rule compensation_verdict:
 
 rule compensation_collect:
     input:
-        model=f"{OUT}/compensation/model.json",
         **{
             name: expand(f"{OUT}/compensation/folds/{{fold}}/{name}.csv", fold=FOLDS)
             for name in COMP_TABLES
         },
+        model=f"{OUT}/compensation/model.json",
         code=code_of("compensation_collect.py"),
     output:
         **{

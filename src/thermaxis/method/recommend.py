@@ -245,14 +245,13 @@ def fold_scores(
     ``loco``: each candidate fitted on every run but ``fold``, scored on ``fold``.
     """
     runs = natural_sorted(pd.unique(X["run"]).tolist())
-    if len(runs) < 3:
-        raise ValueError(
-            f"{len(runs)} runs: a nested leave-one-condition-out choice needs at least 3 "
-            "(one held out, and at least two to compare candidates on)"
-        )
+    if len(runs) < 2:
+        raise ValueError(f"{len(runs)} run: leave-one-condition-out needs at least 2")
     say = progress or (lambda message: None)
     train = [r for r in runs if r != fold]
-    splits = inner_splits(train, max_loco_runs, n_group_folds)
+    # With two runs the training side of a fold is one run: nothing to compare candidates
+    # on without the held-out run, so the fold has no inner scores (collect says so).
+    splits = inner_splits(train, max_loco_runs, n_group_folds) if len(train) >= 2 else []
     cache: dict = {}
     rows = []
     for candidate in candidates:
@@ -290,7 +289,11 @@ def collect(
     at = loco.set_index(["candidate", "held_out"])
     rows = []
     for fold in natural_sorted(pd.unique(scores["fold"]).tolist()):
-        chosen, inner_score = _choose(inner.loc[inner["fold"] == fold], names, score)
+        fold_inner = inner.loc[inner["fold"] == fold]
+        # No inner scores (one training run): the reference stands, unchosen.
+        chosen, inner_score = (
+            _choose(fold_inner, names, score) if len(fold_inner) else (reference, np.nan)
+        )
         rows.append(
             {
                 "fold": fold,
