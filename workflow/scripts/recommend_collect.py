@@ -4,12 +4,12 @@ import json
 
 import pandas as pd
 
-from thermaxis.config import ModelSettings, RecommendSettings, SelectionSettings
+from thermaxis.config import RecommendSettings
 from thermaxis.method.recommend import (
     candidate_record,
     candidate_table,
-    candidates_for,
     collect,
+    configured_candidates,
     deployable,
     recommendation_markdown,
 )
@@ -19,13 +19,7 @@ from thermaxis.pipeline.runner import run_script, write_csv, write_text
 def main(snakemake):
     p = snakemake.params
     recommend = RecommendSettings.from_section(p.recommend)
-    candidates = candidates_for(
-        SelectionSettings.from_section(p.selection),
-        ModelSettings.from_section(p.models),
-        recommend,
-        p.decoupled,
-        p.signals,
-    )
+    candidates = configured_candidates(p)
     scores = pd.concat([pd.read_csv(path) for path in snakemake.input.scores], ignore_index=True)
     result = collect(scores, [c.name for c in candidates], "paper", recommend.score)
     write_csv(result.folds, snakemake.output.table, float_format="%.6f")

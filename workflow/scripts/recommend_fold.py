@@ -5,8 +5,8 @@ import logging
 import pandas as pd
 
 from thermaxis.cleaning.run import model_inputs
-from thermaxis.config import DecouplingSettings, ModelSettings, RecommendSettings, SelectionSettings
-from thermaxis.method.recommend import candidates_for, fold_scores
+from thermaxis.config import DecouplingSettings, RecommendSettings
+from thermaxis.method.recommend import configured_candidates, fold_scores
 from thermaxis.pipeline.runner import run_script, write_csv
 
 
@@ -19,13 +19,7 @@ def main(snakemake):
         signals=pd.read_parquet(snakemake.input.signals),
         inputs=pd.read_parquet(snakemake.input.inputs),
     )
-    candidates = candidates_for(
-        SelectionSettings.from_section(p.selection),
-        ModelSettings.from_section(p.models),
-        recommend,
-        p.decoupled,
-        p.signals,
-    )
+    candidates = configured_candidates(p)
     log = logging.getLogger("thermaxis")
     scores = fold_scores(
         X,

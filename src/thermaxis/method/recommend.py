@@ -30,7 +30,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from thermaxis.config import ModelSettings, SelectionSettings, selection_overrides
+from thermaxis.config import (
+    ModelSettings,
+    RecommendSettings,
+    SelectionSettings,
+    selection_overrides,
+)
 from thermaxis.labels import natural_sorted
 from thermaxis.method.folds import META, evaluate_configuration, select_for_fold
 from thermaxis.reports.formatting import markdown_table
@@ -50,6 +55,7 @@ __all__ = [
     "extra_candidates",
     "candidate_table",
     "candidates_for",
+    "configured_candidates",
     "candidate_record",
     "candidate_from_record",
     "recommendation_markdown",
@@ -462,6 +468,17 @@ def candidates_for(
         *default_candidates(selection, models, decoupled, signals, time_inputs),
         *extra_candidates(recommend_settings, selection, models, signals),
     ]
+
+
+def configured_candidates(params) -> list[Candidate]:
+    """The candidate list of the recommendation rules, from their params (config sections)."""
+    return candidates_for(
+        SelectionSettings.from_section(params.selection),
+        ModelSettings.from_section(params.models),
+        RecommendSettings.from_section(params.recommend),
+        params.decoupled,
+        params.signals,
+    )
 
 
 def candidate_record(candidate: Candidate) -> dict:

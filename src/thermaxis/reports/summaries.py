@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
+from thermaxis.cleaning.temperatures import QC_COLUMNS
 from thermaxis.labels import sort_naturally
 from thermaxis.reports.html import table_html
 
@@ -18,14 +19,8 @@ __all__ = [
 
 # --------------------------------------------------------------------------- overviews
 
-_REPAIR_COLUMNS = (
-    "n_duplicates",
-    "n_out_of_range",
-    "n_spikes",
-    "n_interpolated",
-    "n_edge_held",
-    "n_long_gap",
-)
+# The QC table's counts of repaired samples: every n_ column but the raw count.
+_REPAIR_COLUMNS = tuple(c for c in QC_COLUMNS if c.startswith("n_") and c != "n_raw")
 
 
 def cleaning_repairs(qc: pd.DataFrame) -> pd.DataFrame:
