@@ -221,7 +221,8 @@ def model_record(
         "approach": approach,
         "algorithm": algorithm,
         "degree": int(getattr(estimator, "degree", 0)),
-        "sensors": list(dict.fromkeys(s for s, _ in inputs)),
+        # The logged sensors the controller reads; a time-aware input names its own.
+        "sensors": list(dict.fromkeys(s.split("@", 1)[0] for s, _ in inputs)),
         "inputs": [
             {
                 "sensor": s,

@@ -13,6 +13,7 @@ import numpy as np
 from thermaxis.compensation.model import UM_PER_MM, evaluate_regression, validate_model
 from thermaxis.config import FallbackSettings
 from thermaxis.method.decouple import MM_PER_M
+from thermaxis.method.inputs import LagState, RateState, parse_input_name
 
 __all__ = [
     "ControllerParameters",
@@ -74,7 +75,9 @@ class Compensator:
         validate_model(model, where)
         self.model = model
         self.inputs = [(i["sensor"], i["temperature"]) for i in model["inputs"]]
-        self.sensors = tuple(model["sensors"])
+        # Time-aware inputs (``T5@lag30min``): derived cycle by cycle from their sensor.
+        self.derived = {s: parse_input_name(s) for s, _ in self.inputs if "@" in s}
+        self.sensors = tuple(dict.fromkeys(s.split("@", 1)[0] for s in model["sensors"]))
         self.positions_mm = np.asarray(model["positions_mm"], dtype=float)
         self.p0_mm = float(model["reference"]["reference_position_mm"])
         self.offset_only = self.positions_mm.size == 1
@@ -95,6 +98,31 @@ class Compensator:
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: line {exc.lineno}: not valid JSON ({exc.msg})") from exc
         return cls(model, fallback, where=str(path))
+
+    def derived_inputs(
+        self, times_s: Sequence[float], temperatures: Sequence[Mapping[str, float]]
+    ) -> list[dict]:
+        """The time-aware inputs at every cycle, carried from one cycle to the next.
+
+        Each lag or rate starts with the first sample, steady, as the offline inputs of
+        :mod:`thermaxis.method.inputs` start with the run; a missing or non-finite
+        reading feeds the last good one, so a fault does not break the filter's history.
+        """
+        states = {
+            name: (LagState(seconds) if kind == "lag" else RateState(seconds), base)
+            for name, (base, kind, seconds) in self.derived.items()
+        }
+        last: dict[str, float] = {}
+        out = []
+        for time_s, sample in zip(times_s, temperatures, strict=True):
+            values = {}
+            for name, (state, base) in states.items():
+                value = sample.get(base, math.nan)
+                if math.isfinite(value):
+                    last[base] = value
+                values[name] = state.update(float(time_s), last[base]) if base in last else math.nan
+            out.append(values)
+        return out
 
     def _input_row(
         self, temperatures: Mapping[str, float], reference: Mapping[str, float]
@@ -216,6 +244,11 @@ class Compensator:
     ) -> list[Step]:
         """The compensation cycle by cycle, with the fallback policy applied."""
         f = self.fallback
+        if self.derived:
+            # The reference of a derived input is its value at the first cycle (homing).
+            derived = self.derived_inputs(times_s, temperatures)
+            temperatures = [{**s, **d} for s, d in zip(temperatures, derived, strict=True)]
+            reference = {**reference, **derived[0]}
         good = _zero_parameters(self.p0_mm, self.offset_only, self.positions_mm.size)
         fault_since = None
         last: dict[str, tuple[float, float]] = {}

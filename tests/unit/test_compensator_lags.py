@@ -1,0 +1,63 @@
+"""A time-aware input in model.json, computed by the Compensator cycle by cycle."""
+
+import copy
+
+import numpy as np
+import pytest
+
+from helpers.builders import hand_model
+from thermaxis.compensation.runtime import Compensator
+from thermaxis.method.inputs import lag_filter
+
+
+def lagged_model():
+    """The hand model with b on a 30 min lag of T2 (relative to homing) instead of T2."""
+    model = copy.deepcopy(hand_model())
+    model["inputs"][1]["sensor"] = "T2@lag30min"
+    model["inputs"][1]["training_max_c"] = 10.0
+    return model
+
+
+def logged_run(n=240, seed=4):
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(5.0, 15.0, n))  # irregular cycles, seconds
+    t1 = 30.0 + np.cumsum(rng.normal(0.0, 0.005, n))
+    t2 = 25.0 + 0.002 * t + rng.normal(0.0, 0.01, n)
+    return t, [{"T1": a, "T2": b} for a, b in zip(t1, t2, strict=True)], t2
+
+
+def test_the_lag_carried_cycle_by_cycle_equals_the_offline_filter():
+    t, samples, t2 = logged_run()
+    compensator = Compensator(lagged_model())
+    assert compensator.sensors == ("T1", "T2")  # the controller reads the logged sensors
+    online = [d["T2@lag30min"] for d in compensator.derived_inputs(t, samples)]
+    np.testing.assert_allclose(online, lag_filter(t, t2, 1800.0), rtol=0, atol=1e-9)
+
+
+def test_each_cycle_uses_the_lag_and_its_value_at_homing():
+    t, samples, t2 = logged_run()
+    compensator = Compensator(lagged_model())
+    steps = compensator.run(t, samples, samples[0])
+    lag = lag_filter(t, t2, 1800.0)
+    for k in (0, 60, 239):
+        # b = -0.5 - 11 x (lag now - lag at homing), k = -300 + 13 T1: as parameters() computes it.
+        expected = compensator.parameters(
+            {**samples[k], "T2@lag30min": lag[k]}, {**samples[0], "T2@lag30min": lag[0]}
+        )
+        assert steps[k].status == "ok"
+        assert steps[k].parameters.k0_mm == pytest.approx(expected.k0_mm, abs=1e-12)
+        assert steps[k].parameters.tan_beta == pytest.approx(expected.tan_beta, abs=1e-15)
+    # Hand check at the last cycle: the compensation undoes the change of b since homing,
+    # delta b = -11 (lag - lag at homing) um, so K0 = -delta b / 1000 mm.
+    delta_b = -11.0 * (lag[-1] - lag[0])
+    assert steps[-1].parameters.k0_mm == pytest.approx(-delta_b / 1000.0, abs=1e-12)
+
+
+def test_a_missing_reading_feeds_the_last_good_one_to_the_filter():
+    t, samples, t2 = logged_run(n=20)
+    broken = [dict(s) for s in samples]
+    broken[10]["T2"] = float("nan")
+    held = t2.copy()
+    held[10] = held[9]
+    online = [d["T2@lag30min"] for d in Compensator(lagged_model()).derived_inputs(t, broken)]
+    np.testing.assert_allclose(online, lag_filter(t, held, 1800.0), rtol=0, atol=1e-9)
