@@ -131,6 +131,8 @@ rule model_report:
             f"{OUT}/compensation/folds/{w.fold}/{n}.csv"
             for n in ("summary", "iso230_2", "siemens_840d", "twincat")
         ],
+        fold_model=f"{OUT}/compensation/folds/{{fold}}/model.json",
+        deployed=f"{OUT}/compensation/model.json",
         figures=lambda w: [f["path"] for f in model_report_figures(w.fold).values()],
     output:
         notebook=f"{OUT}/reports/model_{{fold}}.ipynb",
