@@ -9,7 +9,12 @@ import pandas as pd
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.compensation import heldout, runtime
 from thermaxis.compensation import model as comp_model
-from thermaxis.config import CompensationSettings, DecouplingSettings, ModelSettings
+from thermaxis.config import (
+    CompensationSettings,
+    DecouplingSettings,
+    ModelSettings,
+    SelectionSettings,
+)
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.method import recommend
 from thermaxis.method.folds import select_for_fold, selection_from_dict
@@ -28,19 +33,23 @@ def main(snakemake):
     with open(snakemake.input.choice, encoding="utf-8") as fh:
         # The model the procedure would have deployed without this run (its fold's choice).
         chosen = recommend.deployed_record(settings.model, json.load(fh), fold)
-    approach = p.approach
+    approach, selection_settings, models, settings = recommend.deployed_setup(
+        chosen,
+        p.approach,
+        SelectionSettings.from_section(p.sections["selection"]),
+        models,
+        settings,
+    )
     if chosen is None:
+        # The configured model's selection of this fold, as the models rule made it.
         with open(snakemake.input.selection, encoding="utf-8") as fh:
             selection = selection_from_dict(json.load(fh))
     else:
-        candidate = recommend.candidate_from_record(chosen, models)
-        approach, models = candidate.approach, candidate.models
-        settings = replace(settings, algorithm=candidate.algorithm)
         selection = select_for_fold(
             X,
             Y,
             fold,
-            replace(candidate.selection, scope="training"),
+            replace(selection_settings, scope="training"),
             decoupling.degree,
             decoupled=approach == "decoupled",
             pointwise=approach == "pointwise",

@@ -36,28 +36,20 @@ def main(snakemake):
     )
     with open(snakemake.input.choice, encoding="utf-8") as fh:
         record = recommend.deployed_record(settings.model, json.load(fh))
+    approach, selection_settings, models, settings = recommend.deployed_setup(
+        record, p.approach, SelectionSettings.from_section(sections["selection"]), models, settings
+    )
     if record is None:
-        approach, selection_settings = (
-            p.approach,
-            SelectionSettings.from_section(sections["selection"]),
-        )
         deployment = {"model": "paper", "candidate": "paper"}
         accuracy = heldout.held_out_accuracy(
             pd.read_csv(snakemake.input.metrics), approach, settings.algorithm
         )
     else:
-        candidate = recommend.candidate_from_record(record, models)
-        approach, selection_settings, models = (
-            candidate.approach,
-            candidate.selection,
-            candidate.models,
-        )
-        settings = replace(settings, algorithm=candidate.algorithm)
-        deployment = {"model": p.model, "candidate": candidate.name}
+        deployment = {"model": p.model, "candidate": record["name"]}
         scores = pd.concat(
             [pd.read_csv(path) for path in snakemake.input.scores], ignore_index=True
         )
-        accuracy = recommend.held_out_accuracy(scores, candidate.name)
+        accuracy = recommend.held_out_accuracy(scores, record["name"])
     # The deployed model sees every run, its sensitive points too.
     selection = select_for_fold(
         X,

@@ -32,10 +32,9 @@ QUANTITIES = (
 
 def run_changes(summary: pd.DataFrame) -> pd.DataFrame:
     """Per held-out run: each quantity's worst value over its measurements, before and after."""
-    columns = {"run": []}
     grouped = summary.groupby("run", sort=False)
     runs = sorted(grouped.groups, key=natural_key)
-    columns["run"] = runs
+    columns = {"run": runs}
     for name, before, after, _ in QUANTITIES:
         worst_before = grouped[before].max().loc[runs].to_numpy(dtype=float)
         worst_after = grouped[after].max().loc[runs].to_numpy(dtype=float)

@@ -62,12 +62,13 @@ __all__ = [
     "summary_of",
     "deployable",
     "deployed_record",
+    "deployed_setup",
     "held_out_accuracy",
 ]
 
 # What the inner loop minimises: the mean over inner folds of the held-out error curves'
 # largest |residual| (what a compensation must bound) or their RMSE.
-SCORES = {"max_abs": "max_abs", "rmse": "rmse"}
+SCORES = ("max_abs", "rmse")
 # Every held-out score recorded (model.json's held_out_accuracy takes them all).
 METRICS = ("rmse", "max_abs", "mae", "residual_min", "residual_max")
 
@@ -555,6 +556,29 @@ def deployed_record(model: str, choice: Mapping, fold: str | None = None) -> dic
     raise ValueError(
         f"config compensation.model: {model!r} is not 'recommended', 'paper' or a deployable candidate "
         f"({', '.join(d['candidates'])})"
+    )
+
+
+def deployed_setup(
+    record: Mapping | None,
+    approach: str,
+    selection: SelectionSettings,
+    models: ModelSettings,
+    settings,
+):
+    """What the compensation fits: (approach, selection settings, model settings, compensation settings).
+
+    ``record`` is :func:`deployed_record`'s; None keeps the configured model (``approach``,
+    ``selection``, ``models`` and ``settings.algorithm``).
+    """
+    if record is None:
+        return approach, selection, models, settings
+    candidate = candidate_from_record(record, models)
+    return (
+        candidate.approach,
+        candidate.selection,
+        candidate.models,
+        replace(settings, algorithm=candidate.algorithm),
     )
 
 
