@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 
 import numpy as np
@@ -197,3 +198,21 @@ def hand_model(fallback=HOLD, positions=TARGETS) -> dict:
         "curve_basis": [[si, 1.0] for si in s],
         "fallback": {**fallback.__dict__, "plausible_c": list(fallback.plausible_c)},
     }
+
+
+def lagged_model() -> dict:
+    """The hand model with b on a 30 min lag of T2 (relative to homing) instead of T2."""
+    model = copy.deepcopy(hand_model())
+    model["inputs"][1]["sensor"] = "T2@lag30min"
+    model["inputs"][1]["training_max_c"] = 10.0
+    return model
+
+
+def logged_run(n=240, seed=4):
+    """A logged run at irregular 5-15 s cycles: times [s], the samples a controller reads,
+    and T2, which rises 0.002 C/s."""
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(5.0, 15.0, n))  # irregular cycles, seconds
+    t1 = 30.0 + np.cumsum(rng.normal(0.0, 0.005, n))
+    t2 = 25.0 + 0.002 * t + rng.normal(0.0, 0.01, n)
+    return t, [{"T1": a, "T2": b} for a, b in zip(t1, t2, strict=True)], t2

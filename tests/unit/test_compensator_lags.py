@@ -1,29 +1,11 @@
 """A time-aware input in model.json, computed by the Compensator cycle by cycle."""
 
-import copy
-
 import numpy as np
 import pytest
 
-from helpers.builders import hand_model
+from helpers.builders import lagged_model, logged_run
 from thermaxis.compensation.runtime import Compensator
 from thermaxis.method.inputs import lag_filter
-
-
-def lagged_model():
-    """The hand model with b on a 30 min lag of T2 (relative to homing) instead of T2."""
-    model = copy.deepcopy(hand_model())
-    model["inputs"][1]["sensor"] = "T2@lag30min"
-    model["inputs"][1]["training_max_c"] = 10.0
-    return model
-
-
-def logged_run(n=240, seed=4):
-    rng = np.random.default_rng(seed)
-    t = np.cumsum(rng.uniform(5.0, 15.0, n))  # irregular cycles, seconds
-    t1 = 30.0 + np.cumsum(rng.normal(0.0, 0.005, n))
-    t2 = 25.0 + 0.002 * t + rng.normal(0.0, 0.01, n)
-    return t, [{"T1": a, "T2": b} for a, b in zip(t1, t2, strict=True)], t2
 
 
 def test_the_lag_carried_cycle_by_cycle_equals_the_offline_filter():

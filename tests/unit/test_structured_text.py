@@ -4,11 +4,15 @@ The constants are taken from blark's parse tree, evaluated, and the TwinCAT valu
 encode are computed from them with plain numpy; they must equal Compensator's to 1e-9.
 """
 
+import copy
+import math
+
 import numpy as np
 import pandas as pd
 import pytest
 from blark.parse import parse_source_code
 
+from helpers.builders import lagged_model, logged_run
 from thermaxis.compensation.exports import twincat
 from thermaxis.compensation.model import CONVENTION, model_record
 from thermaxis.compensation.plc import st_real, structured_text
@@ -87,12 +91,20 @@ def exported():
     return model, Compensator(model), source, parsed_constants(source)
 
 
-def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray) -> dict:
-    """The block's arithmetic on its own constants: P-AXIS-00272/273/274."""
+def st_twincat(c: dict, temperatures: np.ndarray, reference: np.ndarray, lags=None) -> dict:
+    """The block's arithmetic on its own constants: P-AXIS-00272/273/274.
+
+    ``lags``: the lag filters' outputs now and at homing, for a block with lag inputs."""
     sensor = np.asarray(c["INPUT_SENSOR"]) - 1
     relative = np.asarray(c["INPUT_RELATIVE"])
     now = np.where(relative, temperatures[sensor] - reference[sensor], temperatures[sensor])
     ref = np.where(relative, 0.0, reference[sensor])
+    if lags is not None:
+        y, y_homing = lags
+        lag = np.asarray(c["INPUT_LAG"]) - 1
+        filtered = lag >= 0
+        now = np.where(filtered, np.where(relative, y[lag] - y_homing[lag], y[lag]), now)
+        ref = np.where(filtered, np.where(relative, 0.0, y_homing[lag]), ref)
     if "COEFF" in c:
         change = np.asarray(c["COEFF"]).reshape(c["N_REGRESSIONS"], c["N_INPUTS"]) @ (now - ref)
     else:
@@ -210,3 +222,65 @@ def test_literals_keep_every_bit():
     for value in (1e-05, -7.417, 0.1 + 0.2, 185.0, -2.5e-300):
         text = st_real(value)
         assert "." in text.split("E")[0] and float(text) == value
+
+
+def st_lags(c: dict, times, readings) -> list[np.ndarray]:
+    """The block's lag filters run on its own constants (LAG_SENSOR, LAG_TAU), cycle by cycle:
+    the exact response of tau y' = u - y to u linear over the cycle, e = y - u,
+    e := a e - (1 - a) / x (u - u_previous), a = exp(-x), x = dt / tau; a missing reading
+    (NaN) feeds the last one; each filter starts steady at its sensor's first reading."""
+    sensor, tau = np.asarray(c["LAG_SENSOR"]) - 1, np.asarray(c["LAG_TAU"])
+    u = e = None
+    out = []
+    for k, reading in enumerate(readings):
+        fed = np.asarray(reading, dtype=float)[sensor]
+        if u is None:
+            u, e = fed, np.zeros_like(fed)
+        else:
+            fed = np.where(np.isnan(fed), u, fed)
+            x = (times[k] - times[k - 1]) / tau
+            one_minus_a = -np.array([math.expm1(-v) for v in x])
+            e = np.exp(-x) * e - one_minus_a / x * (fed - u)
+            u = fed
+        out.append(u + e)
+    return out
+
+
+def test_lag_block_equals_compensator_cycle_by_cycle():
+    # k on a 600 min lag of T1 (dt/tau ~ 3e-4: the block's series for 1 - a) and b on a
+    # 30 min lag of T2's rise (dt/tau ~ 6e-3: EXP); one reading of T2 missing mid-run.
+    model = lagged_model()
+    model["inputs"][0]["sensor"] = "T1@lag600min"
+    model["inputs"][0]["training_max_c"] = 40.0
+    t, samples, _ = logged_run()
+    samples[120] = {**samples[120], "T2": math.nan}
+    steps = Compensator(copy.deepcopy(model)).run(t, samples, samples[0])
+    c = parsed_constants(structured_text(model, "SIMULATED test data."))
+    assert (c["N_LAGS"], c["LAG_SENSOR"], c["LAG_TAU"]) == (2, [1, 2], [36000.0, 1800.0])
+    assert c["INPUT_LAG"] == [1, 2]
+    readings = [[s["T1"], s["T2"]] for s in samples]
+    lags = st_lags(c, t, readings)
+    checked = 0
+    for k, step in enumerate(steps):
+        if step.status != "ok":
+            continue
+        expected = {row[0]: row[2] for row in twincat(step.parameters)}
+        got = st_twincat(c, np.array(readings[k]), np.array(readings[0]), (lags[k], lags[0]))
+        for parameter in ("P-AXIS-00273", "P-AXIS-00274"):
+            assert got[parameter] == pytest.approx(expected[parameter], abs=1e-9), (k, parameter)
+        checked += 1
+    assert steps[120].status != "ok" and checked == len(t) - 1
+    # The lags moved: b's 30 min lag of a 0.002 C/s ramp is far from its homing value.
+    assert abs(expected["P-AXIS-00273"]) > 100.0
+
+
+def test_a_block_without_lags_declares_none(exported):
+    _, _, source, c = exported
+    assert "N_LAGS" not in c and "aLag" not in source
+
+
+def test_a_rate_input_is_refused_by_name():
+    model = lagged_model()
+    model["inputs"][1]["sensor"] = "T2@rate10min"
+    with pytest.raises(ValueError, match=r"'T2@rate10min'.*lag inputs only"):
+        structured_text(model, "SIMULATED")

@@ -23,6 +23,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from thermaxis.compensation.model import CONVENTION, TENTHS_UM_PER_MM, UM_PER_MM
+from thermaxis.method.inputs import parse_input_name
 from thermaxis.templates import fill
 
 __all__ = ["structured_text", "st_real"]
@@ -117,6 +118,7 @@ def structured_text(model: Mapping, statement: str) -> str:
         **_header_values(model, statement),
         **_input_values(model),
         **_fallback_values(model["fallback"]),
+        **_lag_values(model),
         regression_constants=constants,
         regression_changes=changes,
     )
@@ -155,7 +157,7 @@ def _input_values(model: Mapping) -> dict:
         n_sensors=len(sensors),
         n_inputs=len(inputs),
         n_regressions=len(model["regressions"]),
-        input_sensor=", ".join(str(sensors.index(i["sensor"]) + 1) for i in inputs),
+        input_sensor=", ".join(str(sensors.index(_base(i["sensor"])) + 1) for i in inputs),
         input_relative=_bools(i["temperature"] == "relative" for i in inputs),
         input_min=_array(i["training_min_c"] for i in inputs),
         input_max=_array(i["training_max_c"] for i in inputs),
@@ -164,6 +166,43 @@ def _input_values(model: Mapping) -> dict:
         p0_mm=st_real(float(model["reference"]["reference_position_mm"])),
         tenths_um_per_mm=st_real(TENTHS_UM_PER_MM),
         tenths_um_per_um=st_real(TENTHS_UM_PER_MM / UM_PER_MM),
+    )
+
+
+def _base(name: str) -> str:
+    """The logged sensor an input is read from (``T2`` of ``T2@lag30min``)."""
+    return name.split("@", 1)[0]
+
+
+def _lag_values(model: Mapping) -> dict:
+    """The lag filters' constants, state and statements; empty for a model without lag inputs.
+
+    Each lag input gets its own filter (its sensor and time constant), so an input's
+    INPUT_LAG names the filter whose output replaces its sensor's temperature.
+    """
+    sensors, names = list(model["sensors"]), [i["sensor"] for i in model["inputs"]]
+    derived = {name: parse_input_name(name) for name in names if "@" in name}
+    rates = [name for name, (_, kind, _) in derived.items() if kind != "lag"]
+    if rates:
+        raise ValueError(
+            f"model.json input {rates[0]!r}: the Structured Text block computes lag inputs only; "
+            "expected <sensor>@lag<duration> (deploy a rate input with thermaxis's Compensator)"
+        )
+    lags = list(dict.fromkeys(derived))
+    if not lags:
+        return dict(lag_constants="", lag_variables="", lag_update="", lag_input="")
+    values = dict(
+        n_lags=len(lags),
+        n_inputs=len(names),
+        lag_sensor=", ".join(str(sensors.index(derived[n][0]) + 1) for n in lags),
+        lag_tau=_array(derived[n][2] for n in lags),
+        input_lag=", ".join(str(lags.index(n) + 1) if n in derived else "0" for n in names),
+    )
+    return dict(
+        lag_constants=_st("lag_constants.st.tmpl", **values),
+        lag_variables=_st("lag_variables.st.tmpl", **values),
+        lag_update=_st("lag_update.st.tmpl"),
+        lag_input=_st("lag_input.st.tmpl"),
     )
 
 
