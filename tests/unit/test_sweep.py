@@ -20,7 +20,7 @@ from threadpoolctl import threadpool_limits
 
 from helpers import DEFAULTS
 from thermaxis.config import Settings, load_config
-from thermaxis.method import folds
+from thermaxis.method import batched, folds
 from thermaxis.method.folds import evaluate_configuration, select_for_fold
 from thermaxis.method.metrics import METRIC_COLUMNS
 from thermaxis.schemas import schema_path
@@ -203,7 +203,8 @@ def test_batch_rows_are_the_library_functions_metrics():
         )
 
 
-def test_identical_model_inputs_are_evaluated_once(monkeypatch):
+@pytest.mark.parametrize("algorithm", ["svr", "mlr"])
+def test_identical_model_inputs_are_evaluated_once(monkeypatch, algorithm):
     X, Y = _inputs()
     calls = []
     original = folds.evaluate_configuration
@@ -212,13 +213,23 @@ def test_identical_model_inputs_are_evaluated_once(monkeypatch):
         calls.append(args[2:5])
         return original(*args, **kwargs)
 
+    def counting_sets(function):
+        # The batched path's point sets (its last argument): one per distinct evaluation.
+        def counted(*args, **kwargs):
+            calls.extend(args[-1])
+            return function(*args, **kwargs)
+
+        return counted
+
     monkeypatch.setattr(folds, "evaluate_configuration", counting)
+    for name in ("decoupled_metrics", "pointwise_metrics"):
+        monkeypatch.setattr(batched, name, counting_sets(getattr(batched, name)))
     # "all" puts every sensor in k and b, and its pointwise common set is the first
     # pointwise_common (here 4 = all) sensors; "fixed" lists exactly the same sensors.
     # So 2 settings x (decoupled d1 + pointwise) x 1 algorithm = 4 configurations,
-    # but only 2 distinct evaluations.
+    # but only 2 distinct evaluations (svr one by one, mlr batched).
     every = ("S1", "S2", "S3", "S4")
-    grid = replace(DEFAULTS.sweep.grid, methods=("all", "fixed"), degrees=(1,), algorithms=("mlr",),
+    grid = replace(DEFAULTS.sweep.grid, methods=("all", "fixed"), degrees=(1,), algorithms=(algorithm,),
                            fixed=(("b", every), ("k", every), ("pointwise", every)))  # fmt: skip
     units, _ = sweep_plan.plan_units(grid, ["R1"], list(every))
     rows = sweep_run.run_batch(

@@ -17,6 +17,9 @@ How the cost is kept down
   ``selection.pointwise_common`` sensors whatever the cluster count).  An evaluation depends on the selection
   only through the sensors its model uses, so within a batch the metrics of an
   identical (fold, approach, algorithm, degree, sensors) evaluation are reused.
+* Linear evaluations (mlr, ridge and pls at fixed strengths) are not fitted one by one:
+  every point set of a (fold, approach, algorithm, degree) is solved at once from the
+  fold's Gram matrices (:mod:`thermaxis.method.batched`, the same numbers to 1e-9).
 
 scikit-learn is imported only when a batch evaluates, so the collecting and plotting
 jobs do not pay for it.
@@ -182,12 +185,35 @@ def _evaluate(
         return str(exc).splitlines()[0]
 
 
+def _evaluate_batched(X, Y, deferred: dict, model: ModelSettings) -> dict:
+    """The deferred linear evaluations, every point set of a (fold, approach, algorithm,
+    degree) in one call of the numpy core; one-by-one where the data stops a group."""
+    from thermaxis.method.batched import decoupled_metrics, pointwise_metrics
+
+    groups: dict[tuple, list] = {}
+    for key in deferred:
+        groups.setdefault(key[:4], []).append(key)
+    out = {}
+    for (fold, approach, algorithm, degree), keys in groups.items():
+        try:
+            if approach == "decoupled":
+                pairs = [(key[4][1], key[4][3]) for key in keys]
+                frames = decoupled_metrics(X, Y, fold, algorithm, model, degree, pairs)
+            else:
+                frames = pointwise_metrics(X, Y, fold, algorithm, model, [k[4][1] for k in keys])
+            out.update(zip(keys, frames, strict=True))
+        except ValueError:
+            # The one-by-one path says which evaluation failed and why, as it always has.
+            out.update({key: _evaluate(X, Y, fold, *deferred[key], model) for key in keys})
+    return out
+
+
 def _config_rows(
     config: Configuration,
     fold: str,
     inputs: tuple,
     outcome,
-    reused: bool = False,
+    how: str = "fitted",
     seconds: float = 0.0,
 ) -> list[dict]:
     """Summary rows of one configuration on one fold, and its log line."""
@@ -198,7 +224,7 @@ def _config_rows(
     error = outcome.loc[outcome["target"] == "error", "max_abs"].iloc[0]
     log.info(
         "%s fold %s: max|residual| %.4g um (%s, %.2f s)",
-        config.config_id, fold, error, "reused" if reused else "fitted", seconds,
+        config.config_id, fold, error, how, seconds,
     )  # fmt: skip
     sensors = _sensors_text(inputs)
     return [
@@ -248,27 +274,46 @@ def run_batch(
         :data:`SUMMARY_COLUMNS`, metrics unrounded.  A configuration that cannot be
         evaluated on a fold (e.g. a selection the data cannot support) gives one row
         with NaN metrics and the reason in ``status``, instead of stopping the sweep.
+
+    Linear evaluations (:func:`thermaxis.method.batched.batchable`) are deferred and
+    made at the end, all point sets of a fold and model at once
+    (:mod:`thermaxis.method.batched`, equal to the one-by-one fits to 1e-9).
     """
-    rows: list[dict] = []
+    from thermaxis.method.batched import batchable
+
+    planned: list[tuple] = []
     done: dict[tuple, pd.DataFrame | str] = {}
+    deferred: dict[tuple, tuple] = {}
+    seconds: dict[tuple, float] = {}
     for unit in units:
         selections = _unit_selections(X, Y, unit, grid, base_selection, decoupled)
         for config in grid.unit_configurations(unit.selection, decoupled):
             selection = selections[config.degree]
             if isinstance(selection, str):
-                rows += _config_rows(config, unit.fold, (), selection)
+                planned.append((config, unit.fold, (), None, selection))
             else:
-                started = time.perf_counter()
                 inputs = _model_inputs_of(selection, config.approach)
                 key = (unit.fold, config.approach, config.algorithm, config.degree, inputs)
-                reused = key in done
-                if not reused:
+                planned.append((config, unit.fold, inputs, key, None))
+                new = key not in done and key not in deferred
+                if new and batchable(config.algorithm, model, Y):
+                    deferred[key] = (config, selection)
+                elif new:
+                    started = time.perf_counter()
                     done[key] = _evaluate(X, Y, unit.fold, config, selection, model)
-                rows += _config_rows(
-                    config, unit.fold, inputs, done[key], reused, time.perf_counter() - started
-                )
+                    seconds[key] = time.perf_counter() - started
             if progress is not None:
                 progress.update()
+    done.update(_evaluate_batched(X, Y, deferred, model))
+    rows: list[dict] = []
+    seen: set[tuple] = set()
+    for config, fold, inputs, key, failure in planned:
+        if key is None:
+            rows += _config_rows(config, fold, inputs, failure)
+            continue
+        how = "reused" if key in seen else "batched" if key in deferred else "fitted"
+        rows += _config_rows(config, fold, inputs, done[key], how, seconds.get(key, 0.0))
+        seen.add(key)
     return _as_summary_frame(rows)
 
 

@@ -1,0 +1,114 @@
+"""The batched linear evaluations equal evaluate_configuration's scikit-learn fits to 1e-9."""
+
+from dataclasses import replace
+from itertools import combinations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from helpers import DEFAULTS
+from thermaxis.method.batched import batchable, decoupled_metrics, pointwise_metrics
+from thermaxis.method.folds import FoldSelection, evaluate_configuration
+from thermaxis.method.metrics import METRIC_COLUMNS
+from thermaxis.method.selection import SensitivePoints
+
+SENSORS = [f"T{i}" for i in range(1, 7)]
+POSITIONS = np.linspace(0.0, 600.0, 7)
+
+
+def runs(collinear: bool = False, seed: int = 3):
+    """Four runs of nine measurements; errors linear in two sensors plus a curvature and noise.
+
+    ``collinear``: T6 is T5 plus a few millikelvin, the near-duplicate sensors of a real rig."""
+    rng = np.random.default_rng(seed)
+    rows, curves = [], []
+    for r in range(4):
+        heat = np.cumsum(rng.uniform(0.2, 1.0, 9))
+        for m in range(9):
+            t = 22.0 + r + heat[m] * rng.uniform(0.5, 1.5, len(SENSORS))
+            if collinear:
+                t[5] = t[4] + rng.normal(0.0, 0.003)
+            rows.append({"run": f"E{r + 1}", "measurement": m + 1, "time_min": 15.0 * m,
+                         **dict(zip(SENSORS, t, strict=True))})  # fmt: skip
+            k, b = 4.0 * (t[0] - 22.0), -3.0 * (t[2] - t[3]) + 0.5 * t[1]
+            curve = k * POSITIONS / 1000.0 + b + 1e-5 * t[4] * POSITIONS**2 / 100.0
+            curves.append(curve + rng.normal(0.0, 0.2, POSITIONS.size))
+    return pd.DataFrame(rows), pd.DataFrame(curves, columns=POSITIONS)
+
+
+def points(selected) -> SensitivePoints:
+    return SensitivePoints(clusters=tuple((s,) for s in selected), selected=tuple(selected),
+                           grades={}, eta=0.0)  # fmt: skip
+
+
+def selection(k, b, pointwise) -> FoldSelection:
+    return FoldSelection("any", points(k), points(b), pointwise=tuple(pointwise))
+
+
+MODELS = replace(DEFAULTS.models, ridge_alpha=0.7, pls_components=2)
+
+
+def assert_same(got: pd.DataFrame, expected: pd.DataFrame):
+    assert list(got.columns) == list(expected.columns)
+    assert got[["fold", "approach", "algorithm", "target"]].equals(
+        expected[["fold", "approach", "algorithm", "target"]]
+    )
+    np.testing.assert_allclose(
+        got[list(METRIC_COLUMNS)].to_numpy(),
+        expected[list(METRIC_COLUMNS)].to_numpy(),
+        rtol=1e-9,
+        atol=1e-12,
+    )
+
+
+@pytest.mark.parametrize("collinear", [False, True])
+@pytest.mark.parametrize("algorithm", ["mlr", "ridge", "pls"])
+@pytest.mark.parametrize("degree", [1, 2, 3])
+def test_decoupled_equals_scikit_learn(algorithm, degree, collinear):
+    X, Y = runs(collinear)
+    pairs = [
+        (("T1", "T5", "T6"), ("T3", "T4")),
+        (("T2",), ("T1", "T3", "T4")),
+        (("T5", "T6"), ("T2",)),
+    ]
+    for fold in ("E1", "E3"):
+        got = decoupled_metrics(X, Y, fold, algorithm, MODELS, degree, pairs)
+        for (k, b), frame in zip(pairs, got, strict=True):
+            expected = evaluate_configuration(
+                X, Y, fold, "decoupled", algorithm, selection(k, b, ()), MODELS, degree
+            ).metrics
+            assert_same(frame, expected)
+
+
+@pytest.mark.parametrize("collinear", [False, True])
+@pytest.mark.parametrize("algorithm", ["mlr", "ridge", "pls"])
+def test_pointwise_equals_scikit_learn(algorithm, collinear):
+    X, Y = runs(collinear)
+    sets = list(combinations(SENSORS, 3)) + [("T2",), ("T5", "T6")]
+    got = pointwise_metrics(X, Y, "E2", algorithm, MODELS, sets)
+    for points, frame in zip(sets, got, strict=True):
+        expected = evaluate_configuration(
+            X, Y, "E2", "pointwise", algorithm, selection((), (), points), MODELS, None
+        ).metrics
+        assert_same(frame, expected)
+
+
+def test_a_perfect_model_is_exact_by_hand():
+    # Errors exactly 2 um per degree of T1's rise at every position: MLR on T1 predicts a
+    # held-out run without residual, whatever the other runs' temperatures.
+    X, _ = runs()
+    rise = X["T1"] - X.groupby("run")["T1"].transform("first")
+    Y = pd.DataFrame(np.outer(2.0 * rise, np.ones(POSITIONS.size)), columns=POSITIONS)
+    (frame,) = pointwise_metrics(X, Y, "E4", "mlr", MODELS, [("T1",)])
+    assert frame["max_abs"].iloc[0] < 1e-9
+
+
+def test_what_is_not_batched():
+    _, Y = runs()
+    assert batchable("mlr", MODELS, Y) and batchable("pls", MODELS, Y)
+    assert not batchable("svr", MODELS, Y) and not batchable("gpr", MODELS, Y)
+    assert not batchable("ridge", replace(MODELS, searched=("ridge",)), Y)
+    assert not batchable("mlr", replace(MODELS, signals=("S",)), Y)
+    Y.iloc[3, 2] = np.nan
+    assert not batchable("mlr", MODELS, Y)
