@@ -313,7 +313,23 @@ def test_scale_generator_writes_the_requested_shape(tmp_path):
 
 def test_scale_generator_rejects_an_impossible_shape(tmp_path):
     with pytest.raises(ValueError, match="positions"):
-        generate_scale(tmp_path, ScaleSpec(runs=1, sensors=2, positions=1, hours=1.0, rate_hz=1.0))
+        generate_scale(tmp_path, ScaleSpec(runs=1, sensors=2, positions=0, hours=1.0, rate_hz=1.0))
+    with pytest.raises(ValueError, match="too short"):
+        generate_scale(tmp_path, ScaleSpec(runs=1, sensors=2, positions=4, hours=0.05, rate_hz=1.0))
+
+
+def test_scale_generator_writes_a_single_position_at_its_measurement_period(tmp_path):
+    # 1 h log, first measurement 300 s after its start, one every 600 s, each 2 readings
+    # 6 s apart (both directions), so starts at 300, 900, ..., 3300 s: 6 measurements.
+    spec = ScaleSpec(
+        runs=1, sensors=3, positions=1, hours=1.0, rate_hz=0.1, measurement_period_s=600.0
+    )
+    generate_scale(tmp_path, spec)
+    raw = read_run(load_dataset(tmp_path), "S001")
+    assert len(raw.measurements) == 6
+    for frame in raw.measurements.values():
+        assert len(frame) == 2 and set(frame["position_mm"]) == {185.0}
+    assert "measurements every 10 min" in (tmp_path / "dataset.yaml").read_text()
 
 
 def test_no_modelling_code_reads_the_ground_truth():

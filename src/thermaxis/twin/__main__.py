@@ -34,6 +34,9 @@ def _parser() -> argparse.ArgumentParser:
     sc.add_argument("--hours", type=float, default=8.0)
     sc.add_argument("--rate-hz", type=float, default=1.0)
     sc.add_argument("--seed", type=int, default=0)
+    sc.add_argument(
+        "--measurement-min", type=float, default=30.0, help="minutes between measurements"
+    )
     return parser
 
 
@@ -63,7 +66,13 @@ def main(argv: list[str] | None = None) -> int:
         from .scale import ScaleSpec, generate_scale
 
         spec = ScaleSpec(
-            args.runs, args.sensors, args.positions, args.hours, args.rate_hz, args.seed
+            args.runs,
+            args.sensors,
+            args.positions,
+            args.hours,
+            args.rate_hz,
+            args.seed,
+            60.0 * args.measurement_min,
         )
         try:
             generate_scale(args.out, spec)

@@ -39,19 +39,18 @@ class ScaleSpec:
     hours: float
     rate_hz: float
     seed: int = 0
+    measurement_period_s: float = MEASUREMENT_PERIOD_S
 
     def validate(self) -> None:
-        if self.runs < 1 or self.sensors < 1:
+        if self.runs < 1 or self.sensors < 1 or self.positions < 1:
             raise ValueError(
-                f"runs and sensors must be >= 1, got runs={self.runs}, sensors={self.sensors}"
+                f"runs, sensors and positions must be >= 1, got runs={self.runs}, "
+                f"sensors={self.sensors}, positions={self.positions}"
             )
-        if self.positions < 2:
+        if not (self.hours > 0 and self.rate_hz > 0 and self.measurement_period_s > 0):
             raise ValueError(
-                f"positions must be >= 2 (a line needs two targets), got {self.positions}"
-            )
-        if not (self.hours > 0 and self.rate_hz > 0):
-            raise ValueError(
-                f"hours and rate_hz must be positive, got hours={self.hours}, rate_hz={self.rate_hz}"
+                f"hours, rate_hz and measurement_period_s must be positive, got hours={self.hours}, "
+                f"rate_hz={self.rate_hz}, measurement_period_s={self.measurement_period_s}"
             )
         if (
             self.hours * 3600.0
@@ -65,7 +64,7 @@ class ScaleSpec:
     @property
     def reading_interval_s(self) -> float:
         # Both passes fit in half the measurement period, at most one capture every 6 s.
-        return min(6.0, 0.5 * MEASUREMENT_PERIOD_S / (2 * self.positions))
+        return min(6.0, 0.5 * self.measurement_period_s / (2 * self.positions))
 
     @property
     def positions_mm(self) -> np.ndarray:
@@ -76,7 +75,7 @@ def _timeline(spec: ScaleSpec) -> cond.Timeline:
     total = spec.hours * 3600.0
     duration = 2 * spec.positions * spec.reading_interval_s
     starts = (
-        np.arange(FIRST_MEASUREMENT_S, total - duration - 60.0, MEASUREMENT_PERIOD_S)
+        np.arange(FIRST_MEASUREMENT_S, total - duration - 60.0, spec.measurement_period_s)
         - FIRST_MEASUREMENT_S
     )
     # Times are relative to the first measurement, as in the paper's runs.
@@ -210,7 +209,7 @@ def generate_scale(
 name: twin_scale
 description: >-
   Benchmark dataset from thermaxis.twin scale: {spec.runs} runs, {spec.sensors} sensors,
-  {spec.positions} targets, {spec.hours:g} h at {spec.rate_hz:g} Hz, measurements every {MEASUREMENT_PERIOD_S / 60:g} min.
+  {spec.positions} targets, {spec.hours:g} h at {spec.rate_hz:g} Hz, measurements every {spec.measurement_period_s / 60:g} min.
 provenance:
   kind: simulated
   citation: "thermaxis.twin scale (seed {spec.seed}); physics calibrated to Xu et al., DOI 10.19650/j.cnki.cjsi.J2209628"
