@@ -60,6 +60,13 @@ def _predict_sets(train, targets, test, sets, algorithm, parameters) -> dict[tup
     return out
 
 
+def _used(X: pd.DataFrame, named: Sequence[str]) -> list[str]:
+    """The sensors the point sets use, in X's column order: the core needs only their columns
+    (and only theirs must be finite, as for the one-by-one fits)."""
+    named = set(named)
+    return [s for s in sensor_columns(X) if s in named]
+
+
 def _features(X: pd.DataFrame, sensors: list[str], temperature: str) -> np.ndarray:
     if temperature == "absolute":
         return X[sensors].to_numpy(dtype=float)
@@ -88,7 +95,7 @@ def decoupled_metrics(
     measurement, each coefficient its own standardised regression (Eq. 9).
     """
     X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
-    sensors = sensor_columns(X)
+    sensors = _used(X, [s for pair in point_sets for points in pair for s in points])
     index = {s: i for i, s in enumerate(sensors)}
     positions = _positions_of(X_train, Y_train)
     kb_train = decouple_rows(X_train, Y_train, degree)
@@ -147,7 +154,7 @@ def pointwise_metrics(
     its own standardised regression on the points' rise since each run's first measurement.
     """
     X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
-    sensors = sensor_columns(X)
+    sensors = _used(X, [s for points in point_sets for s in points])
     index = {s: i for i, s in enumerate(sensors)}
     sets = [tuple(index[s] for s in points) for points in point_sets]
     predicted = _predict_sets(
