@@ -17,7 +17,7 @@ SENSORS = [f"T{i}" for i in range(1, 7)]
 POSITIONS = np.linspace(0.0, 600.0, 7)
 
 
-def runs(collinear: bool = False, seed: int = 3):
+def runs(collinear: bool = False, seed: int = 3, noise_um: float = 0.2):
     """Four runs of nine measurements; errors linear in two sensors plus a curvature and noise.
 
     ``collinear``: T6 is T5 plus a few millikelvin, the near-duplicate sensors of a real rig."""
@@ -33,7 +33,7 @@ def runs(collinear: bool = False, seed: int = 3):
                          **dict(zip(SENSORS, t, strict=True))})  # fmt: skip
             k, b = 4.0 * (t[0] - 22.0), -3.0 * (t[2] - t[3]) + 0.5 * t[1]
             curve = k * POSITIONS / 1000.0 + b + 1e-5 * t[4] * POSITIONS**2 / 100.0
-            curves.append(curve + rng.normal(0.0, 0.2, POSITIONS.size))
+            curves.append(curve + rng.normal(0.0, noise_um, POSITIONS.size))
     return pd.DataFrame(rows), pd.DataFrame(curves, columns=POSITIONS)
 
 
@@ -94,6 +94,54 @@ def test_pointwise_equals_scikit_learn(algorithm, collinear):
         assert_same(frame, expected)
 
 
+SEARCHED = replace(MODELS, searched=("ridge", "pls"))
+# Three training runs above max_loco_runs 2: the inner search deals them into group folds.
+GROUP_FOLDS = replace(SEARCHED, inner_search=(2, 2))
+
+
+@pytest.mark.parametrize("models", [SEARCHED, GROUP_FOLDS], ids=["leave-one-out", "group-folds"])
+@pytest.mark.parametrize("algorithm", ["ridge", "pls"])
+def test_searched_strengths_equal_scikit_learn(algorithm, models):
+    # 3 um of noise: the inner search then picks different strengths for different outputs
+    # (ridge alpha from 0.01 to 100 here), so each output's choice is checked.
+    X, Y = runs(collinear=True, noise_um=3.0)
+    pairs = [(("T1", "T5", "T6"), ("T3", "T4")), (tuple(SENSORS), tuple(SENSORS))]
+    for (k, b), frame in zip(
+        pairs, decoupled_metrics(X, Y, "E3", algorithm, models, 2, pairs), strict=True
+    ):
+        expected = evaluate_configuration(
+            X, Y, "E3", "decoupled", algorithm, selection(k, b, ()), models, 2
+        )
+        assert_same(frame, expected.metrics)
+    sets = [tuple(SENSORS), ("T2", "T3")]
+    for points, frame in zip(
+        sets, pointwise_metrics(X, Y, "E1", algorithm, models, sets), strict=True
+    ):
+        expected = evaluate_configuration(
+            X, Y, "E1", "pointwise", algorithm, selection((), (), points), models, None
+        )
+        assert_same(frame, expected.metrics)
+
+
+@pytest.mark.parametrize("models", [MODELS, SEARCHED], ids=["fixed", "searched"])
+def test_operating_signals_join_every_point_set(models):
+    X, Y = runs(noise_um=1.0)
+    speed = np.tile(np.r_[0.0, np.full(8, 1.0)], 4) * np.repeat([1000.0, 2000.0, 1500.0, 3000.0], 9)
+    X["S"], Y = speed, Y.add(0.002 * speed, axis=0)
+    with_speed = replace(models, signals=("S",))
+    pairs = [(("T1", "T5"), ("T3",))]
+    (frame,) = decoupled_metrics(X, Y, "E2", "ridge", with_speed, 1, pairs)
+    expected = evaluate_configuration(
+        X, Y, "E2", "decoupled", "ridge", selection(*pairs[0], ()), with_speed, 1
+    )
+    assert_same(frame, expected.metrics)
+    (frame,) = pointwise_metrics(X, Y, "E2", "pls", with_speed, [("T2", "T4")])
+    expected = evaluate_configuration(
+        X, Y, "E2", "pointwise", "pls", selection((), (), ("T2", "T4")), with_speed, None
+    )
+    assert_same(frame, expected.metrics)
+
+
 def test_a_perfect_model_is_exact_by_hand():
     # Errors exactly 2 um per degree of T1's rise at every position: MLR on T1 predicts a
     # held-out run without residual, whatever the other runs' temperatures.
@@ -108,7 +156,6 @@ def test_what_is_not_batched():
     _, Y = runs()
     assert batchable("mlr", MODELS, Y) and batchable("pls", MODELS, Y)
     assert not batchable("svr", MODELS, Y) and not batchable("gpr", MODELS, Y)
-    assert not batchable("ridge", replace(MODELS, searched=("ridge",)), Y)
-    assert not batchable("mlr", replace(MODELS, signals=("S",)), Y)
+    assert not batchable("lasso", MODELS, Y) and batchable("ridge", SEARCHED, Y)
     Y.iloc[3, 2] = np.nan
     assert not batchable("mlr", MODELS, Y)

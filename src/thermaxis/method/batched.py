@@ -9,9 +9,17 @@ product.  The numbers are scikit-learn's to 1e-9 (relative; the core refits any 
 conditioned set with scikit-learn itself), checked by ``tests/unit/test_batched.py``
 against ``evaluate_configuration`` on the same data.
 
-What is not batched stays with ``evaluate_configuration``: the kernel models, a searched
-strength (its inner search), operating signals, and missing error readings (a position's
-fit then skips rows, so its rows differ from the other positions').
+A searched strength (ridge ``alpha``, pls ``n_components``, config ``models.searched``)
+is chosen as :func:`thermaxis.method.models.fit_by_group_search` chooses it: the same
+inner split of the training runs, RMSE of each held-out group, the first best grid point;
+every grid point's held-out predictions come from one leave-one-group-out call of the
+core (:func:`thermaxis.method.linear.loco_fit`, the Gram matrices downdated by each
+group), for every output at once.
+
+Operating signals (``models.signals``) join every point set as logged, after the
+temperatures, as the estimators add them.  What is not batched stays with
+``evaluate_configuration``: the kernel models and lasso, and missing error readings (a position's fit then skips rows, so its
+rows differ from the other positions').
 """
 
 from __future__ import annotations
@@ -20,36 +28,88 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
+from sklearn.model_selection import ParameterGrid
 
 from thermaxis.config import ModelSettings
 from thermaxis.method import linear
 from thermaxis.method.decouple import compose_curve
 from thermaxis.method.folds import _split_fold, sensor_columns
 from thermaxis.method.metrics import prediction_metrics
-from thermaxis.method.models import _KB_COLUMNS, _positions_of, decouple_rows, relative_temperatures
+from thermaxis.method.models import (
+    _KB_COLUMNS,
+    _positions_of,
+    decouple_rows,
+    inner_group_splitter,
+    relative_temperatures,
+)
 
 __all__ = ["batchable", "decoupled_metrics", "pointwise_metrics"]
 
 
 def batchable(algorithm: str, model: ModelSettings, Y: pd.DataFrame) -> bool:
     """Whether ``evaluate_configuration``'s fits of ``algorithm`` can come from the linear core."""
-    return (
-        algorithm in linear.ALGORITHMS
-        and model.search_grid_for(algorithm) is None
-        and not model.signals
-        and bool(np.isfinite(Y.to_numpy(dtype=float)).all())
-    )
+    return algorithm in linear.ALGORITHMS and bool(np.isfinite(Y.to_numpy(dtype=float)).all())
 
 
-def _core_parameters(algorithm: str, model: ModelSettings) -> dict:
-    """The configured strength (ridge ``alpha``, pls ``n_components``) as the core takes it."""
-    return dict(model.params_for(algorithm) or {})
+def _core(parameters: dict) -> dict:
+    """A strength as the core takes it (pls components as the integer scikit-learn gets)."""
+    return {k: int(v) if k == "n_components" else float(v) for k, v in parameters.items()}
 
 
-def _predict_sets(train, targets, test, sets, algorithm, parameters) -> dict[tuple, np.ndarray]:
+class _Fitter:
+    """The fits of one fold's training rows: fixed strengths, or each output's searched one."""
+
+    def __init__(self, algorithm: str, model: ModelSettings, runs: np.ndarray):
+        self.algorithm, self.runs = algorithm, runs
+        grid = model.search_grid_for(algorithm)
+        self.grid = None if grid is None else [_core(p) for p in ParameterGrid(grid)]
+        self.fixed = _core(model.params_for(algorithm) or {})
+        self.inner = model.inner_search
+
+    def predict_sets(self, train, targets, test, sets) -> dict[tuple, np.ndarray]:
+        """Held-out predictions (rows, outputs) of each set of column indices."""
+        if self.grid is None:
+            return _subset_predictions(train, targets, test, sets, self.algorithm, self.fixed)
+        return {
+            chosen: self._searched(train[:, list(chosen)], targets, test[:, list(chosen)])
+            for chosen in dict.fromkeys(sets)
+        }
+
+    def _searched(self, train, targets, test) -> np.ndarray:
+        """Each output's grid point chosen by the inner search, then refitted on every row."""
+        chosen = np.zeros(targets.shape[1], dtype=int)  # one group: the first grid point
+        if np.unique(self.runs).size >= 2:
+            splitter = inner_group_splitter(self.runs, *self.inner)
+            held = np.empty(self.runs.size, dtype=int)
+            for g, (_, rows) in enumerate(splitter.split(train, targets[:, 0], self.runs)):
+                held[rows] = g
+            scores = np.array([self._inner_rmse(train, targets, held, p) for p in self.grid])
+            # The first best grid point, NaN last, as GridSearchCV ranks them.
+            chosen = np.argmin(np.where(np.isnan(scores), np.inf, scores), axis=0)
+        out = np.empty((test.shape[0], targets.shape[1]))
+        every_column = tuple(range(train.shape[1]))
+        for c in np.unique(chosen):
+            outputs = chosen == c
+            out[:, outputs] = _subset_predictions(
+                train, targets[:, outputs], test, [every_column], self.algorithm, self.grid[c]
+            )[every_column]
+        return out
+
+    def _inner_rmse(self, train, targets, held, parameters) -> np.ndarray:
+        """Mean over the inner groups of each output's held-out RMSE (fit_by_group_search's score)."""
+        _, fit = linear.loco_fit(train, targets, held, None, self.algorithm, **parameters)
+        residual = targets - fit.predictions[:, 0, :]
+        groups = np.unique(held)
+        rmse = [np.sqrt(np.mean(residual[held == g] ** 2, axis=0)) for g in groups]
+        return np.mean(rmse, axis=0)
+
+
+def _subset_predictions(
+    train, targets, test, sets, algorithm, parameters
+) -> dict[tuple, np.ndarray]:
     """Held-out predictions (rows, outputs) of each set of column indices, one core call per set size."""
     by_size: dict[int, list[tuple]] = {}
-    for chosen in dict.fromkeys(sets):
+    for chosen in dict.fromkeys(tuple(int(i) for i in c) for c in sets):
         by_size.setdefault(len(chosen), []).append(chosen)
     out = {}
     for group in by_size.values():
@@ -67,10 +127,18 @@ def _used(X: pd.DataFrame, named: Sequence[str]) -> list[str]:
     return [s for s in sensor_columns(X) if s in named]
 
 
-def _features(X: pd.DataFrame, sensors: list[str], temperature: str) -> np.ndarray:
+def _features(X: pd.DataFrame, sensors: list[str], temperature: str, signals) -> np.ndarray:
+    """The sensors' temperatures of one kind, then the operating signals as logged."""
     if temperature == "absolute":
-        return X[sensors].to_numpy(dtype=float)
-    return relative_temperatures(X, sensors).to_numpy(dtype=float)
+        values = X[sensors].to_numpy(dtype=float)
+    else:
+        values = relative_temperatures(X, sensors).to_numpy(dtype=float)
+    return np.hstack([values, X[list(signals)].to_numpy(dtype=float)])
+
+
+def _columns(index: dict, points, signals) -> tuple[int, ...]:
+    """A point set's columns of :func:`_features`: its sensors, then every signal."""
+    return (*(index[s] for s in points), *range(len(index), len(index) + len(signals)))
 
 
 def _frame(label: dict, rows: list[tuple[str, np.ndarray, np.ndarray]]) -> pd.DataFrame:
@@ -101,24 +169,21 @@ def decoupled_metrics(
     kb_train = decouple_rows(X_train, Y_train, degree)
     kb_test = decouple_rows(X_test, Y_test, degree)
     shape = [_KB_COLUMNS["k"], *(_KB_COLUMNS[f"c{p}"] for p in range(2, degree + 1))]
-    parameters = _core_parameters(algorithm, model)
-    k_sets = [tuple(index[s] for s in k) for k, _ in point_sets]
-    b_sets = [tuple(index[s] for s in b) for _, b in point_sets]
-    shape_predicted = _predict_sets(
-        _features(X_train, sensors, "absolute"),
+    fitter = _Fitter(algorithm, model, X_train["run"].to_numpy())
+    signals = model.signals
+    k_sets = [_columns(index, k, signals) for k, _ in point_sets]
+    b_sets = [_columns(index, b, signals) for _, b in point_sets]
+    shape_predicted = fitter.predict_sets(
+        _features(X_train, sensors, "absolute", signals),
         kb_train[shape].to_numpy(dtype=float),
-        _features(X_test, sensors, "absolute"),
+        _features(X_test, sensors, "absolute", signals),
         k_sets,
-        algorithm,
-        parameters,
     )
-    b_predicted = _predict_sets(
-        _features(X_train, sensors, "relative"),
+    b_predicted = fitter.predict_sets(
+        _features(X_train, sensors, "relative", signals),
         kb_train[[_KB_COLUMNS["b"]]].to_numpy(dtype=float),
-        _features(X_test, sensors, "relative"),
+        _features(X_test, sensors, "relative", signals),
         b_sets,
-        algorithm,
-        parameters,
     )
     label = {"fold": fold, "approach": "decoupled", "algorithm": algorithm}
     measured = Y_test.to_numpy(dtype=float)
@@ -156,14 +221,13 @@ def pointwise_metrics(
     X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
     sensors = _used(X, [s for points in point_sets for s in points])
     index = {s: i for i, s in enumerate(sensors)}
-    sets = [tuple(index[s] for s in points) for points in point_sets]
-    predicted = _predict_sets(
-        _features(X_train, sensors, "relative"),
+    signals = model.signals
+    sets = [_columns(index, points, signals) for points in point_sets]
+    predicted = _Fitter(algorithm, model, X_train["run"].to_numpy()).predict_sets(
+        _features(X_train, sensors, "relative", signals),
         Y_train.to_numpy(dtype=float),
-        _features(X_test, sensors, "relative"),
+        _features(X_test, sensors, "relative", signals),
         sets,
-        algorithm,
-        _core_parameters(algorithm, model),
     )
     label = {"fold": fold, "approach": "pointwise", "algorithm": algorithm}
     measured = Y_test.to_numpy(dtype=float)
