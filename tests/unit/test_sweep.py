@@ -348,6 +348,25 @@ def test_ranking_by_mean_max_residual_incomplete_last_ties_by_id():
     assert ranking["main_config"].tolist() == [True, False, False, False]
 
 
+def test_means_equal_to_rounding_tie_and_go_by_id():
+    # B's mean is A's plus one part in 1e12 (the same fit computed two ways): a tie, so
+    # id order (A, B) holds, although B's mean is numerically the smaller when it is A's minus that.
+    main = replace(DEFAULTS.selection, method="fixed")
+    frame = _summary_rows()
+    frame.loc[(frame["config_id"] == "B") & (frame["target"] == "error"), "max_abs"] = [
+        2.0 * (1 - 1e-12),
+        2.0 * (1 - 1e-12),
+    ]
+    ranking = sweep_run.rank_configurations(frame, main, 1)
+    assert ranking["config_id"].tolist()[:2] == ["A", "B"]
+    # A real difference (one part in 1e6) still ranks B first.
+    frame.loc[(frame["config_id"] == "B") & (frame["target"] == "error"), "max_abs"] = [
+        2.0 * (1 - 1e-6),
+        2.0 * (1 - 1e-6),
+    ]
+    assert sweep_run.rank_configurations(frame, main, 1)["config_id"].tolist()[:2] == ["B", "A"]
+
+
 def test_factor_effects_by_hand():
     main = replace(DEFAULTS.selection, method="fixed")
     ranking = sweep_run.rank_configurations(_summary_rows(), main, 1)

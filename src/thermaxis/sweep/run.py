@@ -373,8 +373,10 @@ def rank_configurations(
     """Configurations ranked by their mean held-out max |residual| of the error curves.
 
     The mean is over folds; a configuration that failed on any fold is ranked after
-    all complete ones (its mean is over fewer folds and would flatter it).  Ties are
-    broken by the configuration id, so the order is deterministic.
+    all complete ones (its mean is over fewer folds and would flatter it).  Means that
+    agree to 9 significant digits are ties: two models that are the same fit (PLS with as
+    many components as sensors is MLR) differ only by rounding, which the order must
+    not depend on.  Ties are broken by the configuration id, so the order is deterministic.
     """
     errors = summary[summary["target"] == "error"]
     n_folds = errors["fold"].nunique()
@@ -387,11 +389,11 @@ def rank_configurations(
     table = table.reset_index()
     complete = table["n_folds"] == n_folds
     table = (
-        table.assign(_incomplete=~complete)
-        .sort_values(
-            ["_incomplete", "mean_max_abs", "config_id"], kind="stable", na_position="last"
+        table.assign(
+            _incomplete=~complete, _mean=table["mean_max_abs"].map(lambda v: float(f"{v:.9g}"))
         )
-        .drop(columns="_incomplete")
+        .sort_values(["_incomplete", "_mean", "config_id"], kind="stable", na_position="last")
+        .drop(columns=["_incomplete", "_mean"])
         .reset_index(drop=True)
     )
     table.insert(0, "rank", np.arange(1, len(table) + 1))
