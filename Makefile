@@ -91,7 +91,7 @@ import: env
 # worker (tests/conftest.py). PYTEST_WORKERS=0 runs them in this process.
 PYTEST_WORKERS ?= 2
 test: env
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup --durations=25
 
 # ruff's rules are in pyproject.toml ([tool.ruff]); the Snakemake rule files get Snakemake's
 # own linter and snakefmt.
