@@ -17,6 +17,9 @@ so the repository's own ``results/`` are never touched):
   timed separately (``scale_generate_<shape>_<n>``) and is not part of the fit;
 * ``test_suite``: ``python -m pytest`` in the repository, as ``make test`` runs it once
   the environment exists;
+* ``subsets``: the sweep's exhaustive search of every 3 of 22 sensors (1,540 subsets) on a
+  generated dataset of 5 runs with one target position, point by point with MLR, every run
+  held out once;
 * ``startup``: ``snakemake --version`` and the one-rule no-op in ``.venv`` and, when
   ``make slurm-env`` has made it, in ``.venv-slurm`` (the Slurm executor plugin
   installed; on a machine with the Slurm client and no controller its import waits for
@@ -80,7 +83,17 @@ SCALE_SHAPES = {
 MIB = 1024.0 * 1024.0
 # Linux reports ru_maxrss in KiB, macOS in bytes.
 _MAXRSS_UNIT = 1.0 if sys.platform == "darwin" else 1024.0
-STEPS = ("startup", "dryrun", "results", "sweep", "scale", "test")
+STEPS = ("startup", "dryrun", "results", "sweep", "subsets", "scale", "test")
+SUBSET_SHAPE = {
+    "runs": 5,
+    "sensors": 22,
+    "positions": 1,
+    "hours": 5.0,
+    "rate_hz": 0.1,
+    "measurement_min": 10.0,
+}
+SUBSET_SWEEP = {"methods": ["subset"], "n_clusters": [3], "approaches": ["pointwise"], "algorithms": ["mlr"],
+                "max_subsets": 2000}  # fmt: skip
 DRYRUN_REPEATS = 3
 TARGETS = {
     "results_cold": "cold full regeneration of the twin <= 30 s",
@@ -90,6 +103,7 @@ TARGETS = {
     "test_suite": "make test after set-up <= 180 s",
     "dryrun_twin": "dry run of the twin <= the one-rule dry run + 2 s CPU",
     "startup_slurm": "one-rule no-op with the Slurm plugin installed <= 1.5 x without it",
+    "sweep_subsets": "exhaustive 3-of-22 subsets, 5 runs, single position <= 30 s",
 }
 # The smallest workflow Snakemake can run: its no-op is the floor a no-op rerun is measured against.
 ONE_RULE_SNAKEFILE = (
@@ -450,6 +464,8 @@ def run_bench(
         if "startup" in steps:
             for m in _startup(scratch, cores, env, logs, timeout_s):
                 record(m)
+        if "subsets" in steps:
+            record(_subset_sweep(scratch, logs, cores, env, timeout_s, keep))
         if "scale" in steps:
             for shape, spec in SCALE_SHAPES.items():
                 for n in runs:
@@ -502,6 +518,30 @@ def _scale_run(scratch, logs, shape: str, spec: dict, n: int, cores, env, timeou
     if not keep:
         shutil.rmtree(data, ignore_errors=True)
         shutil.rmtree(work, ignore_errors=True)
+
+
+def _subset_sweep(scratch: Path, logs: Path, cores: int, env: dict, timeout_s: float, keep: bool):
+    """The sweep's exhaustive subset search on a generated 5-run, 22-sensor, one-position dataset."""
+    data = scratch / "subsets" / "data"
+    shutil.rmtree(data, ignore_errors=True)
+    spec = SUBSET_SHAPE
+    subprocess.run([sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(data), "--runs", str(spec["runs"]),
+                    "--sensors", str(spec["sensors"]), "--positions", str(spec["positions"]), "--hours",
+                    str(spec["hours"]), "--rate-hz", str(spec["rate_hz"]), "--measurement-min",
+                    str(spec["measurement_min"])], env=env, check=True, capture_output=True, timeout=timeout_s)  # fmt: skip
+    work = prepare_workdir(scratch / "subsets" / "work")
+    override = {"dataset": str(data), "ambient_sensor": "T1", "sweep": SUBSET_SWEEP}
+    (work / "bench_subsets.yaml").write_text(yaml.safe_dump(override))
+    prefix = ["--configfile", "config/config.yaml", "bench_subsets.yaml", "--"]
+    # The assembled tables first, untimed: the measurement is the sweep's.
+    subprocess.run(_snakemake(cores, *prefix, "results/twin_scale/assembled/errors.parquet"), cwd=work, env=env,
+                   check=True, capture_output=True, timeout=timeout_s)  # fmt: skip
+    m = measure("sweep_subsets", _snakemake(cores, *prefix, "results/twin_scale/sweep/summary.csv"), work,
+                logs / "sweep_subsets.log", "sweep of every 3 of 22 sensors (1,540 subsets), 5 runs, one position, "
+                "point by point, MLR (assembled data present)", env, timeout_s, runs=spec["runs"])  # fmt: skip
+    if not keep:
+        shutil.rmtree(scratch / "subsets", ignore_errors=True)
+    return m
 
 
 def _startup(
@@ -669,6 +709,9 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
             m.ok and m.wall_s <= 300.0 and peak <= 4096.0,
             f"{m.wall_s:.1f} s, peak {peak:.0f} MiB",
         )
+    if "sweep_subsets" in by_name:
+        m = by_name["sweep_subsets"]
+        add("sweep_subsets", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s")
     if "startup_noop_slurm" in by_name and "startup_noop_venv" in by_name:
         m, floor = by_name["startup_noop_slurm"], by_name["startup_noop_venv"]
         ratio = m.wall_s / floor.wall_s
