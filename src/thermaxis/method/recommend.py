@@ -535,11 +535,12 @@ def recommendation_markdown(recommendation: Recommendation, statement: str) -> s
 
 
 def deployable(candidate: Candidate) -> bool:
-    """Whether the controller exports can compute the candidate: temperatures only.
+    """Whether the workflow can deploy the candidate and judge it on held-out runs: temperatures only.
 
     ``model.json``, :class:`~thermaxis.compensation.runtime.Compensator` and the
-    Structured Text block take temperatures, absolute or relative to the homing
-    reference; neither lags nor operating signals yet.
+    Structured Text block compute lag inputs cycle by cycle, but the held-out replay of
+    ``compensation_fold`` feeds the controller one sample per measurement, too sparse for
+    a lag; operating signals are not read by the exports at all.
     """
     return not candidate.time_inputs and not candidate.models.signals
 
