@@ -30,10 +30,12 @@ def read_record(spec: dict, spec_path: Path):
     frame = importer.read_table(source, mapping.get("sheet", 0))
     seconds = importer.read_seconds(source, frame, mapping["time"])
     temperatures = {
-        s["id"]: importer.read_numeric(source, frame, s["column"], False) for s in mapping["sensors"]
+        s["id"]: importer.read_numeric(source, frame, s["column"], False)
+        for s in mapping["sensors"]
     }
     signals = {
-        s["id"]: importer.read_numeric(source, frame, s["column"], False) for s in mapping["signals"]
+        s["id"]: importer.read_numeric(source, frame, s["column"], False)
+        for s in mapping["signals"]
     }
     channels = {c: importer.read_numeric(source, frame, c, False) for c in spec["channels"]}
     return seconds, temperatures, signals, channels
