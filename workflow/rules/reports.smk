@@ -240,11 +240,17 @@ rule index:
         simulated=SIMULATED,
         statement=DATA_STATEMENT,
         sections=index_sections(),
+        figures=index_figures(),
+        tables=INDEX_TABLES,
         sweep=f"{OUT}/sweep/sweep_report.html",
         headline=HEADLINE,
         answer=dict(
             markdown=f"{OUT}/tables/recommendation.md",
+            recommendation=f"{OUT}/tables/recommendation.csv",
+            metrics=f"{OUT}/tables/metrics.csv",
             model=f"{OUT}/compensation/model.json",
+            # The claims table (tables/claims.csv) is shown once the workflow makes it.
+            claims=f"{OUT}/tables/claims.csv",
         ),
     script:
         "../scripts/index.py"

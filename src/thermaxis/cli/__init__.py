@@ -329,11 +329,9 @@ def _compensate(args) -> int:
         )
     fallback = table[table["status"] != "ok"]
     print(f"wrote {out} ({len(table)} cycles, {len(fallback)} on the fallback policy) and {figure}")
-    deployment = model.model.get("deployment")
-    if deployment:
-        from thermaxis.compensation.verdict import verdict_sentence
-
-        print(f"the model's deployment verdict: {verdict_sentence(deployment)}")
+    sentence = model.model.get("deployment", {}).get("sentence")
+    if sentence:
+        print(f"the model's deployment verdict: {sentence}")
     return 0
 
 
