@@ -67,6 +67,7 @@ figure.tx-figure{margin:0.8em 0 1.5em 0}
 figure.tx-figure img{max-width:100%;height:auto;border:1px solid #e5e7eb}
 figure.tx-figure figcaption{font-size:0.9em;color:#374151;max-width:60em}
 .tx-note{color:#4b5563;font-style:italic}
+.tx-lead{font-size:1.15em;max-width:60em}
 code.tx-hash{font-size:0.85em}
 """
 

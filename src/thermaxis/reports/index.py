@@ -24,6 +24,7 @@ from thermaxis.reports.html import (
     statement_html,
     table_html,
 )
+from thermaxis.reports.leads import model_name
 
 __all__ = [
     "IndexRow",
@@ -105,7 +106,6 @@ PAPER_HEADLINE = (
     "linear axis."
 )
 CLAIMS_COLUMNS = ("claim", "dataset", "effect", "lo", "hi", "p_value", "verdict")
-_APPROACH_WORDS = {"decoupled": "decoupled (slope/intercept)", "pointwise": "point-by-point"}
 
 
 # --------------------------------------------------------------------------- the numbers
@@ -149,16 +149,13 @@ def claims_table(frame: pd.DataFrame, where: str) -> pd.DataFrame:
 def _ranking_sentence(ranking: pd.DataFrame) -> str:
     best = ranking.iloc[0]
     text = (
-        f"Predicting a held-out condition, the best is the {_APPROACH_WORDS.get(best['approach'], best['approach'])} "
-        f"{str(best['algorithm']).upper()}: mean RMSE {best['mean_rmse_um']:.2f} µm over {int(best['n_folds'])} "
+        f"Predicting a held-out condition, the best is the {model_name(best['approach'], best['algorithm'])}"
+        f": mean RMSE {best['mean_rmse_um']:.2f} µm over {int(best['n_folds'])} "
         f"held-out runs, largest |residual| {best['worst_max_abs_um']:.2f} µm at worst."
     )
     if len(ranking) > 1:
         worst = ranking.iloc[-1]
-        text += (
-            f" The weakest, the {_APPROACH_WORDS.get(worst['approach'], worst['approach'])} "
-            f"{str(worst['algorithm']).upper()}, leaves {worst['mean_rmse_um']:.2f} µm."
-        )
+        text += f" The weakest, the {model_name(worst['approach'], worst['algorithm'])}, leaves {worst['mean_rmse_um']:.2f} µm."
     return text
 
 
@@ -169,7 +166,7 @@ _INDEX_CSS = (
     "body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:76em;margin:1.5em auto;"
     "padding:0 1em;line-height:1.45}ul.tx-index{padding-left:1.2em}"
     ".tx-answer{border-left:4px solid #15803d;background:#f0fdf4;padding:0.6em 1.1em;margin:0 0 1.2em 0}"
-    ".tx-answer h2{margin-top:0.3em}.tx-lead{font-size:1.1em}"
+    ".tx-answer h2{margin-top:0.3em}"
     ".tx-verdict-yes{color:#15803d;font-weight:bold}.tx-verdict-no{color:#b91c1c;font-weight:bold}"
     ".tx-grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(15em,1fr));gap:1em}"
     ".tx-thumb{margin:0;border:1px solid #e5e7eb;padding:0.4em;background:#fff}"
@@ -371,8 +368,7 @@ def render_results_index(summary: pd.DataFrame, pages: dict[str, str], figure: s
         )
         parts.append(
             f"<li>{title} ({html.escape(str(best['data']).upper())}): the "
-            f"{html.escape(_APPROACH_WORDS.get(best['approach'], str(best['approach'])))} "
-            f"{html.escape(str(best['algorithm']).upper())} leaves a mean RMSE of {best['mean_rmse_um']:.2f} µm "
+            f"{html.escape(model_name(best['approach'], best['algorithm']))} leaves a mean RMSE of {best['mean_rmse_um']:.2f} µm "
             f"over {int(best['n_folds'])} held-out runs.</li>"
         )
     parts.append("</ul></section>")
