@@ -45,9 +45,7 @@ def how_much_more(larger: float, smaller: float) -> str:
 
 def lead_html(sentences: str) -> str:
     """The lead paragraph under a report's banner (escaped: it names runs and sensors)."""
-    return (
-        f'<p class="tx-lead">{html.escape(sentences)}</p>'
-    )
+    return f'<p class="tx-lead">{html.escape(sentences)}</p>'
 
 
 def model_lead(
