@@ -21,7 +21,7 @@ class ProgressBar:
     """``bar(done, total, what)``: the callable the library's ``progress`` parameters take."""
 
     def __init__(self, stream: TextIO | None = None, tty: bool | None = None):
-        self.stream = stream or sys.stderr
+        self.stream = sys.stderr if stream is None else stream
         self.tty = self.stream.isatty() if tty is None else tty
         self._open = False
 
