@@ -11,6 +11,7 @@ the provenance. Everything is computed from the workflow's tables, never recompu
 from __future__ import annotations
 
 import html
+import re
 from dataclasses import dataclass, field
 
 import pandas as pd
@@ -173,7 +174,18 @@ _INDEX_CSS = (
     ".tx-thumb img{width:100%;height:auto;display:block}"
     ".tx-thumb figcaption{font-size:0.78em;color:#374151}"
     "nav.tx-toc a{margin-right:1em}table.tx-sortable th{white-space:nowrap}"
+    ".tx-scroll{overflow-x:auto;max-width:100%}"
 )
+
+
+def _inline_markdown(text: str) -> str:
+    """Escaped text with the Markdown of recommendation.md's sentence: `code` and **bold**."""
+    return re.sub(r"\*\*([^*]+)\*\*", r"<strong>\1</strong>", _code_spans(text))
+
+
+def _scroll(table: str) -> str:
+    """A wide table scrolls inside its box instead of widening the page."""
+    return f'<div class="tx-scroll">{table}</div>'
 
 
 def _links(links) -> str:
@@ -222,7 +234,7 @@ def _headline_html(headline: Headline) -> str:
         ),
         "</div>",
         "<h3>Compensation</h3>",
-        f"<p>{_code_spans(headline.recommendation)}</p>",
+        f"<p>{_inline_markdown(headline.recommendation)}</p>",
         _verdict_html(headline.deployment),
     ]
     if headline.comparison is not None:
@@ -237,11 +249,13 @@ def _headline_html(headline: Headline) -> str:
     if headline.claims is not None:
         parts += [
             "<h3>The paper's claims</h3>",
-            table_html(
-                headline.claims,
-                "%.3g",
-                caption="Each claim's effect, interval and verdict",
-                sortable=True,
+            _scroll(
+                table_html(
+                    headline.claims,
+                    "%.3g",
+                    caption="Each claim's effect, interval and verdict",
+                    sortable=True,
+                )
             ),
         ]
     parts.append("</section>")
@@ -274,7 +288,7 @@ def _tables_html(tables) -> str:
         parts.append(
             f"<h3>{html.escape(table.title)}</h3>"
             f'<p><a href="{html.escape(table.csv, quote=True)}">CSV</a>{note}</p>'
-            + table_html(table.frame, table.float_format, sortable=True)
+            + _scroll(table_html(table.frame, table.float_format, sortable=True))
         )
     parts.append("</section>")
     return "".join(parts)
@@ -381,7 +395,7 @@ def render_results_index(summary: pd.DataFrame, pages: dict[str, str], figure: s
     parts += [
         '<section id="tables"><h2>Every dataset, approach and algorithm</h2>'
         '<p><a href="_datasets/summary.csv">CSV</a> · <a href="_datasets/summary.md">Markdown</a></p>',
-        table_html(summary, "%.3f", sortable=True),
+        _scroll(table_html(summary, "%.3f", sortable=True)),
         "</section>",
         f"<script>{SORT_SCRIPT}</script>",
         "</body></html>",
