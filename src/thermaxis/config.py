@@ -488,10 +488,14 @@ class FigureSettings:
 @dataclass(frozen=True)
 class ReportSettings:
     model_algorithms: tuple[str, ...]  # algorithms the model report of each fold shows side by side
+    combined_above_runs: int  # more runs than this: one report of all conditions
 
     @classmethod
     def from_section(cls, reports: Mapping) -> ReportSettings:
-        return cls(model_algorithms=tuple(reports["model_algorithms"]))
+        return cls(
+            model_algorithms=tuple(reports["model_algorithms"]),
+            combined_above_runs=int(reports["combined_above_runs"]),
+        )
 
 
 @dataclass(frozen=True)

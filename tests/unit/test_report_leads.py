@@ -6,6 +6,7 @@ import pandas as pd
 
 from thermaxis.reports.leads import (
     condition_lead,
+    conditions_lead,
     dataset_lead,
     how_much_more,
     lead_html,
@@ -130,3 +131,39 @@ def test_the_paper_lead_counts_reproduced_numbers_and_names_the_largest_differen
 
 def test_the_lead_is_escaped():
     assert lead_html("run <E1>") == '<p class="tx-lead">run &lt;E1&gt;</p>'
+
+
+def test_the_conditions_lead_names_the_runs_that_drift_most_and_least():
+    largest = pd.DataFrame(
+        {
+            "run": ["E1", "E1", "E2", "E2", "E2", "E10"],
+            "measurement": [1, 2, 1, 2, 3, 1],
+            "largest_abs_um": [1.0, 4.0, 0.5, 9.25, 2.0, 0.75],
+        }  # fmt: skip
+    )
+    assert conditions_lead(largest) == (
+        "3 runs of 1 to 3 measurements. The largest unzeroed error is 9.2 µm, in run E2; the run that "
+        "drifts least, E10, stays within 0.8 µm."
+    )
+
+
+def test_the_small_multiples_have_one_panel_per_run_on_shared_axes():
+    from thermaxis.figures.overview import fig_runs_overview, largest_error_by_measurement
+
+    errors = pd.DataFrame(
+        {
+            "run": ["E10", "E10", "E2", "E2", "E2"],
+            "measurement": [1, 1, 1, 2, 2],
+            "time_min": [0, 0, 0, 30, 30],
+            "error_um": [1.0, -3.0, 0.5, 2.0, -2.5],
+        }  # fmt: skip
+    )
+    table = largest_error_by_measurement(errors)
+    assert table["largest_abs_um"].tolist() == [3.0, 0.5, 2.5]
+    fig = fig_runs_overview(errors)
+    axes = fig.get_axes()
+    # E2 before E10 (natural order); the other two panels of the row are removed.
+    assert [ax.get_title(loc="left") for ax in axes] == ["E2", "E10"]
+    assert axes[0].get_shared_y_axes().joined(axes[0], axes[1])
+    x, y = axes[0].get_lines()[0].get_data()
+    assert list(x) == [0, 30] and list(y) == [0.5, 2.5]

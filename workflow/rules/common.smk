@@ -317,8 +317,22 @@ def notebook_parameters(input, sections_used, **values):
     )
 
 
+# Many runs (config reports.combined_above_runs): one report of all conditions, a section
+# per run, instead of a notebook per run.
+COMBINED_CONDITIONS = len(RUNS) > SETTINGS.reports.combined_above_runs
+
+
 def condition_reports():
+    if COMBINED_CONDITIONS:
+        return [f"{OUT}/reports/conditions.html"]
     return expand(f"{OUT}/reports/condition_{{run}}.html", run=RUNS)
+
+
+def condition_links(run):
+    """Where the index sends a run: its report, or its section of the combined one."""
+    if COMBINED_CONDITIONS:
+        return [("section", f"{OUT}/reports/conditions.html#run-{run}")]
+    return [("condition report", f"{OUT}/reports/condition_{run}.html")]
 
 
 def model_reports():
@@ -440,10 +454,14 @@ def index_sections():
             [("dataset report", f"{OUT}/reports/dataset_report.html")],
         )
     )
-    reports += [
-        (f"Run {run}", [("condition report", f"{OUT}/reports/condition_{run}.html")])
-        for run in RUNS
-    ]
+    if COMBINED_CONDITIONS:
+        reports.append(
+            (
+                f"All {len(RUNS)} runs",
+                [("conditions report", f"{OUT}/reports/conditions.html")],
+            )
+        )
+    reports += [(f"Run {run}", condition_links(run)) for run in RUNS]
     models = [
         (f"Fold {fold} (held-out run)", [("model report", path)])
         for fold, path in zip(FOLDS, model_reports())
@@ -537,7 +555,7 @@ INDEX_TABLES = [
 
 def index_inputs():
     linked = {
-        path
+        path.split("#", 1)[0]
         for _, _, rows in index_sections()
         for _, links in rows
         for _, path in links
@@ -706,6 +724,7 @@ RESOURCES = {
         for name in (
             "dataset_report",
             "condition_report",
+            "conditions_report",
             "model_report",
             "paper_report",
             "sweep_report",

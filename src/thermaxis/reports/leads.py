@@ -21,6 +21,7 @@ __all__ = [
     "lead_html",
     "model_lead",
     "condition_lead",
+    "conditions_lead",
     "dataset_lead",
     "paper_lead",
 ]
@@ -137,6 +138,21 @@ def condition_lead(
             f"Sensor {top['sensor']} warms most, {top['relative_c']:.1f} °C above the first measurement."
         )
     return " ".join(sentences)
+
+
+def conditions_lead(largest: pd.DataFrame) -> str:
+    """The combined conditions report's opening, from the largest |unzeroed error| of each measurement.
+
+    ``largest`` holds run, measurement and largest_abs_um
+    (:func:`thermaxis.figures.overview.largest_error_by_measurement`).
+    """
+    per_run = largest.groupby("run", sort=True)["largest_abs_um"].max()
+    counts = largest.groupby("run", sort=True)["measurement"].nunique()
+    top, low = per_run.idxmax(), per_run.idxmin()
+    return (
+        f"{len(per_run)} runs of {counts.min()} to {counts.max()} measurements. The largest unzeroed error is "
+        f"{per_run.max():.1f} µm, in run {top}; the run that drifts least, {low}, stays within {per_run.min():.1f} µm."
+    )
 
 
 def dataset_lead(summary: pd.DataFrame, repairs: pd.DataFrame, errors: pd.DataFrame) -> str:
