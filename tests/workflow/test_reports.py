@@ -117,6 +117,9 @@ def test_provenance_json_records_code_config_data_and_software(built):
 def test_index_links_every_report_figure_and_table(built):
     index = built.out / "index.html"
     hrefs = re.findall(r'<a href="([^"]+)"', index.read_text(encoding="utf-8"))
+    # Anchors within the page; the page across datasets is made after every dataset's run
+    # (thermaxis run, make results), so test_browser checks that link.
+    hrefs = [h for h in hrefs if not h.startswith("#") and h != "../index.html"]
     targets = {(index.parent / unquote(urlparse(h).path)).resolve() for h in hrefs}
     assert all(t.is_file() for t in targets), [str(t) for t in targets if not t.is_file()]
     expected = {p.resolve() for p in report_pages(built.out)}
