@@ -149,8 +149,13 @@ def conditions_lead(largest: pd.DataFrame) -> str:
     per_run = largest.groupby("run", sort=True)["largest_abs_um"].max()
     counts = largest.groupby("run", sort=True)["measurement"].nunique()
     top, low = per_run.idxmax(), per_run.idxmin()
+    sizes = (
+        f"{counts.min()} measurements each"
+        if counts.min() == counts.max()
+        else f"{counts.min()} to {counts.max()} measurements"
+    )
     return (
-        f"{len(per_run)} runs of {counts.min()} to {counts.max()} measurements. The largest unzeroed error is "
+        f"{len(per_run)} runs of {sizes}. The largest unzeroed error is "
         f"{per_run.max():.1f} µm, in run {top}; the run that drifts least, {low}, stays within {per_run.min():.1f} µm."
     )
 
