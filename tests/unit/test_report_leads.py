@@ -48,7 +48,7 @@ def test_the_model_lead_compares_the_largest_errors_and_says_what_compensating_d
     # 15.448 / 5.572 = 2.77; the compensated largest |deviation| 17.2 > 8.3: worse.
     assert text == (
         "On held-out run E2 the decoupled MLR's largest error is 15.4 µm, 2.8 times the point-by-point "
-        "MLR's 5.6 µm; the best RMSE is 2.76 µm. Compensating with the decoupled MLR takes the largest "
+        "MLR's 5.6 µm (RMSE 2.76 µm). Compensating with the decoupled MLR takes the largest "
         "|deviation| of E2 from 8.3 µm to 17.2 µm: it makes E2 worse. The fallback policy acted at 1 of "
         "3 measurements."
     )

@@ -89,8 +89,8 @@ def model_lead(
         else:
             sentences.append(
                 f"On held-out run {fold} the {model_name(worst[0], worst[1])}'s largest error is {worst[2]:.1f} µm, "
-                f"{how_much_more(worst[2], best[2])} the {model_name(best[0], best[1])}'s {best[2]:.1f} µm; "
-                f"the best RMSE is {best[3]:.2f} µm."
+                f"{how_much_more(worst[2], best[2])} the {model_name(best[0], best[1])}'s {best[2]:.1f} µm "
+                f"(RMSE {best[3]:.2f} µm)."
             )
     if not compensation.empty:
         before = float(compensation["largest_abs_uncompensated_um"].max())
