@@ -176,3 +176,13 @@ def test_a_unit_beside_a_clock_format_is_refused(tmp_path):
     path.write_text(yaml.safe_dump(mapping))
     with pytest.raises(DataError, match="clock.yaml: time:"):
         import_dataset(path, tmp_path / "raw" / "clock")
+
+
+def test_two_channels_of_one_id_are_refused_before_anything_is_written(tmp_path):
+    path = _mapping(tmp_path, {"column": "minutes", "unit": "min", "start": "2030-01-01T08:00:00"})
+    mapping = yaml.safe_load(path.read_text())
+    mapping["errors"]["channels"][1]["id"] = "X"
+    path.write_text(yaml.safe_dump(mapping))
+    with pytest.raises(DataError, match=r"rig.yaml: errors/channels: id 'X' given more than once"):
+        import_dataset(path, tmp_path / "raw" / "rig")
+    assert not (tmp_path / "raw").exists()

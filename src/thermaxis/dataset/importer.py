@@ -124,6 +124,12 @@ def _check_ids(path: Path, mapping: dict) -> None:
     dup = sorted({i for i in ids if ids.count(i) > 1})
     if dup:
         raise DataError(f"{path}: sensors/signals: id {dup[0]!r} given more than once")
+    channels = [c["id"] for c in mapping["errors"].get("channels", [])]
+    dup = sorted({c for c in channels if channels.count(c) > 1})
+    if dup:
+        raise DataError(
+            f"{path}: errors/channels: id {dup[0]!r} given more than once (each channel is a dataset of its own)"
+        )
     names = [r["name"] for r in mapping["runs"]]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
