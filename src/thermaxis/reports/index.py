@@ -172,7 +172,7 @@ _INDEX_CSS = (
     ".tx-grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(15em,1fr));gap:1em}"
     ".tx-thumb{margin:0;border:1px solid #e5e7eb;padding:0.4em;background:#fff}"
     ".tx-thumb img{width:100%;height:auto;display:block}"
-    ".tx-thumb figcaption{font-size:0.78em;color:#374151}"
+    ".tx-thumb figcaption{font-size:0.78em;color:#374151;overflow-wrap:anywhere}"
     "nav.tx-toc a{margin-right:1em}table.tx-sortable th{white-space:nowrap}"
     ".tx-scroll{overflow-x:auto;max-width:100%}"
 )
