@@ -140,3 +140,41 @@ def test_progress_is_a_bar_on_a_terminal_and_lines_elsewhere(tmp_path):
         ["rule sweep_batch:\n", "3 of 8 steps (38%) done\n"], ProgressBar(shown, tty=True), out
     )
     assert out == ["rule sweep_batch:\n"] and "3/8 jobs done" in shown[0]
+
+
+def test_run_goes_through_the_recovery_wrapper_with_snakemakes_arguments(monkeypatch):
+    import thermaxis.cli as cli
+    from thermaxis.reports import crossdataset
+
+    started = []
+    monkeypatch.chdir(REPO)
+    monkeypatch.setattr(
+        cli, "_wrapped", lambda command, progress=False: started.append(command) or 0
+    )
+    monkeypatch.setattr(crossdataset, "main", lambda argv: started.append(argv) or 0)
+    assert main(["run", "data/raw/twin", "data/raw/fl_thermal", "--cores", "1", "--", "-n"]) == 0
+    wrapper = [
+        sys.executable,
+        "-m",
+        "thermaxis.pipeline.resume",
+        str(Path(sys.executable).with_name("snakemake")),
+    ]
+    assert started == [
+        [*wrapper, "--cores", "1", "--printshellcmds", "-n", "--config", "dataset=data/raw/twin"],
+        [
+            *wrapper,
+            "--cores",
+            "1",
+            "--printshellcmds",
+            "-n",
+            "--config",
+            "dataset=data/raw/fl_thermal",
+        ],
+        ["--results", "results"],  # then the page across datasets, as make results does
+    ]
+
+
+def test_snakemake_arguments_are_refused_where_no_snakemake_runs():
+    with pytest.raises(SystemExit) as info:
+        main(["check", "data/raw/twin", "--", "-n"])
+    assert info.value.code == 2

@@ -20,6 +20,7 @@ from thermaxis.errors import DataError
 
 __all__ = ["build_parser", "main"]
 
+SNAKEMAKE_COMMANDS = ("run", "sweep", "report")
 CHECKOUT_NEEDED = (
     "run it in a thermaxis checkout (the folder with the Snakefile): the workflow is not part of "
     "the installed package"
@@ -44,11 +45,7 @@ def _subcommand(sub, name: str, summary: str, examples: tuple[str, ...], handler
 
 def _snakemake_parser(parser) -> None:
     parser.add_argument("--cores", default="all", help="cores Snakemake may use (default: all)")
-    parser.add_argument(
-        "snakemake_args",
-        nargs=argparse.REMAINDER,
-        help="after --: further Snakemake arguments, e.g. -- --dry-run",
-    )
+    parser.epilog += "\n\nArguments after -- go to Snakemake as they are."
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -200,7 +197,6 @@ def _snakemake_command(cores: str, extra: list[str]) -> list[str]:
     if not Path("Snakefile").is_file():
         raise DataError(f"{Path.cwd()}: no Snakefile; {CHECKOUT_NEEDED}")
     snakemake = Path(sys.executable).with_name("snakemake")
-    extra = extra[1:] if extra[:1] == ["--"] else extra
     return [
         sys.executable, "-m", "thermaxis.pipeline.resume", str(snakemake),
         "--cores", cores, "--printshellcmds", *extra,
@@ -255,7 +251,16 @@ def _sweep(args) -> int:
         return 0
     return _wrapped(
         _snakemake_command(
-            args.cores, ["--forcerun", "index", "--config", f"dataset={dataset}", "--", str(index)]
+            args.cores,
+            [
+                *args.snakemake_args,
+                "--forcerun",
+                "index",
+                "--config",
+                f"dataset={dataset}",
+                "--",
+                str(index),
+            ],
         )
     )
 
@@ -272,7 +277,7 @@ def _report(args) -> int:
     target = ["--report", str(out / "report.zip")] if args.zip else [str(out / "index.html")]
     return _wrapped(
         _snakemake_command(
-            args.cores, [*args.snakemake_args, "--config", f"dataset={dataset}", *target]
+            args.cores, [*target, *args.snakemake_args, "--config", f"dataset={dataset}"]
         )
     )
 
@@ -336,7 +341,14 @@ def _compensate(args) -> int:
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # What follows "--" is Snakemake's, whatever it looks like (argparse would read -n as ours).
+    cut = argv.index("--") if "--" in argv else len(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv[:cut])
+    args.snakemake_args = argv[cut + 1 :]
+    if args.snakemake_args and args.command not in SNAKEMAKE_COMMANDS:
+        parser.error(f"thermaxis {args.command} takes no Snakemake arguments (after --)")
     try:
         return args.handler(args)
     except ValueError as exc:  # DataError included: one line naming the file and what was expected
