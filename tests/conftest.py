@@ -58,6 +58,8 @@ SHARED_RUN_FILES = {
     "tests/workflow/test_compensation_workflow.py": "lines_run",
     "tests/workflow/test_interrupted_run.py": "lines_run",
     "tests/workflow/test_sweep_workflow.py": "lines_run",
+    "tests/workflow/test_cli_workflow.py": "lines_run",
+    "tests/workflow/test_conditions_report.py": "lines_run",
     "tests/workflow/test_reports.py": "built",
     "tests/workflow/test_browser.py": "built",
 }

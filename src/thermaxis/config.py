@@ -33,6 +33,7 @@ __all__ = [
     "load_config",
     "validate_config",
     "merge",
+    "fill_defaults",
     "dataset_of",
     "TemperatureCleaning",
     "ErrorCleaning",
@@ -65,12 +66,18 @@ def merge(base: dict, update: dict) -> dict:
     return out
 
 
-def _fill_defaults(instance: dict, schema: dict) -> None:
+def fill_defaults(instance: dict, schema: dict) -> None:
+    """Fill the schema's defaults into ``instance`` in place, into nested objects and lists of objects."""
     for key, sub in schema.get("properties", {}).items():
         if "default" in sub and key not in instance:
             instance[key] = copy.deepcopy(sub["default"])
-        if isinstance(instance.get(key), dict) and sub.get("type") == "object":
-            _fill_defaults(instance[key], sub)
+        value = instance.get(key)
+        if isinstance(value, dict) and sub.get("type") == "object":
+            fill_defaults(value, sub)
+        elif isinstance(value, list) and sub.get("items", {}).get("type") == "object":
+            for item in value:
+                if isinstance(item, dict):
+                    fill_defaults(item, sub["items"])
 
 
 def validate_config(config: dict, schema_path=CONFIG_SCHEMA) -> dict:
@@ -78,7 +85,7 @@ def validate_config(config: dict, schema_path=CONFIG_SCHEMA) -> dict:
     with open(schema_path, encoding="utf-8") as fh:
         schema = yaml.safe_load(fh)
     filled = copy.deepcopy(config)
-    _fill_defaults(filled, schema)
+    fill_defaults(filled, schema)
     errors = sorted(
         jsonschema.Draft202012Validator(schema).iter_errors(filled),
         key=lambda e: list(e.absolute_path),
@@ -481,10 +488,14 @@ class FigureSettings:
 @dataclass(frozen=True)
 class ReportSettings:
     model_algorithms: tuple[str, ...]  # algorithms the model report of each fold shows side by side
+    combined_above_runs: int  # more runs than this: one report of all conditions
 
     @classmethod
     def from_section(cls, reports: Mapping) -> ReportSettings:
-        return cls(model_algorithms=tuple(reports["model_algorithms"]))
+        return cls(
+            model_algorithms=tuple(reports["model_algorithms"]),
+            combined_above_runs=int(reports["combined_above_runs"]),
+        )
 
 
 @dataclass(frozen=True)

@@ -183,3 +183,41 @@ def test_paper_values_are_packaged(child):
 
 def test_model_schema_is_packaged(child):
     assert child["refused"] is not None and "fallback" in child["refused"], child["refused"]
+
+
+# The installed console script, run as the installed copy sees it (its package first on the path).
+SCRIPT = textwrap.dedent(
+    """
+    import json, runpy, sys
+    sys.path[:0] = json.loads(sys.argv[1])
+    script, sys.argv = sys.argv[2], [sys.argv[2], *sys.argv[3:]]
+    runpy.run_path(script, run_name="__main__")
+    """
+)
+SUBCOMMANDS = ("run", "check", "import", "compensate", "sweep", "report")
+
+
+def test_the_wheel_declares_the_thermaxis_command(wheel):
+    with zipfile.ZipFile(wheel) as archive:
+        (entry_points,) = [n for n in archive.namelist() if n.endswith("entry_points.txt")]
+        text = archive.read(entry_points).decode()
+    assert "[console_scripts]" in text and "thermaxis = thermaxis.cli:main" in text
+
+
+@pytest.mark.parametrize("subcommand", ("", *SUBCOMMANDS))
+def test_the_installed_command_and_each_subcommand_have_help(subcommand, installed, tmp_path):
+    script = installed / "bin" / "thermaxis"
+    assert script.is_file(), f"pip installed no console script into {installed / 'bin'}"
+    paths = [str(installed)] + list(
+        dict.fromkeys(sysconfig.get_paths()[k] for k in ("purelib", "platlib"))
+    )
+    proc = subprocess.run(
+        [sys.executable, "-I", "-S", "-c", SCRIPT, json.dumps(paths), str(script),
+         *([subcommand] if subcommand else []), "--help"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    usage = f"usage: thermaxis {subcommand}".rstrip()
+    assert proc.stdout.startswith(usage) and "examples:" in proc.stdout, proc.stdout[:500]
+    if not subcommand:
+        assert all(name in proc.stdout for name in SUBCOMMANDS)

@@ -140,7 +140,7 @@ def _mapping(tmp_path: Path, **changes) -> Path:
 
 
 def test_importer_splits_by_signal_rereferences_and_states_its_assumptions(tmp_path):
-    out = import_dataset(_mapping(tmp_path), tmp_path / "raw" / "wide")
+    out = import_dataset(_mapping(tmp_path), tmp_path / "raw" / "wide").out
     dataset = load_dataset(out)
     assert dataset.run_ids == ("B1", "B2", "B3")
     # Run 1 keeps the record's start (0 s); runs 2 and 3 start at their first active sample:
@@ -242,7 +242,7 @@ def test_importer_takes_one_file_per_run_without_a_time_column(tmp_path):
             {"name": "B", "condition": "b", "description": "y", "file": "b.csv"},
         ],  # fmt: skip
     )
-    dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "files"))
+    dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "files").out)
     errors = pd.read_csv(dataset.root / "B" / "errors.csv")
     # Samples every 30 s, a measurement every 150 s: rows 0, 5, 10, 15 -> 0, 3, 6, 9 um at
     # 0.02 um/s.
@@ -260,7 +260,7 @@ def test_importer_cuts_explicit_time_ranges(tmp_path):
             {"name": "late", "condition": "b", "description": "y", "start_s": 2400, "end_s": 3600},
         ],  # fmt: skip
     )
-    dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "ranges"))
+    dataset = load_dataset(import_dataset(mapping, tmp_path / "raw" / "ranges").out)
     late = pd.read_csv(dataset.root / "late" / "errors.csv")
     assert (
         late["time"].iloc[0] == "2030-01-01T00:40:00" and len(late) == 4

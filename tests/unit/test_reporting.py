@@ -248,7 +248,20 @@ def test_index_page_links_and_states_the_data():
         ),
         index_page.IndexSection("Empty", ()),
     ]
-    page = index_page.render_index("twin", "Dataset `twin`: SIMULATED data.", True, sections)
+    metrics = pd.DataFrame(
+        {
+            "fold": ["E1"],
+            "approach": ["decoupled"],
+            "algorithm": ["mlr"],
+            "target": ["error"],
+            "rmse": [1.0],
+            "max_abs": [2.0],
+        }  # fmt: skip
+    )
+    headline = index_page.Headline(index_page.model_ranking(metrics), "Recommended: x.", {})
+    page = index_page.render_index(
+        "twin", "Dataset `twin`: SIMULATED data.", True, headline, sections=sections
+    )
     assert '<a href="reports/paper_report.html">html</a>' in page
     assert page.index("SIMULATED DATA") < page.index("<h2>Reports</h2>")
     assert "<h2>Empty</h2>" not in page

@@ -2,7 +2,10 @@
 
 Every image must decode, the console must show no error, nothing may be requested from
 anywhere but the local server (or ``data:`` URIs), and the data statement must be on the
-first screen. A screenshot of each page is saved in the test's tmp folder.
+first screen. A screenshot of each page is saved in the test's tmp folder. The two index
+pages (the dataset's and ``results/index.html`` across datasets) must also link only
+files that exist and show the held-out errors of ``metrics.csv``, read here with the
+csv module.
 
 Needs the Debian packages ``chromium`` and ``chromium-driver`` (``.ci/run`` installs
 them); without them the test is skipped with a message.
@@ -10,10 +13,14 @@ them); without them the test is skipped with a message.
 
 from __future__ import annotations
 
+import csv
 import functools
 import json
 import shutil
 import threading
+import urllib.error
+import urllib.request
+from collections import defaultdict
 from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
@@ -37,10 +44,21 @@ class _QuietHandler(SimpleHTTPRequestHandler):
 
 
 @pytest.fixture(scope="module")
-def server(built):
-    """The built dataset's results folder over http://127.0.0.1:<free port>/."""
+def results(built, tmp_path_factory) -> Path:
+    """A copy of the built results folder with the cross-dataset summary and page made in it."""
+    from thermaxis.reports import crossdataset
+
+    results = tmp_path_factory.mktemp("served") / "results"
+    shutil.copytree(built.out, results / built.out.name)
+    assert crossdataset.main(["--results", str(results), "--formats", "png"]) == 0
+    return results
+
+
+@pytest.fixture(scope="module")
+def server(results):
+    """The results folder over http://127.0.0.1:<free port>/."""
     httpd = ThreadingHTTPServer(
-        ("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(built.out))
+        ("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(results))
     )
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
     thread.start()
@@ -86,11 +104,13 @@ def browser(tmp_path_factory):
 
 PAGES = (
     "index.html",
-    "reports/paper_report.html",
-    "reports/dataset_report.html",
-    "reports/condition_R1.html",
-    "reports/model_R2.html",
+    "rep/index.html",
+    "rep/reports/paper_report.html",
+    "rep/reports/dataset_report.html",
+    "rep/reports/condition_R1.html",
+    "rep/reports/model_R2.html",
 )
+INDEXES = ("index.html", "rep/index.html")
 
 
 def requested_urls(driver) -> list[str]:
@@ -116,8 +136,7 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
     )
     broken = [alt for alt, complete, width in images if not (complete and width > 0)]
     assert broken == [], f"{page}: images that did not load: {broken}"
-    if page != "index.html":
-        assert images, f"{page}: a report without a single figure"
+    assert images, f"{page}: a page without a single figure"
 
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert errors == [], f"{page}: console errors: {errors}"
@@ -139,8 +158,87 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
     assert 0 <= top and bottom <= FIRST_SCREEN_PX, (
         f"{page}: the data statement is not on the first screen ({top}-{bottom} px)"
     )
-    assert "SIMULATED DATA" in text and "SIMULATED data" in text
+    assert "SIMULATED DATA" in text
+    assert "SIMULATED data" in text or page == "index.html"  # across datasets: names them
 
     shot = tmp_path / (page.replace("/", "_").removesuffix(".html") + ".png")
     assert browser.save_screenshot(str(shot))
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and shot.stat().st_size > 10_000
+
+
+def _mean_rmse(metrics: Path) -> dict[tuple[str, str], float]:
+    """Mean held-out RMSE of the error curves per (approach, algorithm), from the CSV text."""
+    values = defaultdict(list)
+    with open(metrics, newline="", encoding="utf-8") as fh:
+        for row in csv.DictReader(fh):
+            if row["target"] == "error":
+                values[row["approach"], row["algorithm"]].append(float(row["rmse"]))
+    return {key: sum(v) / len(v) for key, v in values.items()}
+
+
+def _links_resolve(browser) -> list[str]:
+    """The page's links that do not answer 200 (anchors within the page skipped)."""
+    hrefs = browser.execute_script(
+        "return Array.from(document.querySelectorAll('a[href]'))"
+        ".filter(a => !a.getAttribute('href').startsWith('#')).map(a => a.href)"
+    )
+    broken = []
+    for href in sorted(set(hrefs)):
+        try:
+            with urllib.request.urlopen(href.split("#")[0], timeout=10) as response:
+                if response.status != 200:
+                    broken.append(href)
+        except urllib.error.URLError:
+            broken.append(href)
+    return broken
+
+
+@pytest.mark.parametrize("page", INDEXES)
+def test_index_links_resolve(page, browser, server):
+    browser.get(f"{server}/{page}")
+    assert _links_resolve(browser) == []
+
+
+def test_dataset_index_leads_with_the_held_out_errors_of_metrics_csv(browser, server, results):
+    expected = _mean_rmse(results / "rep" / "tables" / "metrics.csv")
+    browser.get(f"{server}/rep/index.html")
+    rows = browser.execute_script(
+        "const t = document.querySelector('#headline-models table');"
+        "const head = Array.from(t.tHead.rows[0].cells).map(c => c.textContent);"
+        "return Array.from(t.tBodies[0].rows).map(r => Object.fromEntries(Array.from(r.cells)"
+        ".map((c, i) => [head[i], c.getAttribute('data-value') ?? c.textContent])));"
+    )
+    shown = {(r["approach"], r["algorithm"]): float(r["mean_rmse_um"]) for r in rows}
+    assert shown.keys() == expected.keys()
+    for key, value in expected.items():
+        assert shown[key] == pytest.approx(value, rel=1e-12)
+    ordered = [float(r["mean_rmse_um"]) for r in rows]
+    assert ordered == sorted(ordered), "the headline is not best first"
+    # The answer is above the figures: its top on the first screen.
+    top = browser.execute_script(
+        "return document.querySelector('#answer').getBoundingClientRect().top"
+    )
+    assert top < FIRST_SCREEN_PX
+
+    # A click on a header sorts the table in place (descending on the second click).
+    header = browser.find_element(
+        "xpath", "//div[@id='headline-models']//th[text()='mean_rmse_um']"
+    )
+    header.click()
+    header.click()
+    resorted = browser.execute_script(
+        "return Array.from(document.querySelectorAll('#headline-models tbody tr'))"
+        ".map(r => parseFloat(r.cells[3].getAttribute('data-value')))"
+    )
+    assert resorted == sorted(ordered, reverse=True)
+
+
+def test_results_index_shows_each_datasets_best_model_and_links_its_page(browser, server, results):
+    best = min(_mean_rmse(results / "rep" / "tables" / "metrics.csv").values())
+    browser.get(f"{server}/index.html")
+    text = browser.execute_script("return document.querySelector('#answer').innerText")
+    assert f"mean RMSE of {best:.2f} µm" in text
+    assert (
+        browser.execute_script("return document.querySelector('#answer a').getAttribute('href')")
+        == "rep/index.html"
+    )

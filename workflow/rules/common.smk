@@ -208,15 +208,6 @@ def figure_output(figure):
     )
 
 
-def figure_stems(figures=FIGURES):
-    """Every figure's stem, a per-fold figure's once per fold, in table order."""
-    return [
-        fig.stem.format(fold=fold)
-        for fig in figures
-        for fold in (FOLDS if fig.per_fold else [None])
-    ]
-
-
 def figure_files(figures=FIGURES):
     """Every file of ``figures``, a per-fold figure's for every fold, in table order."""
     return [
@@ -326,8 +317,22 @@ def notebook_parameters(input, sections_used, **values):
     )
 
 
+# Many runs (config reports.combined_above_runs): one report of all conditions, a section
+# per run, instead of a notebook per run.
+COMBINED_CONDITIONS = len(RUNS) > SETTINGS.reports.combined_above_runs
+
+
 def condition_reports():
+    if COMBINED_CONDITIONS:
+        return [f"{OUT}/reports/conditions.html"]
     return expand(f"{OUT}/reports/condition_{{run}}.html", run=RUNS)
+
+
+def condition_links(run):
+    """Where the index sends a run: its report, or its section of the combined one."""
+    if COMBINED_CONDITIONS:
+        return [("section", f"{OUT}/reports/conditions.html#run-{run}")]
+    return [("condition report", f"{OUT}/reports/condition_{run}.html")]
 
 
 def model_reports():
@@ -449,17 +454,17 @@ def index_sections():
             [("dataset report", f"{OUT}/reports/dataset_report.html")],
         )
     )
-    reports += [
-        (f"Run {run}", [("condition report", f"{OUT}/reports/condition_{run}.html")])
-        for run in RUNS
-    ]
+    if COMBINED_CONDITIONS:
+        reports.append(
+            (
+                f"All {len(RUNS)} runs",
+                [("conditions report", f"{OUT}/reports/conditions.html")],
+            )
+        )
+    reports += [(f"Run {run}", condition_links(run)) for run in RUNS]
     models = [
         (f"Fold {fold} (held-out run)", [("model report", path)])
         for fold, path in zip(FOLDS, model_reports())
-    ]
-    figures = [
-        (stem, [(ext, f"{OUT}/figures/{stem}.{ext}") for ext in FIG_FORMATS])
-        for stem in figure_stems()
     ]
     tables = [(Path(p).name, [(Path(p).suffix[1:], p)]) for p in linked_tables()]
     compensation = {}
@@ -490,8 +495,7 @@ def index_sections():
             f"({', '.join(REPORT_ALGORITHMS)}) side by side.",
             models,
         ),
-        ("Figures", "", figures),
-        ("Tables", "", tables),
+        ("All tables", "", tables),
         (
             "Compensation",
             f"The deployed model (config compensation.model: {SETTINGS.compensation.model}) fitted on all "
@@ -503,15 +507,66 @@ def index_sections():
     ]
 
 
+def index_figures():
+    """The index's thumbnails by stage: (stage, [(stem, caption, thumbnail, [(ext, path)])])."""
+    groups = {}
+    for fig in FIGURES:
+        for fold in FOLDS if fig.per_fold else [None]:
+            wildcards = {"fold": fold} if fold else {}
+            stem = fig.stem.format(**wildcards)
+            paths = figure_paths(fig, **wildcards)
+            thumbnail = next((p for p in paths if p.endswith((".png", ".svg"))), None)
+            groups.setdefault(fig.category, []).append(
+                (
+                    stem,
+                    registry.caption_of(fig, FACTS, wildcards) or "",
+                    thumbnail,
+                    [(Path(p).suffix[1:], p) for p in paths],
+                )
+            )
+    order = list(CATEGORY)
+    return [
+        (CATEGORY[key].split(". ", 1)[1], figures)
+        for key, figures in sorted(groups.items(), key=lambda kv: order.index(kv[0]))
+    ]
+
+
+# The tables the index shows in the page (title, file, note); the others are linked.
+INDEX_TABLES = [
+    ("Runs", f"{OUT}/tables/dataset_summary.csv", ""),
+    (
+        "Held-out error per fold, approach, algorithm and target",
+        f"{OUT}/tables/metrics.csv",
+        "",
+    ),
+    (
+        "Recommendation per held-out run",
+        f"{OUT}/tables/recommendation.csv",
+        "docs/recommendation.md",
+    ),
+    (
+        "Compensation: each held-out run before and after compensating",
+        f"{OUT}/compensation/summary.csv",
+        "",
+    ),
+    ("Sensitive points per fold", f"{OUT}/tables/sensitive_points.csv", ""),
+]
+
+
 def index_inputs():
-    return sorted(
-        {
-            path
-            for _, _, rows in index_sections()
-            for _, links in rows
-            for _, path in links
-        }
-    )
+    linked = {
+        path.split("#", 1)[0]
+        for _, _, rows in index_sections()
+        for _, links in rows
+        for _, path in links
+    }
+    drawn = {
+        path
+        for _, figures in index_figures()
+        for *_, links in figures
+        for _, path in links
+    }
+    return sorted(linked | drawn | {path for _, path, _ in INDEX_TABLES})
 
 
 # --------------------------------------------------------------------------- compensation
@@ -669,6 +724,7 @@ RESOURCES = {
         for name in (
             "dataset_report",
             "condition_report",
+            "conditions_report",
             "model_report",
             "paper_report",
             "sweep_report",

@@ -117,6 +117,40 @@ rule condition_report:
         RUN_NOTEBOOK
 
 
+rule conditions_report:
+    input:
+        notebook="notebooks/conditions_report.ipynb",
+        library=code_of("notebooks/conditions_report.ipynb"),
+        summary=f"{OUT}/tables/dataset_summary.csv",
+        errors=f"{OUT}/assembled/errors.parquet",
+        temperatures=f"{OUT}/assembled/temperatures.parquet",
+    output:
+        notebook=f"{OUT}/reports/conditions.ipynb",
+        html=report(
+            f"{OUT}/reports/conditions.html",
+            caption="../report/notebook_report.rst",
+            category=CATEGORY["reports"],
+            subcategory="Conditions",
+            labels={"report": "conditions", "run": "all"},
+        ),
+    log:
+        f"{LOGS}/reports/conditions.log",
+    benchmark:
+        f"{BENCH}/reports/conditions.tsv"
+    conda:
+        ENV
+    resources:
+        **rule_resources("conditions_report"),
+    params:
+        title=f"Conditions report: all runs ({DATASET.name})",
+        statement=DATA_STATEMENT,
+        parameters=lambda w, input: notebook_parameters(
+            input, sections(*DATA_SECTIONS), runs=RUNS
+        ),
+    shell:
+        RUN_NOTEBOOK
+
+
 rule model_report:
     input:
         notebook="notebooks/model_report.ipynb",
@@ -240,11 +274,17 @@ rule index:
         simulated=SIMULATED,
         statement=DATA_STATEMENT,
         sections=index_sections(),
+        figures=index_figures(),
+        tables=INDEX_TABLES,
         sweep=f"{OUT}/sweep/sweep_report.html",
         headline=HEADLINE,
         answer=dict(
             markdown=f"{OUT}/tables/recommendation.md",
+            recommendation=f"{OUT}/tables/recommendation.csv",
+            metrics=f"{OUT}/tables/metrics.csv",
             model=f"{OUT}/compensation/model.json",
+            # The claims table (tables/claims.csv) is shown once the workflow makes it.
+            claims=f"{OUT}/tables/claims.csv",
         ),
     script:
         "../scripts/index.py"

@@ -1,10 +1,23 @@
-"""results/<dataset>/index.html: the data statement, then links to every report, figure and table."""
+"""results/<dataset>/index.html: the answer first, then figures, tables, reports and provenance."""
 
 import json
 import os
 
+import pandas as pd
+
 from thermaxis.pipeline.runner import run_script, write_text
-from thermaxis.reports.index import IndexRow, IndexSection, render_index
+from thermaxis.reports.index import (
+    FigureGroup,
+    Headline,
+    IndexFigure,
+    IndexRow,
+    IndexSection,
+    PageTable,
+    claims_table,
+    deployment_comparison,
+    model_ranking,
+    render_index,
+)
 
 
 def main(snakemake):
@@ -25,19 +38,6 @@ def main(snakemake):
         )
         for title, intro, rows in p.sections
     ]
-    # The answer first: the recommendation and the deployment verdict, in words.
-    with open(p.answer["markdown"], encoding="utf-8") as fh:
-        recommendation = fh.read().split("\n\n")[2]
-    with open(p.answer["model"], encoding="utf-8") as fh:
-        deployment = json.load(fh)["deployment"]
-    sections[0] = IndexSection(
-        title=sections[0].title,
-        intro=(
-            f"{recommendation} Deployed: {deployment['candidate']} "
-            f"(compensation.model: {deployment['model']}). {deployment['sentence']}"
-        ),
-        rows=sections[0].rows,
-    )
     # The sweep is optional and slow: linked when it was run, never a dependency.
     if os.path.isfile(p.sweep):
         sweep = IndexRow(
@@ -46,12 +46,56 @@ def main(snakemake):
             "present when the index was built (`make sweep`)",
         )
         sections.insert(1, IndexSection(title="Sweep", rows=(sweep,)))
-    with open(snakemake.input.provenance, encoding="utf-8") as fh:
-        provenance = json.load(fh)
+    figures = [
+        FigureGroup(
+            title,
+            tuple(
+                IndexFigure(
+                    stem, caption, rel(thumb) if thumb else "", tuple((e, rel(f)) for e, f in links)
+                )
+                for stem, caption, thumb, links in entries
+            ),
+        )
+        for title, entries in p.figures
+    ]
+    tables = [
+        PageTable(title, pd.read_csv(path, comment="#"), rel(path), note)
+        for title, path, note in p.tables
+    ]
     page = render_index(
-        p.dataset_name, p.statement, p.simulated, sections, provenance, headline=p.headline
+        p.dataset_name,
+        p.statement,
+        p.simulated,
+        _headline(p.answer),
+        figures,
+        tables,
+        sections,
+        _provenance(snakemake.input.provenance),
+        subtitle=p.headline,
     )
     write_text(page, snakemake.output[0])
+
+
+def _headline(answer) -> Headline:
+    with open(answer["markdown"], encoding="utf-8") as fh:
+        recommendation = fh.read().split("\n\n")[2]
+    with open(answer["model"], encoding="utf-8") as fh:
+        deployment = json.load(fh)["deployment"]
+    claims = None
+    if os.path.isfile(answer["claims"]):
+        claims = claims_table(pd.read_csv(answer["claims"]), answer["claims"])
+    return Headline(
+        ranking=model_ranking(pd.read_csv(answer["metrics"])),
+        recommendation=recommendation,
+        deployment=deployment,
+        comparison=deployment_comparison(pd.read_csv(answer["recommendation"])),
+        claims=claims,
+    )
+
+
+def _provenance(path):
+    with open(path, encoding="utf-8") as fh:
+        return json.load(fh)
 
 
 run_script(main, snakemake)

@@ -28,14 +28,16 @@ def read_record(spec: dict, spec_path: Path):
     mapping = importer.load_mapping(mapping_path)
     source = (mapping_path.parent / mapping["source"]).resolve()
     frame = importer.read_table(source, mapping.get("sheet", 0))
-    seconds = importer._seconds(source, frame, mapping["time"])
+    seconds = importer.read_seconds(source, frame, mapping["time"])
     temperatures = {
-        s["id"]: importer._numeric(source, frame, s["column"], False) for s in mapping["sensors"]
+        s["id"]: importer.read_numeric(source, frame, s["column"], False)
+        for s in mapping["sensors"]
     }
     signals = {
-        s["id"]: importer._numeric(source, frame, s["column"], False) for s in mapping["signals"]
+        s["id"]: importer.read_numeric(source, frame, s["column"], False)
+        for s in mapping["signals"]
     }
-    channels = {c: importer._numeric(source, frame, c, False) for c in spec["channels"]}
+    channels = {c: importer.read_numeric(source, frame, c, False) for c in spec["channels"]}
     return seconds, temperatures, signals, channels
 
 

@@ -4,9 +4,16 @@
 mapping names, splits it into runs (by an operating signal's rest-to-active steps, by
 explicit time ranges, or one file per run), subsamples the error columns into
 measurements every ``errors.every_s`` seconds, and writes ``dataset.yaml``,
-``runs.tsv`` and one folder per run.  Every assumption the import makes (an invented
+``runs.tsv`` and one folder per run; with ``errors.channels``, one such dataset per
+displacement channel of the same table.  Every assumption the import makes (an invented
 clock, re-referencing, subsampling, how runs were cut) is appended to the generated
 ``dataset.yaml`` description, so it travels with the data.
+
+Time is a column of elapsed time in ``time.unit`` (s, min or h), a column of clock
+times (``time.format``: ``ISO8601`` or a strftime format), or one row every
+``time.interval_s``.  After the import each run is summarised (duration, samples,
+measurements) and a run too short or too long for a thermal test, or with fewer
+measurements than the workflow needs, is warned about with the likely unit mistake.
 
 The output is validated by :func:`thermaxis.dataset.reader.load_dataset` before it is moved into
 place; nothing half-written is left behind.
@@ -14,10 +21,12 @@ place; nothing half-written is left behind.
 
 from __future__ import annotations
 
-import argparse
+import copy
 import shutil
 import sys
 import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import jsonschema
@@ -25,11 +34,65 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from thermaxis.config import fill_defaults
 from thermaxis.dataset.reader import load_dataset
 from thermaxis.errors import DataError
 from thermaxis.schemas import load_schema
 
-__all__ = ["load_mapping", "read_table", "split_runs", "measurements_of", "import_dataset", "main"]
+__all__ = [
+    "TIME_UNITS_S",
+    "RunSummary",
+    "Imported",
+    "ImportReport",
+    "load_mapping",
+    "read_table",
+    "read_numeric",
+    "read_seconds",
+    "read_start",
+    "split_runs",
+    "measurements_of",
+    "run_warnings",
+    "summary_lines",
+    "import_dataset",
+    "main",
+]
+
+TIME_UNITS_S = {"s": 1.0, "min": 60.0, "h": 3600.0}
+_UNIT_WORDS = {"s": "seconds", "min": "minutes", "h": "hours"}
+# A thermal test heats the axis for half an hour at least and no bench run lasts a week;
+# outside these a run's length is almost always a time column read in the wrong unit.
+PLAUSIBLE_RUN_S = (30 * 60.0, 7 * 86400.0)
+# check_dataset_shape's floor: the intercept b and every model need two measurements in a run.
+MIN_MEASUREMENTS = 2
+Progress = Callable[[int, int, str], None]
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What one imported run holds: its length on the record's clock, rows and measurements."""
+
+    run: str
+    duration_s: float
+    samples: int
+    measurements: int
+
+
+@dataclass(frozen=True)
+class Imported:
+    """One dataset the import wrote (one per error channel)."""
+
+    name: str
+    folder: Path
+    runs: tuple[RunSummary, ...]
+
+
+@dataclass(frozen=True)
+class ImportReport:
+    """The import's result: the folder replaced, the datasets in it and the warnings about its runs."""
+
+    out: Path
+    datasets: tuple[Imported, ...]
+    warnings: tuple[str, ...]
 
 
 def load_mapping(path) -> dict:
@@ -50,14 +113,8 @@ def load_mapping(path) -> dict:
     if errors:
         where = "/".join(map(str, errors[0].absolute_path)) or "top level"
         raise DataError(f"{path}: {where}: {errors[0].message}")
-    for key, sub in schema["properties"].items():
-        if "default" in sub and key not in mapping:
-            mapping[key] = sub["default"]
-    mapping["errors"].setdefault("rereference", "none")
-    mapping["split"].setdefault("rest", 0)
+    fill_defaults(mapping, schema)
     mapping["time"].setdefault("column", None)
-    for sensor in mapping["sensors"]:
-        sensor.setdefault("location", "not documented by the source")
     _check_ids(path, mapping)
     return mapping
 
@@ -67,6 +124,12 @@ def _check_ids(path: Path, mapping: dict) -> None:
     dup = sorted({i for i in ids if ids.count(i) > 1})
     if dup:
         raise DataError(f"{path}: sensors/signals: id {dup[0]!r} given more than once")
+    channels = [c["id"] for c in mapping["errors"].get("channels", [])]
+    dup = sorted({c for c in channels if channels.count(c) > 1})
+    if dup:
+        raise DataError(
+            f"{path}: errors/channels: id {dup[0]!r} given more than once (each channel is a dataset of its own)"
+        )
     names = [r["name"] for r in mapping["runs"]]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -114,7 +177,12 @@ def read_table(path, sheet=0) -> pd.DataFrame:
     return frame
 
 
-def _numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool) -> np.ndarray:
+def read_numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool) -> np.ndarray:
+    """Column ``column`` of ``frame`` (read from ``path``) as floats.
+
+    A cell that is not a finite number raises one line naming the file, the row and the
+    column; with ``allow_empty`` an empty cell is a missing reading (NaN) instead.
+    """
     if column not in frame.columns:
         raise DataError(
             f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
@@ -129,27 +197,80 @@ def _numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool) ->
     return values
 
 
-def _seconds(path: Path, frame: pd.DataFrame, time: dict) -> np.ndarray:
-    if time["column"]:
-        t = _numeric(path, frame, time["column"], allow_empty=False)
-        back = np.flatnonzero(np.diff(t) <= 0)
-        if back.size:
-            i = int(back[0]) + 1
-            raise DataError(
-                f"{path}: row {i + 2}, column {time['column']!r}: time does not increase ({t[i]:g} after {t[i - 1]:g})"
-            )
-        return t
-    return np.arange(len(frame), dtype=float) * float(time["interval_s"])
+def _clock(path: Path, frame: pd.DataFrame, time: dict) -> pd.DatetimeIndex:
+    """The clock-time column, parsed with the mapping's format; a zone is converted to UTC."""
+    column, fmt = time["column"], time["format"]
+    if column not in frame.columns:
+        raise DataError(
+            f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
+        )
+    text = frame[column].astype(str).str.strip()
+    # utc=True: naive times stay as they are, zoned ones (even mixed offsets) become UTC.
+    parsed = pd.to_datetime(text, format=fmt, errors="coerce", utc=True)
+    if parsed.isna().any():
+        i = int(np.flatnonzero(parsed.isna().to_numpy())[0])
+        expected = "an ISO 8601 clock time" if fmt == "ISO8601" else f"a clock time in {fmt!r}"
+        raise DataError(
+            f"{path}: row {i + 2}, column {column!r}: expected {expected}, got {text.iloc[i]!r}"
+        )
+    return pd.DatetimeIndex(parsed).tz_localize(None)
+
+
+def _increasing(path: Path, column: str, t: np.ndarray) -> np.ndarray:
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise DataError(
+            f"{path}: row {i + 2}, column {column!r}: time does not increase ({t[i]:g} after {t[i - 1]:g} s)"
+        )
+    return t
+
+
+def read_seconds(path: Path, frame: pd.DataFrame, time: dict) -> np.ndarray:
+    """Each row's time in seconds after :func:`read_start` (the mapping's ``time`` section).
+
+    An elapsed-time column is scaled from its ``unit``; a clock-time column counts from its
+    first row; without a column row i is at i x ``interval_s``. Time must increase.
+    """
+    if time["column"] is None:
+        return np.arange(len(frame), dtype=float) * float(time["interval_s"])
+    if time.get("format"):
+        clock = _clock(path, frame, time)
+        t = (clock - clock[0]).total_seconds().to_numpy(dtype=float)
+    else:
+        t = (
+            read_numeric(path, frame, time["column"], allow_empty=False)
+            * TIME_UNITS_S[time["unit"]]
+        )
+    return _increasing(path, time["column"], t)
+
+
+def read_start(path: Path, frame: pd.DataFrame, time: dict) -> pd.Timestamp:
+    """The clock time at 0 s of :func:`read_seconds`: a clock column's first row, else ``time.start``."""
+    if time.get("format"):
+        return _clock(path, frame, time)[0]
+    return pd.Timestamp(time["start"])
 
 
 def _tidy(path: Path, frame: pd.DataFrame, mapping: dict) -> pd.DataFrame:
-    """Seconds since the record's start, then every mapped column under its new id."""
-    out = {"_t": _seconds(path, frame, mapping["time"])}
+    """Seconds since the table's clock start, then every mapped column under its new id."""
+    out = {"_t": read_seconds(path, frame, mapping["time"])}
     for item in (*mapping["sensors"], *mapping["signals"]):
-        out[item["id"]] = _numeric(path, frame, item["column"], allow_empty=True)
-    for j, item in enumerate(mapping["errors"]["columns"]):
-        out[f"_e{j}"] = _numeric(path, frame, item["column"], allow_empty=True)
+        out[item["id"]] = read_numeric(path, frame, item["column"], allow_empty=True)
+    for c, channel in enumerate(_channels(mapping)):
+        for j, item in enumerate(channel["columns"]):
+            out[_error_key(c, j)] = read_numeric(path, frame, item["column"], allow_empty=True)
     return pd.DataFrame(out)
+
+
+def _error_key(channel: int, column: int) -> str:
+    return f"_e{channel}.{column}"
+
+
+def _channels(mapping: dict) -> list[dict]:
+    """The error channels: ``errors.channels``, or ``errors.columns`` as the one unnamed channel."""
+    errors = mapping["errors"]
+    return errors.get("channels") or [{"id": None, "columns": errors["columns"]}]
 
 
 def split_runs(rows: pd.DataFrame, mapping: dict, where: str = "mapping") -> list[pd.DataFrame]:
@@ -197,8 +318,10 @@ def _iso(start: pd.Timestamp, seconds) -> list[str]:
     return [t.isoformat() for t in times]
 
 
-def _write_run(folder: Path, rows: pd.DataFrame, mapping: dict, start: pd.Timestamp) -> int:
-    """A run's temperatures, signals and measurements; returns the number of measurements."""
+def _write_run(
+    folder: Path, rows: pd.DataFrame, mapping: dict, start: pd.Timestamp, channel: int
+) -> RunSummary:
+    """A run's temperatures, signals and the measurements of error channel ``channel``."""
     times = _iso(start, rows["_t"])
     source = mapping["source_name"]
     (folder / "temperatures").mkdir(parents=True)
@@ -222,7 +345,8 @@ def _write_run(folder: Path, rows: pd.DataFrame, mapping: dict, start: pd.Timest
         )
     picked = measurements_of(rows, mapping["errors"]["every_s"])
     columns = mapping["errors"]["columns"]
-    reference = rows[[f"_e{j}" for j in range(len(columns))]].iloc[0].to_numpy(dtype=float)
+    keys = [_error_key(channel, j) for j in range(len(columns))]
+    reference = rows[keys].iloc[0].to_numpy(dtype=float)
     if mapping["errors"]["rereference"] == "run_start" and not np.isfinite(reference).all():
         raise DataError(
             f"{folder.name}: the run's first error reading is missing; cannot re-reference to it"
@@ -230,7 +354,7 @@ def _write_run(folder: Path, rows: pd.DataFrame, mapping: dict, start: pd.Timest
     records = []
     for i, (_, sample) in enumerate(picked.iterrows(), start=1):
         for j, item in enumerate(columns):
-            value = float(sample[f"_e{j}"])
+            value = float(sample[keys[j]])
             if mapping["errors"]["rereference"] == "run_start":
                 value -= reference[j]
             if np.isfinite(value):
@@ -239,17 +363,23 @@ def _write_run(folder: Path, rows: pd.DataFrame, mapping: dict, start: pd.Timest
                 )
     errors = pd.DataFrame(records, columns=["measurement", "time", "position_mm", "error_um"])
     errors.to_csv(folder / "errors.csv", index=False, float_format="%.6g", lineterminator="\n")
-    return len(picked)
+    t = rows["_t"].to_numpy(dtype=float)
+    return RunSummary(folder.name, float(t[-1] - t[0]), len(rows), len(picked))
 
 
 def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
     """What the import assumed, in sentences for the dataset's description."""
     time = mapping["time"]
     notes = []
-    if time["column"]:
+    if time.get("format"):
         notes.append(
-            f"Times are seconds since the record's start (column {time['column']!r}); the clock time "
-            f"{time['start']} given to the first row is invented by the import, not measured."
+            f"Times are the logged clock times of column {time['column']!r} (format {time['format']}); "
+            "a time zone, where given, was converted to UTC."
+        )
+    elif time["column"]:
+        notes.append(
+            f"Times are {_UNIT_WORDS[time['unit']]} since the record's start (column {time['column']!r}); "
+            f"the clock time {time['start']} given to the first row is invented by the import, not measured."
         )
     else:
         notes.append(
@@ -336,71 +466,178 @@ def _runs_tsv(mapping: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _runs_rows(mapping_path: Path, mapping: dict) -> list[pd.DataFrame]:
+def _runs_rows(mapping_path: Path, mapping: dict, progress: Progress) -> list[tuple]:
+    """Each run's tidy rows with the clock time of their 0 s, in the mapping's order."""
     source = (mapping_path.parent / mapping["source"]).resolve()
     if mapping["split"]["by"] == "files":
         pieces = []
-        for run in mapping["runs"]:
+        for i, run in enumerate(mapping["runs"]):
             table_path = source / run["file"]
-            pieces.append(_tidy(table_path, read_table(table_path, mapping["sheet"]), mapping))
+            progress(i, len(mapping["runs"]), f"reading {run['file']}")
+            frame = read_table(table_path, mapping["sheet"])
+            pieces.append(
+                (_tidy(table_path, frame, mapping), read_start(table_path, frame, mapping["time"]))
+            )
+        progress(len(mapping["runs"]), len(mapping["runs"]), "tables read")
         return pieces
-    return split_runs(
-        _tidy(source, read_table(source, mapping["sheet"]), mapping), mapping, str(mapping_path)
+    progress(0, 1, f"reading {source.name}")
+    frame = read_table(source, mapping["sheet"])
+    start = read_start(source, frame, mapping["time"])
+    runs = split_runs(_tidy(source, frame, mapping), mapping, str(mapping_path))
+    progress(1, 1, "table read")
+    # Each run keeps its place on the record's clock, so runs follow each other in time.
+    return [(rows, start) for rows in runs]
+
+
+def _channel_mapping(mapping: dict, channel: dict) -> dict:
+    """The mapping of one channel's dataset: its own name, error columns and direction."""
+    if channel["id"] is None:
+        return mapping
+    out = copy.deepcopy(mapping)
+    out["name"] = f"{mapping['name']}_{channel['id']}"
+    out["errors"]["columns"] = channel["columns"]
+    if channel.get("direction"):
+        out["axis"]["direction"] = channel["direction"]
+    out["description"] = (
+        mapping["description"].strip()
+        + f"\n\nThis dataset holds error channel {channel['id']!r} of the record"
+        + (f" ({channel['direction']})." if channel.get("direction") else ".")
     )
+    return out
 
 
-def import_dataset(mapping_path, out) -> Path:
-    """Write the dataset the mapping describes into ``out`` (replaced only when complete and valid)."""
+def _write_dataset(
+    folder: Path, mapping: dict, mapping_path: Path, pieces: list, channel: int, progress: Progress
+) -> Imported:
+    summaries = []
+    for i, (run, (rows, start)) in enumerate(zip(mapping["runs"], pieces, strict=False)):
+        progress(i, len(pieces), f"{mapping['name']}: writing run {run['name']}")
+        summaries.append(_write_run(folder / run["name"], rows, mapping, start, channel))
+    progress(len(pieces), len(pieces), f"{mapping['name']}: runs written")
+    counts = {r.run: r.measurements for r in summaries}
+    meta = _dataset_yaml(mapping, _assumptions(mapping, counts))
+    header = f"# Written by `python -m thermaxis.dataset.importer {mapping_path.name}` -- do not edit by hand.\n"
+    (folder / "dataset.yaml").write_text(
+        header + yaml.safe_dump(meta, sort_keys=False, allow_unicode=True, width=100),
+        encoding="utf-8",
+    )
+    (folder / "runs.tsv").write_text(_runs_tsv(mapping), encoding="utf-8")
+    if mapping.get("licence_file"):
+        shutil.copyfile(mapping_path.parent / mapping["licence_file"], folder / "LICENSE")
+    return Imported(mapping["name"], folder, tuple(summaries))
+
+
+def _span(seconds: float) -> str:
+    """A run's length as a reader would say it."""
+    for limit, unit, size in ((120, "s", 1), (7200, "min", 60), (172800, "h", 3600)):
+        if abs(seconds) < limit:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds / 86400:.3g} days"
+
+
+def _unit_hint(time: dict, durations: list[float]) -> str:
+    """The time unit under which every flagged run would last like a thermal test, if one does."""
+    if time.get("format"):
+        return f"check the clock format {time['format']!r}"
+    if time["column"] is None:
+        return f"check time.interval_s ({time['interval_s']:g} s per row)"
+    low, high = PLAUSIBLE_RUN_S
+    for unit, size in TIME_UNITS_S.items():
+        scaled = [d * size / TIME_UNITS_S[time["unit"]] for d in durations]
+        if unit != time["unit"] and all(low <= d <= high for d in scaled):
+            return (
+                f"if column {time['column']!r} is in {_UNIT_WORDS[unit]}, set time.unit: {unit} "
+                f"(they would last {_span(min(scaled))} to {_span(max(scaled))})"
+            )
+    return f"check the unit of column {time['column']!r} (time.unit: {time['unit']})"
+
+
+def run_warnings(name: str, time: dict, every_s: float, runs: tuple[RunSummary, ...]) -> list[str]:
+    """Warnings about runs a thermal test would not give: implausible lengths, too few measurements."""
+    low, high = PLAUSIBLE_RUN_S
+    out = []
+    for flagged, what in (
+        ([r for r in runs if r.duration_s < low], "short"),
+        ([r for r in runs if r.duration_s > high], "long"),
+    ):
+        if flagged:
+            durations = [r.duration_s for r in flagged]
+            out.append(
+                f"{name}: run(s) {', '.join(r.run for r in flagged)} last {_span(min(durations))} to "
+                f"{_span(max(durations))}, implausibly {what} for a thermal test (expected "
+                f"{_span(low)} to {_span(high)}); {_unit_hint(time, durations)}"
+            )
+    few = [r for r in runs if r.measurements < MIN_MEASUREMENTS]
+    if few:
+        out.append(
+            f"{name}: run(s) {', '.join(f'{r.run} ({r.measurements})' for r in few)} have fewer than "
+            f"{MIN_MEASUREMENTS} measurements at errors.every_s = {every_s:g} s; the workflow refuses "
+            "such a dataset"
+        )
+    return out
+
+
+def _no_progress(done: int, total: int, what: str) -> None:
+    """The default: an import called from code reports nothing."""
+
+
+def import_dataset(mapping_path, out, progress: Progress = _no_progress) -> ImportReport:
+    """Write the dataset(s) the mapping describes into ``out`` (replaced only when complete and valid).
+
+    One dataset goes into ``out`` itself; with ``errors.channels`` each channel's dataset
+    goes into ``out/<name>_<channel>``. ``progress(done, total, what)`` is told each step.
+    """
     mapping_path = Path(mapping_path)
     mapping = load_mapping(mapping_path)
-    pieces = _runs_rows(mapping_path, mapping)
+    pieces = _runs_rows(mapping_path, mapping, progress)
     out = Path(out)
-    start = pd.Timestamp(mapping["time"]["start"])
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
-        counts = {}
-        for run, rows in zip(mapping["runs"], pieces, strict=False):
-            # Each run keeps its place on the record's clock, so runs follow each other in time.
-            counts[run["name"]] = _write_run(tmp / run["name"], rows, mapping, start)
-        meta = _dataset_yaml(mapping, _assumptions(mapping, counts))
-        header = f"# Written by `python -m thermaxis.dataset.importer {mapping_path.name}` -- do not edit by hand.\n"
-        (tmp / "dataset.yaml").write_text(
-            header + yaml.safe_dump(meta, sort_keys=False, allow_unicode=True, width=100),
-            encoding="utf-8",
-        )
-        (tmp / "runs.tsv").write_text(_runs_tsv(mapping), encoding="utf-8")
-        if mapping.get("licence_file"):
-            shutil.copyfile(mapping_path.parent / mapping["licence_file"], tmp / "LICENSE")
-        load_dataset(tmp)  # the layout's own validation, before anything replaces `out`
+        written = []
+        for c, channel in enumerate(_channels(mapping)):
+            channel_mapping = _channel_mapping(mapping, channel)
+            folder = tmp if channel["id"] is None else tmp / channel_mapping["name"]
+            written.append(
+                _write_dataset(folder, channel_mapping, mapping_path, pieces, c, progress)
+            )
+        for dataset in written:
+            load_dataset(
+                dataset.folder
+            )  # the layout's own validation, before anything replaces `out`
         if out.exists():
             shutil.rmtree(out)
         tmp.rename(out)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp)
-    return out
+    datasets = tuple(Imported(d.name, out / d.folder.relative_to(tmp), d.runs) for d in written)
+    found = [
+        w
+        for d in datasets
+        for w in run_warnings(d.name, mapping["time"], mapping["errors"]["every_s"], d.runs)
+    ]
+    return ImportReport(out, datasets, tuple(found))
+
+
+def summary_lines(report: ImportReport) -> list[str]:
+    """The per-run summary printed after an import: duration, samples, measurements."""
+    lines = []
+    for dataset in report.datasets:
+        lines.append(f"{dataset.name}: {len(dataset.runs)} runs in {dataset.folder}")
+        width = max(len(r.run) for r in dataset.runs)
+        lines.extend(
+            f"  {r.run:<{width}}  {_span(r.duration_s):>10}  {r.samples:>7} samples  "
+            f"{r.measurements:>4} measurements"
+            for r in dataset.runs
+        )
+    return lines
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m thermaxis.dataset.importer", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument(
-        "mapping",
-        help="the import mapping (YAML; schema src/thermaxis/schemas/import_mapping.schema.yaml)",
-    )
-    parser.add_argument(
-        "--out", required=True, help="the dataset folder to write, e.g. data/raw/<name>"
-    )
-    args = parser.parse_args(argv)
-    try:
-        out = import_dataset(args.mapping, args.out)
-    except DataError as exc:
-        print(f"thermaxis error: {exc}", file=sys.stderr)
-        return 1
-    print(f"wrote {out}")
-    return 0
+    from thermaxis.cli import main as cli_main  # one command line: thermaxis import
+
+    return cli_main(["import", *(sys.argv[1:] if argv is None else argv)])
 
 
 if __name__ == "__main__":

@@ -9,7 +9,8 @@ its own ``dataset.yaml`` (found through ``provenance.json``), so the summary say
 for every row.
 
 Command line (writes ``summary.csv``, ``summary.md`` and the figure table's ``heldout_error``
-in every format, ``heldout_error.{png,pdf}`` by default)::
+in every format, ``heldout_error.{png,pdf}`` by default, and the page across datasets,
+``<results>/index.html``, which links each dataset's ``index.html``)::
 
     python -m thermaxis.reports.crossdataset --results results --out results/_datasets
 """
@@ -209,6 +210,7 @@ def main(argv=None) -> int:
         print(f"thermaxis error: {exc}", file=sys.stderr)
         return 1
     _write(summary, fig, out, args.formats)
+    _write_page(summary, results, out, args.formats)
     print(
         f"thermaxis: held-out error of {len(dirs)} dataset(s) -> {out}/summary.csv", file=sys.stderr
     )
@@ -227,6 +229,26 @@ def _write(summary: pd.DataFrame, fig, out: Path, formats) -> None:
         summary.to_csv(table, index=False, float_format="%.6f", lineterminator="\n")
         markdown.write_text(to_markdown(summary), encoding="utf-8")
         save_figure(fig, figures)
+
+
+def _write_page(summary: pd.DataFrame, results: Path, out: Path, formats) -> None:
+    """``results/index.html``: the summary with a link to each dataset's own page."""
+    import os
+
+    from thermaxis.pipeline.runner import write_text
+    from thermaxis.reports.index import render_results_index
+
+    pages = {
+        name: f"{name}/index.html"
+        for name in summary["dataset"].unique()
+        if (results / name / "index.html").is_file()
+    }
+    figure = (
+        os.path.relpath(out / f"{FIGURE.id}.png", results).replace(os.sep, "/")
+        if "png" in formats
+        else None
+    )
+    write_text(render_results_index(summary, pages, figure), results / "index.html")
 
 
 if __name__ == "__main__":

@@ -41,6 +41,7 @@ __all__ = [
     "banner_html",
     "provenance_html",
     "table_html",
+    "SORT_SCRIPT",
     "figure_png",
     "figure_html",
     "figures_html",
@@ -66,6 +67,7 @@ figure.tx-figure{margin:0.8em 0 1.5em 0}
 figure.tx-figure img{max-width:100%;height:auto;border:1px solid #e5e7eb}
 figure.tx-figure figcaption{font-size:0.9em;color:#374151;max-width:60em}
 .tx-note{color:#4b5563;font-style:italic}
+.tx-lead{font-size:1.15em;max-width:60em}
 code.tx-hash{font-size:0.85em}
 """
 
@@ -188,16 +190,25 @@ def _cell_text(value, float_format: str) -> str:
     return html.escape(format_cell(value, float_format))
 
 
+def _number_attr(value) -> str:
+    """The full-precision value a sortable column sorts by (and a test can read back)."""
+    if pd.isna(value):
+        return ""
+    return f' data-value="{float(value)!r}"'
+
+
 def table_html(
     frame: pd.DataFrame,
     float_format: str = "%.3f",
     caption: str | None = None,
     max_rows: int | None = None,
+    sortable: bool = False,
 ) -> str:
     """A DataFrame as an HTML table: no index, a fixed float format, numbers right-aligned.
 
     Missing values are blank.  ``max_rows`` keeps the first rows and says how many were
-    left out.
+    left out.  A ``sortable`` table carries each number's full value for
+    :data:`SORT_SCRIPT`, which sorts it by a click on a header.
     """
     shown = frame if max_rows is None or len(frame) <= max_rows else frame.head(max_rows)
     numeric = [
@@ -208,17 +219,47 @@ def table_html(
     rows = []
     for values in shown.itertuples(index=False, name=None):
         cells = "".join(
-            f'<td class="tx-num">{_cell_text(v, float_format)}</td>'
+            f'<td class="tx-num"{_number_attr(v) if sortable else ""}>{_cell_text(v, float_format)}</td>'
             if num
             else f"<td>{_cell_text(v, float_format)}</td>"
             for v, num in zip(values, numeric, strict=False)
         )
         rows.append(f"<tr>{cells}</tr>")
     cap = f"<caption>{html.escape(caption)}</caption>" if caption else ""
-    text = f'<table class="tx-table">{cap}<thead><tr>{head}</tr></thead><tbody>{"".join(rows)}</tbody></table>'
+    kind = "tx-table tx-sortable" if sortable else "tx-table"
+    text = f'<table class="{kind}">{cap}<thead><tr>{head}</tr></thead><tbody>{"".join(rows)}</tbody></table>'
     if len(shown) < len(frame):
         text += f'<p class="tx-note">First {len(shown)} of {len(frame)} rows; the full table is in the CSV.</p>'
     return text
+
+
+# Inline, so a page loads nothing from elsewhere; without JavaScript the tables read as written.
+SORT_SCRIPT = """
+document.querySelectorAll("table.tx-sortable").forEach(function (table) {
+  table.querySelectorAll("thead th").forEach(function (th, column) {
+    th.title = "click to sort";
+    th.style.cursor = "pointer";
+    th.addEventListener("click", function () {
+      var body = table.tBodies[0];
+      var rows = Array.prototype.slice.call(body.rows);
+      var up = th.getAttribute("aria-sort") !== "ascending";
+      table.querySelectorAll("thead th").forEach(function (h) { h.removeAttribute("aria-sort"); });
+      th.setAttribute("aria-sort", up ? "ascending" : "descending");
+      function key(row) {
+        var cell = row.cells[column];
+        var v = cell.getAttribute("data-value");
+        return v === null ? cell.textContent : parseFloat(v);
+      }
+      rows.sort(function (a, b) {
+        var x = key(a), y = key(b);
+        var order = (typeof x === "number" && typeof y === "number") ? x - y : String(x).localeCompare(String(y));
+        return up ? order : -order;
+      });
+      rows.forEach(function (row) { body.appendChild(row); });
+    });
+  });
+});
+"""
 
 
 # --------------------------------------------------------------------------- figures

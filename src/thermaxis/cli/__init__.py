@@ -1,0 +1,359 @@
+"""The ``thermaxis`` command: run, check, import, compensate, sweep and report.
+
+Every subcommand calls the functions the workflow itself uses: ``run``, ``sweep`` and
+``report`` start Snakemake through the recovery wrapper of ``make results``
+(:mod:`thermaxis.pipeline.resume`), ``check`` is the workflow's parse-time gate
+(:func:`thermaxis.pipeline.preflight.check_before_jobs`), ``import`` the importer and
+``compensate`` the controller runtime (:class:`thermaxis.compensation.runtime.Compensator`).
+A bad input ends in one line, ``thermaxis error: <message>``, and exit status 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from thermaxis.errors import DataError
+
+__all__ = ["build_parser", "main"]
+
+SNAKEMAKE_COMMANDS = ("run", "sweep", "report")
+CHECKOUT_NEEDED = (
+    "run it in a thermaxis checkout (the folder with the Snakefile): the workflow is not part of "
+    "the installed package"
+)
+
+
+def _examples(*lines: str) -> str:
+    return "examples:\n" + "\n".join(f"  {line}" for line in lines)
+
+
+def _subcommand(sub, name: str, summary: str, examples: tuple[str, ...], handler):
+    parser = sub.add_parser(
+        name,
+        help=summary,
+        description=summary,
+        epilog=_examples(*examples),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.set_defaults(handler=handler)
+    return parser
+
+
+def _snakemake_parser(parser) -> None:
+    parser.add_argument("--cores", default="all", help="cores Snakemake may use (default: all)")
+    parser.epilog += "\n\nArguments after -- go to Snakemake as they are."
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="thermaxis",
+        description="Thermal positioning error of machine-tool linear axes: the workflow, "
+        "its checks, the importer and the compensation runtime.",
+        epilog=_examples(
+            "thermaxis check data/raw/twin",
+            "thermaxis run",
+            "thermaxis import data/import/fl_thermal.yaml --out data/raw/fl_thermal",
+            "thermaxis compensate results/twin/compensation/model.json log.csv --out applied.csv",
+        )
+        + "\n\nEach subcommand has --help. Guide: docs/cli.md.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    run = _subcommand(
+        sub,
+        "run",
+        "Build the results of each dataset (what `make results` does), resuming an interrupted run.",
+        (
+            "thermaxis run                      # every dataset of config `datasets`",
+            "thermaxis run data/raw/twin --cores 2",
+            "thermaxis run data/raw/mine -- --dry-run",
+        ),
+        _run,
+    )
+    run.add_argument(
+        "datasets",
+        nargs="*",
+        metavar="DATASET",
+        help="dataset folders (default: config `datasets`)",
+    )
+    _snakemake_parser(run)
+
+    check = _subcommand(
+        sub,
+        "check",
+        "Every check the workflow makes before any job, in seconds, then what the dataset holds.",
+        ("thermaxis check data/raw/twin", "thermaxis check data/raw/mine --configfile my.yaml"),
+        _check,
+    )
+    check.add_argument("dataset", metavar="DATASET", help="the dataset folder")
+    check.add_argument(
+        "--configfile",
+        action="append",
+        default=[],
+        help="config file(s), later ones win (default: config/config.yaml if present, else the schema's defaults)",
+    )
+
+    imp = _subcommand(
+        sub,
+        "import",
+        "Turn a logger export (CSV or XLSX) into datasets of the raw layout, from an import mapping.",
+        (
+            "thermaxis import data/import/fl_thermal.yaml --out data/raw/fl_thermal",
+            "thermaxis import mine.yaml --out data/raw/mine   # errors.channels: one dataset per channel",
+        ),
+        _import,
+    )
+    imp.add_argument(
+        "mapping", metavar="MAPPING", help="the import mapping (YAML; docs/your-data.md)"
+    )
+    imp.add_argument(
+        "--out",
+        required=True,
+        metavar="FOLDER",
+        help="the dataset folder to write (replaced when complete)",
+    )
+
+    comp = _subcommand(
+        sub,
+        "compensate",
+        "Replay a compensation over a logged temperature file cycle by cycle, with the fallback policy.",
+        (
+            "thermaxis compensate results/twin/compensation/model.json day.csv --out applied.csv",
+            "# day.csv: a column time (ISO 8601) or time_s (seconds), one column per sensor of the model",
+        ),
+        _compensate,
+    )
+    comp.add_argument(
+        "model", metavar="MODEL.json", help="a model.json of the workflow (compensation/)"
+    )
+    comp.add_argument(
+        "log", metavar="LOG.csv", help="logged temperatures, one row per controller cycle"
+    )
+    comp.add_argument(
+        "--out",
+        required=True,
+        metavar="FILE.csv",
+        help="K0, tan(beta), P0 and fallback reasons per cycle",
+    )
+    comp.add_argument(
+        "--figure", metavar="FILE.png", help="the figure (default: FILE.csv with .png)"
+    )
+
+    sweep = _subcommand(
+        sub,
+        "sweep",
+        "Sweep the method's choices on one dataset (what `make sweep` does), batches as a progress bar.",
+        ("thermaxis sweep", "thermaxis sweep data/raw/twin --cores 2"),
+        _sweep,
+    )
+    sweep.add_argument(
+        "dataset",
+        nargs="?",
+        metavar="DATASET",
+        help="dataset folder (default: the first of config `datasets`)",
+    )
+    _snakemake_parser(sweep)
+
+    report = _subcommand(
+        sub,
+        "report",
+        "Build a dataset's pages (index.html and the reports), or Snakemake's report as a zip.",
+        ("thermaxis report", "thermaxis report data/raw/fl_thermal", "thermaxis report --zip"),
+        _report,
+    )
+    report.add_argument(
+        "dataset",
+        nargs="?",
+        metavar="DATASET",
+        help="dataset folder (default: the first of config `datasets`)",
+    )
+    report.add_argument(
+        "--zip",
+        action="store_true",
+        help="Snakemake's HTML report, results/<dataset>/report.zip (what `make report` does)",
+    )
+    _snakemake_parser(report)
+    return parser
+
+
+# --------------------------------------------------------------------------- the workflow
+
+
+def _config(configfiles=(), dataset: str | None = None) -> dict:
+    from thermaxis.config import load_config, validate_config
+
+    overrides = {"dataset": dataset} if dataset else None
+    if configfiles or Path("config/config.yaml").is_file():
+        return load_config(*configfiles, overrides=overrides)
+    return validate_config(overrides or {})
+
+
+def _snakemake_command(cores: str, extra: list[str]) -> list[str]:
+    if not Path("Snakefile").is_file():
+        raise DataError(f"{Path.cwd()}: no Snakefile; {CHECKOUT_NEEDED}")
+    snakemake = Path(sys.executable).with_name("snakemake")
+    return [
+        sys.executable, "-m", "thermaxis.pipeline.resume", str(snakemake),
+        "--cores", cores, "--printshellcmds", *extra,
+    ]  # fmt: skip
+
+
+def _wrapped(command: list[str], progress: bool = False) -> int:
+    """Snakemake through the recovery wrapper; with ``progress`` its step counts as a bar."""
+    if not progress:
+        return subprocess.run(command, stdin=subprocess.DEVNULL).returncode
+    from thermaxis.cli.progress import ProgressBar, relay_snakemake
+
+    with subprocess.Popen(
+        command, stdin=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, bufsize=1
+    ) as proc:
+        relay_snakemake(proc.stderr, ProgressBar(), sys.stderr)
+    return proc.returncode
+
+
+def _dataset_arg(dataset: str | None) -> str:
+    from thermaxis.config import dataset_of
+
+    return dataset or dataset_of(_config())
+
+
+def _run(args) -> int:
+    from thermaxis.reports import crossdataset
+
+    datasets = args.datasets or _config()["datasets"]
+    for dataset in datasets:
+        print(f"== {dataset}", flush=True)
+        command = _snakemake_command(
+            args.cores, [*args.snakemake_args, "--config", f"dataset={dataset}"]
+        )
+        code = _wrapped(command)
+        if code:
+            return code
+    return crossdataset.main(["--results", "results"])
+
+
+def _sweep(args) -> int:
+    dataset = _dataset_arg(args.dataset)
+    command = _snakemake_command(
+        args.cores, ["sweep", *args.snakemake_args, "--config", f"dataset={dataset}"]
+    )
+    code = _wrapped(command, progress=True)
+    if code:
+        return code
+    # The index links the sweep report only if it existed when the index was built.
+    index = _results_of(dataset) / "index.html"
+    if not index.is_file():
+        return 0
+    return _wrapped(
+        _snakemake_command(
+            args.cores,
+            [
+                *args.snakemake_args,
+                "--forcerun",
+                "index",
+                "--config",
+                f"dataset={dataset}",
+                "--",
+                str(index),
+            ],
+        )
+    )
+
+
+def _results_of(dataset: str) -> Path:
+    from thermaxis.dataset.reader import load_dataset
+
+    return Path("results") / load_dataset(dataset).name
+
+
+def _report(args) -> int:
+    dataset = _dataset_arg(args.dataset)
+    out = _results_of(dataset)
+    target = ["--report", str(out / "report.zip")] if args.zip else [str(out / "index.html")]
+    return _wrapped(
+        _snakemake_command(
+            args.cores, [*target, *args.snakemake_args, "--config", f"dataset={dataset}"]
+        )
+    )
+
+
+def _check(args) -> int:
+    from thermaxis.cli.check import overview_lines
+    from thermaxis.pipeline.preflight import check_before_jobs
+
+    started = time.perf_counter()
+    checked = check_before_jobs(_config(args.configfile, args.dataset))
+    print(f"thermaxis: {args.dataset}: every check before any job passed")
+    print("\n".join(overview_lines(checked)))
+    print(f"checked in {time.perf_counter() - started:.2f} s")
+    return 0
+
+
+# --------------------------------------------------------------------------- data and models
+
+
+def _import(args) -> int:
+    from thermaxis.cli.progress import ProgressBar
+    from thermaxis.dataset.importer import import_dataset, summary_lines
+
+    bar = ProgressBar()
+    try:
+        report = import_dataset(args.mapping, args.out, progress=bar)
+    finally:
+        bar.close()
+    print("\n".join(summary_lines(report)))
+    for warning in report.warnings:
+        print(f"thermaxis warning: {warning}", file=sys.stderr)
+    return 0
+
+
+def _compensate(args) -> int:
+    from thermaxis.cli import compensate
+    from thermaxis.compensation.runtime import Compensator
+    from thermaxis.figures.style import save_figure
+    from thermaxis.pipeline.runner import atomic_path, write_csv
+
+    model = Compensator.from_json(args.model)
+    seconds, samples = compensate.read_log(args.log, model.sensors)
+    table = compensate.controller_table(compensate.replay(model, seconds, samples))
+    out = Path(args.out)
+    # Full precision: a controller (and a check against residuals.csv) reads these numbers back.
+    write_csv(table, out, float_format="%.17g")
+    figure = Path(args.figure) if args.figure else out.with_suffix(".png")
+    with atomic_path(figure) as tmp:
+        save_figure(
+            compensate.replay_figure(
+                table, f"{Path(args.log).name} through {Path(args.model).name}"
+            ),
+            tmp,
+        )
+    fallback = table[table["status"] != "ok"]
+    print(f"wrote {out} ({len(table)} cycles, {len(fallback)} on the fallback policy) and {figure}")
+    sentence = model.model.get("deployment", {}).get("sentence")
+    if sentence:
+        print(f"the model's deployment verdict: {sentence}")
+    return 0
+
+
+def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # What follows "--" is Snakemake's, whatever it looks like (argparse would read -n as ours).
+    cut = argv.index("--") if "--" in argv else len(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv[:cut])
+    args.snakemake_args = argv[cut + 1 :]
+    if args.snakemake_args and args.command not in SNAKEMAKE_COMMANDS:
+        parser.error(f"thermaxis {args.command} takes no Snakemake arguments (after --)")
+    try:
+        return args.handler(args)
+    except ValueError as exc:  # DataError included: one line naming the file and what was expected
+        print(
+            f"thermaxis error: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}",
+            file=sys.stderr,
+        )
+        return 1

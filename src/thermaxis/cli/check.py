@@ -1,0 +1,38 @@
+"""``thermaxis check``: the workflow's parse-time gate on one dataset, and what it found."""
+
+from __future__ import annotations
+
+from thermaxis.dataset.reader import read_measurements_of
+from thermaxis.pipeline.preflight import Checked
+
+__all__ = ["overview_lines"]
+
+
+def overview_lines(checked: Checked) -> list[str]:
+    """Runs, measurements per run, sensors, positions and each run's time span, as lines.
+
+    Reads every run's measurements (the full reader's checks, which the workflow makes
+    in its first jobs), so a bad later file is named here too.
+    """
+    dataset = checked.dataset
+    kind = "SIMULATED" if dataset.simulated else "MEASURED"
+    lines = [
+        f"dataset {dataset.name} ({kind}) in {dataset.root}",
+        f"  {len(dataset.sensors)} sensors: {', '.join(dataset.sensors)}",
+        f"  {checked.n_positions} target position(s)"
+        + ("" if checked.n_positions >= 2 else ": point-by-point models only, no slope/intercept"),
+        f"  {len(checked.runs)} runs (held-out folds: {', '.join(checked.folds)})",
+    ]
+    width = max(len(r) for r in checked.runs)
+    for run in checked.runs:
+        measurements, _, _ = read_measurements_of(dataset, run)
+        firsts = [m["time"].min() for m in measurements.values()]
+        lasts = [m["time"].max() for m in measurements.values()]
+        span = (max(lasts) - min(firsts)).total_seconds() / 3600.0
+        positions = {len(m["position_mm"].unique()) for m in measurements.values()}
+        lines.append(
+            f"  {run:<{width}}  {len(measurements):>4} measurements  {span:7.2f} h  "
+            f"{min(firsts):%Y-%m-%d %H:%M} to {max(lasts):%Y-%m-%d %H:%M}  "
+            f"{'/'.join(map(str, sorted(positions)))} positions"
+        )
+    return lines

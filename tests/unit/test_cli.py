@@ -1,0 +1,180 @@
+"""The ``thermaxis`` command: ``check`` as the workflow's gate, ``import``'s summary, help texts."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from helpers import REPO
+from thermaxis.cli import build_parser, main
+from thermaxis.cli.progress import ProgressBar, relay_snakemake
+
+CHECK_SECONDS = 5.0
+
+
+def _thermaxis(*args, cwd=REPO) -> tuple[subprocess.CompletedProcess, float]:
+    env = {
+        **os.environ,
+        "PYTHONPATH": f"{REPO / 'src'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
+    }
+    started = time.perf_counter()
+    proc = subprocess.run(
+        [sys.executable, "-m", "thermaxis.cli", *args], cwd=cwd, env=env, capture_output=True,
+        text=True, timeout=120,
+    )  # fmt: skip
+    return proc, time.perf_counter() - started
+
+
+@pytest.mark.parametrize(
+    "dataset, expected",
+    [
+        ("data/raw/twin", ["dataset twin (SIMULATED)", "12 sensors: T1, T2", "14 target position(s)",
+                           "4 runs (held-out folds: E1, E2, E3, E4)", "E1     8 measurements"]),
+        ("data/raw/fl_thermal", ["dataset fl_thermal (MEASURED)", "16 sensors", "1 target position(s): point-by-point",
+                                 "6 runs", "R6_variable    38 measurements"]),
+    ],
+)  # fmt: skip
+def test_check_passes_an_embedded_dataset_and_says_what_it_holds_in_seconds(dataset, expected):
+    if not (REPO / dataset).is_dir():
+        pytest.skip(f"{dataset} is not in this checkout")
+    proc, seconds = _thermaxis("check", dataset)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith(f"thermaxis: {dataset}: every check before any job passed\n")
+    for line in expected:
+        assert line in proc.stdout
+    assert seconds < CHECK_SECONDS
+
+
+def _comma_separated(ds: Path) -> None:
+    path = ds / "runs.tsv"
+    path.write_text(
+        path.read_text().replace(
+            "run\tcondition\tfeed_mm_min\tdescription", "run,condition,feed_mm_min,description", 1
+        )
+    )
+
+
+def _bad_kind(ds: Path) -> None:
+    meta = yaml.safe_load((ds / "dataset.yaml").read_text())
+    meta["provenance"]["kind"] = "guessed"
+    (ds / "dataset.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+
+
+def _leading_dash(ds: Path) -> None:
+    (ds / "E2/errors/M03.csv").rename(ds / "E2/errors/-M03.csv")
+
+
+# The messages of tests/workflow/CATALOGUE.md for the same edits (<ds> is the dataset folder).
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (_comma_separated, "thermaxis error: <ds>/runs.tsv: line 1: looks comma-separated; expected tab-separated columns"),
+        (_bad_kind, "thermaxis error: <ds>/dataset.yaml: provenance/kind: 'guessed' is not one of ['simulated', 'measured']"),
+        (_leading_dash, "thermaxis error: <ds>/E2/errors/-M03.csv: measurement '-M03' is not a safe name (expected "
+                        "letters, digits, '_', '.', '-', starting with a letter, digit or '_', at most 128 characters)"),
+    ],
+    ids=["runs_comma_separated", "yaml_bad_kind", "measurement_leading_dash"],
+)  # fmt: skip
+def test_check_refuses_a_bad_dataset_with_the_workflows_one_line(edit, message, tmp_path):
+    ds = tmp_path / "cut"
+    shutil.copytree(REPO / "data/raw/twin", ds)
+    edit(ds)
+    proc, seconds = _thermaxis("check", str(ds))
+    assert proc.returncode == 1 and proc.stdout == ""
+    assert proc.stderr == message.replace("<ds>", str(ds)) + "\n"
+    assert seconds < CHECK_SECONDS
+
+
+def test_every_subcommand_has_help_with_examples(capsys):
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    assert sorted(sub.choices) == ["check", "compensate", "import", "report", "run", "sweep"]
+    for name, parser in sub.choices.items():
+        assert parser.epilog.startswith("examples:\n  thermaxis "), name
+
+
+def test_run_outside_a_checkout_says_where_to_run_it(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "data/raw/twin"]) == 1
+    assert "no Snakefile; run it in a thermaxis checkout" in capsys.readouterr().err
+
+
+def test_import_prints_the_run_summary_and_the_unit_warning(tmp_path, capsys):
+    from test_importer_exports import _mapping
+
+    mapping = _mapping(tmp_path, {"column": "minutes", "start": "2030-01-01T08:00:00"})
+    assert main(["import", str(mapping), "--out", str(tmp_path / "raw")]) == 0
+    out, err = capsys.readouterr()
+    assert f"rig_X: 3 runs in {tmp_path / 'raw' / 'rig_X'}" in out
+    assert re.search(r"^  A +6 min +181 samples +1 measurements$", out, re.MULTILINE)
+    assert (
+        "thermaxis warning: rig_X: run(s) A, B, C last 6 min" in err and "set time.unit: min" in err
+    )
+    assert "[1/1] table" not in err  # files: one progress line per table read
+    assert "[3/3] tables read" in err
+
+
+def test_progress_is_a_bar_on_a_terminal_and_lines_elsewhere(tmp_path):
+    class Stream(list):
+        def write(self, text):
+            self.append(text)
+
+        def flush(self):
+            pass
+
+    lines, bar = Stream(), Stream()
+    ProgressBar(lines, tty=False)(2, 4, "batch")
+    assert lines == ["[2/4] batch\n"]
+    ProgressBar(bar, tty=True)(2, 4, "batch")
+    assert bar[0].startswith("\r[" + "#" * 15 + "." * 15 + "] 2/4 batch")
+    # Snakemake's step counts become the bar on a terminal; other lines pass through.
+    out, shown = Stream(), Stream()
+    relay_snakemake(
+        ["rule sweep_batch:\n", "3 of 8 steps (38%) done\n"], ProgressBar(shown, tty=True), out
+    )
+    assert out == ["rule sweep_batch:\n"] and "3/8 jobs done" in shown[0]
+
+
+def test_run_goes_through_the_recovery_wrapper_with_snakemakes_arguments(monkeypatch):
+    import thermaxis.cli as cli
+    from thermaxis.reports import crossdataset
+
+    started = []
+    monkeypatch.chdir(REPO)
+    monkeypatch.setattr(
+        cli, "_wrapped", lambda command, progress=False: started.append(command) or 0
+    )
+    monkeypatch.setattr(crossdataset, "main", lambda argv: started.append(argv) or 0)
+    assert main(["run", "data/raw/twin", "data/raw/fl_thermal", "--cores", "1", "--", "-n"]) == 0
+    wrapper = [
+        sys.executable,
+        "-m",
+        "thermaxis.pipeline.resume",
+        str(Path(sys.executable).with_name("snakemake")),
+    ]
+    assert started == [
+        [*wrapper, "--cores", "1", "--printshellcmds", "-n", "--config", "dataset=data/raw/twin"],
+        [
+            *wrapper,
+            "--cores",
+            "1",
+            "--printshellcmds",
+            "-n",
+            "--config",
+            "dataset=data/raw/fl_thermal",
+        ],
+        ["--results", "results"],  # then the page across datasets, as make results does
+    ]
+
+
+def test_snakemake_arguments_are_refused_where_no_snakemake_runs():
+    with pytest.raises(SystemExit) as info:
+        main(["check", "data/raw/twin", "--", "-n"])
+    assert info.value.code == 2

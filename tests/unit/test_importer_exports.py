@@ -1,0 +1,188 @@
+"""The importer on real logger exports: time units, clock times, several error channels, the run summary."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from thermaxis.dataset.importer import RunSummary, import_dataset, run_warnings
+from thermaxis.dataset.reader import load_dataset
+from thermaxis.errors import DataError
+
+RUNS = ("A", "B", "C")
+MINUTES = np.arange(0.0, 362.0, 2.0)  # six hours, a sample every 2 min
+
+
+def _per_run_csvs(folder: Path) -> None:
+    """One CSV per run: minutes since the start, two temperatures, displacement in X and Z."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for i, run in enumerate(RUNS, start=1):
+        hours = MINUTES / 60.0
+        pd.DataFrame(
+            {
+                "minutes": MINUTES,
+                "temp A": 20.0 + 0.5 * i * hours,
+                "temp B": 21.0 + 0.2 * hours,
+                "dx (um)": 1.5 * i * hours,  # X grows 1.5 i um per hour
+                "dz (um)": -0.4 * i * hours,
+            }
+        ).to_csv(folder / f"{run.lower()}.csv", index=False)
+
+
+def _mapping(tmp_path: Path, time: dict, **changes) -> Path:
+    _per_run_csvs(tmp_path / "logs")
+    mapping = {
+        "name": "rig",
+        "source": "logs",
+        "description": "Generated per-run logger exports.",
+        "provenance": {"kind": "measured", "citation": "tests", "licence": "CC0"},
+        "axis": {"name": "XZ"},
+        "time": time,
+        "sensors": [{"column": "temp A", "id": "TA"}, {"column": "temp B", "id": "TB"}],
+        "errors": {
+            "channels": [
+                {"id": "X", "columns": [{"column": "dx (um)", "position_mm": 0}], "direction": "X"},
+                {"id": "Z", "columns": [{"column": "dz (um)", "position_mm": 0}]},
+            ],
+            "every_s": 1800,
+        },
+        "split": {"by": "files"},
+        "runs": [
+            {"name": r, "condition": f"c{r}", "description": "x", "file": f"{r.lower()}.csv"}
+            for r in RUNS
+        ],
+        **changes,
+    }
+    path = tmp_path / "rig.yaml"
+    path.write_text(yaml.safe_dump(mapping, allow_unicode=True))
+    return path
+
+
+def test_minutes_and_two_channels_import_into_two_datasets_of_six_hour_runs(tmp_path):
+    mapping = _mapping(
+        tmp_path, {"column": "minutes", "unit": "min", "start": "2030-01-01T08:00:00"}
+    )
+    report = import_dataset(mapping, tmp_path / "raw" / "rig")
+    assert [d.name for d in report.datasets] == ["rig_X", "rig_Z"]
+    assert report.warnings == ()
+    for channel, per_hour in (("X", 1.5), ("Z", -0.4)):
+        dataset = load_dataset(tmp_path / "raw" / "rig" / f"rig_{channel}")
+        assert dataset.name == f"rig_{channel}" and dataset.run_ids == RUNS
+        for i, run in enumerate(RUNS, start=1):
+            errors = pd.read_csv(dataset.root / run / "errors.csv", parse_dates=["time"])
+            # 0 .. 360 min every 30 min: 13 measurements over 6 h, from 08:00 to 14:00.
+            assert len(errors) == 13
+            assert errors["time"].iloc[0] == pd.Timestamp("2030-01-01T08:00:00")
+            assert errors["time"].iloc[-1] == pd.Timestamp("2030-01-01T14:00:00")
+            np.testing.assert_allclose(errors["error_um"], per_hour * i * np.arange(13) * 0.5)
+    summary = report.datasets[0].runs
+    assert summary[0] == RunSummary("A", 6 * 3600.0, len(MINUTES), 13)
+    described = load_dataset(tmp_path / "raw" / "rig" / "rig_X").meta
+    assert "minutes since the record's start" in described["description"]
+    assert described["axis"]["direction"] == "X"
+
+
+def test_the_same_mapping_without_a_unit_warns_naming_the_runs_and_the_unit(tmp_path):
+    mapping = _mapping(tmp_path, {"column": "minutes", "start": "2030-01-01T08:00:00"})
+    report = import_dataset(mapping, tmp_path / "raw" / "rig")
+    # Read as seconds every run lasts 360 s = 6 min and yields one measurement (at 0 s).
+    assert report.datasets[0].runs[0] == RunSummary("A", 360.0, len(MINUTES), 1)
+    short = [w for w in report.warnings if "implausibly short" in w]
+    assert len(short) == 2  # one per channel's dataset
+    assert short[0].startswith("rig_X: run(s) A, B, C last 6 min to 6 min")
+    assert "set time.unit: min (they would last 6 h to 6 h)" in short[0]
+    few = [w for w in report.warnings if "fewer than 2 measurements" in w]
+    assert few and "A (1), B (1), C (1)" in few[0]
+
+
+def test_seconds_read_as_hours_suggest_seconds():
+    long = (RunSummary("R1", 5 * 3600 * 3600.0, 100, 9000),)  # 18000 "h": a 5 h run in seconds
+    (warning,) = run_warnings("d", {"column": "t", "unit": "h"}, 600.0, long)
+    assert (
+        "implausibly long" in warning and "set time.unit: s (they would last 5 h to 5 h)" in warning
+    )
+
+
+def _clock_table(path: Path, stamps: list[str]) -> None:
+    n = len(stamps)
+    pd.DataFrame(
+        {"when": stamps, "temp A": np.linspace(20, 22, n), "temp B": 21.0, "dx (um)": np.arange(n)}
+    ).to_csv(path, index=False)
+
+
+def _clock_mapping(tmp_path: Path, fmt: str) -> Path:
+    mapping = {
+        "name": "clock",
+        "source": "clock.csv",
+        "description": "A record with clock times.",
+        "provenance": {"kind": "measured", "citation": "tests"},
+        "axis": {"name": "X"},
+        "time": {"column": "when", "format": fmt},
+        "sensors": [{"column": "temp A", "id": "TA"}, {"column": "temp B", "id": "TB"}],
+        "errors": {"columns": [{"column": "dx (um)", "position_mm": 0}], "every_s": 1200},
+        "split": {"by": "ranges"},
+        "runs": [
+            {"name": "R1", "condition": "a", "description": "x", "start_s": 0, "end_s": 3600},
+            {"name": "R2", "condition": "b", "description": "y", "start_s": 3600, "end_s": 7200},
+        ],
+    }
+    path = tmp_path / "clock.yaml"
+    path.write_text(yaml.safe_dump(mapping))
+    return path
+
+
+def test_clock_times_are_read_as_logged_in_iso_8601_or_a_stated_format(tmp_path):
+    start = pd.Timestamp("2020-06-15 08:01:02")
+    times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]  # 08:01:02 .. 09:51:02
+    _clock_table(tmp_path / "clock.csv", [t.strftime("%Y-%m-%d %H:%M:%S") for t in times])
+    dataset = load_dataset(
+        import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "iso").out
+    )
+    late = pd.read_csv(dataset.root / "R2" / "errors.csv")
+    # R2 is [3600, 7200) s after 08:01:02: samples 6 .. 11, a measurement every 20 min.
+    assert late["time"].tolist() == [
+        "2020-06-15T09:01:02",
+        "2020-06-15T09:21:02",
+        "2020-06-15T09:41:02",
+    ]
+    assert late["error_um"].tolist() == [6.0, 8.0, 10.0]
+    assert "logged clock times of column 'when'" in dataset.meta["description"]
+
+    _clock_table(tmp_path / "clock.csv", [t.strftime("%d.%m.%Y %H:%M:%S") for t in times])
+    stated = import_dataset(_clock_mapping(tmp_path, "%d.%m.%Y %H:%M:%S"), tmp_path / "stated")
+    assert pd.read_csv(stated.out / "R2" / "errors.csv")["time"].tolist() == late["time"].tolist()
+
+
+def test_a_bad_clock_time_names_the_row_and_column_and_leaves_nothing(tmp_path):
+    stamps = [f"2020-06-15 08:{m:02d}:00" for m in range(0, 60, 10)]
+    stamps[3] = "15/06/2020 08:30"
+    _clock_table(tmp_path / "clock.csv", stamps)
+    with pytest.raises(
+        DataError,
+        match=r"clock.csv: row 5, column 'when': expected an ISO 8601 clock time, got '15/06/2020 08:30'",
+    ):
+        import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "raw" / "clock")
+    assert not (tmp_path / "raw").exists() or not any((tmp_path / "raw").iterdir())
+
+
+def test_a_unit_beside_a_clock_format_is_refused(tmp_path):
+    path = _clock_mapping(tmp_path, "ISO8601")
+    mapping = yaml.safe_load(path.read_text())
+    mapping["time"]["unit"] = "min"
+    path.write_text(yaml.safe_dump(mapping))
+    with pytest.raises(DataError, match="clock.yaml: time:"):
+        import_dataset(path, tmp_path / "raw" / "clock")
+
+
+def test_two_channels_of_one_id_are_refused_before_anything_is_written(tmp_path):
+    path = _mapping(tmp_path, {"column": "minutes", "unit": "min", "start": "2030-01-01T08:00:00"})
+    mapping = yaml.safe_load(path.read_text())
+    mapping["errors"]["channels"][1]["id"] = "X"
+    path.write_text(yaml.safe_dump(mapping))
+    with pytest.raises(DataError, match=r"rig.yaml: errors/channels: id 'X' given more than once"):
+        import_dataset(path, tmp_path / "raw" / "rig")
+    assert not (tmp_path / "raw").exists()
