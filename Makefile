@@ -84,7 +84,7 @@ results: env
 
 # Re-import the embedded measured dataset from its public source (shared/realdata).
 import: env
-	$(BIN)/python -m thermaxis.dataset.importer data/import/fl_thermal.yaml --out data/raw/fl_thermal
+	$(BIN)/thermaxis import data/import/fl_thermal.yaml --out data/raw/fl_thermal
 
 # Both tiers (tests/unit, tests/workflow) and tests/slurm (skipped without Slurm), on
 # PYTEST_WORKERS pytest-xdist workers; the tests of one shared workflow run stay on one

@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 
 from thermaxis.errors import DataError
+from thermaxis.reports.crossdataset import model_ranking
 from thermaxis.reports.index import (
     FigureGroup,
     Headline,
@@ -15,7 +16,6 @@ from thermaxis.reports.index import (
     PageTable,
     claims_table,
     deployment_comparison,
-    model_ranking,
     render_index,
     render_results_index,
 )

@@ -20,6 +20,7 @@ from helpers.workflow import FIXED_EPOCH
 from thermaxis.reports import html as rep
 from thermaxis.reports import index as index_page
 from thermaxis.reports import notebooks, provenance, summaries
+from thermaxis.reports.crossdataset import model_ranking
 
 NOTEBOOKS = ("dataset_report", "condition_report", "model_report", "paper_report")
 
@@ -258,7 +259,7 @@ def test_index_page_links_and_states_the_data():
             "max_abs": [2.0],
         }  # fmt: skip
     )
-    headline = index_page.Headline(index_page.model_ranking(metrics), "Recommended: x.", {})
+    headline = index_page.Headline(model_ranking(metrics), "Recommended: x.", {})
     page = index_page.render_index(
         "twin", "Dataset `twin`: SIMULATED data.", True, headline, sections=sections
     )

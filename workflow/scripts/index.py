@@ -6,6 +6,7 @@ import os
 import pandas as pd
 
 from thermaxis.pipeline.runner import run_script, write_text
+from thermaxis.reports.crossdataset import model_ranking
 from thermaxis.reports.index import (
     FigureGroup,
     Headline,
@@ -15,7 +16,6 @@ from thermaxis.reports.index import (
     PageTable,
     claims_table,
     deployment_comparison,
-    model_ranking,
     render_index,
 )
 

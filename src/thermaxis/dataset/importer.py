@@ -1,6 +1,6 @@
 """Wide logger tables (CSV or XLSX, one row per sample) into the raw-data layout.
 
-``python -m thermaxis.dataset.importer MAPPING.yaml --out data/raw/<name>`` reads the table the
+``thermaxis import MAPPING.yaml --out data/raw/<name>`` (:mod:`thermaxis.cli`) reads the table the
 mapping names, splits it into runs (by an operating signal's rest-to-active steps, by
 explicit time ranges, or one file per run), subsamples the error columns into
 measurements every ``errors.every_s`` seconds, and writes ``dataset.yaml``,
@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import copy
 import shutil
-import sys
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -54,7 +53,6 @@ __all__ = [
     "run_warnings",
     "summary_lines",
     "import_dataset",
-    "main",
 ]
 
 TIME_UNITS_S = {"s": 1.0, "min": 60.0, "h": 3600.0}
@@ -632,13 +630,3 @@ def summary_lines(report: ImportReport) -> list[str]:
             for r in dataset.runs
         )
     return lines
-
-
-def main(argv=None) -> int:
-    from thermaxis.cli import main as cli_main  # one command line: thermaxis import
-
-    return cli_main(["import", *(sys.argv[1:] if argv is None else argv)])
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -39,6 +39,7 @@ __all__ = [
     "read_metrics",
     "dataset_kind",
     "summarise",
+    "model_ranking",
     "to_markdown",
     "main",
 ]
@@ -160,6 +161,19 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
     if not rows:
         raise DataError("no dataset results found; expected results/<dataset>/tables/metrics.csv")
     return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
+
+
+def model_ranking(metrics: pd.DataFrame) -> pd.DataFrame:
+    """Held-out error of each approach x algorithm over the folds (target ``error``), best first.
+
+    The same summary as the cross-dataset table (:func:`summarise`), ordered by mean RMSE,
+    then mean largest |residual|.
+    """
+    summary = summarise({"dataset": metrics}, {"dataset": ""})
+    ranked = summary.drop(columns=["dataset", "data"]).sort_values(
+        ["mean_rmse_um", "mean_max_abs_um", "approach", "algorithm"], kind="stable"
+    )
+    return ranked.reset_index(drop=True)
 
 
 def to_markdown(summary: pd.DataFrame) -> str:

@@ -36,7 +36,6 @@ __all__ = [
     "Headline",
     "PAPER_HEADLINE",
     "CLAIMS_COLUMNS",
-    "model_ranking",
     "claims_table",
     "deployment_comparison",
     "render_index",
@@ -95,7 +94,7 @@ class PageTable:
 class Headline:
     """What a visitor came for, from the workflow's tables."""
 
-    ranking: pd.DataFrame  # model_ranking(metrics.csv)
+    ranking: pd.DataFrame  # thermaxis.reports.crossdataset.model_ranking(metrics.csv)
     recommendation: str  # the answer sentence of recommendation.md
     deployment: dict  # model.json's deployment record
     comparison: pd.DataFrame | None = None  # deployment_comparison(recommendation.csv)
@@ -110,21 +109,6 @@ CLAIMS_COLUMNS = ("claim", "dataset", "effect", "lo", "hi", "p_value", "verdict"
 
 
 # --------------------------------------------------------------------------- the numbers
-
-
-def model_ranking(metrics: pd.DataFrame) -> pd.DataFrame:
-    """Held-out error of each approach x algorithm over the folds (target ``error``), best first.
-
-    The same summary as the cross-dataset table (:func:`thermaxis.reports.crossdataset.summarise`),
-    ordered by mean RMSE, then mean largest |residual|.
-    """
-    from thermaxis.reports.crossdataset import summarise
-
-    summary = summarise({"dataset": metrics}, {"dataset": ""})
-    ranked = summary.drop(columns=["dataset", "data"]).sort_values(
-        ["mean_rmse_um", "mean_max_abs_um", "approach", "algorithm"], kind="stable"
-    )
-    return ranked.reset_index(drop=True)
 
 
 def deployment_comparison(folds: pd.DataFrame) -> pd.DataFrame:
