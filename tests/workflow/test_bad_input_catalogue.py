@@ -534,7 +534,8 @@ CASES = [
         lambda ds, w: _write_lines(
             ds / "runs.tsv", _lines(ds / "runs.tsv")[:2] + [_lines(ds / "runs.tsv")[2] + "\textra"]
         ),
-        "line 3: 5 tab-separated fields but the header has 4",
+        "line 3: 5 tab-separated fields but the header has 4; expected 4 fields (run, condition, "
+        "feed_mm_min, description): a tab inside a text (a description?) is the likely cause",
         "runs.tsv",
         3,
     ),
@@ -1083,6 +1084,15 @@ CASES = [
         target="clean:E2",
     ),
     Case(
+        "error_targets_shifted",
+        lambda ds, w: _column(ds / E2_M03, "position_mm", lambda v: f"{v + 3:g}"),
+        "reads 14 position(s) that are not the run's targets (188, 208, 228, 248, 268, 288, ... "
+        "(14 in all) mm) and lacks 14 of the run's 14 targets (185, 205, 225, 245, 265, 285, ... "
+        "(14 in all) mm); they look shifted by +3 mm",
+        E2_M03,
+        target="clean:E2",
+    ),
+    Case(
         "error_zero_duration",
         lambda ds, w: _write_lines(
             ds / E2_M03,
@@ -1224,6 +1234,17 @@ CASES = [
         "config selection.n_clusters: 12 clusters but only 11 sensors vary over the training measurements of fold E2",
         target="select:E2",
         config={"selection": {"n_clusters": 12}},
+    ),
+    Case(
+        "constant_every_sensor",
+        lambda ds, w: [
+            _column(path, sensor, lambda v: "25.000")
+            for path in sorted((ds / "E1" / "temperatures").glob("*.csv"))
+            for sensor in _lines(path)[0].split(",")[1:]
+        ],
+        "re:results/cut/assembled/temperatures\\.parquet: fold E2: every sensor is constant over "
+        "the training measurements",
+        target="select:E2",
     ),
     Case(
         "constant_fixed_sensor",

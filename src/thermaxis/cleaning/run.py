@@ -223,6 +223,10 @@ def derived_inputs(tables: RunTables, lags_min, rates_min) -> pd.DataFrame:
 
 def _combined_errors(raw: RawRun, cleaning: CleaningSettings) -> tuple[list[pd.Series], list[str]]:
     """Every measurement's passes combined at the run's targets, and the warnings of doing so."""
+    foreign = passes.foreign_targets(raw.measurements, cleaning.errors.max_missing_fraction)
+    if foreign is not None:
+        name, why = foreign
+        raise DataError(f"measurement {raw.error_origin(name)}: {why}")
     targets = _targets(raw)
     combined, notes = [], []
     for name, measurement in raw.measurements.items():
