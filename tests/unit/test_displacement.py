@@ -54,6 +54,21 @@ def test_a_smooth_drift_is_never_flagged(tau_min, interval_min):
     assert findings(errors, interval_min).empty
 
 
+def test_a_long_pause_between_measurements_is_no_step():
+    # 90 minutes instead of 10 while the axis heats fast: the level changes by ~10 µm
+    # over the pause, far more than over its neighbouring intervals, at the same rate.
+    minutes = np.array([0, 10, 20, 30, 120, 130, 140, 150, 160, 170], dtype=float)
+    errors = noisy(drift(minutes, TARGETS, tau_min=200.0), seed=5)
+    level = np.median(errors, axis=1)
+    assert level[3] - level[4] > 4 * (level[2] - level[3])
+    times = T0 + pd.to_timedelta(minutes, unit="min")
+    found = displacement_findings(
+        times, run_curves(errors), threshold=QC.threshold, min_um=QC.min_deviation_um,
+        outliers="warn", steps="warn",
+    )  # fmt: skip
+    assert found.empty
+
+
 def test_a_knocked_reading_is_an_outlier_at_its_measurement_and_target():
     minutes = np.arange(12) * 15.0
     clean = noisy(drift(minutes, TARGETS))

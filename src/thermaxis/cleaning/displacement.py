@@ -15,7 +15,8 @@ Both are judged like temperature spikes (:func:`thermaxis.cleaning.temperatures.
 by how far a value lies beyond both of its neighbours, so a drift however fast or
 curved is never flagged. An outlier is a reading beyond both neighbouring readings at its
 target; a step is a change between two measurements beyond both neighbouring changes of
-the run's level (the median over targets, which one outlier does not move). The first
+the run's level (the median over targets, which one outlier does not move), changes
+compared per minute so that a long pause between two measurements is no step. The first
 and last measurements have one neighbour: a reading there, or a change into or out of
 them, cannot be told from a real drift and is not judged.
 """
@@ -78,14 +79,22 @@ def _outliers(errors: np.ndarray, limit: float) -> list[tuple[int, int, float]]:
     ]
 
 
-def _steps(errors: np.ndarray, limit: float) -> list[tuple[int, float]]:
-    """(index of the first measurement after the step, signed size) of every step of the run's level."""
+def _steps(t_min: np.ndarray, errors: np.ndarray, limit: float) -> list[tuple[int, float]]:
+    """(index of the first measurement after the step, signed jump) of every step of the run's level.
+
+    Changes are compared as rates, so a longer pause between two measurements is not a
+    step for the drift it lets accumulate; the excursion is then taken over the step's
+    own interval, in µm.
+    """
     usable = np.isfinite(errors).any(axis=1)
-    level = np.full(errors.shape[0], np.nan)
-    level[usable] = np.nanmedian(errors[usable], axis=1)
     ok = np.flatnonzero(usable)
-    changes = np.diff(level[ok])
-    return [(int(ok[j + 1]), float(changes[j])) for j, _ in _excursions(changes, limit)]
+    if ok.size < 4:
+        return []
+    level = np.nanmedian(errors[ok], axis=1)
+    changes, dt = np.diff(level), np.diff(t_min[ok])
+    rates = np.divide(changes, dt, out=np.zeros_like(changes), where=dt > 0)
+    excursion = interior_excursions(rates, 1) * dt[1:-1]
+    return [(int(ok[j + 2]), float(changes[j + 1])) for j in np.flatnonzero(excursion > limit)]
 
 
 def displacement_findings(
@@ -129,7 +138,8 @@ def displacement_findings(
     for i, k, _ in knocked:
         cleaned[i, k] = np.nan
     rows += [
-        (i + 1, np.nan, "step", size, _CAUSES["step"], steps) for i, size in _steps(cleaned, limit)
+        (i + 1, np.nan, "step", size, _CAUSES["step"], steps)
+        for i, size in _steps(t_min, cleaned, limit)
     ]
     findings = pd.DataFrame(rows, columns=FINDING_COLUMNS)
     findings["size_um"] = findings["size_um"].astype(float)
