@@ -787,7 +787,8 @@ CASES = [
             ds / E2_M03,
             _lines(ds / E2_M03)[:3] + [_lines(ds / E2_M03)[3] + ",x"] + _lines(ds / E2_M03)[4:],
         ),
-        "re:line 4: 5 comma-separated fields but the header has 4$",
+        "re:line 4: 5 comma-separated fields but the header has 4; expected 4 fields "
+        "\\(time, position_mm, error_um, direction\\)$",
         E2_M03,
         4,
         "clean:E2",
