@@ -1278,6 +1278,7 @@ END_TO_END = {
     "temp_fahrenheit",  # clean_run warns, and the warning reaches the terminal
     "error_positions_differ",  # assemble refuses
     "constant_sensor_too_few_for_clusters",  # select_sensitive_points refuses
+    "constant_every_sensor",  # select_sensitive_points refuses, naming the fold's temperatures file
 }
 
 
