@@ -172,7 +172,7 @@ def interior_excursions(x: np.ndarray, width: int) -> np.ndarray:
     between or within its flanks, as every sample of a monotone trend does.
     """
     n = x.size - width - 1
-    blocks = sliding_window_view(x[1:-1], width)[:n] if n > 0 else np.empty((0, width))
+    blocks = sliding_window_view(x[1:-1], width) if n > 0 else np.empty((0, width))
     left, right = x[: max(n, 0)], x[width + 1 : width + 1 + max(n, 0)]
     above = blocks.min(axis=1) - np.maximum(left, right)
     below = np.minimum(left, right) - blocks.max(axis=1)
