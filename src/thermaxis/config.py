@@ -160,9 +160,9 @@ class TemperatureCleaning:
     """
 
     interval_s: float
-    hampel_window: int
-    hampel_threshold: float
-    hampel_min_deviation_c: float
+    spike_threshold: float
+    spike_min_deviation_c: float
+    spike_max_rate_c_per_min: float
     limits_c: tuple[float, float]
     max_gap_s: float
     estimate_clock_offsets: bool
@@ -173,15 +173,15 @@ class TemperatureCleaning:
     def __post_init__(self):
         if not self.interval_s > 0:
             raise ValueError(f"interval_s must be > 0, got {self.interval_s}")
-        if self.hampel_window < 3 or self.hampel_window % 2 == 0:
+        if not self.spike_threshold > 0:
+            raise ValueError(f"spike_threshold must be > 0, got {self.spike_threshold}")
+        if not self.spike_min_deviation_c >= 0:
             raise ValueError(
-                f"hampel_window must be an odd number of samples >= 3, got {self.hampel_window}"
+                f"spike_min_deviation_c must be >= 0, got {self.spike_min_deviation_c}"
             )
-        if not self.hampel_threshold > 0:
-            raise ValueError(f"hampel_threshold must be > 0, got {self.hampel_threshold}")
-        if not self.hampel_min_deviation_c >= 0:
+        if not self.spike_max_rate_c_per_min > 0:
             raise ValueError(
-                f"hampel_min_deviation_c must be >= 0, got {self.hampel_min_deviation_c}"
+                f"spike_max_rate_c_per_min must be > 0, got {self.spike_max_rate_c_per_min}"
             )
         low, high = self.limits_c
         if not low < high:
@@ -215,6 +215,32 @@ class ErrorCleaning:
 
 
 @dataclass(frozen=True)
+class DisplacementQC:
+    """Settings of :func:`thermaxis.cleaning.displacement.displacement_findings` (config ``errors``).
+
+    outliers : "warn" keeps a single-reading outlier, "drop" removes the reading.
+    steps : "warn" keeps the run as it is, "refuse" stops with the step named.
+    threshold : departures must exceed this many noise sigmas ...
+    min_deviation_um : ... and this many µm to be flagged.
+    """
+
+    outliers: str
+    steps: str
+    threshold: float
+    min_deviation_um: float
+
+    def __post_init__(self):
+        if self.outliers not in ("warn", "drop"):
+            raise ValueError(f"outliers must be 'warn' or 'drop', got {self.outliers!r}")
+        if self.steps not in ("warn", "refuse"):
+            raise ValueError(f"steps must be 'warn' or 'refuse', got {self.steps!r}")
+        if not self.threshold > 0:
+            raise ValueError(f"qc_threshold must be > 0, got {self.threshold}")
+        if not self.min_deviation_um >= 0:
+            raise ValueError(f"qc_min_deviation_um must be >= 0, got {self.min_deviation_um}")
+
+
+@dataclass(frozen=True)
 class CleaningSettings:
     """Cleaning of one run (config ``temperatures`` and ``errors``) and its plausibility checks."""
 
@@ -224,6 +250,7 @@ class CleaningSettings:
     window: str  # temperature of a measurement: "mean" over its window or value at its "start"
     plausible_median_c: tuple[float, float]
     max_abs_error_um: float
+    displacement: DisplacementQC
 
     @classmethod
     def from_sections(cls, temperatures: Mapping, errors: Mapping) -> CleaningSettings:
@@ -231,9 +258,9 @@ class CleaningSettings:
         return cls(
             temperatures=TemperatureCleaning(
                 interval_s=float(t["interval_s"]),
-                hampel_window=int(t["hampel_window"]),
-                hampel_threshold=float(t["hampel_threshold"]),
-                hampel_min_deviation_c=float(t["hampel_min_deviation_c"]),
+                spike_threshold=float(t["spike_threshold"]),
+                spike_min_deviation_c=float(t["spike_min_deviation_c"]),
+                spike_max_rate_c_per_min=float(t["spike_max_rate_c_per_min"]),
                 limits_c=_pair(t["limits_c"]),
                 max_gap_s=float(t["max_gap_s"]),
                 estimate_clock_offsets=bool(t["estimate_clock_offsets"]),
@@ -245,6 +272,12 @@ class CleaningSettings:
             window=t["window"],
             plausible_median_c=_pair(t["plausible_median_c"]),
             max_abs_error_um=float(e["max_abs_error_um"]),
+            displacement=DisplacementQC(
+                outliers=e["outliers"],
+                steps=e["steps"],
+                threshold=float(e["qc_threshold"]),
+                min_deviation_um=float(e["qc_min_deviation_um"]),
+            ),
         )
 
 

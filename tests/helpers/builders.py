@@ -27,13 +27,18 @@ def write_dataset(
     kind="simulated",
     two_passes=True,
     reproduces=None,
+    log_interval_s=10.0,
+    log_start_s=-300.0,
+    log_end_margin_s=300.0,
 ) -> Path:
     """Write a small, fault-free dataset.
 
     ``n_measurements`` is one count for every run, or one count per run (runs of
     unequal length).  ``curve(run_index, measurement_index, positions) -> errors`` gives
     the error of each measurement; ``temperature(run_index, sensor_index, minutes) -> degC``
-    the sensor logs (sampled every 10 s). Defaults: exact lines and smooth ramps.
+    the sensor logs, sampled every ``log_interval_s`` from ``log_start_s`` (seconds from
+    the first measurement) to the last sample before ``log_end_margin_s`` after the last
+    measurement's start + 10 min. Defaults: exact lines and smooth ramps.
     """
     root = Path(root)
     root.mkdir(parents=True, exist_ok=True)
@@ -69,7 +74,7 @@ def write_dataset(
         total = interval_min * (n_run - 1) + 10
         (root / run / "temperatures").mkdir(parents=True, exist_ok=True)
         (root / run / "errors").mkdir(parents=True, exist_ok=True)
-        seconds = np.arange(-300, total * 60 + 300, 10.0)
+        seconds = np.arange(log_start_s, total * 60 + log_end_margin_s, log_interval_s)
         times = t0 + pd.to_timedelta(seconds, unit="s")
         frame = pd.DataFrame({"time": times.strftime("%Y-%m-%dT%H:%M:%S")})
         for s, sensor in enumerate(sensors):
@@ -216,3 +221,51 @@ def logged_run(n=240, seed=4):
     t1 = 30.0 + np.cumsum(rng.normal(0.0, 0.005, n))
     t2 = 25.0 + 0.002 * t + rng.normal(0.0, 0.01, n)
     return t, [{"T1": a, "T2": b} for a, b in zip(t1, t2, strict=True)], t2
+
+
+# --------------------------------------------------------------------------- a real record's shape
+
+REAL_RUNS = ("R1", "R2", "R3", "R4", "R5")
+REAL_SENSORS = tuple(f"T{i}" for i in range(1, 23))
+# True spikes of the real-record dataset: (run index, sensor index, minute, degC). Whole
+# multiples of its 5-minute logging, in the middle of a run.
+REAL_SPIKES = ((0, 3, 60.0, +2.5), (2, 17, 125.0, -3.0), (4, 9, 95.0, +1.5))
+
+
+def real_record_temperature(r, s, minutes):
+    """Slow warming, then a ramp that sets in 15 to 30 minutes before the record's last
+    sample and steepens up to it, at 0.1 C resolution, plus the spikes of :data:`REAL_SPIKES`.
+
+    On 5-minute logging the ramp's first readings are 0.1 C steps off a flat stretch
+    (8.0, 8.0, 8.0, 8.0, 8.1, 8.2, 8.3 in the report that found the old filter's fault).
+    """
+    minutes = np.asarray(minutes, dtype=float)
+    late = np.clip(minutes - (minutes[-1] - 5.0 * (3 + s % 4)), 0.0, None)
+    values = 18.0 + 0.3 * s + 0.5 * r + 0.001 * minutes + 0.02 * late + 0.0004 * late**2
+    for run, sensor, minute, delta in REAL_SPIKES:
+        if (run, sensor) == (r, s):
+            values[np.argmin(np.abs(minutes - minute))] += delta
+    return np.round(values, 1)
+
+
+def write_real_record(root: Path) -> Path:
+    """Records shaped like a machine builder's logger export that the old spike filter refused.
+
+    5 runs, 22 temperature channels logged every 5 minutes at 0.1 C resolution, each
+    rising to its last sample; true spikes at :data:`REAL_SPIKES`. 12 measurements every
+    20 minutes; the log's samples fall 2 minutes before each measurement's start, and its
+    last sample 30 s after the last measurement ends, the only one after it: without
+    that sample the last measurement has no reading within max_gap_s / 2.
+    """
+    return write_dataset(
+        root,
+        runs=REAL_RUNS,
+        sensors=REAL_SENSORS,
+        positions=tuple(np.arange(0.0, 701.0, 50.0)),
+        n_measurements=12,
+        temperature=real_record_temperature,
+        name="real",
+        log_interval_s=300.0,
+        log_start_s=-120.0,
+        log_end_margin_s=-300.0,
+    )

@@ -39,7 +39,7 @@ def test_defaults_fill_missing_sections():
     [
         ({"decoupling": {"degree": 4}}, "decoupling/degree: 4 is greater than the maximum of 3"),
         ({"selection": {"method": "magic"}}, "selection/method: 'magic' is not one of"),
-        ({"temperatures": {"hampel_window": 6}}, "temperatures/hampel_window"),
+        ({"temperatures": {"spike_threshold": 0}}, "temperatures/spike_threshold"),
         ({"models": {"algorithms": ["mlr", "xgb"]}}, "models/algorithms/1: 'xgb' is not one of"),
         ({"unknown_key": 1}, "Additional properties are not allowed"),
     ],

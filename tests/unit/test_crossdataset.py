@@ -12,6 +12,7 @@ import yaml
 from thermaxis.errors import DataError
 from thermaxis.reports import crossdataset
 
+ASKED = ("--datasets", "twin", "fl_thermal")
 HEADER = "fold,approach,algorithm,target,rmse,max_abs,mae,residual_min,residual_max\n"
 
 
@@ -47,7 +48,7 @@ def two_datasets(tmp_path):
 
 
 def test_summary_means_and_worst_over_folds_by_hand(two_datasets):
-    assert crossdataset.main(["--results", str(two_datasets), "--formats", "png"]) == 0
+    assert crossdataset.main(["--results", str(two_datasets), *ASKED, "--formats", "png"]) == 0
     out = two_datasets / "_datasets"
     table = pd.read_csv(out / "summary.csv")
     assert list(table.columns) == list(crossdataset.SUMMARY_COLUMNS)
@@ -82,22 +83,49 @@ def test_summary_means_and_worst_over_folds_by_hand(two_datasets):
 
 
 def test_outputs_are_byte_identical_on_a_rerun(two_datasets, tmp_path):
-    crossdataset.main(["--results", str(two_datasets), "--out", str(tmp_path / "a")])
-    crossdataset.main(["--results", str(two_datasets), "--out", str(tmp_path / "b")])
+    crossdataset.main(["--results", str(two_datasets), *ASKED, "--out", str(tmp_path / "a")])
+    crossdataset.main(["--results", str(two_datasets), *ASKED, "--out", str(tmp_path / "b")])
     for name in ("summary.csv", "summary.md", "heldout_error.png", "heldout_error.pdf"):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
 
 
-def test_bad_metrics_cell_is_one_line_naming_file_line_and_column(two_datasets, capsys):
+def test_a_bad_metrics_cell_leaves_its_dataset_out_with_one_line_naming_file_line_and_column(
+    two_datasets, capsys
+):
     path = two_datasets / "twin" / "tables" / "metrics.csv"
     path.write_text(HEADER + "E1,decoupled,mlr,error,1.0,n/a,0.5,-2.0,1.0\n")
-    assert crossdataset.main(["--results", str(two_datasets)]) == 1
-    message = capsys.readouterr().err.strip()
-    assert (
-        message
-        == f"thermaxis error: {path}: line 2, column 'max_abs': expected a number, got 'n/a'"
+    assert crossdataset.main(["--results", str(two_datasets), *ASKED]) == 0
+    warning = capsys.readouterr().err.splitlines()[0]
+    assert warning == (
+        f"thermaxis warning: {two_datasets / 'twin'} left out of the cross-dataset summary: "
+        f"{path}: line 2, column 'max_abs': expected a number, got 'n/a'"
     )
-    assert not (two_datasets / "_datasets").exists()
+    summary = pd.read_csv(two_datasets / "_datasets" / "summary.csv")
+    assert summary["dataset"].unique().tolist() == ["fl_thermal"]
+
+
+def test_only_the_datasets_asked_for_are_read(two_datasets, capsys):
+    # A user's own dataset, run for one target: metrics but no provenance yet.
+    mine = _result(two_datasets, "mine", "measured", "R1,pointwise,mlr,error,5.0,9.0,1,-9,1\n")
+    (mine / "provenance.json").unlink()
+    assert crossdataset.main(["--results", str(two_datasets), *ASKED]) == 0
+    assert "mine" not in capsys.readouterr().err
+    summary = pd.read_csv(two_datasets / "_datasets" / "summary.csv")
+    assert sorted(summary["dataset"].unique()) == ["fl_thermal", "twin"]
+    # Asked for, it is left out with a warning naming its folder and what is missing.
+    assert crossdataset.main(["--results", str(two_datasets), *ASKED, "mine"]) == 0
+    err = capsys.readouterr().err
+    assert (
+        f"thermaxis warning: {mine} left out of the cross-dataset summary: {mine}/provenance.json"
+        in err
+    )
+    # Nothing readable at all is an error, and nothing is written.
+    out = two_datasets.parent / "none"
+    assert (
+        crossdataset.main(["--results", str(two_datasets), "--out", str(out), "--datasets", "mine"])
+        == 1
+    )
+    assert "no dataset results could be read" in capsys.readouterr().err and not out.exists()
 
 
 def test_missing_column_and_missing_provenance_are_named(two_datasets):

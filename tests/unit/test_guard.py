@@ -144,12 +144,19 @@ def test_size_limit_is_checked_before_reading(tmp_path):
         (
             b"time,T1\n2022-01-01T00:00:00,20,x\n",
             ",",
-            "line 2: 3 comma-separated fields but the header has 2",
+            "line 2: 3 comma-separated fields but the header has 2; expected 2 fields (time, T1)",
         ),
         (
             b"time,T1\n2022-01-01T00:00:00,20\n2022-01-01T00:00:10,20,5\n",
             ",",
-            "line 3: 3 comma-separated fields but the header has 2",
+            "line 3: 3 comma-separated fields but the header has 2; expected 2 fields (time, T1)",
+        ),
+        (
+            b"run\tcondition\tdescription\nE1\t1\twarm\tup\n",
+            "\t",
+            "line 2: 4 tab-separated fields but the header has 3; expected 3 fields (run, "
+            "condition, description): a tab inside a text (a description?) is the likely cause; "
+            "replace it with a space",
         ),
         (b"time,T1,T1\n", ",", "line 1: column 'T1' appears twice; expected each column once"),
         (b"time,,T1\n", ",", "line 1: column 2 has no name; expected a name for every column"),

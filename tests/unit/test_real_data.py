@@ -16,7 +16,6 @@ from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.cleaning.temperatures import (
     check_gaps,
     clean_temperatures,
-    hampel_outliers,
     signals_on_grid,
 )
 from thermaxis.config import Settings, load_config
@@ -27,25 +26,6 @@ from thermaxis.method.folds import evaluate_configuration, select_for_fold
 
 REPO = Path(__file__).resolve().parents[2]
 FL_THERMAL = REPO / "data" / "raw" / "fl_thermal"
-
-
-def test_hampel_keeps_both_ends_of_a_noisy_ramp():
-    rng = np.random.default_rng(7)
-    ramp = np.linspace(20.0, 32.0, 400) + rng.normal(0.0, 0.01, 400)
-    assert not hampel_outliers(ramp, window=7, threshold=4.0, min_deviation=0.0).any()
-
-
-def test_hampel_still_flags_a_spike_at_the_end():
-    values = np.array([20.0, 20.1, 20.2, 20.3, 20.4, 20.5, 20.6, 20.7, 25.0])
-    assert hampel_outliers(values, 7, 4.0, 0.2).tolist() == [False] * 8 + [True]
-
-
-def test_hampel_threshold_tie_is_not_a_spike():
-    # 0.1 C quantised readings: 20.6 is exactly 0.2 from the window median 20.4, the minimum
-    # deviation.
-    values = np.array([20.4, 20.4, 20.4, 20.6, 20.4, 20.4, 20.4])
-    assert float(abs(values[3] - 20.4)) > 0.2  # the rounding the comparison must forgive
-    assert not hampel_outliers(values, 7, 4.0, 0.2).any()
 
 
 def _log(minutes, values):

@@ -11,6 +11,7 @@ from thermaxis.config import (
     CleaningSettings,
     CompensationSettings,
     DecouplingSettings,
+    DisplacementQC,
     ModelSettings,
     SelectionSettings,
     Settings,
@@ -38,8 +39,8 @@ def test_values_missing_from_the_config_get_the_schema_defaults():
         assert list(dict(settings.models.svr_grid)[name]) == schema_default(
             "models", "svr_grid", name
         )
-    assert settings.cleaning.temperatures.hampel_window == schema_default(
-        "temperatures", "hampel_window"
+    assert settings.cleaning.temperatures.spike_max_rate_c_per_min == schema_default(
+        "temperatures", "spike_max_rate_c_per_min"
     )
     assert list(settings.cleaning.plausible_median_c) == schema_default(
         "temperatures", "plausible_median_c"
@@ -126,9 +127,9 @@ def test_each_section_builds_from_its_config_section():
     cleaning = CleaningSettings.from_sections(
         {
             "interval_s": 30,
-            "hampel_window": 5,
-            "hampel_threshold": 3,
-            "hampel_min_deviation_c": 0.1,
+            "spike_threshold": 3,
+            "spike_min_deviation_c": 0.1,
+            "spike_max_rate_c_per_min": 2.0,
             "limits_c": [-10, 90],
             "max_gap_s": 120,
             "plausible_median_c": [0, 50],
@@ -136,7 +137,15 @@ def test_each_section_builds_from_its_config_section():
             "estimate_clock_offsets": False,
             "window": "start",
         },
-        {"direction": "+", "max_missing_fraction": 0.5, "max_abs_error_um": 200},
+        {
+            "direction": "+",
+            "max_missing_fraction": 0.5,
+            "max_abs_error_um": 200,
+            "outliers": "drop",
+            "steps": "refuse",
+            "qc_threshold": 8,
+            "qc_min_deviation_um": 3,
+        },
     )
     assert (cleaning.temperatures.interval_s, cleaning.temperatures.limits_c) == (
         30.0,
@@ -146,6 +155,9 @@ def test_each_section_builds_from_its_config_section():
         "+",
         200.0,
         "start",
+    )
+    assert cleaning.displacement == DisplacementQC(
+        outliers="drop", steps="refuse", threshold=8.0, min_deviation_um=3.0
     )
 
 

@@ -534,7 +534,8 @@ CASES = [
         lambda ds, w: _write_lines(
             ds / "runs.tsv", _lines(ds / "runs.tsv")[:2] + [_lines(ds / "runs.tsv")[2] + "\textra"]
         ),
-        "line 3: 5 tab-separated fields but the header has 4",
+        "line 3: 5 tab-separated fields but the header has 4; expected 4 fields (run, condition, "
+        "feed_mm_min, description): a tab inside a text (a description?) is the likely cause",
         "runs.tsv",
         3,
     ),
@@ -786,7 +787,8 @@ CASES = [
             ds / E2_M03,
             _lines(ds / E2_M03)[:3] + [_lines(ds / E2_M03)[3] + ",x"] + _lines(ds / E2_M03)[4:],
         ),
-        "re:line 4: 5 comma-separated fields but the header has 4$",
+        "re:line 4: 5 comma-separated fields but the header has 4; expected 4 fields "
+        "\\(time, position_mm, error_um, direction\\)$",
         E2_M03,
         4,
         "clean:E2",
@@ -1083,6 +1085,15 @@ CASES = [
         target="clean:E2",
     ),
     Case(
+        "error_targets_shifted",
+        lambda ds, w: _column(ds / E2_M03, "position_mm", lambda v: f"{v + 3:g}"),
+        "reads 14 position(s) that are not the run's targets (188, 208, 228, 248, 268, 288, ... "
+        "(14 in all) mm) and lacks 14 of the run's 14 targets (185, 205, 225, 245, 265, 285, ... "
+        "(14 in all) mm); they look shifted by +3 mm",
+        E2_M03,
+        target="clean:E2",
+    ),
+    Case(
         "error_zero_duration",
         lambda ds, w: _write_lines(
             ds / E2_M03,
@@ -1226,6 +1237,17 @@ CASES = [
         config={"selection": {"n_clusters": 12}},
     ),
     Case(
+        "constant_every_sensor",
+        lambda ds, w: [
+            _column(path, sensor, lambda v: "25.000")
+            for path in sorted((ds / "E1" / "temperatures").glob("*.csv"))
+            for sensor in _lines(path)[0].split(",")[1:]
+        ],
+        "re:results/cut/assembled/temperatures\\.parquet: fold E2: every sensor is constant over "
+        "the training measurements",
+        target="select:E2",
+    ),
+    Case(
         "constant_fixed_sensor",
         lambda ds, w: _column(ds / "E1/temperatures/box.csv", "T1", lambda v: "25.000"),
         "config selection.fixed: sensor T1 is constant",
@@ -1256,6 +1278,7 @@ END_TO_END = {
     "temp_fahrenheit",  # clean_run warns, and the warning reaches the terminal
     "error_positions_differ",  # assemble refuses
     "constant_sensor_too_few_for_clusters",  # select_sensitive_points refuses
+    "constant_every_sensor",  # select_sensitive_points refuses, naming the fold's temperatures file
 }
 
 

@@ -4,6 +4,7 @@ import pandas as pd
 
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import DecouplingSettings, SelectionSettings
+from thermaxis.errors import DataError
 from thermaxis.method.folds import select_for_fold, selection_table, selection_to_dict
 from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
@@ -15,9 +16,14 @@ def main(snakemake):
     p = snakemake.params
     settings = SelectionSettings.from_section(p.selection)
     degree = DecouplingSettings.from_section(p.decoupling).degree
-    selection = select_for_fold(
-        X, Y, snakemake.wildcards.fold, settings, degree, decoupled=p.decoupled
-    )
+    fold = snakemake.wildcards.fold
+    try:
+        selection = select_for_fold(X, Y, fold, settings, degree, decoupled=p.decoupled)
+    except DataError as exc:
+        # The fold's training temperatures are what the message is about: name their file.
+        if not str(exc).startswith(f"fold {fold}:"):
+            raise
+        raise DataError(f"{snakemake.input.temperatures}: {exc}") from None
     write_text(
         json.dumps(selection_to_dict(selection), indent=1, sort_keys=True) + "\n",
         snakemake.output.selection,

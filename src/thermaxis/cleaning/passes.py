@@ -11,12 +11,56 @@ from thermaxis.config import ErrorCleaning
 
 __all__ = [
     "combine_passes",
+    "foreign_targets",
 ]
 # Positions closer than this are the same target (readings are logged to 1e-3 mm at best).
 _POSITION_TOL_MM = 1e-6
 
 
 # ----------------------------------------------------------------------------- errors
+
+
+def _listed(positions) -> str:
+    shown = ", ".join(f"{p:g}" for p in positions[:6])
+    return shown + (f", ... ({len(positions)} in all)" if len(positions) > 6 else "")
+
+
+def foreign_targets(
+    measurements: dict[str, pd.DataFrame], max_missing_fraction: float
+) -> tuple[str, str] | None:
+    """The first measurement that reads other targets than the run's own, and why; None if all agree.
+
+    The run's own targets are those more than half of its measurements read; the others
+    are not its targets. A
+    measurement whose positions miss more of them than ``max_missing_fraction`` allows
+    would otherwise make every measurement of the run look incomplete; when its positions
+    are the run's targets shifted by one distance, the message says by how much.
+    """
+    read = {
+        name: np.unique(np.round(m["position_mm"].to_numpy(dtype=float), 6))
+        for name, m in measurements.items()
+    }
+    levels, counts = np.unique(np.concatenate(list(read.values())), return_counts=True)
+    own = levels[counts > len(read) / 2]
+    if own.size == 0:
+        return None
+    for name, positions in read.items():
+        foreign = np.setdiff1d(positions, own)
+        lacking = np.setdiff1d(own, positions)
+        if foreign.size == 0 or lacking.size <= max_missing_fraction * own.size:
+            continue
+        offsets = foreign - lacking if foreign.size == lacking.size else np.empty(0)
+        shifted = (
+            f"; they look shifted by {offsets[0]:+g} mm"
+            if offsets.size and np.allclose(offsets, offsets[0], atol=1e-6)
+            else ""
+        )
+        return name, (
+            f"reads {foreign.size} position(s) that are not the run's targets ({_listed(foreign)} mm) "
+            f"and lacks {lacking.size} of the run's {own.size} targets ({_listed(lacking)} mm){shifted}; "
+            f"expected the run's targets {_listed(own)} mm in every measurement"
+        )
+    return None
 
 
 def _passes(measurement: pd.DataFrame, label: str) -> dict[str, pd.DataFrame]:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from thermaxis.cleaning import passes
+from thermaxis.cleaning import displacement, passes
 from thermaxis.cleaning import temperatures as temperature_cleaning
 from thermaxis.config import CleaningSettings
 from thermaxis.dataset.reader import Dataset, RawRun
@@ -148,6 +148,10 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     run, windows = raw.run, raw.windows()
     condition = dataset.condition_of(run)
     combined, notes = _combined_errors(raw, cleaning)
+    combined, findings = _checked_displacement(raw, windows, combined, cleaning)
+    notes.extend(
+        displacement.finding_text(row, _finding_origin(raw, row)) for row in findings.itertuples()
+    )
     cleaned, gap_notes = _cleaned_temperatures(dataset, raw, windows, cleaning)
     notes.extend(f"{run}: {n}" for n in gap_notes)
     at_measurements = temperature_cleaning.temperatures_in_windows(
@@ -165,7 +169,7 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     return RunTables(
         run=run,
         series=series,
-        qc=_with_run(cleaned.qc, run),
+        qc=_with_run(_qc_table(cleaned.qc, findings), run),
         gaps=_with_run(cleaned.gaps, run),
         errors=tidy_errors(run, condition, windows, combined),
         temperatures=tidy_temperatures(run, condition, windows, at_measurements[sensors]),
@@ -219,6 +223,10 @@ def derived_inputs(tables: RunTables, lags_min, rates_min) -> pd.DataFrame:
 
 def _combined_errors(raw: RawRun, cleaning: CleaningSettings) -> tuple[list[pd.Series], list[str]]:
     """Every measurement's passes combined at the run's targets, and the warnings of doing so."""
+    foreign = passes.foreign_targets(raw.measurements, cleaning.errors.max_missing_fraction)
+    if foreign is not None:
+        name, why = foreign
+        raise DataError(f"measurement {raw.error_origin(name)}: {why}")
     targets = _targets(raw)
     combined, notes = [], []
     for name, measurement in raw.measurements.items():
@@ -228,6 +236,41 @@ def _combined_errors(raw: RawRun, cleaning: CleaningSettings) -> tuple[list[pd.S
         notes.extend(warns)
         combined.append(curve)
     return combined, notes
+
+
+def _checked_displacement(
+    raw: RawRun, windows: pd.DataFrame, combined: list[pd.Series], cleaning: CleaningSettings
+) -> tuple[list[pd.Series], pd.DataFrame]:
+    """The curves after the displacement QC's actions, and its findings; a step refused stops here."""
+    qc = cleaning.displacement
+    findings = displacement.displacement_findings(
+        windows["start"],
+        combined,
+        threshold=qc.threshold,
+        min_um=qc.min_deviation_um,
+        outliers=qc.outliers,
+        steps=qc.steps,
+    )
+    refused = findings[findings["action"] == "refuse"]
+    if len(refused):
+        row = next(refused.itertuples())
+        raise DataError(
+            f"{displacement.finding_text(row, _finding_origin(raw, row))}; expected one datum per run: "
+            "split the run's measurements at the step into two runs, or set errors.steps: warn"
+        )
+    return displacement.apply_findings(combined, findings), findings
+
+
+def _finding_origin(raw: RawRun, row) -> str:
+    """The measurement a finding is in, as messages name it (its file)."""
+    return raw.error_origin(list(raw.measurements)[row.measurement - 1])
+
+
+def _qc_table(temperature_qc: pd.DataFrame, findings: pd.DataFrame) -> pd.DataFrame:
+    """One QC table: a row per sensor, then a row per displacement finding (sensor ``error_um``)."""
+    rows = findings.assign(sensor="error_um", source="errors")
+    table = pd.concat([temperature_qc, rows], ignore_index=True) if len(rows) else temperature_qc
+    return table.reindex(columns=[*temperature_qc.columns, *displacement.FINDING_COLUMNS])
 
 
 def _temperature_file(dataset: Dataset, run: str, source: str):

@@ -16,10 +16,12 @@ The order of the steps matters:
    before anything statistical: one such value would dominate any mean.
 4. **Repeated timestamps** with different values are merged into their mean (after
    step 3, so an open-circuit value never enters the mean).
-5. **Spikes**: a Hampel filter on the native series (window counted in the source's
-   own samples), so the filter sees the raw sampling and not interpolated points.
-   ``hampel_min_deviation_c`` keeps quantised data (the HMI's 0.1 C steps give a
-   window MAD of 0) from turning every quantisation step into a "spike".
+5. **Spikes** (:func:`spike_mask`) on the native series, so the test sees the raw
+   sampling and not interpolated points: a spike is one or two samples beyond both
+   neighbours that returns, judged against a limit that cannot fall below two steps of
+   the logger's resolution, so a heating ramp, however quantised or steep, is kept to
+   its last sample. The record's first and last samples, which have one neighbour
+   only, are judged by a physical rate limit.
 6. **Estimated clock offsets** (optional): after steps 3-5, because a spike or an
    open-circuit value would dominate the cross-correlation.
 7. **Grid**: the remaining valid samples are interpolated *linearly in time* onto a
@@ -58,7 +60,14 @@ __all__ = [
     "GAP_FACTOR",
     "QC_COLUMNS",
     "GAP_COLUMNS",
-    "hampel_outliers",
+    "MAX_SPIKE_SAMPLES",
+    "interior_excursions",
+    "neighbour_residuals",
+    "noise_sigma",
+    "sigma_of_residuals",
+    "resolution",
+    "spike_limit",
+    "spike_mask",
     "clean_temperatures",
     "check_gaps",
     "signals_on_grid",
@@ -106,45 +115,141 @@ class CleanedTemperatures:
 
 # ----------------------------------------------------------------------------- spikes
 
+# A spike is at most this many adjacent samples: longer excursions are real events.
+MAX_SPIKE_SAMPLES = 2
+# Second-difference residuals of white noise have sqrt(1 + 1/4 + 1/4) times its sigma.
+_RESIDUAL_TO_SIGMA = 1.0 / np.sqrt(1.5)
 
-def hampel_outliers(values, window: int, threshold: float, min_deviation: float) -> np.ndarray:
-    """Boolean mask of the samples a Hampel filter calls spikes.
 
-    A sample is a spike when it deviates from the median of the ``window`` samples
-    centred on it by more than ``max(threshold * 1.4826 * MAD, min_deviation)``,
-    MAD being that window's median absolute deviation from its median.
+def resolution(values) -> float:
+    """The logger's resolution as the data shows it: the smallest step between two of its levels.
+
+    0 for fewer than two distinct values. On unquantised data it is tiny and harmless: it
+    is a floor under the spike limit, and the noise scale is then larger.
+    """
+    levels = np.unique(np.asarray(values, dtype=float))
+    return float(np.diff(levels).min()) if levels.size > 1 else 0.0
+
+
+def neighbour_residuals(t_s, values) -> np.ndarray:
+    """Each interior sample minus the line through its two neighbours (in time)."""
+    t, x = np.asarray(t_s, dtype=float), np.asarray(values, dtype=float)
+    if x.size < 3:
+        return np.empty(0)
+    span = t[2:] - t[:-2]
+    w = np.divide(t[1:-1] - t[:-2], span, out=np.full(span.shape, 0.5), where=span > 0)
+    return x[1:-1] - (x[:-2] + w * (x[2:] - x[:-2]))
+
+
+def sigma_of_residuals(residuals) -> float:
+    """Robust noise sigma from :func:`neighbour_residuals` (0 without any)."""
+    r = np.abs(np.asarray(residuals, dtype=float))
+    return float(MAD_TO_SIGMA * np.median(r) * _RESIDUAL_TO_SIGMA) if r.size else 0.0
+
+
+def noise_sigma(t_s, values) -> float:
+    """Robust noise scale of a series: each sample against the line through its two neighbours.
+
+    A linear trend leaves no residual whatever its slope; a spike spoils three residuals
+    of the whole record, which the median ignores.
+    """
+    return sigma_of_residuals(neighbour_residuals(t_s, values))
+
+
+def spike_limit(t_s, values, threshold: float, min_deviation: float) -> float:
+    """The excursion a spike must exceed: ``threshold`` noise sigmas, ``min_deviation``, two resolution steps.
+
+    Two steps, because one step up and back down is what a quantised logger shows when
+    the temperature sits between two of its levels.
+    """
+    return max(threshold * noise_sigma(t_s, values), min_deviation, 2.0 * resolution(values))
+
+
+def interior_excursions(x: np.ndarray, width: int) -> np.ndarray:
+    """How far each block of ``width`` adjacent samples lies beyond both flanking samples, all in one direction.
+
+    Element i is for the block starting at sample i + 1; <= 0 where the block lies
+    between or within its flanks, as every sample of a monotone trend does.
+    """
+    n = x.size - width - 1
+    blocks = sliding_window_view(x[1:-1], width) if n > 0 else np.empty((0, width))
+    left, right = x[: max(n, 0)], x[width + 1 : width + 1 + max(n, 0)]
+    above = blocks.min(axis=1) - np.maximum(left, right)
+    below = np.minimum(left, right) - blocks.max(axis=1)
+    return np.maximum(above, below)
+
+
+def _end_excursion(t_min: np.ndarray, x: np.ndarray, width: int, rate: float) -> float:
+    """How far the first ``width`` samples lie beyond what the rate limit allows from the next sample.
+
+    The smallest over the block, and <= 0 unless every sample of it departs in the same
+    direction: an end has one neighbour only, so the physical rate is all it can be judged by.
+    """
+    ref_t, ref = t_min[width], x[width]
+    departure = x[:width] - ref
+    if not (np.all(departure > 0) or np.all(departure < 0)):
+        return 0.0
+    return float(np.min(np.abs(departure) - rate * np.abs(ref_t - t_min[:width])))
+
+
+def _worst_block(t_min: np.ndarray, x: np.ndarray, rate: float) -> tuple[float, int, int]:
+    """The block (excursion, first sample, width) that departs the most, interior or at an end."""
+    candidates = [(-np.inf, 0, 0)]
+    for width in range(1, MAX_SPIKE_SAMPLES + 1):
+        excursions = interior_excursions(x, width)
+        if excursions.size:
+            i = int(np.argmax(excursions))
+            candidates.append((float(excursions[i]), i + 1, width))
+        if x.size >= 2 * width + 1:  # shorter, and which end of a jump is wrong is unknown
+            candidates.append((_end_excursion(t_min, x, width, rate), 0, width))
+            tail = _end_excursion(-t_min[::-1], x[::-1], width, rate)
+            candidates.append((tail, x.size - width, width))
+    return max(candidates, key=lambda c: c[0])  # the first of equals: deterministic
+
+
+def spike_mask(
+    t_s, values, *, threshold: float, min_deviation: float, max_rate_c_per_min: float
+) -> np.ndarray:
+    """Boolean mask of the samples that are spikes: short excursions that return.
+
+    A block of one or two adjacent samples (:data:`MAX_SPIKE_SAMPLES`) is a spike when
+    every sample of it lies beyond both samples flanking the block, on the same side,
+    by more than :func:`spike_limit`. A sample between its neighbours is never a spike,
+    so a trend is kept however steep, steepening or quantised it is, and however the
+    logger's rate compares with it. The first and last one or two samples have one
+    neighbour only: they are spikes only when they depart from it faster than
+    ``max_rate_c_per_min`` (config ``temperatures.spike_max_rate_c_per_min``) allows,
+    by more than the same limit.
+
+    The block that departs the most is removed first and the rest judged again without
+    it: on a steep ramp the sample after an upward spike lies below both of its
+    neighbours, and must not be flagged for the spike's sake.
 
     Parameters
     ----------
+    t_s : sample times in seconds, non-decreasing.
     values : 1-D array of valid (finite) samples in time order.
-    window : odd number of samples (config ``temperatures.hampel_window``).
-    threshold : in scaled MADs (normal-noise standard deviations; ``hampel_threshold``).
-    min_deviation : deviations up to this are never spikes (quantised data has MAD 0;
-        ``hampel_min_deviation_c``).
+    threshold : in noise sigmas (:func:`noise_sigma`; ``spike_threshold``).
+    min_deviation : excursions up to this are never spikes (``spike_min_deviation_c``).
+    max_rate_c_per_min : the fastest a real temperature changes at the record's ends.
 
     Notes
     -----
-    A sample within ``window // 2`` of an end is judged against the nearest FULL
-    window (the first or last ``window`` samples), never a mirrored one: mirroring a
-    steady ramp folds it into a peak, so its first and last samples would look like
-    spikes.  Deviations within a relative 1e-9 of the limit count as equal to it, so a
-    reading exactly ``min_deviation`` away is never flagged by a rounding error
-    (0.1 C steps give 0.20000000000000284 for 0.2).  Vectorised with a sliding-window
-    view and ``np.partition`` (exact window medians, no Python loop over samples).
+    Excursions within a relative 1e-9 of the limit count as equal to it, so a reading
+    exactly one limit away is never flagged by a rounding error (0.1 C steps give
+    0.20000000000000284 for 0.2).
     """
-    x = np.asarray(values, dtype=float)
-    if window < 3 or window % 2 == 0:
-        raise ValueError(f"Hampel window must be an odd number of samples >= 3, got {window}")
-    half = window // 2
-    if x.size < window:
-        return np.zeros(x.shape, dtype=bool)
-    windows = sliding_window_view(x, window)
-    median = np.partition(windows, half, axis=1)[:, half]
-    mad = np.partition(np.abs(windows - median[:, None]), half, axis=1)[:, half]
-    # Window i is centred on sample i + half; the ends borrow the first and last window.
-    centre = np.clip(np.arange(x.size) - half, 0, windows.shape[0] - 1)
-    limit = np.maximum(threshold * MAD_TO_SIGMA * mad[centre], min_deviation)
-    return np.abs(x - median[centre]) > limit * (1.0 + _TIE_RTOL)
+    t, x = np.asarray(t_s, dtype=float), np.asarray(values, dtype=float)
+    limit = spike_limit(t, x, threshold, min_deviation) * (1.0 + _TIE_RTOL)
+    kept = np.arange(x.size)
+    while kept.size:
+        excursion, first, width = _worst_block(t[kept] / 60.0, x[kept], max_rate_c_per_min)
+        if not excursion > limit:
+            break
+        kept = np.delete(kept, np.arange(first, first + width))
+    flags = np.ones(x.shape, dtype=bool)
+    flags[kept] = False
+    return flags
 
 
 # ----------------------------------------------------------------------------- native series
@@ -200,8 +305,12 @@ def _clean_source(
     for j, sensor in enumerate(sensors):
         ok = np.isfinite(values[:, j])
         ts, vs = t[ok], values[ok, j]
-        spikes = hampel_outliers(
-            vs, settings.hampel_window, settings.hampel_threshold, settings.hampel_min_deviation_c
+        spikes = spike_mask(
+            ts / _NS,
+            vs,
+            threshold=settings.spike_threshold,
+            min_deviation=settings.spike_min_deviation_c,
+            max_rate_c_per_min=settings.spike_max_rate_c_per_min,
         )
         natives.append(
             _Native(

@@ -211,8 +211,11 @@ def _read_runs(path: Path) -> pd.DataFrame:
         if not any(cell.strip() for cell in row):
             continue
         if len(row) != len(header):
+            # Only a surplus can come from a tab inside a text.
+            hint = safety.field_count_hint("\t" if len(row) > len(header) else "", header)
             raise DataError(
-                f"{path}: line {lineno}: expected {len(header)} tab-separated fields, got {len(row)}"
+                f"{path}: line {lineno}: {len(row)} tab-separated fields but the header has "
+                f"{len(header)}{hint}"
             )
         record = {}
         for name, cell in zip(header, row, strict=False):

@@ -29,6 +29,7 @@ __all__ = [
     "check_inside",
     "check_within",
     "check_rule_outputs",
+    "field_count_hint",
     "load_yaml",
     "sniff_delimited",
 ]
@@ -243,14 +244,23 @@ def sniff_delimited(path, delimiter: str, max_bytes: int = MAX_DATA_BYTES) -> No
             )
         if name in names[:k]:
             raise _error(path, f"line 1: column {name!r} appears twice; expected each column once")
-    _check_field_counts(path, lines[1:20], delimiter, len(names))
+    _check_field_counts(path, lines[1:20], delimiter, names)
 
 
-def _check_field_counts(path: Path, rows: list[str], delimiter: str, n_fields: int) -> None:
+def field_count_hint(delimiter: str, names) -> str:
+    """What a row with too many fields should have, and the likely cause of a tab-separated one."""
+    expected = f"; expected {len(names)} fields ({', '.join(names)})"
+    if delimiter == "\t":
+        return f"{expected}: a tab inside a text (a description?) is the likely cause; replace it with a space"
+    return expected
+
+
+def _check_field_counts(path: Path, rows: list[str], delimiter: str, names: list[str]) -> None:
     """Surplus fields would quietly become the parser's index; name them instead.
 
     Decimal commas add fields to EVERY row of numbers, a stray field to one row only.
     """
+    n_fields = len(names)
     counted = [
         (lineno, row.split(delimiter)) for lineno, row in enumerate(rows, start=2) if row.strip()
     ]
@@ -267,7 +277,11 @@ def _check_field_counts(path: Path, rows: list[str], delimiter: str, n_fields: i
         and len(surplus) == len(counted)
         and all(_decimal_splits(row) >= len(row) - n_fields for _, row in surplus)
     )
-    hint = "; looks like decimal commas (expected '.' as the decimal mark)" if decimal else ""
+    hint = (
+        "; looks like decimal commas (expected '.' as the decimal mark)"
+        if decimal
+        else field_count_hint(delimiter, names)
+    )
     raise _error(
         path,
         f"line {lineno}: {len(fields)} {_DELIMITER_NAMES[delimiter]}-separated fields but the header has {n_fields}{hint}",

@@ -21,10 +21,12 @@ Two checks belong to this gate but cannot run when :func:`check_before_jobs` doe
 
 from __future__ import annotations
 
+import os
 import sys
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cached_property
+from pathlib import Path
 
 from thermaxis.config import Settings, validate_config
 from thermaxis.dataset import plausibility, safety
@@ -32,7 +34,15 @@ from thermaxis.dataset.reader import Dataset, load_dataset, read_first_measureme
 from thermaxis.errors import DataError
 from thermaxis.sweep import plan
 
-__all__ = ["Checked", "SweepPlan", "check_before_jobs", "sweep_plan", "check_rules", "one_line"]
+__all__ = [
+    "Checked",
+    "SweepPlan",
+    "check_before_jobs",
+    "check_writable",
+    "sweep_plan",
+    "check_rules",
+    "one_line",
+]
 
 
 @dataclass(frozen=True)
@@ -93,6 +103,8 @@ def check_before_jobs(config: dict) -> Checked:
     plausibility.check_dataset_shape(dataset, config)
     runs = list(dataset.run_ids)
     out = str(safety.check_inside(f"results/{dataset.name}", "results", what="results folder"))
+    for folder in (out, f"logs/{dataset.name}", f"benchmarks/{dataset.name}"):
+        check_writable(folder)
     # The one data file read before any job: size-checked, regular and fully validated.
     n_positions = read_first_measurement(dataset, runs[0])["position_mm"].nunique()
     runs_sheet, sheet = dataset.root / "runs.tsv", dataset.root / "dataset.yaml"
@@ -136,6 +148,29 @@ def check_before_jobs(config: dict) -> Checked:
         out=out,
         n_positions=int(n_positions),
         ambient=ambient,
+    )
+
+
+def check_writable(folder) -> None:
+    """``folder``, or the nearest folder above it that exists, can be written; else one line.
+
+    Before any job: otherwise every job would fail on its own, after minutes of work.
+    ``os.access`` answers for root too on a read-only mount or an immutable folder,
+    where permission bits mean nothing, and it writes nothing.
+    """
+    path = Path(folder).absolute()
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    if os.access(existing, os.W_OK | os.X_OK):
+        return
+    cause = (
+        "is on a read-only file system"
+        if os.statvfs(existing).f_flag & os.ST_RDONLY
+        else "cannot be written (permissions or an immutable flag)"
+    )
+    where = folder if existing == path else f"{folder} (its folder {existing})"
+    raise DataError(
+        f"{where}: {cause}; expected a results folder the workflow can write: make it writable, "
+        "or run from a writable copy of the checkout"
     )
 
 

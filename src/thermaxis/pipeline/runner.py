@@ -7,6 +7,7 @@ instead of a traceback, so the user sees which file and what was expected.
 
 from __future__ import annotations
 
+import errno
 import logging
 import os
 import re
@@ -73,6 +74,12 @@ def run_script(main, snakemake) -> None:
         logger.error(message)
         print(f"thermaxis error: {message}", file=sys.stderr)
         sys.exit(1)
+    except OSError as exc:
+        if not machine_fault(exc):
+            raise
+        logger.exception("machine fault")
+        print(f"thermaxis error: {fault_line(exc)}", file=sys.stderr)
+        sys.exit(1)
     except Exception as exc:  # noqa: BLE001 - an unforeseen input must still end in one line
         logger.exception("unexpected error")
         first = str(exc).splitlines()[0] if str(exc) else ""
@@ -83,21 +90,59 @@ def run_script(main, snakemake) -> None:
         sys.exit(1)
 
 
+# Faults of the machine, not of the data or the code: a full disk, a read-only folder.
+_MACHINE_FAULTS = {
+    errno.ENOSPC: "no space left on the device",
+    errno.EDQUOT: "disk quota exceeded",
+    errno.EROFS: "read-only file system",
+    errno.EACCES: "permission denied",
+    errno.EPERM: "operation not permitted",
+}
+
+
+def machine_fault(exc: OSError) -> bool:
+    """A full disk or a folder that cannot be written (pyarrow names ENOSPC in its text only)."""
+    return exc.errno in _MACHINE_FAULTS or "No space left on device" in str(exc)
+
+
+def fault_line(exc: OSError) -> str:
+    """One line: the file, what the machine refused, and that nothing half-written was left."""
+    cause = _MACHINE_FAULTS.get(exc.errno, "no space left on the device")
+    where = f"{exc.filename}: " if exc.filename else ""
+    return f"{where}{cause}; nothing half-written was left in its place: free space or fix the folder, then rerun"
+
+
 @contextmanager
 def atomic_path(path):
-    """Yield a temporary path beside ``path`` and move it into place only on success."""
+    """Yield a temporary path beside ``path`` and move it into place only on success.
+
+    A machine fault while writing names ``path`` (a write's OSError names no file).
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    except OSError as exc:
+        _raise_named(exc, path)
     os.close(fd)
     try:
         yield Path(tmp)
         # mkstemp creates 0600 files; results are meant to be read and served by others.
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
+    except OSError as exc:
+        _raise_named(exc, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _raise_named(exc: OSError, path: Path):
+    """Re-raise ``exc``; a machine fault as an OSError that names ``path``."""
+    if not machine_fault(exc):
+        raise exc
+    code = exc.errno if exc.errno in _MACHINE_FAULTS else errno.ENOSPC
+    raise OSError(code, os.strerror(code), str(path)) from exc
 
 
 def write_csv(frame, path, float_format: str = "%.6g") -> None:

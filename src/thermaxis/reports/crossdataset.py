@@ -2,17 +2,22 @@
 
 Each dataset's workflow run writes ``results/<dataset>/tables/metrics.csv`` (one row
 per fold x approach x algorithm x target, see :data:`thermaxis.method.metrics.METRICS_CSV_COLUMNS`).
-This module reads every such table under a results folder and summarises the error
-curves' held-out residuals (target ``error``) over the leave-one-condition-out folds:
+This module reads the tables of the datasets it is asked for (by default those of config
+``datasets``, the ones ``make results`` builds) and summarises the error curves' held-out
+residuals (target ``error``) over the leave-one-condition-out folds:
 mean RMSE, mean and worst max |residual|.  Whether a dataset is simulated comes from
 its own ``dataset.yaml`` (found through ``provenance.json``), so the summary says so
 for every row.
+
+A dataset whose folder cannot be read (not built yet, or built only in part, or
+broken) is left out with a warning naming it; other folders under ``results/`` (a
+user's own dataset run for one target, say) are not looked at.
 
 Command line (writes ``summary.csv``, ``summary.md`` and the figure table's ``heldout_error``
 in every format, ``heldout_error.{png,pdf}`` by default, and the page across datasets,
 ``<results>/index.html``, which links each dataset's ``index.html``)::
 
-    python -m thermaxis.reports.crossdataset --results results --out results/_datasets
+    python -m thermaxis.reports.crossdataset --results results --out results/_datasets [--datasets NAME ...]
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ __all__ = [
     "summarise",
     "model_ranking",
     "to_markdown",
+    "configured_datasets",
     "main",
 ]
 
@@ -57,8 +63,6 @@ SUMMARY_COLUMNS = (
 )
 _APPROACH_ORDER = ("decoupled", "pointwise")
 _ALGORITHM_ORDER = ("mlr", "svr", "ridge", "pls", "gpr")
-# Folders of results/ that are not datasets.
-_NOT_DATASETS = ("_datasets", "bench")
 
 
 def read_metrics(path) -> pd.DataFrame:
@@ -159,7 +163,10 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
                     }
                 )
     if not rows:
-        raise DataError("no dataset results found; expected results/<dataset>/tables/metrics.csv")
+        raise DataError(
+            "no dataset results could be read; expected results/<dataset>/tables/metrics.csv "
+            "for the datasets of config datasets"
+        )
     return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
 
 
@@ -192,12 +199,39 @@ def to_markdown(summary: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
-def _result_dirs(results: Path) -> list[Path]:
-    return sorted(
-        p.parent.parent
-        for p in results.glob("*/tables/metrics.csv")
-        if p.parent.parent.name not in _NOT_DATASETS
-    )
+def configured_datasets() -> list[str]:
+    """Names (``results/<name>``) of the datasets of config ``datasets`` that can be loaded.
+
+    A folder that cannot is left out with a warning: its results cannot be there either.
+    """
+    from thermaxis.config import load_config
+    from thermaxis.dataset.reader import load_dataset
+
+    names = []
+    for folder in load_config()["datasets"]:
+        try:
+            names.append(load_dataset(folder).name)
+        except (DataError, ValueError, OSError) as exc:
+            _warn(f"dataset {folder} left out: {str(exc).splitlines()[0]}")
+    return names
+
+
+def _warn(message: str) -> None:
+    print(f"thermaxis warning: {message}", file=sys.stderr)
+
+
+def _readable(results: Path, names: Iterable[str]) -> tuple[dict, dict]:
+    """Metrics and kind of every dataset that can be read; the others are named and left out."""
+    metrics, kinds = {}, {}
+    for name in names:
+        folder = results / name
+        try:
+            metrics[name] = read_metrics(folder / "tables" / "metrics.csv")
+            kinds[name] = dataset_kind(folder)
+        except DataError as exc:
+            metrics.pop(name, None)
+            _warn(f"{folder} left out of the cross-dataset summary: {exc}")
+    return metrics, kinds
 
 
 def main(argv=None) -> int:
@@ -209,24 +243,30 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--out", default=None, help="output folder (default: <results>/_datasets)")
     parser.add_argument(
+        "--datasets",
+        nargs="+",
+        default=None,
+        help="names of the datasets to compare (default: those of config datasets)",
+    )
+    parser.add_argument(
         "--formats", nargs="+", default=["png", "pdf"], help="figure formats (default: png pdf)"
     )
     args = parser.parse_args(argv)
     results = Path(args.results)
     out = Path(args.out) if args.out else results / "_datasets"
     try:
-        dirs = _result_dirs(results)
-        metrics = {d.name: read_metrics(d / "tables" / "metrics.csv") for d in dirs}
-        kinds = {d.name: dataset_kind(d) for d in dirs}
+        names = args.datasets if args.datasets is not None else configured_datasets()
+        metrics, kinds = _readable(results, names)
         summary = summarise(metrics, kinds)
         fig = registry.function(FIGURE.draw)(summary)
-    except DataError as exc:
+    except (DataError, ValueError) as exc:
         print(f"thermaxis error: {exc}", file=sys.stderr)
         return 1
     _write(summary, fig, out, args.formats)
     _write_page(summary, results, out, args.formats)
     print(
-        f"thermaxis: held-out error of {len(dirs)} dataset(s) -> {out}/summary.csv", file=sys.stderr
+        f"thermaxis: held-out error of {len(metrics)} dataset(s) -> {out}/summary.csv",
+        file=sys.stderr,
     )
     return 0
 
