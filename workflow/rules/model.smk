@@ -10,6 +10,7 @@ rule fit_predict:
         coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
         kb_predictions=f"{OUT}/models/{{fold}}/kb_predictions.csv",
         error_predictions=f"{OUT}/models/{{fold}}/error_predictions.csv",
+        fitting=f"{OUT}/models/{{fold}}/fitting.csv",
     log:
         f"{LOGS}/models/{{fold}}.log",
     benchmark:

@@ -161,6 +161,7 @@ rule model_report:
         coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
         kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
         errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
+        fitting=f"{OUT}/models/{{fold}}/fitting.csv",
         compensation=lambda w: [
             f"{OUT}/compensation/folds/{w.fold}/{n}.csv"
             for n in ("summary", "iso230_2", "siemens_840d", "twincat")

@@ -29,7 +29,7 @@ def main(snakemake):
             results.append(
                 evaluate_configuration(X, Y, fold, approach, algorithm, selection, models, degree)
             )
-    for name in ("metrics", "coefficients", "kb_predictions", "error_predictions"):
+    for name in ("metrics", "coefficients", "kb_predictions", "error_predictions", "fitting"):
         frame = pd.concat([getattr(r, name) for r in results], ignore_index=True)
         frame = sort_naturally(frame, SORT_KEYS[name])
         write_csv(frame, snakemake.output[name], float_format="%.6f")

@@ -62,6 +62,7 @@ SORT_KEYS = {
     ],
     "kb_predictions": ["fold", "approach", "algorithm", "target", "measurement"],
     "error_predictions": ["fold", "approach", "algorithm", "measurement", "position_mm"],
+    "fitting": ["fold", "approach", "algorithm", "target", "position_mm"],
     "selection": ["fold", "target", "position_mm", "cluster", "sensor"],
 }
 
@@ -255,6 +256,7 @@ class FoldResult:
     coefficients: pd.DataFrame
     kb_predictions: pd.DataFrame
     error_predictions: pd.DataFrame
+    fitting: pd.DataFrame  # per regression: inner search, choice, rows (models' fit_notes_)
 
 
 def _build_model(
@@ -317,6 +319,7 @@ def evaluate_configuration(
         error_predictions=_error_table(
             label, X_test, np.asarray(Y.columns, dtype=float), measured, predicted, lower, upper
         ),
+        fitting=pd.DataFrame([{**label, **note} for note in estimator.fit_notes_]),
     )
 
 

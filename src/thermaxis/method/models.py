@@ -26,6 +26,7 @@ units, per degree C.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -464,6 +465,37 @@ def _fit_one(features, target, groups, estimator):
     return model.fit(features, target), None
 
 
+def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, chosen) -> dict:
+    """What one regression's fit did: its inner search's split and choice, the rows a GP used.
+
+    Follows :func:`_fit_one`, :func:`fit_by_group_search` and :func:`inner_group_splitter`
+    (the model report states it; config ``models.inner_search`` and ``models.gpr_max_samples``).
+    """
+    algorithm = estimator.algorithm
+    searched = algorithm == "svr" or (estimator.search_grid is not None and algorithm in SEARCHABLE)
+    runs = int(np.unique(groups).size)
+    max_loco, group_folds = tuple(estimator.inner_search)
+    if not searched:
+        split = ""
+    elif runs < 2:
+        split = "none (one training run): the grid's first point"
+    elif runs <= max_loco:
+        split = f"leave one of {runs} training runs out"
+    else:
+        split = f"{min(group_folds, runs)} group folds of {runs} training runs"
+    fitted = rows
+    if algorithm == "gpr" and rows > estimator.gpr_max_samples:
+        fitted = int(_evenly_spaced(rows, estimator.gpr_max_samples).size)
+    return {
+        "target": target,
+        "position_mm": position_mm,
+        "inner_search": split,
+        "chosen": json.dumps(chosen, sort_keys=True) if chosen else "",
+        "training_rows": int(rows),
+        "rows_fitted": fitted,
+    }
+
+
 def _coefficient_rows(
     target, position_mm, temperature, terms: dict | None, signals: Sequence[str] = ()
 ) -> list[dict]:
@@ -571,6 +603,9 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         Fitted pipeline per target ("k", "b", "c2", "c3").
     searched_params_ : dict
         Parameters chosen by the inner search per target (empty without a search).
+    fit_notes_ : list of dict
+        Per regression: its inner search's split and choice, its training rows and the rows
+        a Gaussian process was fitted on (the model report's "How each model was fitted").
     """
 
     # Every parameter has a default because scikit-learn asks it of an estimator (clone,
@@ -621,12 +656,13 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         self.origin_mm_ = float(self.positions_mm_[0])
         self.kb_ = decouple_rows(X, Y, self.degree)
         groups = X["run"].to_numpy()
-        self.estimators_, self.searched_params_ = {}, {}
+        self.estimators_, self.searched_params_, self.fit_notes_ = {}, {}, []
         for target, sensors, temperature in self._targets():
             features = _features(X, sensors, temperature, self.signals)
             y = self.kb_[_KB_COLUMNS[target]].to_numpy(dtype=float)
             model, chosen = _fit_one(features, y, groups, self)
             self.estimators_[target] = model
+            self.fit_notes_.append(_fit_note(self, target, np.nan, len(y), groups, chosen))
             if chosen is not None:
                 self.searched_params_[target] = chosen
         return self
@@ -756,6 +792,8 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         Fitted pipeline per position.
     searched_params_ : dict
         Parameters chosen by the inner search per position (empty without a search).
+    fit_notes_ : list of dict
+        As for :class:`DecoupledAxisModel`, one per position.
     """
 
     # Defaults for scikit-learn, as for DecoupledAxisModel: the paper's Eq. 8 model.
@@ -789,7 +827,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         features = _features(X, self.sensors, "relative", self.signals)
         groups = X["run"].to_numpy()
         errors = Y.to_numpy(dtype=float)
-        self.estimators_, self.searched_params_ = [], {}
+        self.estimators_, self.searched_params_, self.fit_notes_ = [], {}, []
         for j, position in enumerate(self.positions_mm_):
             valid = np.isfinite(errors[:, j])
             if valid.sum() < 2:
@@ -798,6 +836,9 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
                 )
             model, chosen = _fit_one(features[valid], errors[valid, j], groups[valid], self)
             self.estimators_.append(model)
+            self.fit_notes_.append(
+                _fit_note(self, "error", float(position), int(valid.sum()), groups[valid], chosen)
+            )
             if chosen is not None:
                 self.searched_params_[float(position)] = chosen
         return self

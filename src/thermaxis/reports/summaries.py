@@ -14,6 +14,7 @@ __all__ = [
     "cleaning_repairs",
     "temperature_overview",
     "error_overview",
+    "fitting_summary",
 ]
 
 
@@ -121,3 +122,22 @@ def audit_html(
         caption=caption or f"Audit of {', '.join(tables)}: published and reproduced",
         max_rows=max_rows,
     )
+
+
+def fitting_summary(fitting: pd.DataFrame) -> pd.DataFrame:
+    """The model report's "How each model was fitted": one row per searched or subsampled model.
+
+    ``fitting`` is a fold's ``models/<fold>/fitting.csv`` (one row per regression: target,
+    position, inner search, chosen parameters, training rows, rows fitted). Regressions of
+    one model that were fitted alike (the positions of a point-by-point model) share a row;
+    its ``regressions`` column counts them. Models fitted once on every row are left out.
+    """
+    columns = ["approach", "algorithm", "inner_search", "chosen", "training_rows", "rows_fitted"]
+    frame = fitting.assign(
+        inner_search=fitting["inner_search"].fillna(""), chosen=fitting["chosen"].fillna("")
+    )
+    noted = frame[(frame["inner_search"] != "") | (frame["rows_fitted"] < frame["training_rows"])]
+    if noted.empty:
+        return pd.DataFrame(columns=[*columns, "regressions"])
+    grouped = noted.groupby(columns, sort=False, dropna=False)
+    return grouped.size().rename("regressions").reset_index()
