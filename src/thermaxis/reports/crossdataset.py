@@ -27,8 +27,10 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from thermaxis.config import StatisticsSettings, load_config, validate_config
 from thermaxis.errors import DataError
 from thermaxis.figures import registry
+from thermaxis.statistics.resampling import fold_mean_interval
 
 # The figure table's entry of the one figure this command draws.
 FIGURE = registry.entry("heldout_error")
@@ -50,7 +52,11 @@ SUMMARY_COLUMNS = (
     "algorithm",
     "n_folds",
     "mean_rmse_um",
+    "mean_rmse_um_lo",
+    "mean_rmse_um_hi",
     "mean_max_abs_um",
+    "mean_max_abs_um_lo",
+    "mean_max_abs_um_hi",
     "worst_max_abs_um",
 )
 _APPROACH_ORDER = ("decoupled", "pointwise")
@@ -114,7 +120,11 @@ def _order(values: Iterable[str], preferred: tuple[str, ...]) -> list[str]:
     return sorted(set(values), key=lambda v: (rank.get(v, len(rank)), v))
 
 
-def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> pd.DataFrame:
+def summarise(
+    metrics: Mapping[str, pd.DataFrame],
+    kinds: Mapping[str, str],
+    statistics: StatisticsSettings | None = None,
+) -> pd.DataFrame:
     """Held-out error of the whole error curve per dataset x approach x algorithm.
 
     Parameters
@@ -123,13 +133,25 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
         Each dataset's metrics table (:func:`read_metrics`).
     kinds : mapping of dataset name to str
         'simulated' or 'measured' (:func:`dataset_kind`).
+    statistics : StatisticsSettings, optional
+        Level, bootstrap size and seed of the means' intervals (config ``statistics``);
+        default the schema's.
 
     Returns
     -------
     DataFrame
-        :data:`SUMMARY_COLUMNS`; means and the worst case are over the folds.  Sorted
-        by dataset, then approach and algorithm in the paper's order.
+        :data:`SUMMARY_COLUMNS`; means and the worst case are over the folds, a mean's
+        ``_lo`` and ``_hi`` its interval with the folds resampled.  Sorted by dataset,
+        then approach and algorithm in the paper's order.
     """
+    if statistics is None:
+        statistics = StatisticsSettings.from_section(validate_config({})["statistics"])
+
+    def interval(values) -> tuple[float, float]:
+        return fold_mean_interval(
+            values, statistics.level, statistics.n_resamples, statistics.seed
+        )
+
     rows = []
     for name in sorted(metrics):
         errors = metrics[name][metrics[name]["target"] == "error"]
@@ -144,6 +166,8 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
                 group = errors[
                     (errors["approach"] == approach) & (errors["algorithm"] == algorithm)
                 ]
+                rmse_lo, rmse_hi = interval(group["rmse"])
+                max_lo, max_hi = interval(group["max_abs"])
                 rows.append(
                     {
                         "dataset": name,
@@ -152,7 +176,11 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
                         "algorithm": algorithm,
                         "n_folds": int(group["fold"].nunique()),
                         "mean_rmse_um": float(group["rmse"].mean()),
+                        "mean_rmse_um_lo": rmse_lo,
+                        "mean_rmse_um_hi": rmse_hi,
                         "mean_max_abs_um": float(group["max_abs"].mean()),
+                        "mean_max_abs_um_lo": max_lo,
+                        "mean_max_abs_um_hi": max_hi,
                         "worst_max_abs_um": float(group["max_abs"].max()),
                     }
                 )
@@ -170,7 +198,8 @@ def to_markdown(summary: pd.DataFrame) -> str:
     if simulated:
         lines += [f"SIMULATED data: {', '.join(simulated)} (not measurements).", ""]
     lines += [
-        "Error curves of each held-out condition (leave-one-condition-out); means and worst case over the folds, µm.",
+        "Error curves of each held-out condition (leave-one-condition-out); means and worst case over the folds, µm; "
+        "a mean's _lo and _hi: its bootstrap interval with the folds resampled (config statistics).",
         "",
         markdown_table(summary, float_format="%.3f"),
     ]
@@ -196,6 +225,11 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--formats", nargs="+", default=["png", "pdf"], help="figure formats (default: png pdf)"
     )
+    parser.add_argument(
+        "--config",
+        default="config/config.yaml",
+        help="the config whose `statistics` sets the intervals (default: config/config.yaml)",
+    )
     args = parser.parse_args(argv)
     results = Path(args.results)
     out = Path(args.out) if args.out else results / "_datasets"
@@ -203,10 +237,11 @@ def main(argv=None) -> int:
         dirs = _result_dirs(results)
         metrics = {d.name: read_metrics(d / "tables" / "metrics.csv") for d in dirs}
         kinds = {d.name: dataset_kind(d) for d in dirs}
-        summary = summarise(metrics, kinds)
+        statistics = StatisticsSettings.from_section(load_config(args.config)["statistics"])
+        summary = summarise(metrics, kinds, statistics)
         fig = registry.function(FIGURE.draw)(summary)
-    except DataError as exc:
-        print(f"thermaxis error: {exc}", file=sys.stderr)
+    except (DataError, ValueError, OSError) as exc:
+        print(f"thermaxis error: {str(exc).splitlines()[0]}", file=sys.stderr)
         return 1
     _write(summary, fig, out, args.formats)
     print(

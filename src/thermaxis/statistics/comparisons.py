@@ -147,4 +147,5 @@ def comparison_table(pairs: pd.DataFrame, recommendation: dict | None) -> pd.Dat
     table = pd.concat([pairs, pd.DataFrame(extra)], ignore_index=True) if extra else pairs.copy()
     for column in ("p_permutation", "p_wilcoxon"):
         table[f"{column}_holm"] = holm(table[column].to_numpy(dtype=float))
+    table["n_measurements"] = table["n_measurements"].astype("Int64")
     return table[list(COMPARISON_COLUMNS)]
