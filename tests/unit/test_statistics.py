@@ -354,3 +354,24 @@ def test_stability_of_fixed_and_all_selections_is_known_and_one_training_run_is_
     X2, Y2, _ = _eq9_dataset(runs=("R1", "R2"))
     two = selection_stability(X2, Y2, ["R1"], fixed, 1, True)
     assert (two["n_subsets"] == 0).all() and two["frequency"].isna().all()
+
+
+# --------------------------------------------------------------------------- cross-dataset
+
+
+def test_cross_dataset_means_get_scipys_fold_bootstrap_interval():
+    from thermaxis.reports.crossdataset import summarise
+
+    rmse = [1.0, 3.5, 2.0, 1.5]
+    metrics = pd.DataFrame(
+        {"fold": ["E1", "E2", "E3", "E4"], "approach": "decoupled", "algorithm": "mlr",
+         "target": "error", "rmse": rmse, "max_abs": [2.0, 5.0, 3.0, 2.5]}
+    )  # fmt: skip
+    settings = StatisticsSettings(level=0.9, n_resamples=999, seed=5, block_length=0)
+    row = summarise({"twin": metrics}, {"twin": "simulated"}, settings).iloc[0]
+    ci = stats.bootstrap(
+        (np.array(rmse),), np.mean, n_resamples=999, confidence_level=0.9,
+        method="percentile", rng=np.random.default_rng(5),
+    ).confidence_interval  # fmt: skip
+    assert (row["mean_rmse_um_lo"], row["mean_rmse_um_hi"]) == (ci.low, ci.high)
+    assert row["mean_rmse_um_lo"] <= row["mean_rmse_um"] <= row["mean_rmse_um_hi"]

@@ -148,9 +148,7 @@ def summarise(
         statistics = StatisticsSettings.from_section(validate_config({})["statistics"])
 
     def interval(values) -> tuple[float, float]:
-        return fold_mean_interval(
-            values, statistics.level, statistics.n_resamples, statistics.seed
-        )
+        return fold_mean_interval(values, statistics.level, statistics.n_resamples, statistics.seed)
 
     rows = []
     for name in sorted(metrics):
