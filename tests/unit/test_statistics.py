@@ -375,3 +375,29 @@ def test_cross_dataset_means_get_scipys_fold_bootstrap_interval():
     ).confidence_interval  # fmt: skip
     assert (row["mean_rmse_um_lo"], row["mean_rmse_um_hi"]) == (ci.low, ci.high)
     assert row["mean_rmse_um_lo"] <= row["mean_rmse_um"] <= row["mean_rmse_um_hi"]
+
+
+# --------------------------------------------------------------------------- figures
+
+
+def test_fold_comparison_bars_carry_their_intervals_and_the_stability_map_its_shares():
+    from matplotlib.collections import LineCollection
+
+    from thermaxis.figures.predictions import fig_fold_comparison
+    from thermaxis.figures.statistics import fig_selection_stability
+
+    metrics = pd.DataFrame(
+        {"fold": ["E1", "E2"], "approach": "decoupled", "algorithm": "mlr", "target": "error",
+         "rmse": [2.0, 3.0], "rmse_lo": [1.5, 2.0], "rmse_hi": [2.5, 4.5],
+         "max_abs": [4.0, 5.0], "max_abs_lo": [3.0, 4.0], "max_abs_hi": [4.0, 5.0]}
+    )  # fmt: skip
+    fig = fig_fold_comparison(metrics)
+    bars = [c for c in fig.axes[0].collections if isinstance(c, LineCollection)]
+    spans = sorted((float(s[:, 1].min()), float(s[:, 1].max())) for s in bars[0].get_segments())
+    assert spans == [(1.5, 2.5), (2.0, 4.5)]
+    stability = pd.DataFrame(
+        {"fold": ["E1", "E1", "E2", "E2"], "target": "k", "sensor": ["T1", "T2", "T1", "T2"],
+         "chosen": [True, False, False, True], "frequency": [1.0, 0.5, 0.0, 2 / 3]}
+    )  # fmt: skip
+    image = fig_selection_stability(stability).axes[0].images[0].get_array()
+    np.testing.assert_allclose(image, [[1.0, 0.0], [0.5, 2 / 3]])
