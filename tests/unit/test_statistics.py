@@ -401,3 +401,25 @@ def test_fold_comparison_bars_carry_their_intervals_and_the_stability_map_its_sh
     )  # fmt: skip
     image = fig_selection_stability(stability).axes[0].images[0].get_array()
     np.testing.assert_allclose(image, [[1.0, 0.0], [0.5, 2 / 3]])
+
+
+def test_candidates_means_over_folds_get_scipys_fold_bootstrap_interval():
+    from thermaxis.statistics import fold_means
+
+    loco = pd.DataFrame(
+        {"candidate": ["paper"] * 3 + ["all"] * 3, "held_out": ["E1", "E2", "E3"] * 2,
+         "rmse": [1.0, 2.0, 4.0, 1.0, 1.0, 1.0], "max_abs": [2.0, 3.0, 7.0, 2.0, 2.5, 2.0]}
+    )  # fmt: skip
+    out = fold_means(loco, SETTINGS)
+    assert list(out.index) == ["paper", "all"]
+    ci = stats.bootstrap(
+        (np.array([1.0, 2.0, 4.0]),), np.mean, n_resamples=1999, method="percentile",
+        rng=np.random.default_rng(0),
+    ).confidence_interval  # fmt: skip
+    assert out.loc["paper", "loco_rmse_um"] == pytest.approx(7 / 3)
+    assert (out.loc["paper", "loco_rmse_um_lo"], out.loc["paper", "loco_rmse_um_hi"]) == (
+        ci.low,
+        ci.high,
+    )
+    # Equal folds: nothing varies, the interval is the value.
+    assert out.loc["all", "loco_rmse_um_lo"] == out.loc["all", "loco_rmse_um_hi"] == 1.0

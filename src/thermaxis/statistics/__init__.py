@@ -18,6 +18,7 @@ from thermaxis.statistics.comparisons import (
     compare_models,
     compare_recommendation,
     comparison_table,
+    fold_means,
     model_sums,
 )
 from thermaxis.statistics.intervals import measurement_sums, metric_intervals, with_intervals
@@ -36,6 +37,7 @@ __all__ = [
     "compare_models",
     "compare_recommendation",
     "comparison_table",
+    "fold_means",
     "holm",
     "measurement_sums",
     "metric_intervals",

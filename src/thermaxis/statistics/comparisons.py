@@ -29,6 +29,7 @@ __all__ = [
     "compare_models",
     "compare_recommendation",
     "comparison_table",
+    "fold_means",
 ]
 
 COMPARISON_COLUMNS = (
@@ -149,3 +150,24 @@ def comparison_table(pairs: pd.DataFrame, recommendation: dict | None) -> pd.Dat
         table[f"{column}_holm"] = holm(table[column].to_numpy(dtype=float))
     table["n_measurements"] = table["n_measurements"].astype("Int64")
     return table[list(COMPARISON_COLUMNS)]
+
+
+def fold_means(loco: pd.DataFrame, settings: StatisticsSettings) -> pd.DataFrame:
+    """Each candidate's mean held-out RMSE and max |residual| over folds, with intervals.
+
+    ``loco`` holds one row per candidate and held-out run (the recommendation's scores);
+    the columns are ``loco_rmse_um``, ``loco_rmse_um_lo``, ``loco_rmse_um_hi``, then the
+    same for ``max_abs``, indexed by candidate in first-seen order; intervals resample folds.
+    """
+    rows = {}
+    for candidate, group in loco.groupby("candidate", sort=False):
+        row = {}
+        for metric in ("rmse", "max_abs"):
+            values = group[metric].to_numpy(dtype=float)
+            lo, hi = fold_mean_interval(values, settings.level, settings.n_resamples, settings.seed)
+            row.update(
+                {f"loco_{metric}_um": values.mean(), f"loco_{metric}_um_lo": lo,
+                 f"loco_{metric}_um_hi": hi}
+            )  # fmt: skip
+        rows[candidate] = row
+    return pd.DataFrame.from_dict(rows, orient="index").rename_axis("candidate")
