@@ -423,3 +423,17 @@ def test_candidates_means_over_folds_get_scipys_fold_bootstrap_interval():
     )
     # Equal folds: nothing varies, the interval is the value.
     assert out.loc["all", "loco_rmse_um_lo"] == out.loc["all", "loco_rmse_um_hi"] == 1.0
+
+
+def test_a_single_position_dataset_without_k_b_rows_is_compared_in_numbers():
+    from thermaxis.statistics import compare_models, model_sums
+
+    rng = np.random.default_rng(8)
+    kb, errors = _predictions(rng.normal(0.0, 1.0, (12, 1)))
+    kb = kb.astype(object)  # as pandas reads an empty kb_predictions.csv
+    other = errors.assign(algorithm="svr", measured=errors["measured"] * 0.5)
+    sums = measurement_sums(kb, pd.concat([errors, other], ignore_index=True))
+    assert sums["sq"].dtype == float
+    row = compare_models(model_sums(sums), SETTINGS).iloc[0]
+    r = errors["measured"].to_numpy()
+    assert row["difference"] == pytest.approx(np.sqrt(np.mean(r**2)) * 0.5)

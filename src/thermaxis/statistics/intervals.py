@@ -40,7 +40,10 @@ def _residuals(kb_predictions: pd.DataFrame, error_predictions: pd.DataFrame) ->
         target="error", residual=error_predictions["measured"] - error_predictions["predicted"]
     )
     columns = [*MODEL_KEYS, "run", "measurement", "residual"]
-    return pd.concat([kb[columns], errors[columns]], ignore_index=True)
+    # A single-position dataset has no k/b rows: its empty table must not make the column object.
+    frames = [f[columns] for f in (kb, errors) if len(f)]
+    residuals = pd.concat(frames, ignore_index=True) if frames else errors[columns]
+    return residuals.astype({"residual": float})
 
 
 def measurement_sums(kb_predictions: pd.DataFrame, error_predictions: pd.DataFrame) -> pd.DataFrame:
