@@ -57,7 +57,13 @@ def fig_selection_stability(stability: pd.DataFrame) -> Figure:
         image = ax.imshow(grid, cmap=ORDERED_CMAP, vmin=0.0, vmax=1.0, aspect="auto")
         ys, xs = np.nonzero(chosen)
         ax.scatter(xs, ys, s=30, facecolors="none", edgecolors="black", linewidths=0.7)
-        ax.set_xticks(range(len(folds)), folds, rotation=30 if len(folds) > 4 else 0)
+        slanted = len(folds) > 4  # long run names side by side would overlap
+        ax.set_xticks(
+            range(len(folds)),
+            folds,
+            rotation=30 if slanted else 0,
+            ha="right" if slanted else "center",
+        )
         ax.set_yticks(range(len(sensors)), sensors)
         ax.set_title(_TARGETS[target])
         ax.set_xlabel("Fold (held-out run)")
