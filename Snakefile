@@ -26,6 +26,7 @@ include: "workflow/rules/compensation.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/reports.smk"
 include: "workflow/rules/sweep.smk"
+include: "workflow/rules/statistics.smk"
 
 
 rule all:

@@ -49,6 +49,7 @@ __all__ = [
     "FigureSettings",
     "ReportSettings",
     "SweepSettings",
+    "StatisticsSettings",
     "Settings",
 ]
 
@@ -569,6 +570,29 @@ class SweepSettings:
 
 
 @dataclass(frozen=True)
+class StatisticsSettings:
+    """Config ``statistics``: the confidence level, bootstrap size, seed and block length."""
+
+    level: float
+    n_resamples: int
+    seed: int
+    block_length: int  # measurements per block; 0: round(n^(1/3)) per fold
+
+    @classmethod
+    def from_section(cls, section) -> StatisticsSettings:
+        return cls(
+            level=float(section["level"]),
+            n_resamples=int(section["n_resamples"]),
+            seed=int(section["seed"]),
+            block_length=int(section["block_length"]),
+        )
+
+    @property
+    def alpha(self) -> float:
+        return 1.0 - self.level
+
+
+@dataclass(frozen=True)
 class Settings:
     """Every stage's settings, parsed once from one configuration."""
 
@@ -581,6 +605,7 @@ class Settings:
     figures: FigureSettings
     reports: ReportSettings
     sweep: SweepSettings
+    statistics: StatisticsSettings
 
     @classmethod
     def from_config(cls, config: Mapping) -> Settings:
@@ -601,4 +626,5 @@ class Settings:
             figures=FigureSettings.from_section(c["figures"]),
             reports=ReportSettings.from_section(c["reports"]),
             sweep=SweepSettings.from_section(c["sweep"], models),
+            statistics=StatisticsSettings.from_section(c["statistics"]),
         )

@@ -25,7 +25,7 @@ FACTS = registry.Facts(
 TWIN_STEMS = [
     "fig2_positioning_error", "fig5_unzeroed", "fig6_error_vs_time", "fig7_error_surface",
     "fig8_rezeroed", "fig3_ambient", "fig9_other_runs", "fig10_temperature_rise",
-    "fig12_slope_intercept", "fold_comparison", "recommendation",
+    "fig12_slope_intercept", "fold_comparison", "recommendation", "selection_stability",
     "error_prediction_{fold}_decoupled_mlr", "error_prediction_{fold}_pointwise_mlr",
     "kb_prediction_{fold}_decoupled_mlr",
     "error_prediction_{fold}_decoupled_svr", "error_prediction_{fold}_pointwise_svr",
@@ -70,6 +70,7 @@ def test_the_twins_figures_keep_their_stems_and_order():
     assert [f.stem for f in registry.expand(FACTS, "sweep")] == [
         "sweep_heatmap",
         "sweep_factor_effects",
+        "sweep_critical_difference",
     ]
     assert [f.stem for f in registry.expand(None, "datasets")] == ["heldout_error"]
 

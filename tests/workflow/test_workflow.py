@@ -61,11 +61,20 @@ def test_metrics_cover_every_fold_approach_algorithm(lines_run):
         "algorithm",
         "target",
         "rmse",
+        "rmse_lo",
+        "rmse_hi",
         "max_abs",
+        "max_abs_lo",
+        "max_abs_hi",
         "mae",
+        "mae_lo",
+        "mae_hi",
         "residual_min",
         "residual_max",
     ]
+    for metric in ("rmse", "max_abs", "mae"):
+        assert (metrics[f"{metric}_lo"] <= metrics[metric] + 1e-6).all()
+        assert (metrics[metric] <= metrics[f"{metric}_hi"] + 1e-6).all()
     combos = set(zip(metrics["fold"], metrics["approach"], metrics["algorithm"], strict=True))
     assert combos == {
         (f, a, g)
@@ -76,6 +85,26 @@ def test_metrics_cover_every_fold_approach_algorithm(lines_run):
     decoupled = metrics[metrics["approach"] == "decoupled"]
     assert set(decoupled["target"]) == {"k", "b", "error"}
     assert (metrics["rmse"] <= metrics["max_abs"] + 1e-12).all()
+
+
+def test_claims_and_comparisons_are_tables_of_verdicts_and_intervals(lines_run):
+    tables = lines_run.out / "tables"
+    claims = pd.read_csv(tables / "claims.csv", keep_default_na=False, na_values=[""])
+    assert list(claims.columns) == ["claim", "dataset", "effect", "lo", "hi", "p_value", "verdict"]
+    assert set(claims["verdict"]) <= {"holds", "reversed", "not resolved"}
+    done = claims.dropna(subset=["effect"])
+    assert ((done["lo"] <= done["effect"] + 1e-6) & (done["effect"] <= done["hi"] + 1e-6)).all()
+    assert (tables / "claims.md").read_text(encoding="utf-8").startswith("# The paper's claims")
+    comparisons = pd.read_csv(tables / "comparisons.csv")
+    # 2 approaches x 2 algorithms: 6 pairs, and the recommendation against the paper's.
+    assert len(comparisons) == 7
+    assert (
+        comparisons["p_permutation_holm"].dropna() >= comparisons["p_permutation"].dropna()
+    ).all()
+    stability = pd.read_csv(tables / "selection_stability.csv")
+    # Three runs: each fold's selection sees two, so two leave-one-run-out subsets.
+    assert set(stability["n_subsets"]) == {2}
+    assert stability["frequency"].between(0.0, 1.0).all()
 
 
 def test_noop_rerun_has_nothing_to_do(lines_run, library_unchanged):

@@ -620,6 +620,18 @@ def recommendation_outputs():
     ]
 
 
+# --------------------------------------------------------------------------- statistics
+# The uncertainty of every comparison (thermaxis.statistics, docs/statistics.md):
+# comparisons.csv, the paper's claims and the stability of the sensitive points.
+def statistics_outputs():
+    return [
+        f"{OUT}/tables/comparisons.csv",
+        f"{OUT}/tables/claims.csv",
+        f"{OUT}/tables/claims.md",
+        f"{OUT}/tables/selection_stability.csv",
+    ]
+
+
 # --------------------------------------------------------------------------- sweep
 # The sweep (`make sweep`, i.e. `snakemake sweep`): every configuration of config `sweep`
 # on every leave-one-condition-out fold; not part of `rule all`. Batches, not one job per
@@ -754,6 +766,7 @@ def all_outputs():
         *([f"{OUT}/tables/paper_comparison.csv"] if PAPER else []),
         *([f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else []),
         *recommendation_outputs(),
+        *statistics_outputs(),
         *compensation_outputs(),
         *report_outputs(),
     ]

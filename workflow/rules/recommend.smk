@@ -51,5 +51,6 @@ rule recommend_collect:
     params:
         **RECOMMEND_PARAMS,
         statement=DATA_STATEMENT,
+        statistics=config["statistics"],
     script:
         "../scripts/recommend_collect.py"

@@ -50,6 +50,7 @@ rule sweep_collect:
     params:
         selection=config["selection"],
         decoupling=config["decoupling"],
+        statistics=config["statistics"],
     script:
         "../scripts/sweep_collect.py"
 

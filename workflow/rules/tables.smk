@@ -49,6 +49,7 @@ rule collect_model_tables:
         **rule_resources("collect_model_tables"),
     params:
         statement=DATA_STATEMENT,
+        statistics=config["statistics"],
     script:
         "../scripts/collect_tables.py"
 

@@ -4,7 +4,7 @@ import json
 
 import pandas as pd
 
-from thermaxis.config import RecommendSettings
+from thermaxis.config import RecommendSettings, StatisticsSettings
 from thermaxis.method.recommend import (
     candidate_record,
     candidate_table,
@@ -14,6 +14,7 @@ from thermaxis.method.recommend import (
     recommendation_markdown,
 )
 from thermaxis.pipeline.runner import run_script, write_csv, write_text
+from thermaxis.statistics import fold_means
 
 
 def main(snakemake):
@@ -24,10 +25,8 @@ def main(snakemake):
     result = collect(scores, [c.name for c in candidates], "paper", recommend.score)
     write_csv(result.folds, snakemake.output.table, float_format="%.6f")
     write_text(recommendation_markdown(result, p.statement), snakemake.output.markdown)
-    means = result.loco.groupby("candidate", sort=False)[["rmse", "max_abs"]].mean()
-    table = candidate_table(candidates).join(
-        means.rename(columns=lambda c: f"loco_{c}_um"), on="candidate"
-    )
+    means = fold_means(result.loco, StatisticsSettings.from_section(p.statistics))
+    table = candidate_table(candidates).join(means, on="candidate")
     write_csv(table, snakemake.output.candidates, float_format="%.6f")
     by_name = {c.name: c for c in candidates}
     # The same choice among the candidates the controller exports can compute: what the

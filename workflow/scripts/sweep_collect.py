@@ -2,8 +2,9 @@
 
 import pandas as pd
 
-from thermaxis.config import DecouplingSettings, SelectionSettings
+from thermaxis.config import DecouplingSettings, SelectionSettings, StatisticsSettings
 from thermaxis.pipeline.runner import run_script, write_csv
+from thermaxis.statistics import with_uncertainty
 from thermaxis.sweep import run as sweep_run
 
 
@@ -14,8 +15,9 @@ def main(snakemake):
     ranking = sweep_run.rank_configurations(
         summary, SelectionSettings.from_section(p.selection), degree
     )
+    uncertain = with_uncertainty(summary, ranking, StatisticsSettings.from_section(p.statistics))
     write_csv(summary, snakemake.output.summary, float_format="%.6f")
-    write_csv(ranking, snakemake.output.ranking, float_format="%.6f")
+    write_csv(uncertain, snakemake.output.ranking, float_format="%.6f")
     write_csv(sweep_run.factor_effects(ranking), snakemake.output.effects, float_format="%.6f")
 
 

@@ -84,7 +84,14 @@ _CAPTIONS: dict[str, tuple[str | None, str]] = {
     "fold_comparison": (
         None,
         "Prediction accuracy of every fold (held-out run), approach and algorithm: RMSE (top) "
-        "and maximum absolute residual (bottom) of the {target}.",
+        "and maximum absolute residual (bottom) of the {target}, with the confidence interval of "
+        "a block bootstrap of the held-out measurements (config statistics.level).",
+    ),
+    "selection_stability": (
+        None,
+        "Stability of the sensitive points: for each fold (column) and target, the share of the "
+        "leave-one-run-out subsets of the fold's training runs whose selection chooses each sensor "
+        "(row); ringed cells are the sensors the fold itself chose (Table 6 for k and b).",
     ),
     "recommendation": (
         None,

@@ -272,7 +272,8 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
     """RMSE (top) and maximum absolute residual (bottom) of every fold, approach and algorithm.
 
     Grouped bars: one group per fold, one bar per (approach, algorithm) pair; a pair
-    missing from a fold leaves a gap.
+    missing from a fold leaves a gap. Where the table has ``<metric>_lo`` and
+    ``<metric>_hi`` (metrics.csv's bootstrap intervals), each bar gets its error bar.
 
     Parameters
     ----------
@@ -308,8 +309,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
         pair_rows = keyed[(keyed["approach"] == approach) & (keyed["algorithm"] == algorithm)]
         offsets = centres + (j - (len(pairs) - 1) / 2) * bar_width
         for ax, column in ((ax_rmse, "rmse"), (ax_max, "max_abs")):
-            by_fold = pair_rows.groupby("fold")[column].mean()
-            heights = np.array([by_fold.get(f, np.nan) for f in folds], dtype=float)
+            heights = _by_fold(pair_rows, column, folds)
             keep = np.isfinite(heights)
             ax.bar(
                 offsets[keep],
@@ -320,6 +320,19 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
                 linewidth=0.4,
                 label=f"{_display(approach)}, {_display(algorithm)}",
             )
+            if {f"{column}_lo", f"{column}_hi"} <= set(pair_rows.columns):
+                lo = _by_fold(pair_rows, f"{column}_lo", folds)
+                hi = _by_fold(pair_rows, f"{column}_hi", folds)
+                shown = keep & np.isfinite(lo) & np.isfinite(hi)
+                ax.errorbar(
+                    offsets[shown],
+                    heights[shown],
+                    yerr=[heights[shown] - lo[shown], hi[shown] - heights[shown]],
+                    fmt="none",
+                    ecolor="0.15",
+                    elinewidth=0.5,
+                    capsize=1.2,
+                )
     ax_rmse.set_ylabel(f"RMSE{suffix}")
     ax_max.set_ylabel(f"Max |residual|{suffix}")
     labels = [str(f) for f in folds]
@@ -334,6 +347,11 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
         ax.set_axisbelow(True)
     _top_legend(fig, ax_rmse)
     return fig
+
+
+def _by_fold(rows: pd.DataFrame, column: str, folds) -> np.ndarray:
+    values = rows.groupby("fold")[column].mean()
+    return np.array([values.get(f, np.nan) for f in folds], dtype=float)
 
 
 def fig_recommendation(recommendation: pd.DataFrame) -> Figure:

@@ -196,6 +196,13 @@ FIGURES: tuple[FigureEntry, ...] = (
         when="always", target="all", tables={"recommendation": "tables/recommendation.csv"},
         category="prediction", label="recommendation", labels={"fold": "all"},
     ),
+    # Beside Table 6: how often each sensor is chosen when a training run is left out.
+    FigureEntry(
+        "selection_stability", "figures.statistics.fig_selection_stability",
+        family="fig_fold_comparison", when="always", target="all",
+        tables={"stability": "tables/selection_stability.csv"}, category="sensitive_points",
+        label="stability", labels={"fold": "all"},
+    ),
     # Figs. 11/15/17 (point by point: 11) and 14/16.
     _prediction("error_prediction", "always", {"err_pred": "tables/error_predictions.csv"},
                 "Figs. 11/15/17", approaches=Fact("approaches")),
@@ -219,6 +226,11 @@ FIGURES: tuple[FigureEntry, ...] = (
     FigureEntry(
         "sweep_factor_effects", "figures.sweep.fig_factor_effects", family="fig_sweep",
         when="always", target="sweep", tables={"ranking": "sweep/ranking.csv"},
+        reader="sweep.run.read_table", caption=None, folder="sweep/figures",
+    ),
+    FigureEntry(
+        "sweep_critical_difference", "figures.statistics.fig_sweep_critical_difference",
+        family="fig_sweep", when="always", target="sweep", tables={"ranking": "sweep/ranking.csv"},
         reader="sweep.run.read_table", caption=None, folder="sweep/figures",
     ),
     # Held-out error across datasets, after every dataset's run (results/_datasets/).

@@ -33,8 +33,10 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from thermaxis.config import StatisticsSettings, load_config, validate_config
 from thermaxis.errors import DataError
 from thermaxis.figures import registry
+from thermaxis.statistics.resampling import fold_mean_interval
 
 # The figure table's entry of the one figure this command draws.
 FIGURE = registry.entry("heldout_error")
@@ -58,7 +60,11 @@ SUMMARY_COLUMNS = (
     "algorithm",
     "n_folds",
     "mean_rmse_um",
+    "mean_rmse_um_lo",
+    "mean_rmse_um_hi",
     "mean_max_abs_um",
+    "mean_max_abs_um_lo",
+    "mean_max_abs_um_hi",
     "worst_max_abs_um",
 )
 _APPROACH_ORDER = ("decoupled", "pointwise")
@@ -120,7 +126,11 @@ def _order(values: Iterable[str], preferred: tuple[str, ...]) -> list[str]:
     return sorted(set(values), key=lambda v: (rank.get(v, len(rank)), v))
 
 
-def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> pd.DataFrame:
+def summarise(
+    metrics: Mapping[str, pd.DataFrame],
+    kinds: Mapping[str, str],
+    statistics: StatisticsSettings | None = None,
+) -> pd.DataFrame:
     """Held-out error of the whole error curve per dataset x approach x algorithm.
 
     Parameters
@@ -129,13 +139,23 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
         Each dataset's metrics table (:func:`read_metrics`).
     kinds : mapping of dataset name to str
         'simulated' or 'measured' (:func:`dataset_kind`).
+    statistics : StatisticsSettings, optional
+        Level, bootstrap size and seed of the means' intervals (config ``statistics``);
+        default the schema's.
 
     Returns
     -------
     DataFrame
-        :data:`SUMMARY_COLUMNS`; means and the worst case are over the folds.  Sorted
-        by dataset, then approach and algorithm in the paper's order.
+        :data:`SUMMARY_COLUMNS`; means and the worst case are over the folds, a mean's
+        ``_lo`` and ``_hi`` its interval with the folds resampled.  Sorted by dataset,
+        then approach and algorithm in the paper's order.
     """
+    if statistics is None:
+        statistics = StatisticsSettings.from_section(validate_config({})["statistics"])
+
+    def interval(values) -> tuple[float, float]:
+        return fold_mean_interval(values, statistics.level, statistics.n_resamples, statistics.seed)
+
     rows = []
     for name in sorted(metrics):
         errors = metrics[name][metrics[name]["target"] == "error"]
@@ -150,6 +170,8 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
                 group = errors[
                     (errors["approach"] == approach) & (errors["algorithm"] == algorithm)
                 ]
+                rmse_lo, rmse_hi = interval(group["rmse"])
+                max_lo, max_hi = interval(group["max_abs"])
                 rows.append(
                     {
                         "dataset": name,
@@ -158,7 +180,11 @@ def summarise(metrics: Mapping[str, pd.DataFrame], kinds: Mapping[str, str]) -> 
                         "algorithm": algorithm,
                         "n_folds": int(group["fold"].nunique()),
                         "mean_rmse_um": float(group["rmse"].mean()),
+                        "mean_rmse_um_lo": rmse_lo,
+                        "mean_rmse_um_hi": rmse_hi,
                         "mean_max_abs_um": float(group["max_abs"].mean()),
+                        "mean_max_abs_um_lo": max_lo,
+                        "mean_max_abs_um_hi": max_hi,
                         "worst_max_abs_um": float(group["max_abs"].max()),
                     }
                 )
@@ -192,23 +218,23 @@ def to_markdown(summary: pd.DataFrame) -> str:
     if simulated:
         lines += [f"SIMULATED data: {', '.join(simulated)} (not measurements).", ""]
     lines += [
-        "Error curves of each held-out condition (leave-one-condition-out); means and worst case over the folds, µm.",
+        "Error curves of each held-out condition (leave-one-condition-out); means and worst case over the folds, µm; "
+        "a mean's _lo and _hi: its bootstrap interval with the folds resampled (config statistics).",
         "",
         markdown_table(summary, float_format="%.3f"),
     ]
     return "\n".join(lines)
 
 
-def configured_datasets() -> list[str]:
-    """Names (``results/<name>``) of the datasets of config ``datasets`` that can be loaded.
+def configured_datasets(config: Mapping) -> list[str]:
+    """Names (``results/<name>``) of the datasets of ``config["datasets"]`` that can be loaded.
 
     A folder that cannot is left out with a warning: its results cannot be there either.
     """
-    from thermaxis.config import load_config
     from thermaxis.dataset.reader import load_dataset
 
     names = []
-    for folder in load_config()["datasets"]:
+    for folder in config["datasets"]:
         try:
             names.append(load_dataset(folder).name)
         except (DataError, ValueError, OSError) as exc:
@@ -251,16 +277,23 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--formats", nargs="+", default=["png", "pdf"], help="figure formats (default: png pdf)"
     )
+    parser.add_argument(
+        "--config",
+        default="config/config.yaml",
+        help="the config whose `statistics` sets the intervals (default: config/config.yaml)",
+    )
     args = parser.parse_args(argv)
     results = Path(args.results)
     out = Path(args.out) if args.out else results / "_datasets"
     try:
-        names = args.datasets if args.datasets is not None else configured_datasets()
+        config = load_config(args.config)
+        names = args.datasets if args.datasets is not None else configured_datasets(config)
         metrics, kinds = _readable(results, names)
-        summary = summarise(metrics, kinds)
+        statistics = StatisticsSettings.from_section(config["statistics"])
+        summary = summarise(metrics, kinds, statistics)
         fig = registry.function(FIGURE.draw)(summary)
-    except (DataError, ValueError) as exc:
-        print(f"thermaxis error: {exc}", file=sys.stderr)
+    except (DataError, ValueError, OSError) as exc:
+        print(f"thermaxis error: {str(exc).splitlines()[0]}", file=sys.stderr)
         return 1
     _write(summary, fig, out, args.formats)
     _write_page(summary, results, out, args.formats)
