@@ -374,7 +374,7 @@ def linked_tables():
         "error_predictions.csv",
         *(["paper_comparison.csv", "paper_comparison.md"] if PAPER else []),
     ]
-    return [f"{OUT}/tables/{name}" for name in tables]
+    return [f"{OUT}/tables/{name}" for name in tables] + statistics_outputs()
 
 
 # The figures and captions each report embeds, and what the index links.
