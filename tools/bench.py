@@ -676,17 +676,19 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
     def add(name, met, measured):
         rows.append({"target": TARGETS[name], "measured": measured, "met": met})
 
+    def add_ratio(name, m, floor, limit):
+        ratio = m.wall_s / floor.wall_s
+        add(
+            name,
+            m.ok and ratio <= limit,
+            f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x",
+        )
+
     if "results_cold" in by_name:
         m = by_name["results_cold"]
         add("results_cold", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s")
     if "results_noop" in by_name and "one_rule_noop" in by_name:
-        m, floor = by_name["results_noop"], by_name["one_rule_noop"]
-        ratio = m.wall_s / floor.wall_s
-        add(
-            "results_noop",
-            m.ok and ratio <= 1.25,
-            f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x",
-        )
+        add_ratio("results_noop", by_name["results_noop"], by_name["one_rule_noop"], 1.25)
     if "sweep_default" in by_name:
         m = by_name["sweep_default"]
         n = m.extra.get("configurations", 0)
@@ -713,10 +715,7 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
         m = by_name["sweep_subsets"]
         add("sweep_subsets", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s")
     if "startup_noop_slurm" in by_name and "startup_noop_venv" in by_name:
-        m, floor = by_name["startup_noop_slurm"], by_name["startup_noop_venv"]
-        ratio = m.wall_s / floor.wall_s
-        add("startup_slurm", m.ok and ratio <= 1.5,
-            f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x")  # fmt: skip
+        add_ratio("startup_slurm", by_name["startup_noop_slurm"], by_name["startup_noop_venv"], 1.5)
     return rows
 
 
