@@ -370,6 +370,7 @@ def linked_tables():
         "sensitive_points.csv",
         "metrics.csv",
         "coefficients.csv",
+        "fitting.csv",
         "kb_predictions.csv",
         "error_predictions.csv",
         *(["paper_comparison.csv", "paper_comparison.md"] if PAPER else []),

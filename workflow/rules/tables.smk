@@ -7,6 +7,7 @@ rule collect_model_tables:
         error_predictions=expand(
             f"{OUT}/models/{{fold}}/error_predictions.csv", fold=FOLDS
         ),
+        fitting=expand(f"{OUT}/models/{{fold}}/fitting.csv", fold=FOLDS),
         selection=expand(f"{OUT}/selection/{{fold}}.csv", fold=FOLDS),
     output:
         metrics=report(
@@ -32,6 +33,12 @@ rule collect_model_tables:
             caption="../report/error_predictions.rst",
             category=CATEGORY["prediction"],
             labels={"table": "error predictions"},
+        ),
+        fitting=report(
+            f"{OUT}/tables/fitting.csv",
+            caption="../report/fitting.rst",
+            category=CATEGORY["models"],
+            labels={"table": "fitting"},
         ),
         selection=report(
             f"{OUT}/tables/sensitive_points.csv",
