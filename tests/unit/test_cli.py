@@ -170,7 +170,8 @@ def test_run_goes_through_the_recovery_wrapper_with_snakemakes_arguments(monkeyp
             "--config",
             "dataset=data/raw/fl_thermal",
         ],
-        ["--results", "results"],  # then the page across datasets, as make results does
+        # then the summary and page across the datasets just run, as make results does
+        ["--results", "results", "--datasets", "twin", "fl_thermal"],
     ]
 
 

@@ -50,7 +50,9 @@ def results(built, tmp_path_factory) -> Path:
 
     results = tmp_path_factory.mktemp("served") / "results"
     shutil.copytree(built.out, results / built.out.name)
-    assert crossdataset.main(["--results", str(results), "--formats", "png"]) == 0
+    # The built dataset is not one of config datasets: named, as make results names its own.
+    args = ["--results", str(results), "--datasets", built.out.name, "--formats", "png"]
+    assert crossdataset.main(args) == 0
     return results
 
 

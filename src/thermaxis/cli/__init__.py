@@ -234,7 +234,9 @@ def _run(args) -> int:
         code = _wrapped(command)
         if code:
             return code
-    return crossdataset.main(["--results", "results"])
+    # The summary of the datasets just run (their results/<name> folders), as make results does.
+    names = crossdataset.configured_datasets({"datasets": datasets})
+    return crossdataset.main(["--results", "results", "--datasets", *names]) if names else 1
 
 
 def _sweep(args) -> int:
