@@ -27,14 +27,18 @@ def lines_run(tmp_path_factory) -> Run:
     Tests read it or dry-run against it (`-n`); only test_sweep_workflow adds to it, the
     ``sweep/`` folder of the `sweep` target, which `all` does not make.
     """
-    return make_lines_run(tmp_path_factory.mktemp("lines"))
+    # Shared lock: a test that edits a module meanwhile (holding it exclusively) would make
+    # the run record a dirty checkout in provenance.json, which a later dry run sees as changed.
+    with library_lock(tmp_path_factory):
+        return make_lines_run(tmp_path_factory.mktemp("lines"))
 
 
 @pytest.fixture(scope="session")
 def built(tmp_path_factory) -> Built:
     """The workflow with every kind of report on a small simulated dataset that reproduces
     the paper, once per test session (the reports and the browser tests read it)."""
-    return make_built(tmp_path_factory.mktemp("reports"))
+    with library_lock(tmp_path_factory):  # as for lines_run
+        return make_built(tmp_path_factory.mktemp("reports"))
 
 
 @pytest.fixture
