@@ -84,14 +84,8 @@ MIB = 1024.0 * 1024.0
 # Linux reports ru_maxrss in KiB, macOS in bytes.
 _MAXRSS_UNIT = 1.0 if sys.platform == "darwin" else 1024.0
 STEPS = ("startup", "dryrun", "results", "sweep", "subsets", "scale", "test")
-SUBSET_SHAPE = {
-    "runs": 5,
-    "sensors": 22,
-    "positions": 1,
-    "hours": 5.0,
-    "rate_hz": 0.1,
-    "measurement_min": 10.0,
-}
+SUBSET_SHAPE = {"sensors": 22, "positions": 1, "hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0, "seed": 0}  # fmt: skip
+SUBSET_RUNS = 5
 SUBSET_SWEEP = {"methods": ["subset"], "n_clusters": [3], "approaches": ["pointwise"], "algorithms": ["mlr"],
                 "max_subsets": 2000}  # fmt: skip
 DRYRUN_REPEATS = 3
@@ -494,16 +488,20 @@ def run_bench(
     return finish(doc, measurements, out)
 
 
+def _generate_command(out: Path, runs: int, spec: dict) -> list[str]:
+    """``python -m thermaxis.twin scale`` writing ``runs`` runs of shape ``spec`` to ``out``."""
+    options = ("sensors", "positions", "hours", "rate_hz", "measurement_min", "seed")
+    flags = [[f"--{name.replace('_', '-')}", str(spec[name])] for name in options]
+    return [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(out), "--runs", str(runs),
+            *(part for flag in flags for part in flag)]  # fmt: skip
+
+
 def _scale_run(scratch, logs, shape: str, spec: dict, n: int, cores, env, timeout_s, keep, record):
     """Generate one scale dataset (timed apart) and run the default configuration to metrics.csv."""
     name = f"{shape}_{n}"
     data = scratch / "scale" / f"data_{name}"
     shutil.rmtree(data, ignore_errors=True)
-    generate = [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(data), "--runs", str(n),
-                "--sensors", str(spec["sensors"]), "--positions", str(spec["positions"]),
-                "--hours", str(spec["hours"]), "--rate-hz", str(spec["rate_hz"]),
-                "--measurement-min", str(spec["measurement_min"]), "--seed", str(spec["seed"])]  # fmt: skip
-    record(measure(f"scale_generate_{name}", generate, scratch, logs / f"scale_generate_{name}.log",
+    record(measure(f"scale_generate_{name}", _generate_command(data, n, spec), scratch, logs / f"scale_generate_{name}.log",
                    f"python -m thermaxis.twin scale: {n} runs, {shape} (not part of the fit)", env, timeout_s,
                    runs=n))  # fmt: skip
     work = prepare_workdir(scratch / "scale" / f"work_{name}")
@@ -525,10 +523,8 @@ def _subset_sweep(scratch: Path, logs: Path, cores: int, env: dict, timeout_s: f
     data = scratch / "subsets" / "data"
     shutil.rmtree(data, ignore_errors=True)
     spec = SUBSET_SHAPE
-    subprocess.run([sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(data), "--runs", str(spec["runs"]),
-                    "--sensors", str(spec["sensors"]), "--positions", str(spec["positions"]), "--hours",
-                    str(spec["hours"]), "--rate-hz", str(spec["rate_hz"]), "--measurement-min",
-                    str(spec["measurement_min"])], env=env, check=True, capture_output=True, timeout=timeout_s)  # fmt: skip
+    subprocess.run(_generate_command(data, SUBSET_RUNS, spec), env=env, check=True, capture_output=True,
+                   timeout=timeout_s)  # fmt: skip
     work = prepare_workdir(scratch / "subsets" / "work")
     override = {"dataset": str(data), "ambient_sensor": "T1", "sweep": SUBSET_SWEEP}
     (work / "bench_subsets.yaml").write_text(yaml.safe_dump(override))
@@ -538,7 +534,7 @@ def _subset_sweep(scratch: Path, logs: Path, cores: int, env: dict, timeout_s: f
                    check=True, capture_output=True, timeout=timeout_s)  # fmt: skip
     m = measure("sweep_subsets", _snakemake(cores, *prefix, "results/twin_scale/sweep/summary.csv"), work,
                 logs / "sweep_subsets.log", "sweep of every 3 of 22 sensors (1,540 subsets), 5 runs, one position, "
-                "point by point, MLR (assembled data present)", env, timeout_s, runs=spec["runs"])  # fmt: skip
+                "point by point, MLR (assembled data present)", env, timeout_s, runs=SUBSET_RUNS)  # fmt: skip
     if not keep:
         shutil.rmtree(scratch / "subsets", ignore_errors=True)
     return m

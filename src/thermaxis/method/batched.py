@@ -37,10 +37,10 @@ from thermaxis.method.folds import _split_fold, sensor_columns
 from thermaxis.method.metrics import prediction_metrics
 from thermaxis.method.models import (
     _KB_COLUMNS,
+    _features,
     _positions_of,
     decouple_rows,
     inner_group_splitter,
-    relative_temperatures,
 )
 
 __all__ = ["batchable", "decoupled_metrics", "pointwise_metrics"]
@@ -125,15 +125,6 @@ def _used(X: pd.DataFrame, named: Sequence[str]) -> list[str]:
     (and only theirs must be finite, as for the one-by-one fits)."""
     named = set(named)
     return [s for s in sensor_columns(X) if s in named]
-
-
-def _features(X: pd.DataFrame, sensors: list[str], temperature: str, signals) -> np.ndarray:
-    """The sensors' temperatures of one kind, then the operating signals as logged."""
-    if temperature == "absolute":
-        values = X[sensors].to_numpy(dtype=float)
-    else:
-        values = relative_temperatures(X, sensors).to_numpy(dtype=float)
-    return np.hstack([values, X[list(signals)].to_numpy(dtype=float)])
 
 
 def _columns(index: dict, points, signals) -> tuple[int, ...]:

@@ -474,15 +474,18 @@ def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, cho
     algorithm = estimator.algorithm
     searched = algorithm == "svr" or (estimator.search_grid is not None and algorithm in SEARCHABLE)
     runs = int(np.unique(groups).size)
-    max_loco, group_folds = tuple(estimator.inner_search)
     if not searched:
         split = ""
     elif runs < 2:
         split = "none (one training run): the grid's first point"
-    elif runs <= max_loco:
-        split = f"leave one of {runs} training runs out"
     else:
-        split = f"{min(group_folds, runs)} group folds of {runs} training runs"
+        # The splitter the search used, so the note cannot drift from it.
+        splitter = inner_group_splitter(groups, *tuple(estimator.inner_search))
+        split = (
+            f"leave one of {runs} training runs out"
+            if isinstance(splitter, LeaveOneGroupOut)
+            else f"{splitter.get_n_splits()} group folds of {runs} training runs"
+        )
     fitted = rows
     if algorithm == "gpr" and rows > estimator.gpr_max_samples:
         fitted = int(_evenly_spaced(rows, estimator.gpr_max_samples).size)
