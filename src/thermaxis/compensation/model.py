@@ -47,6 +47,7 @@ from thermaxis.config import (
     ModelSettings,
 )
 from thermaxis.method.decouple import MM_PER_M
+from thermaxis.method.inputs import base_of
 from thermaxis.method.models import linear_terms, relative_temperatures
 from thermaxis.schemas import schema_path
 
@@ -222,7 +223,7 @@ def model_record(
         "algorithm": algorithm,
         "degree": int(getattr(estimator, "degree", 0)),
         # The logged sensors the controller reads; a time-aware input names its own.
-        "sensors": list(dict.fromkeys(s.split("@", 1)[0] for s, _ in inputs)),
+        "sensors": list(dict.fromkeys(base_of(s) for s, _ in inputs)),
         "inputs": [
             {
                 "sensor": s,

@@ -23,7 +23,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from thermaxis.compensation.model import CONVENTION, TENTHS_UM_PER_MM, UM_PER_MM
-from thermaxis.method.inputs import parse_input_name
+from thermaxis.method.inputs import base_of, parse_input_name
 from thermaxis.templates import fill
 
 __all__ = ["structured_text", "st_real"]
@@ -157,7 +157,7 @@ def _input_values(model: Mapping) -> dict:
         n_sensors=len(sensors),
         n_inputs=len(inputs),
         n_regressions=len(model["regressions"]),
-        input_sensor=", ".join(str(sensors.index(_base(i["sensor"])) + 1) for i in inputs),
+        input_sensor=", ".join(str(sensors.index(base_of(i["sensor"])) + 1) for i in inputs),
         input_relative=_bools(i["temperature"] == "relative" for i in inputs),
         input_min=_array(i["training_min_c"] for i in inputs),
         input_max=_array(i["training_max_c"] for i in inputs),
@@ -167,11 +167,6 @@ def _input_values(model: Mapping) -> dict:
         tenths_um_per_mm=st_real(TENTHS_UM_PER_MM),
         tenths_um_per_um=st_real(TENTHS_UM_PER_MM / UM_PER_MM),
     )
-
-
-def _base(name: str) -> str:
-    """The logged sensor an input is read from (``T2`` of ``T2@lag30min``)."""
-    return name.split("@", 1)[0]
 
 
 def _lag_values(model: Mapping) -> dict:

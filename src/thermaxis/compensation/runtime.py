@@ -13,7 +13,7 @@ import numpy as np
 from thermaxis.compensation.model import UM_PER_MM, evaluate_regression, validate_model
 from thermaxis.config import FallbackSettings
 from thermaxis.method.decouple import MM_PER_M
-from thermaxis.method.inputs import LagState, RateState, parse_input_name
+from thermaxis.method.inputs import LagState, RateState, base_of, parse_input_name
 
 __all__ = [
     "ControllerParameters",
@@ -77,7 +77,7 @@ class Compensator:
         self.inputs = [(i["sensor"], i["temperature"]) for i in model["inputs"]]
         # Time-aware inputs (``T5@lag30min``): derived cycle by cycle from their sensor.
         self.derived = {s: parse_input_name(s) for s, _ in self.inputs if "@" in s}
-        self.sensors = tuple(dict.fromkeys(s.split("@", 1)[0] for s in model["sensors"]))
+        self.sensors = tuple(dict.fromkeys(base_of(s) for s in model["sensors"]))
         self.positions_mm = np.asarray(model["positions_mm"], dtype=float)
         self.p0_mm = float(model["reference"]["reference_position_mm"])
         self.offset_only = self.positions_mm.size == 1

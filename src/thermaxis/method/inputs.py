@@ -33,6 +33,7 @@ import numpy as np
 __all__ = [
     "KINDS",
     "LagState",
+    "base_of",
     "RateState",
     "input_name",
     "inputs_at_measurements",
@@ -351,6 +352,12 @@ def lag_name(base: str, tau_s: float) -> str:
 def rate_name(base: str, window_s: float) -> str:
     """``rate_name("T5", 600) == "T5@rate10min"``; see :func:`input_name`."""
     return input_name(base, "rate", window_s)
+
+
+def base_of(name: str) -> str:
+    """The logged signal an input is read from: ``base_of("T5@lag30min") == "T5"``; a plain
+    signal is its own base."""
+    return str(name).split("@", 1)[0]
 
 
 def parse_input_name(name: str) -> tuple[str, str, float]:

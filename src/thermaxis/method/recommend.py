@@ -39,6 +39,7 @@ from thermaxis.config import (
 from thermaxis.labels import natural_sorted
 from thermaxis.method.batched import batchable, decoupled_metrics, pointwise_metrics
 from thermaxis.method.folds import META, evaluate_configuration, select_for_fold
+from thermaxis.method.inputs import base_of
 from thermaxis.reports.formatting import markdown_table
 
 __all__ = [
@@ -110,11 +111,6 @@ class Recommendation:
     score: str
 
 
-def _base(column: str) -> str:
-    """The logged signal a derived input comes from: ``T5@lag30min`` -> ``T5``."""
-    return str(column).split("@", 1)[0]
-
-
 def candidate_view(X: pd.DataFrame, candidate: Candidate, signals: Sequence[str]):
     """What a candidate may use: (X's columns it sees, those selection may choose, its settings).
 
@@ -125,10 +121,10 @@ def candidate_view(X: pd.DataFrame, candidate: Candidate, signals: Sequence[str]
     derived = [c for c in X.columns if "@" in str(c)]
     temperatures = [c for c in X.columns if c not in META and c not in signals and c not in derived]
     if candidate.time_inputs:
-        temperatures += [c for c in derived if _base(c) not in signals]
+        temperatures += [c for c in derived if base_of(c) not in signals]
     used = [s for s in candidate.models.signals if s in X.columns]
     if candidate.time_inputs:
-        used += [c for c in derived if _base(c) in candidate.models.signals]
+        used += [c for c in derived if base_of(c) in candidate.models.signals]
     keys = [c for c in X.columns if c in META]
     return (
         X[keys + temperatures + used],
