@@ -281,6 +281,8 @@ def run_batch(
     """
     from thermaxis.method.batched import batchable
 
+    # Whether an algorithm is batched depends on the data and the settings only: asked once.
+    batched = {algorithm: batchable(algorithm, model, Y) for algorithm in grid.algorithms}
     planned: list[tuple] = []
     done: dict[tuple, pd.DataFrame | str] = {}
     deferred: dict[tuple, tuple] = {}
@@ -296,7 +298,7 @@ def run_batch(
                 key = (unit.fold, config.approach, config.algorithm, config.degree, inputs)
                 planned.append((config, unit.fold, inputs, key, None))
                 new = key not in done and key not in deferred
-                if new and batchable(config.algorithm, model, Y):
+                if new and batched[config.algorithm]:
                     deferred[key] = (config, selection)
                 elif new:
                     started = time.perf_counter()
