@@ -46,7 +46,9 @@ def comparison(spec: dict, spec_path: Path) -> pd.DataFrame:
     n = len(seconds)
     train, test = block(n, spec["protocol"]["train"]), block(n, spec["protocol"]["test"])
     c = spec["candidates"]
-    sets = input_sets(seconds, temperatures, signals, c["inputs"], c["lag_sets_min"])
+    sets = input_sets(
+        seconds, temperatures, signals, c["inputs"], c["lag_sets_min"], c.get("rate_sets_min", [[]])
+    )
     rows = []
     for j, (channel, y) in enumerate(channels.items()):
         print(

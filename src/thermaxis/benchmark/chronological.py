@@ -7,8 +7,9 @@ constants, the ridge strength) is made inside the training part by scikit-learn'
 they fit; the test block reaches nothing but the final score.
 
 Inputs are the logged temperatures, optionally the operating signals (and their
-squares), and first-order lags of all of them (:func:`thermaxis.method.inputs.lag_filter`,
-causal: a lag at a sample depends only on the samples up to it).
+squares), first-order lags of all of them (:func:`thermaxis.method.inputs.lag_filter`)
+and their rates of change over a window (:func:`thermaxis.method.inputs.rate_of_change`),
+all causal: a value at a sample depends only on the samples up to it.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.model_selection import TimeSeriesSplit
 
-from thermaxis.method.inputs import lag_filter
+from thermaxis.method.inputs import lag_filter, rate_of_change
 from thermaxis.method.metrics import prediction_metrics
 from thermaxis.method.models import make_regressor
 
@@ -31,17 +32,19 @@ INPUT_KINDS = ("temperatures", "signals", "signal_squares")
 
 @dataclass(frozen=True)
 class InputSet:
-    """One candidate set of input columns: its kind, lag time constants and the matrix."""
+    """One candidate set of input columns: its kind, lag time constants, rate windows and the matrix."""
 
     kind: str
     lags_min: tuple[float, ...]
+    rates_min: tuple[float, ...]
     names: tuple[str, ...]
     values: np.ndarray
 
     @property
     def label(self) -> str:
         lags = ", ".join(f"{m:g}" for m in self.lags_min) or "none"
-        return f"{self.kind}; lags (min): {lags}"
+        rates = ", ".join(f"{m:g}" for m in self.rates_min) or "none"
+        return f"{self.kind}; lags (min): {lags}; rates (min): {rates}"
 
 
 def block(n: int, fractions: Sequence[float]) -> slice:
@@ -67,8 +70,9 @@ def input_sets(
     signals: Mapping[str, np.ndarray],
     kinds: Sequence[str],
     lag_sets_min: Sequence[Sequence[float]],
+    rate_sets_min: Sequence[Sequence[float]] = ((),),
 ) -> list[InputSet]:
-    """Every candidate input set, simplest first (fewer columns first)."""
+    """Every candidate input set (kind x lag set x rate set), simplest first (fewer columns first)."""
     unknown = [k for k in kinds if k not in INPUT_KINDS]
     if unknown:
         raise ValueError(
@@ -76,24 +80,35 @@ def input_sets(
         )
     if not signals and any(k != "temperatures" for k in kinds):
         kinds = ["temperatures"]
-    lagged: dict[tuple[str, float], np.ndarray] = {}
+    derived: dict[tuple[str, str, float], np.ndarray] = {}
+
+    def column(name: str, values: np.ndarray, how: str, minutes: float) -> np.ndarray:
+        key = (name, how, float(minutes))
+        if key not in derived:
+            make = lag_filter if how == "lag" else rate_of_change
+            derived[key] = make(t_s, values, 60.0 * float(minutes))
+        return derived[key]
+
     sets = []
     for kind in dict.fromkeys(kinds):
         base = _base(kind, temperatures, signals)
         for lags in lag_sets_min:
-            names, columns = list(base), list(base.values())
-            for minutes in lags:
-                for name, values in base.items():
-                    key = (name, float(minutes))
-                    if key not in lagged:
-                        lagged[key] = lag_filter(t_s, values, 60.0 * float(minutes))
-                    names.append(f"{name}@lag{minutes:g}min")
-                    columns.append(lagged[key])
-            sets.append(
-                InputSet(
-                    kind, tuple(float(m) for m in lags), tuple(names), np.column_stack(columns)
+            for rates in rate_sets_min:
+                names, columns = list(base), list(base.values())
+                for how, durations in (("lag", lags), ("rate", rates)):
+                    for minutes in durations:
+                        for name, values in base.items():
+                            names.append(f"{name}@{how}{minutes:g}min")
+                            columns.append(column(name, values, how, minutes))
+                sets.append(
+                    InputSet(
+                        kind,
+                        tuple(float(m) for m in lags),
+                        tuple(float(m) for m in rates),
+                        tuple(names),
+                        np.column_stack(columns),
+                    )
                 )
-            )
     return sorted(sets, key=lambda s: len(s.names))
 
 
