@@ -70,3 +70,19 @@ def test_the_test_block_reaches_no_choice():
         choose(sets, y, slice(0, 1800), [1.0], 5)[0].label
         == choose(sets, poisoned, slice(0, 1800), [1.0], 5)[0].label
     )
+
+
+def test_a_rate_that_made_the_data_is_chosen_and_named():
+    rng = np.random.default_rng(1)
+    t = np.arange(3000) * 15.0
+    u = 20 + np.cumsum(rng.normal(0, 0.05, t.size))
+    # The drift follows (u(t) - u(t - 2 min)) / 2 min, in C per minute, and not u itself;
+    # before the record's first 2 min the rate is from the start's value, as offline.
+    previous = np.interp(t - 120.0, t, u, left=u[0])
+    y = 40.0 * (u - previous) / 2.0 + rng.normal(0, 0.01, t.size)
+    sets = input_sets(t, {"T1": u}, {}, ["temperatures"], [[]], [[], [2], [10]])
+    assert [s.rates_min for s in sets] == [(), (2.0,), (10.0,)]
+    assert sets[1].names == ("T1", "T1@rate2min")
+    inputs, _, _ = choose(sets, y, slice(0, 1800), [0.01, 1.0], 5)
+    assert inputs.rates_min == (2.0,)
+    assert inputs.label == "temperatures; lags (min): none; rates (min): 2"

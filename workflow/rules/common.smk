@@ -586,6 +586,7 @@ COMP_PARAMS = dict(
         for name in ("selection", "decoupling", "models", "compensation")
     },
     about=dict(dataset=DATASET.name, simulated=SIMULATED, statement=DATA_STATEMENT),
+    signals=list(DATASET.signals),
 )
 
 

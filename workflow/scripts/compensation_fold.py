@@ -25,7 +25,9 @@ def main(snakemake):
     p = snakemake.params
     fold = snakemake.wildcards.fold
     X, Y = model_inputs(
-        pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures)
+        pd.read_parquet(snakemake.input.errors),
+        pd.read_parquet(snakemake.input.temperatures),
+        inputs=pd.read_parquet(snakemake.input.inputs),
     )
     decoupling = DecouplingSettings.from_section(p.sections["decoupling"])
     settings = CompensationSettings.from_section(p.sections["compensation"])
@@ -40,6 +42,7 @@ def main(snakemake):
         models,
         settings,
     )
+    X = recommend.deployed_view(X, chosen, p.signals)
     if chosen is None:
         # The configured model's selection of this fold, as the models rule made it.
         with open(snakemake.input.selection, encoding="utf-8") as fh:
@@ -71,10 +74,16 @@ def main(snakemake):
     model = runtime.Compensator(json.loads(text))
     final = runtime.Compensator.from_json(snakemake.input.final)
     X_run = X.loc[~train]
-    times_s, samples, reference = heldout.run_states(X_run, model.sensors)
-    steps = model.run(times_s, samples, reference)
-    _, final_samples, final_reference = heldout.run_states(X_run, final.sensors)
-    final_values = [final.parameters(s, final_reference) for s in final_samples]
+    cycles = None
+    if model.derived or final.derived:
+        sensors = list(dict.fromkeys([*model.sensors, *final.sensors]))
+        cycles = heldout.measurement_cycles(
+            pd.read_parquet(snakemake.input.series),
+            pd.read_csv(snakemake.input.windows),
+            sensors,
+        )
+    steps, _ = heldout.replay(model, X_run, cycles)
+    _, final_values = heldout.replay(final, X_run, cycles)
     for step in steps:
         if step.reasons:
             logging.getLogger("thermaxis").warning(

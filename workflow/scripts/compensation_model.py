@@ -32,13 +32,16 @@ def main(snakemake):
     settings = CompensationSettings.from_section(sections["compensation"])
     models = ModelSettings.from_section(sections["models"])
     X, Y = model_inputs(
-        pd.read_parquet(snakemake.input.errors), pd.read_parquet(snakemake.input.temperatures)
+        pd.read_parquet(snakemake.input.errors),
+        pd.read_parquet(snakemake.input.temperatures),
+        inputs=pd.read_parquet(snakemake.input.inputs),
     )
     with open(snakemake.input.choice, encoding="utf-8") as fh:
         record = recommend.deployed_record(settings.model, json.load(fh))
     approach, selection_settings, models, settings = recommend.deployed_setup(
         record, p.approach, SelectionSettings.from_section(sections["selection"]), models, settings
     )
+    X = recommend.deployed_view(X, record, p.signals)
     if record is None:
         deployment = {"model": "paper", "candidate": "paper"}
         accuracy = heldout.held_out_accuracy(

@@ -14,6 +14,8 @@ from thermaxis.config import ErrorCleaning
 __all__ = [
     "held_out_accuracy",
     "run_states",
+    "measurement_cycles",
+    "replay",
     "pass_deviations",
     "held_out_tables",
 ]
@@ -38,6 +40,54 @@ def run_states(X_run: pd.DataFrame, sensors: Sequence[str]):
     ordered = X_run.sort_values("measurement", kind="stable")
     samples = [{s: float(row[s]) for s in sensors} for _, row in ordered.iterrows()]
     return (ordered["time_min"].to_numpy(dtype=float) * 60.0).tolist(), samples, samples[0]
+
+
+def measurement_cycles(series: pd.DataFrame, windows: pd.DataFrame, sensors: Sequence[str]):
+    """A controller's cycles over a held-out run, for a model with time-aware inputs.
+
+    Every sample of the cleaned log (``series``: ``time`` and a column per sensor) up to
+    the last measurement, with each measurement's middle instant added (the instant
+    the offline lags are evaluated at, :func:`thermaxis.cleaning.run.derived_inputs`).
+    Values there, and across gaps the cleaning left, are linear between samples, as
+    offline. Returns (seconds since the log's start, samples, the cycle of each
+    measurement in time order).
+    """
+    ordered = windows.sort_values("measurement", kind="stable")
+    start = pd.to_datetime(ordered["start"]).to_numpy(dtype="datetime64[ns]").astype(np.int64)
+    end = pd.to_datetime(ordered["end"]).to_numpy(dtype="datetime64[ns]").astype(np.int64)
+    grid_ns = pd.to_datetime(series["time"]).to_numpy(dtype="datetime64[ns]").astype(np.int64)
+    grid = (grid_ns - grid_ns[0]) / 1e9
+    mids = (start + (end - start) // 2 - grid_ns[0]) / 1e9
+    values = series[list(sensors)].interpolate(limit_direction="both").to_numpy(dtype=float)
+    keep = grid <= mids.max()
+    times = np.union1d(grid[keep], mids)
+    columns = [np.interp(times, grid, values[:, j]) for j in range(len(sensors))]
+    samples = [
+        dict(zip(sensors, map(float, row), strict=True)) for row in zip(*columns, strict=True)
+    ]
+    return times.tolist(), samples, np.searchsorted(times, mids).tolist()
+
+
+def replay(
+    compensator, X_run: pd.DataFrame, cycles=None
+) -> tuple[list[Step], list[ControllerParameters]]:
+    """The compensator on a held-out run: its step at each measurement (fallback policy
+    applied) and its parameters there without the policy.
+
+    Without time-aware inputs one cycle per measurement, at its temperatures; with them
+    every cycle of ``cycles`` (:func:`measurement_cycles`), homed at the first
+    measurement's cycle, so each lag carries the run's history as it would on the machine.
+    """
+    times_s, samples, reference = run_states(X_run, compensator.sensors)
+    if not compensator.derived:
+        steps = compensator.run(times_s, samples, reference)
+        return steps, [compensator.parameters(s, reference) for s in samples]
+    times_s, samples, rows = cycles
+    derived = compensator.derived_inputs(times_s, samples)
+    home = {**samples[rows[0]], **derived[rows[0]]}
+    steps = compensator.run(times_s, samples, home)
+    states = [{**samples[r], **derived[r]} for r in rows]
+    return [steps[r] for r in rows], [compensator.parameters(s, home) for s in states]
 
 
 def pass_deviations(

@@ -48,7 +48,6 @@ from thermaxis.config import (
 )
 from thermaxis.method.decouple import MM_PER_M
 from thermaxis.method.inputs import base_of
-from thermaxis.method.models import linear_terms, relative_temperatures
 from thermaxis.schemas import schema_path
 
 __all__ = [
@@ -89,6 +88,9 @@ def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline)
     inputs z, scaled back to the target's unit.
     """
     record = {"target": target, "position_mm": position_mm, "inputs": [int(i) for i in inputs]}
+    # The fitting side's imports (scikit-learn) stay out of the controller side's start.
+    from thermaxis.method.models import linear_terms
+
     terms = linear_terms(pipeline, [str(i) for i in inputs])
     if terms is not None:
         return {
@@ -174,6 +176,8 @@ def _inputs_of(approach: str, estimator) -> list[tuple[str, str]]:
 
 def _input_values(X: pd.DataFrame, inputs: Sequence[tuple[str, str]]) -> np.ndarray:
     sensors = sorted({s for s, _ in inputs})
+    from thermaxis.method.models import relative_temperatures
+
     relative = relative_temperatures(X, sensors)
     return np.column_stack(
         [(X[s] if kind == "absolute" else relative[s]).to_numpy(dtype=float) for s, kind in inputs]

@@ -245,10 +245,11 @@ class Compensator:
         """The compensation cycle by cycle, with the fallback policy applied."""
         f = self.fallback
         if self.derived:
-            # The reference of a derived input is its value at the first cycle (homing).
+            # The reference of a derived input is its value at homing: the first cycle's,
+            # unless ``reference`` holds it (homed after the filters started).
             derived = self.derived_inputs(times_s, temperatures)
             temperatures = [{**s, **d} for s, d in zip(temperatures, derived, strict=True)]
-            reference = {**reference, **derived[0]}
+            reference = {**derived[0], **reference}
         good = _zero_parameters(self.p0_mm, self.offset_only, self.positions_mm.size)
         fault_since = None
         last: dict[str, tuple[float, float]] = {}

@@ -31,7 +31,6 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
-from scipy.stats import norm
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.compose import TransformedTargetRegressor
 from sklearn.cross_decomposition import PLSRegression
@@ -524,6 +523,9 @@ def _coefficient_frame(rows: list[dict]) -> pd.DataFrame:
 def _z_score(level: float) -> float:
     if not 0.0 < level < 1.0:
         raise ValueError(f"interval level must lie strictly between 0 and 1, got {level}")
+    # Imported here: scipy.stats costs seconds at import, and only intervals need it.
+    from scipy.stats import norm
+
     return float(norm.ppf(0.5 + level / 2.0))
 
 

@@ -63,6 +63,7 @@ __all__ = [
     "recommendation_markdown",
     "summary_of",
     "deployable",
+    "deployed_view",
     "deployed_record",
     "deployed_setup",
     "held_out_accuracy",
@@ -531,14 +532,14 @@ def recommendation_markdown(recommendation: Recommendation, statement: str) -> s
 
 
 def deployable(candidate: Candidate) -> bool:
-    """Whether the workflow can deploy the candidate and judge it on held-out runs: temperatures only.
+    """Whether the workflow can deploy the candidate and judge it on held-out runs: no operating signals.
 
     ``model.json``, :class:`~thermaxis.compensation.runtime.Compensator` and the
-    Structured Text block compute lag inputs cycle by cycle, but the held-out replay of
-    ``compensation_fold`` feeds the controller one sample per measurement, too sparse for
-    a lag; operating signals are not read by the exports at all.
+    Structured Text block compute lag inputs cycle by cycle, and the held-out replay
+    feeds them the run's cleaned log (:func:`thermaxis.compensation.heldout.replay`);
+    operating signals are not read by the exports at all.
     """
-    return not candidate.time_inputs and not candidate.models.signals
+    return not candidate.models.signals
 
 
 def deployed_record(model: str, choice: Mapping, fold: str | None = None) -> dict | None:
@@ -582,6 +583,20 @@ def deployed_setup(
         candidate.models,
         replace(settings, algorithm=candidate.algorithm),
     )
+
+
+def deployed_view(X: pd.DataFrame, record: Mapping | None, signals: Sequence[str]) -> pd.DataFrame:
+    """The columns of X the deployed model may use: the temperatures, and the lags of a
+    time-aware candidate (``record`` as :func:`deployed_record` gives it; None: the
+    configured model, temperatures only)."""
+    time_inputs = bool(record and record["time_inputs"])
+
+    def used(column) -> bool:
+        if "@" in str(column):
+            return time_inputs and base_of(column) not in signals
+        return column not in signals
+
+    return X[[c for c in X.columns if used(c)]]
 
 
 def held_out_accuracy(scores: pd.DataFrame, name: str) -> list[dict]:
