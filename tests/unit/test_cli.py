@@ -7,7 +7,6 @@ import re
 import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -17,20 +16,16 @@ from helpers import REPO
 from thermaxis.cli import build_parser, main
 from thermaxis.cli.progress import ProgressBar, relay_snakemake
 
-CHECK_SECONDS = 5.0
 
-
-def _thermaxis(*args, cwd=REPO) -> tuple[subprocess.CompletedProcess, float]:
+def _thermaxis(*args, cwd=REPO) -> subprocess.CompletedProcess:
     env = {
         **os.environ,
         "PYTHONPATH": f"{REPO / 'src'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
     }
-    started = time.perf_counter()
-    proc = subprocess.run(
+    return subprocess.run(
         [sys.executable, "-m", "thermaxis.cli", *args], cwd=cwd, env=env, capture_output=True,
         text=True, timeout=120,
     )  # fmt: skip
-    return proc, time.perf_counter() - started
 
 
 @pytest.mark.parametrize(
@@ -42,15 +37,14 @@ def _thermaxis(*args, cwd=REPO) -> tuple[subprocess.CompletedProcess, float]:
                                  "6 runs", "R6_variable    38 measurements"]),
     ],
 )  # fmt: skip
-def test_check_passes_an_embedded_dataset_and_says_what_it_holds_in_seconds(dataset, expected):
+def test_check_passes_an_embedded_dataset_and_says_what_it_holds(dataset, expected):
     if not (REPO / dataset).is_dir():
         pytest.skip(f"{dataset} is not in this checkout")
-    proc, seconds = _thermaxis("check", dataset)
+    proc = _thermaxis("check", dataset)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.startswith(f"thermaxis: {dataset}: every check before any job passed\n")
     for line in expected:
         assert line in proc.stdout
-    assert seconds < CHECK_SECONDS
 
 
 def _comma_separated(ds: Path) -> None:
@@ -87,10 +81,9 @@ def test_check_refuses_a_bad_dataset_with_the_workflows_one_line(edit, message, 
     ds = tmp_path / "cut"
     shutil.copytree(REPO / "data/raw/twin", ds)
     edit(ds)
-    proc, seconds = _thermaxis("check", str(ds))
+    proc = _thermaxis("check", str(ds))
     assert proc.returncode == 1 and proc.stdout == ""
     assert proc.stderr == message.replace("<ds>", str(ds)) + "\n"
-    assert seconds < CHECK_SECONDS
 
 
 def test_every_subcommand_has_help_with_examples(capsys):

@@ -80,13 +80,40 @@ def raw_lines() -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["run", "measurement", "k", "b", "r2", "k_paper", "b_paper"])
 
 
+# CALIBRATION.md reports models fitted to the twin; an SVR's libsvm solution moves in the
+# last bits between processors (seen: 1.79 on the machine that committed it, 1.80 on
+# another), so its numbers are compared to their printed precision, the data byte for byte.
+REPORT = "CALIBRATION.md"
+NUMBER = re.compile(r"-?\d+\.\d+")
+
+
+def _within_printed_precision(want: str, got: str) -> bool:
+    """Equal text, each decimal number within one unit of its last printed digit."""
+    if NUMBER.sub("#", want) != NUMBER.sub("#", got):
+        return False
+    for a, b in zip(NUMBER.findall(want), NUMBER.findall(got), strict=True):
+        unit = 10.0 ** -len(a.split(".")[1])
+        if len(a) != len(b) or abs(float(a) - float(b)) > unit * 1.0001:
+            return False
+    return True
+
+
 def test_generate_regenerates_the_committed_files_byte_for_byte(tmp_path):
     generate_dataset(tmp_path / "raw", tmp_path / "truth")
     for committed, fresh in ((RAW, tmp_path / "raw"), (TRUTH, tmp_path / "truth")):
         want, got = _files(committed), _files(fresh)
         assert sorted(got) == sorted(want), f"file sets differ under {committed}"
-        changed = [name for name in want if want[name] != got[name]]
+        changed = [name for name in want if want[name] != got[name] and name != REPORT]
         assert not changed, f"regenerated files differ from the committed ones: {changed[:5]}"
+        if REPORT in want:
+            assert _within_printed_precision(want[REPORT].decode(), got[REPORT].decode())
+
+
+def test_printed_precision_allows_a_last_digit_and_nothing_more():
+    assert _within_printed_precision("| SVR | 1.79 / 3.49 |", "| SVR | 1.80 / 3.50 |")
+    assert not _within_printed_precision("| SVR | 1.79 |", "| SVR | 1.81 |")
+    assert not _within_printed_precision("| SVR | 1.79 |", "| GPR | 1.79 |")
+    assert not _within_printed_precision("| SVR | 1.79 |", "| SVR | 1.790 |")
 
 
 def test_calibration_rms_against_table5_from_the_raw_files(raw_lines):
