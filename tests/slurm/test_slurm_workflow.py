@@ -1,5 +1,5 @@
-"""The workflow through a real Slurm (tests/slurm/start_slurm.sh): same bytes as a local run,
-and a job killed with scancel is either resubmitted or fails the run cleanly.
+"""The workflow through a real Slurm (tests/slurm/start_slurm.sh): a job killed with scancel
+either fails the run cleanly or is resubmitted, and the completed run has a local run's bytes.
 
 Skipped, with the reason, where the one-node cluster cannot be started (not root, the
 Debian packages missing). The twin's models and a small sweep on the held-out run E4
@@ -97,7 +97,7 @@ def _workdir(tmp_path: Path) -> tuple[Path, Path]:
 
 
 def _slurm_command(config: Path, *extra: str) -> list[str]:
-    # Status checks every few seconds instead of the profile's 20 s: the jobs are short.
+    # Status checks every 2 s instead of the profile's 20 s and Snakemake's 10 s: the jobs are short.
     return [
         str(SLURM_BIN / "snakemake"),
         "--profile",
@@ -106,6 +106,8 @@ def _slurm_command(config: Path, *extra: str) -> list[str]:
         "--configfile",
         str(config),
         "--slurm-init-seconds-before-status-checks",
+        "2",
+        "--seconds-between-status-checks",
         "2",
         "--latency-wait",
         "10",
@@ -132,26 +134,6 @@ def local_results(tmp_path_factory):
     assert "thermaxis: sweep of 2 fold x selection units, 8 evaluations in 1 batches" in proc.stderr
     assert (work / "results" / "twin" / "sweep" / "batches" / "1" / "0.parquet").is_file()
     return _results(work)
-
-
-def test_slurm_run_is_byte_identical_to_the_local_run(slurm_env, local_results, tmp_path):
-    work, config = _workdir(tmp_path)
-    proc = subprocess.run(_slurm_command(config), cwd=work, capture_output=True, text=True,
-                          env=slurm_env, timeout=900)  # fmt: skip
-    assert proc.returncode == 0, proc.stderr[-5000:]
-    assert "SLURM run ID" in proc.stderr
-    assert "Submitted array job" in proc.stderr  # the sweep batches, as one job array
-    # The estimate before the start: 8 evaluations x 0.065 s on 2 batches = 0.26 s wall.
-    assert "8 evaluations in 2 batches; estimated 0.00 CPU-hours at 0.065 s each" in proc.stderr
-    # The cluster plan: 8 evaluations in batches of 4.
-    batches = sorted(
-        p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir()
-    )
-    assert batches == ["0.parquet", "1.parquet"]
-    ours = _results(work)
-    assert sorted(ours) == sorted(local_results)
-    differing = [name for name in ours if ours[name] != local_results[name]]
-    assert differing == []
 
 
 def _running_job(rule: str, timeout: float = 300.0) -> str:
@@ -181,12 +163,18 @@ def _finish(run: subprocess.Popen, log: Path) -> str:
     return log.read_text()
 
 
-def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(
+def test_scancel_fails_cleanly_then_resubmits_and_the_rerun_is_byte_identical_to_the_local_run(
     slurm_env, local_results, tmp_path
 ):
+    """One cluster workflow serves three checks: a killed job fails a run without retries
+    cleanly; with the profile's retries it is resubmitted; and the completed run, its sweep
+    spread over a job array of two batches, has the local run's bytes."""
     work, config = _workdir(tmp_path)
     # 1. Without retries the killed job fails the run, with the job and its state named.
-    run = _start(work, _slurm_command(config, "--retries", "0"), tmp_path / "run.log", slurm_env)
+    # Only the models' table: the sweep's batches are left for the rerun to submit.
+    first = _slurm_command(config, "--retries", "0")
+    first = [*first[: first.index("--") + 1], TARGETS[0]]
+    run = _start(work, first, tmp_path / "run.log", slurm_env)
     killed = _running_job("fit_predict")
     subprocess.run(["scancel", killed], check=True)
     output = _finish(run, tmp_path / "run.log")
@@ -207,7 +195,19 @@ def test_scancel_fails_cleanly_then_resubmits_and_a_rerun_completes(
     assert rerun.returncode == 0, output[-5000:]
     assert f"SLURM-job '{killed_again}' failed, SLURM status is: 'CANCELLED'" in output
     assert "Trying to restart job" in output
-    assert _results(work) == local_results
     states = subprocess.run(["sacct", "-n", "-X", "-P", "-j", killed_again, "-o", "State"],
                             capture_output=True, text=True).stdout  # fmt: skip
     assert states.strip().startswith("CANCELLED")
+
+    # 3. The cluster plan: the estimate before the start (8 evaluations x 0.065 s on 2
+    # batches), the sweep's batches of 4 as one job array, and the local run's bytes.
+    assert "SLURM run ID" in output
+    assert "Submitted array job" in output
+    assert "8 evaluations in 2 batches; estimated 0.00 CPU-hours at 0.065 s each" in output
+    batches = sorted(
+        p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir()
+    )
+    assert batches == ["0.parquet", "1.parquet"]
+    ours = _results(work)
+    assert sorted(ours) == sorted(local_results)
+    assert [name for name in ours if ours[name] != local_results[name]] == []
