@@ -65,22 +65,6 @@ def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run, 
     assert rules == {"fig_compensation_drift"}, rules
 
 
-def test_single_position_dataset_exports_an_offset_only(tmp_path):
-    runs = ("R1", "R2", "R3")
-    dataset = write_dataset(
-        tmp_path / "spot", runs=runs, positions=(120.0,), name="spot", n_measurements=4
-    )
-    work = workflow_workdir(tmp_path)
-    config = tiny_config(work, dataset, models={"algorithms": ["mlr"]})
-    run_snakemake(work, *targets("spot", runs), "--configfile", str(config))
-    out = work / "results" / "spot" / "compensation"
-    assert json.loads((out / "model.json").read_text())["approach"] == "pointwise"
-    siemens = pd.read_csv(out / "siemens_840d.csv", comment="#")
-    assert set(siemens["parameter"]) == {"SD43900"}
-    twincat = pd.read_csv(out / "twincat.csv", comment="#")
-    assert (twincat.loc[twincat["parameter"] == "P-AXIS-00274", "value"] == 0).all()
-
-
 def test_compensation_algorithm_outside_the_fitted_ones_stops_with_one_line(tmp_path):
     dataset = write_dataset(tmp_path / "tiny", name="tiny")
     work = workflow_workdir(tmp_path)

@@ -2,10 +2,12 @@
 
 Three runs of unequal length with long names, one target position, no ambient sensor,
 an operating signal, one errors.csv per run: the workflow must run end to end to its
-tables and figures, draw against time, and make no paper audit.
+tables, figures and an offset-only compensation, draw against time, and make no paper audit.
 """
 
 from __future__ import annotations
+
+import json
 
 import numpy as np
 import pandas as pd
@@ -67,6 +69,8 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
             "figures/fig10_temperature_rise.png",
             "figures/fold_comparison.png",
             f"figures/error_prediction_{RUNS[1]}_pointwise_mlr.png",
+            "compensation/siemens_840d.csv",
+            "compensation/twincat.csv",
         )
     ]
     run_snakemake(
@@ -87,6 +91,13 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
     assert "spindle_rpm" in set(coefficients["term"])
     for target in targets:
         assert (work / target).stat().st_size > 0
+    # One position: the compensation is an offset only, point by point.
+    comp = out / "compensation"
+    assert json.loads((comp / "model.json").read_text())["approach"] == "pointwise"
+    siemens = pd.read_csv(comp / "siemens_840d.csv", comment="#")
+    assert set(siemens["parameter"]) == {"SD43900"}
+    twincat = pd.read_csv(comp / "twincat.csv", comment="#")
+    assert (twincat.loc[twincat["parameter"] == "P-AXIS-00274", "value"] == 0).all()
     assert not (out / "tables" / "paper_comparison.csv").exists()
     dry = run_snakemake(work, "-n", "--config", "dataset=data/measured")
     assert "paper_comparison" not in dry.stdout and "fig3_ambient" not in dry.stdout
