@@ -47,6 +47,7 @@ from thermaxis.config import (
     ModelSettings,
 )
 from thermaxis.method.decouple import MM_PER_M
+from thermaxis.method.features import relative_temperatures
 from thermaxis.method.inputs import base_of
 from thermaxis.schemas import schema_path
 
@@ -176,8 +177,6 @@ def _inputs_of(approach: str, estimator) -> list[tuple[str, str]]:
 
 def _input_values(X: pd.DataFrame, inputs: Sequence[tuple[str, str]]) -> np.ndarray:
     sensors = sorted({s for s, _ in inputs})
-    from thermaxis.method.models import relative_temperatures
-
     relative = relative_temperatures(X, sensors)
     return np.column_stack(
         [(X[s] if kind == "absolute" else relative[s]).to_numpy(dtype=float) for s, kind in inputs]

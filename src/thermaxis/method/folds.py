@@ -20,13 +20,8 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.config import ModelSettings, SelectionSettings
+from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.method.metrics import prediction_metrics
-from thermaxis.method.models import (
-    DecoupledAxisModel,
-    PointwiseAxisModel,
-    decouple_rows,
-    relative_temperatures,
-)
 from thermaxis.method.selection import (
     SensitivePoints,
     common_points,
@@ -266,6 +261,10 @@ def _build_model(
     model: ModelSettings,
     degree: int | None,
 ):
+    # Imported here: selecting sensitive points, which shares this module, needs no
+    # scikit-learn, and a selection job should not pay for importing it.
+    from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+
     common = dict(
         algorithm=algorithm,
         params=model.params_for(algorithm),

@@ -43,7 +43,10 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
 
-from thermaxis.method.decouple import compose_curve, decouple_curves, stroke_powers
+from thermaxis.method.decouple import compose_curve, stroke_powers
+from thermaxis.method.features import ID_COLUMNS as _ID_COLUMNS
+from thermaxis.method.features import KB_COLUMNS as _KB_COLUMNS
+from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
 
 __all__ = [
@@ -63,7 +66,6 @@ __all__ = [
 COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
 
 
-_ID_COLUMNS = ("run", "measurement")
 _ALLOWED_PARAMS = {
     "mlr": set(),
     "ridge": {"alpha"},
@@ -73,12 +75,6 @@ _ALLOWED_PARAMS = {
     "gpr": {"length_scale", "noise_level", "n_restarts_optimizer"},
 }
 # Where make_regressor's pipeline keeps the wrapped regressor's parameters.
-_KB_COLUMNS = {
-    "k": "k_um_per_m",
-    "b": "b_um",
-    "c2": "c2_um_per_m2",
-    "c3": "c3_um_per_m3",
-}
 
 
 # --------------------------------------------------------------------------- regressors
@@ -368,45 +364,6 @@ def _positions_of(X: pd.DataFrame, Y, min_positions: int = 2) -> np.ndarray:
     return positions
 
 
-def relative_temperatures(X: pd.DataFrame, sensors: Sequence[str] | None = None) -> pd.DataFrame:
-    """Temperatures relative to the same run's first measurement.
-
-    Parameters
-    ----------
-    X : DataFrame
-        Columns ``run``, ``measurement`` and sensor columns in absolute degrees C.
-    sensors : sequence of str, optional
-        Which sensor columns; default every numeric column other than run and measurement.
-
-    Returns
-    -------
-    DataFrame
-        Same index as X, one column per sensor: value minus the run's value at its lowest
-        ``measurement`` among the rows of X, so a run's first row is all zeros.  A run's
-        reference comes from its own rows only, whatever other runs X holds.
-    """
-    if sensors is None:
-        sensors = [
-            c
-            for c in X.columns
-            if c not in _ID_COLUMNS and pd.api.types.is_numeric_dtype(X[c].dtype)
-        ]
-    sensors = list(sensors)
-    missing = [c for c in (*_ID_COLUMNS, *sensors) if c not in X.columns]
-    if missing:
-        raise ValueError(
-            f"X lacks column(s) {missing}; expected run, measurement and sensor columns"
-        )
-    # In numpy, not a pandas sort and group-by: the sweep calls this thousands of times.
-    runs, _ = pd.factorize(X["run"])
-    # A stable sort by measurement puts each run's lowest measurement (the earlier row on a tie) first.
-    order = np.argsort(X["measurement"].to_numpy(), kind="stable")
-    _, first = np.unique(runs[order], return_index=True)
-    absolute = X[sensors].to_numpy(dtype=float)
-    values = absolute - absolute[order[first]][runs]
-    return pd.DataFrame(values, index=X.index, columns=sensors)
-
-
 def _features(
     X: pd.DataFrame, sensors: Sequence[str], temperature: str, signals: Sequence[str] = ()
 ) -> np.ndarray:
@@ -530,34 +487,6 @@ def _z_score(level: float) -> float:
 
 
 # --------------------------------------------------------------------------- decoupled
-
-
-def decouple_rows(X: pd.DataFrame, Y: pd.DataFrame, degree: int) -> pd.DataFrame:
-    """Decoupling of every row of Y (Eq. 6): run, measurement, k_um_per_m, b_um (c2, c3), r2, rms_um.
-
-    The origin is Y's first position, so b means the same for every measurement.
-    """
-    positions = np.asarray(Y.columns, dtype=float)
-    labels = [
-        f"run {run} measurement {measurement}"
-        for run, measurement in zip(X["run"], X["measurement"], strict=False)
-    ]
-    fits = decouple_curves(
-        positions, Y.to_numpy(dtype=float), degree, origin_mm=float(positions[0]), labels=labels
-    )
-    rows = []
-    for run, measurement, fit in zip(X["run"], X["measurement"], fits, strict=False):
-        row = {
-            "run": run,
-            "measurement": measurement,
-            "k_um_per_m": fit.k_um_per_m,
-            "b_um": fit.b_um,
-        }
-        for p in range(2, degree + 1):
-            row[_KB_COLUMNS[f"c{p}"]] = fit.coefficients[p]
-        row.update(r2=fit.r2, rms_um=fit.rms_um)
-        rows.append(row)
-    return pd.DataFrame(rows, index=X.index)
 
 
 class DecoupledAxisModel(RegressorMixin, BaseEstimator):

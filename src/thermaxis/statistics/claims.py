@@ -19,8 +19,8 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.config import SelectionSettings, StatisticsSettings
+from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.method.linear import subset_fit
-from thermaxis.method.models import decouple_rows, relative_temperatures
 from thermaxis.method.selection import informative_sensors, select_sensitive_points
 from thermaxis.statistics.comparisons import aligned
 from thermaxis.statistics.paired import (
