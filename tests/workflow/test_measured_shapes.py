@@ -2,7 +2,8 @@
 
 Three runs of unequal length with long names, one target position, no ambient sensor,
 an operating signal, one errors.csv per run: the workflow must run end to end to its
-tables, figures and an offset-only compensation, draw against time, and make no paper audit.
+tables, figures and an offset-only compensation with time-aware inputs, draw against time,
+and make no paper audit.
 """
 
 from __future__ import annotations
@@ -79,6 +80,9 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
         "dataset=data/measured",
         "models={algorithms: [mlr], signals: [spindle_rpm]}",
         "figures={algorithms: [mlr]}",
+        # A time-aware candidate, deployed by name: its held-out replay reads the logs.
+        "recommend={lags_min: [30]}",
+        "compensation={model: pointwise-mlr-all+lags}",
         "--",
         *targets,
     )
@@ -93,7 +97,14 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
         assert (work / target).stat().st_size > 0
     # One position: the compensation is an offset only, point by point.
     comp = out / "compensation"
-    assert json.loads((comp / "model.json").read_text())["approach"] == "pointwise"
+    model = json.loads((comp / "model.json").read_text())
+    assert model["approach"] == "pointwise"
+    assert model["deployment"]["candidate"] == "pointwise-mlr-all+lags"
+    inputs = [i["sensor"] for i in model["inputs"]]
+    assert "T1@lag30min" in inputs and "spindle_rpm" not in inputs
+    for run, n in zip(RUNS, (9, 14, 6), strict=True):
+        summary = pd.read_csv(comp / "folds" / run / "summary.csv")
+        assert len(summary) == n and summary["largest_abs_compensated_um"].notna().all()
     siemens = pd.read_csv(comp / "siemens_840d.csv", comment="#")
     assert set(siemens["parameter"]) == {"SD43900"}
     twincat = pd.read_csv(comp / "twincat.csv", comment="#")
