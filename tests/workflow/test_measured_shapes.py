@@ -74,15 +74,19 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
             "compensation/twincat.csv",
         )
     ]
+    # A time-aware candidate, deployed by name: its held-out replay reads the logs.
+    lagged = work / "lagged.yaml"
+    lagged.write_text(yaml.safe_dump({"recommend": {"lags_min": [30]},
+                                      "compensation": {"model": "pointwise-mlr-all+lags"}}))  # fmt: skip
     run_snakemake(
         work,
+        "--configfile",
+        "config/config.yaml",
+        str(lagged),
         "--config",
         "dataset=data/measured",
         "models={algorithms: [mlr], signals: [spindle_rpm]}",
         "figures={algorithms: [mlr]}",
-        # A time-aware candidate, deployed by name: its held-out replay reads the logs.
-        "recommend={lags_min: [30]}",
-        "compensation={model: pointwise-mlr-all+lags}",
         "--",
         *targets,
     )
@@ -101,7 +105,8 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
     assert model["approach"] == "pointwise"
     assert model["deployment"]["candidate"] == "pointwise-mlr-all+lags"
     inputs = [i["sensor"] for i in model["inputs"]]
-    assert "T1@lag30min" in inputs and "spindle_rpm" not in inputs
+    # Every sensor and its lag (selection "all"), no operating signal (not exportable).
+    assert inputs == ["S1", "S2", "S3", "S1@lag30min", "S2@lag30min", "S3@lag30min"]
     for run, n in zip(RUNS, (9, 14, 6), strict=True):
         summary = pd.read_csv(comp / "folds" / run / "summary.csv")
         assert len(summary) == n and summary["largest_abs_compensated_um"].notna().all()
