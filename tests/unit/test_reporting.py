@@ -267,3 +267,16 @@ def test_index_page_links_and_states_the_data():
     assert page.index("SIMULATED DATA") < page.index("<h2>Reports</h2>")
     assert "<h2>Empty</h2>" not in page
     assert notebooks.remote_loads(page) == []
+
+
+def test_only_the_paper_twin_is_said_to_be_calibrated_to_the_paper():
+    from thermaxis.dataset.summary import data_statement
+
+    assert data_statement("twin", True) == (
+        "Dataset `twin`: SIMULATED data (thermal twin calibrated to the paper's Table 5), "
+        "not the paper's measurements."
+    )
+    assert data_statement("scale", True, "thermaxis.twin scale", reproduces_paper=False) == (
+        "Dataset `scale`: SIMULATED data, not measurements of a machine. Source: thermaxis.twin scale"
+    )
+    assert data_statement("rig", False, "") == "Dataset `rig`: MEASURED data."

@@ -49,7 +49,10 @@ RUNS = CHECKED.runs
 FOLDS = CHECKED.folds
 SIMULATED = DATASET.simulated
 DATA_STATEMENT = data_statement(
-    DATASET.name, SIMULATED, DATASET.meta["provenance"].get("citation", "")
+    DATASET.name,
+    SIMULATED,
+    DATASET.meta["provenance"].get("citation", ""),
+    reproduces_paper=DATASET.reproduces == "xu2023",
 )
 # The paper's audit and report belong only to a dataset that reproduces the paper.
 PAPER = DATASET.reproduces == "xu2023"

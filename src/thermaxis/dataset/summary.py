@@ -13,14 +13,23 @@ __all__ = [
 ]
 
 
-def data_statement(dataset_name: str, simulated: bool, citation: str = "") -> str:
-    """The sentence every report and caption carries about where the numbers come from."""
-    if simulated:
+def data_statement(
+    dataset_name: str, simulated: bool, citation: str = "", reproduces_paper: bool = True
+) -> str:
+    """The sentence every report and caption carries about where the numbers come from.
+
+    Only a simulated dataset that reproduces the paper (``reproduces: xu2023``, the
+    twin) is said to be calibrated to it; any other simulated dataset is named as
+    simulated with its own source.
+    """
+    source = f" Source: {citation.strip()}" if citation.strip() else ""
+    if simulated and reproduces_paper:
         return (
             f"Dataset `{dataset_name}`: SIMULATED data (thermal twin calibrated to the paper's Table 5), "
             "not the paper's measurements."
         )
-    source = f" Source: {citation.strip()}" if citation.strip() else ""
+    if simulated:
+        return f"Dataset `{dataset_name}`: SIMULATED data, not measurements of a machine.{source}"
     return f"Dataset `{dataset_name}`: MEASURED data.{source}"
 
 
