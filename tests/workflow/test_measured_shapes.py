@@ -72,12 +72,14 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
             f"figures/error_prediction_{RUNS[1]}_pointwise_mlr.png",
             "compensation/siemens_840d.csv",
             "compensation/twincat.csv",
+            "compensation/ThermalCompensation.st",
         )
     ]
-    # A time-aware candidate, deployed by name: its held-out replay reads the logs.
+    # A time-aware candidate with the operating signal, deployed by name: its held-out
+    # replay reads the temperature and signal logs.
     lagged = work / "lagged.yaml"
     lagged.write_text(yaml.safe_dump({"recommend": {"lags_min": [30]},
-                                      "compensation": {"model": "pointwise-mlr-all+lags"}}))  # fmt: skip
+                                      "compensation": {"model": "pointwise-mlr-all+signals+lags"}}))  # fmt: skip
     run_snakemake(
         work,
         "--configfile",
@@ -103,10 +105,17 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
     comp = out / "compensation"
     model = json.loads((comp / "model.json").read_text())
     assert model["approach"] == "pointwise"
-    assert model["deployment"]["candidate"] == "pointwise-mlr-all+lags"
-    inputs = [i["sensor"] for i in model["inputs"]]
-    # Every sensor and its lag (selection "all"), no operating signal (not exportable).
-    assert inputs == ["S1", "S2", "S3", "S1@lag30min", "S2@lag30min", "S3@lag30min"]
+    assert model["deployment"]["candidate"] == "pointwise-mlr-all+signals+lags"
+    inputs = [(i["sensor"], i["temperature"]) for i in model["inputs"]]
+    # Every sensor and its lag (selection "all"), then the signal and its lag, as logged.
+    temperatures = ["S1", "S2", "S3", "S1@lag30min", "S2@lag30min", "S3@lag30min"]
+    signals = ["spindle_rpm", "spindle_rpm@lag30min"]
+    assert inputs == [(s, "relative") for s in temperatures] + [(s, "signal") for s in signals]
+    assert model["signals"] == ["spindle_rpm"]
+    assert (
+        "SENSOR_SIGNAL : ARRAY[1..4] OF BOOL := [FALSE, FALSE, FALSE, TRUE];"
+        in (comp / "ThermalCompensation.st").read_text()
+    )
     for run, n in zip(RUNS, (9, 14, 6), strict=True):
         summary = pd.read_csv(comp / "folds" / run / "summary.csv")
         assert len(summary) == n and summary["largest_abs_compensated_um"].notna().all()

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import pandas as pd
 
-from thermaxis.cleaning.run import model_inputs
+from thermaxis.cleaning.run import logged_series, model_inputs
 from thermaxis.compensation import heldout, runtime
 from thermaxis.compensation import model as comp_model
 from thermaxis.config import (
@@ -27,32 +27,34 @@ def main(snakemake):
     X, Y = model_inputs(
         pd.read_parquet(snakemake.input.errors),
         pd.read_parquet(snakemake.input.temperatures),
+        signals=pd.read_parquet(snakemake.input.signals),
         inputs=pd.read_parquet(snakemake.input.inputs),
     )
     decoupling = DecouplingSettings.from_section(p.sections["decoupling"])
     settings = CompensationSettings.from_section(p.sections["compensation"])
-    models = ModelSettings.from_section(p.sections["models"])
     with open(snakemake.input.choice, encoding="utf-8") as fh:
         # The model the procedure would have deployed without this run (its fold's choice).
         chosen = recommend.deployed_record(settings.model, json.load(fh), fold)
-    approach, selection_settings, models, settings = recommend.deployed_setup(
+    setup = recommend.deployed_setup(
         chosen,
+        X,
         p.approach,
         SelectionSettings.from_section(p.sections["selection"]),
-        models,
+        ModelSettings.from_section(p.sections["models"]),
         settings,
+        p.signals,
     )
-    X = recommend.deployed_view(X, chosen, p.signals)
+    X, approach = setup.view, setup.approach
     if chosen is None:
         # The configured model's selection of this fold, as the models rule made it.
         with open(snakemake.input.selection, encoding="utf-8") as fh:
             selection = selection_from_dict(json.load(fh))
     else:
         selection = select_for_fold(
-            X,
+            X[setup.selectable],
             Y,
             fold,
-            replace(selection_settings, scope="training"),
+            replace(setup.selection, scope="training"),
             decoupling.degree,
             decoupled=approach == "decoupled",
             pointwise=approach == "pointwise",
@@ -63,9 +65,9 @@ def main(snakemake):
         Y.loc[train].reset_index(drop=True),
         selection,
         approach,
-        models,
+        setup.models,
         decoupling,
-        settings,
+        setup.settings,
         **p.about,
     )
     text = json.dumps(record, indent=1) + "\n"
@@ -78,7 +80,10 @@ def main(snakemake):
     if model.derived or final.derived:
         sensors = list(dict.fromkeys([*model.sensors, *final.sensors]))
         cycles = heldout.measurement_cycles(
-            pd.read_parquet(snakemake.input.series),
+            logged_series(
+                pd.read_parquet(snakemake.input.series),
+                pd.read_parquet(snakemake.input.signal_series),
+            ),
             pd.read_csv(snakemake.input.windows),
             sensors,
         )

@@ -30,18 +30,24 @@ def main(snakemake):
     sections = p.sections
     decoupling = DecouplingSettings.from_section(sections["decoupling"])
     settings = CompensationSettings.from_section(sections["compensation"])
-    models = ModelSettings.from_section(sections["models"])
     X, Y = model_inputs(
         pd.read_parquet(snakemake.input.errors),
         pd.read_parquet(snakemake.input.temperatures),
+        signals=pd.read_parquet(snakemake.input.signals),
         inputs=pd.read_parquet(snakemake.input.inputs),
     )
     with open(snakemake.input.choice, encoding="utf-8") as fh:
         record = recommend.deployed_record(settings.model, json.load(fh))
-    approach, selection_settings, models, settings = recommend.deployed_setup(
-        record, p.approach, SelectionSettings.from_section(sections["selection"]), models, settings
+    setup = recommend.deployed_setup(
+        record,
+        X,
+        p.approach,
+        SelectionSettings.from_section(sections["selection"]),
+        ModelSettings.from_section(sections["models"]),
+        settings,
+        p.signals,
     )
-    X = recommend.deployed_view(X, record, p.signals)
+    approach, settings = setup.approach, setup.settings
     if record is None:
         deployment = {"model": "paper", "candidate": "paper"}
         accuracy = heldout.held_out_accuracy(
@@ -55,20 +61,20 @@ def main(snakemake):
         accuracy = recommend.held_out_accuracy(scores, record["name"])
     # The deployed model sees every run, its sensitive points too.
     selection = select_for_fold(
-        X,
+        setup.view[setup.selectable],
         Y,
         "all runs",
-        replace(selection_settings, scope="all"),
+        replace(setup.selection, scope="all"),
         decoupling.degree,
         decoupled=approach == "decoupled",
         pointwise=approach == "pointwise",
     )
     fitted = comp_model.fit_model_record(
-        X,
+        setup.view,
         Y,
         selection,
         approach,
-        models,
+        setup.models,
         decoupling,
         settings,
         **p.about,

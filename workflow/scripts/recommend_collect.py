@@ -10,7 +10,6 @@ from thermaxis.method.recommend import (
     candidate_table,
     collect,
     configured_candidates,
-    deployable,
     recommendation_markdown,
 )
 from thermaxis.pipeline.runner import run_script, write_csv, write_text
@@ -29,10 +28,7 @@ def main(snakemake):
     table = candidate_table(candidates).join(means, on="candidate")
     write_csv(table, snakemake.output.candidates, float_format="%.6f")
     by_name = {c.name: c for c in candidates}
-    # The same choice among the candidates the controller exports can compute: what the
-    # compensation deploys (compensation.model: recommended).
-    exportable = [c.name for c in candidates if deployable(c)]
-    deployed = collect(scores, exportable, "paper", recommend.score)
+    # What the compensation deploys (compensation.model: recommended | paper | <candidate>).
     record = {
         "final": candidate_record(by_name[result.final]),
         "paper": candidate_record(by_name["paper"]),
@@ -40,14 +36,7 @@ def main(snakemake):
             row.fold: candidate_record(by_name[row.chosen]) for row in result.folds.itertuples()
         },
         "score": result.score,
-        "deployable": {
-            "final": candidate_record(by_name[deployed.final]),
-            "folds": {
-                row.fold: candidate_record(by_name[row.chosen])
-                for row in deployed.folds.itertuples()
-            },
-            "candidates": {name: candidate_record(by_name[name]) for name in exportable},
-        },
+        "candidates": {c.name: candidate_record(c) for c in candidates},
     }
     write_text(json.dumps(record, indent=1, sort_keys=True) + "\n", snakemake.output.choice)
 

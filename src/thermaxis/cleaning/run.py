@@ -29,6 +29,7 @@ __all__ = [
     "unzeroed_matrix",
     "model_inputs",
     "tidy_signals",
+    "logged_series",
     "derived_inputs",
 ]
 
@@ -180,6 +181,17 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     )
 
 
+def logged_series(series: pd.DataFrame, signal_series: pd.DataFrame) -> pd.DataFrame:
+    """A run's cleaned log on its grid: ``time``, a column per sensor, then per operating signal.
+
+    ``series`` and ``signal_series`` are the clean rule's ``temperatures.parquet`` and
+    ``signals.parquet`` (the same grid, each with ``elapsed_min``, which is dropped).
+    """
+    frame = series.drop(columns="elapsed_min").reset_index(drop=True)
+    signals = signal_series.drop(columns=["time", "elapsed_min"]).reset_index(drop=True)
+    return pd.concat([frame, signals], axis=1)
+
+
 def derived_inputs(tables: RunTables, lags_min, rates_min) -> pd.DataFrame:
     """Time-aware inputs of every temperature and operating signal at each measurement.
 
@@ -195,9 +207,7 @@ def derived_inputs(tables: RunTables, lags_min, rates_min) -> pd.DataFrame:
     columns = ["run", "condition", "measurement", "time_min", "input", "value"]
     if not lags_min and not rates_min:
         return pd.DataFrame(columns=columns)
-    frame = tables.series.drop(columns="elapsed_min")
-    signals = tables.signal_series.drop(columns=["time", "elapsed_min"])
-    frame = pd.concat([frame.reset_index(drop=True), signals.reset_index(drop=True)], axis=1)
+    frame = logged_series(tables.series, tables.signal_series)
     values = frame.drop(columns="time").interpolate(limit_direction="both")
     frame = pd.concat([frame[["time"]], values], axis=1)
     windows = tables.windows

@@ -168,18 +168,22 @@ def line_weights(positions_mm: Sequence[float], origin_mm: float, basis: np.ndar
 
 
 def _inputs_of(approach: str, estimator) -> list[tuple[str, str]]:
+    """The model's inputs as (name, kind); operating signals (and their lags) come last, as logged."""
+    signals = [(s, "signal") for s in estimator.signals]
     if approach == "decoupled":
-        return [(s, "absolute") for s in estimator.k_sensors] + [
-            (s, "relative") for s in estimator.b_sensors
-        ]
-    return [(s, "relative") for s in estimator.sensors]
+        return (
+            [(s, "absolute") for s in estimator.k_sensors]
+            + [(s, "relative") for s in estimator.b_sensors]
+            + signals
+        )
+    return [(s, "relative") for s in estimator.sensors] + signals
 
 
 def _input_values(X: pd.DataFrame, inputs: Sequence[tuple[str, str]]) -> np.ndarray:
-    sensors = sorted({s for s, _ in inputs})
+    sensors = sorted({s for s, kind in inputs if kind == "relative"})
     relative = relative_temperatures(X, sensors)
     return np.column_stack(
-        [(X[s] if kind == "absolute" else relative[s]).to_numpy(dtype=float) for s, kind in inputs]
+        [(relative[s] if kind == "relative" else X[s]).to_numpy(dtype=float) for s, kind in inputs]
     )
 
 
@@ -200,9 +204,11 @@ def model_record(
     positions = np.asarray(estimator.positions_mm_, dtype=float)
     origin = float(positions[0])
     regressions = []
+    # Every regression sees the operating signals after its temperatures (models._features).
+    signal_inputs = [index[(s, "signal")] for s in estimator.signals]
     if approach == "decoupled":
-        k_inputs = [index[(s, "absolute")] for s in estimator.k_sensors]
-        b_inputs = [index[(s, "relative")] for s in estimator.b_sensors]
+        k_inputs = [index[(s, "absolute")] for s in estimator.k_sensors] + signal_inputs
+        b_inputs = [index[(s, "relative")] for s in estimator.b_sensors] + signal_inputs
         for target, _, kind in estimator._targets():
             chosen = b_inputs if kind == "relative" else k_inputs
             regressions.append(
@@ -212,7 +218,7 @@ def model_record(
         shifted = (positions - origin) / MM_PER_M
         basis = np.column_stack([shifted ** power[r["target"]] for r in regressions])
     else:
-        chosen = [index[(s, "relative")] for s in estimator.sensors]
+        chosen = [index[(s, "relative")] for s in estimator.sensors] + signal_inputs
         for position, pipeline in zip(positions, estimator.estimators_, strict=False):
             regressions.append(regression_record("error", float(position), chosen, pipeline))
         basis = np.eye(positions.size)
@@ -225,8 +231,10 @@ def model_record(
         "approach": approach,
         "algorithm": algorithm,
         "degree": int(getattr(estimator, "degree", 0)),
-        # The logged sensors the controller reads; a time-aware input names its own.
+        # The logged channels the controller reads (temperatures, then operating signals);
+        # a time-aware input names its own.
         "sensors": list(dict.fromkeys(base_of(s) for s, _ in inputs)),
+        "signals": list(dict.fromkeys(base_of(s) for s, kind in inputs if kind == "signal")),
         "inputs": [
             {
                 "sensor": s,

@@ -5,7 +5,7 @@ The block is written from ``model.json`` alone: the same constants the
 parser reads back the very same doubles, into the Structured Text templates of
 ``thermaxis/compensation/templates`` (the block, and the constants and statements of
 affine or RBF regressions). Each model input is a sensor's temperature
-(absolute) or its rise since homing (relative); each regression's change is its value
+(absolute), its rise since homing (relative) or an operating signal as logged; each regression's change is its value
 at the current inputs minus its value at the reference inputs. Affine models (mlr,
 ridge, pls) need only
 
@@ -127,6 +127,7 @@ def structured_text(model: Mapping, statement: str) -> str:
 def _header_values(model: Mapping, statement: str) -> dict:
     """What the comment above the block says of the model, its inputs and its fallback."""
     sensors, inputs, policy = list(model["sensors"]), model["inputs"], model["fallback"]["policy"]
+    signals = list(model.get("signals", ()))
     offset_only = len(model["positions_mm"]) == 1
     return dict(
         statement=statement,
@@ -137,6 +138,12 @@ def _header_values(model: Mapping, statement: str) -> dict:
         convention=CONVENTION,
         single_target_note=" Single target: offset only, coefficient 0." if offset_only else "",
         sensor_list=", ".join(f"{i}: {s}" for i, s in enumerate(sensors, start=1)),
+        signal_note=(
+            f"\n     channels {', '.join(str(sensors.index(s) + 1) for s in signals)} ({', '.join(signals)}) are "
+            "operating signals in their logged unit, not temperatures"
+            if signals
+            else ""
+        ),
         input_list="; ".join(
             f"{j}: {i['sensor']} {i['temperature']}" for j, i in enumerate(inputs, start=1)
         ),
@@ -157,6 +164,7 @@ def _input_values(model: Mapping) -> dict:
         n_sensors=len(sensors),
         n_inputs=len(inputs),
         n_regressions=len(model["regressions"]),
+        sensor_signal=_bools(s in model.get("signals", ()) for s in sensors),
         input_sensor=", ".join(str(sensors.index(base_of(i["sensor"])) + 1) for i in inputs),
         input_relative=_bools(i["temperature"] == "relative" for i in inputs),
         input_min=_array(i["training_min_c"] for i in inputs),

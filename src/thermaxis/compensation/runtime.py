@@ -62,7 +62,8 @@ def _zero_parameters(p0_mm: float, offset_only: bool, n_positions: int) -> Contr
 
 
 class Compensator:
-    """The deployable model: predicted error curve and controller parameters from temperatures.
+    """The deployable model: predicted error curve and controller parameters from temperatures
+    (and operating signals, when the model reads any).
 
     Build it with :meth:`from_json`. :meth:`parameters` is the pure computation for one
     temperature state; :meth:`run` applies the fallback policy to a time series, as a
@@ -78,6 +79,8 @@ class Compensator:
         # Time-aware inputs (``T5@lag30min``): derived cycle by cycle from their sensor.
         self.derived = {s: parse_input_name(s) for s, _ in self.inputs if "@" in s}
         self.sensors = tuple(dict.fromkeys(base_of(s) for s in model["sensors"]))
+        # Operating signals (a spindle speed) have no plausible degC range or rate.
+        self.signals = frozenset(model.get("signals", ()))
         self.positions_mm = np.asarray(model["positions_mm"], dtype=float)
         self.p0_mm = float(model["reference"]["reference_position_mm"])
         self.offset_only = self.positions_mm.size == 1
@@ -129,7 +132,7 @@ class Compensator:
     ) -> np.ndarray:
         return np.array(
             [
-                temperatures[s] if kind == "absolute" else temperatures[s] - reference[s]
+                temperatures[s] - reference[s] if kind == "relative" else temperatures[s]
                 for s, kind in self.inputs
             ],
             dtype=float,
@@ -198,15 +201,12 @@ class Compensator:
                 reasons.append(
                     f"{sensor}: stale, last update {age:g} s ago (limit {f.max_sensor_age_s:g} s)"
                 )
-            elif not lo <= value <= hi:
-                reasons.append(f"{sensor}: implausible {value:g} C (plausible {lo:g} ... {hi:g} C)")
-            elif last and sensor in last and time_s > last[sensor][0]:
-                rate = abs(value - last[sensor][1]) / (time_s - last[sensor][0]) * 60.0
-                if rate > f.max_rate_c_per_min:
-                    reasons.append(
-                        f"{sensor}: changes {rate:.3g} C/min (limit {f.max_rate_c_per_min:g} C/min)"
-                    )
-            if not (math.isfinite(ref) and lo <= ref <= hi):
+            elif sensor not in self.signals:
+                reasons += self._temperature_faults(sensor, value, time_s, last)
+            if sensor in self.signals:
+                if not math.isfinite(ref):
+                    reasons.append(f"{sensor}: reference value missing")
+            elif not (math.isfinite(ref) and lo <= ref <= hi):
                 reasons.append(f"{sensor}: reference temperature missing or implausible")
         if reasons:
             return tuple(reasons)
@@ -214,6 +214,10 @@ class Compensator:
         for (sensor, kind), spec, value in zip(
             self.inputs, self.model["inputs"], row, strict=False
         ):
+            if kind == "signal":
+                # A speed beyond the training range is an extrapolation the held-out verdict
+                # measures; a degC margin says nothing about it.
+                continue
             low = spec["training_min_c"] - f.range_margin_c
             high = spec["training_max_c"] + f.range_margin_c
             if not low <= value <= high:
@@ -223,6 +227,20 @@ class Compensator:
                 )
         return tuple(reasons)
 
+    def _temperature_faults(self, sensor: str, value: float, time_s: float, last) -> list[str]:
+        """A present, fresh temperature's faults: outside the plausible range, or changing too fast."""
+        f = self.fallback
+        lo, hi = f.plausible_c
+        if not lo <= value <= hi:
+            return [f"{sensor}: implausible {value:g} C (plausible {lo:g} ... {hi:g} C)"]
+        if last and sensor in last and time_s > last[sensor][0]:
+            rate = abs(value - last[sensor][1]) / (time_s - last[sensor][0]) * 60.0
+            if rate > f.max_rate_c_per_min:
+                return [
+                    f"{sensor}: changes {rate:.3g} C/min (limit {f.max_rate_c_per_min:g} C/min)"
+                ]
+        return []
+
     def _plausible_readings(
         self, time_s: float, sample: Mapping[str, float], ages: Mapping[str, float]
     ) -> dict:
@@ -230,7 +248,8 @@ class Compensator:
         return {
             s: (time_s, sample[s])
             for s in self.sensors
-            if math.isfinite(sample.get(s, math.nan))
+            if s not in self.signals
+            and math.isfinite(sample.get(s, math.nan))
             and lo <= sample[s] <= hi
             and ages.get(s, 0.0) <= self.fallback.max_sensor_age_s
         }

@@ -62,9 +62,8 @@ __all__ = [
     "candidate_from_record",
     "recommendation_markdown",
     "summary_of",
-    "deployable",
-    "deployed_view",
     "deployed_record",
+    "DeployedSetup",
     "deployed_setup",
     "held_out_accuracy",
 ]
@@ -531,72 +530,68 @@ def recommendation_markdown(recommendation: Recommendation, statement: str) -> s
     return head + markdown_table(f, "%.3f")
 
 
-def deployable(candidate: Candidate) -> bool:
-    """Whether the workflow can deploy the candidate and judge it on held-out runs: no operating signals.
-
-    ``model.json``, :class:`~thermaxis.compensation.runtime.Compensator` and the
-    Structured Text block compute lag inputs cycle by cycle, and the held-out replay
-    feeds them the run's cleaned log (:func:`thermaxis.compensation.heldout.replay`);
-    operating signals are not read by the exports at all.
-    """
-    return not candidate.models.signals
-
-
 def deployed_record(model: str, choice: Mapping, fold: str | None = None) -> dict | None:
     """The candidate record the compensation deploys (on ``fold``'s training runs when given).
 
     ``model`` is config ``compensation.model``: ``paper`` (None: the configured approach
-    and algorithm), ``recommended`` (the choice among the deployable candidates: the
-    final one, or the one chosen without ``fold``) or a deployable candidate's name.
+    and algorithm), ``recommended`` (the final choice, or the one chosen without
+    ``fold``) or a candidate's name. Every candidate can be deployed: ``model.json``,
+    :class:`~thermaxis.compensation.runtime.Compensator` and the Structured Text block
+    read temperatures, operating signals and their lags cycle by cycle.
     """
     if model == "paper":
         return None
-    d = choice["deployable"]
     if model == "recommended":
-        return d["final"] if fold is None else d["folds"][fold]
-    if model in d["candidates"]:
-        return d["candidates"][model]
+        return choice["final"] if fold is None else choice["folds"][fold]
+    if model in choice["candidates"]:
+        return choice["candidates"][model]
     raise ValueError(
-        f"config compensation.model: {model!r} is not 'recommended', 'paper' or a deployable candidate "
-        f"({', '.join(d['candidates'])})"
+        f"config compensation.model: {model!r} is not 'recommended', 'paper' or a candidate "
+        f"({', '.join(choice['candidates'])})"
     )
+
+
+@dataclass(frozen=True)
+class DeployedSetup:
+    """What the compensation fits: the columns of X it sees, those its selection may
+    choose, and its approach, selection, model and compensation settings."""
+
+    view: pd.DataFrame
+    selectable: list
+    approach: str
+    selection: SelectionSettings
+    models: ModelSettings
+    settings: object
 
 
 def deployed_setup(
     record: Mapping | None,
+    X: pd.DataFrame,
     approach: str,
     selection: SelectionSettings,
     models: ModelSettings,
     settings,
-):
-    """What the compensation fits: (approach, selection settings, model settings, compensation settings).
+    signals: Sequence[str],
+) -> DeployedSetup:
+    """The deployed model's setup (:class:`DeployedSetup`).
 
     ``record`` is :func:`deployed_record`'s; None keeps the configured model (``approach``,
-    ``selection``, ``models`` and ``settings.algorithm``).
+    ``selection``, ``models`` and ``settings.algorithm``) on the temperatures alone, as the
+    paper models. A candidate sees what it saw in the recommendation (:func:`candidate_view`).
     """
     if record is None:
-        return approach, selection, models, settings
+        keep = [c for c in X.columns if c not in signals and "@" not in str(c)]
+        return DeployedSetup(X[keep], keep, approach, selection, models, settings)
     candidate = candidate_from_record(record, models)
-    return (
+    view, selectable, candidate_models = candidate_view(X, candidate, signals)
+    return DeployedSetup(
+        view,
+        selectable,
         candidate.approach,
         candidate.selection,
-        candidate.models,
+        candidate_models,
         replace(settings, algorithm=candidate.algorithm),
     )
-
-
-def deployed_view(X: pd.DataFrame, record: Mapping | None, signals: Sequence[str]) -> pd.DataFrame:
-    """The columns of X the deployed model may use: the temperatures, and the lags of a
-    time-aware candidate (``record`` as :func:`deployed_record` gives it; None: the
-    configured model, temperatures only)."""
-    time_inputs = bool(record and record["time_inputs"])
-
-    def used(column) -> bool:
-        if "@" in str(column):
-            return time_inputs and base_of(column) not in signals
-        return column not in signals
-
-    return X[[c for c in X.columns if used(c)]]
 
 
 def held_out_accuracy(scores: pd.DataFrame, name: str) -> list[dict]:
