@@ -138,12 +138,7 @@ def _header_values(model: Mapping, statement: str) -> dict:
         convention=CONVENTION,
         single_target_note=" Single target: offset only, coefficient 0." if offset_only else "",
         sensor_list=", ".join(f"{i}: {s}" for i, s in enumerate(sensors, start=1)),
-        signal_note=(
-            f"\n     channels {', '.join(str(sensors.index(s) + 1) for s in signals)} ({', '.join(signals)}) are "
-            "operating signals in their logged unit, not temperatures"
-            if signals
-            else ""
-        ),
+        signal_note=_signal_note(sensors, signals),
         input_list="; ".join(
             f"{j}: {i['sensor']} {i['temperature']}" for j, i in enumerate(inputs, start=1)
         ),
@@ -153,6 +148,18 @@ def _header_values(model: Mapping, statement: str) -> dict:
             if policy == "ramp_to_zero"
             else "the last good values are held"
         ),
+    )
+
+
+def _signal_note(sensors: list, signals: list) -> str:
+    """The header's line naming the channels that hold operating signals (none: empty)."""
+    if not signals:
+        return ""
+    channels = ", ".join(f"{sensors.index(s) + 1} ({s})" for s in signals)
+    if len(signals) == 1:
+        return f"\n     channel {channels} is an operating signal in its logged unit, not a temperature"
+    return (
+        f"\n     channels {channels} are operating signals in their logged units, not temperatures"
     )
 
 
