@@ -114,3 +114,27 @@ def test_a_lag_of_the_signal_follows_the_closed_form_step_response(fitted):
     assert all(s.status == "ok" for s in steps)
     curves = np.array([s.parameters.curve_um for s in steps[1:]])
     assert curves == pytest.approx(-np.outer(lag - 1000.0, PER_RPM), abs=1e-9)
+
+
+def test_a_derived_input_carries_its_definition_and_a_false_one_is_refused():
+    X, Y = _runs()
+    # Any values will do for the lag column: the test reads the record, not the fit.
+    X["spindle@lag30min"] = np.linspace(900.0, 3100.0, len(X)) ** 1.1
+    estimator = PointwiseAxisModel(
+        sensors=("T1",), algorithm="mlr", signals=("spindle", "spindle@lag30min")
+    )
+    model = model_record(estimator.fit(X, Y), "pointwise", "mlr", X, RAMP, dataset="exact")
+    assert "definition" not in model["inputs"][1]
+    definition = model["inputs"][2]["definition"]
+    assert (definition["of"], definition["kind"], definition["seconds"]) == (
+        "spindle",
+        "lag",
+        1800.0,
+    )
+    assert "1800 s * dy/dt = spindle - y" in definition["formula"]
+    validate_model(model)
+    model["inputs"][2]["definition"] = {**definition, "seconds": 600.0}
+    with pytest.raises(
+        ValueError, match=r"^model.json: inputs/2/definition: does not match .*'spindle@lag30min'"
+    ):
+        validate_model(model)

@@ -48,7 +48,7 @@ from thermaxis.config import (
 )
 from thermaxis.method.decouple import MM_PER_M
 from thermaxis.method.features import relative_temperatures
-from thermaxis.method.inputs import base_of
+from thermaxis.method.inputs import base_of, input_definition
 from thermaxis.schemas import schema_path
 
 __all__ = [
@@ -241,6 +241,7 @@ def model_record(
                 "temperature": kind,
                 "training_min_c": float(values[:, i].min()),
                 "training_max_c": float(values[:, i].max()),
+                **({"definition": input_definition(s)} if "@" in s else {}),
             }
             for i, (s, kind) in enumerate(inputs)
         ],
@@ -276,6 +277,19 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
     if errors:
         path = "/".join(map(str, errors[0].absolute_path)) or "top level"
         raise ValueError(f"{where}: {path}: {errors[0].message}")
+    # The runtime computes a derived input from its name; a definition saying otherwise
+    # would describe a model other than the one run.
+    for i, spec in enumerate(record["inputs"]):
+        if "definition" in spec:
+            try:
+                expected = input_definition(spec["sensor"])
+            except ValueError as exc:
+                raise ValueError(f"{where}: inputs/{i}/sensor: {exc}") from None
+            if spec["definition"] != expected:
+                raise ValueError(
+                    f"{where}: inputs/{i}/definition: does not match the input's name "
+                    f"{spec['sensor']!r}; expected {expected}"
+                )
 
 
 # --------------------------------------------------------------------------- fitting and held-out evaluation

@@ -35,6 +35,7 @@ __all__ = [
     "LagState",
     "base_of",
     "RateState",
+    "input_definition",
     "input_name",
     "inputs_at_measurements",
     "lag_filter",
@@ -358,6 +359,19 @@ def base_of(name: str) -> str:
     """The logged signal an input is read from: ``base_of("T5@lag30min") == "T5"``; a plain
     signal is its own base."""
     return str(name).split("@", 1)[0]
+
+
+def input_definition(name: str) -> dict:
+    """What a derived input is, for ``model.json``: its channel, kind, duration and formula."""
+    base, kind, seconds = parse_input_name(name)
+    formula = (
+        f"first-order lag y of {base}: {seconds:g} s * dy/dt = {base} - y, exact for {base} linear "
+        f"between samples, started steady at the first reading"
+        if kind == "lag"
+        else f"rate of {base} per minute over the last {seconds:g} s: ({base}(t) - {base}(t - {seconds:g} s)) "
+        f"/ {seconds:g} s * 60, the first reading held before it"
+    )
+    return {"of": base, "kind": kind, "seconds": seconds, "formula": formula}
 
 
 def parse_input_name(name: str) -> tuple[str, str, float]:
