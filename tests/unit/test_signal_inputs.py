@@ -17,7 +17,7 @@ from thermaxis.compensation.model import model_record, validate_model
 from thermaxis.compensation.plc import structured_text
 from thermaxis.compensation.runtime import Compensator
 from thermaxis.config import FallbackSettings
-from thermaxis.method.models import PointwiseAxisModel
+from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
 
 TARGETS = np.array([0.0, 500.0, 1000.0])
 PER_C = np.array([1.0, 2.0, 3.0])
@@ -138,3 +138,35 @@ def test_a_derived_input_carries_its_definition_and_a_false_one_is_refused():
         ValueError, match=r"^model.json: inputs/2/definition: does not match .*'spindle@lag30min'"
     ):
         validate_model(model)
+
+
+def test_a_decoupled_model_reads_the_signal_in_both_its_slope_and_its_intercept():
+    # k = -300 + 13 T1 + 0.01 speed [um/m] (absolute T1), b = -0.5 - 11 dT2 + 0.002 speed
+    # [um] (T2's rise); homed at T1 = 30, T2 = 25, 1000 rpm, now T1 = 32, T2 = 26, 3000 rpm:
+    # dk = 26 + 20 = 46 um/m, db = -11 + 4 = -7 um, so K0 = +0.007 mm, tan(beta) = -46e-6.
+    rows, curves = [], []
+    for r in range(3):
+        for m in range(8):
+            t1, rise = 28.0 + r + 0.7 * m + 0.04 * m * m, 0.3 * m + 0.02 * r * m
+            speed = [1000.0, 2500.0, 4000.0][(m + 2 * r) % 3]
+            rows.append({"run": f"R{r}", "measurement": m + 1, "time_min": 15.0 * m,
+                         "T1": t1, "T2": 25.0 + r + rise, "spindle": speed})  # fmt: skip
+            k = -300.0 + 13.0 * t1 + 0.01 * speed
+            b = -0.5 - 11.0 * rise + 0.002 * speed
+            curves.append(k * TARGETS / 1000.0 + b)
+    X, Y = pd.DataFrame(rows), pd.DataFrame(curves, columns=TARGETS)
+    estimator = DecoupledAxisModel(("T1",), ("T2",), algorithm="mlr", signals=("spindle",))
+    model = model_record(estimator.fit(X, Y), "decoupled", "mlr", X, RAMP, dataset="exact")
+    kinds = [(i["sensor"], i["temperature"]) for i in model["inputs"]]
+    assert kinds == [("T1", "absolute"), ("T2", "relative"), ("spindle", "signal")]
+    # k on T1 and the speed, b on T2's rise and the speed, in physical units.
+    assert [(r["target"], r["inputs"]) for r in model["regressions"]] == [
+        ("k", [0, 2]),
+        ("b", [1, 2]),
+    ]
+    assert model["regressions"][0]["coefficients"] == pytest.approx([13.0, 0.01], abs=1e-8)
+    assert model["regressions"][1]["coefficients"] == pytest.approx([-11.0, 0.002], abs=1e-8)
+    p = Compensator(model).parameters({"T1": 32.0, "T2": 26.0, "spindle": 3000.0},
+                                      {"T1": 30.0, "T2": 25.0, "spindle": 1000.0})  # fmt: skip
+    assert p.k0_mm == pytest.approx(0.007, abs=1e-9)
+    assert p.tan_beta == pytest.approx(-46e-6, abs=1e-12)
