@@ -195,18 +195,18 @@ class Compensator:
             value = temperatures.get(sensor, math.nan)
             ref = reference.get(sensor, math.nan)
             age = (ages_s or {}).get(sensor, 0.0)
+            signal = sensor in self.signals
             if not math.isfinite(value):
                 reasons.append(f"{sensor}: missing")
             elif age > f.max_sensor_age_s:
                 reasons.append(
                     f"{sensor}: stale, last update {age:g} s ago (limit {f.max_sensor_age_s:g} s)"
                 )
-            elif sensor not in self.signals:
+            elif not signal:
                 reasons += self._temperature_faults(sensor, value, time_s, last)
-            if sensor in self.signals:
-                if not math.isfinite(ref):
-                    reasons.append(f"{sensor}: reference value missing")
-            elif not (math.isfinite(ref) and lo <= ref <= hi):
+            if signal and not math.isfinite(ref):
+                reasons.append(f"{sensor}: reference value missing")
+            elif not signal and not (math.isfinite(ref) and lo <= ref <= hi):
                 reasons.append(f"{sensor}: reference temperature missing or implausible")
         if reasons:
             return tuple(reasons)
@@ -214,9 +214,10 @@ class Compensator:
         for (sensor, kind), spec, value in zip(
             self.inputs, self.model["inputs"], row, strict=False
         ):
-            if kind == "signal":
+            if base_of(sensor) in self.signals:
                 # A speed beyond the training range is an extrapolation the held-out verdict
-                # measures; a degC margin says nothing about it.
+                # measures; a degC margin says nothing about it. (The channel decides, as
+                # SENSOR_SIGNAL[INPUT_SENSOR[j]] does in the Structured Text block.)
                 continue
             low = spec["training_min_c"] - f.range_margin_c
             high = spec["training_max_c"] + f.range_margin_c
