@@ -7,7 +7,16 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.thermaxis-env.sha256
 CORES ?= all
-SNAKEMAKE := $(BIN)/snakemake --cores $(CORES) --printshellcmds
+# Quiet by default: Snakemake's own progress (jobs done of total, the rule that finished)
+# and its warnings; `make results V=1` prints every rule, reason and shell command. The
+# full log is in .snakemake/log/ either way.
+V ?= 0
+ifeq ($(V),1)
+SNAKEMAKE_OUTPUT := --printshellcmds
+else
+SNAKEMAKE_OUTPUT := --quiet rules reason host
+endif
+SNAKEMAKE := $(BIN)/snakemake --cores $(CORES) $(SNAKEMAKE_OUTPUT)
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
@@ -81,6 +90,9 @@ results: env
 	@if [ -f ../shared/realdata/fl_thermal/data.xlsx ]; then \
 		$(BIN)/python -m thermaxis.benchmark data/benchmarks/fl_thermal.yaml --out results/_benchmarks/fl_thermal; \
 	else echo "thermaxis: benchmark fl_thermal skipped: ../shared/realdata/fl_thermal/data.xlsx is not beside the checkout"; fi
+	@echo "== the answer per dataset"
+	@$(BIN)/python -c "from thermaxis.config import load_config; print('\n'.join('results/' + d for d in load_config()['datasets']))" \
+	| xargs $(BIN)/python -m thermaxis.reports.answer
 
 # Re-import the embedded measured dataset from its public source (shared/realdata).
 import: env

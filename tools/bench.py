@@ -83,7 +83,7 @@ SCALE_SHAPES = {
 MIB = 1024.0 * 1024.0
 # Linux reports ru_maxrss in KiB, macOS in bytes.
 _MAXRSS_UNIT = 1.0 if sys.platform == "darwin" else 1024.0
-STEPS = ("startup", "dryrun", "results", "sweep", "subsets", "scale", "test")
+STEPS = ("startup", "dryrun", "results", "sweep", "subsets", "scale", "twin_calibrate", "test")
 SUBSET_SHAPE = {"sensors": 22, "positions": 1, "hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0, "seed": 0}  # fmt: skip
 SUBSET_RUNS = 5
 SUBSET_SWEEP = {"methods": ["subset"], "n_clusters": [3], "approaches": ["pointwise"], "algorithms": ["mlr"],
@@ -98,6 +98,7 @@ TARGETS = {
     "dryrun_twin": "dry run of the twin <= the one-rule dry run + 2 s CPU",
     "startup_slurm": "one-rule no-op with the Slurm plugin installed <= 1.5 x without it",
     "sweep_subsets": "exhaustive 3-of-22 subsets, 5 runs, single position <= 30 s",
+    "twin_calibrate": "make twin-calibrate (staged, through the pipeline) <= 10 min on 2 cores",
 }
 # The smallest workflow Snakemake can run: its no-op is the floor a no-op rerun is measured against.
 ONE_RULE_SNAKEFILE = (
@@ -464,6 +465,16 @@ def run_bench(
             for shape, spec in SCALE_SHAPES.items():
                 for n in runs:
                     _scale_run(scratch, logs, shape, spec, n, cores, env, timeout_s, keep, record)
+        if "twin_calibrate" in steps:
+            # Into the scratch folder: the committed parameters and data stay as they are.
+            target = scratch / "twin_calibrate"
+            command = [sys.executable, "-m", "thermaxis.twin", "calibrate",
+                       "--out", str(target / "raw"), "--truth", str(target / "truth"),
+                       "--params", str(target / "twin_params.json")]  # fmt: skip
+            target.mkdir(parents=True, exist_ok=True)
+            record(measure("twin_calibrate", command, REPO, logs / "twin_calibrate.log",
+                           "python -m thermaxis.twin calibrate, every stage, then the regeneration",
+                           env, timeout_s))  # fmt: skip
         if "test" in steps:
             workers = os.environ.get("PYTEST_WORKERS", "2")  # as the Makefile's test target
             suite = [
@@ -710,6 +721,13 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
     if "sweep_subsets" in by_name:
         m = by_name["sweep_subsets"]
         add("sweep_subsets", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s")
+    if "twin_calibrate" in by_name:
+        m = by_name["twin_calibrate"]
+        add(
+            "twin_calibrate",
+            m.ok and m.wall_s <= 600.0,
+            f"{m.wall_s:.1f} s on {os.cpu_count()} cores",
+        )
     if "startup_noop_slurm" in by_name and "startup_noop_venv" in by_name:
         add_ratio("startup_slurm", by_name["startup_noop_slurm"], by_name["startup_noop_venv"], 1.5)
     return rows

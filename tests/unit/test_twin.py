@@ -16,11 +16,11 @@ import yaml
 
 from helpers import REPO
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.paper.equations import PublishedModel
 from thermaxis.twin import ScaleSpec, generate_dataset, generate_scale
 from thermaxis.twin import model as twin_model
 from thermaxis.twin.network import CONDUCTANCE_W_PER_K, NODES, discretise, simulate
 from thermaxis.twin.observe import calibrated_sensors, lagged
-from thermaxis.twin.published import PublishedModel
 
 RAW = REPO / "data" / "raw" / "twin"
 TRUTH = REPO / "data" / "twin_truth"
@@ -107,6 +107,21 @@ def test_generate_regenerates_the_committed_files_byte_for_byte(tmp_path):
         assert not changed, f"regenerated files differ from the committed ones: {changed[:5]}"
         if REPORT in want:
             assert _within_printed_precision(want[REPORT].decode(), got[REPORT].decode())
+
+
+def test_a_reduced_twin_of_one_run_is_written_byte_for_byte_twice(tmp_path):
+    from thermaxis.twin import model as mdl
+    from thermaxis.twin.generate import simulate_records, write_runs
+
+    first, second = tmp_path / "a", tmp_path / "b"
+    for out in (first, second):
+        out.mkdir()
+        write_runs(out, simulate_records(mdl.load_params())[:1])
+    assert _files(first) == _files(second)
+    # And it is the committed E1, file for file.
+    committed = _files(RAW)
+    run_files = {name: data for name, data in _files(first).items() if name.startswith("E1/")}
+    assert run_files and all(committed[name] == data for name, data in run_files.items())
 
 
 def test_printed_precision_allows_a_last_digit_and_nothing_more():
@@ -282,11 +297,17 @@ def test_mounting_keeps_the_clamped_part_s_share_and_splits_the_rest_by_softmax(
         sensor.weights == pytest.approx({"motor": 0.75, "ambient": 0.25})
         and sensor.offset_c == -0.2
     )
-    # Sensors without a calibrated mounting keep their design.
-    assert next(s for s in calibrated_sensors(values) if s.id == "T8").weights == {
-        "bed_inner": 0.95,
-        "ambient": 0.05,
-    }
+    # Every sensor is calibrated; at the priors T8 reads its design: 95 % bed core, the
+    # rest split e^-4 : e^-4 : 1 between the bed's walls, the carriages and the air.
+    rest = 0.05 / (1.0 + 2.0 * np.exp(-4.0))
+    assert next(s for s in calibrated_sensors(values) if s.id == "T8").weights == pytest.approx(
+        {
+            "bed_inner": 0.95,
+            "bed_outer": rest * np.exp(-4.0),
+            "sliders": rest * np.exp(-4.0),
+            "ambient": rest,
+        }
+    )
     assert twin_model.GLOBAL_PARAMETERS["mount_T1_share"].lower == 0.5
 
 

@@ -376,7 +376,16 @@ def linked_tables():
         "fitting.csv",
         "kb_predictions.csv",
         "error_predictions.csv",
-        *(["paper_comparison.csv", "paper_comparison.md"] if PAPER else []),
+        *(
+            [
+                "paper_comparison.csv",
+                "paper_comparison.md",
+                "faithfulness.csv",
+                "faithfulness.md",
+            ]
+            if PAPER
+            else []
+        ),
     ]
     return [f"{OUT}/tables/{name}" for name in tables] + statistics_outputs()
 
@@ -554,6 +563,17 @@ INDEX_TABLES = [
         "",
     ),
     ("Sensitive points per fold", f"{OUT}/tables/sensitive_points.csv", ""),
+    *(
+        [
+            (
+                "Faithfulness: every calibration target, published against reproduced",
+                f"{OUT}/tables/faithfulness.csv",
+                "docs/datasets.md",
+            )
+        ]
+        if PAPER
+        else []
+    ),
 ]
 
 

@@ -46,6 +46,8 @@ rule dataset_report:
         gaps=expand(f"{OUT}/clean/{{run}}/gaps.csv", run=RUNS),
         errors=f"{OUT}/assembled/errors.parquet",
         temperatures=f"{OUT}/assembled/temperatures.parquet",
+        recommendation=f"{OUT}/tables/recommendation.csv",
+        model=f"{OUT}/compensation/model.json",
         figures=[f["path"] for f in dataset_report_figures().values()],
     output:
         notebook=f"{OUT}/reports/dataset_report.ipynb",
@@ -220,6 +222,7 @@ rule paper_report:
         coefficients=f"{OUT}/tables/coefficients.csv",
         sensitive_points=f"{OUT}/tables/sensitive_points.csv",
         comparison=f"{OUT}/tables/paper_comparison.csv",
+        faithfulness=f"{OUT}/tables/faithfulness.csv",
         claims=f"{OUT}/tables/claims.csv",
         paper=PAPER_FILES,
         figures=[f["path"] for f in paper_report_figures().values()],

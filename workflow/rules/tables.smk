@@ -101,6 +101,7 @@ rule paper_comparison:
         selection=f"{OUT}/tables/sensitive_points.csv",
         predictions=f"{OUT}/tables/error_predictions.csv",
         errors=f"{OUT}/assembled/errors.parquet",
+        temperatures=f"{OUT}/assembled/temperatures.parquet",
         paper=PAPER_FILES,
     output:
         csv=report(
@@ -110,6 +111,13 @@ rule paper_comparison:
             labels={"table": "paper comparison"},
         ),
         markdown=f"{OUT}/tables/paper_comparison.md",
+        faithfulness=report(
+            f"{OUT}/tables/faithfulness.csv",
+            caption="../report/faithfulness.rst",
+            category=CATEGORY["audit"],
+            labels={"table": "faithfulness"},
+        ),
+        faithfulness_markdown=f"{OUT}/tables/faithfulness.md",
     log:
         f"{LOGS}/paper_comparison.log",
     benchmark:

@@ -6,6 +6,7 @@ import os
 import pandas as pd
 
 from thermaxis.pipeline.runner import run_script, write_text
+from thermaxis.reports.answer import answer_of, answer_sentence
 from thermaxis.reports.crossdataset import model_ranking
 from thermaxis.reports.index import (
     FigureGroup,
@@ -84,11 +85,13 @@ def _headline(answer) -> Headline:
     claims = None
     if os.path.isfile(answer["claims"]):
         claims = claims_table(pd.read_csv(answer["claims"]), answer["claims"])
+    folds = pd.read_csv(answer["recommendation"])
     return Headline(
+        answer=answer_sentence(answer_of(folds, deployment)),
         ranking=model_ranking(pd.read_csv(answer["metrics"])),
         recommendation=recommendation,
         deployment=deployment,
-        comparison=deployment_comparison(pd.read_csv(answer["recommendation"])),
+        comparison=deployment_comparison(folds),
         claims=claims,
     )
 

@@ -1,6 +1,8 @@
 import pandas as pd
 
 from thermaxis.paper.audit import ReproducedTables, comparison_markdown, paper_comparison
+from thermaxis.paper.equations import published_targets
+from thermaxis.paper.faithfulness import faithfulness, faithfulness_markdown
 from thermaxis.paper.published import published_values
 from thermaxis.pipeline.runner import run_script, write_csv, write_text
 
@@ -31,6 +33,16 @@ def main(snakemake):
         comparison_markdown(comparison, p.dataset_name, p.simulated, p.paper_fold),
         snakemake.output.markdown,
     )
+    faithful = faithfulness(
+        comparison,
+        tables.sensitive_points,
+        pd.read_parquet(i.temperatures),
+        tables.kb,
+        published_targets(p.paper_dir),
+        p.paper_fold,
+    )
+    write_csv(faithful, snakemake.output.faithfulness)
+    write_text(faithfulness_markdown(faithful, p.statement), snakemake.output.faithfulness_markdown)
 
 
 run_script(main, snakemake)

@@ -277,11 +277,16 @@ def _report(args) -> int:
     dataset = _dataset_arg(args.dataset)
     out = _results_of(dataset)
     target = ["--report", str(out / "report.zip")] if args.zip else [str(out / "index.html")]
-    return _wrapped(
+    code = _wrapped(
         _snakemake_command(
             args.cores, [*target, *args.snakemake_args, "--config", f"dataset={dataset}"]
         )
     )
+    if code == 0 and (out / "compensation" / "model.json").is_file():
+        from thermaxis.reports.answer import main as answers
+
+        answers([str(out)])
+    return code
 
 
 def _check(args) -> int:

@@ -335,7 +335,14 @@ def _write_page(summary: pd.DataFrame, results: Path, out: Path, formats) -> Non
         if "png" in formats
         else None
     )
-    write_text(render_results_index(summary, pages, figure), results / "index.html")
+    from thermaxis.reports.answer import read_answer
+
+    answers = {
+        name: read_answer(results / name)
+        for name in summary["dataset"].unique()
+        if (results / name / "compensation" / "model.json").is_file()
+    }
+    write_text(render_results_index(summary, pages, figure, answers), results / "index.html")
 
 
 if __name__ == "__main__":

@@ -1,9 +1,10 @@
 """The index pages: a dataset's ``results/<dataset>/index.html`` and ``results/index.html`` across datasets.
 
-A dataset's page leads with the answer (the headline: the data statement, each
-approach x algorithm's held-out error best first, the deployed compensation against
-the paper's configuration with its verdict, the paper's claims with their verdicts
-where that table exists), then shows every figure as a thumbnail by stage, the main
+A dataset's page leads with the answer (the data statement, then
+:func:`thermaxis.reports.answer.answer_sentence`: the model to deploy or none, its
+held-out error against the paper's configuration and uncompensated, the verdict and the
+run that decides it), then the reproduction (the paper's approach x algorithm grid,
+lowest error first, and the paper's claims with their verdicts), then shows every figure as a thumbnail by stage, the main
 tables in the page (sortable by a click, readable without JavaScript), the reports and
 the provenance. Everything is computed from the workflow's tables, never recomputed.
 """
@@ -40,6 +41,7 @@ __all__ = [
     "deployment_comparison",
     "render_index",
     "render_results_index",
+    "answers_table",
 ]
 
 
@@ -99,6 +101,7 @@ class Headline:
     deployment: dict  # model.json's deployment record
     comparison: pd.DataFrame | None = None  # deployment_comparison(recommendation.csv)
     claims: pd.DataFrame | None = None  # tables/claims.csv, when the workflow made it
+    answer: str = ""  # thermaxis.reports.answer.answer_sentence: what to deploy, and whether
 
 
 PAPER_HEADLINE = (
@@ -131,17 +134,18 @@ def claims_table(frame: pd.DataFrame, where: str) -> pd.DataFrame:
     return frame[list(CLAIMS_COLUMNS)]
 
 
-def _ranking_sentence(ranking: pd.DataFrame) -> str:
-    best = ranking.iloc[0]
+def _grid_sentence(ranking: pd.DataFrame) -> str:
+    """The reproduction's grid in one sentence: the lowest and highest mean error, not a choice."""
+    low = ranking.iloc[0]
     text = (
-        f"Predicting a held-out condition, the best is the {model_name(best['approach'], best['algorithm'])}"
-        f": mean RMSE {best['mean_rmse_um']:.2f} µm over {int(best['n_folds'])} "
-        f"held-out runs, largest |residual| {best['worst_max_abs_um']:.2f} µm at worst."
+        f"Of the paper's approach × algorithm grid, the {model_name(low['approach'], low['algorithm'])} "
+        f"has the lowest mean RMSE, {low['mean_rmse_um']:.2f} µm over {int(low['n_folds'])} held-out runs "
+        f"(largest |residual| {low['worst_max_abs_um']:.2f} µm at worst)."
     )
     if len(ranking) > 1:
-        worst = ranking.iloc[-1]
-        text += f" The weakest, the {model_name(worst['approach'], worst['algorithm'])}, leaves {worst['mean_rmse_um']:.2f} µm."
-    return text
+        high = ranking.iloc[-1]
+        text += f" The {model_name(high['approach'], high['algorithm'])} leaves {high['mean_rmse_um']:.2f} µm."
+    return text + " The answer above is chosen among more candidates, without each held-out run."
 
 
 # --------------------------------------------------------------------------- HTML pieces
@@ -205,20 +209,10 @@ def _verdict_html(deployment: dict) -> str:
 
 
 def _headline_html(headline: Headline) -> str:
+    lead = headline.answer or headline.recommendation
     parts = [
         '<section class="tx-answer" id="answer"><h2>The answer</h2>',
-        f'<p class="tx-lead">{html.escape(_ranking_sentence(headline.ranking))}</p>',
-        '<div id="headline-models">',
-        table_html(
-            headline.ranking,
-            "%.2f",
-            caption="Held-out error of each approach × algorithm, best first (µm; leave-one-condition-out, "
-            "error curves)",
-            sortable=True,
-        ),
-        "</div>",
-        "<h3>Compensation</h3>",
-        f"<p>{_inline_markdown(headline.recommendation)}</p>",
+        f'<p class="tx-lead">{_inline_markdown(lead)}</p>',
         _verdict_html(headline.deployment),
     ]
     if headline.comparison is not None:
@@ -230,6 +224,21 @@ def _headline_html(headline: Headline) -> str:
                 sortable=True,
             )
         )
+    parts += [
+        "</section>",
+        '<section id="grid"><h2>The reproduction: the paper\'s approach × algorithm grid</h2>',
+        f"<p>{html.escape(_grid_sentence(headline.ranking))}</p>",
+        f"<p>{_inline_markdown(headline.recommendation)}</p>" if headline.answer else "",
+        '<div id="headline-models">',
+        table_html(
+            headline.ranking,
+            "%.2f",
+            caption="Held-out error of each approach × algorithm, lowest first (µm; leave-one-condition-out, "
+            "error curves)",
+            sortable=True,
+        ),
+        "</div>",
+    ]
     if headline.claims is not None:
         parts += [
             "<h3>The paper's claims</h3>",
@@ -335,11 +344,33 @@ def render_index(
     return "\n".join(parts) + "\n"
 
 
-def render_results_index(summary: pd.DataFrame, pages: dict[str, str], figure: str | None) -> str:
-    """``results/index.html``: each dataset's held-out errors (the cross-dataset summary) and its page.
+def answers_table(summary: pd.DataFrame, answers: dict[str, dict]) -> pd.DataFrame:
+    """One row per dataset: its data, the model to deploy, its error against the paper's, the verdict."""
+    data = summary.groupby("dataset", sort=True)["data"].first()
+    rows = [
+        {
+            "dataset": name,
+            "data": data.get(name, ""),
+            "recommended model": a["candidate"]
+            if a["recommended"]
+            else f"none (closest: {a['candidate']})",
+            "held-out RMSE, µm": a["rmse_um"],
+            "paper's configuration, µm": a["paper_rmse_um"],
+            "verdict": "recommended for deployment" if a["recommended"] else "do not compensate",
+        }
+        for name, a in sorted(answers.items())
+    ]
+    return pd.DataFrame(rows)
+
+
+def render_results_index(
+    summary: pd.DataFrame, pages: dict[str, str], figure: str | None, answers: dict | None = None
+) -> str:
+    """``results/index.html``: each dataset's answer, its held-out errors and its page.
 
     ``pages`` maps a dataset name to its page, relative to ``results/``; ``figure`` is the
-    summary figure's PNG, relative too.
+    summary figure's PNG, relative too; ``answers`` each dataset's
+    :func:`thermaxis.reports.answer.read_answer`.
     """
     parts = _head("thermaxis: all datasets")
     simulated = sorted(summary.loc[summary["data"] == "simulated", "dataset"].unique())
@@ -354,7 +385,15 @@ def render_results_index(summary: pd.DataFrame, pages: dict[str, str], figure: s
             else ""
         ),
         "</header>",
-        '<section id="answer" class="tx-answer"><h2>Best model per dataset</h2><ul>',
+    ]
+    if answers:
+        parts += [
+            '<section id="answers" class="tx-answer"><h2>The answer per dataset</h2>',
+            table_html(answers_table(summary, answers), "%.2f"),
+            "</section>",
+        ]
+    parts += [
+        '<section id="answer"><h2>Lowest error of the paper\'s grid per dataset</h2><ul>',
     ]
     for name, rows in summary.groupby("dataset", sort=True):
         best = rows.sort_values(["mean_rmse_um", "mean_max_abs_um"], kind="stable").iloc[0]
@@ -365,8 +404,8 @@ def render_results_index(summary: pd.DataFrame, pages: dict[str, str], figure: s
             else html.escape(name)
         )
         parts.append(
-            f"<li>{title} ({html.escape(str(best['data']).upper())}): the "
-            f"{html.escape(model_name(best['approach'], best['algorithm']))} leaves a mean RMSE of {best['mean_rmse_um']:.2f} µm "
+            f"<li>{title} ({html.escape(str(best['data']).upper())}): the paper's grid's lowest, the "
+            f"{html.escape(model_name(best['approach'], best['algorithm']))}, leaves a mean RMSE of {best['mean_rmse_um']:.2f} µm "
             f"over {int(best['n_folds'])} held-out runs.</li>"
         )
     parts.append("</ul></section>")

@@ -2,15 +2,16 @@
 
 ``python -m thermaxis.twin generate`` writes ``data/raw/twin`` (and the ground truth)
 from the committed ``twin_params.json``; ``calibrate`` refits those parameters to the
-paper's Table 5, Eq. 8 and Eq. 9; ``scale`` writes large benchmark datasets.  Modules:
+paper's published fits (Table 5, Eq. 8, Eq. 9) and results (Tables 3, 4, 6, 7, 8);
+``scale`` writes large benchmark datasets.  Modules:
 
 * :mod:`~thermaxis.twin.network` -- the lumped thermal network and its exact integration;
 * :mod:`~thermaxis.twin.conditions` -- the four experiments, timelines, workshop air;
 * :mod:`~thermaxis.twin.model` -- free parameters, heat inputs, the error model;
 * :mod:`~thermaxis.twin.observe` -- sensors and interferometer;
 * :mod:`~thermaxis.twin.faults` -- the real-log faults seeded into the raw files;
-* :mod:`~thermaxis.twin.published` -- the paper's fitted models as calibration targets;
-* :mod:`~thermaxis.twin.fit` -- calibration against Table 5, Eq. 8 and Eq. 9;
+* :mod:`~thermaxis.twin.results` -- the paper's results as calibration margins;
+* :mod:`~thermaxis.twin.fit` -- the staged calibration (published fits, then results);
 * :mod:`~thermaxis.twin.generate`, :mod:`~thermaxis.twin.report` -- files and documents;
 * :mod:`~thermaxis.twin.scale` -- benchmark datasets.
 """

@@ -52,15 +52,23 @@ def main(argv: list[str] | None = None) -> int:
 
         result = calibrate()
         summary = {
-            "method": "scipy.optimize.least_squares on the noise-free model, start at the priors",
+            "method": "scipy.optimize.least_squares on the noise-free model, start at the priors, "
+            "staged (thermaxis.twin.fit.STAGES)",
             **{f"rms_{name}": round(value, 4) for name, value in result.rms.items()},
+            **{name: round(value, 4) for name, value in result.summary.items()},
             "evaluations": result.evaluations,
+            "stages": [
+                {key: value for key, value in stage.items() if key != "seconds"}
+                for stage in result.stages
+            ],
         }
         mdl.save_params(result.params, args.params, summary)
-        generate_dataset(args.out, args.truth, mdl.load_params(args.params))
+        generate_dataset(args.out, args.truth, args.params)
         figures = ", ".join(f"{name} {value:.3f}" for name, value in result.rms.items())
+        seconds = ", ".join(f"{s['name']} {s['seconds']:.0f} s" for s in result.stages)
         print(
-            f"calibrated (noise-free RMS): {figures}; wrote {args.params} and regenerated {args.out}"
+            f"calibrated (noise-free RMS): {figures}; stages: {seconds}; "
+            f"wrote {args.params} and regenerated {args.out}"
         )
     else:
         from .scale import ScaleSpec, generate_scale

@@ -30,7 +30,7 @@ from .observe import (
     sensor_signal,
 )
 
-__all__ = ["SEED", "RunRecord", "simulate_records", "generate_dataset"]
+__all__ = ["SEED", "RunRecord", "simulate_records", "write_runs", "generate_dataset"]
 
 SEED = 20220416  # the paper's received date
 
@@ -296,19 +296,26 @@ the start of M1.
 """
 
 
-def generate_dataset(
-    out_dir: Path | str, truth_dir: Path | str, params: mdl.TwinParams | None = None
-) -> list[RunRecord]:
-    """Write the raw dataset and the ground truth; returns the simulated records."""
-    from .report import write_calibration_report, write_dataset_docs
+def write_runs(out_dir: Path, records: list[RunRecord]) -> None:
+    """The raw files of every run and the dataset's description (no ground truth)."""
+    from .report import write_dataset_docs
 
-    params = params or mdl.load_params()
-    out_dir, truth_dir = Path(out_dir), Path(truth_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    records = simulate_records(params)
     for record in records:
         _write_run(out_dir, record)
     write_dataset_docs(out_dir)
+
+
+def generate_dataset(
+    out_dir: Path | str, truth_dir: Path | str, params_path: Path | str = mdl.PARAMS_PATH
+) -> list[RunRecord]:
+    """Write the raw dataset and the ground truth from a parameter file; returns the records."""
+    from .report import write_calibration_report
+
+    params = mdl.load_params(params_path)
+    out_dir, truth_dir = Path(out_dir), Path(truth_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    records = simulate_records(params)
+    write_runs(out_dir, records)
     _write_truth(truth_dir, records, params)
-    write_calibration_report(out_dir, params)
+    write_calibration_report(out_dir, params, mdl.load_fit(params_path))
     return records

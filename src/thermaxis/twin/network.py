@@ -5,9 +5,10 @@ a state).  With piecewise-constant inputs on a fixed step the linear system
 ``C dT/dt = -L T + g_a T_a + q`` integrates exactly through one matrix exponential
 (zero-order hold), which makes a three-hour run a few thousand matrix-vector products.
 
-Capacities and conductances are FIXED, documented estimates (order of magnitude from the
-parts' masses and convective areas); what the calibration adjusts are the heat inputs,
-the expansion/drift gains and the initial temperatures (see :mod:`thermaxis.twin.params`).
+Capacities and conductances are documented estimates (order of magnitude from the
+parts' masses and convective areas); the calibration multiplies
+some of them by bounded factors (:mod:`thermaxis.twin.model`), beside the heat inputs, the
+expansion/drift gains, the sensor mountings and the initial temperatures.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ __all__ = [
     "CONDUCTANCE_W_PER_K",
     "Discretised",
     "capacities",
+    "conductances",
     "discretise",
     "simulate",
 ]
@@ -125,15 +127,33 @@ def capacities(scale: dict[str, float] | None = None) -> dict[str, float]:
     return {name: CAPACITY_J_PER_K[name] * scale.get(name, 1.0) for name in NODES}
 
 
-def discretise(step_s: float, capacity_scale: dict[str, float] | None = None) -> Discretised:
+def conductances(
+    scale: dict[tuple[str, str], float] | None = None,
+) -> dict[tuple[str, str], float]:
+    """Conductances with calibrated multiplicative factors applied."""
+    scale = scale or {}
+    unknown = set(scale) - set(CONDUCTANCE_W_PER_K)
+    if unknown:
+        raise ValueError(
+            f"conductance scale for unknown link(s) {sorted(unknown)}; expected links of CONDUCTANCE_W_PER_K"
+        )
+    return {link: g * scale.get(link, 1.0) for link, g in CONDUCTANCE_W_PER_K.items()}
+
+
+def discretise(
+    step_s: float,
+    capacity_scale: dict[str, float] | None = None,
+    conductance_scale: dict[tuple[str, str], float] | None = None,
+) -> Discretised:
     """Exact discretisation of the network for a fixed step (seconds).
 
-    ``capacity_scale`` multiplies the documented capacities of some nodes (the
-    calibrated effective capacities, see :mod:`thermaxis.twin.model`).
+    ``capacity_scale`` and ``conductance_scale`` multiply the documented capacities of
+    some nodes and conductances of some links (the calibrated ones, see
+    :mod:`thermaxis.twin.model`).
     """
     if not step_s > 0:
         raise ValueError(f"step_s must be positive, got {step_s}")
-    A, B = _continuous(capacities(capacity_scale), CONDUCTANCE_W_PER_K)
+    A, B = _continuous(capacities(capacity_scale), conductances(conductance_scale))
     n, m = B.shape
     block = np.zeros((n + m, n + m))
     block[:n, :n] = A * step_s

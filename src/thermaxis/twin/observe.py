@@ -16,7 +16,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from . import conditions as cond
-from .model import MOUNTING_DESIGN, MOUNTING_SURFACES, RunState, mounting, positioning_error
+from .model import MOUNTING_DESIGN, RunState, mounting, positioning_error
 from .network import NODES
 
 __all__ = [
@@ -51,60 +51,31 @@ def _designed(sensor_id: str, location: str, source: str, lag_s: float, noise_c:
 
 
 SENSORS: tuple[Sensor, ...] = (
-    # Mountings of T1, T2, T6, T7, T11 and T12 are calibrated (model.MOUNTING_SURFACES):
-    # these entries hold their design estimate, calibrated_sensors() the fitted one.
+    # Every mounting is calibrated (model.MOUNTING_SURFACES): these entries hold the design
+    # estimate, calibrated_sensors() the fitted one.  Lags: the sleeve's covers are thin
+    # sheet on an air gap; the HMI reads the motor's own winding sensor, fast but coarse.
     _designed("T1", "screw sleeve, left", "box", 90.0, 0.008),
     _designed("T2", "screw sleeve, right", "box", 90.0, 0.008),
-    Sensor(
-        "T3",
-        "screw sleeve, front",
-        "box",
-        {"sleeve": 0.85, "nut": 0.05, "ambient": 0.10},
-        90.0,
-        0.09,
-        0.008,
-    ),
-    Sensor(
-        "T4",
-        "left slider",
-        "box",
-        {"sliders": 0.85, "nut": 0.10, "ambient": 0.05},
-        60.0,
-        -0.07,
-        0.008,
-    ),
-    Sensor(
-        "T5",
-        "right slider",
-        "box",
-        {"sliders": 0.85, "bed_inner": 0.10, "ambient": 0.05},
-        60.0,
-        0.03,
-        0.008,
-    ),
+    _designed("T3", "screw sleeve, front", "box", 90.0, 0.008),
+    _designed("T4", "left slider", "box", 60.0, 0.008),
+    _designed("T5", "right slider", "box", 60.0, 0.008),
     _designed("T6", "bearing seat near motor", "box", 60.0, 0.008),
-    # The shell sees the winding through the stator and loses heat to the air.
     _designed("T7", "motor shell, top", "box", 60.0, 0.008),
-    Sensor("T8", "bed, inner side", "box", {"bed_inner": 0.95, "ambient": 0.05}, 60.0, 0.02, 0.008),
-    Sensor(
-        "T9", "bed, outer side", "box", {"bed_outer": 0.85, "ambient": 0.15}, 60.0, -0.06, 0.008
-    ),
-    Sensor("T10", "ambient", "box", {"ambient": 1.0}, 120.0, 0.08, 0.010),
+    _designed("T8", "bed, inner side", "box", 60.0, 0.008),
+    _designed("T9", "bed, outer side", "box", 60.0, 0.008),
+    _designed("T10", "ambient", "box", 120.0, 0.010),
     _designed("T11", "nut", "wireless", 45.0, 0.030),
-    # The HMI reads the motor's own winding sensor: fast, but a coarser thermistor.
     _designed("T12", "motor (internal)", "hmi", 20.0, 0.040),
 )
 
 
 def calibrated_sensors(values: dict[str, float]) -> tuple[Sensor, ...]:
     """The sensors with the fitted mountings and offsets of ``values`` in place of the design."""
-    out = []
-    for sensor in SENSORS:
-        if sensor.id in MOUNTING_SURFACES:
-            weights, offset = mounting(values, sensor.id)
-            sensor = replace(sensor, weights=weights, offset_c=offset)
-        out.append(sensor)
-    return tuple(out)
+    return tuple(
+        replace(sensor, weights=weights, offset_c=offset)
+        for sensor in SENSORS
+        for weights, offset in [mounting(values, sensor.id)]
+    )
 
 
 #: The HMI's clock runs this many seconds behind the box (reference) clock.

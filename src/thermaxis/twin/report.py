@@ -24,6 +24,7 @@ from thermaxis.config import Settings, load_config
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.method.decouple import decouple_table
 from thermaxis.method.folds import evaluate_configuration, select_for_fold
+from thermaxis.paper.equations import PublishedTargets, published_targets
 from thermaxis.paper.published import load_table
 from thermaxis.templates import fill
 
@@ -45,7 +46,6 @@ from .observe import (
     WIRELESS_JITTER_S,
     WIRELESS_PERIOD_S,
 )
-from .published import PublishedTargets, published_targets
 
 __all__ = [
     "PipelineView",
@@ -380,6 +380,8 @@ def _parameter_tables(params: mdl.TwinParams) -> str:
         f"| {sensor} | {next(s.location for s in SENSORS if s.id == sensor)} | "
         + ", ".join(f"{name} {w:.2f}" for name, w in mdl.mounting(params.values, sensor)[0].items())
         + f" | {mdl.mounting(params.values, sensor)[1]:+.2f} | "
+        + ", ".join(mdl.MOUNTING_SURFACES[sensor])
+        + " | "
         + ", ".join(f"{name} {w:.2f}" for name, w in mdl.MOUNTING_DESIGN[sensor][0].items())
         + f" | {mdl.MOUNTING_DESIGN[sensor][1]:+.2f} |"
         for sensor in mdl.MOUNTING_SURFACES
@@ -396,15 +398,17 @@ def _parameter_tables(params: mdl.TwinParams) -> str:
 |---|---|---|---|
 {rows}
 
-Sensor mountings (weights of the surfaces each sensor reads, summing to 1, and the
-calibration offset, bounded by PT100 class B at 30 degC, +-{mdl.OFFSET_LIMIT_C} degC), fitted
-beside the design estimate they started from (the priors' centres):
+Sensor mountings: the weights of the surfaces each sensor reads (summing to 1; BOUND:
+only the part it is clamped to, at least half, and the parts touching it, listed
+first-clamped first) and the calibration offset (BOUND: PT100 class B at 30 degC,
++-{mdl.OFFSET_LIMIT_C} degC), fitted beside the design estimate they started from (the priors' centres):
 
-| sensor | location | fitted weights | fitted offset degC | design weights | design offset degC |
-|---|---|---|---|---|---|
+| sensor | location | fitted weights | fitted offset degC | may read (bound) | design weights | design offset degC |
+|---|---|---|---|---|---|---|
 {mountings}
 
-Initial temperatures, K above the workshop air at the start of the log ({groups}):
+Initial temperatures, K above the workshop air at the start of the log ({groups};
+BOUND: +-{mdl.INITIAL_OFFSET_LIMIT_K:g} K, the swing of the air between the test days):
 
 {header}
 |---|{"---|" * len(mdl.INITIAL_PARAMETERS)}
@@ -574,7 +578,42 @@ def _start_gap(targets: PublishedTargets) -> str:
     )
 
 
-def write_calibration_report(root: Path | str, params: mdl.TwinParams) -> pd.DataFrame:
+def _fit_values(fit: dict) -> dict:
+    """The calibration's stages and its noise-free margins, from the parameter file's ``fit``."""
+    from .fit import PARTITION_DELTA, POINT_DELTA, STAGES, TABLE3_DELTA
+
+    recorded = {stage["name"]: stage for stage in fit.get("stages", [])}
+    rows = ["| stage | targets | iterations (Jacobians) | model evaluations |", "|---|---|---|---|"]
+    for stage in STAGES:
+        terms = (["Table 5, Eq. 8, Eq. 9"] if stage.published else []) + list(stage.results)
+        done = recorded.get(stage.name, {})
+        rows.append(
+            f"| {stage.name} | {', '.join(terms)} | {done.get('iterations', '-')} of "
+            f"{stage.max_evaluations} | {done.get('evaluations', '-')} |"
+        )
+    margins = ", ".join(
+        f"{name} {fit[name]:g}"
+        for name in (
+            "k_partition_margin",
+            "b_partition_margin",
+            "k_points",
+            "b_points",
+            "table3_hits",
+            "decoupled_mlr_max_abs",
+            "pointwise_mlr_max_abs",
+        )
+        if name in fit
+    )
+    return dict(
+        stage_rows="\n".join(rows),
+        partition_delta=f"{PARTITION_DELTA:g}",
+        point_delta=f"{POINT_DELTA:g}",
+        table3_delta=f"{TABLE3_DELTA:g}",
+        margin_summary=margins or "not recorded",
+    )
+
+
+def write_calibration_report(root: Path | str, params: mdl.TwinParams, fit: dict) -> pd.DataFrame:
     """CALIBRATION.md and calibration.png from the raw files under ``root``."""
     root = Path(root)
     view = pipeline_view(root)
@@ -590,6 +629,7 @@ def write_calibration_report(root: Path | str, params: mdl.TwinParams) -> pd.Dat
         **_target_values(view, targets, residuals),
         **_heldout_values(view, metrics, selected),
         **_measurement_values(table),
+        **_fit_values(fit),
         n_initial_parameters=len(mdl.INITIAL_PARAMETERS),
         parameter_tables=_parameter_tables(params),
     )

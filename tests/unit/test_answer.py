@@ -1,0 +1,56 @@
+"""The one answer per dataset (thermaxis.reports.answer), from hand-made tables."""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from thermaxis.reports.answer import answer_of, answer_sentence
+
+
+def _folds():
+    return pd.DataFrame(
+        {
+            "fold": ["R1", "R2"],
+            "chosen": ["a", "a"],
+            "rmse_um": [1.0, 2.0],
+            "paper_rmse_um": [3.0, 5.0],
+        }  # fmt: skip
+    )
+
+
+def _deployment(ok: bool, change_r2: float):
+    return {
+        "candidate": "pointwise-mlr-all",
+        "recommended_for_deployment": ok,
+        "runs": [
+            {
+                "run": "R1",
+                "largest_abs_before_um": 6.0,
+                "largest_abs_after_um": 2.0,
+                "largest_abs_change_um": -4.0,
+            },  # fmt: skip
+            {
+                "run": "R2",
+                "largest_abs_before_um": 5.0,
+                "largest_abs_after_um": 5.0 + change_r2,
+                "largest_abs_change_um": change_r2,
+            },  # fmt: skip
+        ],
+    }
+
+
+def test_a_safe_candidate_is_deployed_and_the_run_helped_least_decides():
+    answer = answer_of(_folds(), _deployment(True, -1.0))
+    # Means by hand: (1 + 2) / 2 = 1.5 and (3 + 5) / 2 = 4; worst run before 6, after max(2, 4) = 4.
+    assert (answer["rmse_um"], answer["paper_rmse_um"]) == (1.5, 4.0)
+    assert (answer["uncompensated_um"], answer["compensated_um"]) == (6.0, 4.0)
+    text = answer_sentence(answer)
+    assert text.startswith("Deploy pointwise-mlr-all: held-out RMSE 1.50 µm against 4.00 µm")
+    assert "Recommended for deployment. Held-out run R2 decides it: 5.00 -> 4.00 µm" in text
+
+
+def test_no_safe_candidate_says_so_and_names_the_run_it_fails_on():
+    text = answer_sentence(answer_of(_folds(), _deployment(False, 1.5)))
+    assert text.startswith("Do not compensate with any candidate. Closest: pointwise-mlr-all")
+    assert "held-out run R2 worse (5.00 -> 6.50 µm)" in text and "more runs like R2" in text
+    assert "best" not in text
