@@ -22,20 +22,22 @@ def _deployment(ok: bool, change_r2: float):
     return {
         "candidate": "pointwise-mlr-all",
         "recommended_for_deployment": ok,
-        "runs": [
-            {
-                "run": "R1",
-                "largest_abs_before_um": 6.0,
-                "largest_abs_after_um": 2.0,
-                "largest_abs_change_um": -4.0,
-            },  # fmt: skip
-            {
-                "run": "R2",
-                "largest_abs_before_um": 5.0,
-                "largest_abs_after_um": 5.0 + change_r2,
-                "largest_abs_change_um": change_r2,
-            },  # fmt: skip
-        ],
+        "verdict": {
+            "runs": [
+                {
+                    "run": "R1",
+                    "largest_abs_before_um": 6.0,
+                    "largest_abs_after_um": 2.0,
+                    "largest_abs_change_um": -4.0,
+                },  # fmt: skip
+                {
+                    "run": "R2",
+                    "largest_abs_before_um": 5.0,
+                    "largest_abs_after_um": 5.0 + change_r2,
+                    "largest_abs_change_um": change_r2,
+                },
+            ]
+        },
     }
 
 

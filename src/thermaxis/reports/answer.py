@@ -20,7 +20,7 @@ __all__ = ["answer_of", "answer_sentence", "read_answer", "main"]
 
 def answer_of(folds: pd.DataFrame, deployment: dict) -> dict:
     """The numbers of the answer from recommendation.csv's folds and model.json's deployment."""
-    runs = pd.DataFrame(deployment.get("runs", []))
+    runs = pd.DataFrame(deployment.get("verdict", {}).get("runs", []))
     ok = bool(deployment.get("recommended_for_deployment"))
     deciding = None
     if len(runs):
