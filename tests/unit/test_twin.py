@@ -391,3 +391,21 @@ def test_no_modelling_code_reads_the_ground_truth():
             if "twin_truth" in path.read_text(encoding="utf-8", errors="ignore"):
                 offenders.append(str(path.relative_to(REPO)))
     assert not offenders, f"modelling code mentions the twin's ground truth: {offenders}"
+
+
+def test_the_faithfulness_block_of_docs_datasets_states_table5_as_recomputed_here(raw_lines):
+    # The block is copied from the workflow's faithfulness.csv; its Table 5 rows must be
+    # the RMS differences of the committed raw files, recomputed here with numpy.
+    text = (REPO / "docs" / "datasets.md").read_text(encoding="utf-8")
+    block = text.split("do not edit -->", 1)[1].split("<!-- end of faithfulness -->", 1)[0]
+    rows = {
+        cells[0]: cells
+        for line in block.splitlines()
+        if line.startswith("| Table 5")
+        for cells in [[c.strip() for c in line.strip("|").split("|")]]
+    }
+    for quantity in ("k", "b"):
+        (cells,) = [c for name, c in rows.items() if name.startswith(f"Table 5: {quantity}")]
+        rms = np.sqrt(np.mean((raw_lines[quantity] - raw_lines[f"{quantity}_paper"]) ** 2))
+        assert float(cells[2]) == pytest.approx(rms, abs=1.5e-3)
+        assert cells[4] == ("yes" if rms <= {"k": 0.5, "b": 0.3}[quantity] else "no")

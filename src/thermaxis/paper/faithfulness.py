@@ -49,7 +49,7 @@ def _partition(rows: pd.DataFrame, listed: set[str] | None = None) -> tuple[froz
         [s for s in group["sensor"] if listed is None or s in listed]
         for _, group in rows.groupby("cluster", sort=True)
     ]
-    text = " | ".join(", ".join(c) for c in classes if c)
+    text = " ".join("{" + ", ".join(c) + "}" for c in classes if c)
     return frozenset(frozenset(c) for c in classes if c), text
 
 
@@ -97,7 +97,7 @@ def _value(comparison: pd.DataFrame, item: str, column: str = "reproduced") -> f
 
 def _heldout_rows(comparison: pd.DataFrame, fold: str) -> list[dict]:
     out = []
-    for quantity, label in (("max_abs", "largest |residual|"), ("rmse", "RMSE")):
+    for quantity, label in (("max_abs", "largest absolute residual"), ("rmse", "RMSE")):
         for table, model in _HELDOUT:
             item = f"{table}/error/{quantity}"
             published = _value(comparison, item, "published")
@@ -116,7 +116,7 @@ def _heldout_rows(comparison: pd.DataFrame, fold: str) -> list[dict]:
     pointwise = _value(comparison, "table4/error/max_abs")
     out.append(
         dict(
-            target="Claim: decoupled MLR below point-by-point MLR (largest |residual|), um",
+            target="Claim: decoupled MLR below point-by-point MLR (largest absolute residual), um",
             published=f"{_value(comparison, 'table7/error/max_abs', 'published'):.1f} < "
             f"{_value(comparison, 'table4/error/max_abs', 'published'):.1f}",
             reproduced=f"{decoupled:.2f} vs {pointwise:.2f}",

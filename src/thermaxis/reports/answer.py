@@ -24,9 +24,13 @@ def answer_of(folds: pd.DataFrame, deployment: dict) -> dict:
     ok = bool(deployment.get("recommended_for_deployment"))
     deciding = None
     if len(runs):
-        change = runs["largest_abs_change_um"]
-        # The run that decides: the one made worst (refused), or the one helped least.
-        deciding = runs.loc[change.idxmax()]
+        # The run that decides: the largest change of either quantity of the verdict
+        # (made worst when refused, helped least when deployed).
+        quantities = [q for q in ("largest_abs", "E") if f"{q}_change_um" in runs]
+        changes = runs[[f"{q}_change_um" for q in quantities]].to_numpy()
+        row, column = divmod(int(changes.argmax()), len(quantities))
+        quantity = quantities[column]
+        deciding = runs.iloc[row]
     return dict(
         candidate=str(deployment.get("candidate", "")),
         recommended=ok,
@@ -36,8 +40,11 @@ def answer_of(folds: pd.DataFrame, deployment: dict) -> dict:
         uncompensated_um=float(runs["largest_abs_before_um"].max()) if len(runs) else float("nan"),
         compensated_um=float(runs["largest_abs_after_um"].max()) if len(runs) else float("nan"),
         deciding_run=None if deciding is None else str(deciding["run"]),
-        deciding_before_um=None if deciding is None else float(deciding["largest_abs_before_um"]),
-        deciding_after_um=None if deciding is None else float(deciding["largest_abs_after_um"]),
+        deciding_quantity=None
+        if deciding is None
+        else {"largest_abs": "largest |deviation|", "E": "E of ISO 230-2"}[quantity],
+        deciding_before_um=None if deciding is None else float(deciding[f"{quantity}_before_um"]),
+        deciding_after_um=None if deciding is None else float(deciding[f"{quantity}_after_um"]),
     )
 
 
@@ -52,14 +59,16 @@ def answer_sentence(answer: dict) -> str:
     run = answer["deciding_run"]
     if answer["recommended"]:
         decides = (
-            f" Held-out run {run} decides it: {answer['deciding_before_um']:.2f} -> "
+            f" Held-out run {run} decides it: {answer['deciding_quantity']} "
+            f"{answer['deciding_before_um']:.2f} -> "
             f"{answer['deciding_after_um']:.2f} µm, the smallest gain."
             if run
             else ""
         )
         return f"Deploy {answer['candidate']}: {error}. Recommended for deployment.{decides}"
     fails = (
-        f" it makes held-out run {run} worse ({answer['deciding_before_um']:.2f} -> "
+        f" it makes held-out run {run} worse ({answer['deciding_quantity']} "
+        f"{answer['deciding_before_um']:.2f} -> "
         f"{answer['deciding_after_um']:.2f} µm); it needs more runs like {run}'s condition"
         if run
         else " no held-out run shows it helps; it needs more runs"
