@@ -48,11 +48,17 @@ def test_a_safe_candidate_is_deployed_and_the_run_helped_least_decides():
     assert (answer["uncompensated_um"], answer["compensated_um"]) == (6.0, 4.0)
     text = answer_sentence(answer)
     assert text.startswith("Deploy pointwise-mlr-all: held-out RMSE 1.50 µm against 4.00 µm")
-    assert "Recommended for deployment. Held-out run R2 decides it: largest |deviation| 5.00 -> 4.00 µm" in text
+    assert (
+        "Recommended for deployment. Held-out run R2 decides it: largest |deviation| 5.00 -> 4.00 µm"
+        in text
+    )
 
 
 def test_no_safe_candidate_says_so_and_names_the_run_it_fails_on():
     text = answer_sentence(answer_of(_folds(), _deployment(False, 1.5)))
     assert text.startswith("Do not compensate with any candidate. Closest: pointwise-mlr-all")
-    assert "held-out run R2 worse (largest |deviation| 5.00 -> 6.50 µm)" in text and "more runs like R2" in text
+    assert (
+        "held-out run R2 worse (largest |deviation| 5.00 -> 6.50 µm)" in text
+        and "more runs like R2" in text
+    )
     assert "best" not in text

@@ -22,13 +22,25 @@ def _selection(k_classes, b_classes, k_points, b_points):
 
 def _comparison(values: dict[str, float], table3_hits: int) -> pd.DataFrame:
     rows = [
-        {"item": item, "table": item.split("/")[0], "quantity": item.split("/")[-1],
-         "published": published, "reproduced": reproduced, "difference": reproduced - published}  # fmt: skip
+        {
+            "item": item,
+            "table": item.split("/")[0],
+            "quantity": item.split("/")[-1],
+            "published": published,
+            "reproduced": reproduced,
+            "difference": reproduced - published,
+        }  # fmt: skip
         for item, (published, reproduced) in values.items()
     ]
     rows += [
-        {"item": f"table3/{i}", "table": "table3", "quantity": "sensitive_point",
-         "published": 1.0, "reproduced": float(i < table3_hits), "difference": 0.0}  # fmt: skip
+        {
+            "item": f"table3/{i}",
+            "table": "table3",
+            "quantity": "sensitive_point",
+            "published": 1.0,
+            "reproduced": float(i < table3_hits),
+            "difference": 0.0,
+        }  # fmt: skip
         for i in range(42)
     ]
     return pd.DataFrame(rows)
