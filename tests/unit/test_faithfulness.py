@@ -100,3 +100,15 @@ def test_the_docs_block_is_replaced_whole():
     docs = "head\n" + docs_block(table.assign(reproduced=["9"])) + "\ntail\n"
     assert update_docs(docs, table) == "head\n" + docs_block(table) + "\ntail\n"
     assert "| a | 1 | 2 | +-1 | yes |" in update_docs(docs, table)
+
+
+def test_a_dataset_without_the_papers_sensors_gets_eq9_as_not_holding():
+    selection = _selection([("A", "B")], [("A", "B")], ("A",), ("B",))
+    temperatures = pd.DataFrame(
+        [("R1", 1, "A", 20.0), ("R1", 1, "B", 21.0)],
+        columns=["run", "measurement", "sensor", "absolute_c"],
+    )
+    kb = pd.DataFrame({"run": ["R1"], "measurement": [1], "k_um_per_m": [0.0], "b_um": [0.0]})
+    table = faithfulness(_comparison({}, 0), selection, temperatures, kb, published_targets(), "E4")
+    eq9 = table[table["target"].str.startswith("Eq. 9")]
+    assert eq9["reproduced"].tolist() == ["nan", "nan"] and eq9["holds"].tolist() == ["no", "no"]

@@ -169,18 +169,23 @@ def _eq9_rows(
     wide = temperatures.pivot_table(
         index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True
     )
-    kb = kb.set_index(["run", "measurement"]).loc[wide.index]
+    kb = kb.set_index(["run", "measurement"])
+    wide = wide.loc[wide.index.intersection(kb.index)]
     out = []
     for quantity, column, model, bound, unit in (
         ("k", "k_um_per_m", targets.k, targets.bound_k_um_per_m, "um/m"),
         ("b", "b_um", targets.b, targets.bound_b_um, "um"),
     ):
-        residuals = [
-            model.predict({s: rows[s].to_numpy() for s in model.coef})
-            - kb.loc[rows.index, column].to_numpy()
-            for _, rows in wide.groupby(level="run", sort=True)
-        ]
-        rms = _rms(np.concatenate(residuals))
+        # A dataset without Eq. 9's sensors, or without k and b, has nothing to apply it to.
+        if len(wide) == 0 or not set(model.coef) <= set(wide.columns):
+            rms = float("nan")
+        else:
+            residuals = [
+                model.predict({s: rows[s].to_numpy() for s in model.coef})
+                - kb.loc[rows.index, column].to_numpy()
+                for _, rows in wide.groupby(level="run", sort=True)
+            ]
+            rms = _rms(np.concatenate(residuals))
         out.append(
             dict(
                 target=f"Eq. 9 on the dataset's temperatures: {quantity}, RMS residual, {unit}",

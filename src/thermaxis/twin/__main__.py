@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
 
         generate_dataset(args.out, args.truth)
     elif args.command == "calibrate":
-        from .fit import calibrate
+        from .calibration import calibrate
         from .generate import generate_dataset
 
         result = calibrate()

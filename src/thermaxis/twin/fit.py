@@ -22,7 +22,8 @@ Table 1's ambient ranges are met by construction (:mod:`thermaxis.twin.condition
 
 Through the pipeline: the later stages (:data:`STAGES`) apply a defect correction.  At
 the stage's start the raw files of the current parameters are written and run through
-the pipeline's own cleaning, assembly and decoupling (:func:`pipeline_observables`); the
+the pipeline's own cleaning, assembly and decoupling
+(:func:`thermaxis.twin.calibration.pipeline_observables`); the
 difference from the noise-free model (the noise, the faults, the clocks, the cleaning)
 is held, so the objective there is computed on what the pipeline assembles, and nearby
 on that plus the model's change.  The selections and models inside the objective are
@@ -37,7 +38,6 @@ factors force a new integration, cached per Jacobian.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,6 +73,7 @@ __all__ = [
     "objective_weights",
     "rms_by_target",
     "calibrate",
+    "STAGES",
 ]
 
 #: Table 5 of the paper: slope k (um/m) and intercept b (um) of the 32 measurements.
@@ -520,25 +521,6 @@ STAGES: tuple[Stage, ...] = (
 )
 
 
-def pipeline_observables(params: mdl.TwinParams) -> dict[str, RunObservables]:
-    """What the pipeline makes of the twin's raw files: k, b, curves and window means.
-
-    The raw files of ``params`` (noise, faults, clocks and all) are written to a
-    temporary folder and cleaned, assembled and decoupled by the pipeline's own code.
-    """
-    import tempfile
-    from pathlib import Path
-
-    from .generate import simulate_records, write_runs
-    from .report import pipeline_view
-
-    with tempfile.TemporaryDirectory(prefix="thermaxis-twin-") as tmp, warnings.catch_warnings():
-        # The pipeline's notes on the seeded faults are the dataset's, reported by the workflow.
-        warnings.simplefilter("ignore")
-        write_runs(Path(tmp), simulate_records(params))
-        return pipeline_view(Path(tmp)).observables()
-
-
 def _difference(a: RunObservables, b: RunObservables) -> RunObservables:
     return RunObservables(
         k=a.k - b.k,
@@ -622,7 +604,7 @@ class _Objective:
             return runs
         return {run: _difference(o, self.correction[run]) for run, o in runs.items()}
 
-    def correct_to_pipeline(self, x: np.ndarray) -> None:
+    def correct_to_pipeline(self, x: np.ndarray, pipeline) -> None:
         """Defect correction: hold the pipeline's departure from the noise-free model at x.
 
         Afterwards the objective at x is computed on exactly what the pipeline assembles
@@ -630,8 +612,8 @@ class _Objective:
         """
         self.correction = {}
         model = self.observables(x)
-        pipeline = pipeline_observables(self.params(x))
-        self.correction = {run: _difference(model[run], pipeline[run]) for run in model}
+        assembled = pipeline(self.params(x))
+        self.correction = {run: _difference(model[run], assembled[run]) for run in model}
 
     def __call__(self, z: np.ndarray) -> np.ndarray:
         x = self.full.copy()
@@ -685,8 +667,12 @@ def _jacobian(objective: _Objective, pool, lower: np.ndarray, upper: np.ndarray)
     return jac
 
 
-def calibrate(step_s: float = cond.STEP_S, workers: int = 2) -> FitResult:
+def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitResult:
     """Fit the free parameters to the paper's published fits and results, stage by stage.
+
+    ``pipeline(params)`` gives what the pipeline makes of the raw files of ``params``
+    (:func:`thermaxis.twin.calibration.pipeline_observables`; passed in, so this module
+    needs neither the files' writer nor the pipeline).
 
     Deterministic: a fixed start (the priors' centres, initial offsets 0), scipy's
     trust-region least squares with a fixed budget per stage (:data:`STAGES`), and
@@ -716,7 +702,7 @@ def calibrate(step_s: float = cond.STEP_S, workers: int = 2) -> FitResult:
             start = time.perf_counter()
             index = objective.free(stage)
             if stage.through_pipeline:
-                objective.correct_to_pipeline(x)
+                objective.correct_to_pipeline(x, pipeline)
             _set_stage((stage, x, index, objective.correction))
             solution = least_squares(
                 objective,

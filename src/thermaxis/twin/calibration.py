@@ -1,0 +1,38 @@
+"""``make twin-calibrate``: the staged calibration of :mod:`thermaxis.twin.fit`, through the pipeline.
+
+The later stages correct the noise-free model towards what the pipeline's own cleaning,
+assembly and decoupling make of the twin's raw files; this module writes those files
+and runs the pipeline on them, so that the fit itself needs neither.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import warnings
+from pathlib import Path
+
+from . import conditions as cond
+from . import fit
+from . import model as mdl
+from .generate import simulate_records, write_runs
+from .report import pipeline_view
+
+__all__ = ["pipeline_observables", "calibrate"]
+
+
+def pipeline_observables(params: mdl.TwinParams) -> dict[str, fit.RunObservables]:
+    """What the pipeline makes of the twin's raw files: k, b, curves and window means.
+
+    The raw files of ``params`` (noise, faults, clocks and all) are written to a
+    temporary folder and cleaned, assembled and decoupled by the pipeline's own code.
+    """
+    with tempfile.TemporaryDirectory(prefix="thermaxis-twin-") as tmp, warnings.catch_warnings():
+        # The pipeline's notes on the seeded faults are the dataset's, reported by the workflow.
+        warnings.simplefilter("ignore")
+        write_runs(Path(tmp), simulate_records(params))
+        return pipeline_view(Path(tmp)).observables()
+
+
+def calibrate(step_s: float = cond.STEP_S, workers: int = 2) -> fit.FitResult:
+    """The staged fit (:data:`thermaxis.twin.fit.STAGES`) with the pipeline's correction."""
+    return fit.calibrate(pipeline_observables, step_s, workers)
