@@ -76,15 +76,15 @@ def _table6_rows(selection: pd.DataFrame, fold: str) -> list[dict]:
                 holds=got == want,
             )
         )
-        want_points = ", ".join(paper.loc[paper["selected"], "sensor"])
-        got_points = ", ".join(ours.loc[ours["selected"].astype(bool), "sensor"])
+        want_points = list(paper.loc[paper["selected"], "sensor"])
+        got_points = list(ours.loc[ours["selected"].astype(bool), "sensor"])
         out.append(
             dict(
                 target=f"Table 6: {target} sensitive points",
-                published=want_points,
-                reproduced=got_points,
+                published=", ".join(want_points),
+                reproduced=", ".join(got_points),
                 tolerance="equal",
-                holds=set(want_points.split(", ")) == set(got_points.split(", ")),
+                holds=set(want_points) == set(got_points),
             )
         )
     return out

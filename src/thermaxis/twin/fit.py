@@ -391,7 +391,7 @@ def result_residuals(
     data = fold_data(runs, targets.fold)
     col = {s: i for i, s in enumerate(data.sensors)}
     out, summary = {}, {}
-    classes_residuals, points_residuals = [], []
+    classes_residuals, points_residuals, options = [], [], {}
     for name, values, target, classes, points, threshold in (
         ("k", data.absolute, data.k, targets.k_classes, targets.k_points, eta[0]),
         ("b", data.relative, data.b, targets.b_classes, targets.b_points, eta[1]),
@@ -400,6 +400,7 @@ def result_residuals(
             values, data.sensors, classes, threshold, PARTITION_DELTA
         )
         classes_residuals.append(residuals)
+        options[name] = option
         gap, wins = point_margins(
             grades(target, values), option, [col[p] for p in points], POINT_DELTA
         )
@@ -408,9 +409,8 @@ def result_residuals(
         summary[f"{name}_points"] = wins
     out["table6_classes"] = np.concatenate(classes_residuals)
     out["table6_points"] = np.concatenate(points_residuals)
-    _, b_option, _ = partition_margins(
-        data.relative, data.sensors, targets.b_classes, eta[1], PARTITION_DELTA
-    )
+    # Table 3 is selected within the b partition (same relative temperatures).
+    b_option = options["b"]
     table3, hits, chosen, total = [], 0, [], np.zeros(len(data.sensors))
     for j, x in enumerate(data.positions_mm):
         g = grades(data.curves[:, j], data.relative)
@@ -684,7 +684,7 @@ def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitRes
     global _WORKER
     problem = _problem(step_s)
     runs = problem.runs
-    objective = _objective = _Objective(problem, step_s)
+    objective = _Objective(problem, step_s)
     x = np.array(
         [p.prior if np.isfinite(p.prior_width) else 0.0 for p in mdl.GLOBAL_PARAMETERS.values()]
         + [p.prior for _ in runs for p in mdl.INITIAL_PARAMETERS.values()]
@@ -730,7 +730,7 @@ def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitRes
         if pool is not None:
             pool.close()
             pool.join()
-    observed = _objective.observables(x)
+    observed = objective.observables(x)
     _, summary = result_residuals(observed, objective.results, (x[-2], x[-1]))
     return FitResult(
         params=objective.params(x),
