@@ -164,6 +164,8 @@ class TemperatureCleaning:
     spike_threshold: float
     spike_min_deviation_c: float
     spike_max_rate_c_per_min: float
+    spike_window_s: float  # a spike's samples span at most this, and the trend resumes after
+    excursions: str  # keep | fault: a longer departure is kept (reported) or dropped as a fault
     limits_c: tuple[float, float]
     max_gap_s: float
     estimate_clock_offsets: bool
@@ -184,6 +186,10 @@ class TemperatureCleaning:
             raise ValueError(
                 f"spike_max_rate_c_per_min must be > 0, got {self.spike_max_rate_c_per_min}"
             )
+        if not self.spike_window_s >= 0:
+            raise ValueError(f"spike_window_s must be >= 0, got {self.spike_window_s}")
+        if self.excursions not in ("keep", "fault"):
+            raise ValueError(f"excursions must be 'keep' or 'fault', got {self.excursions!r}")
         low, high = self.limits_c
         if not low < high:
             raise ValueError(f"limits_c must be (low, high) with low < high, got {self.limits_c}")
@@ -262,6 +268,8 @@ class CleaningSettings:
                 spike_threshold=float(t["spike_threshold"]),
                 spike_min_deviation_c=float(t["spike_min_deviation_c"]),
                 spike_max_rate_c_per_min=float(t["spike_max_rate_c_per_min"]),
+                spike_window_s=float(t["spike_window_s"]),
+                excursions=t["excursions"],
                 limits_c=_pair(t["limits_c"]),
                 max_gap_s=float(t["max_gap_s"]),
                 estimate_clock_offsets=bool(t["estimate_clock_offsets"]),
@@ -474,6 +482,7 @@ class ExtraCandidate:
 class RecommendSettings:
     score: str  # max_abs | rmse
     lags_min: tuple[float, ...]
+    baseline_lags_min: tuple[float, ...]
     max_loco_runs: int
     group_folds: int
     extra_candidates: tuple[ExtraCandidate, ...]
@@ -495,10 +504,16 @@ class RecommendSettings:
         return cls(
             score=r["score"],
             lags_min=tuple(float(v) for v in r["lags_min"]),
+            baseline_lags_min=tuple(float(v) for v in r["baseline_lags_min"]),
             max_loco_runs=int(r["max_loco_runs"]),
             group_folds=int(r["group_folds"]),
             extra_candidates=extra,
         )
+
+    @property
+    def all_lags_min(self) -> tuple[float, ...]:
+        """Every lag time constant a candidate may see: what the clean rule computes."""
+        return tuple(sorted({*self.lags_min, *self.baseline_lags_min}))
 
 
 @dataclass(frozen=True)

@@ -13,8 +13,8 @@ from thermaxis.cleaning.clock import estimate_clock_offset
 from thermaxis.cleaning.passes import combine_passes
 from thermaxis.cleaning.temperatures import (
     CleanedTemperatures,
-    check_gaps,
     clean_temperatures,
+    gap_overlaps,
     temperatures_in_windows,
 )
 
@@ -330,28 +330,31 @@ def windows_frame(*spans):
     )
 
 
-def test_long_gap_overlapping_a_measurement_raises_unless_allowed():
+def test_a_long_gap_overlapping_measurements_is_one_summary_per_sensor():
     gaps = pd.DataFrame(
-        {"sensor": ["T11"], "start": at([1000]), "end": at([1900]), "duration_s": [900.0]}
+        {"sensor": ["T11"], "start": at([1000]), "end": at([2600]), "duration_s": [1600.0]}
     )
-    windows = windows_frame((0, 600), (1800, 2400), (3000, 3600))
-    with pytest.raises(ValueError, match=r"T11.*measurement 2 \(m02\)"):
-        check_gaps(gaps, windows, allow=False, max_gap_s=600.0)
-    warnings = check_gaps(gaps, windows, allow=True, max_gap_s=600.0)
-    assert len(warnings) == 1 and "T11" in warnings[0] and "m02" in warnings[0]
+    windows = windows_frame((0, 600), (1800, 2400), (2500, 2550), (3000, 3600))
+    (overlap,) = gap_overlaps(gaps, windows, max_gap_s=600.0)
+    assert overlap.sensor == "T11" and overlap.start == at([1000])[0]
+    assert "measurement 2 (m02)" in overlap.text and overlap.text.endswith("(and 1 more)")
     # A gap that ends exactly when a measurement starts has a real sample there.
     assert (
-        check_gaps(gaps, windows_frame((0, 600), (1900, 2400)), allow=False, max_gap_s=600.0) == []
+        gap_overlaps(
+            gaps.assign(end=at([1900])), windows_frame((0, 600), (1900, 2400)), max_gap_s=600.0
+        )
+        == []
     )
 
 
-def test_gaps_of_clean_temperatures_feed_check_gaps():
+def test_gaps_of_clean_temperatures_feed_gap_overlaps():
     s = np.arange(0, 3600, 10.0)
     hole = (s > 1000) & (s < 1900)
     result = clean({"box": source(s[~hole], T1=ramp(s[~hole]))})
-    with pytest.raises(ValueError, match="T1"):
-        check_gaps(result.gaps, windows_frame((1500, 1600)), allow=False, max_gap_s=600.0)
-    assert check_gaps(result.gaps, windows_frame((2000, 2600)), allow=False, max_gap_s=600.0) == []
+    assert [
+        o.sensor for o in gap_overlaps(result.gaps, windows_frame((1500, 1600)), max_gap_s=600.0)
+    ] == ["T1"]
+    assert gap_overlaps(result.gaps, windows_frame((2000, 2600)), max_gap_s=600.0) == []
 
 
 # ----------------------------------------------------------------------------- windows

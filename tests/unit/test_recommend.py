@@ -114,12 +114,14 @@ def test_inner_splits_become_group_folds_above_the_limit():
 
 def test_time_inputs_and_signals_are_seen_only_by_candidates_that_use_them():
     X = pd.DataFrame({"run": ["R1"], "measurement": [1], "time_min": [0.0], "T1": [20.0],
-                      "T1@lag30min": [19.0], "S": [100.0], "S@lag30min": [90.0]})  # fmt: skip
+                      "T1@lag30min": [19.0], "T1@lag20min": [19.5], "S": [100.0],
+                      "S@lag30min": [90.0]})  # fmt: skip
     keys = ["run", "measurement", "time_min"]
     plain = fixed("T1")
     view, selectable, models = candidate_view(X, plain, ["S"])
     assert list(view.columns) == selectable == [*keys, "T1"] and models.signals == ()
-    lagged = replace(plain, time_inputs=True)
+    # Only the lags at the candidate's own time constants: T1@lag20min is another's.
+    lagged = replace(plain, time_inputs=True, lags_min=(30.0,))
     view, selectable, _ = candidate_view(X, lagged, ["S"])
     assert list(view.columns) == selectable == [*keys, "T1", "T1@lag30min"]
     both = replace(lagged, models=replace(DEFAULTS.models, signals=("S",)))

@@ -130,6 +130,8 @@ def test_each_section_builds_from_its_config_section():
             "spike_threshold": 3,
             "spike_min_deviation_c": 0.1,
             "spike_max_rate_c_per_min": 2.0,
+            "spike_window_s": 90,
+            "excursions": "fault",
             "limits_c": [-10, 90],
             "max_gap_s": 120,
             "plausible_median_c": [0, 50],
@@ -150,6 +152,10 @@ def test_each_section_builds_from_its_config_section():
     assert (cleaning.temperatures.interval_s, cleaning.temperatures.limits_c) == (
         30.0,
         (-10.0, 90.0),
+    )
+    assert (cleaning.temperatures.spike_window_s, cleaning.temperatures.excursions) == (
+        90.0,
+        "fault",
     )
     assert (cleaning.errors.direction, cleaning.max_abs_error_um, cleaning.window) == (
         "+",

@@ -9,7 +9,14 @@ import pandas as pd
 import pytest
 
 from helpers import DEFAULTS, REPO
-from thermaxis.cleaning.temperatures import clean_temperatures, noise_sigma, resolution, spike_mask
+from thermaxis.cleaning.temperatures import (
+    clean_temperatures,
+    excursions,
+    noise_sigma,
+    resolution,
+    spike_limit,
+    spike_mask,
+)
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.twin import faults
 
@@ -18,6 +25,7 @@ LIMITS = dict(
     threshold=SETTINGS.spike_threshold,
     min_deviation=SETTINGS.spike_min_deviation_c,
     max_rate_c_per_min=SETTINGS.spike_max_rate_c_per_min,
+    window_s=SETTINGS.spike_window_s,
 )
 DURATION_MIN = 240.0
 RISE_C = 8.0
@@ -178,3 +186,46 @@ def test_every_spike_injected_into_the_twin_is_found_and_nothing_else(run):
         found = minutes[ok][spike_mask(seconds[ok], values[ok], **LIMITS)]
         injected = [s.minute for s in faults.SPIKES if (s.run, s.sensor) == (run, sensor)]
         np.testing.assert_allclose(np.sort(found), injected, atol=0.1)
+
+
+def _limit(t, x):
+    return spike_limit(t, x, LIMITS["threshold"], LIMITS["min_deviation"])
+
+
+@pytest.mark.parametrize("interval_s", [10.0, 60.0, 300.0])
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+def test_a_quantised_ramp_has_no_excursion(shape, interval_s):
+    t, x = quantised_ramp(shape, 0.1, interval_s, noise_c=0.03, seed=5)
+    assert excursions(t, x, _limit(t, x)) == []
+
+
+@pytest.mark.parametrize("interval_s", [10.0, 60.0, 300.0])
+def test_a_20_minute_excursion_is_kept_and_found_where_it_is(interval_s):
+    # +1.5 C for 20 minutes from minute 100 on a quantised, noisy ramp: no sample of it is
+    # a spike (the old rule ate such a departure a sample at a time), and it is one
+    # excursion spanning exactly its readings, of about its size.
+    t, x = quantised_ramp("flattening", 0.1, interval_s, noise_c=0.03, seed=7)
+    inside = (t >= 6000.0) & (t < 7200.0)
+    x = np.where(inside, x + 1.5, x)
+    assert not spike_mask(t, x, **LIMITS).any()
+    ((first, last, size),) = excursions(t, x, _limit(t, x))
+    assert (first, last) == (np.flatnonzero(inside)[0], np.flatnonzero(inside)[-1])
+    assert size == pytest.approx(1.5, abs=0.2)
+
+
+def test_an_isolated_5_c_spike_is_still_replaced_and_is_no_excursion():
+    t, x = quantised_ramp("steepening", 0.1, 60.0, noise_c=0.03, seed=9)
+    x[120] += 5.0
+    assert np.flatnonzero(spike_mask(t, x, **LIMITS)).tolist() == [120]
+    kept = np.arange(t.size) != 120
+    assert excursions(t[kept], x[kept], _limit(t[kept], x[kept])) == []
+
+
+def test_a_departure_that_does_not_return_is_no_spike():
+    # The sensor: off its rise by 2.8 C, then 1.6, 1.8, 1.5, 1.4 on 5-minute logging.
+    t = np.arange(40) * 300.0
+    x = np.round(20.0 + 0.004 * t / 60.0, 1)
+    x[20:25] += np.array([2.8, 1.6, 1.8, 1.5, 1.4])
+    assert spike_mask(t, x, **LIMITS)[20:25].sum() <= 1  # a 0.2 C wiggle on it may be one
+    ((first, last, size),) = excursions(t, x, _limit(t, x))
+    assert (first, last) == (20, 24) and size == pytest.approx(1.6, abs=0.15)  # the median

@@ -11,6 +11,7 @@ only samples flagged are the spikes the generator put in.
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 import yaml
 
@@ -39,3 +40,59 @@ def test_the_default_workflow_runs_on_a_real_records_shape_flagging_only_true_sp
     assert (qc["sensor"] == "error_um").sum() == 0  # the displacements are fault-free too
     metrics = pd.read_csv(out / "metrics.csv")
     assert sorted(metrics["fold"].unique()) == list(REAL_RUNS)
+
+
+def _shift_readings(box, first_min, last_min, change):
+    """Apply ``change`` to one sensor's readings from ``first_min`` to ``last_min`` (minutes
+    after the first measurement, 09:00), in the logger file ``box``."""
+    frame = pd.read_csv(box, dtype={"time": str})
+    minutes = (
+        pd.to_datetime(frame["time"]) - pd.Timestamp("2022-05-10T09:00:00")
+    ).dt.total_seconds() / 60
+    inside = (minutes >= first_min) & (minutes <= last_min)
+    change(frame, inside.to_numpy())
+    frame.to_csv(box, index=False)
+    return pd.to_datetime(frame.loc[inside, "time"])
+
+
+def test_an_excursion_and_a_long_gap_of_one_sensor_cost_that_sensor_only(tmp_path):
+    # Issue 33: the 5-run x 22-sensor record, with one sensor 1.5 C above its trend for
+    # 20 minutes (four 5-minute readings) in R2 and another's readings missing for
+    # 1,200 s over a measurement in R4. Both are named; the dataset runs by default.
+    dataset = write_real_record(tmp_path / "real")
+
+    def raise_t8(frame, inside):
+        frame.loc[inside, "T8"] = (frame.loc[inside, "T8"] + 1.5).round(1)
+
+    def blank_t15(frame, inside):
+        frame.loc[inside, "T15"] = np.nan
+
+    excursion = _shift_readings(dataset / "R2" / "temperatures" / "box.csv", 100, 120, raise_t8)
+    assert len(excursion) == 4
+    gap = _shift_readings(dataset / "R4" / "temperatures" / "box.csv", 60, 75, blank_t15)
+    assert len(gap) == 3  # readings at 58 and 78 min remain: a 1,200 s gap over 60-70 min
+    work = workflow_workdir(tmp_path)
+    config = work / "real.yaml"
+    config.write_text(yaml.safe_dump({"dataset": str(dataset), "ambient_sensor": "T1"}))
+    proc = run_snakemake(
+        work, "--configfile", str(config), "--", "results/real/tables/metrics.csv",
+        "results/real/tables/cleaning_events.csv", "results/real/tables/recommendation.csv",
+    )  # fmt: skip
+    out = work / "results" / "real" / "tables"
+    events = pd.read_csv(out / "cleaning_events.csv", parse_dates=["start", "end"])
+    assert events["finding"].tolist() == ["excursion", "unusable"]
+    row = events.iloc[0]
+    assert (row["run"], row["sensor"]) == ("R2", "T8")
+    assert (row["start"], row["end"]) == (excursion.iloc[0], excursion.iloc[-1])
+    assert abs(row["size_c"] - 1.5) <= 0.15 and row["action"] == "kept as data"
+    row = events.iloc[1]
+    assert (row["run"], row["sensor"]) == ("R4", "T15")
+    assert "1200 s gap" in row["cause"] and "max_gap_s" in row["cause"]
+    warnings = [line for line in proc.stderr.splitlines() if "thermaxis warning:" in line]
+    assert any("T8" in w and "excursion" in w for w in warnings)
+    assert any("T15" in w and "leaves the candidate sensors" in w for w in warnings)
+    # T15 is no candidate of any fold; every fold still has its sensitive points.
+    points = pd.read_csv(out / "sensitive_points.csv")
+    assert sorted(points["fold"].unique()) == list(REAL_RUNS)
+    assert not points.astype(str).apply(lambda c: c.str.contains(r"\bT15\b")).any().any()
+    assert sorted(pd.read_csv(out / "recommendation.csv")["fold"]) == list(REAL_RUNS)

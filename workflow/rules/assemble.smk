@@ -19,6 +19,7 @@ rule assemble:
             category=CATEGORY["dataset"],
             labels={"table": "cleaning QC"},
         ),
+        events=f"{OUT}/tables/cleaning_events.csv",
     log:
         f"{LOGS}/assemble.log",
     benchmark:

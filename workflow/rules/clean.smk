@@ -25,6 +25,6 @@ rule clean_run:
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         temperatures=config["temperatures"],
         errors=config["errors"],
-        lags_min=list(SETTINGS.recommend.lags_min),
+        lags_min=list(SETTINGS.recommend.all_lags_min),
     script:
         "../scripts/clean_run.py"

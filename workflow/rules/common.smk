@@ -548,6 +548,11 @@ def index_figures():
 INDEX_TABLES = [
     ("Runs", f"{OUT}/tables/dataset_summary.csv", ""),
     (
+        "Cleaning events: excursions, unusable sensors, displacement findings",
+        f"{OUT}/tables/cleaning_events.csv",
+        "docs/your-data.md",
+    ),
+    (
         "Held-out error per fold, approach, algorithm and target",
         f"{OUT}/tables/metrics.csv",
         "",

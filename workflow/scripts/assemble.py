@@ -1,5 +1,6 @@
 import pandas as pd
 
+from thermaxis.cleaning.run import cleaning_events
 from thermaxis.dataset.plausibility import check_same_targets
 from thermaxis.labels import sort_naturally
 from thermaxis.pipeline.runner import run_script, write_csv, write_parquet
@@ -26,7 +27,9 @@ def main(snakemake):
     write_parquet(
         sort_naturally(signals, ["run", "measurement", "signal"]), snakemake.output.signals
     )
-    write_csv(sort_naturally(qc, ["run", "sensor"]), snakemake.output.qc)
+    qc = sort_naturally(qc, ["run", "sensor"])
+    write_csv(qc, snakemake.output.qc)
+    write_csv(cleaning_events(qc), snakemake.output.events)
 
 
 run_script(main, snakemake)

@@ -29,7 +29,7 @@ def main(snakemake):
     write_csv(tables.windows, out.windows)
     write_parquet(tables.signals, out.signals)
     write_parquet(tables.signal_series, out.signal_series)
-    # The time-aware inputs of the recommendation's candidates (none without lags_min).
+    # The time-aware inputs of the recommendation's candidates (recommend.lags_min and the baseline's).
     write_parquet(derived_inputs(tables, snakemake.params.lags_min, []), out.inputs)
 
 

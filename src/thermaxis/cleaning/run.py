@@ -31,6 +31,7 @@ __all__ = [
     "tidy_signals",
     "logged_series",
     "derived_inputs",
+    "cleaning_events",
 ]
 
 
@@ -153,13 +154,25 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     notes.extend(
         displacement.finding_text(row, _finding_origin(raw, row)) for row in findings.itertuples()
     )
-    cleaned, gap_notes = _cleaned_temperatures(dataset, raw, windows, cleaning)
-    notes.extend(f"{run}: {n}" for n in gap_notes)
+    cleaned, overlaps = _cleaned_temperatures(dataset, raw, windows, cleaning)
     at_measurements = temperature_cleaning.temperatures_in_windows(
         cleaned.frame, windows, how=cleaning.window
     )
     sensors = [s for s in dataset.sensors if s in at_measurements.columns]
-    _check_every_window_read(dataset, raw, windows, at_measurements[sensors])
+    if cleaning.allow_long_gaps:
+        notes.extend(f"{run}: {o.text}" for o in overlaps)
+        overlaps = []
+    unusable = _unusable_sensors(dataset, raw, windows, at_measurements[sensors], overlaps)
+    # A sensor that misses a measurement cannot be modelled on this run: it costs that
+    # sensor, which leaves every fold's candidates (model_inputs), not the dataset.
+    at_measurements[[u.sensor for u in unusable]] = np.nan
+    notes.extend(
+        f"{u.text}; {u.sensor} leaves the candidate sensors of every fold (it needs a reading in every "
+        "measurement): raise temperatures.max_gap_s, or set temperatures.allow_long_gaps to average what "
+        "the window has"
+        for u in unusable
+    )
+    notes.extend(_excursion_text(raw, row) for row in cleaned.excursions.itertuples())
     signal_frame = temperature_cleaning.signals_on_grid(
         raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"]
     )
@@ -170,7 +183,7 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     return RunTables(
         run=run,
         series=series,
-        qc=_with_run(_qc_table(cleaned.qc, findings), run),
+        qc=_with_run(_qc_table(cleaned.qc, findings, cleaned.excursions, unusable), run),
         gaps=_with_run(cleaned.gaps, run),
         errors=tidy_errors(run, condition, windows, combined),
         temperatures=tidy_temperatures(run, condition, windows, at_measurements[sensors]),
@@ -200,15 +213,18 @@ def derived_inputs(tables: RunTables, lags_min, rates_min) -> pd.DataFrame:
     each measurement window, the instant the window-mean temperature stands for. The
     filters start steady at the grid's first sample, a margin before the first
     measurement: the run's history starts where its measurements do. Gaps the cleaning
-    left on the grid (none can fall in a measurement window) are bridged linearly for
-    the filters, which need a value at every sample. One row per measurement x input
+    left on the grid are bridged linearly for the filters, which need a value at every
+    sample; a sensor unusable in the run (:func:`model_inputs`) gets none. One row per measurement x input
     (``input`` named like ``T5@lag30min``).
     """
     columns = ["run", "condition", "measurement", "time_min", "input", "value"]
     if not lags_min and not rates_min:
         return pd.DataFrame(columns=columns)
     frame = logged_series(tables.series, tables.signal_series)
-    values = frame.drop(columns="time").interpolate(limit_direction="both")
+    # A sensor unusable in this run (no temperature in some measurement) has no inputs.
+    t = tables.temperatures
+    unusable = pd.unique(t.loc[t["absolute_c"].isna(), "sensor"]).tolist()
+    values = frame.drop(columns=["time", *unusable]).interpolate(limit_direction="both")
     frame = pd.concat([frame[["time"]], values], axis=1)
     windows = tables.windows
     derived = time_inputs.inputs_at_measurements(
@@ -276,11 +292,75 @@ def _finding_origin(raw: RawRun, row) -> str:
     return raw.error_origin(list(raw.measurements)[row.measurement - 1])
 
 
-def _qc_table(temperature_qc: pd.DataFrame, findings: pd.DataFrame) -> pd.DataFrame:
-    """One QC table: a row per sensor, then a row per displacement finding (sensor ``error_um``)."""
-    rows = findings.assign(sensor="error_um", source="errors")
-    table = pd.concat([temperature_qc, rows], ignore_index=True) if len(rows) else temperature_qc
-    return table.reindex(columns=[*temperature_qc.columns, *displacement.FINDING_COLUMNS])
+# The QC table's columns of the temperature findings (excursions, unusable sensors).
+EVENT_COLUMNS = ["start", "end", "size_c"]
+
+
+def _qc_table(
+    temperature_qc: pd.DataFrame, findings: pd.DataFrame, excursions: pd.DataFrame, unusable
+) -> pd.DataFrame:
+    """One QC table: a row per sensor, then a row per finding.
+
+    Displacement findings have sensor ``error_um``; a temperature excursion or an
+    unusable sensor names its sensor, with ``start``, ``end`` and (excursions) ``size_c``.
+    """
+    events = [
+        findings.assign(sensor="error_um", source="errors"),
+        pd.DataFrame(
+            {
+                "sensor": excursions["sensor"],
+                "source": excursions["source"],
+                "finding": "excursion",
+                "start": excursions["start"],
+                "end": excursions["end"],
+                "size_c": excursions["size_c"],
+                "cause": [
+                    f"departs {r.size_c:+.2f} C from its trend for {r.duration_s:.0f} s and returns: "
+                    "a real event, or a sensor fault?"
+                    for r in excursions.itertuples()
+                ],
+                "action": excursions["action"],
+            }
+        ),
+        pd.DataFrame(
+            {
+                "sensor": [u.sensor for u in unusable],
+                "source": [u.source for u in unusable],
+                "finding": "unusable",
+                "start": [u.start for u in unusable],
+                "end": [u.end for u in unusable],
+                "cause": [u.text for u in unusable],
+                "action": "left out of every fold's candidate sensors",
+            }
+        ),
+    ]
+    events = [e for e in events if len(e)]
+    table = pd.concat([temperature_qc, *events], ignore_index=True) if events else temperature_qc
+    return table.reindex(
+        columns=[*temperature_qc.columns, *displacement.FINDING_COLUMNS, *EVENT_COLUMNS]
+    )
+
+
+def cleaning_events(qc: pd.DataFrame) -> pd.DataFrame:
+    """The findings of a QC table alone (``tables/cleaning_events.csv``), one row each.
+
+    Excursions and unusable sensors (with their start, end and size in C), and the
+    displacement findings (measurement, position, size in um): what a reader of the
+    index must see without scanning a row per sensor.
+    """
+    columns = ["run", "sensor", "finding", *EVENT_COLUMNS, "measurement", "position_mm",
+               "size_um", "cause", "action"]  # fmt: skip
+    events = qc.loc[qc["finding"].notna()] if "finding" in qc.columns else qc.iloc[:0]
+    return events.reindex(columns=columns).reset_index(drop=True)
+
+
+def _excursion_text(raw: RawRun, row) -> str:
+    """One line per excursion: where, when, how large, and what was done with it."""
+    return (
+        f"run {raw.run}: sensor {row.sensor} ({row.source}) departs {row.size_c:+.2f} C from its trend "
+        f"from {row.start} to {row.end} ({row.duration_s:.0f} s) and returns: an excursion, "
+        f"{row.action} (temperatures.excursions)"
+    )
 
 
 def _temperature_file(dataset: Dataset, run: str, source: str):
@@ -290,7 +370,7 @@ def _temperature_file(dataset: Dataset, run: str, source: str):
 def _cleaned_temperatures(
     dataset: Dataset, raw: RawRun, windows: pd.DataFrame, cleaning: CleaningSettings
 ):
-    """The run's temperatures on the grid, and the long gaps allowed during a measurement (as warnings)."""
+    """The run's temperatures on the grid, and each sensor's long gaps during a measurement."""
     settings = cleaning.temperatures
     # The grid spans the measurements with a margin so window means never extrapolate.
     margin = pd.Timedelta(seconds=max(60.0, 3 * settings.interval_s))
@@ -306,35 +386,51 @@ def _cleaned_temperatures(
         for source in raw.sources
         for s in dataset.sensors_of(source)
     }
-    try:
-        gap_notes = temperature_cleaning.check_gaps(
-            cleaned.gaps,
-            windows,
-            allow=cleaning.allow_long_gaps,
-            max_gap_s=settings.max_gap_s,
-            files=files,
-        )
-    except ValueError as exc:
-        raise DataError(str(exc)) from None  # the message starts with the sensor's file
-    return cleaned, gap_notes
-
-
-def _check_every_window_read(
-    dataset: Dataset, raw: RawRun, windows: pd.DataFrame, at_measurements: pd.DataFrame
-) -> None:
-    """Every sensor has a temperature during every measurement, or the run cannot be modelled."""
-    missing = at_measurements.isna()
-    if not missing.any().any():
-        return
-    sensor = missing.any()[missing.any()].index[0]
-    window = windows.loc[missing[sensor].to_numpy()].iloc[0]
-    source = next(src for src in raw.sources if sensor in dataset.sensors_of(src))
-    raise DataError(
-        f"{_temperature_file(dataset, raw.run, source)}: sensor {sensor!r} of run {raw.run!r} has no usable reading "
-        f"during measurement {window['measurement']} ({window['name']}, {window['start']} to {window['end']}); "
-        "expected readings within temperatures.max_gap_s of every measurement (raise max_gap_s, or drop the sensor "
-        "from dataset.yaml)"
+    overlaps = temperature_cleaning.gap_overlaps(
+        cleaned.gaps, windows, max_gap_s=settings.max_gap_s, files=files
     )
+    return cleaned, overlaps
+
+
+@dataclass(frozen=True)
+class UnusableSensor:
+    """A sensor of a run without a reading in some measurement, and why (``text``)."""
+
+    sensor: str
+    source: str
+    start: pd.Timestamp
+    end: pd.Timestamp
+    text: str
+
+
+def _unusable_sensors(
+    dataset: Dataset, raw: RawRun, windows: pd.DataFrame, at_measurements: pd.DataFrame, overlaps
+) -> list[UnusableSensor]:
+    """The sensors that miss a measurement: a long gap over it, or no value in its window."""
+    source_of = {s: src for src in raw.sources for s in dataset.sensors_of(src)}
+    out = [
+        UnusableSensor(
+            o.sensor, source_of.get(o.sensor, ""), o.start, o.end, f"run {raw.run}: {o.text}"
+        )
+        for o in overlaps
+    ]
+    named = {u.sensor for u in out}
+    missing = at_measurements.isna()
+    for sensor in (s for s in at_measurements.columns if missing[s].any() and s not in named):
+        window = windows.loc[missing[sensor].to_numpy()].iloc[0]
+        source = source_of[sensor]
+        out.append(
+            UnusableSensor(
+                sensor,
+                source,
+                window["start"],
+                window["end"],
+                f"{_temperature_file(dataset, raw.run, source)}: sensor {sensor!r} of run {raw.run!r} has no "
+                f"usable reading during measurement {window['measurement']} ({window['name']}, "
+                f"{window['start']} to {window['end']})",
+            )
+        )
+    return out
 
 
 def _with_elapsed(frame: pd.DataFrame, windows: pd.DataFrame) -> pd.DataFrame:
@@ -374,10 +470,17 @@ def model_inputs(
     ``signals`` (the tidy operating-signal table) adds one column per signal after the
     sensors, for models asked to use them as inputs; ``inputs`` (the tidy table of
     :func:`derived_inputs`) one column per time-aware input after those.
+
+    A sensor without a temperature in some measurement of some run (the clean rule
+    named it unusable there, and why) is left out, with its time-aware inputs: with
+    leave-one-condition-out every fold trains or tests on every run, so it is no
+    candidate of any fold. It costs that sensor only; none left is an error.
     """
     wide = temperatures.pivot_table(
         index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True
     )
+    # A sensor unusable in every run has no value to pivot, and is still a column.
+    wide = wide.reindex(columns=pd.unique(temperatures["sensor"]))
     if sensors is None:
         # Natural order (T2 before T10), so clusters and tables read like the paper's.
         sensors = sorted(wide.columns, key=natural_key)
@@ -390,6 +493,13 @@ def model_inputs(
             f"assembled tables: run {missing[0]!r} measurement {missing[1]} has errors but no temperatures"
         )
     X = wide.loc[index, list(sensors)]
+    unusable = [s for s in X.columns if X[s].isna().any()]
+    if len(unusable) == X.shape[1]:
+        raise DataError(
+            f"assembled tables: every sensor ({', '.join(map(str, unusable))}) misses a measurement in some run "
+            "(tables/cleaning_qc.csv, finding 'unusable'); expected at least one sensor read in every measurement"
+        )
+    X = X.drop(columns=unusable)
     if signals is not None and len(signals):
         signal_wide = signals.pivot_table(
             index=["run", "measurement"], columns="signal", values="value", sort=True
@@ -399,7 +509,8 @@ def model_inputs(
         derived = inputs.pivot_table(
             index=["run", "measurement"], columns="input", values="value", sort=True
         )
-        X = X.join(derived.reindex(index)[sorted(derived.columns, key=natural_key)])
+        kept = [c for c in derived.columns if time_inputs.base_of(c) not in unusable]
+        X = X.join(derived.reindex(index)[sorted(kept, key=natural_key)])
     X = X.reset_index()
     X.insert(2, "time_min", times.loc[index].to_numpy())
     X.columns.name = None

@@ -60,6 +60,7 @@ __all__ = [
     "GAP_FACTOR",
     "QC_COLUMNS",
     "GAP_COLUMNS",
+    "EXCURSION_COLUMNS",
     "MAX_SPIKE_SAMPLES",
     "interior_excursions",
     "neighbour_residuals",
@@ -68,8 +69,10 @@ __all__ = [
     "resolution",
     "spike_limit",
     "spike_mask",
+    "excursions",
     "clean_temperatures",
-    "check_gaps",
+    "GapOverlap",
+    "gap_overlaps",
     "signals_on_grid",
     "temperatures_in_windows",
 ]
@@ -95,6 +98,7 @@ QC_COLUMNS = [
     "offset_estimated",
 ]
 GAP_COLUMNS = ["sensor", "start", "end", "duration_s", "kind"]
+EXCURSION_COLUMNS = ["sensor", "source", "start", "end", "duration_s", "size_c", "action"]
 
 
 @dataclass(frozen=True)
@@ -106,11 +110,15 @@ class CleanedTemperatures:
     gaps  : one row per gap left NaN, columns :data:`GAP_COLUMNS` (``start``/``end``
             are the valid samples bounding it, or the grid's ends for a sensor that
             starts late or stops early).
+    excursions : one row per departure that jumped away and back (:func:`excursions`),
+            columns :data:`EXCURSION_COLUMNS` (``start``/``end``: its first and last
+            departing samples; ``size_c`` signed).
     """
 
     frame: pd.DataFrame
     qc: pd.DataFrame
     gaps: pd.DataFrame
+    excursions: pd.DataFrame
 
 
 # ----------------------------------------------------------------------------- spikes
@@ -192,46 +200,94 @@ def _end_excursion(t_min: np.ndarray, x: np.ndarray, width: int, rate: float) ->
     return float(np.min(np.abs(departure) - rate * np.abs(ref_t - t_min[:width])))
 
 
-def _worst_block(t_min: np.ndarray, x: np.ndarray, rate: float) -> tuple[float, int, int]:
-    """The block (excursion, first sample, width) that departs the most, interior or at an end."""
-    candidates = [(-np.inf, 0, 0)]
+def _blocks(
+    t_min: np.ndarray, x: np.ndarray, rate: float, limit: float
+) -> list[tuple[float, int, int]]:
+    """Every block (excursion, first sample, width) departing by more than ``limit``, the largest first."""
+    found = []
     for width in range(1, MAX_SPIKE_SAMPLES + 1):
         excursions = interior_excursions(x, width)
-        if excursions.size:
-            i = int(np.argmax(excursions))
-            candidates.append((float(excursions[i]), i + 1, width))
+        found += [
+            (float(excursions[i]), int(i) + 1, width) for i in np.flatnonzero(excursions > limit)
+        ]
         if x.size >= 2 * width + 1:  # shorter, and which end of a jump is wrong is unknown
-            candidates.append((_end_excursion(t_min, x, width, rate), 0, width))
+            head = _end_excursion(t_min, x, width, rate)
             tail = _end_excursion(-t_min[::-1], x[::-1], width, rate)
-            candidates.append((tail, x.size - width, width))
-    return max(candidates, key=lambda c: c[0])  # the first of equals: deterministic
+            found += [(head, 0, width)] if head > limit else []
+            found += [(tail, x.size - width, width)] if tail > limit else []
+    # Largest first; among equals the earlier and narrower: deterministic.
+    return sorted(found, key=lambda c: (-c[0], c[1], c[2]))
+
+
+def _returns(
+    t: np.ndarray, x: np.ndarray, first: int, width: int, limit: float, excursion: float
+) -> bool:
+    """Whether the samples on both sides of an interior block lie on one local trend.
+
+    The trend's slope is the median of the slopes just before the block, just after it
+    and across it: one outer slope spoiled by a neighbouring spike does not move it. The
+    flanks may stray from that trend by the limit, or by half the block's ``excursion``
+    (a quantised, noisy ramp's flanks stray by a step or two): a series that stays away
+    after the block, as after an excursion's first sample, does not return. Blocks at a
+    record's ends have one side only and are judged by the rate.
+    """
+    left, right = first - 1, first + width
+    if left < 0 or right >= x.size:
+        return True
+    slopes = [(x[right] - x[left]) / (t[right] - t[left])]
+    if left >= 1:
+        slopes.append((x[left] - x[left - 1]) / (t[left] - t[left - 1]))
+    if right + 1 < x.size:
+        slopes.append((x[right + 1] - x[right]) / (t[right + 1] - t[right]))
+    drift = x[right] - x[left] - float(np.median(slopes)) * (t[right] - t[left])
+    return abs(drift) <= max(limit, excursion / 2.0)
+
+
+def _short(removed: np.ndarray, block: np.ndarray, t: np.ndarray, window_s: float) -> bool:
+    """Whether ``block`` (original sample indices), joined to the removed samples next to it, stays a spike."""
+    lo, hi = int(block.min()), int(block.max())
+    while lo > 0 and removed[lo - 1]:
+        lo -= 1
+    while hi + 1 < removed.size and removed[hi + 1]:
+        hi += 1
+    return hi - lo + 1 <= MAX_SPIKE_SAMPLES and t[hi] - t[lo] <= window_s * (1.0 + _TIE_RTOL)
 
 
 def spike_mask(
-    t_s, values, *, threshold: float, min_deviation: float, max_rate_c_per_min: float
+    t_s,
+    values,
+    *,
+    threshold: float,
+    min_deviation: float,
+    max_rate_c_per_min: float,
+    window_s: float,
 ) -> np.ndarray:
-    """Boolean mask of the samples that are spikes: short excursions that return.
+    """Boolean mask of the samples that are spikes: short, isolated departures that return.
 
     A block of one or two adjacent samples (:data:`MAX_SPIKE_SAMPLES`) is a spike when
     every sample of it lies beyond both samples flanking the block, on the same side,
-    by more than :func:`spike_limit`. A sample between its neighbours is never a spike,
-    so a trend is kept however steep, steepening or quantised it is, and however the
-    logger's rate compares with it. The first and last one or two samples have one
-    neighbour only: they are spikes only when they depart from it faster than
-    ``max_rate_c_per_min`` (config ``temperatures.spike_max_rate_c_per_min``) allows,
-    by more than the same limit.
+    by more than :func:`spike_limit`, its samples span at most ``window_s`` (config
+    ``temperatures.spike_window_s``), and the flanking samples lie on one local trend
+    (:func:`_returns`): the series comes back to where it was heading. A sample between
+    its neighbours is never a spike, so a trend is kept however steep, steepening or
+    quantised it is. The first and last one or two samples have one neighbour only:
+    they are spikes only when they depart from it faster than ``max_rate_c_per_min``
+    (config ``temperatures.spike_max_rate_c_per_min``) allows, by more than the same limit.
 
     The block that departs the most is removed first and the rest judged again without
     it: on a steep ramp the sample after an upward spike lies below both of its
-    neighbours, and must not be flagged for the spike's sake.
+    neighbours, and must not be flagged for the spike's sake. A block that would join
+    removed samples into a departure longer than a spike is not removed, so a longer
+    departure (an excursion, :func:`excursions`) is never eaten a sample at a time.
 
     Parameters
     ----------
-    t_s : sample times in seconds, non-decreasing.
+    t_s : sample times in seconds, increasing.
     values : 1-D array of valid (finite) samples in time order.
     threshold : in noise sigmas (:func:`noise_sigma`; ``spike_threshold``).
     min_deviation : excursions up to this are never spikes (``spike_min_deviation_c``).
     max_rate_c_per_min : the fastest a real temperature changes at the record's ends.
+    window_s : the longest a spike's samples span (``spike_window_s``).
 
     Notes
     -----
@@ -241,15 +297,91 @@ def spike_mask(
     """
     t, x = np.asarray(t_s, dtype=float), np.asarray(values, dtype=float)
     limit = spike_limit(t, x, threshold, min_deviation) * (1.0 + _TIE_RTOL)
+    removed = np.zeros(x.shape, dtype=bool)
     kept = np.arange(x.size)
     while kept.size:
-        excursion, first, width = _worst_block(t[kept] / 60.0, x[kept], max_rate_c_per_min)
-        if not excursion > limit:
+        tk, xk = t[kept], x[kept]
+        for excursion, first, width in _blocks(tk / 60.0, xk, max_rate_c_per_min, limit):
+            block = kept[first : first + width]
+            if _short(removed, block, t, window_s) and _returns(
+                tk, xk, first, width, limit, excursion
+            ):
+                removed[block] = True
+                kept = np.delete(kept, np.arange(first, first + width))
+                break
+        else:
             break
-        kept = np.delete(kept, np.arange(first, first + width))
-    flags = np.ones(x.shape, dtype=bool)
-    flags[kept] = False
-    return flags
+    return removed
+
+
+def _jumps(t: np.ndarray, x: np.ndarray, limit: float) -> np.ndarray:
+    """Each step x[i] - x[i-1] beyond the local trend (element i; 0 where within ``limit``).
+
+    The trend's slope is the median of the (up to four) neighbouring intervals' slopes,
+    so a jump does not set the trend it is judged against, and a ramp however steep
+    makes no jump.
+    """
+    jumps = np.zeros(x.size)
+    if x.size < 3:
+        return jumps
+    dt = np.diff(t)
+    slopes = np.diff(x) / dt
+    padded = np.pad(slopes, 2, constant_values=np.nan)
+    # Intervals i-2, i-1, i+1, i+2 around interval i (padded: NaN beyond the record).
+    around = np.stack([padded[k : k + slopes.size] for k in (0, 1, 3, 4)])
+    trend = np.nanmedian(around, axis=0)
+    step = np.diff(x) - trend * dt
+    jumps[1:] = np.where(np.abs(step) > limit, step, 0.0)
+    return jumps
+
+
+_MAX_JUMPS_BACK = 64
+
+
+def _jump_back(jumps: np.ndarray, at: np.ndarray, k: int, limit: float) -> int | None:
+    """Index into ``at`` of the jump that undoes jump ``at[k]``: the first the other way
+    after which the jumps since ``at[k]`` sum to within ``limit`` (or half the first) of 0."""
+    first = jumps[at[k]]
+    total = first
+    # The next _MAX_JUMPS_BACK jumps only: bounds the cost on a noisy sensor.
+    for m in range(k + 1, min(at.size, k + 1 + _MAX_JUMPS_BACK)):
+        total += jumps[at[m]]
+        if np.sign(jumps[at[m]]) != np.sign(first) and abs(total) <= max(limit, abs(first) / 2):
+            return m
+    return None
+
+
+def excursions(t_s, values, limit: float) -> list[tuple[int, int, float]]:
+    """Departures that jump away from a sensor's trend and jump back: (first, last, size).
+
+    ``first`` and ``last`` index the departing samples; ``size`` is the signed median
+    distance from the straight line joining the samples just before and just after it,
+    which stand for the trend across it. A jump is a step beyond the local trend by
+    more than twice ``limit`` (:func:`_jumps`: a noisy, quantised ramp's steps reach
+    one limit now and then, and over a long span its curvature alone lifts it off the
+    line joining its ends); a departure starts with a jump and ends with
+    the jump that undoes it (:func:`_jump_back`), its samples beyond that line, on the
+    first jump's side, by more than ``limit`` at their median. A jump never undone is a
+    change of level, not a departure.
+    """
+    t, x = np.asarray(t_s, dtype=float), np.asarray(values, dtype=float)
+    jumps = _jumps(t, x, 2.0 * limit)
+    at = np.flatnonzero(jumps)
+    found, k = [], 0
+    while k < at.size:
+        back = _jump_back(jumps, at, k, limit)
+        if back is None:
+            k += 1
+            continue
+        i, j = at[k], at[back]
+        line = x[i - 1] + (x[j] - x[i - 1]) * (t[i:j] - t[i - 1]) / (t[j] - t[i - 1])
+        departure = (x[i:j] - line) * np.sign(jumps[i])
+        if np.median(departure) > limit:
+            found.append((int(i), int(j - 1), float(np.sign(jumps[i]) * np.median(departure))))
+            k = back + 1
+        else:
+            k += 1
+    return found
 
 
 # ----------------------------------------------------------------------------- native series
@@ -268,6 +400,7 @@ class _Native:
     n_out_of_range: int
     n_spikes: int
     clock_offset_s: float
+    excursions: tuple[tuple[int, int, float], ...] = ()  # (start ns, end ns, size C)
     offset_estimated: bool = False
 
 
@@ -311,18 +444,31 @@ def _clean_source(
             threshold=settings.spike_threshold,
             min_deviation=settings.spike_min_deviation_c,
             max_rate_c_per_min=settings.spike_max_rate_c_per_min,
+            window_s=settings.spike_window_s,
         )
+        ts, vs = ts[~spikes], vs[~spikes]
+        limit = spike_limit(ts / _NS, vs, settings.spike_threshold, settings.spike_min_deviation_c)
+        found = excursions(ts / _NS, vs, limit * (1.0 + _TIE_RTOL))
+        if settings.excursions == "fault" and found:
+            faulty = np.zeros(ts.shape, dtype=bool)
+            for first, last, _ in found:
+                faulty[first : last + 1] = True
+            events = tuple((int(ts[a]), int(ts[b]), size) for a, b, size in found)
+            ts, vs = ts[~faulty], vs[~faulty]
+        else:
+            events = tuple((int(ts[a]), int(ts[b]), size) for a, b, size in found)
         natives.append(
             _Native(
                 sensor=str(sensor),
                 source=name,
-                t=ts[~spikes],
-                v=vs[~spikes],
+                t=ts,
+                v=vs,
                 n_raw=int(n_raw[j]),
                 n_duplicates=int(duplicates[j]),
                 n_out_of_range=int(out_of_range[:, j].sum()),
                 n_spikes=int(spikes.sum()),
                 clock_offset_s=float(offset_s),
+                excursions=events,
             )
         )
     return natives
@@ -358,6 +504,9 @@ def _estimate_offsets(
         shift = int(round(best_offset * _NS))
         for native in by_source[source]:
             native.t = native.t + shift
+            native.excursions = tuple(
+                (a + shift, b + shift, size) for a, b, size in native.excursions
+            )
             native.clock_offset_s += best_offset
             native.offset_estimated = True
 
@@ -466,7 +615,23 @@ def clean_temperatures(
         frame=pd.DataFrame(columns),
         qc=pd.DataFrame(qc_rows, columns=QC_COLUMNS),
         gaps=_gap_table(gap_rows),
+        excursions=_excursion_table(natives, settings.excursions),
     )
+
+
+def _excursion_table(natives: list[_Native], policy: str) -> pd.DataFrame:
+    """Every excursion (:data:`EXCURSION_COLUMNS`), in time order."""
+    action = "dropped as a sensor fault" if policy == "fault" else "kept as data"
+    rows = [
+        (n.sensor, n.source, a, b, (b - a) / _NS, size, action)
+        for n in natives
+        for a, b, size in n.excursions
+    ]
+    table = pd.DataFrame(rows, columns=EXCURSION_COLUMNS)
+    table["start"] = table["start"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
+    table["end"] = table["end"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
+    table = table.astype({"duration_s": float, "size_c": float})
+    return sort_naturally(table, ["start", "sensor"])
 
 
 def _native_series(
@@ -589,59 +754,64 @@ def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float) -> str:
     return f"has a {gap['duration_s']:.0f} s gap ({_iso(start_ns)} to {_iso(end_ns)}) longer than max_gap_s{limit}"
 
 
-def check_gaps(
+@dataclass(frozen=True)
+class GapOverlap:
+    """A sensor's long gaps that overlap measurement windows: the first, and how many.
+
+    ``text`` names the file (when known), the sensor, the first gap (interior, or the
+    record's start or end) and the first measurement it hides, then how many more.
+    """
+
+    sensor: str
+    start: pd.Timestamp
+    end: pd.Timestamp
+    text: str
+
+
+def gap_overlaps(
     gaps: pd.DataFrame,
     windows: pd.DataFrame,
     *,
-    allow: bool,
     max_gap_s: float,
     files: Mapping[str, object] | None = None,
-) -> list[str]:
-    """Long temperature gaps that overlap a measurement window.
+) -> list[GapOverlap]:
+    """Long temperature gaps that overlap a measurement window, one summary per sensor.
 
     Parameters
     ----------
     gaps : ``CleanedTemperatures.gaps``.
     windows : one row per measurement: ``measurement``, ``start``, ``end`` (optionally
         ``name``).
-    allow : when False an overlap is an error; when True it is returned as a warning
-        (config ``temperatures.allow_long_gaps``).
     max_gap_s : the limit in force, named in the messages (``temperatures.max_gap_s``).
     files : sensor -> the file its readings came from, named in the messages.
 
     Returns
     -------
-    list of str
-        One warning per (sensor, measurement) overlap (only when ``allow``).  Gaps
-        outside every window are harmless and already listed in ``gaps``.
-
-    Raises
-    ------
-    ValueError
-        Naming the file, the sensor, the gap (interior, or the record's start or end)
-        and the measurement, for the first overlap.
+    list of GapOverlap
+        In the order of the sensors' first overlap. Gaps outside every window are
+        harmless and already listed in ``gaps``; a gap ending exactly when a window
+        starts has a real sample there.
     """
     _check_windows(windows)
     files = files or {}
     g_start, g_end = _as_ns(gaps["start"]), _as_ns(gaps["end"])
     w_start, w_end = _as_ns(windows["start"]), _as_ns(windows["end"])
-    # Strict inequalities: a gap ending exactly at a window's start has a real sample there.
     hits = (g_start[:, None] < w_end[None, :]) & (g_end[:, None] > w_start[None, :])
-    messages = []
+    by_sensor: dict[str, list[tuple[int, int]]] = {}
     for i, j in zip(*np.nonzero(hits), strict=False):
+        by_sensor.setdefault(gaps.iloc[i]["sensor"], []).append((i, j))
+    out = []
+    for sensor, pairs in by_sensor.items():
+        i, j = pairs[0]
         gap, window = gaps.iloc[i], windows.iloc[j]
-        where = f"{files[gap['sensor']]}: " if gap["sensor"] in files else ""
-        messages.append(
-            f"{where}sensor {gap['sensor']} {_gap_text(gap, g_start[i], g_end[i], max_gap_s)}, during measurement "
-            f"{_window_label(window)} ({_iso(w_start[j])} to {_iso(w_end[j])})"
+        where = f"{files[sensor]}: " if sensor in files else ""
+        more = f" (and {len(pairs) - 1} more)" if len(pairs) > 1 else ""
+        text = (
+            f"{where}sensor {sensor} {_gap_text(gap, g_start[i], g_end[i], max_gap_s)}, during measurement "
+            f"{_window_label(window)} ({_iso(w_start[j])} to {_iso(w_end[j])}){more}"
         )
-    if messages and not allow:
-        more = f" (and {len(messages) - 1} more)" if len(messages) > 1 else ""
-        raise ValueError(
-            f"{messages[0]}{more}; expected readings throughout every measurement: raise temperatures.max_gap_s, "
-            "or set temperatures.allow_long_gaps to average what the window has"
-        )
-    return messages
+        out.append(GapOverlap(str(sensor), gap["start"], gap["end"], text))
+    return out
 
 
 def _interp_at(grid_ns: np.ndarray, values: np.ndarray, t_ns: np.ndarray) -> np.ndarray:
