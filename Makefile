@@ -91,7 +91,8 @@ results: env
 		$(BIN)/python -m thermaxis.benchmark data/benchmarks/fl_thermal.yaml --out results/_benchmarks/fl_thermal; \
 	else echo "thermaxis: benchmark fl_thermal skipped: ../shared/realdata/fl_thermal/data.xlsx is not beside the checkout"; fi
 	@echo "== the answer per dataset"
-	@$(BIN)/python -c "from thermaxis.config import load_config; print('\n'.join('results/' + d for d in load_config()['datasets']))" \
+	@$(BIN)/python -c "from thermaxis.config import load_config; from thermaxis.dataset.reader import load_dataset; \
+		print('\n'.join('results/' + load_dataset(d).name for d in load_config()['datasets']))" \
 	| xargs $(BIN)/python -m thermaxis.reports.answer
 
 # Re-import the embedded measured dataset from its public source (shared/realdata).

@@ -20,6 +20,9 @@ so the repository's own ``results/`` are never touched):
 * ``subsets``: the sweep's exhaustive search of every 3 of 22 sensors (1,540 subsets) on a
   generated dataset of 5 runs with one target position, point by point with MLR, every run
   held out once;
+* ``records_<name>``: the recommendation of every embedded dataset and of the public
+  FL_THERMAL record's channels 1-5 (:mod:`tools.bench_records`), with its mean held-out
+  RMSE beside the plain nested ridge baseline's and the paper's configuration's;
 * ``startup``: ``snakemake --version`` and the one-rule no-op in ``.venv`` and, when
   ``make slurm-env`` has made it, in ``.venv-slurm`` (the Slurm executor plugin
   installed; on a machine with the Slurm client and no controller its import waits for
@@ -59,6 +62,7 @@ import yaml
 
 from thermaxis.config import load_config
 from thermaxis.dataset.safety import load_yaml
+from tools import bench_records
 
 __all__ = [
     "Measurement",
@@ -83,7 +87,17 @@ SCALE_SHAPES = {
 MIB = 1024.0 * 1024.0
 # Linux reports ru_maxrss in KiB, macOS in bytes.
 _MAXRSS_UNIT = 1.0 if sys.platform == "darwin" else 1024.0
-STEPS = ("startup", "dryrun", "results", "sweep", "subsets", "scale", "twin_calibrate", "test")
+STEPS = (
+    "startup",
+    "dryrun",
+    "results",
+    "sweep",
+    "subsets",
+    "scale",
+    "records",
+    "twin_calibrate",
+    "test",
+)
 SUBSET_SHAPE = {"sensors": 22, "positions": 1, "hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0, "seed": 0}  # fmt: skip
 SUBSET_RUNS = 5
 SUBSET_SWEEP = {"methods": ["subset"], "n_clusters": [3], "approaches": ["pointwise"], "algorithms": ["mlr"],
@@ -465,6 +479,18 @@ def run_bench(
             for shape, spec in SCALE_SHAPES.items():
                 for n in runs:
                     _scale_run(scratch, logs, shape, spec, n, cores, env, timeout_s, keep, record)
+        if "records" in steps:
+            work = prepare_workdir(scratch / "records")
+            datasets = [REPO / d for d in load_config(REPO / "config" / "config.yaml")["datasets"]]
+            datasets += bench_records.import_channels(
+                REPO, scratch / "records_data", env, timeout_s
+            )
+            for m, quality in bench_records.run_records(
+                datasets, work, lambda *a: _snakemake(cores, *a), measure, logs, env, timeout_s
+            ):
+                record(m)
+                if quality is not None:
+                    doc.setdefault("records", []).append(quality)
         if "twin_calibrate" in steps:
             # Into the scratch folder: the committed parameters and data stay as they are.
             target = scratch / "twin_calibrate"
@@ -627,7 +653,16 @@ def finish(doc: dict, measurements: list[Measurement], out: Path) -> dict:
                     fit_scaling([m.runs for m in scale], [m.cpu_s for m in scale], "CPU time")
                 ),
             }
-    doc["targets"] = _targets(measurements)
+    doc["targets"] = _targets(measurements) + [
+        {
+            "target": f"{q['record']}: recommendation <= {bench_records.RECORD_TARGETS['baseline']} x the nested "
+            f"ridge baseline and <= {bench_records.RECORD_TARGETS['paper']} x the paper's configuration",
+            "measured": f"{q['recommended_rmse_um']:.2f} um: {q['vs_baseline']:.2f} x {q['baseline_rmse_um']:.2f}, "
+            f"{q['vs_paper']:.2f} x {q['paper_rmse_um']:.2f}",
+            "met": q["met"],
+        }
+        for q in doc.get("records", [])
+    ]
     out.mkdir(parents=True, exist_ok=True)
     (out / "bench.json").write_text(
         json.dumps(doc, indent=1, sort_keys=True) + "\n", encoding="utf-8"
@@ -761,6 +796,20 @@ def bench_markdown(doc: dict) -> str:
     for shape, fit in doc.get("scale_fit", {}).items():
         lines += ["", f"Scaling of the scale series {shape}: {fit['wall']['statement']}.",
                   f"{fit['cpu']['statement']}."]  # fmt: skip
+    if doc.get("records"):
+        lines += [
+            "",
+            "Mean held-out RMSE (µm, leave-one-condition-out) of the recommendation, the plain nested ridge "
+            "baseline (`baseline-ridge+lags`) and the paper's configuration (tools/bench_records.py):",
+            "",
+            "| record | folds | recommendation | nested ridge | paper's configuration | vs ridge | vs paper |",
+            "|---|---:|---:|---:|---:|---:|---:|",
+        ]
+        lines += [
+            f"| {q['record']} | {q['folds']} | {q['recommended_rmse_um']:.2f} | {q['baseline_rmse_um']:.2f} | "
+            f"{q['paper_rmse_um']:.2f} | {q['vs_baseline']:.2f} | {q['vs_paper']:.2f} |"
+            for q in doc["records"]
+        ]
     if doc.get("targets"):
         lines += ["", "| target | measured | met |", "|---|---|---|"]
         lines += [

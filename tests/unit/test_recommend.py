@@ -7,7 +7,15 @@ import pandas as pd
 import pytest
 
 from thermaxis.config import Settings
-from thermaxis.method.recommend import Candidate, candidate_view, inner_splits, recommend
+from thermaxis.method.recommend import (
+    BASELINE,
+    Candidate,
+    _choose,
+    candidate_view,
+    default_candidates,
+    inner_splits,
+    recommend,
+)
 
 DEFAULTS = Settings.from_config({})
 POSITIONS = (0.0, 200.0, 400.0)
@@ -139,3 +147,45 @@ def test_with_two_runs_no_fold_is_chosen_but_the_final_choice_is_made():
     assert list(result.folds["chosen"]) == ["pointwise-mlr-T3"] * 2
     assert result.folds["inner_score"].isna().all() and result.inner.empty
     assert result.final == "pointwise-mlr-T1"
+
+
+def test_the_one_standard_error_rule_keeps_the_baseline_unless_beaten_beyond_the_noise():
+    # Inner scores of three held-out runs, worked by hand. "lucky" has the lowest mean
+    # (1.0 vs the baseline's 1.1) but its paired differences -0.6, +0.6, -0.3 have mean
+    # -0.1 and standard error 0.37: no evidence. "steady" is 0.2 better on every run
+    # (differences -0.2 each, standard error 0): it displaces the baseline.
+    def rows(name, values):
+        return [
+            {"candidate": name, "held_out": f"R{i}", "max_abs": v} for i, v in enumerate(values)
+        ]
+
+    base = rows(BASELINE, [1.0, 1.0, 1.3])
+    lucky = rows("lucky", [0.4, 1.6, 1.0])
+    steady = rows("steady", [0.8, 0.8, 1.1])
+    scores = pd.DataFrame(base + lucky)
+    assert _choose(scores, ["lucky", BASELINE], "max_abs") == (BASELINE, pytest.approx(1.1))
+    scores = pd.DataFrame(base + lucky + steady)
+    assert _choose(scores, ["lucky", "steady", BASELINE], "max_abs") == (
+        "steady",
+        pytest.approx(0.9),
+    )
+    # Without the baseline the lowest mean chooses, as before.
+    assert _choose(pd.DataFrame(lucky + steady), ["lucky", "steady"], "max_abs")[0] == "steady"
+
+
+def test_the_plain_baseline_is_always_a_candidate_and_sees_only_its_own_lags():
+    candidates = default_candidates(
+        DEFAULTS.selection, DEFAULTS.models, True, ["S"], (30.0,), (20.0, 60.0, 180.0)
+    )
+    baseline = candidates[-1]
+    assert (baseline.name, baseline.approach, baseline.algorithm) == (
+        BASELINE,
+        "pointwise",
+        "ridge",
+    )
+    assert baseline.selection.method == "all" and baseline.models.signals == ()
+    assert baseline.models.searched == ("ridge",) and baseline.lags_min == (20.0, 60.0, 180.0)
+    X = pd.DataFrame({"run": ["R1"], "measurement": [1], "time_min": [0.0], "T1": [20.0],
+                      "T1@lag20min": [19.0], "T1@lag30min": [19.2], "S": [1.0]})  # fmt: skip
+    _, selectable, _ = candidate_view(X, baseline, ["S"])
+    assert selectable == ["run", "measurement", "time_min", "T1", "T1@lag20min"]

@@ -229,3 +229,30 @@ def test_a_departure_that_does_not_return_is_no_spike():
     assert spike_mask(t, x, **LIMITS)[20:25].sum() <= 1  # a 0.2 C wiggle on it may be one
     ((first, last, size),) = excursions(t, x, _limit(t, x))
     assert (first, last) == (20, 24) and size == pytest.approx(1.6, abs=0.15)  # the median
+
+
+@pytest.mark.parametrize("policy", ["keep", "fault"])
+def test_an_excursion_is_kept_or_dropped_as_a_fault_and_said_so(policy):
+    t, x = quantised_ramp("flattening", 0.1, 60.0, noise_c=0.03, seed=7)
+    inside = (t >= 6000.0) & (t < 7200.0)
+    frame = pd.DataFrame(
+        {
+            "time": pd.Timestamp("2024-01-01") + pd.to_timedelta(t, unit="s"),
+            "T3": np.where(inside, x + 1.5, x),
+        }
+    )
+    settings = replace(SETTINGS, interval_s=60.0, excursions=policy)
+    result = clean_temperatures({"box": frame}, {}, settings)
+    (event,) = result.excursions.itertuples()
+    assert (event.sensor, event.start, event.end) == (
+        "T3",
+        frame["time"][inside].iloc[0],
+        frame["time"][inside].iloc[-1],
+    )
+    grid = result.frame.set_index("time")["T3"]
+    middle = frame["time"][inside].iloc[10]
+    if policy == "keep":
+        assert event.action == "kept as data" and grid[middle] == pytest.approx(x[inside][10] + 1.5)
+    else:
+        # Dropped: a 20-minute hole, longer than max_gap_s (600 s), left NaN on the grid.
+        assert event.action == "dropped as a sensor fault" and np.isnan(grid[middle])

@@ -44,7 +44,8 @@ def main(snakemake):
         settings,
         p.signals,
     )
-    X, approach = setup.view, setup.approach
+    # The final model may read inputs this fold's does not (a signal): it replays on all of X.
+    everything, X, approach = X, setup.view, setup.approach
     if chosen is None:
         # The configured model's selection of this fold, as the models rule made it.
         with open(snakemake.input.selection, encoding="utf-8") as fh:
@@ -88,7 +89,7 @@ def main(snakemake):
             sensors,
         )
     steps, _ = heldout.replay(model, X_run, cycles)
-    _, final_values = heldout.replay(final, X_run, cycles)
+    _, final_values = heldout.replay(final, everything.loc[~train], cycles)
     for step in steps:
         if step.reasons:
             logging.getLogger("thermaxis").warning(
