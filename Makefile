@@ -7,21 +7,23 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.thermaxis-env.sha256
 CORES ?= all
-# Quiet by default: Snakemake's own progress (jobs done of total, the rule that finished)
-# and its warnings; `make results V=1` prints every rule, reason and shell command. The
-# full log is in .snakemake/log/ either way.
+# Quiet by default: the maintained logger plugin snakemake-logger-plugin-rich (a progress
+# bar of jobs done of total and the rules running on a terminal; the job table and the
+# outcome otherwise), and the rules' warnings; `make results V=1` prints Snakemake's own
+# full output, every rule, reason and shell command. The full log is in .snakemake/log/
+# either way.
 V ?= 0
 ifeq ($(V),1)
 SNAKEMAKE_OUTPUT := --printshellcmds
 else
-SNAKEMAKE_OUTPUT := --quiet rules reason host
+SNAKEMAKE_OUTPUT := --logger rich
 endif
 SNAKEMAKE := $(BIN)/snakemake --cores $(CORES) $(SNAKEMAKE_OUTPUT)
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
 
-.PHONY: env results import test lint fmt clean twin twin-calibrate report sweep bench help
+.PHONY: env results import test lint fmt clean twin twin-calibrate twin-conflicts report sweep bench help
 
 help:
 	@echo "make help            this list"
@@ -34,6 +36,7 @@ help:
 	@echo "make fmt             snakefmt over Snakefile and workflow/rules/"
 	@echo "make twin            regenerate data/raw/twin (byte-identical) from the committed twin parameters"
 	@echo "make twin-calibrate  refit src/thermaxis/twin_params.json to the paper's published targets, then regenerate data/raw/twin"
+	@echo "make twin-conflicts  optimise each group of the paper's targets alone and in pairs: docs/twin-conflicts.md"
 	@echo "make report          Snakemake report: results/<dataset>/report.zip"
 	@echo "make sweep           sweep cluster counts x selection x algorithms x decoupling degree"
 	@echo "make bench           benchmark; writes results/bench/bench.json and bench.md"
@@ -121,6 +124,9 @@ twin: env
 
 twin-calibrate: env
 	$(BIN)/python -m thermaxis.twin calibrate
+
+twin-conflicts: env
+	$(BIN)/python -m thermaxis.twin conflicts
 
 report: results
 	$(SNAKEMAKE) --report "results/twin/report.zip"

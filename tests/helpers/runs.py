@@ -58,7 +58,16 @@ def make_lines_run(tmp: Path) -> Run:
     work = workflow_workdir(tmp)
     # No model reports (notebooks are the costliest jobs, and this run is made twice, see
     # test_interrupted_run): the reports build `built` has them and checks their bytes.
-    config = tiny_config(work, dataset, reports={"model_algorithms": []}, sweep=LINES_SWEEP)
+    # The paper's decoupled model is deployed: its controller line (K0, tan beta, P0) is the
+    # compensation exactly, which test_cli_workflow replays; on these three runs the
+    # recommendation keeps the plain baseline, a point-by-point ridge with lags.
+    config = tiny_config(
+        work,
+        dataset,
+        reports={"model_algorithms": []},
+        sweep=LINES_SWEEP,
+        compensation={"model": "paper"},
+    )
     run_snakemake(work, "--configfile", str(config))
     return Run(work=work, dataset=dataset, config=config, out=work / "results" / "lines")
 

@@ -84,3 +84,20 @@ def test_a_model_without_time_aware_inputs_is_replayed_one_measurement_at_a_time
     assert steps[1].parameters.k0_mm == pytest.approx(0.022, abs=1e-12)
     assert steps[1].parameters.tan_beta == pytest.approx(-13e-6, abs=1e-15)
     assert values[1] == steps[1].parameters
+
+
+def test_fallback_warnings_are_one_line_per_fold_and_status():
+    from thermaxis.compensation.heldout import fallback_summary
+    from thermaxis.compensation.runtime import ControllerParameters, Step
+
+    p = ControllerParameters(0.0, 0.0, 0.0, (0.0,), 0.0, True)
+    steps = [
+        Step(0.0, p, "ok"),
+        Step(60.0, p, "hold", ("T16: changes 0.6 C/min (limit 0.5 C/min)",)),
+        Step(120.0, p, "hold", ("T16: changes 0.9 C/min (limit 0.5 C/min)", "T5: stale")),
+        Step(180.0, p, "ok"),
+    ]
+    assert fallback_summary("R1", steps) == [
+        "fold R1: hold on 2 of 4 cycles (t=60 to 120 s): first T16: changes 0.6 C/min "
+        "(limit 0.5 C/min) at t=60 s; T5: stale at t=120 s"
+    ]

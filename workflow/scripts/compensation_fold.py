@@ -90,11 +90,8 @@ def main(snakemake):
         )
     steps, _ = heldout.replay(model, X_run, cycles)
     _, final_values = heldout.replay(final, everything.loc[~train], cycles)
-    for step in steps:
-        if step.reasons:
-            logging.getLogger("thermaxis").warning(
-                "fold %s t=%g s: %s: %s", fold, step.time_s, step.status, "; ".join(step.reasons)
-            )
+    for line in heldout.fallback_summary(fold, steps):
+        logging.getLogger("thermaxis").warning(line)
     raw = read_run(load_dataset(p.dataset), fold)
     deviations = heldout.pass_deviations(raw, list(Y.columns), p.max_missing_fraction)
     time_min = X_run.sort_values("measurement")["time_min"].tolist()

@@ -15,6 +15,7 @@ __all__ = [
     "held_out_accuracy",
     "run_states",
     "measurement_cycles",
+    "fallback_summary",
     "replay",
     "pass_deviations",
     "held_out_tables",
@@ -88,6 +89,27 @@ def replay(
     steps = compensator.run(times_s, samples, home)
     states = [{**samples[r], **derived[r]} for r in rows]
     return [steps[r] for r in rows], [compensator.parameters(s, home) for s in states]
+
+
+def fallback_summary(fold: str, steps: Sequence[Step]) -> list[str]:
+    """One line per fallback status of a held-out run: how many cycles, when, and why.
+
+    Each reason's sensor is named once, with its first occurrence (the cycle-by-cycle
+    account is the fold's ``residuals.csv`` and log).
+    """
+    lines = []
+    for status in dict.fromkeys(s.status for s in steps if s.reasons):
+        cycles = [s for s in steps if s.status == status and s.reasons]
+        first: dict[str, str] = {}
+        for step in cycles:
+            for reason in step.reasons:
+                first.setdefault(reason.split(":", 1)[0], f"{reason} at t={step.time_s:g} s")
+        lines.append(
+            f"fold {fold}: {status} on {len(cycles)} of {len(steps)} cycles "
+            f"(t={cycles[0].time_s:g} to {cycles[-1].time_s:g} s): first "
+            + "; ".join(first.values())
+        )
+    return lines
 
 
 def pass_deviations(

@@ -1,4 +1,4 @@
-"""Command line: ``python -m thermaxis.twin {generate,calibrate,scale} ...``."""
+"""Command line: ``python -m thermaxis.twin {generate,calibrate,conflicts,scale} ...``."""
 
 from __future__ import annotations
 
@@ -26,6 +26,11 @@ def _parser() -> argparse.ArgumentParser:
     cal.add_argument("--out", type=Path, default=DEFAULT_OUT)
     cal.add_argument("--truth", type=Path, default=DEFAULT_TRUTH)
     cal.add_argument("--params", type=Path, default=mdl.PARAMS_PATH)
+    con = sub.add_parser(
+        "conflicts",
+        help="optimise each group of the paper's targets alone and in pairs (which conflict)",
+    )
+    con.add_argument("--out", type=Path, default=Path("docs/twin-conflicts.md"))
     sc = sub.add_parser("scale", help="write a large benchmark dataset (not committed)")
     sc.add_argument("--out", type=Path, required=True)
     sc.add_argument("--runs", type=int, default=50)
@@ -70,6 +75,15 @@ def main(argv: list[str] | None = None) -> int:
             f"calibrated (noise-free RMS): {figures}; stages: {seconds}; "
             f"wrote {args.params} and regenerated {args.out}"
         )
+    elif args.command == "conflicts":
+        from .calibration import pipeline_observables
+        from .conflicts import conflicts, conflicts_markdown
+
+        experiments = conflicts(
+            pipeline_observables, progress=lambda line: print(line, file=sys.stderr)
+        )
+        args.out.write_text(conflicts_markdown(experiments), encoding="utf-8")
+        print(f"wrote {args.out}")
     else:
         from .scale import ScaleSpec, generate_scale
 

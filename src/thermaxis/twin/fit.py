@@ -667,6 +667,53 @@ def _jacobian(objective: _Objective, pool, lower: np.ndarray, upper: np.ndarray)
     return jac
 
 
+# The lambda-cut thresholds' start and range (free variables of the optimiser only).
+_ETA_START, _ETA_RANGE = 0.85, (0.5, 0.99)
+
+
+def _bounds(runs: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of (twin parameters, eta_k, eta_b): the physical ones, then the etas'."""
+    twin_lower, twin_upper = mdl.parameter_bounds(runs)
+    low, high = _ETA_RANGE
+    return np.concatenate([twin_lower, [low, low]]), np.concatenate([twin_upper, [high, high]])
+
+
+def _pool(workers: int):
+    import multiprocessing
+
+    return multiprocessing.get_context("fork").Pool(workers) if workers > 1 else None
+
+
+def _solve(objective: _Objective, pool, x, stage: Stage, lower, upper, pipeline):
+    """One stage of least squares from ``x``: the new x, scipy's solution, and its record."""
+    import time
+
+    start = time.perf_counter()
+    index = objective.free(stage)
+    if stage.through_pipeline:
+        objective.correct_to_pipeline(x, pipeline)
+    _set_stage((stage, x, index, objective.correction))
+    solution = least_squares(
+        objective,
+        x[index],
+        jac=_jacobian(objective, pool, lower[index], upper[index]),
+        bounds=(lower[index], upper[index]),
+        x_scale="jac",
+        max_nfev=stage.max_evaluations,
+        xtol=1e-10,
+        ftol=1e-10,
+    )
+    x = x.copy()
+    x[index] = solution.x
+    record = dict(
+        name=stage.name,
+        iterations=int(solution.njev),
+        evaluations=int(solution.nfev) + int(solution.njev) * index.size,
+        seconds=round(time.perf_counter() - start, 1),
+    )
+    return x, solution, record
+
+
 def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitResult:
     """Fit the free parameters to the paper's published fits and results, stage by stage.
 
@@ -678,9 +725,6 @@ def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitRes
     trust-region least squares with a fixed budget per stage (:data:`STAGES`), and
     forward-difference Jacobians computed the same way on any number of ``workers``.
     """
-    import multiprocessing
-    import time
-
     global _WORKER
     problem = _problem(step_s)
     runs = problem.runs
@@ -688,44 +732,18 @@ def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitRes
     x = np.array(
         [p.prior if np.isfinite(p.prior_width) else 0.0 for p in mdl.GLOBAL_PARAMETERS.values()]
         + [p.prior for _ in runs for p in mdl.INITIAL_PARAMETERS.values()]
-        + [0.85, 0.85]
+        + [_ETA_START, _ETA_START]
     )
-    twin_lower, twin_upper = mdl.parameter_bounds(runs)
-    lower = np.concatenate([twin_lower, [0.5, 0.5]])
-    upper = np.concatenate([twin_upper, [0.99, 0.99]])
+    lower, upper = _bounds(runs)
     x = np.clip(x, lower, upper)
     _WORKER = objective
-    pool = multiprocessing.get_context("fork").Pool(workers) if workers > 1 else None
+    pool = _pool(workers)
     stages, evaluations = [], 0
     try:
         for stage in STAGES:
-            start = time.perf_counter()
-            index = objective.free(stage)
-            if stage.through_pipeline:
-                objective.correct_to_pipeline(x, pipeline)
-            _set_stage((stage, x, index, objective.correction))
-            solution = least_squares(
-                objective,
-                x[index],
-                jac=_jacobian(objective, pool, lower[index], upper[index]),
-                bounds=(lower[index], upper[index]),
-                x_scale="jac",
-                max_nfev=stage.max_evaluations,
-                xtol=1e-10,
-                ftol=1e-10,
-            )
-            x = x.copy()
-            x[index] = solution.x
-            cost = int(solution.nfev) + int(solution.njev) * index.size
-            evaluations += cost
-            stages.append(
-                dict(
-                    name=stage.name,
-                    iterations=int(solution.njev),
-                    evaluations=cost,
-                    seconds=round(time.perf_counter() - start, 1),
-                )
-            )
+            x, solution, record = _solve(objective, pool, x, stage, lower, upper, pipeline)
+            evaluations += record["evaluations"]
+            stages.append(record)
     finally:
         if pool is not None:
             pool.close()
