@@ -32,6 +32,24 @@ class _OneLine(logging.Formatter):
         return f"thermaxis warning: {self._LOCATION.sub('', first)}"
 
 
+class _Once(logging.Filter):
+    """Warnings only, each text once: a sweep repeats one warning per configuration, and
+    the log file keeps every occurrence."""
+
+    def __init__(self):
+        super().__init__()
+        self._seen: set[str] = set()
+
+    def filter(self, record):
+        if record.levelno != logging.WARNING:
+            return False
+        text = _OneLine().format(record)
+        if text in self._seen:
+            return False
+        self._seen.add(text)
+        return True
+
+
 def _configure_logging(log_path: str | None) -> logging.Logger:
     logger = logging.getLogger("thermaxis")
     py_warnings = logging.getLogger("py.warnings")
@@ -51,7 +69,7 @@ def _configure_logging(log_path: str | None) -> logging.Logger:
     # (errors reach it through run_script's one line).
     terminal = logging.StreamHandler(sys.stderr)
     terminal.setFormatter(_OneLine())
-    terminal.addFilter(lambda record: record.levelno == logging.WARNING)
+    terminal.addFilter(_Once())
     logger.addHandler(handler)
     logging.captureWarnings(True)
     py_warnings.handlers.clear()
