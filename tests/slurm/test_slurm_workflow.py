@@ -175,21 +175,21 @@ def test_scancel_fails_cleanly_then_resubmits_and_the_rerun_is_byte_identical_to
     first = _slurm_command(config, "--retries", "0")
     first = [*first[: first.index("--") + 1], TARGETS[0]]
     run = _start(work, first, tmp_path / "run.log", slurm_env)
-    killed = _running_job("fit_predict")
+    killed = _running_job("models")
     subprocess.run(["scancel", killed], check=True)
     output = _finish(run, tmp_path / "run.log")
     assert run.returncode != 0
     assert f"SLURM-job '{killed}' failed, SLURM status is: 'CANCELLED'" in output
-    assert "fit_predict" in output
+    assert "models" in output
     # Nothing half-written: the killed job's outputs are gone, no temporary file is left.
     fold_dir = work / "results" / "twin" / "models" / "E4"
     assert not (fold_dir.exists() and any(fold_dir.iterdir()))
     assert not [p for p in (work / "results").rglob(".*") if p.is_file()]
 
-    # 2. The rerun, with the profile's retries: its fit_predict job is killed too,
+    # 2. The rerun, with the profile's retries: its models job is killed too,
     # resubmitted, and the run completes with the local run's bytes.
     rerun = _start(work, _slurm_command(config), tmp_path / "rerun.log", slurm_env)
-    killed_again = _running_job("fit_predict")
+    killed_again = _running_job("models")
     subprocess.run(["scancel", killed_again], check=True)
     output = _finish(rerun, tmp_path / "rerun.log")
     assert rerun.returncode == 0, output[-5000:]

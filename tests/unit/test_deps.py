@@ -11,10 +11,10 @@ def names(entry):
     return {Path(p).relative_to(PACKAGE).as_posix() for p in library_modules(entry)}
 
 
-def test_selection_script_reaches_models_through_the_folds():
-    # select.py imports cleaning.run, method.folds and pipeline.runner; the folds import
+def test_models_script_reaches_the_method_through_the_folds():
+    # models.py imports cleaning.run, method.folds and pipeline.runner; the folds import
     # models, selection, decouple and metrics (read off the files' import lines by hand).
-    found = names(REPO / "workflow/scripts/select.py")
+    found = names(REPO / "workflow/scripts/models.py")
     assert {
         "cleaning/run.py",
         "method/folds.py",

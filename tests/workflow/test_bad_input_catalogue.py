@@ -1291,8 +1291,8 @@ END_TO_END = {
     "measurement_symlink_outside",  # clean_run refuses a file outside the dataset
     "temp_fahrenheit",  # clean_run warns, and the warning reaches the terminal
     "error_positions_differ",  # assemble refuses
-    "constant_sensor_too_few_for_clusters",  # select_sensitive_points refuses
-    "constant_every_sensor",  # select_sensitive_points refuses, naming the fold's temperatures file
+    "constant_sensor_too_few_for_clusters",  # the models rule's selection refuses
+    "constant_every_sensor",  # the models rule refuses, naming the fold's temperatures file
 }
 
 
@@ -1391,7 +1391,7 @@ def _target_jobs(case: Case, runs: list[str]) -> list[tuple[str, dict]]:
         "summary": cleans + [("dataset_summary", {})],
         "clean": [("clean_run", {"run": arg})],
         "assemble": cleans + [("assemble", {})],
-        "select": cleans + [("assemble", {}), ("select_sensitive_points", {"fold": arg})],
+        "select": cleans + [("assemble", {}), ("models", {})],
         "sweep": [],
     }[kind]
 

@@ -52,12 +52,7 @@ def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run, 
     model_change = work / "model_change.yaml"
     model_change.write_text(yaml.safe_dump({**doc, "models": {**doc["models"], "random_state": 7}}))
     rules = planned_rules(run_snakemake(work, *wanted, "-n", "--configfile", str(model_change)))
-    assert {
-        "compensation_model",
-        "compensation_fold",
-        "compensation_collect",
-        "compensation_plc",
-    } <= rules, rules
+    assert "compensation" in rules, rules
 
     figure_change = work / "figure_change.yaml"
     figure_change.write_text(yaml.safe_dump({**doc, "figures": {**doc["figures"], "dpi": 120}}))

@@ -157,7 +157,7 @@ def test_changing_n_clusters_reruns_only_the_affected_reports(built, library_unc
     # The dataset report leads with the answer (recommendation and verdict), so it
     # follows the selection too; what the data are (cleaning, assembly) does not.
     assert {
-        "select_sensitive_points",
+        "models",
         "model_report",
         "paper_report",
         "dataset_report",

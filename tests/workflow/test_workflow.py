@@ -178,7 +178,8 @@ def test_plot_option_reruns_only_figure_rules(lines_run, library_unchanged):
 def test_editing_a_module_selection_imports_indirectly_reruns_selection(
     lines_run, tmp_path_factory
 ):
-    """models.py is named in no rule; select.py reaches it through experiment.select_for_fold.
+    """method/models.py is named in no rule; the models rule's script reaches it through
+    method.folds.
 
     Snakemake compares checksums of inputs newer than the outputs, so the edit must
     change the file's content; it is restored byte for byte afterwards.
@@ -197,5 +198,5 @@ def test_editing_a_module_selection_imports_indirectly_reruns_selection(
         finally:
             module.write_bytes(original)
             os.utime(module, (stat.st_atime, stat.st_mtime))
-    assert re.search(r"rule select_sensitive_points:", dry.stdout)
+    assert re.search(r"rule models:", dry.stdout)
     assert not re.search(r"rule clean_run:", dry.stdout)

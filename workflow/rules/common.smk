@@ -130,6 +130,14 @@ def dataset_files():
 # --------------------------------------------------------------------------- vocabulary
 APPROACHES = list(vocabulary.APPROACHES) if DECOUPLED else ["pointwise"]
 ALGORITHMS = list(SETTINGS.models.algorithms)
+# The tables each fold of the models rule writes (thermaxis.method.folds.SORT_KEYS).
+MODEL_TABLES = [
+    "metrics",
+    "coefficients",
+    "kb_predictions",
+    "error_predictions",
+    "fitting",
+]
 FIG_ALGORITHMS = [a for a in SETTINGS.figures.algorithms if a in ALGORITHMS]
 REPORT_ALGORITHMS = [a for a in SETTINGS.reports.model_algorithms if a in ALGORITHMS]
 # Model reports embed the prediction figures of their algorithms, so those are drawn too.
@@ -153,7 +161,7 @@ wildcard_constraints:
 
 # --------------------------------------------------------------------------- figures
 # Every figure comes from the figure table (thermaxis.figures.registry); figures.smk
-# defines one rule per family. FACTS is what the table's conditions and arguments name.
+# defines one rule per family, one job each. FACTS is what the table's conditions and arguments name.
 FIG_FORMATS = list(SETTINGS.figures.formats)
 FIG_RUN = SETTINGS.figures.run or RUNS[0]
 OTHER_RUNS = [r for r in RUNS if r != FIG_RUN]
@@ -197,9 +205,18 @@ def figure_code(figures):
     return sorted(set(code_of("plot.py")) | set(named_modules(*names)))
 
 
-def figure_output(figure):
+def figure_instances(figures=FIGURES):
+    """Each figure with its wildcards: once per fold when its stem holds the fold, else once."""
+    return [
+        (fig, {"fold": fold} if fold else {})
+        for fig in figures
+        for fold in (FOLDS if fig.per_fold else [None])
+    ]
+
+
+def figure_output(figure, wildcards):
     """A figure's files, filed in the Snakemake report when it has a category."""
-    paths = figure_paths(figure)
+    paths = figure_paths(figure, **wildcards)
     if figure.category is None:
         return paths
     return report(
@@ -207,24 +224,37 @@ def figure_output(figure):
         caption="../report/figure.rst",
         category=CATEGORY[figure.category],
         subcategory=figure.subcategory,
-        labels=figure.labels,
+        labels={
+            k: v.format(**wildcards) if isinstance(v, str) else v
+            for k, v in figure.labels.items()
+        },
     )
 
 
 def figure_files(figures=FIGURES):
     """Every file of ``figures``, a per-fold figure's for every fold, in table order."""
     return [
-        f"{OUT}/{fig.folder}/{fig.stem.format(fold=fold)}.{ext}"
-        for fig in figures
-        for fold in (FOLDS if fig.per_fold else [None])
-        for ext in FIG_FORMATS
+        path
+        for fig, wildcards in figure_instances(figures)
+        for path in figure_paths(fig, **wildcards)
     ]
 
 
-def figure_specs(figures, wildcards):
-    """What plot.py draws: per figure its function, tables, arguments, files and caption."""
+def figure_tables(figures):
+    """The tables a family reads, a per-fold figure's for every fold."""
+    return sorted(
+        {
+            f"{OUT}/{path}".format(**wildcards)
+            for fig, wildcards in figure_instances(figures)
+            for path in fig.tables.values()
+        }
+    )
+
+
+def figure_specs(figures):
+    """What plot.py draws: per figure (and fold) its function, tables, arguments, files and caption."""
     specs = []
-    for fig in figures:
+    for fig, wildcards in figure_instances(figures):
         spec = dict(
             stem=fig.stem.format(**wildcards),
             draw=fig.draw,
@@ -523,20 +553,17 @@ def index_sections():
 def index_figures():
     """The index's thumbnails by stage: (stage, [(stem, caption, thumbnail, [(ext, path)])])."""
     groups = {}
-    for fig in FIGURES:
-        for fold in FOLDS if fig.per_fold else [None]:
-            wildcards = {"fold": fold} if fold else {}
-            stem = fig.stem.format(**wildcards)
-            paths = figure_paths(fig, **wildcards)
-            thumbnail = next((p for p in paths if p.endswith((".png", ".svg"))), None)
-            groups.setdefault(fig.category, []).append(
-                (
-                    stem,
-                    registry.caption_of(fig, FACTS, wildcards) or "",
-                    thumbnail,
-                    [(Path(p).suffix[1:], p) for p in paths],
-                )
+    for fig, wildcards in figure_instances():
+        paths = figure_paths(fig, **wildcards)
+        thumbnail = next((p for p in paths if p.endswith((".png", ".svg"))), None)
+        groups.setdefault(fig.category, []).append(
+            (
+                fig.stem.format(**wildcards),
+                registry.caption_of(fig, FACTS, wildcards) or "",
+                thumbnail,
+                [(Path(p).suffix[1:], p) for p in paths],
             )
+        )
     order = list(CATEGORY)
     return [
         (CATEGORY[key].split(". ", 1)[1], figures)
@@ -772,8 +799,7 @@ RESOURCES = {
             "sweep_report",
         )
     },
-    "compensation_model": (1000, MIN_RUNTIME_MIN),
-    "compensation_fold": (1000, MIN_RUNTIME_MIN),
+    "compensation": (1000, MIN_RUNTIME_MIN),
     # Every candidate on every inner split of one fold: the heaviest jobs of a run.
     "recommend_fold": (1000, 30),
     "sweep_batch": (MIN_MEMORY_MB, sweep_batch_minutes),

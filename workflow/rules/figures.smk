@@ -1,34 +1,33 @@
 # The figures, one rule per family of the figure table (thermaxis.figures.registry; the
-# table is read in common.smk, figures block): each family is one job, per fold when its
-# stems hold the fold, because starting Python and importing matplotlib costs more than
+# table is read in common.smk, figures block): each family is one job, every fold's
+# figures included, because starting Python and importing matplotlib costs more than
 # drawing a figure. A family reads only tables the computing rules wrote, so a cosmetic
 # change reruns only plots.
 
 
 for family, figures in FIGURE_FAMILIES.items():
-    per_fold = any(fig.per_fold for fig in figures)
-    where = f"{family}_{{fold}}" if per_fold else family
 
     rule:
         name:
             family
         input:
-            tables=sorted(
-                {f"{OUT}/{path}" for fig in figures for path in fig.tables.values()}
-            ),
+            tables=figure_tables(figures),
             code=figure_code(figures),
         output:
-            *(figure_output(fig) for fig in figures),
+            *(
+                figure_output(fig, wildcards)
+                for fig, wildcards in figure_instances(figures)
+            ),
         log:
-            f"{LOGS}/figures/{where}.log",
+            f"{LOGS}/figures/{family}.log",
         benchmark:
-            f"{BENCH}/figures/{where}.tsv"
+            f"{BENCH}/figures/{family}.tsv"
         conda:
             ENV
         resources:
             **rule_resources(family),
         params:
-            figures=lambda w, figures=figures: figure_specs(figures, dict(w.items())),
+            figures=figure_specs(figures),
             simulated=SIMULATED,
             dpi=SETTINGS.figures.dpi,
         script:

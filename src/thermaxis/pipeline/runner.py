@@ -14,6 +14,7 @@ import re
 import sys
 import tempfile
 import warnings
+from collections.abc import Mapping
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -163,15 +164,25 @@ def _raise_named(exc: OSError, path: Path):
     raise OSError(code, os.strerror(code), str(path)) from exc
 
 
-def write_csv(frame, path, float_format: str = "%.6g") -> None:
+def csv_text(frame, float_format: str = "%.6g") -> str:
     """CSV with explicit float format and Unix newlines, so reruns are byte-identical."""
-    with atomic_path(path) as tmp:
-        frame.to_csv(tmp, index=False, float_format=float_format, lineterminator="\n")
+    return frame.to_csv(index=False, float_format=float_format, lineterminator="\n")
+
+
+def write_csv(frame, path, float_format: str = "%.6g") -> None:
+    write_text(csv_text(frame, float_format), path)
 
 
 def write_text(text: str, path) -> None:
     with atomic_path(path) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
+
+
+def write_texts(texts: Mapping) -> None:
+    """Every file of a job, written only once all of them are computed: a job that stops
+    half-way leaves none of its outputs behind."""
+    for path, text in texts.items():
+        write_text(text, path)
 
 
 def write_parquet(frame, path) -> None:

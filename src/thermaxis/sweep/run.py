@@ -2,7 +2,7 @@
 
 Each configuration is evaluated on every fold by
 :func:`thermaxis.method.folds.evaluate_configuration`, the function the main workflow's
-``fit_predict`` rule calls: the sweep has no model code of its own, and its metric
+``models`` rule calls: the sweep has no model code of its own, and its metric
 columns are :data:`thermaxis.method.metrics.METRIC_COLUMNS`. The grid, units and batches are
 planned by :mod:`thermaxis.sweep.plan`; the figures are in :mod:`thermaxis.figures`.
 

@@ -1,0 +1,225 @@
+"""The deployable compensation in one job: the model fitted on every run, each held-out
+run's fold model replayed as the controller would run it, the verdict, the collected
+controller exports and the Structured Text block.
+
+The deployed model is config compensation.model: the recommendation's choice among the
+candidates the controller exports can compute, the paper's configured model, or a named
+candidate (thermaxis.method.recommend.deployed_record). The inputs are read once; every
+fold's replay starts from them.
+"""
+
+import io
+import json
+import logging
+from dataclasses import replace
+from importlib.metadata import version
+
+import pandas as pd
+
+from thermaxis.cleaning.run import logged_series, model_inputs
+from thermaxis.compensation import heldout, runtime
+from thermaxis.compensation import model as comp_model
+from thermaxis.compensation.exports import file_header
+from thermaxis.compensation.plc import structured_text
+from thermaxis.compensation.verdict import deployment_verdict, verdict_sentence
+from thermaxis.config import (
+    CompensationSettings,
+    DecouplingSettings,
+    ModelSettings,
+    SelectionSettings,
+)
+from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.method import recommend
+from thermaxis.method.folds import select_for_fold, selection_from_dict
+from thermaxis.pipeline.runner import csv_text, run_script, write_texts
+
+SORT = ["fold", "measurement"]
+
+
+def _settings(p):
+    sections = p.sections
+    return dict(
+        decoupling=DecouplingSettings.from_section(sections["decoupling"]),
+        compensation=CompensationSettings.from_section(sections["compensation"]),
+        selection=SelectionSettings.from_section(sections["selection"]),
+        models=ModelSettings.from_section(sections["models"]),
+    )
+
+
+def _select(setup, Y, fold, scope, degree):
+    """The sensitive points of ``setup``'s view, on the training runs of ``fold`` or on all."""
+    return select_for_fold(
+        setup.view[setup.selectable],
+        Y,
+        fold,
+        replace(setup.selection, scope=scope),
+        degree,
+        decoupled=setup.approach == "decoupled",
+        pointwise=setup.approach == "pointwise",
+    )
+
+
+def fitted_model(snakemake, X, Y, s, choice) -> dict:
+    """The deployed model on every run (the verdict comes later)."""
+    p = snakemake.params
+    record = recommend.deployed_record(s["compensation"].model, choice)
+    setup = recommend.deployed_setup(
+        record, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
+    )
+    if record is None:
+        deployment = {"model": "paper", "candidate": "paper"}
+        accuracy = heldout.held_out_accuracy(
+            pd.read_csv(snakemake.input.metrics), setup.approach, setup.settings.algorithm
+        )
+    else:
+        deployment = {"model": p.model, "candidate": record["name"]}
+        scores = pd.concat(
+            [pd.read_csv(path) for path in snakemake.input.scores], ignore_index=True
+        )
+        accuracy = recommend.held_out_accuracy(scores, record["name"])
+    # The deployed model sees every run, its sensitive points too.
+    selection = _select(setup, Y, "all runs", "all", s["decoupling"].degree)
+    fitted = comp_model.fit_model_record(
+        setup.view,
+        Y,
+        selection,
+        setup.approach,
+        setup.models,
+        s["decoupling"],
+        setup.settings,
+        **p.about,
+        held_out_accuracy=accuracy,
+        deployment={
+            **deployment,
+            "approach": setup.approach,
+            "algorithm": setup.settings.algorithm,
+        },
+        provenance={
+            "citation": p.citation,
+            "packages": {name: version(name) for name in ("thermaxis", "scikit-learn", "numpy")},
+            "settings": p.sections,
+        },
+    )
+    comp_model.validate_model(fitted, where=snakemake.output.fitted)
+    return fitted
+
+
+def fold_tables(snakemake, i, fold, X, Y, s, choice, final) -> tuple[str, dict]:
+    """One held-out run: its fold's model (JSON text) and the exports and error left."""
+    p, inputs = snakemake.params, snakemake.input
+    # The model the procedure would have deployed without this run (its fold's choice).
+    chosen = recommend.deployed_record(s["compensation"].model, choice, fold)
+    setup = recommend.deployed_setup(
+        chosen, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
+    )
+    if chosen is None:
+        # The configured model's selection of this fold, as the models rule made it.
+        with open(inputs.selections[i], encoding="utf-8") as fh:
+            selection = selection_from_dict(json.load(fh))
+    else:
+        selection = _select(setup, Y, fold, "training", s["decoupling"].degree)
+    view = setup.view
+    train = (view["run"] != fold).to_numpy()
+    record = comp_model.fit_model_record(
+        view.loc[train].reset_index(drop=True),
+        Y.loc[train].reset_index(drop=True),
+        selection,
+        setup.approach,
+        setup.models,
+        s["decoupling"],
+        setup.settings,
+        **p.about,
+    )
+    text = json.dumps(record, indent=1) + "\n"
+    # The controller side reads the exported numbers, not the fitted estimator.
+    model = runtime.Compensator(json.loads(text))
+    X_run = view.loc[~train]
+    cycles = None
+    if model.derived or final.derived:
+        sensors = list(dict.fromkeys([*model.sensors, *final.sensors]))
+        cycles = heldout.measurement_cycles(
+            logged_series(
+                pd.read_parquet(inputs.series[i]), pd.read_parquet(inputs.signal_series[i])
+            ),
+            pd.read_csv(inputs.windows[i]),
+            sensors,
+        )
+    steps, _ = heldout.replay(model, X_run, cycles)
+    # The final model may read inputs this fold's does not (a signal): it replays on all of X.
+    _, final_values = heldout.replay(final, X.loc[~train], cycles)
+    for line in heldout.fallback_summary(fold, steps):
+        logging.getLogger("thermaxis").warning(line)
+    raw = read_run(load_dataset(p.dataset), fold)
+    deviations = heldout.pass_deviations(raw, list(Y.columns), p.max_missing_fraction)
+    time_min = X_run.sort_values("measurement")["time_min"].tolist()
+    return text, heldout.held_out_tables(
+        fold, steps, time_min, deviations, list(Y.columns), final_values
+    )
+
+
+def with_verdict(fitted: dict, summary: pd.DataFrame, choice, settings) -> dict:
+    """model.json: the fitted model with its deployment verdict from the held-out runs."""
+    verdict = deployment_verdict(summary, settings.max_worsening_um)
+    fitted = dict(fitted)
+    fitted["deployment"] = {
+        **fitted["deployment"],
+        "recommended_by_the_evidence": choice["final"]["name"],
+        "verdict": verdict,
+        "recommended_for_deployment": verdict["recommended_for_deployment"],
+        "sentence": verdict_sentence(verdict),
+    }
+    return fitted
+
+
+def _reread(text: str, **kwargs) -> pd.DataFrame:
+    """A table as a reader of its CSV file gets it back."""
+    return pd.read_csv(io.StringIO(text), **kwargs)
+
+
+def main(snakemake):
+    p, output = snakemake.params, snakemake.output
+    s = _settings(p)
+    X, Y = model_inputs(
+        pd.read_parquet(snakemake.input.errors),
+        pd.read_parquet(snakemake.input.temperatures),
+        signals=pd.read_parquet(snakemake.input.signals),
+        inputs=pd.read_parquet(snakemake.input.inputs),
+    )
+    with open(snakemake.input.choice, encoding="utf-8") as fh:
+        choice = json.load(fh)
+    fitted_text = json.dumps(fitted_model(snakemake, X, Y, s, choice), indent=1) + "\n"
+    final = runtime.Compensator(json.loads(fitted_text))
+    texts = {output.fitted: fitted_text}
+
+    for i, fold in enumerate(p.folds):
+        model_text, frames = fold_tables(snakemake, i, fold, X, Y, s, choice, final)
+        texts[output.fold_models[i]] = model_text
+        for name, frame in frames.items():
+            texts[output[f"fold_{name}"][i]] = csv_text(frame, float_format="%.10g")
+
+    summary = pd.concat(
+        [_reread(texts[path], comment="#") for path in output.fold_summary], ignore_index=True
+    )
+    record = with_verdict(json.loads(fitted_text), summary, choice, s["compensation"])
+    comp_model.validate_model(record, where=output.model)
+    texts[output.model] = model_text = json.dumps(record, indent=1) + "\n"
+    # The exports and the controller's block are written from the file a controller reads.
+    record = json.loads(model_text)
+    sentence = record["deployment"]["sentence"]
+    # Every export says in words which model it holds and whether it is recommended.
+    statement = f"{p.statement}\n# Deployment: {sentence}"
+    for name in p.tables:
+        frame = pd.concat(
+            [
+                _reread(texts[path], keep_default_na=False, na_values=[""])
+                for path in output[f"fold_{name}"]
+            ],
+            ignore_index=True,
+        ).sort_values(SORT, kind="stable", ignore_index=True)
+        body = frame.to_csv(index=False, float_format="%.10g", lineterminator="\n")
+        texts[output[name]] = file_header(name, statement) + body
+    texts[output.st] = structured_text(record, f"{p.statement} Deployment: {sentence}")
+    write_texts(texts)
+
+
+run_script(main, snakemake)
