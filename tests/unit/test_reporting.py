@@ -195,6 +195,40 @@ def test_strip_volatile_drops_time_stamps_and_fixes_the_injected_cell_id():
     assert nb["cells"][1] == {"id": "keep", "metadata": {}}
 
 
+def test_pages_share_one_kernel_but_not_its_names(tmp_path):
+    """Three pages of one notebook in one kernel: each sees its own parameter, none sees a
+    name the page before defined, and each counts its cells from 1 as a fresh kernel does."""
+    nb = nbformat.v4.new_notebook(
+        cells=[
+            nbformat.v4.new_code_cell("x = 0", metadata={"tags": ["parameters"]}),
+            nbformat.v4.new_code_cell("print(x, 'left' in dir())\nleft = x"),
+            nbformat.v4.new_code_cell("x * 10"),
+        ]
+    )
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "language": "python",
+        "display_name": "Python 3",
+    }
+    source = tmp_path / "page.ipynb"
+    nbformat.write(nb, source)
+    pages = [
+        dict(executed=tmp_path / f"p{i}.ipynb", html=tmp_path / f"p{i}.html", title=f"page {i}",
+             parameters={"x": i})
+        for i in (1, 2, 3)
+    ]  # fmt: skip
+    notebooks.execute_pages(source, pages)
+    for i, page in enumerate(pages, start=1):
+        done = nbformat.read(page["executed"], as_version=4)
+        code = [c for c in done.cells if c.cell_type == "code"]
+        # The parameters cell, papermill's injected cell, then the notebook's two cells.
+        assert [c.execution_count for c in code] == [1, 2, 3, 4]
+        assert code[2].outputs[0]["text"] == f"{i} False\n"
+        assert code[3].outputs[0]["data"]["text/plain"] == str(10 * i)
+        assert code[3].outputs[0]["execution_count"] == 4
+        assert f"page {i}" in page["html"].read_text(encoding="utf-8")
+
+
 def test_cleaning_repairs_keeps_only_repaired_sensors():
     qc = pd.DataFrame(
         {

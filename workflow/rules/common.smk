@@ -309,6 +309,13 @@ RUN_NOTEBOOK = (
     " --kernel python3 --start-timeout 120 --execution-timeout 600"
     " --title {params.title:q} --parameters {params.parameters:q} > {log:q} 2>&1"
 )
+# A report of one page per condition or fold: one kernel for every page, its namespace
+# reset between them (thermaxis.reports.notebooks.execute_pages).
+RUN_NOTEBOOK_PAGES = (
+    "python -m thermaxis.reports.notebooks run-pages {input.notebook:q}"
+    " --kernel python3 --start-timeout 120 --execution-timeout 600"
+    " --pages {params.pages:q} > {log:q} 2>&1"
+)
 # One model report per fold shows these side by side, as the paper compares them.
 REPORT_MODELS = [
     [approach, algorithm] for approach in APPROACHES for algorithm in REPORT_ALGORITHMS
@@ -334,7 +341,7 @@ def sections(*names):
 
 def notebook_parameters(input, sections_used, **values):
     """The notebook's parameters as JSON: every input but the notebook and the library, and ``values``."""
-    inputs = {k: v for k, v in input.items() if k not in ("notebook", "library")}
+    inputs = {k: v for k, v in dict(input).items() if k not in ("notebook", "library")}
     return json.dumps(
         dict(
             dataset_name=DATASET.name,
@@ -453,10 +460,10 @@ def paper_report_figures():
     return figures
 
 
-def condition_captions(wildcards):
+def condition_captions(run):
     """Captions of the figures a condition report draws for its run."""
     return {
-        f: figure_caption(f, DATASET.name, SIMULATED, run=wildcards.run)
+        f: figure_caption(f, DATASET.name, SIMULATED, run=run)
         for f in (
             "fig5_unzeroed",
             "fig6_error_vs_time",
@@ -464,6 +471,79 @@ def condition_captions(wildcards):
             "fig10_temperature_rise",
         )
     }
+
+
+def condition_report_inputs(run):
+    """What the condition report of ``run`` reads, by the notebook's input names."""
+    return dict(
+        summary=f"{OUT}/tables/dataset_summary.csv",
+        errors=f"{OUT}/clean/{run}/errors.parquet",
+        temperatures=f"{OUT}/clean/{run}/measurement_temperatures.parquet",
+        series=f"{OUT}/clean/{run}/temperatures.parquet",
+        qc=f"{OUT}/clean/{run}/qc.csv",
+        gaps=f"{OUT}/clean/{run}/gaps.csv",
+        windows=f"{OUT}/clean/{run}/windows.csv",
+        kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
+    )
+
+
+def model_report_inputs(fold):
+    """What the model report of ``fold`` reads, by the notebook's input names."""
+    return dict(
+        selection=f"{OUT}/selection/{fold}.csv",
+        selection_json=f"{OUT}/selection/{fold}.json",
+        metrics=f"{OUT}/models/{fold}/metrics.csv",
+        coefficients=f"{OUT}/models/{fold}/coefficients.csv",
+        kb=f"{OUT}/models/{fold}/kb_predictions.csv",
+        errors=f"{OUT}/models/{fold}/error_predictions.csv",
+        fitting=f"{OUT}/models/{fold}/fitting.csv",
+        compensation=[
+            f"{OUT}/compensation/folds/{fold}/{n}.csv"
+            for n in ("summary", "iso230_2", "siemens_840d", "twincat")
+        ],
+        fold_model=f"{OUT}/compensation/folds/{fold}/model.json",
+        deployed=f"{OUT}/compensation/model.json",
+        figures=[f["path"] for f in model_report_figures(fold).values()],
+    )
+
+
+def page_files(inputs_of, keys):
+    """Every file the pages of ``keys`` read (a page's inputs are files or lists of them)."""
+    return sorted(
+        {
+            path
+            for key in keys
+            for value in inputs_of(key).values()
+            for path in (value if isinstance(value, list) else [value])
+        }
+    )
+
+
+def report_pages(kind, keys, inputs_of, title, sections_used, **values_of):
+    """The JSON of a page-per-key report (RUN_NOTEBOOK_PAGES): per key its files, title
+    and parameters; ``values_of`` maps a parameter to its value or a function of the key.
+    """
+    return json.dumps(
+        [
+            dict(
+                executed=f"{OUT}/reports/{kind}_{key}.ipynb",
+                html=f"{OUT}/reports/{kind}_{key}.html",
+                title=title(key),
+                parameters=json.loads(
+                    notebook_parameters(
+                        inputs_of(key),
+                        sections_used,
+                        **{
+                            name: value(key) if callable(value) else value
+                            for name, value in values_of.items()
+                        },
+                    )
+                ),
+            )
+            for key in keys
+        ],
+        sort_keys=True,
+    )
 
 
 def model_report_figures(fold):

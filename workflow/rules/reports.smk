@@ -81,42 +81,39 @@ rule condition_report:
     input:
         notebook="notebooks/condition_report.ipynb",
         library=code_of("notebooks/condition_report.ipynb"),
-        summary=f"{OUT}/tables/dataset_summary.csv",
-        errors=f"{OUT}/clean/{{run}}/errors.parquet",
-        temperatures=f"{OUT}/clean/{{run}}/measurement_temperatures.parquet",
-        series=f"{OUT}/clean/{{run}}/temperatures.parquet",
-        qc=f"{OUT}/clean/{{run}}/qc.csv",
-        gaps=f"{OUT}/clean/{{run}}/gaps.csv",
-        windows=f"{OUT}/clean/{{run}}/windows.csv",
-        kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
+        pages=page_files(condition_report_inputs, RUNS),
     output:
-        notebook=f"{OUT}/reports/condition_{{run}}.ipynb",
-        html=report(
-            f"{OUT}/reports/condition_{{run}}.html",
-            caption="../report/notebook_report.rst",
-            category=CATEGORY["reports"],
-            subcategory="Conditions",
-            labels={"report": "condition", "run": "{run}"},
-        ),
+        notebooks=expand(f"{OUT}/reports/condition_{{run}}.ipynb", run=RUNS),
+        html=[
+            report(
+                f"{OUT}/reports/condition_{run}.html",
+                caption="../report/notebook_report.rst",
+                category=CATEGORY["reports"],
+                subcategory="Conditions",
+                labels={"report": "condition", "run": run},
+            )
+            for run in RUNS
+        ],
     log:
-        f"{LOGS}/reports/condition_{{run}}.log",
+        f"{LOGS}/reports/condition_report.log",
     benchmark:
-        f"{BENCH}/reports/condition_{{run}}.tsv"
+        f"{BENCH}/reports/condition_report.tsv"
     conda:
         ENV
     resources:
         **rule_resources("condition_report"),
     params:
-        title=lambda w: f"Condition report: run {w.run} ({DATASET.name})",
-        statement=DATA_STATEMENT,
-        parameters=lambda w, input: notebook_parameters(
-            input,
+        pages=report_pages(
+            "condition",
+            RUNS,
+            condition_report_inputs,
+            lambda run: f"Condition report: run {run} ({DATASET.name})",
             sections(*DATA_SECTIONS),
-            run=w.run,
-            captions=condition_captions(w),
+            run=lambda run: run,
+            captions=condition_captions,
         ),
     shell:
-        RUN_NOTEBOOK
+        RUN_NOTEBOOK_PAGES
 
 
 rule conditions_report:
@@ -157,42 +154,33 @@ rule model_report:
     input:
         notebook="notebooks/model_report.ipynb",
         library=code_of("notebooks/model_report.ipynb"),
-        selection=f"{OUT}/selection/{{fold}}.csv",
-        selection_json=f"{OUT}/selection/{{fold}}.json",
-        metrics=f"{OUT}/models/{{fold}}/metrics.csv",
-        coefficients=f"{OUT}/models/{{fold}}/coefficients.csv",
-        kb=f"{OUT}/models/{{fold}}/kb_predictions.csv",
-        errors=f"{OUT}/models/{{fold}}/error_predictions.csv",
-        fitting=f"{OUT}/models/{{fold}}/fitting.csv",
-        compensation=lambda w: [
-            f"{OUT}/compensation/folds/{w.fold}/{n}.csv"
-            for n in ("summary", "iso230_2", "siemens_840d", "twincat")
-        ],
-        fold_model=f"{OUT}/compensation/folds/{{fold}}/model.json",
-        deployed=f"{OUT}/compensation/model.json",
-        figures=lambda w: [f["path"] for f in model_report_figures(w.fold).values()],
+        pages=page_files(model_report_inputs, FOLDS),
     output:
-        notebook=f"{OUT}/reports/model_{{fold}}.ipynb",
-        html=report(
-            f"{OUT}/reports/model_{{fold}}.html",
-            caption="../report/notebook_report.rst",
-            category=CATEGORY["reports"],
-            subcategory="Models",
-            labels={"report": "model", "fold": "{fold}"},
-        ),
+        notebooks=expand(f"{OUT}/reports/model_{{fold}}.ipynb", fold=FOLDS),
+        html=[
+            report(
+                f"{OUT}/reports/model_{fold}.html",
+                caption="../report/notebook_report.rst",
+                category=CATEGORY["reports"],
+                subcategory="Models",
+                labels={"report": "model", "fold": fold},
+            )
+            for fold in FOLDS
+        ],
     log:
-        f"{LOGS}/reports/model_{{fold}}.log",
+        f"{LOGS}/reports/model_report.log",
     benchmark:
-        f"{BENCH}/reports/model_{{fold}}.tsv"
+        f"{BENCH}/reports/model_report.tsv"
     conda:
         ENV
     resources:
         **rule_resources("model_report"),
     params:
-        title=lambda w: f"Model report: fold {w.fold} ({DATASET.name})",
-        statement=DATA_STATEMENT,
-        parameters=lambda w, input: notebook_parameters(
-            input,
+        pages=report_pages(
+            "model",
+            FOLDS,
+            model_report_inputs,
+            lambda fold: f"Model report: fold {fold} ({DATASET.name})",
             sections(
                 *DATA_SECTIONS,
                 "selection",
@@ -201,13 +189,13 @@ rule model_report:
                 "compensation",
                 "figures",
             ),
-            fold=w.fold,
+            fold=lambda fold: fold,
             models=REPORT_MODELS,
             runs=RUNS,
-            figures=model_report_figures(w.fold),
+            figures=model_report_figures,
         ),
     shell:
-        RUN_NOTEBOOK
+        RUN_NOTEBOOK_PAGES
 
 
 rule paper_report:

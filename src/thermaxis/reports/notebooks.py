@@ -1,6 +1,8 @@
 """Running a report notebook: papermill execution, volatile-field stripping and self-contained HTML.
 
-``python -m thermaxis.reports.notebooks run NOTEBOOK OUT.ipynb OUT.html ...`` executes and converts in one process.
+``python -m thermaxis.reports.notebooks run NOTEBOOK OUT.ipynb OUT.html ...`` executes and converts in one process;
+``run-pages NOTEBOOK --pages JSON`` executes one notebook once per page (a condition, a fold) in one
+kernel, its namespace reset between pages, so the kernel and the imports start once per report kind.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ __all__ = [
     "notebook_to_html",
     "convert",
     "execute",
+    "execute_pages",
 ]
 
 
@@ -37,14 +40,21 @@ _TEMPLATE = """{%- extends 'index.html.j2' -%}
 def strip_volatile(nb: dict) -> dict:
     """Drop what differs between two executions of the same notebook on the same inputs.
 
-    Removes papermill's and nbclient's time stamps (notebook and cell metadata) and
-    gives papermill's injected parameters cell a fixed id.  ``nb`` is changed in place
+    Removes papermill's and nbclient's time stamps (notebook and cell metadata), numbers
+    the executed cells from 1 and gives papermill's injected parameters cell a fixed id.  ``nb`` is changed in place
     and returned.
     """
     meta = nb.get("metadata", {}).get("papermill")
     if isinstance(meta, dict):
         for key in _VOLATILE_KEYS:
             meta.pop(key, None)
+    # Counted from 1 as a fresh kernel counts, whichever page of a shared kernel this was.
+    executed = (c for c in nb.get("cells", []) if c.get("execution_count") is not None)
+    for count, cell in enumerate(executed, start=1):
+        cell["execution_count"] = count
+        for output in cell.get("outputs", []):
+            if "execution_count" in output:
+                output["execution_count"] = count
     for cell in nb.get("cells", []):
         cell_meta = cell.get("metadata", {})
         cell_meta.pop("execution", None)
@@ -159,6 +169,49 @@ def execute(
     convert(executed, html_path, title)
 
 
+def execute_pages(
+    notebook,
+    pages: list[dict],
+    kernel: str = "python3",
+    start_timeout: float = 120,
+    execution_timeout: float = 600,
+) -> None:
+    """Execute one report notebook once per page in one kernel, each with papermill.
+
+    ``pages`` are dicts of ``executed``, ``html``, ``title`` and ``parameters``, as
+    :func:`execute` takes them. The user namespace is reset between pages (``%reset -f``):
+    a page sees only its own parameters, and the modules the first page imported stay
+    loaded. Each page is converted to HTML before the next one runs.
+    """
+    import nbformat
+    import papermill
+    from jupyter_client.manager import KernelManager
+    from nbclient import NotebookClient
+
+    reset = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("%reset -f")])
+    km = KernelManager(kernel_name=kernel)
+    km.start_kernel()
+    try:
+        for page in pages:
+            papermill.execute_notebook(
+                str(notebook),
+                str(page["executed"]),
+                parameters=page["parameters"],
+                kernel_name=kernel,
+                km=km,
+                start_timeout=start_timeout,
+                execution_timeout=execution_timeout,
+                progress_bar=False,
+            )
+            # The kernel's own client runs the reset, as it runs a notebook's cells.
+            NotebookClient(
+                reset, km=km, timeout=execution_timeout, startup_timeout=start_timeout
+            ).execute()
+            convert(page["executed"], page["html"], page["title"])
+    finally:
+        km.shutdown_kernel(now=True)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m thermaxis.reports.notebooks", description=__doc__.splitlines()[0]
@@ -173,6 +226,19 @@ def main(argv=None) -> int:
     run.add_argument("--kernel", default="python3")
     run.add_argument("--start-timeout", type=float, default=120)
     run.add_argument("--execution-timeout", type=float, default=600)
+    many = sub.add_parser(
+        "run-pages",
+        help="execute a report notebook once per page in one kernel, and write each HTML",
+    )
+    many.add_argument("notebook")
+    many.add_argument(
+        "--pages",
+        required=True,
+        help="JSON list of {executed, html, title, parameters}, one per page",
+    )
+    many.add_argument("--kernel", default="python3")
+    many.add_argument("--start-timeout", type=float, default=120)
+    many.add_argument("--execution-timeout", type=float, default=600)
     to_html = sub.add_parser(
         "html", help="normalise an executed notebook and write its self-contained HTML"
     )
@@ -188,6 +254,14 @@ def main(argv=None) -> int:
                 args.html,
                 args.title,
                 json.loads(args.parameters),
+                kernel=args.kernel,
+                start_timeout=args.start_timeout,
+                execution_timeout=args.execution_timeout,
+            )
+        elif args.command == "run-pages":
+            execute_pages(
+                args.notebook,
+                json.loads(args.pages),
                 kernel=args.kernel,
                 start_timeout=args.start_timeout,
                 execution_timeout=args.execution_timeout,
