@@ -31,13 +31,13 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
+from sklearn import config_context
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.compose import TransformedTargetRegressor
 from sklearn.cross_decomposition import PLSRegression
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 from sklearn.linear_model import Lasso, LinearRegression, Ridge
-from sklearn.metrics import root_mean_squared_error
 from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, ParameterGrid
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
@@ -246,6 +246,24 @@ def fit_by_group_search(
     # the choice and the refitted model are the ones GridSearchCV gives (test_models checks).
     splits = list(inner_group_splitter(groups, *inner).split(X, y, groups))
     scores = np.empty((len(candidates), len(splits)))
+    # Inputs and parameters are checked once here; re-validating them in each of the many
+    # inner fits cost more than fitting (the same numbers either way).
+    for params in candidates:
+        _base_regressor(algorithm, params, random_state, n_features)._validate_params()
+    finite = bool(np.isfinite(X).all() and np.isfinite(y).all())
+    with config_context(assume_finite=finite, skip_parameter_validation=True):
+        _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_features)
+    means = np.average(scores, axis=1)
+    # The first best candidate, NaN scores last, as GridSearchCV ranks them.
+    chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
+    return make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features).fit(
+        X, y
+    ), chosen
+
+
+def _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_features):
+    """Fill ``scores[candidate, split]`` with minus the RMSE of each hold-out, as
+    GridSearchCV's ``neg_root_mean_squared_error`` scores it."""
     for split, (train, test) in enumerate(splits):
         x_scaler = StandardScaler().fit(X[train])
         X_train, X_test = x_scaler.transform(X[train]), x_scaler.transform(X[test])
@@ -258,13 +276,7 @@ def fit_by_group_search(
             predicted = y_scaler.inverse_transform(
                 np.asarray(regressor.predict(X_test)).reshape(-1, 1)
             ).squeeze(axis=1)
-            scores[c, split] = -root_mean_squared_error(y[test], predicted)
-    means = np.average(scores, axis=1)
-    # The first best candidate, NaN scores last, as GridSearchCV ranks them.
-    chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
-    return make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features).fit(
-        X, y
-    ), chosen
+            scores[c, split] = -np.sqrt(np.mean((y[test] - predicted) ** 2))
 
 
 def _final_regressor(fitted):
