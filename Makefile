@@ -88,12 +88,11 @@ results: env
 		echo "== $$ds"; \
 		$(BIN)/python -m thermaxis.pipeline.resume $(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
 	done
-	$(BIN)/python -m thermaxis.reports.crossdataset --results results
+	@$(BIN)/python -m thermaxis.reports.crossdataset --results results
 	@# The FL_THERMAL authors' protocol on their own record (needs the public record beside the checkout).
 	@if [ -f ../shared/realdata/fl_thermal/data.xlsx ]; then \
 		$(BIN)/python -m thermaxis.benchmark data/benchmarks/fl_thermal.yaml --out results/_benchmarks/fl_thermal; \
 	else echo "thermaxis: benchmark fl_thermal skipped: ../shared/realdata/fl_thermal/data.xlsx is not beside the checkout"; fi
-	@echo "== the answer per dataset"
 	@$(BIN)/python -c "from thermaxis.config import load_config; from thermaxis.dataset.reader import load_dataset; \
 		print('\n'.join('results/' + load_dataset(d).name for d in load_config()['datasets']))" \
 	| xargs $(BIN)/python -m thermaxis.reports.answer

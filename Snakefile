@@ -14,12 +14,9 @@ report: "workflow/report/workflow.rst"
 
 
 include: "workflow/rules/common.smk"
-include: "workflow/rules/ingest.smk"
 include: "workflow/rules/clean.smk"
 include: "workflow/rules/assemble.smk"
-include: "workflow/rules/decouple.smk"
 include: "workflow/rules/model.smk"
-include: "workflow/rules/tables.smk"
 include: "workflow/rules/recommend.smk"
 include: "workflow/rules/compensation.smk"
 include: "workflow/rules/figures.smk"

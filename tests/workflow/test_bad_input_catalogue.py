@@ -1286,7 +1286,7 @@ END_TO_END = {
     "config_sweep_nothing_fits",  # preflight.sweep_plan, when the sweep's DAG is built
     "name_dotdot",  # preflight: a name that would escape results/
     "first_error_fifo",  # preflight: the one data file read at parse time; a FIFO must not hang
-    "yaml_list_property",  # accepted: both runs cleaned, the summary job
+    "yaml_list_property",  # accepted: both runs cleaned and assembled, the summary with them
     "temp_fifo",  # clean_run refuses; a FIFO inside a job must not hang
     "measurement_symlink_outside",  # clean_run refuses a file outside the dataset
     "temp_fahrenheit",  # clean_run warns, and the warning reaches the terminal
@@ -1387,8 +1387,8 @@ def _target_jobs(case: Case, runs: list[str]) -> list[tuple[str, dict]]:
     kind, _, arg = case.target.partition(":")
     cleans = [("clean_run", {"run": run}) for run in runs]
     return {
-        "parse": cleans + [("dataset_summary", {})],
-        "summary": cleans + [("dataset_summary", {})],
+        "parse": cleans + [("assemble", {})],
+        "summary": cleans + [("assemble", {})],
         "clean": [("clean_run", {"run": arg})],
         "assemble": cleans + [("assemble", {})],
         "select": cleans + [("assemble", {}), ("models", {})],

@@ -161,7 +161,6 @@ def test_changing_n_clusters_reruns_only_the_affected_reports(built, library_unc
         "model_report",
         "paper_report",
         "dataset_report",
-        "provenance",
         "index",
     } <= rules, rules
     assert not rules & {

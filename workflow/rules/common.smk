@@ -65,23 +65,25 @@ HEADLINE = (
 # With one target there is no line to decouple: the point-by-point branch runs alone.
 DECOUPLED = CHECKED.n_positions >= 2
 
+# What the dataset leaves out, in one line before the first job.
+_LEFT_OUT = []
 if not DECOUPLED:
-    print(
-        "thermaxis: the dataset has a single target position; the decoupled (slope/intercept) branch is skipped, "
-        "only point-by-point models run",
-        file=sys.stderr,
+    _LEFT_OUT.append(
+        "a single target position: the decoupled (slope/intercept) branch is skipped, "
+        "only point-by-point models run"
     )
 if AMBIENT is None:
-    print(
-        f"thermaxis: dataset {DATASET.name!r} declares no ambient_sensor; the ambient figure (Fig. 3) and "
-        "ambient table are left out",
-        file=sys.stderr,
+    _LEFT_OUT.append(
+        "no ambient_sensor: the ambient figure (Fig. 3) and ambient table are left out"
     )
 if DATASET.temperature_kind == "rise":
+    _LEFT_OUT.append(
+        "temperature rises logged, not absolute temperatures: the slope model k uses "
+        "the logged rises in their place"
+    )
+if _LEFT_OUT:
     print(
-        f"thermaxis: dataset {DATASET.name!r} logs temperature rises, not absolute temperatures; "
-        "the slope model k uses the logged rises in their place",
-        file=sys.stderr,
+        f"thermaxis: dataset {DATASET.name!r}: {'; '.join(_LEFT_OUT)}", file=sys.stderr
     )
 
 # --------------------------------------------------------------------------- paths
@@ -157,6 +159,32 @@ wildcard_constraints:
     fold=_one_of(RUNS),
     batch=r"\d+",
     n_batches=r"\d+",
+
+
+# --------------------------------------------------------------------------- assembly
+def dataset_tables():
+    """What assemble writes beside the assembled runs when the dataset has it: Table 1's
+    ambient ranges (an ambient sensor) and the decoupling of Table 5 (two positions or more).
+    """
+    tables = {}
+    if AMBIENT:
+        tables["ambient"] = report(
+            f"{OUT}/tables/ambient_ranges.csv",
+            caption="../report/ambient_ranges.rst",
+            category=CATEGORY["dataset"],
+            labels={"table": "ambient ranges (Table 1)"},
+        )
+        tables["ambient_series"] = f"{OUT}/tables/ambient_series.parquet"
+    if DECOUPLED:
+        tables["kb"] = report(
+            f"{OUT}/tables/table5_slope_intercept.csv",
+            caption="../report/table5.rst",
+            category=CATEGORY["decoupling"],
+            labels={"table": "Table 5"},
+        )
+        tables["kb_markdown"] = f"{OUT}/tables/table5_slope_intercept.md"
+        tables["polynomials"] = f"{OUT}/decoupled/polynomial_coefficients.csv"
+    return tables
 
 
 # --------------------------------------------------------------------------- figures
@@ -760,6 +788,29 @@ def recommendation_outputs():
 # --------------------------------------------------------------------------- statistics
 # The uncertainty of every comparison (thermaxis.statistics, docs/statistics.md):
 # comparisons.csv, the paper's claims and the stability of the sensitive points.
+def audit_tables():
+    """What the statistics job writes for a dataset that reproduces the paper: the paper's
+    published values beside the reproduced ones, and the faithfulness of the twin."""
+    if not PAPER:
+        return {}
+    return dict(
+        paper_csv=report(
+            f"{OUT}/tables/paper_comparison.csv",
+            caption="../report/paper_comparison.rst",
+            category=CATEGORY["audit"],
+            labels={"table": "paper comparison"},
+        ),
+        paper_markdown=f"{OUT}/tables/paper_comparison.md",
+        faithfulness=report(
+            f"{OUT}/tables/faithfulness.csv",
+            caption="../report/faithfulness.rst",
+            category=CATEGORY["audit"],
+            labels={"table": "faithfulness"},
+        ),
+        faithfulness_markdown=f"{OUT}/tables/faithfulness.md",
+    )
+
+
 def statistics_outputs():
     return [
         f"{OUT}/tables/comparisons.csv",
@@ -880,8 +931,8 @@ RESOURCES = {
         )
     },
     "compensation": (1000, MIN_RUNTIME_MIN),
-    # Every candidate on every inner split of one fold: the heaviest jobs of a run.
-    "recommend_fold": (1000, 30),
+    # Every candidate on every inner split of every fold: the heaviest job of a run.
+    "recommend": (1000, max(30, 10 * len(FOLDS))),
     "sweep_batch": (MIN_MEMORY_MB, sweep_batch_minutes),
 }
 

@@ -3,37 +3,14 @@
 # only read tables the workflow wrote; they recompute nothing.
 #
 # Provenance and reruns: provenance.json (the whole configuration, the raw-data
-# manifest, the git commit and dirty flag, versions, run time) is rewritten when the
-# raw files, the configuration or the git state change, and only the index reads it.
+# manifest, the git commit and dirty flag, versions, run time) is written with the index,
+# the one page that shows it, whenever the raw files, the configuration or the git state
+# change.
 # Each notebook records its own provenance when it runs, hashing only the
 # configuration sections its inputs depend on, so changing selection.n_clusters
 # reruns the model and paper reports but leaves the dataset and condition reports
 # alone. The run time is the only field that differs between two builds from the
 # same inputs; SOURCE_DATE_EPOCH fixes it.
-
-
-rule provenance:
-    input:
-        code=code_of("provenance.py"),
-        sheets=dataset_sheets(),
-        data=dataset_files(),
-    output:
-        f"{OUT}/provenance.json",
-    log:
-        f"{LOGS}/provenance.log",
-    benchmark:
-        f"{BENCH}/provenance.tsv"
-    conda:
-        ENV
-    resources:
-        **rule_resources("provenance"),
-    params:
-        config_json=json.dumps(config, sort_keys=True),
-        dataset=lambda w, input: os.path.dirname(input.sheets[0]),
-        repo=REPO,
-        git=lambda w: git_of_checkout(),
-    script:
-        "../scripts/provenance.py"
 
 
 rule dataset_report:
@@ -250,10 +227,12 @@ rule paper_report:
 rule index:
     input:
         code=code_of("index.py"),
-        provenance=f"{OUT}/provenance.json",
+        sheets=dataset_sheets(),
+        data=dataset_files(),
         linked=index_inputs(),
     output:
-        f"{OUT}/index.html",
+        index=f"{OUT}/index.html",
+        provenance=f"{OUT}/provenance.json",
     log:
         f"{LOGS}/index.log",
     benchmark:
@@ -263,6 +242,10 @@ rule index:
     resources:
         **rule_resources("index"),
     params:
+        config_json=json.dumps(config, sort_keys=True),
+        dataset=lambda w, input: os.path.dirname(input.sheets[0]),
+        repo=REPO,
+        git=lambda w: git_of_checkout(),
         dataset_name=DATASET.name,
         simulated=SIMULATED,
         statement=DATA_STATEMENT,

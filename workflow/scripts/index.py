@@ -1,11 +1,12 @@
-"""results/<dataset>/index.html: the answer first, then figures, tables, reports and provenance."""
+"""results/<dataset>/index.html: the answer first, then figures, tables, reports and
+provenance; and provenance.json (code, configuration, raw-data manifest, software, run time)."""
 
 import json
 import os
 
 import pandas as pd
 
-from thermaxis.pipeline.runner import run_script, write_text
+from thermaxis.pipeline.runner import run_script, write_texts
 from thermaxis.reports.answer import answer_of, answer_sentence
 from thermaxis.reports.crossdataset import model_ranking
 from thermaxis.reports.index import (
@@ -19,11 +20,15 @@ from thermaxis.reports.index import (
     deployment_comparison,
     render_index,
 )
+from thermaxis.reports.provenance import collect, to_json
 
 
 def main(snakemake):
     p = snakemake.params
-    here = os.path.dirname(snakemake.output[0])
+    here = os.path.dirname(snakemake.output.index)
+    # The git state was taken when the workflow was parsed (it is a param, so a new
+    # commit reruns this rule); taking it again here could disagree with that param.
+    provenance = to_json(collect(p.repo, json.loads(p.config_json), p.dataset, git=p.git))
 
     def rel(path):
         return os.path.relpath(path, here).replace(os.sep, "/")
@@ -71,10 +76,10 @@ def main(snakemake):
         figures,
         tables,
         sections,
-        _provenance(snakemake.input.provenance),
+        json.loads(provenance),
         subtitle=p.headline,
     )
-    write_text(page, snakemake.output[0])
+    write_texts({snakemake.output.provenance: provenance, snakemake.output.index: page})
 
 
 def _headline(answer) -> Headline:
@@ -94,11 +99,6 @@ def _headline(answer) -> Headline:
         comparison=deployment_comparison(folds),
         claims=claims,
     )
-
-
-def _provenance(path):
-    with open(path, encoding="utf-8") as fh:
-        return json.load(fh)
 
 
 run_script(main, snakemake)

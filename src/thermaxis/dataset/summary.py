@@ -8,9 +8,13 @@ from thermaxis.dataset.reader import Dataset
 from thermaxis.labels import sort_naturally
 
 __all__ = [
+    "AMBIENT_COLUMNS",
+    "ambient_ranges",
     "dataset_summary",
     "data_statement",
 ]
+
+AMBIENT_COLUMNS = ["run", "sensor", "ambient_min_c", "ambient_max_c"]
 
 
 def data_statement(
@@ -53,3 +57,26 @@ def dataset_summary(dataset: Dataset, n_measurements: dict[str, int]) -> pd.Data
             }
         )
     return sort_naturally(pd.DataFrame(rows), ["run"])
+
+
+def ambient_ranges(
+    sensor: str, runs: dict[str, tuple[pd.DataFrame, pd.DataFrame]]
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Table 1's ambient range per run, and the ambient series every run logged (Fig. 3).
+
+    ``runs`` maps a run to its cleaned series (``time``, ``elapsed_min`` and the sensor)
+    and its measurement windows (``start``, ``end``); the range is over the measurements,
+    from the first window's start to the last one's end.
+    """
+    rows, series_rows = [], []
+    for run, (series, windows) in runs.items():
+        during = series[
+            (series["time"] >= windows["start"].min()) & (series["time"] <= windows["end"].max())
+        ]
+        rows.append((run, sensor, float(during[sensor].min()), float(during[sensor].max())))
+        series_rows.append(
+            pd.DataFrame(
+                {"run": run, "elapsed_min": series["elapsed_min"], "temperature_c": series[sensor]}
+            )
+        )
+    return pd.DataFrame(rows, columns=AMBIENT_COLUMNS), pd.concat(series_rows, ignore_index=True)

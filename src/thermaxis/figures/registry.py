@@ -13,8 +13,9 @@ Each entry also says
 * ``target``: who draws it: ``"all"`` (the workflow's default run), ``"sweep"`` (the
   workflow's ``sweep`` target) or ``"datasets"`` (``python -m thermaxis.reports.crossdataset``);
 * ``family``: the workflow job that draws it with the rest of its family (starting Python
-  and importing matplotlib costs more than drawing a figure); a family whose stems hold
-  the fold is one job per fold;
+  and importing matplotlib costs more than drawing a figure): ``fig_data`` as soon as the
+  data are assembled and decoupled, ``fig_predictions`` (every fold's) once the models
+  are fitted, ``fig_results`` once the recommendation and the compensation are in;
 * ``tables``: argument name -> table, relative to ``results/<dataset>/``, and
   ``arguments``: the function's other arguments; ``each``: the values it is drawn for;
 * the report category, labels and caption details.
@@ -181,25 +182,25 @@ FIGURES: tuple[FigureEntry, ...] = (
     ),
     FigureEntry(
         "fig12_slope_intercept", "figures.paper.fig12_slope_intercept",
-        family="fig_slope_intercept", when="decoupled", target="all",
+        family="fig_data", when="decoupled", target="all",
         tables={"kb": "tables/table5_slope_intercept.csv"}, category="decoupling", label="Fig. 12",
         labels={"run": "all"},
     ),
     FigureEntry(
-        "fold_comparison", "figures.predictions.fig_fold_comparison", family="fig_fold_comparison",
+        "fold_comparison", "figures.predictions.fig_fold_comparison", family="fig_results",
         when="always", target="all", tables={"metrics": "tables/metrics.csv"},
         category="prediction", label="fold comparison", labels={"fold": "all"},
         caption={"target": "error"},
     ),
     FigureEntry(
-        "recommendation", "figures.predictions.fig_recommendation", family="fig_fold_comparison",
+        "recommendation", "figures.predictions.fig_recommendation", family="fig_results",
         when="always", target="all", tables={"recommendation": "tables/recommendation.csv"},
         category="prediction", label="recommendation", labels={"fold": "all"},
     ),
     # Beside Table 6: how often each sensor is chosen when a training run is left out.
     FigureEntry(
         "selection_stability", "figures.statistics.fig_selection_stability",
-        family="fig_fold_comparison", when="always", target="all",
+        family="fig_results", when="always", target="all",
         tables={"stability": "tables/selection_stability.csv"}, category="sensitive_points",
         label="stability", labels={"fold": "all"},
     ),
@@ -211,7 +212,7 @@ FIGURES: tuple[FigureEntry, ...] = (
     # The drift of each compensated held-out run, all in one job.
     FigureEntry(
         "compensation_drift", "figures.compensation.fig_compensation_drift",
-        family="fig_compensation_drift", when="always", target="all",
+        family="fig_results", when="always", target="all",
         tables={"summary": "compensation/folds/{fold}/summary.csv"}, category="compensation",
         label="thermal drift", labels={"fold": FOLD}, arguments={"fold": FOLD},
         caption={"fold": FOLD}, each={"fold": Fact("folds")}, stem="{id}_{fold}",

@@ -1,0 +1,84 @@
+"""The recommendation in one job: every outer fold's candidate scores (inner
+leave-one-condition-out on its training runs, and the held-out run), then the choice per
+fold, the final one and the tables."""
+
+import io
+import json
+import logging
+
+import pandas as pd
+
+from thermaxis.cleaning.run import model_inputs
+from thermaxis.config import DecouplingSettings, RecommendSettings, StatisticsSettings
+from thermaxis.method.recommend import (
+    candidate_record,
+    candidate_table,
+    collect,
+    configured_candidates,
+    fold_scores,
+    recommendation_markdown,
+)
+from thermaxis.pipeline.runner import csv_text, run_script, write_texts
+from thermaxis.statistics import fold_means
+
+
+def choice_record(result, candidates) -> dict:
+    """What the compensation deploys (compensation.model: recommended | paper | <candidate>)."""
+    by_name = {c.name: c for c in candidates}
+    return {
+        "final": candidate_record(by_name[result.final]),
+        "paper": candidate_record(by_name["paper"]),
+        "folds": {
+            row.fold: candidate_record(by_name[row.chosen]) for row in result.folds.itertuples()
+        },
+        "score": result.score,
+        "candidates": {c.name: candidate_record(c) for c in candidates},
+    }
+
+
+def main(snakemake):
+    p, inputs, output = snakemake.params, snakemake.input, snakemake.output
+    recommend = RecommendSettings.from_section(p.recommend)
+    X, Y = model_inputs(
+        pd.read_parquet(inputs.errors),
+        pd.read_parquet(inputs.temperatures),
+        signals=pd.read_parquet(inputs.signals),
+        inputs=pd.read_parquet(inputs.inputs),
+    )
+    candidates = configured_candidates(p)
+    degree = DecouplingSettings.from_section(p.decoupling).degree
+    log = logging.getLogger("thermaxis")
+    texts = {}
+    for fold, path in zip(p.folds, output.scores, strict=True):
+        scores = fold_scores(
+            X,
+            Y,
+            candidates,
+            fold,
+            degree,
+            recommend.max_loco_runs,
+            recommend.group_folds,
+            p.signals,
+            progress=log.info,
+        )
+        texts[path] = csv_text(scores, float_format="%.10g")
+    # The choice reads the scores as a reader of the folds' files gets them back.
+    scores = pd.concat(
+        [pd.read_csv(io.StringIO(texts[path])) for path in output.scores], ignore_index=True
+    )
+    result = collect(scores, [c.name for c in candidates], "paper", recommend.score)
+    means = fold_means(result.loco, StatisticsSettings.from_section(p.statistics))
+    table = candidate_table(candidates).join(means, on="candidate")
+    record = choice_record(result, candidates)
+    texts.update(
+        {
+            output.table: csv_text(result.folds, float_format="%.6f"),
+            output.markdown: recommendation_markdown(result, p.statement),
+            output.candidates: csv_text(table, float_format="%.6f"),
+            output.choice: json.dumps(record, indent=1, sort_keys=True) + "\n",
+        }
+    )
+    write_texts(texts)
+
+
+run_script(main, snakemake)

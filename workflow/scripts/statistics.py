@@ -1,0 +1,97 @@
+"""Every comparison with its uncertainty: comparisons.csv and the paper's claims
+(claims.csv, claims.md) from the held-out predictions, how often each sensor is chosen
+when one of a fold's training runs is left out (selection_stability.csv) and, for a
+dataset that reproduces the paper, every published value beside the reproduced one
+(paper_comparison.csv) and the twin's faithfulness (faithfulness.csv)."""
+
+import pandas as pd
+
+from thermaxis.cleaning.run import model_inputs
+from thermaxis.config import DecouplingSettings, SelectionSettings, StatisticsSettings
+from thermaxis.paper.audit import ReproducedTables, comparison_markdown, paper_comparison
+from thermaxis.paper.equations import published_targets
+from thermaxis.paper.faithfulness import faithfulness, faithfulness_markdown
+from thermaxis.paper.published import published_values
+from thermaxis.pipeline.runner import csv_text, run_script, write_texts
+from thermaxis.statistics import (
+    claim_results,
+    claims_markdown,
+    claims_table,
+    compare_models,
+    compare_recommendation,
+    comparison_table,
+    measurement_sums,
+    model_sums,
+    selection_stability,
+)
+
+
+def audit_texts(inputs, p, output, errors, temperatures) -> dict:
+    """paper_comparison and faithfulness (CSV and Markdown), from the reproduced tables."""
+    tables = ReproducedTables(
+        runs=pd.read_csv(inputs.summary),
+        ambient=pd.read_csv(inputs.ambient[0]),
+        # A single-position dataset has no decoupled k and b: the Table 5 items stay empty.
+        kb=(
+            pd.read_csv(inputs.kb[0])
+            if inputs.kb
+            else pd.DataFrame(columns=["run", "measurement", "k_um_per_m", "b_um"])
+        ),
+        metrics=pd.read_csv(inputs.metrics),
+        coefficients=pd.read_csv(inputs.coefficients),
+        sensitive_points=pd.read_csv(inputs.selection),
+        error_predictions=pd.read_csv(inputs.error_predictions),
+        errors=errors,
+        paper_fold=p.paper_fold,
+    )
+    comparison = paper_comparison(
+        published_values(p.paper_dir), tables, p.dataset_name, p.simulated
+    )
+    faithful = faithfulness(
+        comparison,
+        tables.sensitive_points,
+        temperatures,
+        tables.kb,
+        published_targets(p.paper_dir),
+        p.paper_fold,
+    )
+    return {
+        output.paper_csv: csv_text(comparison, float_format="%.4f"),
+        output.paper_markdown: comparison_markdown(
+            comparison, p.dataset_name, p.simulated, p.paper_fold
+        ),
+        output.faithfulness: csv_text(faithful),
+        output.faithfulness_markdown: faithfulness_markdown(faithful, p.statement),
+    }
+
+
+def main(snakemake):
+    p, inputs, output = snakemake.params, snakemake.input, snakemake.output
+    settings = StatisticsSettings.from_section(p.statistics)
+    selection = SelectionSettings.from_section(p.selection)
+    sums = measurement_sums(
+        pd.read_csv(inputs.kb_predictions), pd.read_csv(inputs.error_predictions)
+    )
+    models = model_sums(sums)
+    recommendation = compare_recommendation(pd.read_csv(inputs.recommendation), settings)
+    comparisons = comparison_table(compare_models(models, settings), recommendation)
+    errors = pd.read_parquet(inputs.errors)
+    temperatures = pd.read_parquet(inputs.temperatures)
+    X, Y = model_inputs(errors, temperatures)
+    claims = claims_table(
+        p.dataset_name, claim_results(models, X, Y, errors, p.folds, selection, settings), settings
+    )
+    degree = DecouplingSettings.from_section(p.decoupling).degree if p.decoupled else None
+    stability = selection_stability(X, Y, p.folds, selection, degree, p.decoupled)
+    texts = {
+        output.comparisons: csv_text(comparisons, float_format="%.6f"),
+        output.claims: csv_text(claims, float_format="%.6f"),
+        output.markdown: claims_markdown(claims, p.statement, settings),
+        output.stability: csv_text(stability, float_format="%.6f"),
+    }
+    if p.paper:
+        texts.update(audit_texts(inputs, p, output, errors, temperatures))
+    write_texts(texts)
+
+
+run_script(main, snakemake)
