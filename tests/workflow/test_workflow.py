@@ -169,8 +169,7 @@ def test_plot_option_reruns_only_figure_rules(lines_run, library_unchanged):
     # Reports embed the figures and the index links them, so they follow; nothing upstream does.
     # provenance.json (written with the index) records the hash of the effective config.
     assert all(
-        r.startswith("fig") or r.endswith("_report") or r in ("all", "index")
-        for r in rules
+        r.startswith("fig") or r.endswith("_report") or r in ("all", "index") for r in rules
     ), rules
     assert "fig_data" in rules
 
