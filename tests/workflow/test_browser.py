@@ -244,3 +244,63 @@ def test_results_index_shows_each_datasets_best_model_and_links_its_page(browser
         browser.execute_script("return document.querySelector('#answer a').getAttribute('href')")
         == "rep/index.html"
     )
+
+
+def _csv_rows(path: Path) -> list[dict]:
+    """A table's rows, its '#' header lines skipped (the compensation tables carry them)."""
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(line for line in fh if not line.startswith("#")))
+
+
+def _sentences_calling_a_model_best(text: str) -> list[str]:
+    return [s.strip() for s in text.replace("\n", ". ").split(". ") if " best" in f" {s.lower()}"]
+
+
+def test_the_answer_box_leads_the_dataset_index_with_the_numbers_of_its_tables(
+    browser, server, results
+):
+    """The first screen (1280 x 800) shows the answer: the model, its held-out error beside
+    the paper's configuration (recommendation.csv) and compensated beside uncompensated
+    (compensation/summary.csv), and the verdict (model.json), each worked out here from
+    the files with the csv and json modules; no sentence calls another model the best."""
+    out = results / "rep"
+    folds = _csv_rows(out / "tables" / "recommendation.csv")
+    rmse = sum(float(r["rmse_um"]) for r in folds) / len(folds)
+    paper = sum(float(r["paper_rmse_um"]) for r in folds) / len(folds)
+    summary = _csv_rows(out / "compensation" / "summary.csv")
+    before = max(float(r["largest_abs_uncompensated_um"]) for r in summary)
+    after = max(float(r["largest_abs_compensated_um"]) for r in summary)
+    deployment = json.loads((out / "compensation" / "model.json").read_text())["deployment"]
+
+    browser.set_window_size(1280, FIRST_SCREEN_PX)
+    try:
+        browser.get(f"{server}/rep/index.html")
+        viewport = browser.execute_script("return window.innerHeight")
+        top, bottom, text = browser.execute_script(
+            "const p = document.querySelector('#answer .tx-lead');"
+            "const r = p.getBoundingClientRect(); return [r.top, r.bottom, p.innerText];"
+        )
+        figure = browser.execute_script(
+            "const i = document.querySelector('#answer img');"
+            "return i ? [i.getBoundingClientRect().top, i.complete, i.naturalWidth] : null;"
+        )
+        body = browser.execute_script("return document.body.innerText")
+    finally:
+        browser.set_window_size(1280, 900)
+    assert 0 <= top and bottom <= viewport, (
+        f"the answer is not on the first screen ({top}-{bottom} px)"
+    )
+    assert figure is not None, "the answer box has no figure"
+    assert figure[0] < viewport and figure[1] and figure[2] > 0, figure
+    assert deployment["candidate"] in text
+    assert f"held-out RMSE {rmse:.2f} µm against {paper:.2f} µm" in text, text
+    assert f"{after:.2f} µm compensated against {before:.2f} µm uncompensated" in text, text
+    if deployment["recommended_for_deployment"]:
+        assert (
+            text.startswith(f"Deploy {deployment['candidate']}:")
+            and "Recommended for deployment" in text
+        )
+    else:
+        assert text.startswith("Do not compensate with any candidate."), text
+    others = [s for s in _sentences_calling_a_model_best(body) if deployment["candidate"] not in s]
+    assert others == [], others

@@ -1,4 +1,5 @@
-"""`make results` after a user ran one target of a dataset of their own (issue 24).
+"""`make results` after a user ran one target of a dataset of their own (issue 24), and
+what it prints (issue 34).
 
 The cross-dataset summary, the recipe's last step, reads only the datasets of config
 ``datasets``: a half-built folder of another dataset beside them (no provenance yet) no
@@ -63,7 +64,18 @@ def test_make_results_after_one_target_of_an_extra_dataset(tmp_path):
     )  # fmt: skip
     assert not (checkout / "results" / "mine" / "provenance.json").exists()
     venv = Path(sys.executable).parent.parent
-    _run(["make", "-o", "env", "results", f"VENV={venv}", "CORES=2"], checkout)
+    proc = _run(["make", "-o", "env", "results", f"VENV={venv}", "CORES=2"], checkout)
+    # The quiet terminal (issue 34): a cold run of the dataset in at most 80 lines, each
+    # warning text once, and the answer last, naming the page to open.
+    lines = proc.stdout.splitlines() + proc.stderr.splitlines()
+    assert len(lines) <= 80, "\n".join(lines)
+    warnings = [line for line in lines if line.startswith("thermaxis warning:")]
+    assert len(warnings) == len(set(warnings)), warnings
+    last = proc.stdout.splitlines()[-1]
+    assert last.startswith("a: ") and last.endswith("See results/a/index.html"), last
+    assert last.split(": ", 1)[1].startswith(
+        ("Deploy ", "Do not compensate with any candidate.")
+    ), last
     summary = pd.read_csv(checkout / "results" / "_datasets" / "summary.csv")
     assert summary["dataset"].unique().tolist() == ["a"]
     assert (checkout / "results" / "a" / "provenance.json").is_file()

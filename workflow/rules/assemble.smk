@@ -51,7 +51,7 @@ rule assemble:
         **rule_resources("assemble"),
     params:
         statement=DATA_STATEMENT,
-        dataset=str(DATASET.root),
+        dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         runs=RUNS,
         ambient=AMBIENT or "",
         decoupled=DECOUPLED,

@@ -261,6 +261,8 @@ rule index:
             model=f"{OUT}/compensation/model.json",
             # The paper's claims, tested (an input of the index through linked_tables).
             claims=f"{OUT}/tables/claims.csv",
+            # Beside the answer: each held-out run's error, recommended and the paper's.
+            figure=embedded("recommendation"),
         ),
     script:
         "../scripts/index.py"

@@ -61,6 +61,8 @@ rule statistics:
         paper=PAPER,
         paper_fold=config["paper_fold"],
         simulated=SIMULATED,
-        paper_dir=PAPER_DIR,
+        paper_dir=lambda w, input: (
+            os.path.dirname(input.paper[0]) if input.paper else ""
+        ),
     script:
         "../scripts/statistics.py"

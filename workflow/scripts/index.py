@@ -72,7 +72,7 @@ def main(snakemake):
         p.dataset_name,
         p.statement,
         p.simulated,
-        _headline(p.answer),
+        _headline(p.answer, rel(p.answer["figure"]["path"]), p.answer["figure"]["caption"]),
         figures,
         tables,
         sections,
@@ -82,7 +82,7 @@ def main(snakemake):
     write_texts({snakemake.output.provenance: provenance, snakemake.output.index: page})
 
 
-def _headline(answer) -> Headline:
+def _headline(answer, figure: str, caption: str) -> Headline:
     with open(answer["markdown"], encoding="utf-8") as fh:
         recommendation = fh.read().split("\n\n")[2]
     with open(answer["model"], encoding="utf-8") as fh:
@@ -98,6 +98,8 @@ def _headline(answer) -> Headline:
         deployment=deployment,
         comparison=deployment_comparison(folds),
         claims=claims,
+        figure=figure,
+        figure_caption=caption,
     )
 
 

@@ -102,6 +102,8 @@ class Headline:
     comparison: pd.DataFrame | None = None  # deployment_comparison(recommendation.csv)
     claims: pd.DataFrame | None = None  # tables/claims.csv, when the workflow made it
     answer: str = ""  # thermaxis.reports.answer.answer_sentence: what to deploy, and whether
+    figure: str = ""  # the recommendation figure beside it, relative to the page
+    figure_caption: str = ""
 
 
 PAPER_HEADLINE = (
@@ -155,7 +157,10 @@ _INDEX_CSS = (
     "body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:76em;margin:1.5em auto;"
     "padding:0 1em;line-height:1.45}ul.tx-index{padding-left:1.2em}"
     ".tx-answer{border-left:4px solid #15803d;background:#f0fdf4;padding:0.6em 1.1em;margin:0 0 1.2em 0}"
-    ".tx-answer h2{margin-top:0.3em}"
+    ".tx-answer h2{margin-top:0.3em}.tx-answer::after{content:'';display:block;clear:both}"
+    ".tx-answer-figure{float:right;width:22em;max-width:40%;margin:0 0 0.6em 1.2em}"
+    ".tx-answer-figure img{width:100%;height:auto;display:block}"
+    ".tx-answer-figure figcaption{font-size:0.75em;color:#374151}"
     ".tx-verdict-yes{color:#15803d;font-weight:bold}.tx-verdict-no{color:#b91c1c;font-weight:bold}"
     ".tx-grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(15em,1fr));gap:1em}"
     ".tx-thumb{margin:0;border:1px solid #e5e7eb;padding:0.4em;background:#fff}"
@@ -210,8 +215,17 @@ def _verdict_html(deployment: dict) -> str:
 
 def _headline_html(headline: Headline) -> str:
     lead = headline.answer or headline.recommendation
+    figure = (
+        f'<figure class="tx-answer-figure"><a href="{html.escape(headline.figure, quote=True)}">'
+        f'<img src="{html.escape(headline.figure, quote=True)}" '
+        f'alt="{html.escape(headline.figure_caption, quote=True)}"></a>'
+        f"<figcaption>{html.escape(headline.figure_caption)}</figcaption></figure>"
+        if headline.figure
+        else ""
+    )
     parts = [
         '<section class="tx-answer" id="answer"><h2>The answer</h2>',
+        figure,
         f'<p class="tx-lead">{_inline_markdown(lead)}</p>',
         _verdict_html(headline.deployment),
     ]
