@@ -27,3 +27,28 @@ def test_a_repeated_warning_is_printed_once_and_logged_every_time(tmp_path, caps
     ]
     text = log.read_text()
     assert text.count("hold on 2 of 9 cycles") == 3 and text.count("lambda-cut") == 3
+
+
+def test_a_warning_another_job_reports_goes_to_this_jobs_log_only(tmp_path, capsys):
+    import warnings
+
+    from thermaxis.errors import SelectionWarning
+    from thermaxis.pipeline.runner import log_only
+
+    log = tmp_path / "job.log"
+    with warnings.catch_warnings():
+        # As in a job's own process: Python's warnings routed through logging from here.
+        logging.captureWarnings(False)
+        _configure_logging(str(log))
+        warnings.simplefilter("always")
+        with log_only(SelectionWarning):
+            warnings.warn("fold R1: only 2 distinct sensors were selected", SelectionWarning)
+            warnings.warn("a warning of this job's own", UserWarning)
+        warnings.warn("fold R2: a selection warning outside the block", SelectionWarning)
+    for handler in logging.getLogger("thermaxis").handlers:
+        handler.flush()
+    err = capsys.readouterr().err
+    assert "only 2 distinct sensors" not in err
+    assert "a warning of this job's own" in err and "outside the block" in err
+    assert "SelectionWarning: fold R1: only 2 distinct sensors were selected" in log.read_text()
+    logging.captureWarnings(False)

@@ -29,9 +29,10 @@ from thermaxis.config import (
     SelectionSettings,
 )
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.errors import SelectionWarning
 from thermaxis.method import recommend
 from thermaxis.method.folds import select_for_fold, selection_from_dict
-from thermaxis.pipeline.runner import csv_text, run_script, write_texts
+from thermaxis.pipeline.runner import csv_text, log_only, run_script, write_texts
 
 SORT = ["fold", "measurement"]
 
@@ -177,49 +178,52 @@ def _reread(text: str, **kwargs) -> pd.DataFrame:
 
 
 def main(snakemake):
-    p, output = snakemake.params, snakemake.output
-    s = _settings(p)
-    X, Y = model_inputs(
-        pd.read_parquet(snakemake.input.errors),
-        pd.read_parquet(snakemake.input.temperatures),
-        signals=pd.read_parquet(snakemake.input.signals),
-        inputs=pd.read_parquet(snakemake.input.inputs),
-    )
-    with open(snakemake.input.choice, encoding="utf-8") as fh:
-        choice = json.load(fh)
-    fitted_text = json.dumps(fitted_model(snakemake, X, Y, s, choice), indent=1) + "\n"
-    final = runtime.Compensator(json.loads(fitted_text))
-    texts = {output.fitted: fitted_text}
+    # The models job reports the selection's warnings; this one selects again on the same
+    # folds, so its copies go to its log only.
+    with log_only(SelectionWarning):
+        p, output = snakemake.params, snakemake.output
+        s = _settings(p)
+        X, Y = model_inputs(
+            pd.read_parquet(snakemake.input.errors),
+            pd.read_parquet(snakemake.input.temperatures),
+            signals=pd.read_parquet(snakemake.input.signals),
+            inputs=pd.read_parquet(snakemake.input.inputs),
+        )
+        with open(snakemake.input.choice, encoding="utf-8") as fh:
+            choice = json.load(fh)
+        fitted_text = json.dumps(fitted_model(snakemake, X, Y, s, choice), indent=1) + "\n"
+        final = runtime.Compensator(json.loads(fitted_text))
+        texts = {output.fitted: fitted_text}
 
-    for i, fold in enumerate(p.folds):
-        model_text, frames = fold_tables(snakemake, i, fold, X, Y, s, choice, final)
-        texts[output.fold_models[i]] = model_text
-        for name, frame in frames.items():
-            texts[output[f"fold_{name}"][i]] = csv_text(frame, float_format="%.10g")
+        for i, fold in enumerate(p.folds):
+            model_text, frames = fold_tables(snakemake, i, fold, X, Y, s, choice, final)
+            texts[output.fold_models[i]] = model_text
+            for name, frame in frames.items():
+                texts[output[f"fold_{name}"][i]] = csv_text(frame, float_format="%.10g")
 
-    summary = pd.concat(
-        [_reread(texts[path], comment="#") for path in output.fold_summary], ignore_index=True
-    )
-    record = with_verdict(json.loads(fitted_text), summary, choice, s["compensation"])
-    comp_model.validate_model(record, where=output.model)
-    texts[output.model] = model_text = json.dumps(record, indent=1) + "\n"
-    # The exports and the controller's block are written from the file a controller reads.
-    record = json.loads(model_text)
-    sentence = record["deployment"]["sentence"]
-    # Every export says in words which model it holds and whether it is recommended.
-    statement = f"{p.statement}\n# Deployment: {sentence}"
-    for name in p.tables:
-        frame = pd.concat(
-            [
-                _reread(texts[path], keep_default_na=False, na_values=[""])
-                for path in output[f"fold_{name}"]
-            ],
-            ignore_index=True,
-        ).sort_values(SORT, kind="stable", ignore_index=True)
-        body = frame.to_csv(index=False, float_format="%.10g", lineterminator="\n")
-        texts[output[name]] = file_header(name, statement) + body
-    texts[output.st] = structured_text(record, f"{p.statement} Deployment: {sentence}")
-    write_texts(texts)
+        summary = pd.concat(
+            [_reread(texts[path], comment="#") for path in output.fold_summary], ignore_index=True
+        )
+        record = with_verdict(json.loads(fitted_text), summary, choice, s["compensation"])
+        comp_model.validate_model(record, where=output.model)
+        texts[output.model] = model_text = json.dumps(record, indent=1) + "\n"
+        # The exports and the controller's block are written from the file a controller reads.
+        record = json.loads(model_text)
+        sentence = record["deployment"]["sentence"]
+        # Every export says in words which model it holds and whether it is recommended.
+        statement = f"{p.statement}\n# Deployment: {sentence}"
+        for name in p.tables:
+            frame = pd.concat(
+                [
+                    _reread(texts[path], keep_default_na=False, na_values=[""])
+                    for path in output[f"fold_{name}"]
+                ],
+                ignore_index=True,
+            ).sort_values(SORT, kind="stable", ignore_index=True)
+            body = frame.to_csv(index=False, float_format="%.10g", lineterminator="\n")
+            texts[output[name]] = file_header(name, statement) + body
+        texts[output.st] = structured_text(record, f"{p.statement} Deployment: {sentence}")
+        write_texts(texts)
 
 
 run_script(main, snakemake)

@@ -10,6 +10,7 @@ import pandas as pd
 
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import DecouplingSettings, RecommendSettings, StatisticsSettings
+from thermaxis.errors import SelectionWarning
 from thermaxis.method.recommend import (
     candidate_record,
     candidate_table,
@@ -18,7 +19,7 @@ from thermaxis.method.recommend import (
     fold_scores,
     recommendation_markdown,
 )
-from thermaxis.pipeline.runner import csv_text, run_script, write_texts
+from thermaxis.pipeline.runner import csv_text, log_only, run_script, write_texts
 from thermaxis.statistics import fold_means
 
 
@@ -37,48 +38,51 @@ def choice_record(result, candidates) -> dict:
 
 
 def main(snakemake):
-    p, inputs, output = snakemake.params, snakemake.input, snakemake.output
-    recommend = RecommendSettings.from_section(p.recommend)
-    X, Y = model_inputs(
-        pd.read_parquet(inputs.errors),
-        pd.read_parquet(inputs.temperatures),
-        signals=pd.read_parquet(inputs.signals),
-        inputs=pd.read_parquet(inputs.inputs),
-    )
-    candidates = configured_candidates(p)
-    degree = DecouplingSettings.from_section(p.decoupling).degree
-    log = logging.getLogger("thermaxis")
-    texts = {}
-    for fold, path in zip(p.folds, output.scores, strict=True):
-        scores = fold_scores(
-            X,
-            Y,
-            candidates,
-            fold,
-            degree,
-            recommend.max_loco_runs,
-            recommend.group_folds,
-            p.signals,
-            progress=log.info,
+    # The models job reports the selection's warnings; this one selects again on the same
+    # folds, so its copies go to its log only.
+    with log_only(SelectionWarning):
+        p, inputs, output = snakemake.params, snakemake.input, snakemake.output
+        recommend = RecommendSettings.from_section(p.recommend)
+        X, Y = model_inputs(
+            pd.read_parquet(inputs.errors),
+            pd.read_parquet(inputs.temperatures),
+            signals=pd.read_parquet(inputs.signals),
+            inputs=pd.read_parquet(inputs.inputs),
         )
-        texts[path] = csv_text(scores, float_format="%.10g")
-    # The choice reads the scores as a reader of the folds' files gets them back.
-    scores = pd.concat(
-        [pd.read_csv(io.StringIO(texts[path])) for path in output.scores], ignore_index=True
-    )
-    result = collect(scores, [c.name for c in candidates], "paper", recommend.score)
-    means = fold_means(result.loco, StatisticsSettings.from_section(p.statistics))
-    table = candidate_table(candidates).join(means, on="candidate")
-    record = choice_record(result, candidates)
-    texts.update(
-        {
-            output.table: csv_text(result.folds, float_format="%.6f"),
-            output.markdown: recommendation_markdown(result, p.statement),
-            output.candidates: csv_text(table, float_format="%.6f"),
-            output.choice: json.dumps(record, indent=1, sort_keys=True) + "\n",
-        }
-    )
-    write_texts(texts)
+        candidates = configured_candidates(p)
+        degree = DecouplingSettings.from_section(p.decoupling).degree
+        log = logging.getLogger("thermaxis")
+        texts = {}
+        for fold, path in zip(p.folds, output.scores, strict=True):
+            scores = fold_scores(
+                X,
+                Y,
+                candidates,
+                fold,
+                degree,
+                recommend.max_loco_runs,
+                recommend.group_folds,
+                p.signals,
+                progress=log.info,
+            )
+            texts[path] = csv_text(scores, float_format="%.10g")
+        # The choice reads the scores as a reader of the folds' files gets them back.
+        scores = pd.concat(
+            [pd.read_csv(io.StringIO(texts[path])) for path in output.scores], ignore_index=True
+        )
+        result = collect(scores, [c.name for c in candidates], "paper", recommend.score)
+        means = fold_means(result.loco, StatisticsSettings.from_section(p.statistics))
+        table = candidate_table(candidates).join(means, on="candidate")
+        record = choice_record(result, candidates)
+        texts.update(
+            {
+                output.table: csv_text(result.folds, float_format="%.6f"),
+                output.markdown: recommendation_markdown(result, p.statement),
+                output.candidates: csv_text(table, float_format="%.6f"),
+                output.choice: json.dumps(record, indent=1, sort_keys=True) + "\n",
+            }
+        )
+        write_texts(texts)
 
 
 run_script(main, snakemake)

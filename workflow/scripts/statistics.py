@@ -8,11 +8,12 @@ import pandas as pd
 
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import DecouplingSettings, SelectionSettings, StatisticsSettings
+from thermaxis.errors import SelectionWarning
 from thermaxis.paper.audit import ReproducedTables, comparison_markdown, paper_comparison
 from thermaxis.paper.equations import published_targets
 from thermaxis.paper.faithfulness import faithfulness, faithfulness_markdown
 from thermaxis.paper.published import published_values
-from thermaxis.pipeline.runner import csv_text, run_script, write_texts
+from thermaxis.pipeline.runner import csv_text, log_only, run_script, write_texts
 from thermaxis.statistics import (
     claim_results,
     claims_markdown,
@@ -66,32 +67,37 @@ def audit_texts(inputs, p, output, errors, temperatures) -> dict:
 
 
 def main(snakemake):
-    p, inputs, output = snakemake.params, snakemake.input, snakemake.output
-    settings = StatisticsSettings.from_section(p.statistics)
-    selection = SelectionSettings.from_section(p.selection)
-    sums = measurement_sums(
-        pd.read_csv(inputs.kb_predictions), pd.read_csv(inputs.error_predictions)
-    )
-    models = model_sums(sums)
-    recommendation = compare_recommendation(pd.read_csv(inputs.recommendation), settings)
-    comparisons = comparison_table(compare_models(models, settings), recommendation)
-    errors = pd.read_parquet(inputs.errors)
-    temperatures = pd.read_parquet(inputs.temperatures)
-    X, Y = model_inputs(errors, temperatures)
-    claims = claims_table(
-        p.dataset_name, claim_results(models, X, Y, errors, p.folds, selection, settings), settings
-    )
-    degree = DecouplingSettings.from_section(p.decoupling).degree if p.decoupled else None
-    stability = selection_stability(X, Y, p.folds, selection, degree, p.decoupled)
-    texts = {
-        output.comparisons: csv_text(comparisons, float_format="%.6f"),
-        output.claims: csv_text(claims, float_format="%.6f"),
-        output.markdown: claims_markdown(claims, p.statement, settings),
-        output.stability: csv_text(stability, float_format="%.6f"),
-    }
-    if p.paper:
-        texts.update(audit_texts(inputs, p, output, errors, temperatures))
-    write_texts(texts)
+    # The models job reports the selection's warnings; this one selects again on the same
+    # folds, so its copies go to its log only.
+    with log_only(SelectionWarning):
+        p, inputs, output = snakemake.params, snakemake.input, snakemake.output
+        settings = StatisticsSettings.from_section(p.statistics)
+        selection = SelectionSettings.from_section(p.selection)
+        sums = measurement_sums(
+            pd.read_csv(inputs.kb_predictions), pd.read_csv(inputs.error_predictions)
+        )
+        models = model_sums(sums)
+        recommendation = compare_recommendation(pd.read_csv(inputs.recommendation), settings)
+        comparisons = comparison_table(compare_models(models, settings), recommendation)
+        errors = pd.read_parquet(inputs.errors)
+        temperatures = pd.read_parquet(inputs.temperatures)
+        X, Y = model_inputs(errors, temperatures)
+        claims = claims_table(
+            p.dataset_name,
+            claim_results(models, X, Y, errors, p.folds, selection, settings),
+            settings,
+        )
+        degree = DecouplingSettings.from_section(p.decoupling).degree if p.decoupled else None
+        stability = selection_stability(X, Y, p.folds, selection, degree, p.decoupled)
+        texts = {
+            output.comparisons: csv_text(comparisons, float_format="%.6f"),
+            output.claims: csv_text(claims, float_format="%.6f"),
+            output.markdown: claims_markdown(claims, p.statement, settings),
+            output.stability: csv_text(stability, float_format="%.6f"),
+        }
+        if p.paper:
+            texts.update(audit_texts(inputs, p, output, errors, temperatures))
+        write_texts(texts)
 
 
 run_script(main, snakemake)

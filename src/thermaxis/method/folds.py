@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.config import ModelSettings, SelectionSettings
+from thermaxis.errors import SelectionWarning
 from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.method.metrics import prediction_metrics
 from thermaxis.method.selection import (
@@ -203,6 +204,7 @@ def select_for_fold(
             warnings.warn(
                 f"fold {fold}: only {distinct} distinct sensors were selected over the positions; "
                 f"the point-by-point common set has {n_common} instead of {settings.pointwise_common}",
+                SelectionWarning,
                 stacklevel=2,
             )
         common = common_points(

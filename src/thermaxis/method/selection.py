@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.dataset.safety import _error
+from thermaxis.errors import SelectionWarning
 
 __all__ = [
     "SensitivePoints",
@@ -151,7 +152,7 @@ def similarity_matrix(X, method: str) -> np.ndarray:
         warnings.warn(
             f"constant sensor column(s) {np.flatnonzero(constant).tolist()}: "
             "similarity set to 0 with every other sensor",
-            UserWarning,
+            SelectionWarning,
             stacklevel=2,
         )
     if method == "pearson":
@@ -319,7 +320,7 @@ def classes_for_count(E, n_classes: int) -> tuple[list[tuple[int, ...]], float]:
     warnings.warn(
         f"no lambda-cut gives {n_classes} classes (ties in the equivalence matrix); "
         f"using {obtained} classes instead (achievable counts: {sorted(by_count)})",
-        UserWarning,
+        SelectionWarning,
         stacklevel=2,
     )
     return by_count[obtained]
@@ -354,7 +355,7 @@ def _normalise(seqs: np.ndarray, normalisation: str) -> np.ndarray:
         warnings.warn(
             f"constant sequence(s) {np.flatnonzero(flat).tolist()} (0 = the target, "
             "i = sensor column i-1): min-max normalised to all zeros",
-            UserWarning,
+            SelectionWarning,
             stacklevel=3,
         )
     return np.where(flat, 0.0, (seqs - seqs.min(axis=0)) / np.where(flat, 1.0, span))
@@ -569,7 +570,7 @@ def rank_by_correlation(X: pd.DataFrame, y, n: int) -> tuple[str, ...]:
     if constant.any():
         warnings.warn(
             f"constant sensor(s) {[names[i] for i in np.flatnonzero(constant)]}: correlation taken as 0",
-            UserWarning,
+            SelectionWarning,
             stacklevel=2,
         )
     abs_r = np.abs(unit.T @ unit_y[:, 0])
@@ -665,6 +666,7 @@ def informative_sensors(
     for sensor in constant:
         warnings.warn(
             f"{where}: sensor {sensor} is constant over the training measurements; left out of the selection",
+            SelectionWarning,
             stacklevel=2,
         )
     varying = len(temperatures.columns) - len(constant)

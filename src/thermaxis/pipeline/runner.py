@@ -51,6 +51,34 @@ class _Once(logging.Filter):
         return True
 
 
+# The logger of what this job's log keeps but the terminal has from another job.
+_LOG_ONLY = "thermaxis.log_only"
+
+
+@contextmanager
+def log_only(category: type[Warning]):
+    """Warnings of ``category`` go to this job's log and not to the terminal.
+
+    For a job that re-derives what another job reports: the statistics, the
+    recommendation and the compensation select sensitive points again on the same folds,
+    and the terminal has their selection's warnings from the models job already.
+    """
+    previous = warnings.showwarning
+    log = logging.getLogger(_LOG_ONLY)
+
+    def show(message, kind, filename, lineno, file=None, line=None):
+        if issubclass(kind, category):
+            log.warning("%s: %s", kind.__name__, message)
+        else:
+            previous(message, kind, filename, lineno, file, line)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = previous
+
+
 def _configure_logging(log_path: str | None) -> logging.Logger:
     logger = logging.getLogger("thermaxis")
     py_warnings = logging.getLogger("py.warnings")
@@ -72,6 +100,9 @@ def _configure_logging(log_path: str | None) -> logging.Logger:
     terminal.setFormatter(_OneLine())
     terminal.addFilter(_Once())
     logger.addHandler(handler)
+    log_only_logger = logging.getLogger(_LOG_ONLY)
+    log_only_logger.handlers = [handler]
+    log_only_logger.propagate = False
     logging.captureWarnings(True)
     py_warnings.handlers.clear()
     py_warnings.addHandler(handler)
