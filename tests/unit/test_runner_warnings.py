@@ -42,9 +42,13 @@ def test_a_warning_another_job_reports_goes_to_this_jobs_log_only(tmp_path, caps
         _configure_logging(str(log))
         warnings.simplefilter("always")
         with log_only(SelectionWarning):
-            warnings.warn("fold R1: only 2 distinct sensors were selected", SelectionWarning)
-            warnings.warn("a warning of this job's own", UserWarning)
-        warnings.warn("fold R2: a selection warning outside the block", SelectionWarning)
+            warnings.warn(
+                "fold R1: only 2 distinct sensors were selected", SelectionWarning, stacklevel=1
+            )
+            warnings.warn("a warning of this job's own", UserWarning, stacklevel=1)
+        warnings.warn(
+            "fold R2: a selection warning outside the block", SelectionWarning, stacklevel=1
+        )
     for handler in logging.getLogger("thermaxis").handlers:
         handler.flush()
     err = capsys.readouterr().err
