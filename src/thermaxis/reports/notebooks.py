@@ -8,6 +8,7 @@ kernel, its namespace reset between pages, so the kernel and the imports start o
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import re
 import sys
@@ -85,6 +86,22 @@ def remote_loads(text: str) -> list[str]:
     return [m.group(0) for m in _REMOTE.finditer(text)]
 
 
+@functools.cache
+def _exporter():
+    """One exporter per process: its templates load once for every page of a report."""
+    import jinja2
+    from nbconvert import HTMLExporter
+
+    return HTMLExporter(
+        template_name="lab",
+        extra_loaders=[jinja2.DictLoader({"thermaxis.html.j2": _TEMPLATE})],
+        template_file="thermaxis.html.j2",
+        exclude_input=True,
+        exclude_input_prompt=True,
+        exclude_output_prompt=True,
+    )
+
+
 def notebook_to_html(nb, title: str) -> str:
     """HTML of an executed notebook: outputs and Markdown only (code hidden), nothing remote.
 
@@ -93,17 +110,7 @@ def notebook_to_html(nb, title: str) -> str:
     ValueError
         If the page would still load something from the network.
     """
-    import jinja2
-    from nbconvert import HTMLExporter
-
-    exporter = HTMLExporter(
-        template_name="lab",
-        extra_loaders=[jinja2.DictLoader({"thermaxis.html.j2": _TEMPLATE})],
-        template_file="thermaxis.html.j2",
-        exclude_input=True,
-        exclude_input_prompt=True,
-        exclude_output_prompt=True,
-    )
+    exporter = _exporter()
     nb.metadata["title"] = title  # the template prefers it to the resource name
     body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title}})
     remote = remote_loads(body)
