@@ -22,6 +22,9 @@ SNAKEMAKE := $(BIN)/snakemake --cores $(CORES) $(SNAKEMAKE_OUTPUT)
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
+# A make that runs inside another (make test's tests, a wrapper) would print 'Entering/Leaving
+# directory' around its output and bury the answer line; the answer stays last.
+MAKEFLAGS += --no-print-directory
 
 .PHONY: env results import test lint fmt clean twin twin-calibrate twin-conflicts report sweep bench help
 

@@ -15,6 +15,7 @@ from thermaxis.figures.captions import figure_caption
 from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
 from thermaxis.pipeline import preflight
 from thermaxis.pipeline.deps import library_modules, named_modules
+from thermaxis.pipeline.parallel import fold_workers
 from thermaxis.pipeline.resources import MIN_MEMORY_MB, MIN_RUNTIME_MIN, per_attempt
 from thermaxis.reports.index import PAPER_HEADLINE
 from thermaxis.reports.provenance import git_state
@@ -132,6 +133,9 @@ def dataset_files():
 # --------------------------------------------------------------------------- vocabulary
 APPROACHES = list(vocabulary.APPROACHES) if DECOUPLED else ["pointwise"]
 ALGORITHMS = list(SETTINGS.models.algorithms)
+# A stage job with many folds spreads them over this many processes (thermaxis.pipeline.
+# parallel: one per MIN_FOLDS_PER_WORKER folds), which Snakemake caps at --cores.
+FOLD_THREADS = fold_workers(len(FOLDS), len(FOLDS))
 # The tables each fold of the models rule writes (thermaxis.method.folds.SORT_KEYS).
 MODEL_TABLES = [
     "metrics",

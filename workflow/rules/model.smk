@@ -59,6 +59,7 @@ rule models:
         f"{BENCH}/models.tsv"
     conda:
         ENV
+    threads: FOLD_THREADS
     resources:
         **rule_resources("models"),
     params:

@@ -27,6 +27,7 @@ rule recommend:
         f"{BENCH}/recommend.tsv"
     conda:
         ENV
+    threads: FOLD_THREADS
     resources:
         **rule_resources("recommend"),
     params:

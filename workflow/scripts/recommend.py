@@ -5,6 +5,7 @@ fold, the final one and the tables."""
 import io
 import json
 import logging
+from functools import partial
 
 import pandas as pd
 
@@ -19,6 +20,7 @@ from thermaxis.method.recommend import (
     fold_scores,
     recommendation_markdown,
 )
+from thermaxis.pipeline.parallel import fold_workers, map_folds
 from thermaxis.pipeline.runner import csv_text, log_only, run_script, write_texts
 from thermaxis.statistics import fold_means
 
@@ -52,20 +54,25 @@ def main(snakemake):
         candidates = configured_candidates(p)
         degree = DecouplingSettings.from_section(p.decoupling).degree
         log = logging.getLogger("thermaxis")
-        texts = {}
-        for fold, path in zip(p.folds, output.scores, strict=True):
-            scores = fold_scores(
-                X,
-                Y,
-                candidates,
-                fold,
-                degree,
-                recommend.max_loco_runs,
-                recommend.group_folds,
-                p.signals,
-                progress=log.info,
-            )
-            texts[path] = csv_text(scores, float_format="%.10g")
+        # A bad-input test runs this script without Snakemake's threads: one process.
+        workers = fold_workers(getattr(snakemake, "threads", 1), len(p.folds))
+        one_fold = partial(
+            fold_scores,
+            X,
+            Y,
+            candidates,
+            degree=degree,
+            max_loco_runs=recommend.max_loco_runs,
+            n_group_folds=recommend.group_folds,
+            signals=p.signals,
+            # Workers start without this job's logging: only one process says its progress.
+            progress=log.info if workers == 1 else None,
+        )
+        scores = map_folds(one_fold, p.folds, workers)
+        texts = {
+            path: csv_text(fold, float_format="%.10g")
+            for path, fold in zip(output.scores, scores, strict=True)
+        }
         # The choice reads the scores as a reader of the folds' files gets them back.
         scores = pd.concat(
             [pd.read_csv(io.StringIO(texts[path])) for path in output.scores], ignore_index=True

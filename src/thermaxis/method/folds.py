@@ -12,8 +12,9 @@ prediction time and its measured errors only to the metrics.
 
 from __future__ import annotations
 
+import json
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,6 +22,7 @@ import pandas as pd
 
 from thermaxis.config import ModelSettings, SelectionSettings
 from thermaxis.errors import SelectionWarning
+from thermaxis.labels import sort_naturally
 from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.method.metrics import prediction_metrics
 from thermaxis.method.selection import (
@@ -40,6 +42,7 @@ __all__ = [
     "selection_table",
     "selection_to_dict",
     "selection_from_dict",
+    "fold_models",
 ]
 
 META = ("run", "measurement", "time_min")
@@ -468,4 +471,44 @@ def selection_from_dict(d: dict) -> FoldSelection:
         b=_points_from_dict(d["b"]),
         per_position={float(p): _points_from_dict(v) for p, v in d["per_position"].items()},
         pointwise=tuple(d["pointwise"]),
+    )
+
+
+def fold_models(
+    fold: str,
+    X_select: pd.DataFrame,
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    selection: SelectionSettings,
+    models: ModelSettings,
+    degree: int,
+    decoupled: bool,
+    approaches: Sequence[str],
+    algorithms: Sequence[str],
+) -> tuple[FoldSelection, str, dict[str, pd.DataFrame]]:
+    """One fold of the models stage: its sensitive points, with their JSON record, and
+    every approach x algorithm fitted on them, each table sorted by :data:`SORT_KEYS`.
+
+    ``X_select`` holds the temperatures the selection reads, ``X`` those and the signals
+    the models read. The models use the selection as read back from its record, as a
+    later job reading the file does.
+    """
+    chosen = select_for_fold(X_select, Y, fold, selection, degree, decoupled=decoupled)
+    record = json.dumps(selection_to_dict(chosen), indent=1, sort_keys=True) + "\n"
+    read_back = selection_from_dict(json.loads(record))
+    results = [
+        evaluate_configuration(X, Y, fold, approach, algorithm, read_back, models, degree)
+        for approach in approaches
+        for algorithm in algorithms
+    ]
+    return (
+        chosen,
+        record,
+        {
+            name: sort_naturally(
+                pd.concat([getattr(r, name) for r in results], ignore_index=True), keys
+            )
+            for name, keys in SORT_KEYS.items()
+            if name != "selection"
+        },
     )
