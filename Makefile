@@ -38,7 +38,7 @@ help:
 	@echo "make lint            ruff check over src/, tools/, workflow/scripts/ and tests/, then snakemake --lint and snakefmt --check"
 	@echo "make fmt             snakefmt over Snakefile and workflow/rules/"
 	@echo "make twin            regenerate data/raw/twin (byte-identical) from the committed twin parameters"
-	@echo "make twin-calibrate  refit src/thermaxis/twin_params.json to the paper's published targets, then regenerate data/raw/twin"
+	@echo "make twin-calibrate  refit src/thermaxis/twin_params.json to the paper's published targets, then regenerate data/raw/twin (RESUME= : from the priors)"
 	@echo "make twin-conflicts  optimise each group of the paper's targets alone and in pairs: docs/twin-conflicts.md"
 	@echo "make report          Snakemake report: results/<dataset>/report.zip"
 	@echo "make sweep           sweep cluster counts x selection x algorithms x decoupling degree"
@@ -124,8 +124,12 @@ fmt: env
 twin: env
 	$(BIN)/python -m thermaxis.twin generate --out data/raw/twin --truth data/twin_truth
 
+# By default the chain resumes at its first restart stage from the seven stages' end the
+# committed twin was refined from, which regenerates the committed parameters;
+# RESUME= (empty) runs every stage from the priors (docs/datasets.md).
+RESUME ?= src/thermaxis/twin_params.seven_stages.json
 twin-calibrate: env
-	$(BIN)/python -m thermaxis.twin calibrate
+	$(BIN)/python -m thermaxis.twin calibrate $(if $(RESUME),--resume "$(RESUME)")
 
 twin-conflicts: env
 	$(BIN)/python -m thermaxis.twin conflicts

@@ -307,7 +307,7 @@ def test_only_the_paper_twin_is_said_to_be_calibrated_to_the_paper():
     from thermaxis.dataset.summary import data_statement
 
     assert data_statement("twin", True) == (
-        "Dataset `twin`: SIMULATED data (thermal twin calibrated to the paper's Table 5), "
+        "Dataset `twin`: SIMULATED data (thermal twin calibrated to the paper's fits and results), "
         "not the paper's measurements."
     )
     assert data_statement("scale", True, "thermaxis.twin scale", reproduces_paper=False) == (

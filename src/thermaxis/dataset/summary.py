@@ -29,7 +29,7 @@ def data_statement(
     source = f" Source: {citation.strip()}" if citation.strip() else ""
     if simulated and reproduces_paper:
         return (
-            f"Dataset `{dataset_name}`: SIMULATED data (thermal twin calibrated to the paper's Table 5), "
+            f"Dataset `{dataset_name}`: SIMULATED data (thermal twin calibrated to the paper's fits and results), "
             "not the paper's measurements."
         )
     if simulated:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import hashlib
 import sys
 from pathlib import Path
 
@@ -26,6 +27,11 @@ def _parser() -> argparse.ArgumentParser:
     cal.add_argument("--out", type=Path, default=DEFAULT_OUT)
     cal.add_argument("--truth", type=Path, default=DEFAULT_TRUTH)
     cal.add_argument("--params", type=Path, default=mdl.PARAMS_PATH)
+    cal.add_argument(
+        "--resume",
+        type=Path,
+        help="parameters written at the first restart stage: go on from there",
+    )
     con = sub.add_parser(
         "conflicts",
         help="optimise each group of the paper's targets alone and in pairs (which conflict)",
@@ -45,6 +51,10 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "generate":
@@ -55,9 +65,15 @@ def main(argv: list[str] | None = None) -> int:
         from .calibration import calibrate
         from .generate import generate_dataset
 
-        result = calibrate()
+        resume = mdl.load_params(args.resume) if args.resume else None
+        result = calibrate(resume=resume)
+        start = (
+            f"resumed at the first restart from {args.resume.name} (sha256 {_sha256(args.resume)})"
+            if args.resume
+            else "start at the priors"
+        )
         summary = {
-            "method": "scipy.optimize.least_squares on the noise-free model, start at the priors, "
+            "method": f"scipy.optimize.least_squares on the noise-free model, {start}, "
             "staged (thermaxis.twin.fit.STAGES)",
             **{f"rms_{name}": round(value, 4) for name, value in result.rms.items()},
             **{name: round(value, 4) for name, value in result.summary.items()},

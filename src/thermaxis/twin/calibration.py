@@ -33,6 +33,8 @@ def pipeline_observables(params: mdl.TwinParams) -> dict[str, fit.RunObservables
         return pipeline_view(Path(tmp)).observables()
 
 
-def calibrate(step_s: float = cond.STEP_S, workers: int = 2) -> fit.FitResult:
+def calibrate(
+    step_s: float = cond.STEP_S, workers: int = 2, resume: mdl.TwinParams | None = None
+) -> fit.FitResult:
     """The staged fit (:data:`thermaxis.twin.fit.STAGES`) with the pipeline's correction."""
-    return fit.calibrate(pipeline_observables, step_s, workers)
+    return fit.calibrate(pipeline_observables, step_s, workers, resume)

@@ -455,6 +455,9 @@ class Stage:
     # Overrides of RESULT_TOLERANCE and OBJECTIVE_FACTOR for this stage, (name, value).
     tolerance: tuple[tuple[str, float], ...] = ()
     factors: tuple[tuple[str, float], ...] = ()
+    # Start from the parameters as twin_params.json writes them, and the thresholds from
+    # their start: the calibration can be resumed from the file at any such stage.
+    restart: bool = False
 
     def result_tolerance(self, name: str) -> float:
         return dict(self.tolerance).get(name, RESULT_TOLERANCE[name])
@@ -518,6 +521,33 @@ STAGES: tuple[Stage, ...] = (
         through_pipeline=True,
         factors=(("table5_k", 0.5), ("table5_b", 0.25), ("eq9_k", 0.8), ("eq9_b", 0.6)),
     ),
+) + tuple(
+    # Table 3 refined by restarts: the single-switch targets' margins are a grade apart
+    # (0.001-0.01), so each restart corrects to the pipeline afresh, with Table 3 held
+    # tighter and Eq. 9's intercepts brought back under their bound as Table 3 pushes
+    # them up; the held-out errors first tight (their bounds are the narrowest), then at
+    # their tolerance.  A schedule found by trial on these targets (docs/datasets.md).
+    Stage(
+        f"Table 3 restart {i}, pipeline",
+        results=_RESULTS,
+        max_evaluations=evaluations,
+        through_pipeline=True,
+        restart=True,
+        tolerance=(("table3_points", table3),)
+        + (() if heldout is None else (("heldout", heldout),)),
+        factors=(("table5_k", 0.5), ("table5_b", 0.25), ("eq9_k", 0.8), ("eq9_b", eq9_b)),
+    )
+    for i, (evaluations, table3, heldout, eq9_b) in enumerate(
+        (
+            (15, 0.002, None, 0.6),
+            (30, 0.002, 0.1, 0.5),
+            (20, 0.002, 0.1, 0.5),
+            (25, 0.001, 0.2, 0.45),
+            (25, 0.001, 0.2, 0.4),
+            (25, 0.001, 0.2, 0.25),
+        ),
+        start=1,
+    )
 )
 
 
@@ -714,7 +744,18 @@ def _solve(objective: _Objective, pool, x, stage: Stage, lower, upper, pipeline)
     return x, solution, record
 
 
-def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitResult:
+def _restarted(x: np.ndarray, objective: _Objective, lower, upper) -> np.ndarray:
+    """``x`` as a restart from the written file sees it: rounded as saved, thresholds anew."""
+    twin = [round(float(v), mdl.PARAMS_DECIMALS) for v in x[: objective._n_twin]]
+    return np.clip(np.array(twin + [_ETA_START, _ETA_START]), lower, upper)
+
+
+def calibrate(
+    pipeline,
+    step_s: float = cond.STEP_S,
+    workers: int = 2,
+    resume: mdl.TwinParams | None = None,
+) -> FitResult:
     """Fit the free parameters to the paper's published fits and results, stage by stage.
 
     ``pipeline(params)`` gives what the pipeline makes of the raw files of ``params``
@@ -724,6 +765,9 @@ def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitRes
     Deterministic: a fixed start (the priors' centres, initial offsets 0), scipy's
     trust-region least squares with a fixed budget per stage (:data:`STAGES`), and
     forward-difference Jacobians computed the same way on any number of ``workers``.
+
+    ``resume``: parameters written at the first restart stage (the earlier stages' end);
+    the calibration goes on from there, as the whole run does at that stage.
     """
     global _WORKER
     problem = _problem(step_s)
@@ -736,11 +780,17 @@ def calibrate(pipeline, step_s: float = cond.STEP_S, workers: int = 2) -> FitRes
     )
     lower, upper = _bounds(runs)
     x = np.clip(x, lower, upper)
+    todo = STAGES
+    if resume is not None:
+        todo = STAGES[next(i for i, stage in enumerate(STAGES) if stage.restart) :]
+        x = np.concatenate([resume.vector(runs), x[-2:]])
     _WORKER = objective
     pool = _pool(workers)
     stages, evaluations = [], 0
     try:
-        for stage in STAGES:
+        for stage in todo:
+            if stage.restart:
+                x = _restarted(x, objective, lower, upper)
             x, solution, record = _solve(objective, pool, x, stage, lower, upper, pipeline)
             evaluations += record["evaluations"]
             stages.append(record)

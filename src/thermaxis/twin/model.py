@@ -389,13 +389,17 @@ def load_params(path: Path | str = PARAMS_PATH) -> TwinParams:
     return TwinParams(values=values, initial=initial)
 
 
+#: Decimals of the written parameters (twin_params.json).
+PARAMS_DECIMALS = 6
+
+
 def save_params(params: TwinParams, path: Path | str, fit_summary: dict) -> None:
     """Write the parameters as stable, human-readable JSON (sorted, fixed precision)."""
     raw = {
         "about": "Fitted free parameters of thermaxis.twin (python -m thermaxis.twin calibrate).",
-        "global": {name: round(params.values[name], 6) for name in GLOBAL_PARAMETERS},
+        "global": {name: round(params.values[name], PARAMS_DECIMALS) for name in GLOBAL_PARAMETERS},
         "initial_offset_K": {
-            run: {name: round(v[name], 6) for name in INITIAL_PARAMETERS}
+            run: {name: round(v[name], PARAMS_DECIMALS) for name in INITIAL_PARAMETERS}
             for run, v in sorted(params.initial.items())
         },
         "fit": fit_summary,
