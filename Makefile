@@ -124,10 +124,11 @@ fmt: env
 twin: env
 	$(BIN)/python -m thermaxis.twin generate --out data/raw/twin --truth data/twin_truth
 
-# By default the chain resumes at its first restart stage from the seven stages' end the
-# committed twin was refined from, which regenerates the committed parameters;
-# RESUME= (empty) runs every stage from the priors (docs/datasets.md).
-RESUME ?= src/thermaxis/twin_params.seven_stages.json
+# By default the chain resumes after the Table 3 restarts, from the file they wrote
+# (the committed twin's last resume point); RESUME= (empty) runs every stage from the
+# priors, RESUME=src/thermaxis/twin_params.seven_stages.json from the seven stages' end
+# (docs/datasets.md).
+RESUME ?= src/thermaxis/twin_params.table3_restarts.json
 twin-calibrate: env
 	$(BIN)/python -m thermaxis.twin calibrate $(if $(RESUME),--resume "$(RESUME)")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import json
 import sys
 from pathlib import Path
 
@@ -30,7 +31,7 @@ def _parser() -> argparse.ArgumentParser:
     cal.add_argument(
         "--resume",
         type=Path,
-        help="parameters written at the first restart stage: go on from there",
+        help="a twin_params file a calibration wrote: go on after the last stage it records",
     )
     con = sub.add_parser(
         "conflicts",
@@ -55,6 +56,15 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
 
 
+def _resume_point(path: Path) -> tuple[mdl.TwinParams, str]:
+    """The parameters of a written calibration and the last stage its record names."""
+    with open(path, encoding="utf-8") as fh:
+        stages = json.load(fh).get("fit", {}).get("stages") or []
+    if not stages or "name" not in stages[-1]:
+        raise ValueError(f"{path}: fit.stages names no stage (expected a calibration's record)")
+    return mdl.load_params(path), stages[-1]["name"]
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "generate":
@@ -65,11 +75,12 @@ def main(argv: list[str] | None = None) -> int:
         from .calibration import calibrate
         from .generate import generate_dataset
 
-        resume = mdl.load_params(args.resume) if args.resume else None
+        resume = _resume_point(args.resume) if args.resume else None
         result = calibrate(resume=resume)
         start = (
-            f"resumed at the first restart from {args.resume.name} (sha256 {_sha256(args.resume)})"
-            if args.resume
+            f"resumed after stage {resume[1]!r} from {args.resume.name} "
+            f"(sha256 {_sha256(args.resume)})"
+            if resume
             else "start at the priors"
         )
         summary = {

@@ -34,7 +34,9 @@ def pipeline_observables(params: mdl.TwinParams) -> dict[str, fit.RunObservables
 
 
 def calibrate(
-    step_s: float = cond.STEP_S, workers: int = 2, resume: mdl.TwinParams | None = None
+    step_s: float = cond.STEP_S,
+    workers: int = 2,
+    resume: tuple[mdl.TwinParams, str] | None = None,
 ) -> fit.FitResult:
     """The staged fit (:data:`thermaxis.twin.fit.STAGES`) with the pipeline's correction."""
     return fit.calibrate(pipeline_observables, step_s, workers, resume)

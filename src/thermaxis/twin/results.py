@@ -55,6 +55,7 @@ __all__ = [
     "partition_margins",
     "point_margins",
     "heldout_max_residuals",
+    "heldout_slope_rmse",
     "HEATED_RISE_K",
 ]
 
@@ -82,6 +83,7 @@ class ResultTargets:
     pointwise_points: tuple[str, ...]  # Table 3's three most frequent (Eq. 8's inputs)
     max_residual_um: dict[tuple[str, str], float]  # (approach, algorithm) -> error max_abs
     rmse_um: dict[tuple[str, str], float]
+    slope_rmse_um_per_m: float  # Table 7: decoupled MLR, RMSE of the held-out slope k
 
 
 def _classes(table6, target: str) -> tuple[tuple[tuple[str, ...], ...], tuple[str, ...]]:
@@ -105,6 +107,11 @@ def result_targets(fold: str = "E4") -> ResultTargets:
     counts = table3["sensor"].value_counts(sort=False)
     order = sorted(counts.index, key=lambda s: (-counts[s], int(s[1:])))
     error = metrics[metrics["target"] == "error"]
+    slope = metrics[
+        (metrics["target"] == "k")
+        & (metrics["approach"] == "decoupled")
+        & (metrics["algorithm"] == "mlr")
+    ]
     return ResultTargets(
         fold=fold,
         k_classes=k_classes,
@@ -116,6 +123,7 @@ def result_targets(fold: str = "E4") -> ResultTargets:
         pointwise_points=tuple(order[:3]),
         max_residual_um={(r.approach, r.algorithm): float(r.max_abs) for r in error.itertuples()},
         rmse_um={(r.approach, r.algorithm): float(r.rmse) for r in error.itertuples()},
+        slope_rmse_um_per_m=float(slope["rmse"].iloc[0]),
     )
 
 
@@ -163,6 +171,7 @@ class FoldData:
     test_absolute: np.ndarray
     test_relative: np.ndarray
     test_curves: np.ndarray
+    test_k: np.ndarray
 
 
 def _tree_edges(similarity: np.ndarray, members: Sequence[int]) -> list[float]:
@@ -269,6 +278,22 @@ def _mlr(features: np.ndarray, target: np.ndarray, test: np.ndarray) -> np.ndarr
     return np.column_stack([np.ones(len(test)), test]) @ coef
 
 
+def _decoupled_kb(data: FoldData, targets: ResultTargets) -> tuple[np.ndarray, np.ndarray]:
+    """The held-out run's k and b as decoupled MLR predicts them on the published points."""
+    col = {s: i for i, s in enumerate(data.sensors)}
+    k_in = [col[s] for s in targets.k_points]
+    b_in = [col[s] for s in targets.b_points]
+    k = _mlr(data.absolute[:, k_in], data.k, data.test_absolute[:, k_in])
+    b = _mlr(data.relative[:, b_in], data.b, data.test_relative[:, b_in])
+    return k, b
+
+
+def heldout_slope_rmse(data: FoldData, targets: ResultTargets) -> float:
+    """RMSE of the held-out slope k under decoupled MLR (Table 7's k row), um/m."""
+    k, _ = _decoupled_kb(data, targets)
+    return float(np.sqrt(np.mean((data.test_k - k) ** 2)))
+
+
 def heldout_max_residuals(
     data: FoldData, targets: ResultTargets, pointwise: Sequence[str]
 ) -> dict[tuple[str, str], tuple]:
@@ -277,12 +302,9 @@ def heldout_max_residuals(
     Decoupled on the published k- and b-points; point-by-point on ``pointwise``.
     """
     col = {s: i for i, s in enumerate(data.sensors)}
-    k_in = [col[s] for s in targets.k_points]
-    b_in = [col[s] for s in targets.b_points]
     p_in = [col[s] for s in pointwise]
     stroke_m = (data.positions_mm - data.positions_mm[0]) / 1000.0
-    k = _mlr(data.absolute[:, k_in], data.k, data.test_absolute[:, k_in])
-    b = _mlr(data.relative[:, b_in], data.b, data.test_relative[:, b_in])
+    k, b = _decoupled_kb(data, targets)
     decoupled = data.test_curves - (b[:, None] + k[:, None] * stroke_m[None, :])
     pointwise = data.test_curves - np.column_stack(
         [

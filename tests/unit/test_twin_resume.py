@@ -1,0 +1,49 @@
+"""Resuming the twin's staged calibration from a file it wrote."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from thermaxis.twin import fit
+from thermaxis.twin.__main__ import _resume_point
+
+NAMES = [stage.name for stage in fit.STAGES]
+
+
+def test_a_resume_goes_on_at_the_stage_after_the_last_one_recorded():
+    assert NAMES[fit._resume_index("kept targets with Eq. 9, pipeline")] == (
+        "Table 3 restart 1, pipeline"
+    )
+    assert NAMES[fit._resume_index("Table 3 restart 6, pipeline")] == (
+        "held-out RMSE restart 1, pipeline"
+    )
+
+
+@pytest.mark.parametrize(
+    "after", ["Table 6", "held-out RMSE restart 11, pipeline", "no such stage"]
+)
+def test_a_resume_needs_a_known_stage_followed_by_a_restart(after):
+    # After "Table 6" comes a stage that does not start afresh; after the last, nothing.
+    with pytest.raises(ValueError, match="cannot resume after stage"):
+        fit._resume_index(after)
+
+
+def test_a_file_without_a_stage_record_names_itself(tmp_path):
+    path = tmp_path / "params.json"
+    path.write_text(json.dumps({"global": {}, "fit": {"stages": []}}), encoding="utf-8")
+    with pytest.raises(ValueError, match=r"params\.json: fit\.stages names no stage"):
+        _resume_point(path)
+
+
+def test_the_committed_resume_points_name_their_last_stages():
+    from importlib import resources
+
+    root = resources.files("thermaxis")
+    for name, last in (
+        ("twin_params.seven_stages.json", "kept targets with Eq. 9, pipeline"),
+        ("twin_params.table3_restarts.json", "Table 3 restart 6, pipeline"),
+    ):
+        params, after = _resume_point(root / name)
+        assert after == last and params.values
