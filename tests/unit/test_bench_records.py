@@ -1,11 +1,11 @@
-"""tools.bench_records: the bench's comparison of the recommendation with the plain baseline."""
+"""tools.bench.records: the bench's comparison of the recommendation with the plain baseline."""
 
 from __future__ import annotations
 
 import pandas as pd
 
 from helpers import REPO
-from tools.bench_records import channel_mapping, record_quality
+from tools.bench.records import channel_mapping, record_quality
 
 
 def test_record_quality_reads_the_workflows_tables(tmp_path):
