@@ -481,6 +481,25 @@ class Stage:
 _RESULTS = ("table6_classes", "table6_points", "table3_points", "heldout", "rise")
 #: Table 6 held loosely: the published fits, pushed away by the Table 6 stage, come back.
 _LOOSE = (("table6_classes", 0.01), ("table6_points", 0.003))
+
+
+def _restart(
+    name: str, evaluations: int, tolerance: dict[str, float], factors: dict[str, float]
+) -> Stage:
+    """A restart stage through the pipeline: every result term, plus each term given a
+    tolerance that the stages before the held-out RMSEs did not have."""
+    extra = tuple(term for term in tolerance if term not in _RESULTS)
+    return Stage(
+        f"{name}, pipeline",
+        results=_RESULTS + extra,
+        max_evaluations=evaluations,
+        through_pipeline=True,
+        restart=True,
+        tolerance=tuple(tolerance.items()),
+        factors=tuple(factors.items()),
+    )
+
+
 #: The published fits first (from the priors); then Table 6 alone, whose partitions are
 #: far from the priors' field and need the whole network to move; then everything
 #: through the pipeline, twice with Table 6 held loosely, once at full weight with
@@ -541,15 +560,11 @@ STAGES: tuple[Stage, ...] = (
         # tighter and Eq. 9's intercepts brought back under their bound as Table 3 pushes
         # them up; the held-out errors first tight (their bounds are the narrowest), then at
         # their tolerance.  A schedule found by trial on these targets (docs/datasets.md).
-        Stage(
-            f"Table 3 restart {i}, pipeline",
-            results=_RESULTS,
-            max_evaluations=evaluations,
-            through_pipeline=True,
-            restart=True,
-            tolerance=(("table3_points", table3),)
-            + (() if heldout is None else (("heldout", heldout),)),
-            factors=(("table5_k", 0.5), ("table5_b", 0.25), ("eq9_k", 0.8), ("eq9_b", eq9_b)),
+        _restart(
+            f"Table 3 restart {i}",
+            evaluations,
+            {"table3_points": table3, **({} if heldout is None else {"heldout": heldout})},
+            {"table5_k": 0.5, "table5_b": 0.25, "eq9_k": 0.8, "eq9_b": eq9_b},
         )
         for i, (evaluations, table3, heldout, eq9_b) in enumerate(
             (
@@ -568,20 +583,12 @@ STAGES: tuple[Stage, ...] = (
         # at restarts, tightened in turn while Table 5 is held tighter; then Eq. 9's slopes
         # brought back under their bound, the largest residuals held tighter, and Table 3's
         # margins last.  Also a schedule found by trial on these targets (docs/datasets.md).
-        Stage(
-            f"held-out RMSE restart {i}, pipeline",
-            results=_RESULTS + terms,
-            max_evaluations=evaluations,
-            through_pipeline=True,
-            restart=True,
-            tolerance=(("table3_points", table3), ("heldout", heldout), ("heldout_rmse", rmse))
-            + ((("heldout_slope", slope),) if slope else ()),
-            factors=(
-                ("table5_k", table5_k),
-                ("table5_b", table5_b),
-                ("eq9_k", eq9_k),
-                ("eq9_b", 0.3),
-            ),
+        _restart(
+            f"held-out RMSE restart {i}",
+            evaluations,
+            {"table3_points": table3, "heldout": heldout, "heldout_rmse": rmse}
+            | ({"heldout_slope": slope} if slope else {}),
+            {"table5_k": table5_k, "table5_b": table5_b, "eq9_k": eq9_k, "eq9_b": 0.3},
         )
         for i, (evaluations, table3, heldout, rmse, slope, table5_k, table5_b, eq9_k) in enumerate(
             (
@@ -599,7 +606,6 @@ STAGES: tuple[Stage, ...] = (
             ),
             start=1,
         )
-        for terms in [("heldout_rmse",) + (("heldout_slope",) if slope else ())]
     )
 )
 
