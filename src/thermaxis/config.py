@@ -359,6 +359,8 @@ class ModelSettings:
     search_grids: tuple  # ((algorithm, ((parameter, (value, ...)), ...)), ...)
     inner_search: tuple[int, int]  # (max_loco_runs, group_folds)
     gpr_max_samples: int
+    svr_max_samples: int
+    svr_search_folds: int
     interval_level: float
     random_state: int
     signals: tuple[str, ...]  # operating signals added to every model's inputs
@@ -382,6 +384,8 @@ class ModelSettings:
                 int(m["inner_search"]["group_folds"]),
             ),
             gpr_max_samples=int(m["gpr_max_samples"]),
+            svr_max_samples=int(m["svr_max_samples"]),
+            svr_search_folds=int(m["inner_search"]["svr_folds"]),
             interval_level=float(m["interval_level"]),
             random_state=int(m["random_state"]),
             signals=tuple(m["signals"]),
@@ -592,14 +596,17 @@ class StatisticsSettings:
     n_resamples: int
     seed: int
     block_length: int  # measurements per block; 0: round(n^(1/3)) per fold
+    stability_subsets: tuple[int, int]  # (max_loco_runs, group_folds)
 
     @classmethod
     def from_section(cls, section) -> StatisticsSettings:
+        subsets = section["stability_subsets"]
         return cls(
             level=float(section["level"]),
             n_resamples=int(section["n_resamples"]),
             seed=int(section["seed"]),
             block_length=int(section["block_length"]),
+            stability_subsets=(int(subsets["max_loco_runs"]), int(subsets["group_folds"])),
         )
 
     @property

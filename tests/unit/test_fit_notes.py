@@ -4,6 +4,8 @@ import json
 
 import numpy as np
 import pandas as pd
+from sklearn.preprocessing import StandardScaler
+from sklearn.svm import SVR
 
 from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
 from thermaxis.reports.summaries import fitting_summary
@@ -33,11 +35,33 @@ def test_an_svr_says_its_inner_split_and_its_choice():
     assert notes["k"]["inner_search"] == "leave one of 3 training runs out"
     assert json.loads(notes["k"]["chosen"])["C"] in (1.0, 10.0)
     assert (notes["b"]["training_rows"], notes["b"]["rows_fitted"]) == (18, 18)
-    # Above max_loco_runs (2) the 3 runs are dealt into min(group_folds, 3) = 2 folds.
+    # Above max_loco_runs (2) the 3 runs are dealt into min(group_folds, 3) = 2 folds, of
+    # which the SVR scores its grid on the first svr_search_folds.
     model = DecoupledAxisModel(
-        ("T1",), ("T2",), algorithm="svr", svr_grid=GRID, inner_search=(2, 2)
+        ("T1",), ("T2",), algorithm="svr", svr_grid=GRID, inner_search=(2, 2), svr_search_folds=2
     )
     assert model.fit(X, Y).fit_notes_[0]["inner_search"] == "2 group folds of 3 training runs"
+    model.set_params(svr_search_folds=1)
+    note = model.fit(X, Y).fit_notes_[0]["inner_search"]
+    assert note == "the first of 2 group folds of 3 training runs"
+
+
+def test_an_svr_beyond_its_row_limit_is_fitted_on_evenly_spaced_rows():
+    X, Y = runs()
+    model = PointwiseAxisModel(("T1", "T2"), algorithm="svr", svr_grid=GRID, svr_max_samples=10)
+    notes = model.fit(X, Y).fit_notes_
+    assert {(n["training_rows"], n["rows_fitted"]) for n in notes} == {(18, 10)}
+    # np.linspace(0, 17, 10) rounded, by hand: each run keeps three or four of its six rows.
+    keep = [0, 2, 4, 6, 8, 9, 11, 13, 15, 17]
+    features = (X[["T1", "T2"]] - X.groupby("run")[["T1", "T2"]].transform("first")).to_numpy()
+    y = Y[600.0].to_numpy()
+    chosen = json.loads(notes[2]["chosen"])
+    x_scale, y_scale = StandardScaler().fit(features[keep]), StandardScaler().fit(y[keep, None])
+    svr = SVR(**chosen).fit(
+        x_scale.transform(features[keep]), y_scale.transform(y[keep, None]).ravel()
+    )
+    expected = y_scale.inverse_transform(svr.predict(x_scale.transform(features))[:, None]).ravel()
+    np.testing.assert_allclose(model.predict(X)[:, 2], expected, rtol=1e-9, atol=1e-9)
 
 
 def test_a_gaussian_process_says_how_many_rows_it_was_fitted_on():

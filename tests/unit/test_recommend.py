@@ -7,13 +7,14 @@ import pandas as pd
 import pytest
 
 from thermaxis.config import Settings
+from thermaxis.method.folds import run_groups
 from thermaxis.method.recommend import (
     BASELINE,
     Candidate,
     _choose,
     candidate_view,
     default_candidates,
-    inner_splits,
+    held_out_scores,
     recommend,
 )
 
@@ -111,13 +112,50 @@ def test_ties_go_to_the_candidate_listed_first():
     assert result.final == "pointwise-mlr-T1-again"
 
 
-def test_inner_splits_become_group_folds_above_the_limit():
+def test_run_groups_become_group_folds_above_the_limit():
     runs = [f"R{i}" for i in range(1, 12)]
-    assert inner_splits(runs[:4], 12, 5) == [("R1",), ("R2",), ("R3",), ("R4",)]
-    groups = inner_splits(runs, 6, 5)
+    assert run_groups(runs[:4], 12, 5) == [("R1",), ("R2",), ("R3",), ("R4",)]
+    groups = run_groups(runs, 6, 5)
     assert len(groups) == 5
     assert sorted(r for g in groups for r in g) == sorted(runs)
     assert groups[0] == ("R1", "R2", "R3")  # contiguous, in natural order
+
+
+def test_an_inner_group_fold_is_fitted_once_and_scored_over_all_its_rows():
+    X, Y = make_runs(n_runs=6)
+    group = ("R2", "R3")
+    (row,) = held_out_scores(X, Y, ["R1", "R2", "R3", "R4"], [group], fixed("T1"), 1, [], {})
+    # By hand: per position, least squares of the error on T1's rise since the run's first
+    # measurement, fitted on R1 and R4 (R5, R6 are outside the training runs), pooled
+    # over R2 and R3's rows.
+    rise = X["T1"] - X.groupby("run")["T1"].transform("first")
+    train, test = X["run"].isin(["R1", "R4"]).to_numpy(), X["run"].isin(group).to_numpy()
+    A = np.column_stack([np.ones(train.sum()), rise[train]])
+    coef, *_ = np.linalg.lstsq(A, Y.to_numpy()[train], rcond=None)
+    residual = Y.to_numpy()[test] - np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
+    assert row["held_out"] == "R2+R3"
+    assert row["rmse"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
+    assert row["max_abs"] == pytest.approx(np.abs(residual).max(), rel=1e-9)
+
+
+def test_above_the_limit_the_outer_loop_holds_out_groups_of_runs():
+    X, Y = make_runs(n_runs=6)
+    result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1,
+                       score="max_abs", max_loco_runs=4, n_group_folds=3)  # fmt: skip
+    # Six runs above a limit of four: three outer groups, R1+R2, R3+R4, R5+R6, every run
+    # still a row, each chosen without its group.
+    assert list(result.folds["fold"]) == [f"R{i}" for i in range(1, 7)]
+    assert list(result.folds["chosen"]) == ["pointwise-mlr-T1"] * 6
+    inner = result.inner.loc[result.inner["fold"] == "R1"]
+    assert set(inner["held_out"]) == {"R3", "R4", "R5", "R6"}
+    # By hand: R1's error from T1's rise fitted on R3-R6 alone (R2 is in R1's group).
+    rise = X["T1"] - X.groupby("run")["T1"].transform("first")
+    train, test = X["run"].isin(["R3", "R4", "R5", "R6"]).to_numpy(), (X["run"] == "R1").to_numpy()
+    coef, *_ = np.linalg.lstsq(np.column_stack([np.ones(train.sum()), rise[train]]),
+                               Y.to_numpy()[train], rcond=None)  # fmt: skip
+    residual = Y.to_numpy()[test] - np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
+    first = result.folds.iloc[0]
+    assert first["rmse_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
 
 
 def test_time_inputs_and_signals_are_seen_only_by_candidates_that_use_them():

@@ -37,7 +37,9 @@ from thermaxis.statistics.resampling import (
     stratified_indices,
 )
 
-SETTINGS = StatisticsSettings(level=0.95, n_resamples=1999, seed=0, block_length=0)
+SETTINGS = StatisticsSettings(
+    level=0.95, n_resamples=1999, seed=0, block_length=0, stability_subsets=(12, 5)
+)
 
 
 def selection(**changes) -> SelectionSettings:
@@ -211,7 +213,9 @@ def test_metric_intervals_agree_with_scipys_bootstrap_of_whole_measurements():
     residuals = rng.normal(0.0, 2.0, (40, 3))
     kb, errors = _predictions(residuals)
     sums = measurement_sums(kb, errors)
-    settings = StatisticsSettings(level=0.95, n_resamples=4999, seed=0, block_length=1)
+    settings = StatisticsSettings(
+        level=0.95, n_resamples=4999, seed=0, block_length=1, stability_subsets=(12, 5)
+    )
     got = metric_intervals(sums, settings).iloc[0]
 
     # scipy resampling the measurements (rows) one by one, on the same numbers.
@@ -344,16 +348,21 @@ def test_share_statistic_is_one_half_off_the_share():
 def test_stability_of_fixed_and_all_selections_is_known_and_one_training_run_is_not_resolved():
     X, Y, _ = _eq9_dataset()
     fixed = selection(method="fixed", fixed={"k": ["T1", "T6"], "b": ["T2"], "pointwise": ["T3"]})
-    table = selection_stability(X, Y, ["E4"], fixed, 1, True)
+    table = selection_stability(X, Y, ["E4"], fixed, 1, True, (12, 5))
     chosen = table.loc[table["frequency"] == 1.0].groupby("target")["sensor"].apply(set)
     assert chosen.to_dict() == {"k": {"T1", "T6"}, "b": {"T2"}, "pointwise": {"T3"}}
     assert (table["n_subsets"] == 3).all()
     assert table.loc[table["frequency"] == 0.0, "chosen"].eq(False).all()
-    everything = selection_stability(X, Y, ["E4"], selection(method="all"), 1, True)
+    everything = selection_stability(X, Y, ["E4"], selection(method="all"), 1, True, (12, 5))
     assert (everything["frequency"] == 1.0).all()
     X2, Y2, _ = _eq9_dataset(runs=("R1", "R2"))
-    two = selection_stability(X2, Y2, ["R1"], fixed, 1, True)
+    two = selection_stability(X2, Y2, ["R1"], fixed, 1, True, (12, 5))
     assert (two["n_subsets"] == 0).all() and two["frequency"].isna().all()
+    # Above max_loco_runs (2) the three training runs fall into 2 groups, E1+E2 and E3:
+    # two subsets, each leaving one group out.
+    grouped = selection_stability(X, Y, ["E4"], fixed, 1, True, (2, 2))
+    assert (grouped["n_subsets"] == 2).all()
+    assert grouped.loc[grouped["chosen"], "frequency"].eq(1.0).all()
 
 
 # --------------------------------------------------------------------------- cross-dataset
@@ -367,7 +376,9 @@ def test_cross_dataset_means_get_scipys_fold_bootstrap_interval():
         {"fold": ["E1", "E2", "E3", "E4"], "approach": "decoupled", "algorithm": "mlr",
          "target": "error", "rmse": rmse, "max_abs": [2.0, 5.0, 3.0, 2.5]}
     )  # fmt: skip
-    settings = StatisticsSettings(level=0.9, n_resamples=999, seed=5, block_length=0)
+    settings = StatisticsSettings(
+        level=0.9, n_resamples=999, seed=5, block_length=0, stability_subsets=(12, 5)
+    )
     row = summarise({"twin": metrics}, {"twin": "simulated"}, settings).iloc[0]
     ci = stats.bootstrap(
         (np.array(rmse),), np.mean, n_resamples=999, confidence_level=0.9,

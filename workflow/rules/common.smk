@@ -335,18 +335,19 @@ CATEGORY = {
 }
 # A report notebook: papermill executes it in a python3 kernel that must start within
 # 2 min, no cell may take over 10 min, and the same process writes its HTML
-# (thermaxis.reports.notebooks).
+# (thermaxis.reports.notebooks). Parameters go on standard input: a record of many runs
+# lists more files than a command line holds.
 RUN_NOTEBOOK = (
     "python -m thermaxis.reports.notebooks run {input.notebook:q} {output.notebook:q} {output.html:q}"
     " --kernel python3 --start-timeout 120 --execution-timeout 600"
-    " --title {params.title:q} --parameters {params.parameters:q} > {log:q} 2>&1"
+    " --title {params.title:q} --parameters - <<< {params.parameters:q} > {log:q} 2>&1"
 )
 # A report of one page per condition or fold: one kernel for every page, its namespace
 # reset between them (thermaxis.reports.notebooks.execute_pages).
 RUN_NOTEBOOK_PAGES = (
     "python -m thermaxis.reports.notebooks run-pages {input.notebook:q}"
     " --kernel python3 --start-timeout 120 --execution-timeout 600"
-    " --pages {params.pages:q} > {log:q} 2>&1"
+    " --pages - <<< {params.pages:q} > {log:q} 2>&1"
 )
 # One model report per fold shows these side by side, as the paper compares them.
 REPORT_MODELS = [

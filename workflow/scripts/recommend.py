@@ -18,6 +18,7 @@ from thermaxis.method.recommend import (
     collect,
     configured_candidates,
     fold_scores,
+    outer_groups,
     recommendation_markdown,
 )
 from thermaxis.pipeline.parallel import fold_workers, map_folds
@@ -54,8 +55,11 @@ def main(snakemake):
         candidates = configured_candidates(p)
         degree = DecouplingSettings.from_section(p.decoupling).degree
         log = logging.getLogger("thermaxis")
-        # A bad-input test runs this script without Snakemake's threads: one process.
-        workers = fold_workers(getattr(snakemake, "threads", 1), len(p.folds))
+        # Above recommend.max_loco_runs runs the outer loop holds out groups of runs.
+        outer = outer_groups(p.folds, recommend.max_loco_runs, recommend.group_folds)
+        # A bad-input test runs this script without Snakemake's threads: one process. The
+        # work grows with the runs, however they are grouped.
+        workers = min(fold_workers(getattr(snakemake, "threads", 1), len(p.folds)), len(outer))
         one_fold = partial(
             fold_scores,
             X,
@@ -68,10 +72,12 @@ def main(snakemake):
             # Workers start without this job's logging: only one process says its progress.
             progress=log.info if workers == 1 else None,
         )
-        scores = map_folds(one_fold, p.folds, workers)
+        by_run = pd.concat(map_folds(one_fold, outer, workers), ignore_index=True)
         texts = {
-            path: csv_text(fold, float_format="%.10g")
-            for path, fold in zip(output.scores, scores, strict=True)
+            path: csv_text(
+                by_run.loc[by_run["fold"] == fold].reset_index(drop=True), float_format="%.10g"
+            )
+            for path, fold in zip(output.scores, p.folds, strict=True)
         }
         # The choice reads the scores as a reader of the folds' files gets them back.
         scores = pd.concat(

@@ -88,7 +88,9 @@ def main(snakemake):
             settings,
         )
         degree = DecouplingSettings.from_section(p.decoupling).degree if p.decoupled else None
-        stability = selection_stability(X, Y, p.folds, selection, degree, p.decoupled)
+        stability = selection_stability(
+            X, Y, p.folds, selection, degree, p.decoupled, settings.stability_subsets
+        )
         texts = {
             output.comparisons: csv_text(comparisons, float_format="%.6f"),
             output.claims: csv_text(claims, float_format="%.6f"),

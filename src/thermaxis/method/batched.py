@@ -33,7 +33,7 @@ from sklearn.model_selection import ParameterGrid
 from thermaxis.config import ModelSettings
 from thermaxis.method import linear
 from thermaxis.method.decouple import compose_curve
-from thermaxis.method.folds import _split_fold, sensor_columns
+from thermaxis.method.folds import _split_fold, fold_name, sensor_columns
 from thermaxis.method.metrics import prediction_metrics
 from thermaxis.method.models import (
     _KB_COLUMNS,
@@ -132,10 +132,19 @@ def _columns(index: dict, points, signals) -> tuple[int, ...]:
     return (*(index[s] for s in points), *range(len(index), len(index) + len(signals)))
 
 
-def _frame(label: dict, rows: list[tuple[str, np.ndarray, np.ndarray]]) -> pd.DataFrame:
-    return pd.DataFrame(
-        [{**label, "target": target, **prediction_metrics(m, p)} for target, m, p in rows]
-    )
+def _frame(
+    label: dict, rows: list[tuple[str, np.ndarray, np.ndarray]], runs: np.ndarray | None = None
+) -> pd.DataFrame:
+    """Metrics per target; with ``runs`` (each test row's run), per run too, ``fold`` the run."""
+    if runs is None:
+        return pd.DataFrame(
+            [{**label, "target": target, **prediction_metrics(m, p)} for target, m, p in rows]
+        )
+    return pd.concat(
+        [_frame({**label, "fold": run}, [(t, m[runs == run], p[runs == run]) for t, m, p in rows])
+         for run in pd.unique(runs)],
+        ignore_index=True,
+    )  # fmt: skip
 
 
 def decoupled_metrics(
@@ -146,8 +155,12 @@ def decoupled_metrics(
     model: ModelSettings,
     degree: int,
     point_sets: Sequence[tuple[tuple[str, ...], tuple[str, ...]]],
+    per_run: bool = False,
 ) -> list[pd.DataFrame]:
     """``evaluate_configuration(..., "decoupled", ...).metrics`` for each (k points, b points).
+
+    ``per_run``: a fold of several runs (:func:`thermaxis.method.folds.held_out_runs`) is
+    scored run by run, each row's ``fold`` its run, from one fit.
 
     As :class:`thermaxis.method.models.DecoupledAxisModel`: k (and c2, c3) on the absolute
     temperatures of the k points, b on the rise of the b points since each run's first
@@ -176,7 +189,7 @@ def decoupled_metrics(
         _features(X_test, sensors, "relative", signals),
         b_sets,
     )
-    label = {"fold": fold, "approach": "decoupled", "algorithm": algorithm}
+    label = {"fold": fold_name(fold), "approach": "decoupled", "algorithm": algorithm}
     measured = Y_test.to_numpy(dtype=float)
     frames = []
     for k_set, b_set in zip(k_sets, b_sets, strict=True):
@@ -191,6 +204,7 @@ def decoupled_metrics(
                     ("b", kb_test[_KB_COLUMNS["b"]].to_numpy(), b),
                     ("error", measured, curve),
                 ],
+                X_test["run"].to_numpy() if per_run else None,
             )
         )
     return frames
@@ -203,8 +217,10 @@ def pointwise_metrics(
     algorithm: str,
     model: ModelSettings,
     point_sets: Sequence[tuple[str, ...]],
+    per_run: bool = False,
 ) -> list[pd.DataFrame]:
-    """``evaluate_configuration(..., "pointwise", ...).metrics`` for each set of points.
+    """``evaluate_configuration(..., "pointwise", ...).metrics`` for each set of points
+    (``per_run`` as for :func:`decoupled_metrics`).
 
     As :class:`thermaxis.method.models.PointwiseAxisModel` (Eq. 8): each position's error
     its own standardised regression on the points' rise since each run's first measurement.
@@ -220,6 +236,7 @@ def pointwise_metrics(
         _features(X_test, sensors, "relative", signals),
         sets,
     )
-    label = {"fold": fold, "approach": "pointwise", "algorithm": algorithm}
+    label = {"fold": fold_name(fold), "approach": "pointwise", "algorithm": algorithm}
     measured = Y_test.to_numpy(dtype=float)
-    return [_frame(label, [("error", measured, predicted[s])]) for s in sets]
+    runs = X_test["run"].to_numpy() if per_run else None
+    return [_frame(label, [("error", measured, predicted[s])], runs) for s in sets]

@@ -22,7 +22,7 @@ import pandas as pd
 
 from thermaxis.config import ModelSettings, SelectionSettings
 from thermaxis.errors import SelectionWarning
-from thermaxis.labels import sort_naturally
+from thermaxis.labels import natural_sorted, sort_naturally
 from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.method.metrics import prediction_metrics
 from thermaxis.method.selection import (
@@ -43,6 +43,9 @@ __all__ = [
     "selection_to_dict",
     "selection_from_dict",
     "fold_models",
+    "run_groups",
+    "held_out_runs",
+    "fold_name",
 ]
 
 META = ("run", "measurement", "time_min")
@@ -147,6 +150,32 @@ def _mean_scores(points: list[SensitivePoints]) -> dict[str, float]:
     return {sensor: total / len(points) for sensor, total in totals.items()}
 
 
+def run_groups(
+    runs: Sequence[str], max_loco_runs: int, n_group_folds: int
+) -> list[tuple[str, ...]]:
+    """Held-out run groups of a loop over runs: one run each, or k group folds when runs are many.
+
+    Above ``max_loco_runs`` runs, leave-one-condition-out would cost one fit per run per
+    candidate; k contiguous groups in natural run order (which usually follows the
+    order the conditions were measured in) keep the cost fixed.
+    """
+    runs = natural_sorted(runs)
+    if len(runs) <= max_loco_runs:
+        return [(run,) for run in runs]
+    k = min(n_group_folds, len(runs))
+    return [tuple(chunk) for chunk in np.array_split(np.array(runs, dtype=object), k)]
+
+
+def held_out_runs(fold: str | Sequence[str]) -> tuple[str, ...]:
+    """The runs a fold holds out: one run, or a group of them (an inner group fold)."""
+    return (fold,) if isinstance(fold, str) else tuple(fold)
+
+
+def fold_name(fold: str | Sequence[str]) -> str:
+    """A fold's label: its run, or its group's runs joined by "+"."""
+    return "+".join(held_out_runs(fold))
+
+
 def select_for_fold(
     X: pd.DataFrame,
     Y: pd.DataFrame,
@@ -167,15 +196,16 @@ def select_for_fold(
     ``pointwise``): the sweep selects k and b once per decoupling degree, but the
     point-by-point points, which do not depend on the degree, only once.
     """
+    name = fold_name(fold)
     if settings.scope == "training":
-        keep = (X["run"] != fold).to_numpy()
+        keep = ~X["run"].isin(held_out_runs(fold)).to_numpy()
         X, Y = X.loc[keep], Y.loc[keep]
     fixed = (
         tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
     )
     clustered = settings.n_clusters if settings.method in ("fuzzy_grey", "correlation") else 0
     sensors = informative_sensors(
-        X[sensor_columns(X)], fixed, where=f"fold {fold}", n_clusters=clustered
+        X[sensor_columns(X)], fixed, where=f"fold {name}", n_clusters=clustered
     )
     absolute = X[sensors]
     relative = relative_temperatures(X)[sensors]
@@ -205,7 +235,7 @@ def select_for_fold(
         n_common = min(settings.pointwise_common, distinct)
         if n_common < settings.pointwise_common:
             warnings.warn(
-                f"fold {fold}: only {distinct} distinct sensors were selected over the positions; "
+                f"fold {name}: only {distinct} distinct sensors were selected over the positions; "
                 f"the point-by-point common set has {n_common} instead of {settings.pointwise_common}",
                 SelectionWarning,
                 stacklevel=2,
@@ -214,7 +244,7 @@ def select_for_fold(
             chosen, n_common, order=sensors, scores=_mean_scores(list(per_position.values()))
         )
     return FoldSelection(
-        fold=fold, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common)
+        fold=name, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common)
     )
 
 
@@ -277,6 +307,8 @@ def _build_model(
         search_grid=model.search_grid_for(algorithm),
         inner_search=model.inner_search,
         gpr_max_samples=model.gpr_max_samples,
+        svr_max_samples=model.svr_max_samples,
+        svr_search_folds=model.svr_search_folds,
         random_state=model.random_state,
         signals=model.signals,
     )
@@ -306,7 +338,7 @@ def evaluate_configuration(
     """
     X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
     estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
-    label = {"fold": fold, "approach": approach, "algorithm": algorithm}
+    label = {"fold": fold_name(fold), "approach": approach, "algorithm": algorithm}
     measured = Y_test.to_numpy(dtype=float)
     predicted, lower, upper = _predicted_errors(estimator, X_test, algorithm, model.interval_level)
     if approach == "decoupled":
@@ -329,9 +361,9 @@ def evaluate_configuration(
 
 def _split_fold(X: pd.DataFrame, Y: pd.DataFrame, fold: str):
     """X and Y of the training runs (every run but ``fold``), then of ``fold``, each indexed from 0."""
-    test = (X["run"] == fold).to_numpy()
+    test = X["run"].isin(held_out_runs(fold)).to_numpy()
     if not test.any():
-        raise ValueError(f"fold {fold!r}: no measurements of that run")
+        raise ValueError(f"fold {fold_name(fold)!r}: no measurements of that run")
     train = X.loc[~test].reset_index(drop=True), Y.loc[~test].reset_index(drop=True)
     return (*train, X.loc[test].reset_index(drop=True), Y.loc[test].reset_index(drop=True))
 
@@ -368,7 +400,7 @@ def _kb_tables(
             pd.DataFrame(
                 {
                     **label,
-                    "run": label["fold"],
+                    "run": X_test["run"].to_numpy(),
                     "measurement": X_test["measurement"].to_numpy(),
                     "time_min": X_test["time_min"].to_numpy(),
                     "target": target,
@@ -390,7 +422,7 @@ def _error_table(
     return pd.DataFrame(
         {
             **label,
-            "run": label["fold"],
+            "run": np.repeat(X_test["run"].to_numpy(), p),
             "measurement": np.repeat(X_test["measurement"].to_numpy(), p),
             "time_min": np.repeat(X_test["time_min"].to_numpy(), p),
             "position_mm": np.tile(positions, n),

@@ -190,7 +190,14 @@ def inner_group_splitter(groups, max_loco_groups: int, group_folds: int):
 
 
 def fit_by_group_search(
-    algorithm: str, X, y, groups, grid: Mapping, random_state: int, inner: tuple[int, int]
+    algorithm: str,
+    X,
+    y,
+    groups,
+    grid: Mapping,
+    random_state: int,
+    inner: tuple[int, int],
+    max_group_folds: int | None = None,
 ):
     """Fit a regressor whose hyper-parameters are chosen by a group search on the runs.
 
@@ -214,6 +221,10 @@ def fit_by_group_search(
         Passed to :func:`make_regressor` for symmetry (these algorithms are deterministic).
     inner : (int, int)
         ``(max_loco_groups, group_folds)`` of :func:`inner_group_splitter`.
+    max_group_folds : int, optional
+        With group folds (above ``max_loco_groups`` groups), score the grid on the first
+        this many of them only (config ``models.inner_search.svr_folds``); leave-one-out
+        always uses every group.
 
     Returns
     -------
@@ -244,7 +255,7 @@ def fit_by_group_search(
     # re-validation and scorer calls: each hold-out is standardised once, the regressor
     # fitted per candidate on the same arrays the pipeline would give it, so the scores,
     # the choice and the refitted model are the ones GridSearchCV gives (test_models checks).
-    splits = list(inner_group_splitter(groups, *inner).split(X, y, groups))
+    splits = _search_splits(X, y, groups, inner, max_group_folds)
     scores = np.empty((len(candidates), len(splits)))
     # Inputs and parameters are checked once here; re-validating them in each of the many
     # inner fits cost more than fitting (the same numbers either way).
@@ -259,6 +270,15 @@ def fit_by_group_search(
     return make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features).fit(
         X, y
     ), chosen
+
+
+def _search_splits(X, y, groups, inner: tuple[int, int], max_group_folds: int | None) -> list:
+    """The (train, test) splits a search scores its grid on (:func:`fit_by_group_search`)."""
+    splitter = inner_group_splitter(groups, *inner)
+    splits = list(splitter.split(X, y, groups))
+    if max_group_folds is None or isinstance(splitter, LeaveOneGroupOut):
+        return splits
+    return splits[:max_group_folds]
 
 
 def _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_features):
@@ -394,6 +414,11 @@ def _evenly_spaced(n: int, at_most: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, at_most).round().astype(int))
 
 
+def _svr_rows(n: int, at_most: int) -> np.ndarray:
+    """The training rows an SVR uses: all of them up to ``at_most``, else evenly spaced."""
+    return np.arange(n) if n <= at_most else _evenly_spaced(n, at_most)
+
+
 def _fit_one(features, target, groups, estimator):
     """One regression; returns (fitted pipeline, chosen searched parameters or None)."""
     algorithm, params = estimator.algorithm, estimator.params
@@ -409,8 +434,21 @@ def _fit_one(features, target, groups, estimator):
             **{k: [v] for k, v in _check_params("svr", params).items()},
             **dict(estimator.svr_grid),
         }
+        # libsvm's cost grows faster than the square of the rows (at C = 100 and
+        # epsilon = 0.01, 0.15 s for 300 rows, 1.2 s for 1,260): beyond the limit the
+        # search and the fit use evenly spaced training rows, every run thinned alike, and
+        # the search scores the grid on its first group folds only (config
+        # models.svr_max_samples and models.inner_search.svr_folds; the model report says so).
+        keep = _svr_rows(len(target), estimator.svr_max_samples)
         return fit_by_group_search(
-            "svr", features, target, groups, grid, estimator.random_state, inner
+            "svr",
+            features[keep],
+            target[keep],
+            groups[keep],
+            grid,
+            estimator.random_state,
+            inner,
+            max_group_folds=estimator.svr_search_folds,
         )
     if estimator.search_grid is not None and algorithm in SEARCHABLE:
         return fit_by_group_search(
@@ -437,7 +475,8 @@ def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, cho
     """What one regression's fit did: its inner search's split and choice, the rows a GP used.
 
     Follows :func:`_fit_one`, :func:`fit_by_group_search` and :func:`inner_group_splitter`
-    (the model report states it; config ``models.inner_search`` and ``models.gpr_max_samples``).
+    (the model report states it; config ``models.inner_search``, ``models.gpr_max_samples``
+    and ``models.svr_max_samples``).
     """
     algorithm = estimator.algorithm
     searched = algorithm == "svr" or (estimator.search_grid is not None and algorithm in SEARCHABLE)
@@ -449,14 +488,20 @@ def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, cho
     else:
         # The splitter the search used, so the note cannot drift from it.
         splitter = inner_group_splitter(groups, *tuple(estimator.inner_search))
-        split = (
-            f"leave one of {runs} training runs out"
-            if isinstance(splitter, LeaveOneGroupOut)
-            else f"{splitter.get_n_splits()} group folds of {runs} training runs"
-        )
+        if isinstance(splitter, LeaveOneGroupOut):
+            split = f"leave one of {runs} training runs out"
+        elif algorithm == "svr" and estimator.svr_search_folds < splitter.get_n_splits():
+            first = "" if estimator.svr_search_folds == 1 else f" {estimator.svr_search_folds}"
+            split = (
+                f"the first{first} of {splitter.get_n_splits()} group folds of {runs} training runs"
+            )
+        else:
+            split = f"{splitter.get_n_splits()} group folds of {runs} training runs"
     fitted = rows
     if algorithm == "gpr" and rows > estimator.gpr_max_samples:
         fitted = int(_evenly_spaced(rows, estimator.gpr_max_samples).size)
+    if algorithm == "svr":
+        fitted = int(_svr_rows(rows, estimator.svr_max_samples).size)
     return {
         "target": target,
         "position_mm": position_mm,
@@ -529,6 +574,11 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
     gpr_max_samples : int
         An exact Gaussian process is fitted on at most this many training rows, evenly
         spaced, beyond it (config ``models.gpr_max_samples``).
+    svr_max_samples : int
+        Likewise for an SVR's search and fit (config ``models.svr_max_samples``).
+    svr_search_folds : int
+        With group folds, an SVR's grid is scored on the first this many of them
+        (config ``models.inner_search.svr_folds``).
     degree : {1, 2, 3}
         Decoupling polynomial degree; 1 is the paper's straight line.
     random_state : int
@@ -569,7 +619,9 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         signals=(),
         search_grid=None,
         inner_search=(12, 5),
-        gpr_max_samples=600,
+        gpr_max_samples=300,
+        svr_max_samples=300,
+        svr_search_folds=1,
     ):
         self.k_sensors = k_sensors
         self.b_sensors = b_sensors
@@ -579,6 +631,8 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         self.search_grid = search_grid
         self.inner_search = inner_search
         self.gpr_max_samples = gpr_max_samples
+        self.svr_max_samples = svr_max_samples
+        self.svr_search_folds = svr_search_folds
         self.degree = degree
         self.random_state = random_state
         self.signals = signals
@@ -728,7 +782,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
     ----------
     sensors : tuple of str
         Sensitive points used for every position (the paper: T1, T11, T12).
-    algorithm, params, svr_grid, search_grid, inner_search, gpr_max_samples, random_state, signals
+    algorithm, params, svr_grid, search_grid, inner_search, gpr_max_samples, svr_max_samples, svr_search_folds, random_state, signals
         As for :class:`DecoupledAxisModel`.
 
     Attributes
@@ -753,7 +807,9 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         signals=(),
         search_grid=None,
         inner_search=(12, 5),
-        gpr_max_samples=600,
+        gpr_max_samples=300,
+        svr_max_samples=300,
+        svr_search_folds=1,
     ):
         self.sensors = sensors
         self.algorithm = algorithm
@@ -762,6 +818,8 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         self.search_grid = search_grid
         self.inner_search = inner_search
         self.gpr_max_samples = gpr_max_samples
+        self.svr_max_samples = svr_max_samples
+        self.svr_search_folds = svr_search_folds
         self.random_state = random_state
         self.signals = signals
 

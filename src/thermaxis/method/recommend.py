@@ -41,8 +41,16 @@ from thermaxis.config import (
 )
 from thermaxis.labels import natural_sorted
 from thermaxis.method.batched import batchable, decoupled_metrics, pointwise_metrics
-from thermaxis.method.folds import META, evaluate_configuration, select_for_fold
+from thermaxis.method.folds import (
+    META,
+    evaluate_configuration,
+    fold_name,
+    held_out_runs,
+    run_groups,
+    select_for_fold,
+)
 from thermaxis.method.inputs import base_of, parse_input_name
+from thermaxis.method.metrics import prediction_metrics
 from thermaxis.reports.formatting import markdown_table
 
 __all__ = [
@@ -50,10 +58,10 @@ __all__ = [
     "Candidate",
     "Recommendation",
     "candidate_view",
-    "inner_splits",
     "held_out_scores",
     "SCORE_COLUMNS",
     "fold_scores",
+    "outer_groups",
     "collect",
     "recommend",
     "default_candidates",
@@ -149,27 +157,13 @@ def _seen_lag(name: str, lags_min: Sequence[float]) -> bool:
     return kind == "lag" and any(np.isclose(seconds, 60.0 * m) for m in lags_min)
 
 
-def inner_splits(
-    runs: Sequence[str], max_loco_runs: int, n_group_folds: int
-) -> list[tuple[str, ...]]:
-    """Held-out run groups of an inner loop: one run each, or k group folds when runs are many.
+def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> list[tuple]:
+    """Select on the training rows of X, fit, predict ``fold``: its error metrics.
 
-    Above ``max_loco_runs`` runs, leave-one-condition-out would cost one fit per run per
-    candidate; k contiguous groups in natural run order (which usually follows the
-    order the conditions were measured in) keep the cost fixed.
-    """
-    runs = natural_sorted(runs)
-    if len(runs) <= max_loco_runs:
-        return [(run,) for run in runs]
-    k = min(n_group_folds, len(runs))
-    return [tuple(chunk) for chunk in np.array_split(np.array(runs, dtype=object), k)]
-
-
-def _error_metrics(X, Y, test_run, candidate, degree, signals, cache) -> dict[str, float]:
-    """Select on the training rows of X, fit, predict ``test_run``: its error metrics.
-
-    Candidates that differ only in their algorithm share the selection (``cache``),
-    as the main workflow's algorithms share a fold's.
+    ``fold`` is a run or a group of runs, fitted once: ``[(its name, metrics)]``, or with
+    ``per_run`` ``[(run, metrics), ...]`` for each of its runs. Candidates that differ only
+    in their algorithm share the selection (``cache``), as the main workflow's algorithms
+    share a fold's.
     """
     view, selectable, models = candidate_view(X, candidate, signals)
     # The recommendation never lets the held-out run into the choice of sensitive points.
@@ -177,32 +171,43 @@ def _error_metrics(X, Y, test_run, candidate, degree, signals, cache) -> dict[st
     decoupled = candidate.approach == "decoupled"
     key = (
         tuple(sorted(pd.unique(X["run"]))),
-        test_run,
+        fold,
         tuple(selectable),
         selection_settings,
         decoupled,
     )
     if key not in cache:
         cache[key] = select_for_fold(
-            view[selectable], Y, test_run, selection_settings, degree if decoupled else None,
+            view[selectable], Y, fold, selection_settings, degree if decoupled else None,
             decoupled=decoupled, pointwise=not decoupled,
         )  # fmt: skip
     selection = cache[key]
     if batchable(candidate.algorithm, models, Y):
         # The numpy core: the same numbers as evaluate_configuration to 1e-9.
         (metrics,) = (
-            decoupled_metrics(view, Y, test_run, candidate.algorithm, models, degree,
-                              [(selection.k_sensors, selection.b_sensors)])
+            decoupled_metrics(view, Y, fold, candidate.algorithm, models, degree,
+                              [(selection.k_sensors, selection.b_sensors)], per_run=per_run)
             if decoupled
-            else pointwise_metrics(view, Y, test_run, candidate.algorithm, models, [selection.pointwise])
+            else pointwise_metrics(view, Y, fold, candidate.algorithm, models,
+                                   [selection.pointwise], per_run=per_run)
         )  # fmt: skip
     else:
-        metrics = evaluate_configuration(
-            view, Y, test_run, candidate.approach, candidate.algorithm, selection, models,
+        result = evaluate_configuration(
+            view, Y, fold, candidate.approach, candidate.algorithm, selection, models,
             degree if decoupled else None,
-        ).metrics  # fmt: skip
-    row = metrics.loc[metrics["target"] == "error"].iloc[0]
-    return {name: float(row[name]) for name in METRICS}
+        )  # fmt: skip
+        metrics = result.metrics
+        if per_run:
+            by_run = result.error_predictions.groupby("run", sort=False)
+            metrics = pd.DataFrame(
+                [{"fold": run, "target": "error",
+                  **prediction_metrics(rows["measured"], rows["predicted"])}
+                 for run, rows in by_run]
+            )  # fmt: skip
+    errors = metrics.loc[metrics["target"] == "error"]
+    return [
+        (row["fold"], {name: float(row[name]) for name in METRICS}) for _, row in errors.iterrows()
+    ]
 
 
 def held_out_scores(
@@ -214,27 +219,23 @@ def held_out_scores(
     degree: int,
     signals: Sequence[str],
     cache: dict,
+    per_run: bool = False,
 ) -> list[dict]:
-    """Each held-out run's error when ``candidate`` is fitted on the rest of ``train_runs``.
+    """Each held-out group's error when ``candidate`` is fitted on the rest of ``train_runs``.
 
-    Rows of X and Y outside ``train_runs`` are never seen: not by the selection, the
-    fit or the scaling.
+    A group of one run is that run; a larger group (a group fold) is fitted once and
+    scored over all its rows, ``held_out`` naming its runs joined by "+", or with
+    ``per_run`` run by run: one fit per group, not per run, keeps a loop over many runs
+    at a fixed number of fits. Rows of X and Y outside ``train_runs`` are never seen: not
+    by the selection, the fit or the scaling.
     """
+    keep = X["run"].isin(train_runs).to_numpy()
+    X, Y = X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True)
     rows = []
     for group in held_out:
-        fit_runs = [r for r in train_runs if r not in group]
-        for run in group:
-            keep = X["run"].isin([*fit_runs, run]).to_numpy()
-            metrics = _error_metrics(
-                X.loc[keep].reset_index(drop=True),
-                Y.loc[keep].reset_index(drop=True),
-                run,
-                candidate,
-                degree,
-                signals,
-                cache,
-            )
-            rows.append({"candidate": candidate.name, "held_out": run, **metrics})
+        fold = group[0] if len(group) == 1 else tuple(group)
+        for name, metrics in _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run):
+            rows.append({"candidate": candidate.name, "held_out": name, **metrics})
     return rows
 
 
@@ -275,7 +276,7 @@ def fold_scores(
     X: pd.DataFrame,
     Y: pd.DataFrame,
     candidates: Sequence[Candidate],
-    fold: str,
+    fold: str | Sequence[str],
     degree: int,
     max_loco_runs: int,
     n_group_folds: int,
@@ -284,31 +285,44 @@ def fold_scores(
 ) -> pd.DataFrame:
     """Everything one outer fold contributes: its inner scores and its held-out errors.
 
-    Rows of kind ``inner``: each candidate fitted on the training runs but one inner
-    group, scored on that group (the fold's run is in none of them). Rows of kind
-    ``loco``: each candidate fitted on every run but ``fold``, scored on ``fold``.
+    ``fold`` is a run, or a group of runs held out together (:func:`outer_groups`). Rows
+    of kind ``inner``: each candidate fitted on the training runs but one inner group,
+    scored on that group (the fold's runs are in none of them), repeated under each run
+    of the fold. Rows of kind ``loco``: each candidate fitted on every run outside the
+    fold, scored on each of its runs.
     """
     runs = natural_sorted(pd.unique(X["run"]).tolist())
     if len(runs) < 2:
         raise ValueError(f"{len(runs)} run: leave-one-condition-out needs at least 2")
     say = progress or (lambda message: None)
-    train = [r for r in runs if r != fold]
+    held = held_out_runs(fold)
+    train = [r for r in runs if r not in held]
     # With two runs the training side of a fold is one run: nothing to compare candidates
     # on without the held-out run, so the fold has no inner scores (collect says so).
-    splits = inner_splits(train, max_loco_runs, n_group_folds) if len(train) >= 2 else []
+    splits = run_groups(train, max_loco_runs, n_group_folds) if len(train) >= 2 else []
     cache: dict = {}
-    rows = []
+    rows: dict[str, list] = {run: [] for run in held}
     for candidate in candidates:
-        say(f"fold {fold}: {candidate.name}")
-        rows += [
-            {"kind": "loco", "fold": fold, **r}
-            for r in held_out_scores(X, Y, runs, [(fold,)], candidate, degree, signals, cache)
-        ]
-        rows += [
-            {"kind": "inner", "fold": fold, **r}
-            for r in held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)
-        ]
-    return pd.DataFrame(rows, columns=SCORE_COLUMNS)
+        say(f"fold {fold_name(fold)}: {candidate.name}")
+        loco = held_out_scores(X, Y, runs, [held], candidate, degree, signals, cache, True)
+        inner = held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)
+        for r in loco:
+            rows[r["held_out"]] += [{"kind": "loco", "fold": r["held_out"], **r}]
+        for run in held:
+            rows[run] += [{"kind": "inner", "fold": run, **r} for r in inner]
+    return pd.DataFrame([r for run in held for r in rows[run]], columns=SCORE_COLUMNS)
+
+
+def outer_groups(folds: Sequence[str], max_loco_runs: int, n_group_folds: int) -> list:
+    """The outer loop's held-out units: each run up to ``max_loco_runs`` runs, else groups.
+
+    Above the limit, leaving one run out would repeat the whole inner loop per run, a
+    cost that grows with the square of the runs: the runs are dealt into ``n_group_folds``
+    contiguous groups as the inner loop deals them (:func:`~thermaxis.method.folds.run_groups`), each held out
+    together. Every run is still held out once; its row is its group's choice, fitted
+    on the runs outside the group.
+    """
+    return [g[0] if len(g) == 1 else g for g in run_groups(folds, max_loco_runs, n_group_folds)]
 
 
 def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
@@ -384,7 +398,7 @@ def recommend(
             fold_scores(
                 X, Y, candidates, f, degree, max_loco_runs, n_group_folds, signals, progress
             )
-            for f in folds
+            for f in outer_groups(folds, max_loco_runs, n_group_folds)
         ],
         ignore_index=True,
     )

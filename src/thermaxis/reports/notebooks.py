@@ -17,6 +17,7 @@ __all__ = [
     "strip_volatile",
     "remote_loads",
     "notebook_to_html",
+    "json_argument",
     "convert",
     "execute",
     "execute_pages",
@@ -219,6 +220,15 @@ def execute_pages(
         km.shutdown_kernel(now=True)
 
 
+def json_argument(value: str, stdin=None):
+    """A JSON command-line value, or with ``-`` the JSON on standard input.
+
+    The workflow passes its report parameters on standard input: a record of many runs
+    lists more files than one command line holds (Linux caps one argument at 128 KiB).
+    """
+    return json.loads((stdin or sys.stdin).read() if value == "-" else value)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m thermaxis.reports.notebooks", description=__doc__.splitlines()[0]
@@ -229,7 +239,9 @@ def main(argv=None) -> int:
     run.add_argument("executed")
     run.add_argument("html")
     run.add_argument("--title", required=True)
-    run.add_argument("--parameters", default="{}", help="JSON object of notebook parameters")
+    run.add_argument(
+        "--parameters", default="{}", help="JSON object of notebook parameters, or - for stdin"
+    )
     run.add_argument("--kernel", default="python3")
     run.add_argument("--start-timeout", type=float, default=120)
     run.add_argument("--execution-timeout", type=float, default=600)
@@ -241,7 +253,7 @@ def main(argv=None) -> int:
     many.add_argument(
         "--pages",
         required=True,
-        help="JSON list of {executed, html, title, parameters}, one per page",
+        help="JSON list of {executed, html, title, parameters}, one per page, or - for stdin",
     )
     many.add_argument("--kernel", default="python3")
     many.add_argument("--start-timeout", type=float, default=120)
@@ -260,7 +272,7 @@ def main(argv=None) -> int:
                 args.executed,
                 args.html,
                 args.title,
-                json.loads(args.parameters),
+                json_argument(args.parameters),
                 kernel=args.kernel,
                 start_timeout=args.start_timeout,
                 execution_timeout=args.execution_timeout,
@@ -268,7 +280,7 @@ def main(argv=None) -> int:
         elif args.command == "run-pages":
             execute_pages(
                 args.notebook,
-                json.loads(args.pages),
+                json_argument(args.pages),
                 kernel=args.kernel,
                 start_timeout=args.start_timeout,
                 execution_timeout=args.execution_timeout,

@@ -7,7 +7,9 @@ one of them out; a sensor's frequency is the share of those subsets that choose 
 because a run's measurements are not independent draws and the choice must not hinge on
 one condition). A bootstrap of whole runs would repeat runs: with the paper's three training
 runs it has only ten distinct resamples, most holding a run twice, so leaving one out is
-the resampling that exists. With a single run to choose from nothing can be left out:
+the resampling that exists. Above ``statistics.stability_subsets.max_loco_runs`` runs a
+subset leaves out a group of them instead, so that a record of many runs costs a fixed
+number of selections per fold. With a single run to choose from nothing can be left out:
 frequencies are then empty (not resolved).
 """
 
@@ -20,7 +22,7 @@ import pandas as pd
 
 from thermaxis.config import SelectionSettings
 from thermaxis.labels import natural_key
-from thermaxis.method.folds import FoldSelection, select_for_fold, sensor_columns
+from thermaxis.method.folds import FoldSelection, run_groups, select_for_fold, sensor_columns
 
 __all__ = ["STABILITY_COLUMNS", "selection_stability"]
 
@@ -56,16 +58,26 @@ def selection_stability(
     settings: SelectionSettings,
     degree: int | None,
     decoupled: bool,
+    subsets: tuple[int, int],
 ) -> pd.DataFrame:
-    """:data:`STABILITY_COLUMNS`: per fold, target (k, b, pointwise) and sensor, how often it is chosen."""
+    """:data:`STABILITY_COLUMNS`: per fold, target (k, b, pointwise) and sensor, how often it is chosen.
+
+    ``subsets`` is ``(max_loco_runs, group_folds)`` (config ``statistics.stability_subsets``):
+    above ``max_loco_runs`` seen runs each subset leaves out one of ``group_folds`` groups
+    of them (:func:`~thermaxis.method.folds.run_groups`) instead of one run.
+    """
     sensors = sorted(sensor_columns(X), key=natural_key)
     rows = []
     for fold in folds:
         full = _chosen(select_for_fold(X, Y, fold, settings, degree, decoupled=decoupled))
         seen = _seen_runs(X, fold, settings)
-        subsets = [[r for r in seen if r != left] for left in seen] if len(seen) >= 2 else []
+        subsets_of_fold = (
+            [[r for r in seen if r not in left] for left in run_groups(seen, *subsets)]
+            if len(seen) >= 2
+            else []
+        )
         counts = {target: dict.fromkeys(sensors, 0) for target in full}
-        for subset in subsets:
+        for subset in subsets_of_fold:
             keep = X["run"].isin(subset).to_numpy()
             with warnings.catch_warnings():
                 # The fold's own selection has warned about its data; a subset's repeats are noise.
@@ -85,7 +97,7 @@ def selection_stability(
                     counts[target][name] += 1
         for target, names in full.items():
             for sensor in sensors:
-                n = len(subsets)
+                n = len(subsets_of_fold)
                 rows.append(
                     {
                         "fold": fold,
