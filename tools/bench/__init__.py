@@ -10,7 +10,7 @@ so the repository's own ``results/`` are never touched):
 * ``results_model_param``: after changing one model parameter (``models.ridge_alpha``);
 * ``sweep_default``: ``snakemake sweep`` with the default grid (the assembled data exist);
 * ``scale_<shape>_<n>``: the default configuration (every algorithm, every run held out
-  once) up to ``tables/metrics.csv`` on twin-generated datasets of n runs shaped like a
+  once) end to end, every figure and report included, on twin-generated datasets of n runs shaped like a
   measured record (``python -m thermaxis.twin scale``: 24 sensors logged every 10 s,
   about 30 measurements per run, one every 10 min), with ONE target position
   (``one_position``) and, separately, 14 (``positions_14``).  Generating a dataset is

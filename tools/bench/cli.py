@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from tools.bench.report import render
-from tools.bench.scaling import SCALE_RUNS
+from tools.bench.scaling import SCALE_RUNS, SCALE_SHAPES
 from tools.bench.steps import STEPS, _machine, run_bench
 
 
@@ -23,6 +23,13 @@ def main(argv=None) -> int:
     )
     parser.add_argument(
         "--runs", type=int, nargs="+", default=list(SCALE_RUNS), help="runs of the scale datasets"
+    )
+    parser.add_argument(
+        "--shapes",
+        nargs="+",
+        choices=list(SCALE_SHAPES),
+        default=list(SCALE_SHAPES),
+        help="shapes of the scale datasets",
     )
     parser.add_argument(
         "--steps", nargs="+", choices=STEPS, default=list(STEPS), help="what to measure"
@@ -55,6 +62,6 @@ def main(argv=None) -> int:
         print("thermaxis error: --cores and --runs must be positive integers", file=sys.stderr)
         return 2
     doc = run_bench(args.out, cores, args.runs, args.steps, args.workdir, args.keep, args.timeout_s,
-                    progress=lambda line: print(line, file=sys.stderr, flush=True))  # fmt: skip
+                    shapes=args.shapes, progress=lambda line: print(line, file=sys.stderr, flush=True))  # fmt: skip
     print((args.out / "bench.md").read_text(encoding="utf-8"))
     return 0 if all(m["ok"] for m in doc["measurements"]) else 1

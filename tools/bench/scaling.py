@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-SCALE_RUNS = (5, 10, 20, 50)
+SCALE_RUNS = (10, 20, 43, 86)
 # 5 h at 0.1 Hz with a measurement every 10 min from 5 min in: 30 measurements per run.
 SCALE_SHAPES = {
     "one_position": {"sensors": 24, "positions": 1, "hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0, "seed": 0},
