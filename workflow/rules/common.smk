@@ -12,6 +12,7 @@ from thermaxis import vocabulary
 from thermaxis.dataset.summary import data_statement
 from thermaxis.figures import registry
 from thermaxis.figures.captions import figure_caption
+from thermaxis.figures.family import family_workers
 from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
 from thermaxis.pipeline import preflight
 from thermaxis.pipeline.deps import library_modules, named_modules
@@ -235,6 +236,12 @@ def figure_code(figures):
         if path
     }
     return sorted(set(code_of("plot.py")) | set(named_modules(*names)))
+
+
+def figure_threads(figures):
+    """Processes a family's job can use: one per MIN_FIGURES_PER_WORKER of its figures."""
+    n = len(figure_instances(figures))
+    return family_workers(n, n)
 
 
 def figure_instances(figures=FIGURES):

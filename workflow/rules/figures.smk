@@ -24,6 +24,8 @@ for family, figures in FIGURE_FAMILIES.items():
             f"{BENCH}/figures/{family}.tsv"
         conda:
             ENV
+        # Snakemake gives at most --cores; the job deals its figures to that many workers.
+        threads: figure_threads(figures)
         resources:
             **rule_resources(family),
         params:
