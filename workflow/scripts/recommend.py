@@ -12,13 +12,13 @@ import pandas as pd
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import DecouplingSettings, RecommendSettings, StatisticsSettings
 from thermaxis.errors import SelectionWarning
+from thermaxis.method.folds import run_groups
 from thermaxis.method.recommend import (
     candidate_record,
     candidate_table,
     collect,
     configured_candidates,
     fold_scores,
-    outer_groups,
     recommendation_markdown,
 )
 from thermaxis.pipeline.parallel import fold_workers, map_folds
@@ -56,7 +56,7 @@ def main(snakemake):
         degree = DecouplingSettings.from_section(p.decoupling).degree
         log = logging.getLogger("thermaxis")
         # Above recommend.max_loco_runs runs the outer loop holds out groups of runs.
-        outer = outer_groups(p.folds, recommend.max_loco_runs, recommend.group_folds)
+        outer = run_groups(p.folds, recommend.max_loco_runs, recommend.group_folds)
         # A bad-input test runs this script without Snakemake's threads: one process. The
         # work grows with the runs, however they are grouped.
         workers = min(fold_workers(getattr(snakemake, "threads", 1), len(p.folds)), len(outer))

@@ -414,9 +414,13 @@ def _evenly_spaced(n: int, at_most: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, at_most).round().astype(int))
 
 
-def _svr_rows(n: int, at_most: int) -> np.ndarray:
-    """The training rows an SVR uses: all of them up to ``at_most``, else evenly spaced."""
-    return np.arange(n) if n <= at_most else _evenly_spaced(n, at_most)
+def _fitted_rows(estimator, n: int) -> np.ndarray:
+    """The training rows a fit uses: all ``n``, or for an SVR or a GP beyond its limit
+    (config ``models.svr_max_samples``, ``models.gpr_max_samples``) that many, evenly spaced."""
+    limit = {"svr": estimator.svr_max_samples, "gpr": estimator.gpr_max_samples}.get(
+        estimator.algorithm
+    )
+    return np.arange(n) if limit is None or n <= limit else _evenly_spaced(n, limit)
 
 
 def _fit_one(features, target, groups, estimator):
@@ -439,7 +443,7 @@ def _fit_one(features, target, groups, estimator):
         # search and the fit use evenly spaced training rows, every run thinned alike, and
         # the search scores the grid on its first group folds only (config
         # models.svr_max_samples and models.inner_search.svr_folds; the model report says so).
-        keep = _svr_rows(len(target), estimator.svr_max_samples)
+        keep = _fitted_rows(estimator, len(target))
         return fit_by_group_search(
             "svr",
             features[keep],
@@ -463,10 +467,10 @@ def _fit_one(features, target, groups, estimator):
     model = make_regressor(
         algorithm, params, random_state=estimator.random_state, n_features=features.shape[1]
     )
-    if algorithm == "gpr" and len(target) > estimator.gpr_max_samples:
+    if algorithm == "gpr":
         # An exact GP costs n^3: beyond the limit it is fitted on evenly spaced training
         # rows (config models.gpr_max_samples; the model report says so).
-        keep = _evenly_spaced(len(target), estimator.gpr_max_samples)
+        keep = _fitted_rows(estimator, len(target))
         return model.fit(features[keep], target[keep]), None
     return model.fit(features, target), None
 
@@ -490,18 +494,13 @@ def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, cho
         splitter = inner_group_splitter(groups, *tuple(estimator.inner_search))
         if isinstance(splitter, LeaveOneGroupOut):
             split = f"leave one of {runs} training runs out"
-        elif algorithm == "svr" and estimator.svr_search_folds < splitter.get_n_splits():
-            first = "" if estimator.svr_search_folds == 1 else f" {estimator.svr_search_folds}"
-            split = (
-                f"the first{first} of {splitter.get_n_splits()} group folds of {runs} training runs"
-            )
         else:
-            split = f"{splitter.get_n_splits()} group folds of {runs} training runs"
-    fitted = rows
-    if algorithm == "gpr" and rows > estimator.gpr_max_samples:
-        fitted = int(_evenly_spaced(rows, estimator.gpr_max_samples).size)
-    if algorithm == "svr":
-        fitted = int(_svr_rows(rows, estimator.svr_max_samples).size)
+            folds = splitter.get_n_splits()
+            split = f"{folds} group folds of {runs} training runs"
+            if algorithm == "svr" and estimator.svr_search_folds < folds:
+                first = "" if estimator.svr_search_folds == 1 else f" {estimator.svr_search_folds}"
+                split = f"the first{first} of {split}"
+    fitted = int(_fitted_rows(estimator, rows).size)
     return {
         "target": target,
         "position_mm": position_mm,

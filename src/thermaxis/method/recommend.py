@@ -61,7 +61,6 @@ __all__ = [
     "held_out_scores",
     "SCORE_COLUMNS",
     "fold_scores",
-    "outer_groups",
     "collect",
     "recommend",
     "default_candidates",
@@ -233,8 +232,9 @@ def held_out_scores(
     X, Y = X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True)
     rows = []
     for group in held_out:
-        fold = group[0] if len(group) == 1 else tuple(group)
-        for name, metrics in _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run):
+        for name, metrics in _error_metrics(
+            X, Y, group, candidate, degree, signals, cache, per_run
+        ):
             rows.append({"candidate": candidate.name, "held_out": name, **metrics})
     return rows
 
@@ -285,7 +285,11 @@ def fold_scores(
 ) -> pd.DataFrame:
     """Everything one outer fold contributes: its inner scores and its held-out errors.
 
-    ``fold`` is a run, or a group of runs held out together (:func:`outer_groups`). Rows
+    ``fold`` is a run, or a group of runs held out together: above ``max_loco_runs``
+    runs the outer loop deals them into ``n_group_folds`` groups as the inner loop does
+    (:func:`~thermaxis.method.folds.run_groups`), because leaving each run out would repeat
+    the whole inner loop per run, a cost that grows with the square of the runs. Every run
+    is still held out once; its row is its group's choice, fitted on the runs outside. Rows
     of kind ``inner``: each candidate fitted on the training runs but one inner group,
     scored on that group (the fold's runs are in none of them), repeated under each run
     of the fold. Rows of kind ``loco``: each candidate fitted on every run outside the
@@ -311,18 +315,6 @@ def fold_scores(
         for run in held:
             rows[run] += [{"kind": "inner", "fold": run, **r} for r in inner]
     return pd.DataFrame([r for run in held for r in rows[run]], columns=SCORE_COLUMNS)
-
-
-def outer_groups(folds: Sequence[str], max_loco_runs: int, n_group_folds: int) -> list:
-    """The outer loop's held-out units: each run up to ``max_loco_runs`` runs, else groups.
-
-    Above the limit, leaving one run out would repeat the whole inner loop per run, a
-    cost that grows with the square of the runs: the runs are dealt into ``n_group_folds``
-    contiguous groups as the inner loop deals them (:func:`~thermaxis.method.folds.run_groups`), each held out
-    together. Every run is still held out once; its row is its group's choice, fitted
-    on the runs outside the group.
-    """
-    return [g[0] if len(g) == 1 else g for g in run_groups(folds, max_loco_runs, n_group_folds)]
 
 
 def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
@@ -398,7 +390,7 @@ def recommend(
             fold_scores(
                 X, Y, candidates, f, degree, max_loco_runs, n_group_folds, signals, progress
             )
-            for f in outer_groups(folds, max_loco_runs, n_group_folds)
+            for f in run_groups(folds, max_loco_runs, n_group_folds)
         ],
         ignore_index=True,
     )
