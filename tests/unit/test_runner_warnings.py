@@ -56,3 +56,24 @@ def test_a_warning_another_job_reports_goes_to_this_jobs_log_only(tmp_path, caps
     assert "a warning of this job's own" in err and "outside the block" in err
     assert "SelectionWarning: fold R1: only 2 distinct sensors were selected" in log.read_text()
     logging.captureWarnings(False)
+
+
+def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path, capsys):
+    # A lasso's warning carries its duality gap, different at every fit: 3 texts, 1 line.
+    log = tmp_path / "job.log"
+    _configure_logging(str(log))
+    for gap in ("4.1e-02", "3.5e-02", "1.9e-02"):
+        logging.getLogger("py.warnings").warning(
+            f"cd.py:7: ConvergenceWarning: Objective did not converge. Duality gap: {gap}"
+        )
+    logging.getLogger("thermaxis").warning("fold S3: another text")
+    for handler in logging.getLogger("thermaxis").handlers:
+        handler.flush()
+    err = capsys.readouterr().err.splitlines()
+    assert err == [
+        "thermaxis warning: Objective did not converge. Duality gap: 4.1e-02 (the first of "
+        "this job's solver warnings; the job's log has them all)",
+        "thermaxis warning: fold S3: another text",
+    ]
+    assert log.read_text().count("Objective did not converge") == 3
+    logging.captureWarnings(False)

@@ -16,7 +16,7 @@ from thermaxis.figures.family import family_workers
 from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
 from thermaxis.pipeline import preflight
 from thermaxis.pipeline.deps import library_modules, named_modules
-from thermaxis.pipeline.parallel import fold_workers
+from thermaxis.pipeline.parallel import FOLDS_PER_WORKER, fold_workers
 from thermaxis.pipeline.resources import MIN_MEMORY_MB, MIN_RUNTIME_MIN, per_attempt
 from thermaxis.reports.index import PAPER_HEADLINE
 from thermaxis.reports.provenance import git_state
@@ -135,8 +135,10 @@ def dataset_files():
 APPROACHES = list(vocabulary.APPROACHES) if DECOUPLED else ["pointwise"]
 ALGORITHMS = list(SETTINGS.models.algorithms)
 # A stage job with many folds spreads them over this many processes (thermaxis.pipeline.
-# parallel: one per MIN_FOLDS_PER_WORKER folds), which Snakemake caps at --cores.
-FOLD_THREADS = fold_workers(len(FOLDS), len(FOLDS))
+# parallel: one per FOLDS_PER_WORKER[stage] folds), which Snakemake caps at --cores.
+FOLD_THREADS = {
+    stage: fold_workers(len(FOLDS), len(FOLDS), stage) for stage in FOLDS_PER_WORKER
+}
 # The tables each fold of the models rule writes (thermaxis.method.folds.SORT_KEYS).
 MODEL_TABLES = [
     "metrics",

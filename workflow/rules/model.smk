@@ -57,9 +57,11 @@ rule models:
         f"{LOGS}/models.log",
     benchmark:
         f"{BENCH}/models.tsv"
+    # Next on the longest chain, after the recommendation (recommend.smk).
+    priority: 1
     conda:
         ENV
-    threads: FOLD_THREADS
+    threads: FOLD_THREADS["models"]
     resources:
         **rule_resources("models"),
     params:

@@ -25,9 +25,11 @@ rule recommend:
         f"{LOGS}/recommend.log",
     benchmark:
         f"{BENCH}/recommend.tsv"
+    # The longest chain of the DAG starts here: first of the jobs ready with it.
+    priority: 2
     conda:
         ENV
-    threads: FOLD_THREADS
+    threads: FOLD_THREADS["recommend"]
     resources:
         **rule_resources("recommend"),
     params:

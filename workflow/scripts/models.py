@@ -44,7 +44,7 @@ def main(snakemake):
     )
     try:
         # A bad-input test runs this script without Snakemake's threads: one process.
-        workers = fold_workers(getattr(snakemake, "threads", 1), len(p.folds))
+        workers = fold_workers(getattr(snakemake, "threads", 1), len(p.folds), "models")
         folds = map_folds(one_fold, p.folds, workers)
     except DataError as exc:
         # A fold's training temperatures are what the message is about: name their file.

@@ -13,16 +13,19 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Sequence
 
-__all__ = ["MIN_FOLDS_PER_WORKER", "map_folds", "fold_workers"]
+__all__ = ["FOLDS_PER_WORKER", "map_folds", "fold_workers"]
 
 # Below this many folds a worker's start (a new interpreter importing the library, about
-# 1.5 s) costs more than the folds it would take over.
-MIN_FOLDS_PER_WORKER = 4
+# 1.5 s) costs more than the folds it would take over: a fold of the models job fits each
+# configuration once (tenths of a second), a fold of the recommendation runs every
+# candidate's inner loop (seconds: 3.9 s on the twin).
+FOLDS_PER_WORKER = {"models": 4, "recommend": 1}
 
 
-def fold_workers(cores: int, n_folds: int) -> int:
-    """How many processes a job with ``n_folds`` folds uses on ``cores`` cores."""
-    return max(1, min(int(cores), n_folds // MIN_FOLDS_PER_WORKER))
+def fold_workers(cores: int, n_folds: int, stage: str) -> int:
+    """How many processes the ``stage`` job (:data:`FOLDS_PER_WORKER`) with ``n_folds``
+    folds uses on ``cores`` cores."""
+    return max(1, min(int(cores), n_folds // FOLDS_PER_WORKER[stage]))
 
 
 def _recorded(function: Callable, item):

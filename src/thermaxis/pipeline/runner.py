@@ -23,6 +23,11 @@ from thermaxis.errors import DataError
 __all__ = ["run_script", "atomic_path", "write_csv", "write_text"]
 
 
+# A solver's warning of this category differs in its numbers at every fit (a lasso's
+# duality gap), so text alone would not collapse it: a job shows its first one.
+_ONCE_PER_JOB = "ConvergenceWarning: "
+
+
 class _OneLine(logging.Formatter):
     """``thermaxis warning: <message>``; a captured Python warning loses its source location."""
 
@@ -30,12 +35,15 @@ class _OneLine(logging.Formatter):
 
     def format(self, record):
         first = record.getMessage().splitlines()[0] if record.getMessage() else ""
-        return f"thermaxis warning: {self._LOCATION.sub('', first)}"
+        text = f"thermaxis warning: {self._LOCATION.sub('', first)}"
+        if _ONCE_PER_JOB in first:
+            text += " (the first of this job's solver warnings; the job's log has them all)"
+        return text
 
 
 class _Once(logging.Filter):
     """Warnings only, each text once: a sweep repeats one warning per configuration, and
-    the log file keeps every occurrence."""
+    the log file keeps every occurrence. A solver's convergence warnings once per job."""
 
     def __init__(self):
         super().__init__()
@@ -45,9 +53,10 @@ class _Once(logging.Filter):
         if record.levelno != logging.WARNING:
             return False
         text = _OneLine().format(record)
-        if text in self._seen:
+        key = _ONCE_PER_JOB if _ONCE_PER_JOB in record.getMessage() else text
+        if key in self._seen:
             return False
-        self._seen.add(text)
+        self._seen.add(key)
         return True
 
 
