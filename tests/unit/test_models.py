@@ -491,3 +491,27 @@ def test_gpr_beyond_its_sample_limit_is_fitted_on_evenly_spaced_rows():
     relative = x.ravel() - np.repeat(x.ravel()[[0, 20]], 20)  # the model's inputs are rises
     scaler = model.estimators_[0].named_steps["standardise"]
     np.testing.assert_allclose(scaler.inverse_transform(gp.X_train_).ravel(), relative[kept])
+
+
+# --------------------------------------------------------------------------- the lasso
+
+
+def test_lasso_reaches_its_optimum_on_many_correlated_sensors():
+    # 60 temperatures that share three heat sources, 66 rows: the case where coordinate
+    # descent stopped at its iteration cap. The lasso's optimality conditions (KKT) in the
+    # pipeline's standardised units, checked directly: with r = y - X w, every sensor has
+    # |x_j . r| / n <= alpha, with equality and the sign of w_j where w_j != 0.
+    rng = np.random.default_rng(3)
+    sources = rng.normal(size=(66, 3)).cumsum(axis=0)
+    X = sources @ rng.uniform(0.2, 1.0, size=(3, 60)) + 0.05 * rng.normal(size=(66, 60))
+    y = sources @ np.array([1.0, -0.5, 0.25]) + 0.1 * rng.normal(size=66)
+    alpha = 0.001
+    fitted = make_regressor("lasso", {"alpha": alpha}, random_state=0).fit(X, y)
+    Xs = (X - X.mean(axis=0)) / X.std(axis=0)
+    ys = (y - y.mean()) / y.std()
+    w = fitted.named_steps["regress"].regressor_.coef_
+    correlation = Xs.T @ (ys - Xs @ w) / len(ys)
+    active = w != 0
+    assert active.sum() >= 2
+    assert np.abs(correlation).max() <= alpha * (1 + 1e-6)
+    np.testing.assert_allclose(correlation[active], alpha * np.sign(w[active]), rtol=1e-6)
