@@ -24,7 +24,8 @@ __all__ = ["run_script", "atomic_path", "write_csv", "write_text"]
 
 
 # A solver's warning of this category differs in its numbers at every fit (LARS's
-# dropped regressor, a GP's length scale at its bound), so text alone would not collapse it: a job shows its first one.
+# dropped regressor, a GP's length scale at its bound), so text alone would not
+# collapse it: a job shows its first one.
 _ONCE_PER_JOB = "ConvergenceWarning: "
 
 
