@@ -515,3 +515,22 @@ def test_lasso_reaches_its_optimum_on_many_correlated_sensors():
     assert active.sum() >= 2
     assert np.abs(correlation).max() <= alpha * (1 + 1e-6)
     np.testing.assert_allclose(correlation[active], alpha * np.sign(w[active]), rtol=1e-6)
+
+
+def test_one_lars_path_predicts_as_a_lasso_fitted_at_each_strength():
+    # The inner search scores the whole strength grid from one path: each strength's
+    # held-out predictions against scikit-learn's LassoLars fitted at that strength alone.
+    from sklearn.linear_model import LassoLars
+
+    from thermaxis.method.models import lasso_path_predictions
+
+    rng = np.random.default_rng(11)
+    sources = rng.normal(size=(40, 2)).cumsum(axis=0)
+    X = sources @ rng.uniform(0.2, 1.0, size=(2, 25)) + 0.1 * rng.normal(size=(40, 25))
+    y = sources @ np.array([1.0, -0.7]) + 0.2 * rng.normal(size=40)
+    X_train, y_train, X_test = X[:30], y[:30] - y[:30].mean(), X[30:]
+    alphas = [5.0, 0.3, 0.1, 0.03, 0.01, 0.003, 0.001]
+    predictions = lasso_path_predictions(X_train, y_train, X_test, alphas)
+    for alpha, predicted in zip(alphas, predictions, strict=True):
+        alone = LassoLars(alpha=alpha).fit(X_train, y_train).predict(X_test)
+        np.testing.assert_allclose(predicted, alone, rtol=1e-9, atol=1e-9)

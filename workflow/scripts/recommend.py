@@ -59,7 +59,9 @@ def main(snakemake):
         outer = run_groups(p.folds, recommend.max_loco_runs, recommend.group_folds)
         # A bad-input test runs this script without Snakemake's threads: one process. The
         # work grows with the runs, however they are grouped.
-        workers = min(fold_workers(getattr(snakemake, "threads", 1), len(p.folds), "recommend"), len(outer))
+        workers = min(
+            fold_workers(getattr(snakemake, "threads", 1), len(p.folds), "recommend"), len(outer)
+        )
         one_fold = partial(
             fold_scores,
             X,

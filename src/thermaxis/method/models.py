@@ -54,6 +54,7 @@ __all__ = [
     "make_regressor",
     "inner_group_splitter",
     "fit_by_group_search",
+    "lasso_path_predictions",
     "linear_terms",
     "predict_with_std",
     "relative_temperatures",
@@ -291,14 +292,49 @@ def _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_
         X_train, X_test = x_scaler.transform(X[train]), x_scaler.transform(X[test])
         y_scaler = StandardScaler().fit(y[train].reshape(-1, 1))
         y_train = y_scaler.transform(y[train].reshape(-1, 1)).squeeze(axis=1)
-        for c, params in enumerate(candidates):
-            regressor = _base_regressor(algorithm, params, random_state, n_features).fit(
-                X_train, y_train
+        if algorithm == "lasso":
+            standardised = lasso_path_predictions(
+                X_train, y_train, X_test, [float(p["alpha"]) for p in candidates]
             )
-            predicted = y_scaler.inverse_transform(
-                np.asarray(regressor.predict(X_test)).reshape(-1, 1)
-            ).squeeze(axis=1)
+        else:
+            standardised = [
+                _base_regressor(algorithm, params, random_state, n_features)
+                .fit(X_train, y_train)
+                .predict(X_test)
+                for params in candidates
+            ]
+        for c, values in enumerate(standardised):
+            # StandardScaler.inverse_transform's own arithmetic (times scale_, plus
+            # mean_), without its input checks, which cost more than the prediction.
+            predicted = np.asarray(values, dtype=float).reshape(-1)
+            predicted = predicted * y_scaler.scale_[0] + y_scaler.mean_[0]
             scores[c, split] = -np.sqrt(np.mean((y[test] - predicted) ** 2))
+
+
+def lasso_path_predictions(X_train, y_train, X_test, alphas: Sequence[float]) -> list:
+    """The lasso's predictions of ``X_test`` at every strength in ``alphas``, from one LARS path.
+
+    The lasso's coefficients are piecewise linear in alpha between the path's knots, so one
+    path down to the smallest alpha (LassoLars, with its path) gives every larger alpha by
+    the interpolation LassoLars makes at its own: a search over the strength grid costs
+    one fit, not one per strength.
+    """
+    smallest = LassoLars(alpha=min(alphas)).fit(X_train, y_train)
+    knots, path = np.asarray(smallest.alphas_), np.asarray(smallest.coef_path_)
+    x_offset, y_offset = X_train.mean(axis=0), y_train.mean()
+    predictions = []
+    for alpha in alphas:
+        # The knots fall: i is the last knot at or above alpha.
+        i = int(np.searchsorted(-knots, -alpha, side="right")) - 1
+        if i < 0:
+            coef = np.zeros(X_train.shape[1])
+        elif knots[i] == alpha or i == knots.size - 1:
+            coef = path[:, i]
+        else:
+            step = (knots[i] - alpha) / (knots[i] - knots[i + 1])
+            coef = path[:, i] + step * (path[:, i + 1] - path[:, i])
+        predictions.append((X_test - x_offset) @ coef + y_offset)
+    return predictions
 
 
 def _final_regressor(fitted):
