@@ -562,3 +562,19 @@ def test_integer_ids_match_their_text_form(tiny):
     kb_pred = tiny["kb_pred"].assign(fold=tiny["kb_pred"]["fold"].str[1:].astype(int))
     fig = prediction_figures.fig_kb_prediction(kb_pred, "2", "decoupled", "mlr")
     np.testing.assert_allclose(lines_of(fig.axes[0])[0].get_ydata(), [-11.0, -11.0, -11.0])
+
+
+def test_fig10_with_many_sensors_names_those_that_rise_most():
+    # 30 sensors, sensor j rising 0.01 j degC per minute: T16..T30 rise most. Fifteen are
+    # named (in their order), the other fifteen are grey and one legend entry.
+    t = np.arange(0.0, 61.0, 5.0)
+    series = pd.DataFrame(
+        {"elapsed_min": t, **{f"T{j}": 20.0 + 0.01 * j * t for j in range(1, 31)}}
+    )
+    fig = paper_figures.fig10_temperature_rise(series)
+    labels = [text.get_text() for text in fig.legends[0].get_texts()]
+    assert labels == ["other 15 sensors"] + [f"T{j}" for j in range(16, 31)]
+    # Every sensor is drawn (the one more line is the zero reference).
+    assert len(fig.axes[0].get_lines()) == 31
+    named = {line.get_label(): line for line in lines_of(fig.axes[0])}
+    np.testing.assert_allclose(named["T30"].get_ydata(), 0.3 * t)

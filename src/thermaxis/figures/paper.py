@@ -473,27 +473,46 @@ def _requested_sensors(series: pd.DataFrame, sensors) -> list:
     return sensors
 
 
+#: Fig. 10 names at most this many sensors: four rows of its four-column legend above the
+#: axes.  With more (a machine logged at 60 points), a legend naming every one buries
+#: the axes; the sensors that rise most keep a colour and a name, the others are drawn
+#: thin and grey as one entry.
+MAX_NAMED_RISES = 16
+
+
 def _draw_rises(ax, series: pd.DataFrame, sensors: Sequence[str]) -> int:
     """Each sensor's rise since ``elapsed_min == 0`` (interpolated there); returns how many were drawn."""
     elapsed = series["elapsed_min"].to_numpy(dtype=float)
     order = np.argsort(elapsed, kind="stable")
     elapsed = elapsed[order]
-    drawn = 0
-    for i, sensor in enumerate(sensors):
+    rises = {}
+    for sensor in sensors:
         values = series[sensor].to_numpy(dtype=float)[order]
         ok = np.isfinite(values) & np.isfinite(elapsed)
-        if not ok.any():
-            continue
-        reference = np.interp(0.0, elapsed[ok], values[ok])
+        if ok.any():
+            rises[sensor] = (elapsed[ok], values[ok] - np.interp(0.0, elapsed[ok], values[ok]))
+    named = list(rises)
+    if len(rises) > MAX_NAMED_RISES:
+        # The largest |rise| first, ties in the given order; named in the given order.
+        ranked = sorted(rises, key=lambda s: -float(np.abs(rises[s][1]).max()))
+        chosen = set(ranked[: MAX_NAMED_RISES - 1])
+        named = [s for s in rises if s in chosen]
+    others = [s for s in rises if s not in set(named)]
+    for j, sensor in enumerate(others):
+        x, rise = rises[sensor]
+        label = f"other {len(others)} sensors" if j == 0 else "_nolegend_"
+        ax.plot(x, rise, color="0.65", linewidth=0.5, zorder=1, label=label)
+    for i, sensor in enumerate(named):
+        x, rise = rises[sensor]
         ax.plot(
-            elapsed[ok],
-            values[ok] - reference,
-            markevery=_markevery(int(ok.sum())),
+            x,
+            rise,
+            markevery=_markevery(x.size),
             label=str(sensor),
+            zorder=2,
             **_categorical_style(i),
         )
-        drawn += 1
-    return drawn
+    return len(rises)
 
 
 def _signal_panel(ax, signals: pd.DataFrame, names: Sequence[str], units: dict) -> None:
