@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from tools.bench.report import render
-from tools.bench.scaling import SCALE_RUNS, SCALE_SHAPES
+from tools.bench.scaling import GROWTH_SHAPES, SCALE_RUNS, SCALE_SHAPES
 from tools.bench.steps import STEPS, _machine, run_bench
 
 
@@ -28,8 +28,8 @@ def main(argv=None) -> int:
         "--shapes",
         nargs="+",
         choices=list(SCALE_SHAPES),
-        default=list(SCALE_SHAPES),
-        help="shapes of the scale datasets",
+        default=list(GROWTH_SHAPES),
+        help="shapes of the scale datasets (default: the growth shapes; sensors_60 on request)",
     )
     parser.add_argument(
         "--steps", nargs="+", choices=STEPS, default=list(STEPS), help="what to measure"

@@ -186,7 +186,8 @@ def bench_markdown(doc: dict) -> str:
     lines += [
         "",
         "Scale runs: SIMULATED twin-generated datasets shaped like a measured record (24 sensors logged "
-        "every 10 s, 30 measurements per run, one position or 14), the default configuration end to "
+        "every 10 s, 30 measurements per run, one position or 14; sensors_60: 60 sensors, 6 "
+        "measurements per run, 8 positions), the default configuration end to "
         "end, from cleaning to the index (every algorithm, every run held out once, every figure and "
         "report). Peak RSS of the process tree is sampled every 0.2 s (psutil).",
     ]

@@ -11,7 +11,12 @@ SCALE_RUNS = (10, 20, 43, 86)
 SCALE_SHAPES = {
     "one_position": {"sensors": 24, "positions": 1, "hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0, "seed": 0},
     "positions_14": {"sensors": 24, "positions": 14, "hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0, "seed": 0},
+    # Many sensors: 60 logged points, 8 positions, 3 h, a measurement every 30 min. Not
+    # run by default (86 such runs would take hours): --shapes sensors_60 --runs 12.
+    "sensors_60": {"sensors": 60, "positions": 8, "hours": 3.0, "rate_hz": 0.1, "measurement_min": 30.0, "seed": 0},
 }  # fmt: skip
+#: The shapes whose growth with the runs the bench measures by default.
+GROWTH_SHAPES = ("one_position", "positions_14")
 
 
 @dataclass(frozen=True)

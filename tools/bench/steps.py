@@ -17,7 +17,7 @@ from thermaxis.dataset.safety import load_yaml
 from tools.bench import records as bench_records
 from tools.bench.measure import MIB, Measurement, _add_jobs, measure
 from tools.bench.report import finish
-from tools.bench.scaling import SCALE_RUNS, SCALE_SHAPES
+from tools.bench.scaling import GROWTH_SHAPES, SCALE_RUNS, SCALE_SHAPES
 
 REPO = Path(__file__).resolve().parents[2]
 STEPS = (
@@ -124,7 +124,7 @@ def run_bench(
     keep: bool = False,
     timeout_s: float = 3600.0,
     progress=print,
-    shapes=tuple(SCALE_SHAPES),
+    shapes=GROWTH_SHAPES,
 ) -> dict:
     """Run the benchmark and return the bench.json document (also written to ``out``)."""
     out.mkdir(parents=True, exist_ok=True)
