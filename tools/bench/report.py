@@ -9,7 +9,7 @@ from pathlib import Path
 
 from tools.bench import records as bench_records
 from tools.bench.measure import Measurement, _add_jobs
-from tools.bench.scaling import SCALE_SHAPES, fit_scaling
+from tools.bench.scaling import GROWTH_SHAPES, SCALE_SHAPES, fit_scaling
 
 TARGETS = {
     "results_cold": "cold full regeneration of the twin <= 30 s",
@@ -183,12 +183,24 @@ def bench_markdown(doc: dict) -> str:
             f"| {t['target']} | {t['measured']} | {'yes' if t['met'] else 'no'} |"
             for t in doc["targets"]
         ]
+    shapes = doc.get("settings", {}).get("scale_shapes") or {
+        shape: SCALE_SHAPES[shape] for shape in GROWTH_SHAPES
+    }
     lines += [
         "",
-        "Scale runs: SIMULATED twin-generated datasets shaped like a measured record (24 sensors logged "
-        "every 10 s, 30 measurements per run, one position or 14; sensors_60: 60 sensors, 6 "
-        "measurements per run, 8 positions), the default configuration end to "
-        "end, from cleaning to the index (every algorithm, every run held out once, every figure and "
-        "report). Peak RSS of the process tree is sampled every 0.2 s (psutil).",
+        "Scale runs: SIMULATED twin-generated datasets shaped like a measured record ("
+        + "; ".join(_shape_phrase(name, spec) for name, spec in shapes.items())
+        + "), the default configuration end to end, from cleaning to the index (every "
+        "algorithm, every run held out once, every figure and report). Peak RSS of the process "
+        "tree is sampled every 0.2 s (psutil).",
     ]
     return "\n".join(lines) + "\n"
+
+
+def _shape_phrase(name: str, spec: dict) -> str:
+    """One scale shape in words, from the generator's settings (tools.bench.scaling)."""
+    measurements = int(spec["hours"] * 60 // spec["measurement_min"])
+    return (
+        f"{name}: {spec['sensors']} sensors logged every {1 / spec['rate_hz']:g} s, "
+        f"{measurements} measurements per run, {spec['positions']} position(s)"
+    )

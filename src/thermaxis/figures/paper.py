@@ -491,18 +491,17 @@ def _draw_rises(ax, series: pd.DataFrame, sensors: Sequence[str]) -> int:
         ok = np.isfinite(values) & np.isfinite(elapsed)
         if ok.any():
             rises[sensor] = (elapsed[ok], values[ok] - np.interp(0.0, elapsed[ok], values[ok]))
-    named = list(rises)
+    named = set(rises)
     if len(rises) > MAX_NAMED_RISES:
-        # The largest |rise| first, ties in the given order; named in the given order.
+        # The largest |rise| first, ties in the given order; drawn in the given order.
         ranked = sorted(rises, key=lambda s: -float(np.abs(rises[s][1]).max()))
-        chosen = set(ranked[: MAX_NAMED_RISES - 1])
-        named = [s for s in rises if s in chosen]
-    others = [s for s in rises if s not in set(named)]
+        named = set(ranked[: MAX_NAMED_RISES - 1])
+    others = [s for s in rises if s not in named]
     for j, sensor in enumerate(others):
         x, rise = rises[sensor]
         label = f"other {len(others)} sensors" if j == 0 else "_nolegend_"
         ax.plot(x, rise, color="0.65", linewidth=0.5, zorder=1, label=label)
-    for i, sensor in enumerate(named):
+    for i, sensor in enumerate(s for s in rises if s in named):
         x, rise = rises[sensor]
         ax.plot(
             x,

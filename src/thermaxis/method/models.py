@@ -319,7 +319,7 @@ def lasso_path_predictions(X_train, y_train, X_test, alphas: Sequence[float]) ->
     the interpolation LassoLars makes at its own: a search over the strength grid costs
     one fit, not one per strength.
     """
-    smallest = LassoLars(alpha=min(alphas)).fit(X_train, y_train)
+    smallest = _base_regressor("lasso", {"alpha": min(alphas)}, 0, None).fit(X_train, y_train)
     knots, path = np.asarray(smallest.alphas_), np.asarray(smallest.coef_path_)
     x_offset, y_offset = X_train.mean(axis=0), y_train.mean()
     predictions = []
