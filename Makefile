@@ -124,11 +124,11 @@ fmt: env
 twin: env
 	$(BIN)/python -m thermaxis.twin generate --out data/raw/twin --truth data/twin_truth
 
-# By default the chain resumes after the Table 3 restarts, from the file they wrote
-# (the committed twin's last resume point); RESUME= (empty) runs every stage from the
-# priors, RESUME=src/thermaxis/twin_params.seven_stages.json from the seven stages' end
-# (docs/datasets.md).
-RESUME ?= src/thermaxis/twin_params.table3_restarts.json
+# By default only the last leg runs (the compass search on the faithfulness table), from
+# the file the least-squares stages wrote (the committed twin's last resume point);
+# RESUME= (empty) runs every stage from the priors, RESUME=src/thermaxis/twin_params.
+# table3_restarts.json from the Table 3 restarts' end (docs/datasets.md).
+RESUME ?= src/thermaxis/twin_params.heldout_restarts.json
 twin-calibrate: env
 	$(BIN)/python -m thermaxis.twin calibrate $(if $(RESUME),--resume "$(RESUME)")
 

@@ -21,11 +21,13 @@ def test_a_resume_goes_on_at_the_stage_after_the_last_one_recorded():
     )
 
 
-@pytest.mark.parametrize(
-    "after", ["Table 6", "held-out RMSE restart 11, pipeline", "no such stage"]
-)
+def test_after_the_last_stage_only_the_polish_is_left():
+    assert fit._resume_index("held-out RMSE restart 11, pipeline") == len(fit.STAGES)
+
+
+@pytest.mark.parametrize("after", ["Table 6", "polish", "no such stage"])
 def test_a_resume_needs_a_known_stage_followed_by_a_restart(after):
-    # After "Table 6" comes a stage that does not start afresh; after the last, nothing.
+    # After "Table 6" comes a stage that does not start afresh; a polished file is finished.
     with pytest.raises(ValueError, match="cannot resume after stage"):
         fit._resume_index(after)
 
@@ -44,6 +46,8 @@ def test_the_committed_resume_points_name_their_last_stages():
     for name, last in (
         ("twin_params.seven_stages.json", "kept targets with Eq. 9, pipeline"),
         ("twin_params.table3_restarts.json", "Table 3 restart 6, pipeline"),
+        ("twin_params.heldout_restarts.json", "held-out RMSE restart 11, pipeline"),
+        ("twin_params.json", "polish"),
     ):
         params, after = _resume_point(root / name)
         assert after == last and params.values

@@ -33,7 +33,7 @@ STEPS = (
 )
 SUBSET_SHAPE = {"sensors": 22, "positions": 1, "hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0, "seed": 0}  # fmt: skip
 SUBSET_RUNS = 5
-TWIN_RESUME = "src/thermaxis/twin_params.table3_restarts.json"  # the Makefile's RESUME
+TWIN_RESUME = "src/thermaxis/twin_params.heldout_restarts.json"  # the Makefile's RESUME
 SUBSET_SWEEP = {"methods": ["subset"], "n_clusters": [3], "approaches": ["pointwise"], "algorithms": ["mlr"],
                 "max_subsets": 2000}  # fmt: skip
 DRYRUN_REPEATS = 3
@@ -223,7 +223,7 @@ def run_bench(
                        "--resume", str(REPO / TWIN_RESUME)]  # fmt: skip
             target.mkdir(parents=True, exist_ok=True)
             m = measure("twin_calibrate", command, REPO, logs / "twin_calibrate.log",
-                        "make twin-calibrate: the held-out RMSE restarts from the Table 3 restarts' end, "
+                        "make twin-calibrate: the polish from the held-out RMSE restarts' end, "
                         "then the regeneration", env, timeout_s)  # fmt: skip
             written = target / "twin_params.json"
             m.extra["reproduces_committed"] = written.is_file() and (

@@ -74,6 +74,7 @@ def _table6_rows(selection: pd.DataFrame, fold: str) -> list[dict]:
                 reproduced=got_text,
                 tolerance="equal on the printed sensors",
                 holds=got == want,
+                margin=0.0 if got == want else -1.0,
             )
         )
         want_points = list(paper.loc[paper["selected"], "sensor"])
@@ -85,6 +86,7 @@ def _table6_rows(selection: pd.DataFrame, fold: str) -> list[dict]:
                 reproduced=", ".join(got_points),
                 tolerance="equal",
                 holds=set(want_points) == set(got_points),
+                margin=0.0 if set(want_points) == set(got_points) else -1.0,
             )
         )
     return out
@@ -110,6 +112,7 @@ def _heldout_rows(comparison: pd.DataFrame, fold: str) -> list[dict]:
                     reproduced=f"{reproduced:.2f}",
                     tolerance=f"+-{tolerance:.1f}",
                     holds=bool(abs(reproduced - published) <= tolerance),
+                    margin=(tolerance - abs(reproduced - published)) / tolerance,
                 )
             )
     decoupled = _value(comparison, "table7/error/max_abs")
@@ -122,6 +125,7 @@ def _heldout_rows(comparison: pd.DataFrame, fold: str) -> list[dict]:
             reproduced=f"{decoupled:.2f} vs {pointwise:.2f}",
             tolerance="below",
             holds=bool(decoupled < pointwise),
+            margin=(pointwise - decoupled) / pointwise,
         )
     )
     return out
@@ -136,6 +140,7 @@ def _table3_row(comparison: pd.DataFrame, fold: str) -> dict:
         reproduced=str(hits),
         tolerance=f">= {TOLERANCES['table3']}",
         holds=hits >= TOLERANCES["table3"],
+        margin=(hits - TOLERANCES["table3"]) / TOLERANCES["table3"],
     )
 
 
@@ -157,6 +162,7 @@ def _table5_rows(comparison: pd.DataFrame) -> list[dict]:
                 reproduced=f"{rms:.3f}",
                 tolerance=f"<= {tolerance:.1f}",
                 holds=bool(rms <= tolerance),
+                margin=(tolerance - rms) / tolerance,
             )
         )
     return out
@@ -193,6 +199,7 @@ def _eq9_rows(
                 reproduced=f"{rms:.3f}",
                 tolerance=f"<= {bound:.1f}",
                 holds=bool(rms <= bound),
+                margin=(bound - rms) / bound,
             )
         )
     return out
@@ -211,6 +218,7 @@ def _ambient_row(comparison: pd.DataFrame) -> dict:
         reproduced=f"{worst:.2f}",
         tolerance=f"<= {tolerance:.1f}",
         holds=bool(worst <= tolerance),
+        margin=(tolerance - worst) / tolerance,
     )
 
 
@@ -221,8 +229,14 @@ def faithfulness(
     kb: pd.DataFrame,
     targets: PublishedTargets,
     fold: str,
+    margins: bool = False,
 ) -> pd.DataFrame:
-    """Every target, published against the workflow's reproduction, and whether it holds."""
+    """Every target, published against the workflow's reproduction, and whether it holds.
+
+    ``margins``: keep a ``margin`` column, how far inside its tolerance each target lies
+    in units of the tolerance (negative outside; Table 6's equalities 0 or -1), which the
+    calibration's last leg (:mod:`thermaxis.twin.polish`) compares candidates by.
+    """
     rows = (
         _table6_rows(selection, fold)
         + [_table3_row(comparison, fold)]
@@ -231,7 +245,7 @@ def faithfulness(
         + _eq9_rows(temperatures, kb, targets)
         + [_ambient_row(comparison)]
     )
-    table = pd.DataFrame(rows, columns=COLUMNS)
+    table = pd.DataFrame(rows, columns=COLUMNS + (["margin"] if margins else []))
     table["holds"] = table["holds"].map({True: "yes", False: "no"})
     return table
 

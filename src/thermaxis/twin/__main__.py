@@ -56,10 +56,14 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
 
 
+def _recorded_stages(path: Path) -> list[dict]:
+    with open(path, encoding="utf-8") as fh:
+        return json.load(fh).get("fit", {}).get("stages") or []
+
+
 def _resume_point(path: Path) -> tuple[mdl.TwinParams, str]:
     """The parameters of a written calibration and the last stage its record names."""
-    with open(path, encoding="utf-8") as fh:
-        stages = json.load(fh).get("fit", {}).get("stages") or []
+    stages = _recorded_stages(path)
     if not stages or "name" not in stages[-1]:
         raise ValueError(f"{path}: fit.stages names no stage (expected a calibration's record)")
     return mdl.load_params(path), stages[-1]["name"]
@@ -85,11 +89,14 @@ def main(argv: list[str] | None = None) -> int:
         )
         summary = {
             "method": f"scipy.optimize.least_squares on the noise-free model, {start}, "
-            "staged (thermaxis.twin.fit.STAGES)",
+            "staged (thermaxis.twin.fit.STAGES), then the compass search on the workflow's "
+            "faithfulness table (thermaxis.twin.polish)",
             **{f"rms_{name}": round(value, 4) for name, value in result.rms.items()},
             **{name: round(value, 4) for name, value in result.summary.items()},
             "evaluations": result.evaluations,
-            "stages": [
+            # A resumed leg's record goes on from the one it resumed.
+            "stages": (_recorded_stages(args.resume) if resume else [])
+            + [
                 {key: value for key, value in stage.items() if key != "seconds"}
                 for stage in result.stages
             ],

@@ -11,13 +11,16 @@ import tempfile
 import warnings
 from pathlib import Path
 
+import pandas as pd
+
 from . import conditions as cond
 from . import fit
 from . import model as mdl
 from .generate import simulate_records, write_runs
-from .report import pipeline_view
+from .polish import polish
+from .report import faithfulness_table, pipeline_view
 
-__all__ = ["pipeline_observables", "calibrate"]
+__all__ = ["pipeline_observables", "faithfulness_of", "calibrate"]
 
 
 def pipeline_observables(params: mdl.TwinParams) -> dict[str, fit.RunObservables]:
@@ -33,10 +36,25 @@ def pipeline_observables(params: mdl.TwinParams) -> dict[str, fit.RunObservables
         return pipeline_view(Path(tmp)).observables()
 
 
+def faithfulness_of(params: mdl.TwinParams) -> pd.DataFrame:
+    """The workflow's faithfulness table, with margins, of the twin's raw files of ``params``."""
+    with tempfile.TemporaryDirectory(prefix="thermaxis-twin-") as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        write_runs(Path(tmp), simulate_records(params))
+        return faithfulness_table(pipeline_view(Path(tmp)), margins=True)
+
+
 def calibrate(
     step_s: float = cond.STEP_S,
     workers: int = 2,
     resume: tuple[mdl.TwinParams, str] | None = None,
 ) -> fit.FitResult:
-    """The staged fit (:data:`thermaxis.twin.fit.STAGES`) with the pipeline's correction."""
-    return fit.calibrate(pipeline_observables, step_s, workers, resume)
+    """The staged fit (:data:`thermaxis.twin.fit.STAGES`) with the pipeline's correction,
+    then the compass search on the faithfulness table (:mod:`thermaxis.twin.polish`)."""
+    return fit.calibrate(
+        pipeline_observables,
+        step_s,
+        workers,
+        resume,
+        polish=lambda params: polish(params, faithfulness_of, workers),
+    )

@@ -122,7 +122,7 @@ def conflicts(pipeline, workers: int = 2, progress=print) -> list[Experiment]:
     lower, upper = fit._bounds(problem.runs)
     x0 = _best_etas(objective, np.clip(x0, lower, upper))
     fit._WORKER = objective
-    pool = fit._pool(workers)
+    pool = fit.worker_pool(workers)
     out = [Experiment((), _read(objective, x0, pipeline))]
     try:
         for size in (1, 2):

@@ -39,6 +39,7 @@ factors force a new integration, cached per Jacobian.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -767,7 +768,7 @@ def _bounds(runs: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([twin_lower, [low, low]]), np.concatenate([twin_upper, [high, high]])
 
 
-def _pool(workers: int):
+def worker_pool(workers: int):
     import multiprocessing
 
     return multiprocessing.get_context("fork").Pool(workers) if workers > 1 else None
@@ -810,12 +811,15 @@ def _restarted(x: np.ndarray, objective: _Objective, lower, upper) -> np.ndarray
 
 
 def _resume_index(after: str) -> int:
-    """Index of the stage after the one named ``after``; it must start afresh (a restart)."""
+    """Index of the stage after the one named ``after``; it must start afresh (a restart).
+
+    After the last stage only the polish (:mod:`thermaxis.twin.polish`) is left.
+    """
     names = [stage.name for stage in STAGES]
     if after not in names:
         raise ValueError(f"cannot resume after stage {after!r}: not a stage of STAGES")
     index = names.index(after) + 1
-    if index == len(STAGES) or not STAGES[index].restart:
+    if index < len(STAGES) and not STAGES[index].restart:
         raise ValueError(f"cannot resume after stage {after!r}: the next stage is no restart")
     return index
 
@@ -825,6 +829,7 @@ def calibrate(
     step_s: float = cond.STEP_S,
     workers: int = 2,
     resume: tuple[mdl.TwinParams, str] | None = None,
+    polish: Callable[[mdl.TwinParams], tuple[mdl.TwinParams, dict]] | None = None,
 ) -> FitResult:
     """Fit the free parameters to the paper's published fits and results, stage by stage.
 
@@ -840,7 +845,8 @@ def calibrate(
 
     ``resume``: (parameters, the name of the last stage they went through); the
     calibration goes on at the next stage, which must be a restart, as the whole run
-    does there.
+    does there.  ``polish(params)``: the last leg after the stages
+    (:func:`thermaxis.twin.polish.polish`), giving the parameters and its record.
     """
     global _WORKER
     problem = _problem(step_s)
@@ -859,8 +865,8 @@ def calibrate(
         todo = STAGES[_resume_index(after) :]
         x = np.concatenate([params.vector(runs), x[-2:]])
     _WORKER = objective
-    pool = _pool(workers)
-    stages, evaluations = [], 0
+    pool = worker_pool(workers)
+    stages, evaluations, solution = [], 0, None
     try:
         for stage in todo:
             if stage.restart:
@@ -872,13 +878,18 @@ def calibrate(
         if pool is not None:
             pool.close()
             pool.join()
+    if polish is not None:
+        polished, record = polish(objective.params(x))
+        x = np.concatenate([polished.vector(runs), x[-2:]])
+        evaluations += record["evaluations"]
+        stages.append(record)
     observed = objective.observables(x)
     _, summary = result_residuals(observed, objective.results, (x[-2], x[-1]))
     return FitResult(
         params=objective.params(x),
         rms=rms_by_target(target_residuals(observed, objective.targets)),
         summary=summary,
-        cost=float(solution.cost),
+        cost=float(solution.cost) if solution is not None else float("nan"),
         evaluations=evaluations,
         stages=tuple(stages),
     )

@@ -62,6 +62,7 @@ __all__ = [
     "REFERENCE_NODE",
     "INITIAL_GROUPS",
     "parameter_bounds",
+    "parameter_names",
     "capacity_scale",
     "load_fit",
     "conductance_scale",
@@ -345,6 +346,13 @@ def parameter_bounds(runs: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper bounds in the order of :meth:`TwinParams.vector`."""
     free = list(GLOBAL_PARAMETERS.values()) + [p for _ in runs for p in INITIAL_PARAMETERS.values()]
     return np.array([p.lower for p in free]), np.array([p.upper for p in free])
+
+
+def parameter_names(runs: tuple[str, ...]) -> list[str]:
+    """Names in the order of :meth:`TwinParams.vector` (a run's offsets as ``run:name``)."""
+    return list(GLOBAL_PARAMETERS) + [
+        f"{run}:{name}" for run in runs for name in INITIAL_PARAMETERS
+    ]
 
 
 def capacity_scale(values: dict[str, float]) -> dict[str, float]:

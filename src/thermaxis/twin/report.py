@@ -22,10 +22,19 @@ import pandas as pd
 from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.config import Settings, load_config
 from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.dataset.summary import ambient_ranges, dataset_summary
 from thermaxis.method.decouple import decouple_table
-from thermaxis.method.folds import evaluate_configuration, select_for_fold
+from thermaxis.method.folds import (
+    FoldResult,
+    FoldSelection,
+    evaluate_configuration,
+    select_for_fold,
+    selection_table,
+)
+from thermaxis.paper.audit import ReproducedTables, paper_comparison
 from thermaxis.paper.equations import PublishedTargets, published_targets
-from thermaxis.paper.published import load_table
+from thermaxis.paper.faithfulness import faithfulness
+from thermaxis.paper.published import load_table, published_values
 from thermaxis.templates import fill
 
 from . import conditions as cond
@@ -50,6 +59,7 @@ from .observe import (
 __all__ = [
     "PipelineView",
     "pipeline_view",
+    "faithfulness_table",
     "write_dataset_docs",
     "write_calibration_report",
 ]
@@ -241,6 +251,12 @@ class PipelineView:
     ambient: pd.DataFrame  # run, min, max of the cleaned ambient sensor over the log
     config: dict
     settings: Settings
+    # As the workflow's tables: the runs' summary, Table 1's ambient over the measurements,
+    # the tidy errors and the tidy window-mean temperatures.
+    runs: pd.DataFrame
+    ambient_ranges: pd.DataFrame
+    errors: pd.DataFrame
+    temperatures: pd.DataFrame
 
     def observables(self) -> dict[str, RunObservables]:
         out = {}
@@ -281,25 +297,73 @@ def pipeline_view(root: Path | str) -> PipelineView:
         [(t.run, t.series[sensor].min(), t.series[sensor].max()) for t in tables],
         columns=["run", "min", "max"],
     )
-    return PipelineView(kb=kb, X=X, Y=Y, ambient=ambient, config=config, settings=settings)
+    temperatures = pd.concat([t.temperatures for t in tables], ignore_index=True)
+    return PipelineView(
+        kb=kb,
+        X=X,
+        Y=Y,
+        ambient=ambient,
+        config=config,
+        settings=settings,
+        runs=dataset_summary(dataset, {t.run: t.errors["measurement"].nunique() for t in tables}),
+        ambient_ranges=ambient_ranges(sensor, {t.run: (t.series, t.windows) for t in tables})[0],
+        errors=errors,
+        temperatures=temperatures,
+    )
 
 
-def heldout_results(view: PipelineView) -> tuple[pd.DataFrame, dict[str, str]]:
+def _paper_fold(view: PipelineView) -> tuple[FoldSelection, list[FoldResult]]:
     """The paper's fold (train on the other runs, predict it) as the workflow runs it."""
     fold = view.config["paper_fold"]
     s = view.settings
     selection = select_for_fold(view.X, view.Y, fold, s.selection, s.decoupling.degree)
-    metrics = pd.concat(
-        [
-            evaluate_configuration(
-                view.X, view.Y, fold, approach, algorithm, selection, s.models, s.decoupling.degree
-            ).metrics
-            for approach, algorithm, _ in HELDOUT
-        ],
-        ignore_index=True,
-    )
+    results = [
+        evaluate_configuration(
+            view.X, view.Y, fold, approach, algorithm, selection, s.models, s.decoupling.degree
+        )
+        for approach, algorithm, _ in HELDOUT
+    ]
+    return selection, results
+
+
+def heldout_results(view: PipelineView) -> tuple[pd.DataFrame, dict[str, str]]:
+    """The paper's fold's metrics, and the sensitive points it chose."""
+    selection, results = _paper_fold(view)
+    metrics = pd.concat([r.metrics for r in results], ignore_index=True)
     chosen = {"k": selection.k_sensors, "b": selection.b_sensors, "pointwise": selection.pointwise}
     return metrics, {name: ", ".join(sensors) for name, sensors in chosen.items()}
+
+
+def faithfulness_table(view: PipelineView, margins: bool = False) -> pd.DataFrame:
+    """The workflow's faithfulness table (:func:`thermaxis.paper.faithfulness.faithfulness`)
+    of the view's raw files, from the same audit of the same tables the workflow writes."""
+    selection, results = _paper_fold(view)
+
+    def joined(name: str) -> pd.DataFrame:
+        return pd.concat([getattr(r, name) for r in results], ignore_index=True)
+
+    fold = view.config["paper_fold"]
+    tables = ReproducedTables(
+        runs=view.runs,
+        ambient=view.ambient_ranges,
+        kb=view.kb,
+        metrics=joined("metrics"),
+        coefficients=joined("coefficients"),
+        sensitive_points=selection_table(selection),
+        error_predictions=joined("error_predictions"),
+        errors=view.errors,
+        paper_fold=fold,
+    )
+    comparison = paper_comparison(published_values(), tables, "twin", simulated=True)
+    return faithfulness(
+        comparison,
+        tables.sensitive_points,
+        view.temperatures,
+        view.kb,
+        published_targets(),
+        fold,
+        margins,
+    )
 
 
 def _rms(values) -> float:
@@ -590,6 +654,14 @@ def _fit_values(fit: dict) -> dict:
         rows.append(
             f"| {stage.name} | {', '.join(terms)} | {done.get('iterations', '-')} of "
             f"{stage.max_evaluations} | {done.get('evaluations', '-')} |"
+        )
+    polished = recorded.get("polish")
+    if polished is not None:
+        moves = "; ".join(polished["moves"]) or "none"
+        rows.append(
+            f"| polish (compass search; moves: {moves}) | the faithfulness table, "
+            f"{polished['failing']} target(s) failing at the end | - | "
+            f"{polished['evaluations']} pipeline runs |"
         )
     margins = ", ".join(
         f"{name} {fit[name]:g}"
