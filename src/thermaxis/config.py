@@ -22,9 +22,8 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import jsonschema
-import yaml
 
-from thermaxis.schemas import schema_path
+from thermaxis.schemas import load_trusted_yaml, schema_path
 from thermaxis.sweep.plan import SweepGrid
 from thermaxis.vocabulary import SEARCHABLE
 
@@ -84,7 +83,7 @@ def fill_defaults(instance: dict, schema: dict) -> None:
 def validate_config(config: dict, schema_path=CONFIG_SCHEMA) -> dict:
     """Return a validated copy with defaults filled; raise ValueError with one line otherwise."""
     with open(schema_path, encoding="utf-8") as fh:
-        schema = yaml.safe_load(fh)
+        schema = load_trusted_yaml(fh)
     filled = copy.deepcopy(config)
     fill_defaults(filled, schema)
     errors = sorted(
@@ -109,7 +108,7 @@ def load_config(*paths, overrides: dict | None = None) -> dict:
     # Relative to the working folder, as Snakemake reads `configfile:`.
     for path in paths or (Path("config/config.yaml"),):
         with open(path, encoding="utf-8") as fh:
-            doc = yaml.safe_load(fh) or {}
+            doc = load_trusted_yaml(fh) or {}
         if not isinstance(doc, dict):
             raise ValueError(f"{path}: expected a mapping at top level")
         config = merge(config, doc)

@@ -21,7 +21,7 @@ TARGETS = {
     "dryrun_twin": "dry run of the twin <= the one-rule dry run + 2 s CPU",
     "startup_slurm": "one-rule no-op with the Slurm plugin installed <= 1.5 x without it",
     "sweep_subsets": "exhaustive 3-of-22 subsets, 5 runs, single position <= 30 s",
-    "twin_calibrate": "make twin-calibrate (staged, through the pipeline) <= 10 min on 2 cores",
+    "twin_calibrate": "make twin-calibrate (its last leg, the polish through the pipeline) <= 10 min on 2 cores",
 }
 
 
