@@ -69,3 +69,15 @@ def test_a_search_that_starts_where_everything_holds_changes_nothing():
     params, record = pol.polish(mdl.TwinParams(values, start.initial), _evaluate, workers=1)
     assert params.values["nut_heat_W_per_m_min"] == 1.5
     assert record["moves"] == [] and record["evaluations"] == 1
+
+
+def test_the_committed_twin_holds_every_published_target_through_the_pipeline():
+    # The polish's own judge on the committed parameters: their raw files, written afresh
+    # and run through the pipeline on fold E4, against the paper's published values.
+    from thermaxis.twin.calibration import faithfulness_of
+
+    table = faithfulness_of(mdl.load_params(mdl.PARAMS_PATH))
+    assert len(table) == 17
+    assert table.loc[table["holds"] == "no", "target"].tolist() == []
+    svr = table[table["target"].str.startswith("Table 8: decoupled SVR, largest")]
+    assert abs(float(svr["reproduced"].iloc[0]) - 1.0) <= 0.3
