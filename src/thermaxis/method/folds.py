@@ -184,6 +184,7 @@ def select_for_fold(
     degree: int | None,
     decoupled: bool = True,
     pointwise: bool = True,
+    relative: pd.DataFrame | None = None,
 ) -> FoldSelection:
     """Sensitive points for k (absolute temperatures), b and each position (relative ones).
 
@@ -195,11 +196,15 @@ def select_for_fold(
     ``pointwise=False`` skips the per-position selection (empty ``per_position`` and
     ``pointwise``): the sweep selects k and b once per decoupling degree, but the
     point-by-point points, which do not depend on the degree, only once.
+    ``relative``: :func:`relative_temperatures` of ``X``, when the caller has it (the
+    sweep selects thousands of times on one X); a run's values depend on its own rows
+    only, so they are the same whichever runs the fold keeps.
     """
     name = fold_name(fold)
     if settings.scope == "training":
         keep = ~X["run"].isin(held_out_runs(fold)).to_numpy()
         X, Y = X.loc[keep], Y.loc[keep]
+        relative = None if relative is None else relative.loc[keep]
     fixed = (
         tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
     )
@@ -208,7 +213,7 @@ def select_for_fold(
         X[sensor_columns(X)], fixed, where=f"fold {name}", n_clusters=clustered
     )
     absolute = X[sensors]
-    relative = relative_temperatures(X)[sensors]
+    relative = (relative_temperatures(X) if relative is None else relative)[sensors]
     k_points = b_points = None
     if decoupled:
         kb = decouple_rows(X, Y, degree=degree)

@@ -135,12 +135,13 @@ def _sensors_text(inputs: tuple) -> str:
 
 
 def _unit_selections(
-    X, Y, unit: Unit, grid: SweepGrid, base: SelectionSettings, decoupled: bool
+    X, Y, unit: Unit, grid: SweepGrid, base: SelectionSettings, decoupled: bool, relative
 ) -> dict:
     """The unit's selections: {degree: FoldSelection} for decoupled, {None: ...} for pointwise.
 
     A selection the data cannot support is kept as its one-line error message, so
-    only the configurations that need it fail.
+    only the configurations that need it fail.  ``relative``: X's relative temperatures,
+    computed once per batch (an exhaustive subset search selects thousands of times).
     """
     from thermaxis.method.folds import select_for_fold
 
@@ -155,7 +156,14 @@ def _unit_selections(
         settings = unit.selection.settings(base, grid.fixed)
         try:
             out[degree] = select_for_fold(
-                X, Y, unit.fold, settings, degree, decoupled=True, pointwise=with_pointwise
+                X,
+                Y,
+                unit.fold,
+                settings,
+                degree,
+                decoupled=True,
+                pointwise=with_pointwise,
+                relative=relative,
             )
         except ValueError as exc:
             out[degree] = f"selection failed: {str(exc).splitlines()[0]}"
@@ -165,7 +173,9 @@ def _unit_selections(
     if wants_pointwise and None not in out:
         settings = unit.selection.settings(base, grid.fixed)
         try:
-            out[None] = select_for_fold(X, Y, unit.fold, settings, None, decoupled=False)
+            out[None] = select_for_fold(
+                X, Y, unit.fold, settings, None, decoupled=False, relative=relative
+            )
         except ValueError as exc:
             out[None] = f"selection failed: {str(exc).splitlines()[0]}"
     return out
@@ -227,15 +237,12 @@ def _config_rows(
         config.config_id, fold, error, how, seconds,
     )  # fmt: skip
     sensors = _sensors_text(inputs)
+    # Column by column (Python values, as DataFrame.to_dict gives them): a subset search
+    # makes thousands of these rows, and to_dict's per-row boxing was a quarter of its time.
+    columns = ("target", *METRIC_COLUMNS)
     return [
-        {
-            **label,
-            "target": r["target"],
-            **{m: r[m] for m in METRIC_COLUMNS},
-            "sensors": sensors,
-            "status": "ok",
-        }
-        for r in outcome.to_dict("records")
+        {**label, **dict(zip(columns, values, strict=True)), "sensors": sensors, "status": "ok"}
+        for values in zip(*(outcome[c].tolist() for c in columns), strict=True)
     ]
 
 
@@ -280,7 +287,9 @@ def run_batch(
     (:mod:`thermaxis.method.batched`, equal to the one-by-one fits to 1e-9).
     """
     from thermaxis.method.batched import batchable
+    from thermaxis.method.features import relative_temperatures
 
+    relative = relative_temperatures(X)
     # Whether an algorithm is batched depends on the data and the settings only: asked once.
     batched = {algorithm: batchable(algorithm, model, Y) for algorithm in grid.algorithms}
     planned: list[tuple] = []
@@ -288,7 +297,7 @@ def run_batch(
     deferred: dict[tuple, tuple] = {}
     seconds: dict[tuple, float] = {}
     for unit in units:
-        selections = _unit_selections(X, Y, unit, grid, base_selection, decoupled)
+        selections = _unit_selections(X, Y, unit, grid, base_selection, decoupled, relative)
         for config in grid.unit_configurations(unit.selection, decoupled):
             selection = selections[config.degree]
             if isinstance(selection, str):
