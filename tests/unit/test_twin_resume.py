@@ -51,3 +51,18 @@ def test_the_committed_resume_points_name_their_last_stages():
     ):
         params, after = _resume_point(root / name)
         assert after == last and params.values
+
+
+def test_resuming_a_finished_calibration_is_one_line_and_writes_nothing(tmp_path, capsys):
+    from importlib import resources
+
+    from thermaxis.twin.__main__ import main
+
+    polished = resources.files("thermaxis") / "twin_params.json"
+    written = tmp_path / "params.json"
+    code = main(["calibrate", "--resume", str(polished), "--params", str(written),
+                 "--out", str(tmp_path / "raw"), "--truth", str(tmp_path / "truth")])  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "twin_params.json" in err and "the calibration is complete" in err
+    assert not written.exists() and not (tmp_path / "raw").exists()

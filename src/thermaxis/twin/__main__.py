@@ -76,10 +76,17 @@ def main(argv: list[str] | None = None) -> int:
 
         generate_dataset(args.out, args.truth)
     elif args.command == "calibrate":
+        from . import fit
         from .calibration import calibrate
         from .generate import generate_dataset
 
-        resume = _resume_point(args.resume) if args.resume else None
+        try:
+            resume = _resume_point(args.resume) if args.resume else None
+            if resume is not None:
+                fit._resume_index(resume[1])
+        except (OSError, ValueError) as exc:
+            print(f"error: {args.resume}: {exc}", file=sys.stderr)
+            return 2
         result = calibrate(resume=resume)
         start = (
             f"resumed after stage {resume[1]!r} from {args.resume.name} "

@@ -816,6 +816,11 @@ def _resume_index(after: str) -> int:
     After the last stage only the polish (:mod:`thermaxis.twin.polish`) is left.
     """
     names = [stage.name for stage in STAGES]
+    if after == "polish":
+        raise ValueError(
+            "cannot resume after stage 'polish': the calibration is complete (resume from "
+            "the file its least-squares stages wrote, twin_params.heldout_restarts.json)"
+        )
     if after not in names:
         raise ValueError(f"cannot resume after stage {after!r}: not a stage of STAGES")
     index = names.index(after) + 1
