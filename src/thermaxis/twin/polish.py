@@ -2,7 +2,7 @@
 
 The least-squares stages (:data:`thermaxis.twin.fit.STAGES`) see the pipeline through a
 defect correction, and not its decoupled SVR: which (C, epsilon, gamma) the SVR's inner
-search picks is a discrete choice, won by under 1 % on fold E4, so the held-out SVR's
+search picks is a discrete choice, won by about 1 % on fold E4, so the held-out SVR's
 error is a step function of the twin's parameters that finite differences cannot follow
 (docs/datasets.md).  This leg reads the finished table instead: every candidate's raw
 files are written and run through the pipeline as the workflow runs the paper's fold,
