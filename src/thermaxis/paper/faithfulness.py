@@ -67,26 +67,28 @@ def _table6_rows(selection: pd.DataFrame, fold: str) -> list[dict]:
         want, want_text = _partition(paper)
         got, _ = _partition(ours, listed)
         _, got_text = _partition(ours)
+        equal = got == want
         out.append(
             dict(
                 target=f"Table 6: {target} partition (fold {fold})",
                 published=want_text,
                 reproduced=got_text,
                 tolerance="equal on the printed sensors",
-                holds=got == want,
-                margin=0.0 if got == want else -1.0,
+                holds=equal,
+                margin=0.0 if equal else -1.0,
             )
         )
         want_points = list(paper.loc[paper["selected"], "sensor"])
         got_points = list(ours.loc[ours["selected"].astype(bool), "sensor"])
+        equal = set(want_points) == set(got_points)
         out.append(
             dict(
                 target=f"Table 6: {target} sensitive points",
                 published=", ".join(want_points),
                 reproduced=", ".join(got_points),
                 tolerance="equal",
-                holds=set(want_points) == set(got_points),
-                margin=0.0 if set(want_points) == set(got_points) else -1.0,
+                holds=equal,
+                margin=0.0 if equal else -1.0,
             )
         )
     return out

@@ -18,30 +18,29 @@ from . import fit
 from . import model as mdl
 from .generate import simulate_records, write_runs
 from .polish import polish
-from .report import faithfulness_table, pipeline_view
+from .report import PipelineView, faithfulness_table, pipeline_view
 
 __all__ = ["pipeline_observables", "faithfulness_of", "calibrate"]
 
 
-def pipeline_observables(params: mdl.TwinParams) -> dict[str, fit.RunObservables]:
-    """What the pipeline makes of the twin's raw files: k, b, curves and window means.
-
-    The raw files of ``params`` (noise, faults, clocks and all) are written to a
-    temporary folder and cleaned, assembled and decoupled by the pipeline's own code.
-    """
+def _pipeline_view_of(params: mdl.TwinParams) -> PipelineView:
+    """The pipeline's view of the raw files of ``params`` (noise, faults, clocks and all),
+    written to a temporary folder and cleaned, assembled and decoupled by its own code."""
     with tempfile.TemporaryDirectory(prefix="thermaxis-twin-") as tmp, warnings.catch_warnings():
         # The pipeline's notes on the seeded faults are the dataset's, reported by the workflow.
         warnings.simplefilter("ignore")
         write_runs(Path(tmp), simulate_records(params))
-        return pipeline_view(Path(tmp)).observables()
+        return pipeline_view(Path(tmp))
+
+
+def pipeline_observables(params: mdl.TwinParams) -> dict[str, fit.RunObservables]:
+    """What the pipeline makes of the twin's raw files: k, b, curves and window means."""
+    return _pipeline_view_of(params).observables()
 
 
 def faithfulness_of(params: mdl.TwinParams) -> pd.DataFrame:
     """The workflow's faithfulness table, with margins, of the twin's raw files of ``params``."""
-    with tempfile.TemporaryDirectory(prefix="thermaxis-twin-") as tmp, warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        write_runs(Path(tmp), simulate_records(params))
-        return faithfulness_table(pipeline_view(Path(tmp)), margins=True)
+    return faithfulness_table(_pipeline_view_of(params), margins=True)
 
 
 def calibrate(
