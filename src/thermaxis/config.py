@@ -484,6 +484,7 @@ class ExtraCandidate:
 @dataclass(frozen=True)
 class RecommendSettings:
     score: str  # max_abs | rmse
+    level: float  # of the signed-rank test that lets a candidate displace the baseline
     lags_min: tuple[float, ...]
     baseline_lags_min: tuple[float, ...]
     max_loco_runs: int
@@ -506,6 +507,7 @@ class RecommendSettings:
         )
         return cls(
             score=r["score"],
+            level=float(r["level"]),
             lags_min=tuple(float(v) for v in r["lags_min"]),
             baseline_lags_min=tuple(float(v) for v in r["baseline_lags_min"]),
             max_loco_runs=int(r["max_loco_runs"]),

@@ -63,7 +63,7 @@ CANDIDATES = [fixed("T3"), fixed("T2"), fixed("T1"), fixed("T4")]
 
 def run(X, Y, **kwargs):
     return recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, score="max_abs",
-                     max_loco_runs=12, n_group_folds=5, **kwargs)  # fmt: skip
+                     level=0.05, max_loco_runs=12, n_group_folds=5, **kwargs)  # fmt: skip
 
 
 def test_the_candidate_that_made_the_data_is_chosen_on_every_fold():
@@ -106,6 +106,7 @@ def test_ties_go_to_the_candidate_listed_first():
         reference="pointwise-mlr-T3",
         degree=1,
         score="rmse",
+        level=0.05,
         max_loco_runs=12,
         n_group_folds=5,
     )
@@ -141,7 +142,8 @@ def test_an_inner_group_fold_is_fitted_once_and_scored_over_all_its_rows():
 def test_above_the_limit_the_outer_loop_holds_out_groups_of_runs():
     X, Y = make_runs(n_runs=6)
     result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1,
-                       score="max_abs", max_loco_runs=4, n_group_folds=3)  # fmt: skip
+                       score="max_abs", level=0.05, max_loco_runs=4,
+                       n_group_folds=3)  # fmt: skip
     # Six runs above a limit of four: three outer groups, R1+R2, R3+R4, R5+R6, every run
     # still a row, each chosen without its group.
     assert list(result.folds["fold"]) == [f"R{i}" for i in range(1, 7)]
@@ -187,28 +189,33 @@ def test_with_two_runs_no_fold_is_chosen_but_the_final_choice_is_made():
     assert result.final == "pointwise-mlr-T1"
 
 
-def test_the_one_standard_error_rule_keeps_the_baseline_unless_beaten_beyond_the_noise():
-    # Inner scores of three held-out runs, worked by hand. "lucky" has the lowest mean
-    # (1.0 vs the baseline's 1.1) but its paired differences -0.6, +0.6, -0.3 have mean
-    # -0.1 and standard error 0.37: no evidence. "steady" is 0.2 better on every run
-    # (differences -0.2 each, standard error 0): it displaces the baseline.
+def test_a_candidate_displaces_the_baseline_only_with_evidence_in_mean_and_in_ranks():
     def rows(name, values):
         return [
             {"candidate": name, "held_out": f"R{i}", "max_abs": v} for i, v in enumerate(values)
         ]
 
-    base = rows(BASELINE, [1.0, 1.0, 1.3])
-    lucky = rows("lucky", [0.4, 1.6, 1.0])
-    steady = rows("steady", [0.8, 0.8, 1.1])
-    scores = pd.DataFrame(base + lucky)
-    assert _choose(scores, ["lucky", BASELINE], "max_abs") == (BASELINE, pytest.approx(1.1))
-    scores = pd.DataFrame(base + lucky + steady)
-    assert _choose(scores, ["lucky", "steady", BASELINE], "max_abs") == (
+    def choose(*tables, order):
+        return _choose(pd.DataFrame([r for t in tables for r in t]), order, "max_abs", 0.05)
+
+    # Five inner runs, worked by hand. "lucky" has a lower mean than the baseline (0.96 vs
+    # 1.1) but its paired differences -0.6, +0.6, -0.3, -0.2, +0.2 have mean -0.06 and
+    # standard error 0.21: no evidence. "steady" is 0.2 better on every run: mean -0.2,
+    # standard error 0, and all five signs negative, which one of the 2**5 equally likely
+    # sign patterns under "no improvement" matches: one-sided p = 1/32 <= 0.05.
+    base = rows(BASELINE, [1.0, 1.0, 1.3, 1.1, 1.1])
+    lucky = rows("lucky", [0.4, 1.6, 1.0, 0.9, 1.3])
+    steady = rows("steady", [0.8, 0.8, 1.1, 0.9, 0.9])
+    assert choose(base, lucky, order=["lucky", BASELINE]) == (BASELINE, pytest.approx(1.1))
+    assert choose(base, lucky, steady, order=["lucky", "steady", BASELINE]) == (
         "steady",
         pytest.approx(0.9),
     )
+    # Three inner runs, "steady" better on each: p = 1/2**3 = 0.125, so the baseline
+    # stands though the standard error is 0. Below five runs nothing reaches 0.05.
+    assert choose(base[:3], steady[:3], order=["steady", BASELINE])[0] == BASELINE
     # Without the baseline the lowest mean chooses, as before.
-    assert _choose(pd.DataFrame(lucky + steady), ["lucky", "steady"], "max_abs")[0] == "steady"
+    assert choose(lucky, steady, order=["lucky", "steady"])[0] == "steady"
 
 
 def test_the_plain_baseline_is_always_a_candidate_and_sees_only_its_own_lags():

@@ -85,7 +85,8 @@ def main(snakemake):
         scores = pd.concat(
             [pd.read_csv(io.StringIO(texts[path])) for path in output.scores], ignore_index=True
         )
-        result = collect(scores, [c.name for c in candidates], "paper", recommend.score)
+        names = [c.name for c in candidates]
+        result = collect(scores, names, "paper", recommend.score, recommend.level)
         means = fold_means(result.loco, StatisticsSettings.from_section(p.statistics))
         table = candidate_table(candidates).join(means, on="candidate")
         record = choice_record(result, candidates)

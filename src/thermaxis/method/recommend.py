@@ -9,10 +9,10 @@ it has not seen. Answering it honestly needs two loops:
 * the *outer* loop holds out one condition (run) at a time: it is the unseen condition;
 * the *inner* loop, on the remaining training runs alone, scores every candidate by
   leave-one-condition-out (or by k group folds above ``max_loco_runs`` training runs)
-  and chooses by the one-standard-error rule against the plain baseline (:data:`BASELINE`,
-  always a candidate): a candidate displaces it only when its paired improvement over the
-  inner held-out runs exceeds one standard error; among those the best mean inner
-  score wins, ties to the candidate listed first (the default list runs from simple to
+  and chooses against the plain baseline (:data:`BASELINE`, always a candidate): a
+  candidate displaces it only when its paired improvement over the inner held-out runs
+  exceeds one standard error and passes a one-sided signed-rank test (:func:`_choose`);
+  among those the best mean inner score wins, ties to the candidate listed first (the default list runs from simple to
   complex).
 
 The chosen candidate's error on the outer held-out run is the estimate of what the
@@ -52,6 +52,7 @@ from thermaxis.method.folds import (
 from thermaxis.method.inputs import base_of, parse_input_name
 from thermaxis.method.metrics import prediction_metrics
 from thermaxis.reports.formatting import markdown_table
+from thermaxis.statistics.paired import wilcoxon_p
 
 __all__ = [
     "SCORES",
@@ -245,15 +246,20 @@ def _lowest(means: pd.Series, order: Sequence[str]) -> str:
     return next(n for n in order if np.isclose(means[n], best, rtol=1e-12, atol=0.0))
 
 
-def _choose(scores: pd.DataFrame, order: Sequence[str], score: str) -> tuple[str, float]:
+def _choose(
+    scores: pd.DataFrame, order: Sequence[str], score: str, level: float
+) -> tuple[str, float]:
     """The candidate the scores support: the baseline, unless another beats it beyond the noise.
 
     With the baseline (:data:`BASELINE`) among ``order``, another candidate displaces it
-    only when its paired improvement over the held-out runs, mean plus one standard
-    error, is below zero (the one-standard-error rule); among those the lowest mean
-    wins. On a few runs the lowest mean of twenty candidates is mostly the luckiest
-    (docs/recommendation.md gives the measured cost); the rule asks for evidence.
-    Without the baseline: the lowest mean. Ties go to the candidate listed first.
+    only when its paired differences over the held-out runs show an improvement twice:
+    their mean plus one standard error is below zero (the one-standard-error rule), and a
+    one-sided Wilcoxon signed-rank test rejects "no improvement" at ``level``. Among those
+    the lowest mean wins. On a few runs the lowest mean of twenty candidates is mostly the
+    luckiest, and a standard error from three differences is itself noise: the rank test's
+    level holds whatever the count, and below 5 held-out runs nothing reaches 0.05
+    (docs/recommendation.md gives the measured cost). Without the baseline: the lowest
+    mean. Ties go to the candidate listed first.
     """
     wide = scores.pivot_table(index="held_out", columns="candidate", values=score, sort=True)
     means = wide.mean()
@@ -264,7 +270,12 @@ def _choose(scores: pd.DataFrame, order: Sequence[str], score: str) -> tuple[str
     n = len(differences)
     # One held-out run gives no spread: nothing is shown to beat the baseline.
     error = differences.std(ddof=1) / np.sqrt(n) if n >= 2 else differences.mean() * 0 + np.inf
-    beaten = [c for c in differences.columns if differences[c].mean() + error[c] < 0]
+    beaten = [
+        c
+        for c in differences.columns
+        if differences[c].mean() + error[c] < 0
+        and wilcoxon_p(differences[c], alternative="less") <= level
+    ]
     name = _lowest(means, beaten) if beaten else BASELINE
     return name, float(means[name])
 
@@ -327,7 +338,7 @@ def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
 
 
 def collect(
-    scores: pd.DataFrame, names: Sequence[str], reference: str, score: str
+    scores: pd.DataFrame, names: Sequence[str], reference: str, score: str, level: float
 ) -> Recommendation:
     """The choice of every outer fold, and the final one, from the folds' scores."""
     _check_choice(names, reference, score)
@@ -342,7 +353,7 @@ def collect(
         fold_inner = inner.loc[inner["fold"] == fold]
         # No inner scores (one training run): the reference stands, unchosen.
         chosen, inner_score = (
-            _choose(fold_inner, names, score) if len(fold_inner) else (reference, np.nan)
+            _choose(fold_inner, names, score, level) if len(fold_inner) else (reference, np.nan)
         )
         rows.append(
             {
@@ -355,7 +366,7 @@ def collect(
                 "paper_max_abs_um": at.loc[(reference, fold), "max_abs"],
             }
         )
-    final, _ = _choose(loco, names, score)
+    final, _ = _choose(loco, names, score, level)
     return Recommendation(pd.DataFrame(rows), inner.reset_index(drop=True), loco, final, score)
 
 
@@ -366,6 +377,7 @@ def recommend(
     reference: str,
     degree: int,
     score: str,
+    level: float,
     max_loco_runs: int,
     n_group_folds: int,
     signals: Sequence[str] = (),
@@ -394,7 +406,7 @@ def recommend(
         ],
         ignore_index=True,
     )
-    return collect(scores, names, reference, score)
+    return collect(scores, names, reference, score, level)
 
 
 def candidate_table(candidates: Sequence[Candidate]) -> pd.DataFrame:

@@ -78,13 +78,17 @@ def _mean_over_folds(statistic: FoldStatistic, F: np.ndarray, n: np.ndarray):
     return effect
 
 
-def wilcoxon_p(differences) -> float:
-    """Two-sided Wilcoxon signed-rank p over the folds; NaN when nothing can be ranked."""
+def wilcoxon_p(differences, alternative: str = "two-sided") -> float:
+    """Wilcoxon signed-rank p over the folds; NaN when nothing can be ranked.
+
+    ``alternative`` is scipy's: "less" asks whether the differences tend below zero.
+    Exact up to 50 folds, so the smallest p of n folds is 2**-n one-sided.
+    """
     d = np.asarray(differences, dtype=float)
     d = d[np.isfinite(d)]
     if d.size < 2 or not np.any(d != 0.0):
         return math.nan
-    return float(stats.wilcoxon(d, zero_method="wilcox", alternative="two-sided").pvalue)
+    return float(stats.wilcoxon(d, zero_method="wilcox", alternative=alternative).pvalue)
 
 
 def paired_comparison(
