@@ -90,6 +90,20 @@ class Compensator:
         self.fallback = fallback or FallbackSettings(
             **{**f, "plausible_c": tuple(f["plausible_c"])}
         )
+        self._names = [s for s, _ in self.inputs]
+        self._relative = np.array([kind == "relative" for _, kind in self.inputs], dtype=bool)
+        self._relative_names = [s for s, kind in self.inputs if kind == "relative"]
+        # The inputs whose training range bounds them: every one but a signal's (a speed
+        # beyond its training range is an extrapolation the held-out verdict measures; a
+        # degC margin says nothing about it; the channel decides, as
+        # SENSOR_SIGNAL[INPUT_SENSOR[j]] does in the Structured Text block).
+        ranged = [i for i, s in enumerate(self._names) if base_of(s) not in self.signals]
+        specs = [model["inputs"][i] for i in ranged]
+        self._ranged = np.array(ranged, dtype=int)
+        self._low = np.array([spec["training_min_c"] for spec in specs], dtype=float)
+        self._high = np.array([spec["training_max_c"] for spec in specs], dtype=float)
+        self._low -= self.fallback.range_margin_c
+        self._high += self.fallback.range_margin_c
 
     @classmethod
     def from_json(cls, path, fallback: FallbackSettings | None = None) -> Compensator:
@@ -107,49 +121,63 @@ class Compensator:
     ) -> list[dict]:
         """The time-aware inputs at every cycle, carried from one cycle to the next.
 
-        Each lag or rate starts with the first sample, steady, as the offline inputs of
-        :mod:`thermaxis.method.inputs` start with the run; a missing or non-finite
-        reading feeds the last good one, so a fault does not break the filter's history.
+        Each lag or rate starts with its sensor's first finite reading, steady, as the
+        offline inputs of :mod:`thermaxis.method.inputs` start with the run, and is NaN
+        before it; a missing or non-finite reading feeds the last good one, so a fault does
+        not break the filter's history.
         """
-        states = {
-            name: (LagState(seconds) if kind == "lag" else RateState(seconds), base)
-            for name, (base, kind, seconds) in self.derived.items()
-        }
-        last: dict[str, float] = {}
-        out = []
-        for time_s, sample in zip(times_s, temperatures, strict=True):
-            values = {}
-            for name, (state, base) in states.items():
-                value = sample.get(base, math.nan)
-                if math.isfinite(value):
-                    last[base] = value
-                values[name] = state.update(float(time_s), last[base]) if base in last else math.nan
-            out.append(values)
-        return out
+        names = list(self.derived)
+        bases = list(dict.fromkeys(base for base, _, _ in self.derived.values()))
+        column = {base: j for j, base in enumerate(bases)}
+        readings = np.array(
+            [[sample.get(base, math.nan) for base in bases] for sample in temperatures],
+            dtype=float,
+        ).reshape(len(temperatures), len(bases))
+        good = np.isfinite(readings)
+        # The last good reading at every cycle (a row index per cycle and sensor).
+        rows = np.where(good, np.arange(len(readings))[:, None], 0)
+        carried = readings[np.maximum.accumulate(rows, axis=0), np.arange(len(bases))]
+        first = np.where(good.any(axis=0), good.argmax(axis=0), len(readings))
+        # Inputs of one kind and duration whose sensors start together share one state,
+        # updated with all their readings at once: the cycle's arithmetic per input is the
+        # same as with a state each, and the coefficients are computed once per cycle.
+        groups: dict[tuple, list[int]] = {}
+        for i, name in enumerate(names):
+            base, kind, seconds = self.derived[name]
+            groups.setdefault((kind, seconds, int(first[column[base]])), []).append(i)
+        values = np.full((len(readings), len(names)), math.nan)
+        for (kind, seconds, start), members in groups.items():
+            state = LagState(seconds) if kind == "lag" else RateState(seconds)
+            sensors = [column[self.derived[names[i]][0]] for i in members]
+            for cycle in range(start, len(readings)):
+                values[cycle, members] = state.update(
+                    float(times_s[cycle]), carried[cycle, sensors]
+                )
+        return [dict(zip(names, row, strict=True)) for row in values.tolist()]
 
     def _input_row(
         self, temperatures: Mapping[str, float], reference: Mapping[str, float]
     ) -> np.ndarray:
-        return np.array(
-            [
-                temperatures[s] - reference[s] if kind == "relative" else temperatures[s]
-                for s, kind in self.inputs
-            ],
-            dtype=float,
-        )
+        row = np.array([temperatures[s] for s in self._names], dtype=float)
+        row[self._relative] -= [reference[s] for s in self._relative_names]
+        return row
 
-    def regression_changes(
-        self, temperatures: Mapping[str, float], reference: Mapping[str, float]
-    ) -> np.ndarray:
-        """Each regression's prediction at the current state minus at the reference state."""
-        now = self._input_row(temperatures, reference)
-        then = self._input_row(reference, reference)
+    def _changes(self, now: np.ndarray, then: np.ndarray) -> np.ndarray:
+        """Each regression's prediction at input row ``now`` minus at ``then``."""
         changes = []
         for record in self.model["regressions"]:
             chosen = record["inputs"]
             pair = evaluate_regression(record, np.vstack([now[chosen], then[chosen]]))
             changes.append(pair[0] - pair[1])
         return np.asarray(changes, dtype=float)
+
+    def regression_changes(
+        self, temperatures: Mapping[str, float], reference: Mapping[str, float]
+    ) -> np.ndarray:
+        """Each regression's prediction at the current state minus at the reference state."""
+        return self._changes(
+            self._input_row(temperatures, reference), self._input_row(reference, reference)
+        )
 
     def predicted_change(
         self, temperatures: Mapping[str, float], reference: Mapping[str, float]
@@ -161,7 +189,9 @@ class Compensator:
         self, temperatures: Mapping[str, float], reference: Mapping[str, float]
     ) -> ControllerParameters:
         """K0 [mm], tan(beta) [-], P0 [mm] of the compensation (= -predicted change) in one state."""
-        changes = self.regression_changes(temperatures, reference)
+        return self._parameters_of(self.regression_changes(temperatures, reference))
+
+    def _parameters_of(self, changes: np.ndarray) -> ControllerParameters:
         b_um, k_um_per_m = self.weights @ changes
         curve = -(self.basis @ changes) + 0.0
         line = -(b_um + k_um_per_m * (self.positions_mm - self.p0_mm) / MM_PER_M)
@@ -188,6 +218,13 @@ class Compensator:
         ``last`` holds each sensor's previous plausible reading as (time [s], value): the
         rate is measured against it, so one wild sample does not also fail the next one.
         """
+        reasons = self._sensor_faults(temperatures, reference, time_s, last, ages_s)
+        if reasons:
+            return reasons
+        return self._range_faults(self._input_row(temperatures, reference))
+
+    def _sensor_faults(self, temperatures, reference, time_s, last, ages_s) -> tuple[str, ...]:
+        """The sensors' faults: missing, stale, implausible, too fast, or no reference."""
         f = self.fallback
         lo, hi = f.plausible_c
         reasons = []
@@ -208,24 +245,23 @@ class Compensator:
                 reasons.append(f"{sensor}: reference value missing")
             elif not signal and not (math.isfinite(ref) and lo <= ref <= hi):
                 reasons.append(f"{sensor}: reference temperature missing or implausible")
-        if reasons:
-            return tuple(reasons)
-        row = self._input_row(temperatures, reference)
-        for (sensor, kind), spec, value in zip(
-            self.inputs, self.model["inputs"], row, strict=False
-        ):
-            if base_of(sensor) in self.signals:
-                # A speed beyond the training range is an extrapolation the held-out verdict
-                # measures; a degC margin says nothing about it. (The channel decides, as
-                # SENSOR_SIGNAL[INPUT_SENSOR[j]] does in the Structured Text block.)
-                continue
-            low = spec["training_min_c"] - f.range_margin_c
-            high = spec["training_max_c"] + f.range_margin_c
-            if not low <= value <= high:
-                reasons.append(
-                    f"{sensor} ({kind}): {value:.3g} C outside the training range "
-                    f"{spec['training_min_c']:.3g} ... {spec['training_max_c']:.3g} C by more than {f.range_margin_c:g} C"
-                )
+        return tuple(reasons)
+
+    def _range_faults(self, row: np.ndarray) -> tuple[str, ...]:
+        """Inputs of ``row`` outside their training range by more than the margin."""
+        values = row[self._ranged]
+        # NaN is outside too: no comparison holds.
+        outside = np.flatnonzero(~((self._low <= values) & (values <= self._high)))
+        f = self.fallback
+        reasons = []
+        for j in outside.tolist():
+            i = int(self._ranged[j])
+            sensor, kind = self.inputs[i]
+            spec = self.model["inputs"][i]
+            reasons.append(
+                f"{sensor} ({kind}): {row[i]:.3g} C outside the training range "
+                f"{spec['training_min_c']:.3g} ... {spec['training_max_c']:.3g} C by more than {f.range_margin_c:g} C"
+            )
         return tuple(reasons)
 
     def _temperature_faults(self, sensor: str, value: float, time_s: float, last) -> list[str]:
@@ -274,12 +310,19 @@ class Compensator:
         fault_since = None
         last: dict[str, tuple[float, float]] = {}
         steps = []
+        # The reference's input row, once: the first good cycle needs it (faults and
+        # parameters are those of faults() and parameters(), their input row shared).
+        then = None
         for i, (time_s, sample) in enumerate(zip(times_s, temperatures, strict=False)):
             ages = ages_s[i] if ages_s is not None else {}
-            reasons = self.faults(sample, reference, float(time_s), last, ages)
+            reasons = self._sensor_faults(sample, reference, float(time_s), last, ages)
+            if not reasons:
+                row = self._input_row(sample, reference)
+                reasons = self._range_faults(row)
             last.update(self._plausible_readings(float(time_s), sample, ages))
             if not reasons:
-                good = self.parameters(sample, reference)
+                then = self._input_row(reference, reference) if then is None else then
+                good = self._parameters_of(self._changes(row, then))
                 fault_since = None
                 steps.append(Step(float(time_s), good, "ok"))
                 continue

@@ -94,11 +94,13 @@ def _series(t, u) -> tuple[np.ndarray, np.ndarray]:
     return t, u
 
 
-def _step_checks(t, u, t_prev: float | None, what: str) -> tuple[float, float]:
-    t, u = float(t), float(u)
+def _step_checks(t, u, t_prev: float | None, what: str):
+    """``(t, u)`` as a float and a float, or an array of floats (several signals at once)."""
+    t = float(t)
+    u = float(u) if np.ndim(u) == 0 else np.asarray(u, dtype=float)
     if not math.isfinite(t):
         raise ValueError(f"{what}: time {t!r} is not finite")
-    if math.isnan(u):
+    if np.isnan(u).any():
         raise ValueError(
             f"{what}: value at t = {t!r} s is NaN; the state cannot be carried over a missing sample"
         )
@@ -196,6 +198,9 @@ class LagState:
     ----------
     tau_s : time constant in seconds, finite and > 0.
     initial : the filter's value at the first sample; default the first sample's value.
+
+    :meth:`update` takes one value, or an array of values: several signals with the same
+    time constant filtered at once, each exactly as alone (elementwise the same arithmetic).
     """
 
     def __init__(self, tau_s: float, initial: float | None = None):
@@ -276,6 +281,9 @@ class RateState:
     Parameters
     ----------
     window_s : the window ``w`` in seconds, finite and > 0.
+
+    :meth:`update` takes one value, or an array of values (several signals at once), as
+    :class:`LagState`.
     """
 
     def __init__(self, window_s: float):
