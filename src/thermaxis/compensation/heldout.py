@@ -86,7 +86,7 @@ def replay(
     times_s, samples, rows = cycles
     derived = compensator.derived_inputs(times_s, samples)
     home = {**samples[rows[0]], **derived[rows[0]]}
-    steps = compensator.run(times_s, samples, home)
+    steps = compensator.run(times_s, samples, home, derived=derived)
     states = [{**samples[r], **derived[r]} for r in rows]
     return [steps[r] for r in rows], [compensator.parameters(s, home) for s in states]
 

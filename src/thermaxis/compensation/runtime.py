@@ -297,13 +297,18 @@ class Compensator:
         temperatures: Sequence[Mapping[str, float]],
         reference: Mapping[str, float],
         ages_s: Sequence[Mapping[str, float]] | None = None,
+        derived: Sequence[Mapping[str, float]] | None = None,
     ) -> list[Step]:
-        """The compensation cycle by cycle, with the fallback policy applied."""
+        """The compensation cycle by cycle, with the fallback policy applied.
+
+        ``derived``: :meth:`derived_inputs` of these cycles, when the caller has them.
+        """
         f = self.fallback
         if self.derived:
             # The reference of a derived input is its value at homing: the first cycle's,
             # unless ``reference`` holds it (homed after the filters started).
-            derived = self.derived_inputs(times_s, temperatures)
+            if derived is None:
+                derived = self.derived_inputs(times_s, temperatures)
             temperatures = [{**s, **d} for s, d in zip(temperatures, derived, strict=True)]
             reference = {**derived[0], **reference}
         good = _zero_parameters(self.p0_mm, self.offset_only, self.positions_mm.size)

@@ -173,6 +173,7 @@ def execute(
         start_timeout=start_timeout,
         execution_timeout=execution_timeout,
         progress_bar=False,
+        request_save_on_cell_execute=False,
     )
     convert(executed, html_path, title)
 
@@ -210,6 +211,9 @@ def execute_pages(
                 start_timeout=start_timeout,
                 execution_timeout=execution_timeout,
                 progress_bar=False,
+                # Written once, when the page is done (or has failed), not twice per
+                # cell: a page with its figures is a megabyte of JSON.
+                request_save_on_cell_execute=False,
             )
             # The kernel's own client runs the reset, as it runs a notebook's cells.
             NotebookClient(
