@@ -360,6 +360,7 @@ class ModelSettings:
     gpr_max_samples: int
     svr_max_samples: int
     svr_search_folds: int
+    svr_max_loco_runs: int
     interval_level: float
     random_state: int
     signals: tuple[str, ...]  # operating signals added to every model's inputs
@@ -385,6 +386,7 @@ class ModelSettings:
             gpr_max_samples=int(m["gpr_max_samples"]),
             svr_max_samples=int(m["svr_max_samples"]),
             svr_search_folds=int(m["inner_search"]["svr_folds"]),
+            svr_max_loco_runs=int(m["inner_search"]["svr_max_loco_runs"]),
             interval_level=float(m["interval_level"]),
             random_state=int(m["random_state"]),
             signals=tuple(m["signals"]),

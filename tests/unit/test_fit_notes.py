@@ -46,6 +46,23 @@ def test_an_svr_says_its_inner_split_and_its_choice():
     assert note == "the first of 2 group folds of 3 training runs"
 
 
+def test_an_svr_leaves_one_run_out_only_up_to_its_own_limit_and_a_ridge_up_to_the_search_limit():
+    X, Y = runs(n_runs=6, n_measurements=4)
+    # Six training runs, over svr_max_loco_runs 5 (under max_loco_runs 12): the SVR's grid
+    # is scored on the first of min(group_folds 5, 6 runs) = 5 group folds ...
+    svr = PointwiseAxisModel(("T1", "T2"), algorithm="svr", svr_grid=GRID, svr_max_loco_runs=5)
+    assert svr.fit(X, Y).fit_notes_[0]["inner_search"] == (
+        "the first of 5 group folds of 6 training runs"
+    )
+    # ... five runs are still left out one at a time ...
+    five = X[X["run"] != "R5"]
+    note = svr.fit(five, Y[(X["run"] != "R5").to_numpy()]).fit_notes_[0]["inner_search"]
+    assert note == "leave one of 5 training runs out"
+    # ... and a searched ridge, whose grid points are linear fits, leaves each of the six out.
+    ridge = PointwiseAxisModel(("T1", "T2"), algorithm="ridge", search_grid={"alpha": [0.1, 1.0]})
+    assert ridge.fit(X, Y).fit_notes_[0]["inner_search"] == "leave one of 6 training runs out"
+
+
 def test_an_svr_beyond_its_row_limit_is_fitted_on_evenly_spaced_rows():
     X, Y = runs()
     model = PointwiseAxisModel(("T1", "T2"), algorithm="svr", svr_grid=GRID, svr_max_samples=10)

@@ -107,7 +107,12 @@ def test_each_section_builds_from_its_config_section():
             "svr_grid": {"gamma": ["scale"], "C": [3], "epsilon": [0.5]},
             "searched": ["lasso"],
             "search_grids": {"lasso": {"alpha": [0.1, 1]}, "ridge": {"alpha": [2]}},
-            "inner_search": {"max_loco_runs": 4, "group_folds": 3, "svr_folds": 2},
+            "inner_search": {
+                "max_loco_runs": 4,
+                "group_folds": 3,
+                "svr_folds": 2,
+                "svr_max_loco_runs": 3,
+            },
             "gpr_max_samples": 50,
             "svr_max_samples": 70,
             "interval_level": 0.9,
@@ -125,6 +130,7 @@ def test_each_section_builds_from_its_config_section():
     )
     assert (models.inner_search, models.gpr_max_samples) == ((4, 3), 50)
     assert (models.svr_max_samples, models.svr_search_folds) == (70, 2)
+    assert models.svr_max_loco_runs == 3
     assert models.signals == ("spindle_rpm",)
     cleaning = CleaningSettings.from_sections(
         {

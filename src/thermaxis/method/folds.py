@@ -314,6 +314,7 @@ def _build_model(
         gpr_max_samples=model.gpr_max_samples,
         svr_max_samples=model.svr_max_samples,
         svr_search_folds=model.svr_search_folds,
+        svr_max_loco_runs=model.svr_max_loco_runs,
         random_state=model.random_state,
         signals=model.signals,
     )

@@ -461,10 +461,24 @@ def _fitted_rows(estimator, n: int) -> np.ndarray:
     return np.arange(n) if limit is None or n <= limit else _evenly_spaced(n, limit)
 
 
+def _search_split(estimator) -> tuple[int, int]:
+    """``(max_loco_runs, group_folds)`` of an estimator's inner search.
+
+    An SVR's leaves one run out only up to ``svr_max_loco_runs`` training runs: each of
+    its grid points is a kernel fit, and nested in leave-one-condition-out (and again in
+    the recommendation's loops) a search over every run made the cost grow with the cube
+    of the runs.
+    """
+    loco, folds = (int(v) for v in estimator.inner_search)
+    if estimator.algorithm == "svr":
+        loco = min(loco, int(estimator.svr_max_loco_runs))
+    return loco, folds
+
+
 def _fit_one(features, target, groups, estimator):
     """One regression; returns (fitted pipeline, chosen searched parameters or None)."""
     algorithm, params = estimator.algorithm, estimator.params
-    inner = tuple(estimator.inner_search)
+    inner = _search_split(estimator)
     if algorithm == "svr":
         if estimator.svr_grid is None:
             # No default grid here: the one default is the schema's (config models.svr_grid).
@@ -529,7 +543,7 @@ def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, cho
         split = "none (one training run): the grid's first point"
     else:
         # The splitter the search used, so the note cannot drift from it.
-        splitter = inner_group_splitter(groups, *tuple(estimator.inner_search))
+        splitter = inner_group_splitter(groups, *_search_split(estimator))
         if isinstance(splitter, LeaveOneGroupOut):
             split = f"leave one of {runs} training runs out"
         else:
@@ -616,6 +630,11 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
     svr_search_folds : int
         With group folds, an SVR's grid is scored on the first this many of them
         (config ``models.inner_search.svr_folds``).
+    svr_max_loco_runs : int
+        An SVR's search leaves one run out up to this many training runs (and never above
+        ``inner_search``'s own limit), group folds above: a kernel search costs a fixed
+        number of fits however many runs there are
+        (config ``models.inner_search.svr_max_loco_runs``).
     degree : {1, 2, 3}
         Decoupling polynomial degree; 1 is the paper's straight line.
     random_state : int
@@ -659,6 +678,7 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         gpr_max_samples=300,
         svr_max_samples=300,
         svr_search_folds=1,
+        svr_max_loco_runs=5,
     ):
         self.k_sensors = k_sensors
         self.b_sensors = b_sensors
@@ -670,6 +690,7 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
         self.gpr_max_samples = gpr_max_samples
         self.svr_max_samples = svr_max_samples
         self.svr_search_folds = svr_search_folds
+        self.svr_max_loco_runs = svr_max_loco_runs
         self.degree = degree
         self.random_state = random_state
         self.signals = signals
@@ -819,7 +840,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
     ----------
     sensors : tuple of str
         Sensitive points used for every position (the paper: T1, T11, T12).
-    algorithm, params, svr_grid, search_grid, inner_search, gpr_max_samples, svr_max_samples, svr_search_folds, random_state, signals
+    algorithm, params, svr_grid, search_grid, inner_search, gpr_max_samples, svr_max_samples, svr_search_folds, svr_max_loco_runs, random_state, signals
         As for :class:`DecoupledAxisModel`.
 
     Attributes
@@ -847,6 +868,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         gpr_max_samples=300,
         svr_max_samples=300,
         svr_search_folds=1,
+        svr_max_loco_runs=5,
     ):
         self.sensors = sensors
         self.algorithm = algorithm
@@ -857,6 +879,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
         self.gpr_max_samples = gpr_max_samples
         self.svr_max_samples = svr_max_samples
         self.svr_search_folds = svr_search_folds
+        self.svr_max_loco_runs = svr_max_loco_runs
         self.random_state = random_state
         self.signals = signals
 
