@@ -99,11 +99,10 @@ class Compensator:
         # SENSOR_SIGNAL[INPUT_SENSOR[j]] does in the Structured Text block).
         ranged = [i for i, s in enumerate(self._names) if base_of(s) not in self.signals]
         specs = [model["inputs"][i] for i in ranged]
+        margin = self.fallback.range_margin_c
         self._ranged = np.array(ranged, dtype=int)
-        self._low = np.array([spec["training_min_c"] for spec in specs], dtype=float)
-        self._high = np.array([spec["training_max_c"] for spec in specs], dtype=float)
-        self._low -= self.fallback.range_margin_c
-        self._high += self.fallback.range_margin_c
+        self._low = np.array([spec["training_min_c"] - margin for spec in specs], dtype=float)
+        self._high = np.array([spec["training_max_c"] + margin for spec in specs], dtype=float)
 
     @classmethod
     def from_json(cls, path, fallback: FallbackSettings | None = None) -> Compensator:
@@ -218,10 +217,15 @@ class Compensator:
         ``last`` holds each sensor's previous plausible reading as (time [s], value): the
         rate is measured against it, so one wild sample does not also fail the next one.
         """
+        return self._faults_and_row(temperatures, reference, time_s, last, ages_s)[0]
+
+    def _faults_and_row(self, temperatures, reference, time_s, last, ages_s):
+        """:meth:`faults`, and the input row it checked (None when a sensor already failed)."""
         reasons = self._sensor_faults(temperatures, reference, time_s, last, ages_s)
         if reasons:
-            return reasons
-        return self._range_faults(self._input_row(temperatures, reference))
+            return reasons, None
+        row = self._input_row(temperatures, reference)
+        return self._range_faults(row), row
 
     def _sensor_faults(self, temperatures, reference, time_s, last, ages_s) -> tuple[str, ...]:
         """The sensors' faults: missing, stale, implausible, too fast, or no reference."""
@@ -315,15 +319,12 @@ class Compensator:
         fault_since = None
         last: dict[str, tuple[float, float]] = {}
         steps = []
-        # The reference's input row, once: the first good cycle needs it (faults and
-        # parameters are those of faults() and parameters(), their input row shared).
+        # The reference's input row, once, when the first good cycle needs it; a cycle's own
+        # row is the one its faults were checked on (as parameters() would build it).
         then = None
         for i, (time_s, sample) in enumerate(zip(times_s, temperatures, strict=False)):
             ages = ages_s[i] if ages_s is not None else {}
-            reasons = self._sensor_faults(sample, reference, float(time_s), last, ages)
-            if not reasons:
-                row = self._input_row(sample, reference)
-                reasons = self._range_faults(row)
+            reasons, row = self._faults_and_row(sample, reference, float(time_s), last, ages)
             last.update(self._plausible_readings(float(time_s), sample, ages))
             if not reasons:
                 then = self._input_row(reference, reference) if then is None else then

@@ -12,8 +12,8 @@ it has not seen. Answering it honestly needs two loops:
   and chooses against the plain baseline (:data:`BASELINE`, always a candidate): a
   candidate displaces it only when its paired improvement over the inner held-out runs
   exceeds one standard error and passes a one-sided signed-rank test (:func:`_choose`);
-  among those the best mean inner score wins, ties to the candidate listed first (the default list runs from simple to
-  complex).
+  among those the best mean inner score wins, ties to the candidate listed first (the
+  default list runs from simple to complex).
 
 The chosen candidate's error on the outer held-out run is the estimate of what the
 pipeline would deploy; the held-out run reaches no choice. The final recommendation is
