@@ -534,3 +534,42 @@ def test_one_lars_path_predicts_as_a_lasso_fitted_at_each_strength():
     for alpha, predicted in zip(alphas, predictions, strict=True):
         alone = LassoLars(alpha=alpha).fit(X_train, y_train).predict(X_test)
         np.testing.assert_allclose(predicted, alone, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "params",
+    [
+        {"C": 10.0, "epsilon": 0.05, "gamma": "scale"},
+        {"C": 0.1, "epsilon": 0.01, "gamma": "auto"},
+        {"C": 100.0, "epsilon": 0.1, "gamma": 0.1},
+        {"C": 1.0, "kernel": "linear"},
+        {"C": 3.0, "kernel": "poly", "degree": 2, "coef0": 1.0, "gamma": 0.5},
+    ],
+)
+def test_the_svr_grid_predicts_as_the_svr_estimator_bit_for_bit(params):
+    # The inner search fits its SVR grid through libsvm directly: each grid point's
+    # held-out predictions against scikit-learn's SVR fitted and predicting on its own.
+    from sklearn.svm import SVR
+
+    from thermaxis.method.svr_grid import svr_grid_predictions
+
+    rng = np.random.default_rng(5)
+    X = rng.normal(size=(30, 4))
+    y = np.sin(X[:, 0]) + 0.5 * X[:, 1] + 0.1 * rng.normal(size=30)
+    # A column-major training block: SVR copies it to C order before computing the
+    # "scale" gamma from its variance, and so must the grid.
+    X_train, y_train, X_test = np.asfortranarray(X[:22]), y[:22], X[22:]
+    alone = SVR(**params).fit(X_train, y_train).predict(X_test)
+    (predicted,) = svr_grid_predictions(X_train, y_train, X_test, [SVR(**params)])
+    np.testing.assert_array_equal(predicted, alone)
+    assert alone.std() > 0.05  # a fitted response, not a constant
+
+
+def test_the_svr_grid_refuses_a_precomputed_kernel():
+    from sklearn.svm import SVR
+
+    from thermaxis.method.svr_grid import svr_grid_predictions
+
+    X = np.eye(3)
+    with pytest.raises(ValueError, match="named kernel"):
+        svr_grid_predictions(X, np.ones(3), X, [SVR(kernel="precomputed")])

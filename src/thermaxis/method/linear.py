@@ -356,6 +356,7 @@ def _sklearn_fit(Xs, Y, algorithm, alpha, k):
     One pipeline per output, as the models fit them: on a singular system even mlr's and
     ridge's rounding differs between one output and several.
     """
+    from sklearn import config_context
     from sklearn.compose import TransformedTargetRegressor
     from sklearn.cross_decomposition import PLSRegression
     from sklearn.linear_model import LinearRegression, Ridge
@@ -378,16 +379,22 @@ def _sklearn_fit(Xs, Y, algorithm, alpha, k):
 
     s, m = Xs.shape[1], Y.shape[1]
     level, slopes = np.empty(m), np.empty((s, m))
-    for j in range(m):
-        fitted = pipeline().fit(Xs, Y[:, j])
-        scaler, target = (
-            fitted.named_steps["standardise"],
-            fitted.named_steps["regress"].transformer_,
-        )
-        # The regressor is affine in standardised units; probe it at 0 and the unit vectors.
-        probe = np.ravel(
-            fitted.named_steps["regress"].regressor_.predict(np.vstack([np.zeros(s), np.eye(s)]))
-        )
-        level[j] = target.mean_[0] + target.scale_[0] * probe[0]
-        slopes[:, j] = (probe[1:] - probe[0]) * target.scale_[0] / scaler.scale_
+    # The pipelines are built here with fixed, valid parameters: scikit-learn's parameter
+    # checks, and its finiteness checks once the rows are known finite, only cost time.
+    finite = bool(np.isfinite(Xs).all() and np.isfinite(Y).all())
+    with config_context(assume_finite=finite, skip_parameter_validation=True):
+        for j in range(m):
+            fitted = pipeline().fit(Xs, Y[:, j])
+            scaler, target = (
+                fitted.named_steps["standardise"],
+                fitted.named_steps["regress"].transformer_,
+            )
+            # The regressor is affine in standardised units; probe it at 0 and the unit vectors.
+            probe = np.ravel(
+                fitted.named_steps["regress"].regressor_.predict(
+                    np.vstack([np.zeros(s), np.eye(s)])
+                )
+            )
+            level[j] = target.mean_[0] + target.scale_[0] * probe[0]
+            slopes[:, j] = (probe[1:] - probe[0]) * target.scale_[0] / scaler.scale_
     return level, slopes, scaler.mean_
