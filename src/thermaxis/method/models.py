@@ -268,12 +268,11 @@ def fit_by_group_search(
     finite = bool(np.isfinite(X).all() and np.isfinite(y).all())
     with config_context(assume_finite=finite, skip_parameter_validation=True):
         _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_features)
-        means = np.average(scores, axis=1)
-        # The first best candidate, NaN scores last, as GridSearchCV ranks them.
-        chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
-        # The refit too: its parameters were checked above, its pipeline is this module's.
-        refit = make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features)
-        return refit.fit(X, y), chosen
+    means = np.average(scores, axis=1)
+    # The first best candidate, NaN scores last, as GridSearchCV ranks them.
+    chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
+    refit = make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features)
+    return _fit_checked_once(refit, X, y), chosen
 
 
 def _search_splits(X, y, groups, inner: tuple[int, int], max_group_folds: int | None) -> list:
@@ -530,12 +529,20 @@ def _fit_one(features, target, groups, estimator):
     model = make_regressor(
         algorithm, params, random_state=estimator.random_state, n_features=features.shape[1]
     )
-    if algorithm == "gpr":
-        # An exact GP costs n^3: beyond the limit it is fitted on evenly spaced training
-        # rows (config models.gpr_max_samples; the model report says so).
-        keep = _fitted_rows(estimator, len(target))
-        return model.fit(features[keep], target[keep]), None
-    return model.fit(features, target), None
+    # An exact GP costs n^3: beyond the limit it is fitted on evenly spaced training rows
+    # (config models.gpr_max_samples; the model report says so).
+    keep = _fitted_rows(estimator, len(target)) if algorithm == "gpr" else slice(None)
+    return _fit_checked_once(model, features[keep], target[keep]), None
+
+
+def _fit_checked_once(model: Pipeline, X: np.ndarray, y: np.ndarray) -> Pipeline:
+    """Fit one of :func:`make_regressor`'s pipelines with its regressor's parameters and
+    the inputs' finiteness checked once, not again by each of its five estimators (a
+    pipeline fit on tens of rows costs several times its arithmetic in those checks)."""
+    model.named_steps["regress"].regressor._validate_params()
+    finite = bool(np.isfinite(X).all() and np.isfinite(y).all())
+    with config_context(assume_finite=finite, skip_parameter_validation=True):
+        return model.fit(X, y)
 
 
 def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, chosen) -> dict:
