@@ -573,3 +573,16 @@ def test_the_svr_grid_refuses_a_precomputed_kernel():
     X = np.eye(3)
     with pytest.raises(ValueError, match="named kernel"):
         svr_grid_predictions(X, np.ones(3), X, [SVR(kernel="precomputed")])
+
+
+def test_the_svr_grid_refuses_a_missing_value_as_the_svr_does():
+    from sklearn.svm import SVR
+
+    from thermaxis.method.svr_grid import svr_grid_predictions
+
+    X = np.arange(12.0).reshape(6, 2)
+    X[2, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        SVR().fit(X, np.arange(6.0))
+    with pytest.raises(ValueError, match="Input X contains NaN"):
+        svr_grid_predictions(X, np.arange(6.0), X, [SVR()])
