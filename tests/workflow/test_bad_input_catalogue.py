@@ -1287,9 +1287,9 @@ END_TO_END = {
     "name_dotdot",  # preflight: a name that would escape results/
     "first_error_fifo",  # preflight: the one data file read at parse time; a FIFO must not hang
     "yaml_list_property",  # accepted: both runs cleaned and assembled, the summary with them
-    "temp_fifo",  # clean_run refuses; a FIFO inside a job must not hang
-    "measurement_symlink_outside",  # clean_run refuses a file outside the dataset
-    "temp_fahrenheit",  # clean_run warns, and the warning reaches the terminal
+    "temp_fifo",  # clean refuses; a FIFO inside a job must not hang
+    "measurement_symlink_outside",  # clean refuses a file outside the dataset
+    "temp_fahrenheit",  # clean warns, and the warning reaches the terminal
     "error_positions_differ",  # assemble refuses
     "constant_sensor_too_few_for_clusters",  # the models rule's selection refuses
     "constant_every_sensor",  # the models rule refuses, naming the fold's temperatures file
@@ -1382,14 +1382,15 @@ def _alarm(signum, frame):
     raise _Timeout(f"no answer within {TIMEOUT_S} s")
 
 
-def _target_jobs(case: Case, runs: list[str]) -> list[tuple[str, dict]]:
+def _target_jobs(case: Case) -> list[tuple[str, dict]]:
     """The (rule, wildcards) of the jobs Snakemake runs for the case's target, in order."""
-    kind, _, arg = case.target.partition(":")
-    cleans = [("clean_run", {"run": run}) for run in runs]
+    kind = case.target.partition(":")[0]
+    # One clean job for every run: a "clean:<run>" target is made by it too.
+    cleans = [("clean", {})]
     return {
         "parse": cleans + [("assemble", {})],
         "summary": cleans + [("assemble", {})],
-        "clean": [("clean_run", {"run": arg})],
+        "clean": cleans,
         "assemble": cleans + [("assemble", {})],
         "select": cleans + [("assemble", {}), ("models", {})],
         "sweep": [],
@@ -1460,7 +1461,7 @@ def _in_process(case: Case, work: Path, config: dict, capsys) -> tuple[bool, str
             assert "\n" not in str(exc), repr(str(exc))
             return True, f"thermaxis error: {exc}", capsys.readouterr().err, []
         try:
-            _, jobs = _parsed(work, _target_jobs(case, checked.runs))
+            _, jobs = _parsed(work, _target_jobs(case))
             if case.target == "sweep":
                 preflight.sweep_plan(checked, cores=1, on_cluster=False)
         except SystemExit as exc:

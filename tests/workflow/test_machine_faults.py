@@ -158,7 +158,7 @@ def test_a_read_only_results_folder_is_one_line_before_any_job(tiny):
         errors = _errors(proc)
         assert len(errors) == 1, proc.stderr[-3000:]
         assert "results/tiny (its folder" in errors[0] and "read-only file system" in errors[0]
-        assert "rule clean_run" not in proc.stdout + proc.stderr  # no job started
+        assert "rule clean:" not in proc.stdout + proc.stderr  # no job started
     _snakemake(work, config, TARGET)
     assert (work / TARGET).is_file()
 

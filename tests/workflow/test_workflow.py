@@ -198,4 +198,4 @@ def test_editing_a_module_selection_imports_indirectly_reruns_selection(
             module.write_bytes(original)
             os.utime(module, (stat.st_atime, stat.st_mtime))
     assert re.search(r"rule models:", dry.stdout)
-    assert not re.search(r"rule clean_run:", dry.stdout)
+    assert not re.search(r"rule clean:", dry.stdout)

@@ -137,8 +137,11 @@ ALGORITHMS = list(SETTINGS.models.algorithms)
 # A stage job with many folds spreads them over this many processes (thermaxis.pipeline.
 # parallel: one per FOLDS_PER_WORKER[stage] folds), which Snakemake caps at --cores.
 FOLD_THREADS = {
-    stage: fold_workers(len(FOLDS), len(FOLDS), stage) for stage in FOLDS_PER_WORKER
+    stage: fold_workers(len(FOLDS), len(FOLDS), stage)
+    for stage in ("models", "recommend")
 }
+# The clean job's unit is a run (every run, whatever the folds).
+CLEAN_THREADS = fold_workers(len(RUNS), len(RUNS), "clean")
 # The tables each fold of the models rule writes (thermaxis.method.folds.SORT_KEYS).
 MODEL_TABLES = [
     "metrics",

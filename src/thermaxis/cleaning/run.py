@@ -16,13 +16,16 @@ import pandas as pd
 from thermaxis.cleaning import displacement, passes
 from thermaxis.cleaning import temperatures as temperature_cleaning
 from thermaxis.config import CleaningSettings
-from thermaxis.dataset.reader import Dataset, RawRun
+from thermaxis.dataset.plausibility import check_run_plausibility
+from thermaxis.dataset.reader import Dataset, RawRun, load_dataset, read_run
 from thermaxis.errors import DataError
 from thermaxis.labels import natural_key
 from thermaxis.method import inputs as time_inputs
 
 __all__ = [
+    "CleanedRun",
     "RunTables",
+    "clean_run",
     "clean_and_assemble_run",
     "tidy_errors",
     "tidy_temperatures",
@@ -192,6 +195,37 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
         signal_series=_with_elapsed(signal_frame, windows),
         notes=tuple(notes),
     )
+
+
+@dataclass(frozen=True)
+class CleanedRun:
+    """One run through the clean stage: the warnings to log, in order, then its tables
+    and time-aware inputs, or the error that stopped it (raised by the caller, in run
+    order, after the warnings that explain it)."""
+
+    run: str
+    warnings: tuple[str, ...]
+    tables: RunTables | None = None
+    inputs: pd.DataFrame | None = None
+    error: ValueError | None = None
+
+
+def clean_run(folder, run: str, cleaning: CleaningSettings, lags_min) -> CleanedRun:
+    """Read, check and clean one run of the dataset in ``folder`` (the clean rule's unit of
+    work, one per worker process at a time). The plausibility warnings come before the
+    cleaning, which may stop on what they explain (°F or kelvin readings)."""
+    notes: tuple[str, ...] = ()
+    try:
+        dataset = load_dataset(folder)
+        raw = read_run(dataset, run)
+        notes = tuple(check_run_plausibility(dataset, raw, cleaning))
+        tables = clean_and_assemble_run(dataset, raw, cleaning)
+    except ValueError as exc:  # a DataError, or a reader's refusal
+        return CleanedRun(run, notes, error=exc)
+    # The time-aware inputs of the recommendation's candidates (recommend.lags_min and the
+    # baseline's).
+    inputs = derived_inputs(tables, lags_min, [])
+    return CleanedRun(run, notes + tables.notes, tables, inputs)
 
 
 def logged_series(series: pd.DataFrame, signal_series: pd.DataFrame) -> pd.DataFrame:

@@ -18,8 +18,9 @@ __all__ = ["FOLDS_PER_WORKER", "map_folds", "fold_workers"]
 # Below this many folds a worker's start (a new interpreter importing the library, about
 # 1.5 s) costs more than the folds it would take over: a fold of the models job fits each
 # configuration once (tenths of a second), a fold of the recommendation runs every
-# candidate's inner loop (seconds: 3.9 s on the twin).
-FOLDS_PER_WORKER = {"models": 4, "recommend": 1}
+# candidate's inner loop (seconds: 3.9 s on the twin), a run of the clean job is read and
+# cleaned in 0.2-0.4 s (the twin, fl_thermal).
+FOLDS_PER_WORKER = {"models": 4, "recommend": 1, "clean": 8}
 
 
 def fold_workers(cores: int, n_folds: int, stage: str) -> int:
