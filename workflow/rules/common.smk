@@ -16,7 +16,7 @@ from thermaxis.figures.family import family_workers
 from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
 from thermaxis.pipeline import preflight
 from thermaxis.pipeline.deps import library_modules, named_modules
-from thermaxis.pipeline.parallel import FOLDS_PER_WORKER, fold_workers
+from thermaxis.pipeline.parallel import fold_workers
 from thermaxis.pipeline.resources import MIN_MEMORY_MB, MIN_RUNTIME_MIN, per_attempt
 from thermaxis.reports.index import PAPER_HEADLINE
 from thermaxis.reports.provenance import git_state
