@@ -1385,8 +1385,9 @@ def _alarm(signum, frame):
 def _target_jobs(case: Case) -> list[tuple[str, dict]]:
     """The (rule, wildcards) of the jobs Snakemake runs for the case's target, in order."""
     kind = case.target.partition(":")[0]
-    # One clean job for every run: a "clean:<run>" target is made by it too.
-    cleans = [("clean", {})]
+    # The dataset's manifest, then one clean job for every run: a "clean:<run>" target is
+    # made by it too.
+    cleans = [("data_manifest", {}), ("clean", {})]
     return {
         "parse": cleans + [("assemble", {})],
         "summary": cleans + [("assemble", {})],

@@ -165,6 +165,7 @@ def test_changing_n_clusters_reruns_only_the_affected_reports(built, library_unc
     } <= rules, rules
     assert not rules & {
         "condition_report",
+        "data_manifest",
         "clean",
         "assemble",
         "fig_data",

@@ -1,13 +1,35 @@
-# Cleaning, one job for every run (thermaxis.cleaning.run.clean_run per run): a run's
-# cleaning is a fraction of a second, less than a job's start, so its outputs stay per run
-# while the work is dealt to the job's threads (more than one above a few runs a worker).
+# The dataset's manifest (common.smk, DATA_MANIFEST), then cleaning, one job for every run
+# (thermaxis.cleaning.run.clean_run per run): a run's cleaning is a fraction of a second,
+# less than a job's start, so its outputs stay per run while the work is dealt to the
+# job's threads (more than one above a few runs a worker).
+
+
+rule data_manifest:
+    input:
+        code=code_of("data_manifest.py"),
+        sheets=dataset_sheets(),
+        data=dataset_files(),
+    output:
+        DATA_MANIFEST,
+    log:
+        f"{LOGS}/data_manifest.log",
+    benchmark:
+        f"{BENCH}/data_manifest.tsv"
+    conda:
+        ENV
+    resources:
+        **rule_resources("data_manifest"),
+    params:
+        dataset=lambda w, input: os.path.dirname(input.sheets[0]),
+    script:
+        "../scripts/data_manifest.py"
 
 
 rule clean:
     input:
         code=code_of("clean.py"),
         sheets=dataset_sheets(),
-        raw=[path for run in RUNS for path in raw_files(run)],
+        manifest=DATA_MANIFEST,
     output:
         series=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
         qc=expand(f"{OUT}/clean/{{run}}/qc.csv", run=RUNS),

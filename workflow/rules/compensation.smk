@@ -19,7 +19,7 @@ rule compensation:
         windows=expand(f"{OUT}/clean/{{fold}}/windows.csv", fold=FOLDS),
         selections=expand(f"{OUT}/selection/{{fold}}.json", fold=FOLDS),
         sheets=dataset_sheets(),
-        raw=[path for fold in FOLDS for path in raw_files(fold)],
+        manifest=DATA_MANIFEST,
     output:
         **{
             f"fold_{name}": expand(

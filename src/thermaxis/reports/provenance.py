@@ -37,6 +37,7 @@ __all__ = [
     "sha256_file",
     "data_manifest",
     "manifest_sha256",
+    "manifest_text",
     "config_sha256",
     "config_sections_sha256",
     "git_state",
@@ -109,14 +110,16 @@ def data_manifest(dataset_root) -> dict[str, str]:
     return {p.relative_to(root).as_posix(): sha256_file(p) for p in files}
 
 
-def manifest_sha256(manifest: dict[str, str]) -> str:
-    """One hash of a manifest: the SHA-256 of its ``sha256sum``-style lines, sorted by path.
+def manifest_text(manifest: dict[str, str]) -> str:
+    """A manifest as ``sha256sum`` writes it, sorted by path: ``"<sha256>  <path>\\n"`` lines,
+    which ``sha256sum -c`` checks from the dataset's folder."""
+    return "".join(f"{digest}  {path}\n" for path, digest in sorted(manifest.items()))
 
-    The lines are ``"<sha256>  <path>\\n"``, so the hash can be checked with
-    ``sha256sum`` output of the same files.
-    """
-    lines = "".join(f"{digest}  {path}\n" for path, digest in sorted(manifest.items()))
-    return hashlib.sha256(lines.encode("utf-8")).hexdigest()
+
+def manifest_sha256(manifest: dict[str, str]) -> str:
+    """One hash of a manifest: the SHA-256 of its :func:`manifest_text`, so the hash can be
+    checked with ``sha256sum`` output of the same files."""
+    return hashlib.sha256(manifest_text(manifest).encode("utf-8")).hexdigest()
 
 
 def _canonical(value) -> bytes:
