@@ -114,8 +114,8 @@ def code_of(entry):
     return library_modules(entry if entry.endswith(".ipynb") else SCRIPTS / entry)
 
 
-# The jobs that read raw files (clean, compensation) depend on the dataset's manifest
-# (rule data_manifest), one file whose inputs are every raw file: Snakemake records a
+# The jobs that read raw files (clean, compensation) depend on the dataset's manifest,
+# one file made from every raw file by the data_manifest job. Snakemake records a
 # checksum of every input for every output of a job, so one job with every run's outputs
 # and every run's files as inputs cost outputs x inputs checksums (36 s at 43 runs).
 DATA_MANIFEST = f"{OUT}/data_manifest.sha256"
