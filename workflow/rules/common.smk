@@ -949,6 +949,9 @@ RESOURCES = {
         )
     },
     "compensation": (1000, MIN_RUNTIME_MIN),
+    # Every run in one job, two workers at most locally: 0.49 GB peak at 43 and 86 runs
+    # (benchmarks of the scale bench), about 0.3 s a run.
+    "clean": (1000, max(MIN_RUNTIME_MIN, len(RUNS) // 20)),
     # Every candidate on every inner split of every fold: the heaviest job of a run.
     "recommend": (1000, max(30, 10 * len(FOLDS))),
     "sweep_batch": (MIN_MEMORY_MB, sweep_batch_minutes),
