@@ -356,35 +356,15 @@ def _sklearn_fit(Xs, Y, algorithm, alpha, k):
     One pipeline per output, as the models fit them: on a singular system even mlr's and
     ridge's rounding differs between one output and several.
     """
-    from sklearn import config_context
-    from sklearn.compose import TransformedTargetRegressor
-    from sklearn.cross_decomposition import PLSRegression
-    from sklearn.linear_model import LinearRegression, Ridge
-    from sklearn.pipeline import Pipeline
-    from sklearn.preprocessing import StandardScaler
-
-    def pipeline():
-        if algorithm == "mlr":
-            regressor = LinearRegression()
-        elif algorithm == "ridge":
-            regressor = Ridge(alpha=alpha)
-        else:
-            regressor = PLSRegression(n_components=k, scale=False)
-        return Pipeline(
-            [
-                ("standardise", StandardScaler()),
-                ("regress", TransformedTargetRegressor(regressor, transformer=StandardScaler())),
-            ]
-        )
+    from thermaxis.method.models import checked_once, make_regressor
 
     s, m = Xs.shape[1], Y.shape[1]
+    params = {"ridge": {"alpha": alpha}, "pls": {"n_components": k}}.get(algorithm)
+    pipelines = [make_regressor(algorithm, params, random_state=0, n_features=s) for _ in range(m)]
     level, slopes = np.empty(m), np.empty((s, m))
-    # The pipelines are built here with fixed, valid parameters: scikit-learn's parameter
-    # checks, and its finiteness checks once the rows are known finite, only cost time.
-    finite = bool(np.isfinite(Xs).all() and np.isfinite(Y).all())
-    with config_context(assume_finite=finite, skip_parameter_validation=True):
-        for j in range(m):
-            fitted = pipeline().fit(Xs, Y[:, j])
+    with checked_once([pipelines[0].named_steps["regress"].regressor], Xs, Y):
+        for j, pipeline in enumerate(pipelines):
+            fitted = pipeline.fit(Xs, Y[:, j])
             scaler, target = (
                 fitted.named_steps["standardise"],
                 fitted.named_steps["regress"].transformer_,

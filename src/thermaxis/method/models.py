@@ -27,7 +27,8 @@ units, per degree C.
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 
 import numpy as np
 import pandas as pd
@@ -53,6 +54,7 @@ from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
 __all__ = [
     "COEFFICIENT_COLUMNS",
     "make_regressor",
+    "checked_once",
     "inner_group_splitter",
     "fit_by_group_search",
     "lasso_path_predictions",
@@ -261,18 +263,16 @@ def fit_by_group_search(
     # the choice and the refitted model are the ones GridSearchCV gives (test_models checks).
     splits = _search_splits(X, y, groups, inner, max_group_folds)
     scores = np.empty((len(candidates), len(splits)))
-    # Inputs and parameters are checked once here; re-validating them in each of the many
-    # inner fits cost more than fitting (the same numbers either way).
-    for params in candidates:
-        _base_regressor(algorithm, params, random_state, n_features)._validate_params()
-    finite = bool(np.isfinite(X).all() and np.isfinite(y).all())
-    with config_context(assume_finite=finite, skip_parameter_validation=True):
+    regressors = [_base_regressor(algorithm, p, random_state, n_features) for p in candidates]
+    # Every grid point's parameters and the inputs checked once, for the inner fits and
+    # the refit alike.
+    with checked_once(regressors, X, y):
         _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_features)
-    means = np.average(scores, axis=1)
-    # The first best candidate, NaN scores last, as GridSearchCV ranks them.
-    chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
-    refit = make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features)
-    return _fit_checked_once(refit, X, y), chosen
+        means = np.average(scores, axis=1)
+        # The first best candidate, NaN scores last, as GridSearchCV ranks them.
+        chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
+        refit = make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features)
+        return refit.fit(X, y), chosen
 
 
 def _search_splits(X, y, groups, inner: tuple[int, int], max_group_folds: int | None) -> list:
@@ -532,17 +532,22 @@ def _fit_one(features, target, groups, estimator):
     # An exact GP costs n^3: beyond the limit it is fitted on evenly spaced training rows
     # (config models.gpr_max_samples; the model report says so).
     keep = _fitted_rows(estimator, len(target)) if algorithm == "gpr" else slice(None)
-    return _fit_checked_once(model, features[keep], target[keep]), None
+    X, y = features[keep], target[keep]
+    with checked_once([model.named_steps["regress"].regressor], X, y):
+        return model.fit(X, y), None
 
 
-def _fit_checked_once(model: Pipeline, X: np.ndarray, y: np.ndarray) -> Pipeline:
-    """Fit one of :func:`make_regressor`'s pipelines with its regressor's parameters and
-    the inputs' finiteness checked once, not again by each of its five estimators (a
-    pipeline fit on tens of rows costs several times its arithmetic in those checks)."""
-    model.named_steps["regress"].regressor._validate_params()
+@contextmanager
+def checked_once(regressors: Sequence, X: np.ndarray, y: np.ndarray) -> Iterator[None]:
+    """Check ``regressors``' parameters and the finiteness of ``X`` and ``y`` once, then fit
+    and predict inside with scikit-learn's own checks of both off: each of a
+    :func:`make_regressor` pipeline's five estimators makes them again, and on tens of rows
+    they cost several times the arithmetic (the same numbers either way)."""
+    for regressor in regressors:
+        regressor._validate_params()
     finite = bool(np.isfinite(X).all() and np.isfinite(y).all())
     with config_context(assume_finite=finite, skip_parameter_validation=True):
-        return model.fit(X, y)
+        yield
 
 
 def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, chosen) -> dict:
