@@ -267,7 +267,7 @@ def fit_by_group_search(
     # Every grid point's parameters and the inputs checked once, for the inner fits and
     # the refit alike.
     with checked_once(regressors, X, y):
-        _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_features)
+        _search_scores(algorithm, X, y, splits, regressors, scores)
         means = np.average(scores, axis=1)
         # The first best candidate, NaN scores last, as GridSearchCV ranks them.
         chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
@@ -284,9 +284,10 @@ def _search_splits(X, y, groups, inner: tuple[int, int], max_group_folds: int | 
     return splits[:max_group_folds]
 
 
-def _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_features):
+def _search_scores(algorithm, X, y, splits, regressors, scores):
     """Fill ``scores[candidate, split]`` with minus the RMSE of each hold-out, as
-    GridSearchCV's ``neg_root_mean_squared_error`` scores it."""
+    GridSearchCV's ``neg_root_mean_squared_error`` scores it; ``regressors``: one
+    :func:`_base_regressor` per grid point, fitted afresh on each hold-out."""
     for split, (train, test) in enumerate(splits):
         x_scaler = StandardScaler().fit(X[train])
         y_scaler = StandardScaler().fit(y[train].reshape(-1, 1))
@@ -297,22 +298,12 @@ def _search_scores(algorithm, X, y, splits, candidates, scores, random_state, n_
         y_train = (y[train] - y_scaler.mean_[0]) / y_scaler.scale_[0]
         if algorithm == "lasso":
             standardised = lasso_path_predictions(
-                X_train, y_train, X_test, [float(p["alpha"]) for p in candidates]
+                X_train, y_train, X_test, [r.alpha for r in regressors]
             )
         elif algorithm == "svr":
-            standardised = svr_grid_predictions(
-                X_train,
-                y_train,
-                X_test,
-                [_base_regressor(algorithm, p, random_state, n_features) for p in candidates],
-            )
+            standardised = svr_grid_predictions(X_train, y_train, X_test, regressors)
         else:
-            standardised = [
-                _base_regressor(algorithm, params, random_state, n_features)
-                .fit(X_train, y_train)
-                .predict(X_test)
-                for params in candidates
-            ]
+            standardised = [r.fit(X_train, y_train).predict(X_test) for r in regressors]
         for c, values in enumerate(standardised):
             # StandardScaler.inverse_transform's own arithmetic (times scale_, plus
             # mean_), without its input checks, which cost more than the prediction.
