@@ -586,3 +586,52 @@ def test_the_svr_grid_refuses_a_missing_value_as_the_svr_does():
         SVR().fit(X, np.arange(6.0))
     with pytest.raises(ValueError, match="Input X contains NaN"):
         svr_grid_predictions(X, np.arange(6.0), X, [SVR()])
+
+
+@pytest.mark.parametrize(
+    ("shape", "restarts", "target"),
+    [
+        ((25, 3), 0, "smooth"),
+        ((40, 1), 2, "smooth"),
+        ((12, 5), 1, "linear"),
+        ((60, 2), 0, "linear"),
+    ],
+)
+def test_the_gp_kernel_fits_as_the_composite_kernel_bit_for_bit(shape, restarts, target):
+    # One kernel object for scikit-learn's ConstantKernel * RBF + WhiteKernel, with the
+    # model's starting point and bounds: the same optimum, weights, predictions and
+    # standard deviations, to the last bit. A noise-free line drives the noise to its bound.
+    from sklearn.gaussian_process import GaussianProcessRegressor
+    from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+    from thermaxis.method.gp_kernel import ScaledRBFWithNoise
+
+    rng = np.random.default_rng(shape[0])
+    X = rng.normal(size=shape)
+    y = X @ rng.normal(size=shape[1])
+    if target == "smooth":
+        y = np.sin(2 * X[:, 0]) + 0.1 * rng.normal(size=shape[0])
+    X_test = rng.normal(size=(9, shape[1]))
+    composite = ConstantKernel(1.0, (1e-3, 1e5)) * RBF(0.7, (1e-2, 1e4)) + WhiteKernel(
+        0.1, (1e-6, 1e1)
+    )
+    one = ScaledRBFWithNoise(1.0, (1e-3, 1e5), 0.7, (1e-2, 1e4), 0.1, (1e-6, 1e1))
+    fits = [
+        GaussianProcessRegressor(kernel, n_restarts_optimizer=restarts, random_state=3).fit(X, y)
+        for kernel in (composite, one)
+    ]
+    reference, ours = fits
+    np.testing.assert_array_equal(ours.kernel_.theta, reference.kernel_.theta)
+    np.testing.assert_array_equal(ours.kernel_.bounds, reference.kernel_.bounds)
+    np.testing.assert_array_equal(ours.alpha_, reference.alpha_)
+    assert ours.log_marginal_likelihood_value_ == reference.log_marginal_likelihood_value_
+    got, want = ours.predict(X_test, return_std=True), reference.predict(X_test, return_std=True)
+    np.testing.assert_array_equal(got[0], want[0])
+    np.testing.assert_array_equal(got[1], want[1])
+    # The fitted hyperparameters under the composite's names, by hand from theta.
+    constant, scale, noise = np.exp(reference.kernel_.theta)
+    assert (ours.kernel_.constant_value, ours.kernel_.length_scale) == (constant, scale)
+    assert ours.kernel_.noise_level == noise
+    K = ours.kernel_(X_test[:3])
+    d2 = ((X_test[:3, None, :] - X_test[None, :3, :]) ** 2).sum(-1)
+    np.testing.assert_allclose(K, constant * np.exp(-d2 / (2 * scale**2)) + noise * np.eye(3))

@@ -107,12 +107,10 @@ def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline)
     regressor = pipeline.named_steps["regress"].regressor_
     if isinstance(regressor, GaussianProcessRegressor):
         # Constant * RBF + White: the white noise adds nothing off the training points.
-        kernel = regressor.kernel_.k1
-        gamma = 1.0 / (2.0 * float(kernel.k2.length_scale) ** 2)
+        kernel = regressor.kernel_
+        gamma = 1.0 / (2.0 * float(kernel.length_scale) ** 2)
         centres = regressor.X_train_
-        weights = (
-            float(kernel.k1.constant_value) * np.asarray(regressor.alpha_, dtype=float).ravel()
-        )
+        weights = float(kernel.constant_value) * np.asarray(regressor.alpha_, dtype=float).ravel()
         offset = 0.0
     else:
         if regressor.kernel != "rbf":

@@ -37,7 +37,6 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.compose import TransformedTargetRegressor
 from sklearn.cross_decomposition import PLSRegression
 from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 from sklearn.linear_model import LassoLars, LinearRegression, Ridge
 from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, ParameterGrid
 from sklearn.pipeline import Pipeline
@@ -48,6 +47,7 @@ from thermaxis.method.decouple import compose_curve, stroke_powers
 from thermaxis.method.features import ID_COLUMNS as _ID_COLUMNS
 from thermaxis.method.features import KB_COLUMNS as _KB_COLUMNS
 from thermaxis.method.features import decouple_rows, relative_temperatures
+from thermaxis.method.gp_kernel import ScaledRBFWithNoise
 from thermaxis.method.svr_grid import svr_grid_predictions
 from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
 
@@ -124,9 +124,14 @@ def _base_regressor(algorithm: str, params: dict, random_state: int, n_features:
     # gpr: bounds are in standardised units.  A nearly linear response drives the RBF
     # towards long length scales and large amplitudes, hence the wide upper bounds; a
     # noise floor of 1e-6 keeps exact (noise-free) training data well posed.
-    kernel = ConstantKernel(1.0, (1e-3, 1e5)) * RBF(
-        float(params.get("length_scale", 1.0)), (1e-2, 1e4)
-    ) + WhiteKernel(float(params.get("noise_level", 0.1)), (1e-6, 1e1))
+    kernel = ScaledRBFWithNoise(
+        1.0,
+        (1e-3, 1e5),
+        float(params.get("length_scale", 1.0)),
+        (1e-2, 1e4),
+        float(params.get("noise_level", 0.1)),
+        (1e-6, 1e1),
+    )
     return GaussianProcessRegressor(
         kernel=kernel,
         normalize_y=False,
