@@ -254,7 +254,9 @@ def stamp_provenance(fig: Figure, note: str = SIMULATED_NOTE) -> Figure:
     """
     if not note:
         raise ValueError("provenance note is empty; expected a sentence such as SIMULATED_NOTE")
-    style = dict(fontsize=5.5, color="0.35", fontstyle="italic", ha="right")
+    # Upright, in the figure's one font: an oblique note would embed a second font in
+    # every PDF, and subsetting a font for a PDF costs more than drawing the figure.
+    style = dict(fontsize=5.5, color="0.35", ha="right")
     if fig.get_layout_engine() is not None:
         fig.supxlabel(note, x=0.995, **style)
     else:
