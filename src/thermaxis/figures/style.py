@@ -84,6 +84,10 @@ STYLE: dict[str, object] = {
     "svg.hashsalt": "thermaxis",
     "svg.fonttype": "path",
     "pdf.fonttype": 42,
+    # matplotlib 3.11's PDF writer sizes its font subsets by ps.fonttype: at its default
+    # (Type 3, 256 glyphs) a minus sign (U+2212) lands in a second embedded subset of
+    # the same font, and subsetting a font costs more than drawing the figure.
+    "ps.fonttype": 42,
     "path.simplify": False,
 }
 
