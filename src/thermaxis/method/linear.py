@@ -363,18 +363,15 @@ def _sklearn_fit(Xs, Y, algorithm, alpha, k):
     pipelines = [make_regressor(algorithm, params, random_state=0, n_features=s) for _ in range(m)]
     level, slopes = np.empty(m), np.empty((s, m))
     with checked_once([pipelines[0].named_steps["regress"].regressor], Xs, Y):
+        # Every output's pipeline standardises the same inputs: they are standardised once,
+        # as the pipeline does it, and each output's target step is fitted on them.
+        scaler = pipelines[0].named_steps["standardise"].fit(Xs)
+        standardised = scaler.transform(Xs)
         for j, pipeline in enumerate(pipelines):
-            fitted = pipeline.fit(Xs, Y[:, j])
-            scaler, target = (
-                fitted.named_steps["standardise"],
-                fitted.named_steps["regress"].transformer_,
-            )
+            regress = pipeline.named_steps["regress"].fit(standardised, Y[:, j])
+            target = regress.transformer_
             # The regressor is affine in standardised units; probe it at 0 and the unit vectors.
-            probe = np.ravel(
-                fitted.named_steps["regress"].regressor_.predict(
-                    np.vstack([np.zeros(s), np.eye(s)])
-                )
-            )
+            probe = np.ravel(regress.regressor_.predict(np.vstack([np.zeros(s), np.eye(s)])))
             level[j] = target.mean_[0] + target.scale_[0] * probe[0]
             slopes[:, j] = (probe[1:] - probe[0]) * target.scale_[0] / scaler.scale_
     return level, slopes, scaler.mean_
