@@ -9,6 +9,7 @@ is relative to the largest magnitude of the compared quantity per output, within
 from __future__ import annotations
 
 import itertools
+import warnings
 
 import numpy as np
 import pytest
@@ -318,3 +319,22 @@ def test_ill_conditioned_system_is_refitted_not_solved_from_the_gram_matrix():
     fit = standardised_fit(X, Y, "mlr")
     assert fit.refitted
     check_against_reference("mlr", X, Y, X, fit.intercept, fit.slopes, fit.predictions)
+
+
+def test_a_repeated_fallback_fit_gives_the_same_numbers_and_raises_its_warnings_again():
+    # The nested recommendation repeats fits; a fallback fit seen before is looked up. Its
+    # numbers and its warnings (scipy's ill-conditioned matrix, from the unpenalised
+    # ridge on a duplicated sensor) are those of fitting it again, both times.
+    groups, X, Y, subsets, both = duplicated_sensor()
+    calls = []
+    for _ in range(2):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            calls.append((loco_fit(X, Y, groups, subsets, "ridge", alpha=0.0)[1], caught))
+    (first, first_warnings), (second, second_warnings) = calls
+    assert first.refitted.any()
+    for name in ("intercept", "slopes", "predictions"):
+        np.testing.assert_array_equal(getattr(first, name), getattr(second, name))
+    raised = [(w.category, str(w.message)) for w in first_warnings]
+    assert any("ill-conditioned" in message for _, message in raised)
+    assert [(w.category, str(w.message)) for w in second_warnings] == raised

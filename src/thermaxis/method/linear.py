@@ -45,6 +45,9 @@ summed from its training rows instead.
 
 from __future__ import annotations
 
+import hashlib
+import warnings
+from collections import OrderedDict
 from typing import NamedTuple
 
 import numpy as np
@@ -278,7 +281,7 @@ def _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components)
     ).copy()  # prediction at the centre
     centre = mean[:, subsets]
     for f, q in zip(*np.nonzero(refitted), strict=False):
-        level[f, q], slopes[f, q], centre[f, q] = _sklearn_fit(
+        level[f, q], slopes[f, q], centre[f, q] = _sklearn_fit_once(
             X[train_rows[f]][:, subsets[q]], Y[train_rows[f]], algorithm, alpha, k
         )
     intercept = level - np.einsum("fqs,fqsm->fqm", centre, slopes)
@@ -348,6 +351,40 @@ def _predict(X_rows, subsets, level, centre, slopes):
     predictions = np.einsum("nqs,qsm->nqm", deviation, slopes)
     predictions += level[None, :, :]
     return predictions
+
+
+# The nested recommendation fits the same training runs again and again: an outer fold's
+# inner split and another outer fold's often leave the same runs out (on 5 runs x 22
+# sensors, 775 fallback fits were 245 distinct ones). A fallback fit is a pure function of
+# its inputs, so the last FALLBACK_MEMO distinct ones are kept, with the warnings they
+# raised, which a reuse raises again: a job's warnings do not depend on what this process
+# fitted before.
+FALLBACK_MEMO = 4096
+_fallback_fits: OrderedDict = OrderedDict()
+
+
+def _sklearn_fit_once(Xs, Y, algorithm, alpha, k):
+    """:func:`_sklearn_fit`, looked up when the same inputs were fitted before."""
+    # The memory layout is part of the key: scikit-learn's rounding follows it.
+    digest = hashlib.sha256(Xs.tobytes(order="A") + Y.tobytes(order="A")).digest()
+    layout = tuple(
+        (a.dtype.str, a.shape, a.flags.c_contiguous, a.flags.f_contiguous) for a in (Xs, Y)
+    )
+    key = (digest, layout, algorithm, float(alpha), int(k))
+    if key in _fallback_fits:
+        _fallback_fits.move_to_end(key)
+    else:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fit = _sklearn_fit(Xs, Y, algorithm, alpha, k)
+        raised = [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
+        _fallback_fits[key] = (fit, raised)
+        if len(_fallback_fits) > FALLBACK_MEMO:
+            _fallback_fits.popitem(last=False)
+    fit, raised = _fallback_fits[key]
+    for message, category, filename, lineno in raised:
+        warnings.warn_explicit(message, category, filename, lineno)
+    return tuple(a.copy() for a in fit)
 
 
 def _sklearn_fit(Xs, Y, algorithm, alpha, k):
