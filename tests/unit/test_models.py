@@ -635,3 +635,13 @@ def test_the_gp_kernel_fits_as_the_composite_kernel_bit_for_bit(shape, restarts,
     K = ours.kernel_(X_test[:3])
     d2 = ((X_test[:3, None, :] - X_test[None, :3, :]) ** 2).sum(-1)
     np.testing.assert_allclose(K, constant * np.exp(-d2 / (2 * scale**2)) + noise * np.eye(3))
+
+
+def test_the_gp_kernel_refuses_a_fixed_hyperparameter():
+    from sklearn.gaussian_process import GaussianProcessRegressor
+
+    from thermaxis.method.gp_kernel import ScaledRBFWithNoise
+
+    kernel = ScaledRBFWithNoise(noise_level_bounds="fixed")
+    with pytest.raises(ValueError, match="noise_level fixed"):
+        GaussianProcessRegressor(kernel).fit(np.arange(6.0).reshape(3, 2), np.arange(3.0))

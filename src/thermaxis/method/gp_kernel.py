@@ -65,6 +65,13 @@ class ScaledRBFWithNoise(StationaryKernelMixin, Kernel):
 
     @property
     def bounds(self):
+        # Every hyperparameter is free (theta has all three); a fit checks it here.
+        fixed = [n for n in _NAMES if isinstance(getattr(self, f"{n}_bounds"), str)]
+        if fixed:
+            raise ValueError(
+                f"ScaledRBFWithNoise: {', '.join(fixed)} fixed; expected (low, high) bounds for"
+                " every hyperparameter (scikit-learn's composite kernel fixes them)"
+            )
         return np.vstack([np.log(np.vstack([getattr(self, f"{n}_bounds")])) for n in _NAMES])
 
     def clone_with_theta(self, theta):

@@ -84,15 +84,18 @@ def map_folds(function: Callable, items: Sequence, workers: int) -> list:
 
     def run(i: int, executor=None) -> None:
         nonlocal running
+        outcome, value = done, None
         try:
             if executor is None:
-                done[i] = _recorded(function, items[i])
+                value = _recorded(function, items[i])
             else:
-                done[i] = executor.submit(_recorded, function, items[i]).result()
+                value = executor.submit(_recorded, function, items[i]).result()
         except BaseException as exc:  # raised below, in the job's own process
-            failed[i] = exc
+            outcome, value = failed, exc
         finally:
+            # Under the lock: take() reads `failed` from the other threads.
             with settled:
+                outcome[i] = value
                 running -= 1
                 settled.notify_all()
 
