@@ -46,11 +46,12 @@ summed from its training rows instead.
 from __future__ import annotations
 
 import hashlib
-import warnings
 from collections import OrderedDict
 from typing import NamedTuple
 
 import numpy as np
+
+from thermaxis.errors import raise_again, recorded
 
 __all__ = [
     "ALGORITHMS",
@@ -374,16 +375,11 @@ def _sklearn_fit_once(Xs, Y, algorithm, alpha, k):
     if key in _fallback_fits:
         _fallback_fits.move_to_end(key)
     else:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            fit = _sklearn_fit(Xs, Y, algorithm, alpha, k)
-        raised = [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
-        _fallback_fits[key] = (fit, raised)
+        _fallback_fits[key] = recorded(_sklearn_fit, Xs, Y, algorithm, alpha, k)
         if len(_fallback_fits) > FALLBACK_MEMO:
             _fallback_fits.popitem(last=False)
     fit, raised = _fallback_fits[key]
-    for message, category, filename, lineno in raised:
-        warnings.warn_explicit(message, category, filename, lineno)
+    raise_again(raised)
     return tuple(a.copy() for a in fit)
 
 

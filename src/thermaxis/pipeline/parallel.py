@@ -16,9 +16,10 @@ done every fold before a worker is ready, and on large data one process fewer is
 from __future__ import annotations
 
 import threading
-import warnings
 from collections import deque
 from collections.abc import Callable, Sequence
+
+from thermaxis.errors import raise_again, recorded
 
 __all__ = ["FOLDS_PER_WORKER", "map_folds", "fold_workers"]
 
@@ -43,10 +44,8 @@ def _recorded(function: Callable, item):
 
     # One BLAS/OpenMP thread per worker: the workers are the parallelism, and BLAS
     # threads spinning beside them on the same cores only burn CPU time.
-    with threadpool_limits(limits=1), warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        value = function(item)
-    return value, [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
+    with threadpool_limits(limits=1):
+        return recorded(function, item)
 
 
 def _import(module: str) -> None:
@@ -125,8 +124,7 @@ def map_folds(function: Callable, items: Sequence, workers: int) -> list:
         raise failed[min(failed)]
     values = []
     for i in range(len(items)):
-        value, caught = done[i]
-        for message, category, filename, lineno in caught:
-            warnings.warn_explicit(message, category, filename, lineno)
+        value, raised = done[i]
+        raise_again(raised)
         values.append(value)
     return values
