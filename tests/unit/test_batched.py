@@ -123,6 +123,30 @@ def test_searched_strengths_equal_scikit_learn(algorithm, models):
         assert_same(frame, expected.metrics)
 
 
+def test_a_pls_grid_point_past_the_inner_rows_ranks_last_as_the_pipelines_rank_it():
+    # Two measurements a run: fold E3's inner splits train on 4 rows, fewer than 6
+    # components on all six sensors. Such a point scores NaN in both paths (scikit-learn's
+    # GridSearchCV does the same, test_models) instead of stopping. (Between the rank and
+    # the rows, 3 and 4 components, PLS fits rounding noise: no grid point there.)
+    X, Y = runs(collinear=True, noise_um=3.0)
+    few = (X["measurement"] <= 2).to_numpy()
+    X, Y = X[few].reset_index(drop=True), Y[few].reset_index(drop=True)
+    grids = tuple((a, (("n_components", (6, 1, 2)),) if a == "pls" else g)
+                  for a, g in SEARCHED.search_grids)  # fmt: skip
+    models = replace(SEARCHED, search_grids=grids)
+    every = tuple(SENSORS)
+    (decoupled,) = decoupled_metrics(X, Y, "E3", "pls", models, 1, [(every, every)])
+    expected = evaluate_configuration(
+        X, Y, "E3", "decoupled", "pls", selection(every, every, ()), models, 1
+    )
+    assert_same(decoupled, expected.metrics)
+    (pointwise,) = pointwise_metrics(X, Y, "E3", "pls", models, [every])
+    expected = evaluate_configuration(
+        X, Y, "E3", "pointwise", "pls", selection((), (), every), models, None
+    )
+    assert_same(pointwise, expected.metrics)
+
+
 @pytest.mark.parametrize("models", [MODELS, SEARCHED], ids=["fixed", "searched"])
 def test_operating_signals_join_every_point_set(models):
     X, Y = runs(noise_um=1.0)

@@ -460,6 +460,33 @@ def test_searched_strength_is_what_gridsearchcv_chooses(algorithm, grid, splitte
     )
 
 
+def test_a_pls_grid_point_past_an_inner_splits_rows_ranks_last_as_in_gridsearchcv():
+    # Three runs of three rows: each inner split trains on 6 rows, so 7 components of the 8
+    # sensors cannot be fitted there. GridSearchCV scores the failed fit NaN (its
+    # error_score) and ranks it last; the search must do the same, not stop.
+    from sklearn.exceptions import FitFailedWarning
+    from sklearn.model_selection import GridSearchCV, LeaveOneGroupOut
+
+    rng = np.random.default_rng(11)
+    x = rng.normal(size=(9, 8))
+    y = x @ rng.normal(size=8) + rng.normal(0.0, 0.5, 9)
+    groups = np.repeat(["r1", "r2", "r3"], 3)
+    grid = {"n_components": [7, 1, 5, 2]}
+    model, chosen = fit_by_group_search("pls", x, y, groups, grid, random_state=0, inner=(12, 3))
+    with pytest.warns(FitFailedWarning):
+        search = GridSearchCV(
+            make_regressor("pls", random_state=0),
+            {"regress__regressor__n_components": grid["n_components"]},
+            scoring="neg_root_mean_squared_error",
+            cv=LeaveOneGroupOut(),
+        ).fit(x, y, groups=groups)
+    assert np.isnan(search.cv_results_["mean_test_score"][0])
+    assert chosen == {"n_components": search.best_params_["regress__regressor__n_components"]}
+    np.testing.assert_allclose(
+        model.predict(x), search.best_estimator_.predict(x), rtol=1e-12, atol=1e-12
+    )
+
+
 def test_a_searched_model_records_its_choice_and_a_fixed_one_does_not():
     X = synthetic_temperatures()
     Y = eq9_errors(X)

@@ -448,6 +448,30 @@ def test_fold_comparison_bar_heights_are_the_metrics(tiny):
     assert labels == ["decoupled, GPR", "decoupled, MLR", "point-by-point, MLR"]
 
 
+def test_fold_comparison_whiskers_span_the_interval_even_where_it_misses_the_bar(tiny):
+    # A percentile interval need not contain its estimate: the tables' rounding put a
+    # max |residual| 1e-6 above its bootstrap's upper end, which matplotlib refused as a
+    # negative error. The whisker is the interval itself.
+    metrics = tiny["metrics"]
+    metrics = metrics[metrics["target"] == "error"].reset_index(drop=True)  # the figure's rows
+    for column in ("rmse", "max_abs"):
+        metrics[f"{column}_lo"] = metrics[column] - 0.05
+        metrics[f"{column}_hi"] = metrics[column] + 0.05
+    metrics.loc[0, "max_abs_lo"] = metrics.loc[0, "max_abs"] - 0.1
+    metrics.loc[0, "max_abs_hi"] = metrics.loc[0, "max_abs"] - 1e-6
+    ax_max = prediction_figures.fig_fold_comparison(metrics).axes[1]
+    spans = sorted(
+        (round(seg[0][1], 9), round(seg[1][1], 9))
+        for collection in ax_max.collections
+        for seg in collection.get_segments()
+    )
+    expected = sorted(
+        (round(lo, 9), round(hi, 9))
+        for lo, hi in zip(metrics["max_abs_lo"], metrics["max_abs_hi"], strict=True)
+    )
+    assert spans == expected
+
+
 def test_fold_comparison_leaves_a_gap_for_a_missing_pair(tiny):
     metrics = tiny["metrics"]
     drop = (metrics["fold"] == "R2") & (metrics["algorithm"] == "gpr")

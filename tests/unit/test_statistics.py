@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -340,6 +341,14 @@ def test_a_single_position_dataset_expresses_only_the_claims_it_can():
 
 def test_share_statistic_is_one_half_off_the_share():
     np.testing.assert_allclose(share_above_half(np.array([3.0]), np.array([1.0]), None), [0.25])
+
+
+def test_share_statistic_is_nan_without_a_warning_where_there_is_nothing_to_share():
+    # A bootstrap replicate that drew only runs' first measurements: no drift on either side.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        shares = share_above_half(np.array([0.0, 1.0]), np.array([0.0, 3.0]), None)
+    np.testing.assert_allclose(shares, [np.nan, -0.25])
 
 
 # --------------------------------------------------------------------------- stability

@@ -45,7 +45,8 @@ def fig_heldout_error(summary: pd.DataFrame):
             ax.errorbar(
                 x,
                 mean,
-                yerr=[np.zeros_like(mean), worst - mean],
+                # worst >= mean; the clip only absorbs the tables' rounding.
+                yerr=[np.zeros_like(mean), np.maximum(worst - mean, 0.0)],
                 fmt="none",
                 ecolor="0.3",
                 elinewidth=0.6,

@@ -324,10 +324,12 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
                 lo = _by_fold(pair_rows, f"{column}_lo", folds)
                 hi = _by_fold(pair_rows, f"{column}_hi", folds)
                 shown = keep & np.isfinite(lo) & np.isfinite(hi)
+                # The interval as computed, about its own centre: a percentile interval need
+                # not contain the estimate (a skewed statistic, the tables' rounding).
                 ax.errorbar(
                     offsets[shown],
-                    heights[shown],
-                    yerr=[heights[shown] - lo[shown], hi[shown] - heights[shown]],
+                    (lo[shown] + hi[shown]) / 2,
+                    yerr=(hi[shown] - lo[shown]) / 2,
                     fmt="none",
                     ecolor="0.15",
                     elinewidth=0.5,

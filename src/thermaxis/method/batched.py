@@ -41,6 +41,7 @@ from thermaxis.method.models import (
     _positions_of,
     decouple_rows,
     inner_group_splitter,
+    pls_fits,
 )
 
 __all__ = ["batchable", "decoupled_metrics", "pointwise_metrics"]
@@ -97,9 +98,14 @@ class _Fitter:
 
     def _inner_rmse(self, train, targets, held, parameters) -> np.ndarray:
         """Mean over the inner groups of each output's held-out RMSE (fit_by_group_search's score)."""
+        groups = np.unique(held)
+        if self.algorithm == "pls" and not all(
+            pls_fits(parameters["n_components"], np.count_nonzero(held != g), train.shape[1])
+            for g in groups
+        ):
+            return np.full(targets.shape[1], np.nan)
         _, fit = linear.loco_fit(train, targets, held, None, self.algorithm, **parameters)
         residual = targets - fit.predictions[:, 0, :]
-        groups = np.unique(held)
         rmse = [np.sqrt(np.mean(residual[held == g] ** 2, axis=0)) for g in groups]
         return np.mean(rmse, axis=0)
 

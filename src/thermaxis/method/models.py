@@ -54,6 +54,7 @@ from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
 __all__ = [
     "COEFFICIENT_COLUMNS",
     "make_regressor",
+    "pls_fits",
     "checked_once",
     "inner_group_splitter",
     "fit_by_group_search",
@@ -98,6 +99,16 @@ def _check_params(algorithm: str, params: Mapping | None) -> dict:
         allowed = ", ".join(sorted(_ALLOWED_PARAMS[algorithm])) or "none"
         raise ValueError(f"unknown parameter(s) {unknown} for {algorithm}; allowed: {allowed}")
     return params
+
+
+def pls_fits(n_components: int, n_rows: int, n_features: int) -> bool:
+    """Whether PLS can fit ``n_components`` on ``n_rows`` rows of ``n_features`` inputs.
+
+    make_regressor caps the components at the inputs; scikit-learn bounds them by the rows
+    as well (``min(n, p)``).  A search's grid point past the rows of one of its inner
+    splits scores NaN there, as GridSearchCV scores a failed fit, so it ranks last.
+    """
+    return min(int(n_components), n_features) <= n_rows
 
 
 def _base_regressor(algorithm: str, params: dict, random_state: int, n_features: int | None):
@@ -308,7 +319,12 @@ def _search_scores(algorithm, X, y, splits, regressors, scores):
         elif algorithm == "svr":
             standardised = svr_grid_predictions(X_train, y_train, X_test, regressors)
         else:
-            standardised = [r.fit(X_train, y_train).predict(X_test) for r in regressors]
+            standardised = [
+                r.fit(X_train, y_train).predict(X_test)
+                if algorithm != "pls" or pls_fits(r.n_components, len(train), X.shape[1])
+                else np.full(len(test), np.nan)
+                for r in regressors
+            ]
         for c, values in enumerate(standardised):
             # StandardScaler.inverse_transform's own arithmetic (times scale_, plus
             # mean_), without its input checks, which cost more than the prediction.

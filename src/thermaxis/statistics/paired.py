@@ -48,8 +48,14 @@ def rmse_difference(a: np.ndarray, b: np.ndarray, n: np.ndarray) -> np.ndarray:
 
 
 def share_above_half(a: np.ndarray, b: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """Share of a in a + b, minus one half, per fold: positive when a carries most."""
-    return a / (a + b) - 0.5
+    """Share of a in a + b, minus one half, per fold: positive when a carries most.
+
+    NaN where both are zero (a replicate that drew only runs' first measurements): there
+    is no share to take.
+    """
+    total = a + b
+    share = np.divide(a, total, out=np.full(np.broadcast(a, total).shape, np.nan), where=total != 0)
+    return share - 0.5
 
 
 @dataclass(frozen=True)
