@@ -949,6 +949,22 @@ CASES = [
         fails=False,
     ),
     Case(
+        "temp_sensor_column_missing",
+        lambda ds, w: _write_lines(
+            ds / E2_BOX,
+            [
+                ",".join(f for j, f in enumerate(line.split(",")) if j != 3)
+                for line in _lines(ds / E2_BOX)
+            ],
+        ),
+        "sensor T3 has no valid reading at all (no column",
+        "E2/temperatures",
+        target="clean:E2",
+        # A declared sensor without a column in one run: it leaves that run's folds, as an
+        # empty column does, not the dataset.
+        fails=False,
+    ),
+    Case(
         "temp_duplicate_column",
         lambda ds, w: _text(ds / E2_BOX, ",T3,", ",T2,"),
         "line 1: column 'T2' appears twice",

@@ -740,7 +740,9 @@ def _gap_text(gap, start_ns: int, end_ns: int, max_gap_s: float) -> str:
     """What a gap is, in the words a user can act on."""
     limit = f" (max_gap_s {max_gap_s:g})"
     if gap.get("kind", "interior") == "no readings":
-        return "has no valid reading at all (empty, or every value out of range or a spike)"
+        return (
+            "has no valid reading at all (no column, empty, or every value out of range or a spike)"
+        )
     if gap.get("kind", "interior") == "record start":
         return (
             f"has no reading before {_iso(end_ns)}: its record starts too late{limit}; a value is held at most "

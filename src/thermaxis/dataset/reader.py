@@ -353,15 +353,17 @@ def read_temperature_source(
             raise DataError(
                 f"{path}: column {column!r}: {kind} is declared for another source in dataset.yaml"
             )
-    for sensor in expected_sensors:
-        if sensor not in columns:
-            raise DataError(
-                f"{path}: missing column {sensor!r} (declared for this source in dataset.yaml)"
-            )
     out = pd.DataFrame({"time": _parse_time(path, frame["time"])})
     _check_time_order(path, out["time"])
     for sensor in expected_sensors:
-        out[sensor] = _parse_numbers(path, frame, sensor, allow_empty=True)
+        # A declared sensor without a column in this run's log has no reading, as an
+        # empty column has none: cleaning names it and it leaves this run's folds; one
+        # sensor must not cost the dataset (issue 33).
+        out[sensor] = (
+            _parse_numbers(path, frame, sensor, allow_empty=True)
+            if sensor in columns
+            else np.full(len(out), np.nan)
+        )
     return out
 
 
