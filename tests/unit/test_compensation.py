@@ -10,7 +10,7 @@ import pytest
 
 from helpers.builders import HOLD, TARGETS, hand_model
 from thermaxis.compensation.exports import siemens_840d, twincat
-from thermaxis.compensation.heldout import held_out_tables
+from thermaxis.compensation.heldout import held_out_tables, largest_steps, step_noise
 from thermaxis.compensation.model import line_weights, model_record
 from thermaxis.compensation.runtime import Compensator, ControllerParameters, Step
 from thermaxis.config import FallbackSettings
@@ -103,6 +103,37 @@ def test_rate_limit():
     steps = comp.run([0.0, 600.0, 660.0], samples, REF)
     assert [s.status for s in steps] == ["ok", "ok", "hold"]
     assert "T1: changes 1 C/min" in steps[2].reasons[0]
+
+
+def test_a_step_within_the_training_logs_noise_is_no_rate_fault():
+    # A 0.1 C display step in a 10 s log is 0.6 C/min, over the 0.5 C/min limit: with the
+    # sensor's noise from training (noise_c 0.1 C) it passes; 0.1 C beyond the noise in
+    # 10 s (0.6 C/min) is still a fault, and a model without noise_c allows nothing.
+    samples = [REF, {"T1": 30.1, "T2": 25.0}, {"T1": 30.3, "T2": 25.0}]
+    times = [0.0, 10.0, 20.0]
+    quiet = Compensator({**hand_model(), "noise_c": {"T1": 0.1, "T2": 0.1}}).run(
+        times, samples, REF
+    )
+    assert [s.status for s in quiet] == ["ok", "ok", "hold"]
+    assert "T1: changes 0.6 C/min beyond its 0.1 C log noise" in quiet[2].reasons[0]
+    strict = Compensator(hand_model()).run(times, samples, REF)
+    assert [s.status for s in strict] == ["ok", "hold", "hold"]
+    assert "T1: changes 0.6 C/min (limit 0.5 C/min)" in strict[1].reasons[0]
+
+
+def test_the_noise_of_the_training_runs_is_their_largest_log_step():
+    logs = {
+        "R1": pd.DataFrame({"time": [0, 10, 20, 30], "elapsed_min": [0, 1, 2, 3],
+                            "T1": [20.0, 20.1, 20.1, 20.3], "T2": [21.0, np.nan, 21.5, 21.4]}),
+        "R2": pd.DataFrame({"time": [0, 10], "elapsed_min": [0, 1],
+                            "T1": [22.0, 22.1], "T2": [np.nan, 23.0]}),
+    }  # fmt: skip
+    steps = {run: largest_steps(frame) for run, frame in logs.items()}
+    # R1: T1 steps 0.1, 0, 0.2; T2 skips the gap: 0.5, 0.1. R2: T1 0.1; T2 one sample.
+    assert steps["R1"] == pytest.approx({"T1": 0.2, "T2": 0.5})
+    assert steps["R2"] == pytest.approx({"T1": 0.1, "T2": 0.0})
+    assert step_noise(steps, ["R2"]) == pytest.approx({"T1": 0.1, "T2": 0.0})
+    assert step_noise(steps, ["R1", "R2"]) == pytest.approx({"T1": 0.2, "T2": 0.5})
 
 
 def test_ramp_to_zero_and_recovery():

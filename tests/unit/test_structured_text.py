@@ -51,7 +51,9 @@ def exact_runs(wobble_um: float = 0.0):
 def exported():
     X, Y = exact_runs()
     estimator = DecoupledAxisModel(("T1",), ("T2",), algorithm="mlr").fit(X, Y)
-    model = model_record(estimator, "decoupled", "mlr", X, RAMP, dataset="exact")
+    model = model_record(
+        estimator, "decoupled", "mlr", X, RAMP, {"T2": 0.125, "T9": 1.0}, dataset="exact"
+    )
     source = structured_text(model, "SIMULATED test data.")
     return model, Compensator(model), source, parsed_constants(source)
 
@@ -72,6 +74,9 @@ def test_constants_read_back_exactly(exported):
         c["MAX_AGE"],
     ) == (1.5, -10.0, 90.0, 0.25, 30.0)
     assert c["POLICY_RAMP"] is True and c["RAMP_TIME"] == 1200.0
+    # Each sensor's log noise in sensor order; a sensor the training logs did not give: 0.
+    assert model["noise_c"] == {"T1": 0.0, "T2": 0.125}
+    assert c["SENSOR_NOISE"] == [0.0, 0.125]
 
 
 @pytest.mark.parametrize(

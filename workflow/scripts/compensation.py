@@ -13,6 +13,7 @@ import json
 import logging
 from dataclasses import replace
 from importlib.metadata import version
+from pathlib import Path
 
 import pandas as pd
 
@@ -60,7 +61,7 @@ def _select(setup, Y, fold, scope, degree):
     )
 
 
-def fitted_model(snakemake, X, Y, s, choice) -> dict:
+def fitted_model(snakemake, X, Y, s, choice, steps) -> dict:
     """The deployed model on every run (the verdict comes later)."""
     p = snakemake.params
     record = recommend.deployed_record(s["compensation"].model, choice)
@@ -88,6 +89,7 @@ def fitted_model(snakemake, X, Y, s, choice) -> dict:
         setup.models,
         s["decoupling"],
         setup.settings,
+        heldout.step_noise(steps, X["run"].unique()),
         **p.about,
         held_out_accuracy=accuracy,
         deployment={
@@ -105,7 +107,7 @@ def fitted_model(snakemake, X, Y, s, choice) -> dict:
     return fitted
 
 
-def fold_tables(snakemake, i, fold, X, Y, s, choice, final) -> tuple[str, dict]:
+def fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps) -> tuple[str, dict]:
     """One held-out run: its fold's model (JSON text) and the exports and error left."""
     p, inputs = snakemake.params, snakemake.input
     # The model the procedure would have deployed without this run (its fold's choice).
@@ -129,6 +131,7 @@ def fold_tables(snakemake, i, fold, X, Y, s, choice, final) -> tuple[str, dict]:
         setup.models,
         s["decoupling"],
         setup.settings,
+        heldout.step_noise(steps, view.loc[train, "run"].unique()),
         **p.about,
     )
     text = json.dumps(record, indent=1) + "\n"
@@ -191,12 +194,17 @@ def main(snakemake):
         )
         with open(snakemake.input.choice, encoding="utf-8") as fh:
             choice = json.load(fh)
-        fitted_text = json.dumps(fitted_model(snakemake, X, Y, s, choice), indent=1) + "\n"
+        # Each run's largest log steps, read once for every fold's model and the final one.
+        steps = {
+            Path(path).parent.name: heldout.largest_steps(pd.read_parquet(path))
+            for path in snakemake.input.logs
+        }
+        fitted_text = json.dumps(fitted_model(snakemake, X, Y, s, choice, steps), indent=1) + "\n"
         final = runtime.Compensator(json.loads(fitted_text))
         texts = {output.fitted: fitted_text}
 
         for i, fold in enumerate(p.folds):
-            model_text, frames = fold_tables(snakemake, i, fold, X, Y, s, choice, final)
+            model_text, frames = fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps)
             texts[output.fold_models[i]] = model_text
             for name, frame in frames.items():
                 texts[output[f"fold_{name}"][i]] = csv_text(frame, float_format="%.10g")

@@ -15,6 +15,8 @@ __all__ = [
     "held_out_accuracy",
     "run_states",
     "measurement_cycles",
+    "largest_steps",
+    "step_noise",
     "fallback_summary",
     "replay",
     "pass_deviations",
@@ -41,6 +43,35 @@ def run_states(X_run: pd.DataFrame, sensors: Sequence[str]):
     ordered = X_run.sort_values("measurement", kind="stable")
     samples = [{s: float(row[s]) for s in sensors} for _, row in ordered.iterrows()]
     return (ordered["time_min"].to_numpy(dtype=float) * 60.0).tolist(), samples, samples[0]
+
+
+def largest_steps(series: pd.DataFrame) -> dict[str, float]:
+    """Each channel's largest change between consecutive samples of a run's cleaned log.
+
+    ``series``: the clean rule's ``temperatures.parquet`` (``time``, ``elapsed_min``, a
+    column per sensor); samples the cleaning left empty are skipped.
+    """
+    steps = {}
+    for column in series.columns.drop(["time", "elapsed_min"], errors="ignore"):
+        values = series[column].to_numpy(dtype=float)
+        values = values[np.isfinite(values)]
+        steps[str(column)] = float(np.abs(np.diff(values)).max()) if values.size > 1 else 0.0
+    return steps
+
+
+def step_noise(steps_by_run: Mapping[str, Mapping[str, float]], runs) -> dict[str, float]:
+    """model.json ``noise_c``: each sensor's largest step in any of ``runs`` (the training runs).
+
+    The controller's rate check allows this much on top of ``max_rate_c_per_min``: a
+    sensor's noise and resolution are not faults (a 0.1 C step in a 10 s log is
+    0.6 C/min), while a change larger than the training runs ever made, at more than
+    the rate, still is.
+    """
+    noise: dict[str, float] = {}
+    for run in runs:
+        for sensor, step in steps_by_run[run].items():
+            noise[sensor] = max(noise.get(sensor, 0.0), step)
+    return noise
 
 
 def measurement_cycles(series: pd.DataFrame, windows: pd.DataFrame, sensors: Sequence[str]):

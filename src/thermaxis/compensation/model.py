@@ -191,10 +191,13 @@ def model_record(
     algorithm: str,
     X_train: pd.DataFrame,
     fallback: FallbackSettings,
+    noise_c: Mapping[str, float] | None = None,
     **about,
 ) -> dict:
     """The ``model.json`` content of a fitted Decoupled- or PointwiseAxisModel.
 
+    ``noise_c``: each temperature sensor's largest step between log samples in the
+    training runs (:func:`thermaxis.compensation.heldout.step_noise`; 0 where absent).
     ``about`` adds descriptive keys (dataset, provenance, held_out_accuracy, ...).
     """
     inputs = _inputs_of(approach, estimator)
@@ -233,6 +236,10 @@ def model_record(
         # a time-aware input names its own.
         "sensors": list(dict.fromkeys(base_of(s) for s, _ in inputs)),
         "signals": list(dict.fromkeys(base_of(s) for s, kind in inputs if kind == "signal")),
+        "noise_c": {
+            sensor: float((noise_c or {}).get(sensor, 0.0))
+            for sensor in dict.fromkeys(base_of(s) for s, kind in inputs if kind != "signal")
+        },
         "inputs": [
             {
                 "sensor": s,
@@ -317,6 +324,7 @@ def fit_model_record(
     models: ModelSettings,
     decoupling: DecouplingSettings,
     settings: CompensationSettings,
+    noise_c: Mapping[str, float] | None = None,
     **about,
 ) -> dict:
     """Fit the configured model on X, Y and return its ``model.json`` record.
@@ -335,6 +343,7 @@ def fit_model_record(
         settings.algorithm,
         X,
         settings.fallback,
+        noise_c,
         trained_on=trained_on,
         **about,
     )

@@ -172,6 +172,7 @@ def _input_values(model: Mapping) -> dict:
         n_inputs=len(inputs),
         n_regressions=len(model["regressions"]),
         sensor_signal=_bools(s in model.get("signals", ()) for s in sensors),
+        sensor_noise=_array(model.get("noise_c", {}).get(s, 0.0) for s in sensors),
         input_sensor=", ".join(str(sensors.index(base_of(i["sensor"])) + 1) for i in inputs),
         input_relative=_bools(i["temperature"] == "relative" for i in inputs),
         input_min=_array(i["training_min_c"] for i in inputs),

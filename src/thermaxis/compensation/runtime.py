@@ -81,6 +81,9 @@ class Compensator:
         self.sensors = tuple(dict.fromkeys(base_of(s) for s in model["sensors"]))
         # Operating signals (a spindle speed) have no plausible degC range or rate.
         self.signals = frozenset(model.get("signals", ()))
+        # What each sensor's log steps by in the training runs (noise, resolution): the
+        # rate check allows it on top of the rate. A model without it allows nothing.
+        self.noise_c = {s: float(v) for s, v in model.get("noise_c", {}).items()}
         self.positions_mm = np.asarray(model["positions_mm"], dtype=float)
         self.p0_mm = float(model["reference"]["reference_position_mm"])
         self.offset_only = self.positions_mm.size == 1
@@ -275,10 +278,13 @@ class Compensator:
         if not lo <= value <= hi:
             return [f"{sensor}: implausible {value:g} C (plausible {lo:g} ... {hi:g} C)"]
         if last and sensor in last and time_s > last[sensor][0]:
-            rate = abs(value - last[sensor][1]) / (time_s - last[sensor][0]) * 60.0
+            noise = self.noise_c.get(sensor, 0.0)
+            beyond = max(abs(value - last[sensor][1]) - noise, 0.0)
+            rate = beyond / (time_s - last[sensor][0]) * 60.0
             if rate > f.max_rate_c_per_min:
+                allowed = f" beyond its {noise:.3g} C log noise" if noise else ""
                 return [
-                    f"{sensor}: changes {rate:.3g} C/min (limit {f.max_rate_c_per_min:g} C/min)"
+                    f"{sensor}: changes {rate:.3g} C/min{allowed} (limit {f.max_rate_c_per_min:g} C/min)"
                 ]
         return []
 
