@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import logging
+import types
 
-from thermaxis.pipeline.runner import _configure_logging
+import pytest
+
+from thermaxis.errors import DataError
+from thermaxis.pipeline.runner import _configure_logging, run_script
 
 
 def test_a_repeated_warning_is_printed_once_and_logged_every_time(tmp_path, capsys):
@@ -77,3 +81,31 @@ def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path
     ]
     assert log.read_text().count("Objective did not converge") == 3
     logging.captureWarnings(False)
+
+
+def _raise(exc: Exception):
+    raise exc
+
+
+def _job_with_log(path):
+    return types.SimpleNamespace(log=[str(path)])
+
+
+def test_a_value_error_is_one_line_on_the_terminal_and_its_traceback_is_in_the_log(
+    tmp_path, capsys
+):
+    # A ValueError may be the code's, not the data's: where it was raised must not be lost.
+    log = tmp_path / "job.log"
+    message = "pls needs 1 <= n_components <= training rows, got 6"
+    with pytest.raises(SystemExit):
+        run_script(lambda _: _raise(ValueError(message)), _job_with_log(log))
+    for handler in logging.getLogger("thermaxis").handlers:
+        handler.flush()
+    assert capsys.readouterr().err.splitlines() == [f"thermaxis error: {message}"]
+    text = log.read_text()
+    assert "Traceback" in text and "in _raise" in text
+    # A data error is the data's: its one line is the whole story.
+    data_log = tmp_path / "data.log"
+    with pytest.raises(SystemExit):
+        run_script(lambda _: _raise(DataError("x.csv: line 3: bad")), _job_with_log(data_log))
+    assert "Traceback" not in data_log.read_text()

@@ -132,6 +132,10 @@ def run_script(main, snakemake) -> None:
     except (DataError, ValueError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         logger.error(message)
+        if not isinstance(exc, DataError):
+            # A ValueError may come from the code rather than the data: where it was
+            # raised goes to the job's log (the terminal keeps its one line).
+            logging.getLogger(_LOG_ONLY).error("raised at", exc_info=exc)
         print(f"thermaxis error: {message}", file=sys.stderr)
         sys.exit(1)
     except OSError as exc:
