@@ -571,3 +571,28 @@ def test_position_that_is_no_target_raises():
     m = measurement([(185.0, 0.0, "+"), (500.0, 1.0, "+")])
     with pytest.raises(ValueError, match="500 mm is not one of the targets"):
         combine_passes(m, TARGETS, replace(DEFAULTS.cleaning.errors, max_missing_fraction=1.0))
+
+
+def test_a_sensor_flat_through_a_run_while_others_change_is_kept_with_a_warning(tiny_dataset):
+    # S2 stuck at 23.4 C through R1 while S1 and S3 rise: a warning and a QC row naming
+    # it, and its readings kept (a place far from the heat can stay put too). Where no
+    # sensor changes, none stands out.
+    from thermaxis.cleaning.run import clean_and_assemble_run
+    from thermaxis.dataset.reader import load_dataset, read_run
+
+    for run, stuck in (("R1", ["S2"]), ("R2", ["S1", "S2", "S3"])):
+        log = tiny_dataset / run / "temperatures" / "box.csv"
+        frame = pd.read_csv(log)
+        frame[stuck] = 23.4
+        frame.to_csv(log, index=False)
+    dataset = load_dataset(tiny_dataset)
+    tables = clean_and_assemble_run(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning)
+    flat = tables.qc[tables.qc["finding"] == "flat"]
+    assert flat["sensor"].tolist() == ["S2"] and flat["action"].tolist() == ["kept"]
+    assert [n for n in tables.notes if "throughout the run" in n] == [
+        f"{tiny_dataset}/R1/temperatures/box.csv: sensor S2 of run R1 reads 23.4 C throughout "
+        "the run while other sensors change: a stuck sensor? (kept)"
+    ]
+    assert (tables.temperatures.query("sensor == 'S2'")["absolute_c"] == 23.4).all()
+    quiet = clean_and_assemble_run(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning)
+    assert "flat" not in quiet.qc["finding"].tolist()

@@ -176,6 +176,9 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
         for u in unusable
     )
     notes.extend(_excursion_text(raw, row) for row in cleaned.excursions.itertuples())
+    left_out = {u.sensor for u in unusable}
+    flat = _flat_sensors(dataset, raw, cleaned.frame, [s for s in sensors if s not in left_out])
+    notes.extend(f.text for f in flat)
     signal_frame = temperature_cleaning.signals_on_grid(
         raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"]
     )
@@ -186,7 +189,7 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     return RunTables(
         run=run,
         series=series,
-        qc=_with_run(_qc_table(cleaned.qc, findings, cleaned.excursions, unusable), run),
+        qc=_with_run(_qc_table(cleaned.qc, findings, cleaned.excursions, unusable, flat), run),
         gaps=_with_run(cleaned.gaps, run),
         errors=tidy_errors(run, condition, windows, combined),
         temperatures=tidy_temperatures(run, condition, windows, at_measurements[sensors]),
@@ -331,12 +334,12 @@ EVENT_COLUMNS = ["start", "end", "size_c"]
 
 
 def _qc_table(
-    temperature_qc: pd.DataFrame, findings: pd.DataFrame, excursions: pd.DataFrame, unusable
+    temperature_qc: pd.DataFrame, findings: pd.DataFrame, excursions: pd.DataFrame, unusable, flat
 ) -> pd.DataFrame:
     """One QC table: a row per sensor, then a row per finding.
 
-    Displacement findings have sensor ``error_um``; a temperature excursion or an
-    unusable sensor names its sensor, with ``start``, ``end`` and (excursions) ``size_c``.
+    Displacement findings have sensor ``error_um``; a temperature excursion, an unusable
+    or a flat sensor names its sensor, with ``start``, ``end`` and (excursions) ``size_c``.
     """
     events = [
         findings.assign(sensor="error_um", source="errors"),
@@ -365,6 +368,17 @@ def _qc_table(
                 "end": [u.end for u in unusable],
                 "cause": [u.text for u in unusable],
                 "action": "left out of every fold's candidate sensors",
+            }
+        ),
+        pd.DataFrame(
+            {
+                "sensor": [f.sensor for f in flat],
+                "source": [f.source for f in flat],
+                "finding": "flat",
+                "start": [f.start for f in flat],
+                "end": [f.end for f in flat],
+                "cause": [f.text for f in flat],
+                "action": "kept",
             }
         ),
     ]
@@ -427,8 +441,8 @@ def _cleaned_temperatures(
 
 
 @dataclass(frozen=True)
-class UnusableSensor:
-    """A sensor of a run without a reading in some measurement, and why (``text``)."""
+class SensorFinding:
+    """A sensor of a run that is unusable (no reading in some measurement) or flat, and why (``text``)."""
 
     sensor: str
     source: str
@@ -439,11 +453,11 @@ class UnusableSensor:
 
 def _unusable_sensors(
     dataset: Dataset, raw: RawRun, windows: pd.DataFrame, at_measurements: pd.DataFrame, overlaps
-) -> list[UnusableSensor]:
+) -> list[SensorFinding]:
     """The sensors that miss a measurement: a long gap over it, or no value in its window."""
     source_of = {s: src for src in raw.sources for s in dataset.sensors_of(src)}
     out = [
-        UnusableSensor(
+        SensorFinding(
             o.sensor, source_of.get(o.sensor, ""), o.start, o.end, f"run {raw.run}: {o.text}"
         )
         for o in overlaps
@@ -454,7 +468,7 @@ def _unusable_sensors(
         window = windows.loc[missing[sensor].to_numpy()].iloc[0]
         source = source_of[sensor]
         out.append(
-            UnusableSensor(
+            SensorFinding(
                 sensor,
                 source,
                 window["start"],
@@ -465,6 +479,34 @@ def _unusable_sensors(
             )
         )
     return out
+
+
+def _flat_sensors(
+    dataset: Dataset, raw: RawRun, frame: pd.DataFrame, sensors: list[str]
+) -> list[SensorFinding]:
+    """Sensors that read one value through the whole run while another sensor's reading
+    changes: a stuck sensor, or a place that stayed put (a 0.1 C display far from the
+    heat). Kept, with a warning and a QC row: only the user can tell which."""
+    values = {s: frame[s].to_numpy(dtype=float) for s in sensors}
+    values = {s: v[np.isfinite(v)] for s, v in values.items()}
+    spans = {s: float(np.ptp(v)) for s, v in values.items() if v.size > 1}
+    if not any(span > 0.0 for span in spans.values()):
+        return []  # nothing changes in this run: no sensor stands out
+    source_of = {s: src for src in raw.sources for s in dataset.sensors_of(src)}
+    start, end = frame["time"].iloc[0], frame["time"].iloc[-1]
+    return [
+        SensorFinding(
+            sensor,
+            source_of.get(sensor, ""),
+            start,
+            end,
+            f"{_temperature_file(dataset, raw.run, source_of.get(sensor, ''))}: sensor {sensor} of "
+            f"run {raw.run} reads {values[sensor][0]:g} C throughout the run while other sensors "
+            "change: a stuck sensor? (kept)",
+        )
+        for sensor, span in spans.items()
+        if span == 0.0
+    ]
 
 
 def _with_elapsed(frame: pd.DataFrame, windows: pd.DataFrame) -> pd.DataFrame:
