@@ -236,8 +236,10 @@ def model_record(
         # a time-aware input names its own.
         "sensors": list(dict.fromkeys(base_of(s) for s, _ in inputs)),
         "signals": list(dict.fromkeys(base_of(s) for s, kind in inputs if kind == "signal")),
+        # To the micro-degree: the differences of logged decimals carry binary noise
+        # (0.04100000000000037) that a PLC engineer should not have to read.
         "noise_c": {
-            sensor: float((noise_c or {}).get(sensor, 0.0))
+            sensor: round(float((noise_c or {}).get(sensor, 0.0)), 6)
             for sensor in dict.fromkeys(base_of(s) for s, kind in inputs if kind != "signal")
         },
         "inputs": [
