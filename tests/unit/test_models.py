@@ -563,6 +563,30 @@ def test_one_lars_path_predicts_as_a_lasso_fitted_at_each_strength():
         np.testing.assert_allclose(predicted, alone, rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.parametrize("shape", [(30, 25), (30, 120)], ids=["tall", "wide"])
+def test_one_svd_predicts_as_a_ridge_fitted_at_each_strength(shape):
+    # The inner search scores the whole strength grid from one SVD: each strength's
+    # held-out predictions against scikit-learn's Ridge fitted at that strength alone,
+    # with more rows than inputs and fewer (many lagged inputs, Ridge's kernel solver).
+    from sklearn.linear_model import Ridge
+
+    from thermaxis.method.models import ridge_grid_predictions
+
+    rows, columns = shape
+    rng = np.random.default_rng(12)
+    sources = rng.normal(size=(rows + 10, 2)).cumsum(axis=0)
+    X = sources @ rng.uniform(0.2, 1.0, size=(2, columns)) + 0.1 * rng.normal(
+        size=(rows + 10, columns)
+    )
+    y = sources @ np.array([1.0, -0.7]) + 0.2 * rng.normal(size=rows + 10)
+    X_train, y_train, X_test = X[:rows], y[:rows], X[rows:]
+    alphas = [100.0, 10.0, 1.0, 0.1, 0.01]
+    predictions = ridge_grid_predictions(X_train, y_train, X_test, alphas)
+    for alpha, predicted in zip(alphas, predictions, strict=True):
+        alone = Ridge(alpha=alpha).fit(X_train, y_train).predict(X_test)
+        np.testing.assert_allclose(predicted, alone, rtol=1e-9, atol=1e-9)
+
+
 @pytest.mark.parametrize(
     "params",
     [
