@@ -359,33 +359,28 @@ def _qc_table(
                 "action": excursions["action"],
             }
         ),
-        pd.DataFrame(
-            {
-                "sensor": [u.sensor for u in unusable],
-                "source": [u.source for u in unusable],
-                "finding": "unusable",
-                "start": [u.start for u in unusable],
-                "end": [u.end for u in unusable],
-                "cause": [u.text for u in unusable],
-                "action": "left out of every fold's candidate sensors",
-            }
-        ),
-        pd.DataFrame(
-            {
-                "sensor": [f.sensor for f in flat],
-                "source": [f.source for f in flat],
-                "finding": "flat",
-                "start": [f.start for f in flat],
-                "end": [f.end for f in flat],
-                "cause": [f.text for f in flat],
-                "action": "kept",
-            }
-        ),
+        _sensor_rows(unusable, "unusable", "left out of every fold's candidate sensors"),
+        _sensor_rows(flat, "flat", "kept"),
     ]
     events = [e for e in events if len(e)]
     table = pd.concat([temperature_qc, *events], ignore_index=True) if events else temperature_qc
     return table.reindex(
         columns=[*temperature_qc.columns, *displacement.FINDING_COLUMNS, *EVENT_COLUMNS]
+    )
+
+
+def _sensor_rows(found: list, finding: str, action: str) -> pd.DataFrame:
+    """The QC rows of sensor findings (:class:`SensorFinding`) of one kind."""
+    return pd.DataFrame(
+        {
+            "sensor": [f.sensor for f in found],
+            "source": [f.source for f in found],
+            "finding": finding,
+            "start": [f.start for f in found],
+            "end": [f.end for f in found],
+            "cause": [f.text for f in found],
+            "action": action,
+        }
     )
 
 
