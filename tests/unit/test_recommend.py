@@ -11,11 +11,13 @@ from thermaxis.method.folds import run_groups
 from thermaxis.method.recommend import (
     BASELINE,
     Candidate,
+    Recommendation,
     _choose,
     candidate_view,
     default_candidates,
     held_out_scores,
     recommend,
+    recommendation_markdown,
 )
 
 DEFAULTS = Settings.from_config({})
@@ -234,3 +236,25 @@ def test_the_plain_baseline_is_always_a_candidate_and_sees_only_its_own_lags():
                       "T1@lag20min": [19.0], "T1@lag30min": [19.2], "S": [1.0]})  # fmt: skip
     _, selectable, _ = candidate_view(X, baseline, ["S"])
     assert selectable == ["run", "measurement", "time_min", "T1", "T1@lag20min"]
+
+
+def test_the_page_says_which_folds_had_no_inner_split_to_choose_on():
+    # Two runs: each fold trains on one run, so it keeps the reference, unchosen.
+    folds = pd.DataFrame(
+        {"fold": ["R1", "R2"], "chosen": ["paper", "paper"], "inner_score": [np.nan, np.nan],
+         "rmse_um": [5.0, 1.5], "max_abs_um": [8.0, 3.5],
+         "paper_rmse_um": [5.0, 1.5], "paper_max_abs_um": [8.0, 3.5]}
+    )  # fmt: skip
+    page = recommendation_markdown(
+        Recommendation(folds, pd.DataFrame(), pd.DataFrame(), "baseline-ridge+lags", "max_abs"),
+        "Dataset `two`: SIMULATED data.",
+    )
+    assert (
+        "Fold(s) R1, R2 had a single training run, so no inner split to choose on: they keep "
+        "the paper's configuration." in page
+    )
+    chosen = folds.assign(inner_score=[0.9, np.nan])
+    page = recommendation_markdown(
+        Recommendation(chosen, pd.DataFrame(), pd.DataFrame(), "paper", "max_abs"), "x"
+    )
+    assert "Fold(s) R2 had a single training run" in page

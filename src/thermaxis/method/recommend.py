@@ -625,6 +625,13 @@ def recommendation_markdown(recommendation: Recommendation, statement: str) -> s
         f"against {s['paper_rmse_um']:.2f} and {s['paper_max_abs_um']:.2f} um for the paper's configuration "
         f"on the same folds.\n\n"
     )
+    unchosen = f.loc[f["inner_score"].isna(), "fold"].astype(str).tolist()
+    if unchosen:
+        # One training run leaves nothing to hold out inside the fold (collect).
+        head += (
+            f"Fold(s) {', '.join(unchosen)} had a single training run, so no inner split to "
+            "choose on: they keep the paper's configuration.\n\n"
+        )
     return head + markdown_table(f, "%.3f")
 
 
