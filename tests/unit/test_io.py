@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 import yaml
 
+from helpers import DEFAULTS
 from helpers.builders import set_csv_cell
+from thermaxis.dataset.plausibility import check_run_plausibility
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.errors import DataError
 
@@ -244,3 +246,20 @@ def test_measurements_ordered_by_time_not_name(tiny_dataset):
     raw = read_run(load_dataset(tiny_dataset), "R1")
     assert list(raw.measurements)[0] == "Z_first"
     assert raw.windows()["measurement"].tolist() == [1, 2, 3, 4]
+
+
+def test_files_the_reader_skips_are_named(tiny_dataset):
+    # Only *.csv is read: an XLSX beside the exports or an upper-case suffix would vanish
+    # unsaid; a hidden file is left unmentioned.
+    errors = tiny_dataset / "R1" / "errors"
+    (errors / "M05.xlsx").write_bytes(b"PK")
+    (errors / "M04.csv").rename(errors / "M04.CSV")
+    (errors / ".DS_Store").write_bytes(b"")
+    dataset = load_dataset(tiny_dataset)
+    notes = check_run_plausibility(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning)
+    assert notes == [
+        f"{errors}: skipped M04.CSV, M05.xlsx: only .csv files are read "
+        "(export a spreadsheet as CSV, with a lower-case .csv suffix)"
+    ]
+    other = check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning)
+    assert other == []

@@ -86,9 +86,31 @@ def check_dataset_shape(dataset, config) -> None:
         )
 
 
+def skipped_files(folder: Path) -> list[str]:
+    """A note per data folder of a run holding files the reader skips: only ``*.csv`` is
+    read, so an XLSX left beside the exports, or an ``M01.CSV``, would vanish unsaid.
+    Hidden files (``.DS_Store``) are left unmentioned."""
+    notes = []
+    for name in ("errors", "temperatures", "signals"):
+        sub = folder / name
+        if not sub.is_dir():
+            continue
+        skipped = sorted(
+            p.name for p in sub.iterdir() if p.suffix != ".csv" and not p.name.startswith(".")
+        )
+        if skipped:
+            notes.append(
+                f"{sub}: skipped {', '.join(skipped)}: only .csv files are read "
+                "(export a spreadsheet as CSV, with a lower-case .csv suffix)"
+            )
+    return notes
+
+
 def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
-    """Refuse implausible readings or a grid step longer than the run; warn of implausible medians."""
+    """Refuse implausible readings or a grid step longer than the run; warn of implausible
+    medians and of files the reader skips."""
     folder = dataset.root / raw.run
+    notes = skipped_files(folder)
     for name, measurement in raw.measurements.items():
         # The file and its lines as read; a run built in memory has neither.
         path = raw.error_files.get(name, name)
@@ -130,8 +152,7 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
             f"expected [low, high] with low < high, got [{median_c[0]:g}, {median_c[1]:g}]",
         )
     if dataset.temperature_kind == "rise":
-        return []  # rises since the start sit near 0 °C by design: no structure-temperature median to judge
-    notes = []
+        return notes  # rises since the start sit near 0 °C by design: no structure-temperature median to judge
     for source, frame in raw.sources.items():
         with np.errstate(
             over="ignore"
