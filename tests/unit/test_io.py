@@ -11,7 +11,7 @@ import yaml
 from helpers import DEFAULTS
 from helpers.builders import set_csv_cell
 from thermaxis.dataset.plausibility import check_run_plausibility
-from thermaxis.dataset.reader import load_dataset, read_run
+from thermaxis.dataset.reader import load_dataset, read_run, read_temperature_source
 from thermaxis.errors import DataError
 
 
@@ -263,3 +263,14 @@ def test_files_the_reader_skips_are_named(tiny_dataset):
     ]
     other = check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning)
     assert other == []
+
+
+def test_a_missing_operating_signal_column_is_refused(tmp_path):
+    # An operating signal is every model's input: a run without it cannot be modelled.
+    log = tmp_path / "plc.csv"
+    log.write_text("time,other\n2022-05-10T09:00:00,1\n")
+    with pytest.raises(DataError) as exc:
+        read_temperature_source(log, ["spindle_rpm", "other"], {"spindle_rpm", "other"}, "signal")
+    assert one_line(exc) == (
+        f"{log}: missing column 'spindle_rpm' (declared for this source in dataset.yaml)"
+    )

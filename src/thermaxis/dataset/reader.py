@@ -353,12 +353,19 @@ def read_temperature_source(
             raise DataError(
                 f"{path}: column {column!r}: {kind} is declared for another source in dataset.yaml"
             )
+    if kind != "sensor":
+        for signal in expected_sensors:
+            if signal not in columns:
+                raise DataError(
+                    f"{path}: missing column {signal!r} (declared for this source in dataset.yaml)"
+                )
     out = pd.DataFrame({"time": _parse_time(path, frame["time"])})
     _check_time_order(path, out["time"])
     for sensor in expected_sensors:
-        # A declared sensor without a column in this run's log has no reading, as an
-        # empty column has none: cleaning names it and it leaves this run's folds; one
-        # sensor must not cost the dataset (issue 33).
+        # A declared temperature sensor without a column in this run's log has no reading,
+        # as an empty column has none: cleaning names it and it leaves this run's folds;
+        # one sensor must not cost the dataset (issue 33). An operating signal is every
+        # model's input: without it the run cannot be modelled, so it is refused above.
         out[sensor] = (
             _parse_numbers(path, frame, sensor, allow_empty=True)
             if sensor in columns
