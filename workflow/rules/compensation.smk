@@ -14,8 +14,8 @@ rule compensation:
         metrics=f"{OUT}/tables/metrics.csv",
         choice=f"{OUT}/recommend/choice.json",
         scores=expand(f"{OUT}/recommend/folds/{{fold}}.csv", fold=FOLDS),
-        series=expand(f"{OUT}/clean/{{fold}}/temperatures.parquet", fold=FOLDS),
-        # Every run's log: the sensors' noise in the training runs (model.json noise_c).
+        # Every run's log: the sensors' noise in the training runs (model.json noise_c),
+        # and a held-out run's cycles for a model with time-aware inputs.
         logs=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
         signal_series=expand(f"{OUT}/clean/{{fold}}/signals.parquet", fold=FOLDS),
         windows=expand(f"{OUT}/clean/{{fold}}/windows.csv", fold=FOLDS),

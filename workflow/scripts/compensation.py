@@ -107,6 +107,11 @@ def fitted_model(snakemake, X, Y, s, choice, steps) -> dict:
     return fitted
 
 
+def _run_log(inputs, run: str) -> str:
+    """The clean rule's ``temperatures.parquet`` of ``run`` among the rule's ``logs``."""
+    return next(path for path in inputs.logs if Path(path).parent.name == run)
+
+
 def fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps) -> tuple[str, dict]:
     """One held-out run: its fold's model (JSON text) and the exports and error left."""
     p, inputs = snakemake.params, snakemake.input
@@ -143,7 +148,7 @@ def fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps) -> tuple[str,
         sensors = list(dict.fromkeys([*model.sensors, *final.sensors]))
         cycles = heldout.measurement_cycles(
             logged_series(
-                pd.read_parquet(inputs.series[i]), pd.read_parquet(inputs.signal_series[i])
+                pd.read_parquet(_run_log(inputs, fold)), pd.read_parquet(inputs.signal_series[i])
             ),
             pd.read_csv(inputs.windows[i]),
             sensors,
@@ -194,7 +199,9 @@ def main(snakemake):
         )
         with open(snakemake.input.choice, encoding="utf-8") as fh:
             choice = json.load(fh)
-        # Each run's largest log steps, read once for every fold's model and the final one.
+        # Each run's largest log steps, for every fold's model and the final one. The logs
+        # are not kept: a held-out run's is read again for its cycles (at 86 long 1 s logs,
+        # keeping every one would cost hundreds of MB).
         steps = {
             Path(path).parent.name: heldout.largest_steps(pd.read_parquet(path))
             for path in snakemake.input.logs

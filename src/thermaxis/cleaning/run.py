@@ -426,8 +426,7 @@ def _cleaned_temperatures(
         raise DataError(f"{dataset.root / raw.run / 'temperatures'}: {exc}") from None
     files = {
         s: _temperature_file(dataset, raw.run, source)
-        for source in raw.sources
-        for s in dataset.sensors_of(source)
+        for s, source in _source_of(dataset, raw).items()
     }
     overlaps = temperature_cleaning.gap_overlaps(
         cleaned.gaps, windows, max_gap_s=settings.max_gap_s, files=files
@@ -446,11 +445,16 @@ class SensorFinding:
     text: str
 
 
+def _source_of(dataset: Dataset, raw: RawRun) -> dict[str, str]:
+    """The source (logger) of each sensor the run's logs hold."""
+    return {s: src for src in raw.sources for s in dataset.sensors_of(src)}
+
+
 def _unusable_sensors(
     dataset: Dataset, raw: RawRun, windows: pd.DataFrame, at_measurements: pd.DataFrame, overlaps
 ) -> list[SensorFinding]:
     """The sensors that miss a measurement: a long gap over it, or no value in its window."""
-    source_of = {s: src for src in raw.sources for s in dataset.sensors_of(src)}
+    source_of = _source_of(dataset, raw)
     out = [
         SensorFinding(
             o.sensor, source_of.get(o.sensor, ""), o.start, o.end, f"run {raw.run}: {o.text}"
@@ -487,15 +491,15 @@ def _flat_sensors(
     spans = {s: float(np.ptp(v)) for s, v in values.items() if v.size > 1}
     if not any(span > 0.0 for span in spans.values()):
         return []  # nothing changes in this run: no sensor stands out
-    source_of = {s: src for src in raw.sources for s in dataset.sensors_of(src)}
+    source_of = _source_of(dataset, raw)
     start, end = frame["time"].iloc[0], frame["time"].iloc[-1]
     return [
         SensorFinding(
             sensor,
-            source_of.get(sensor, ""),
+            source_of[sensor],
             start,
             end,
-            f"{_temperature_file(dataset, raw.run, source_of.get(sensor, ''))}: sensor {sensor} of "
+            f"{_temperature_file(dataset, raw.run, source_of[sensor])}: sensor {sensor} of "
             f"run {raw.run} reads {values[sensor][0]:g} C throughout the run while other sensors "
             "change: a stuck sensor? (kept)",
         )
