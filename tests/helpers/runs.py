@@ -90,10 +90,14 @@ def reports_snakemake(built: Built, *args, check=True) -> subprocess.CompletedPr
     )
 
 
+# Run labels a logger export might use: pandas would read them back from a CSV as 1 and 2.
+BUILT_RUNS = ("01", "02")
+
+
 def make_built(tmp: Path) -> Built:
     """The workflow with every kind of report on a small simulated dataset that reproduces
-    the paper."""
-    dataset = write_dataset(tmp / "rep", runs=("R1", "R2"), name="rep", reproduces="xu2023")
+    the paper, its runs labelled :data:`BUILT_RUNS`."""
+    dataset = write_dataset(tmp / "rep", runs=BUILT_RUNS, name="rep", reproduces="xu2023")
     work = workflow_workdir(tmp)
     config = work / "reports_config.yaml"
     config.write_text(
@@ -103,8 +107,8 @@ def make_built(tmp: Path) -> Built:
                 "ambient_sensor": "S1",
                 "selection": {"n_clusters": 2},
                 # One fold, one algorithm: every kind of report, as few notebooks as possible.
-                "folds": ["R2"],
-                "paper_fold": "R2",
+                "folds": [BUILT_RUNS[1]],
+                "paper_fold": BUILT_RUNS[1],
                 "models": {"algorithms": ["mlr"]},
                 "figures": {"algorithms": ["mlr"], "formats": ["png"], "dpi": 80},
                 "reports": {"model_algorithms": ["mlr"]},

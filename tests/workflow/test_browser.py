@@ -109,8 +109,8 @@ PAGES = (
     "rep/index.html",
     "rep/reports/paper_report.html",
     "rep/reports/dataset_report.html",
-    "rep/reports/condition_R1.html",
-    "rep/reports/model_R2.html",
+    "rep/reports/condition_01.html",
+    "rep/reports/model_02.html",
 )
 INDEXES = ("index.html", "rep/index.html")
 

@@ -21,7 +21,7 @@ from thermaxis.reports import provenance
 
 
 def report_pages(out: Path) -> list[Path]:
-    names = ["paper_report", "dataset_report", "condition_R1", "condition_R2", "model_R2"]
+    names = ["paper_report", "dataset_report", "condition_01", "condition_02", "model_02"]
     return [out / "reports" / f"{n}.html" for n in names]
 
 
@@ -31,8 +31,8 @@ def test_every_report_and_the_index_are_built(built):
         assert page.with_suffix(".ipynb").is_file(), page
     assert (built.out / "index.html").is_file()
     # One model report per fold, every approach side by side.
-    assert sorted(p.name for p in (built.out / "reports").glob("model_*.html")) == ["model_R2.html"]
-    page = (built.out / "reports" / "model_R2.html").read_text(encoding="utf-8")
+    assert sorted(p.name for p in (built.out / "reports").glob("model_*.html")) == ["model_02.html"]
+    page = (built.out / "reports" / "model_02.html").read_text(encoding="utf-8")
     assert "<h3>decoupled MLR</h3>" in page and "<h3>pointwise MLR</h3>" in page
 
 
@@ -98,8 +98,8 @@ def test_provenance_json_records_code_config_data_and_software(built):
         files["runs.tsv"] == hashlib.sha256((built.dataset / "runs.tsv").read_bytes()).hexdigest()
     )
     assert (
-        files["R2/errors/M03.csv"]
-        == hashlib.sha256((built.dataset / "R2/errors/M03.csv").read_bytes()).hexdigest()
+        files["02/errors/M03.csv"]
+        == hashlib.sha256((built.dataset / "02/errors/M03.csv").read_bytes()).hexdigest()
     )
     assert record["config"]["selection"]["n_clusters"] == 2
     canonical = json.dumps(record["config"], sort_keys=True, separators=(",", ":")).encode()
@@ -136,7 +136,7 @@ def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built, library_un
     """A dataset report and a model report made again, in new processes, have the same bytes
     (the session's `lines_run` makes no model reports, so this is where they are checked)."""
     assert planned_rules(snakemake(built, "-n")) - {"all"} == set()
-    pages = [built.out / "reports" / name for name in ("dataset_report.html", "model_R2.html")]
+    pages = [built.out / "reports" / name for name in ("dataset_report.html", "model_02.html")]
     before = [(page.read_bytes(), page.with_suffix(".ipynb").read_bytes()) for page in pages]
     rules = ("dataset_report", "model_report")
     snakemake(built, "--forcerun", *rules, "--until", *rules)

@@ -13,6 +13,7 @@ from thermaxis.labels import sort_naturally
 from thermaxis.method.decouple import decouple_table
 from thermaxis.paper.table5 import table5_markdown
 from thermaxis.pipeline.runner import csv_text, run_script, write_parquet, write_texts
+from thermaxis.tables import read_table
 
 
 def main(snakemake):
@@ -31,9 +32,9 @@ def main(snakemake):
         "signals": concat(inputs.signals, pd.read_parquet, ["run", "measurement", "signal"]),
         "inputs": concat(inputs.inputs, pd.read_parquet, ["run", "measurement", "input"]),
     }
-    qc = concat(inputs.qc, pd.read_csv, ["run", "sensor"])
+    qc = concat(inputs.qc, read_table, ["run", "sensor"])
     windows = {
-        run: pd.read_csv(path, parse_dates=["start", "end"])
+        run: read_table(path, parse_dates=["start", "end"])
         for run, path in zip(p.runs, inputs.windows, strict=True)
     }
     summary = dataset_summary(load_dataset(p.dataset), {run: len(w) for run, w in windows.items()})

@@ -34,6 +34,7 @@ from thermaxis.errors import SelectionWarning
 from thermaxis.method import recommend
 from thermaxis.method.folds import select_for_fold, selection_from_dict
 from thermaxis.pipeline.runner import csv_text, log_only, run_script, write_texts
+from thermaxis.tables import read_table
 
 SORT = ["fold", "measurement"]
 
@@ -71,13 +72,11 @@ def fitted_model(snakemake, X, Y, s, choice, steps) -> dict:
     if record is None:
         deployment = {"model": "paper", "candidate": "paper"}
         accuracy = heldout.held_out_accuracy(
-            pd.read_csv(snakemake.input.metrics), setup.approach, setup.settings.algorithm
+            read_table(snakemake.input.metrics), setup.approach, setup.settings.algorithm
         )
     else:
         deployment = {"model": p.model, "candidate": record["name"]}
-        scores = pd.concat(
-            [pd.read_csv(path) for path in snakemake.input.scores], ignore_index=True
-        )
+        scores = pd.concat([read_table(path) for path in snakemake.input.scores], ignore_index=True)
         accuracy = recommend.held_out_accuracy(scores, record["name"])
     # The deployed model sees every run, its sensitive points too.
     selection = _select(setup, Y, "all runs", "all", s["decoupling"].degree)
@@ -150,7 +149,7 @@ def fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps) -> tuple[str,
             logged_series(
                 pd.read_parquet(_run_log(inputs, fold)), pd.read_parquet(inputs.signal_series[i])
             ),
-            pd.read_csv(inputs.windows[i]),
+            read_table(inputs.windows[i]),
             sensors,
         )
     steps, _ = heldout.replay(model, X_run, cycles)
@@ -182,7 +181,7 @@ def with_verdict(fitted: dict, summary: pd.DataFrame, choice, settings) -> dict:
 
 def _reread(text: str, **kwargs) -> pd.DataFrame:
     """A table as a reader of its CSV file gets it back."""
-    return pd.read_csv(io.StringIO(text), **kwargs)
+    return read_table(io.StringIO(text), **kwargs)
 
 
 def main(snakemake):

@@ -4,8 +4,6 @@ provenance; and provenance.json (code, configuration, raw-data manifest, softwar
 import json
 import os
 
-import pandas as pd
-
 from thermaxis.pipeline.runner import run_script, write_texts
 from thermaxis.reports.answer import answer_of, answer_sentence
 from thermaxis.reports.crossdataset import model_ranking
@@ -21,6 +19,7 @@ from thermaxis.reports.index import (
     render_index,
 )
 from thermaxis.reports.provenance import collect, to_json
+from thermaxis.tables import read_table
 
 
 def main(snakemake):
@@ -65,7 +64,7 @@ def main(snakemake):
         for title, entries in p.figures
     ]
     tables = [
-        PageTable(title, pd.read_csv(path, comment="#"), rel(path), note)
+        PageTable(title, read_table(path, comment="#"), rel(path), note)
         for title, path, note in p.tables
     ]
     page = render_index(
@@ -89,11 +88,11 @@ def _headline(answer, figure: str, caption: str) -> Headline:
         deployment = json.load(fh)["deployment"]
     claims = None
     if os.path.isfile(answer["claims"]):
-        claims = claims_table(pd.read_csv(answer["claims"]), answer["claims"])
-    folds = pd.read_csv(answer["recommendation"])
+        claims = claims_table(read_table(answer["claims"]), answer["claims"])
+    folds = read_table(answer["recommendation"])
     return Headline(
         answer=answer_sentence(answer_of(folds, deployment)),
-        ranking=model_ranking(pd.read_csv(answer["metrics"])),
+        ranking=model_ranking(read_table(answer["metrics"])),
         recommendation=recommendation,
         deployment=deployment,
         comparison=deployment_comparison(folds),

@@ -21,6 +21,7 @@ from thermaxis.method.folds import SORT_KEYS, fold_models, selection_table
 from thermaxis.pipeline.parallel import fold_workers, map_folds
 from thermaxis.pipeline.runner import csv_text, run_script, write_texts
 from thermaxis.statistics import measurement_sums, metric_intervals, with_intervals
+from thermaxis.tables import read_table
 
 
 def main(snakemake):
@@ -63,7 +64,7 @@ def main(snakemake):
     # The collected tables are what a reader of the folds' files gets back.
     collected = {
         name: sort_naturally(
-            pd.concat([pd.read_csv(io.StringIO(t)) for t in tables[name]], ignore_index=True),
+            pd.concat([read_table(io.StringIO(t)) for t in tables[name]], ignore_index=True),
             keys,
         )
         for name, keys in SORT_KEYS.items()

@@ -24,6 +24,7 @@ from thermaxis.method.recommend import (
 from thermaxis.pipeline.parallel import fold_workers, map_folds
 from thermaxis.pipeline.runner import csv_text, log_only, run_script, write_texts
 from thermaxis.statistics import fold_means
+from thermaxis.tables import read_table
 
 
 def choice_record(result, candidates) -> dict:
@@ -83,7 +84,7 @@ def main(snakemake):
         }
         # The choice reads the scores as a reader of the folds' files gets them back.
         scores = pd.concat(
-            [pd.read_csv(io.StringIO(texts[path])) for path in output.scores], ignore_index=True
+            [read_table(io.StringIO(texts[path])) for path in output.scores], ignore_index=True
         )
         names = [c.name for c in candidates]
         result = collect(scores, names, "paper", recommend.score, recommend.level)

@@ -25,23 +25,24 @@ from thermaxis.statistics import (
     model_sums,
     selection_stability,
 )
+from thermaxis.tables import read_table
 
 
 def audit_texts(inputs, p, output, errors, temperatures) -> dict:
     """paper_comparison and faithfulness (CSV and Markdown), from the reproduced tables."""
     tables = ReproducedTables(
-        runs=pd.read_csv(inputs.summary),
-        ambient=pd.read_csv(inputs.ambient[0]),
+        runs=read_table(inputs.summary),
+        ambient=read_table(inputs.ambient[0]),
         # A single-position dataset has no decoupled k and b: the Table 5 items stay empty.
         kb=(
-            pd.read_csv(inputs.kb[0])
+            read_table(inputs.kb[0])
             if inputs.kb
             else pd.DataFrame(columns=["run", "measurement", "k_um_per_m", "b_um"])
         ),
-        metrics=pd.read_csv(inputs.metrics),
-        coefficients=pd.read_csv(inputs.coefficients),
-        sensitive_points=pd.read_csv(inputs.selection),
-        error_predictions=pd.read_csv(inputs.error_predictions),
+        metrics=read_table(inputs.metrics),
+        coefficients=read_table(inputs.coefficients),
+        sensitive_points=read_table(inputs.selection),
+        error_predictions=read_table(inputs.error_predictions),
         errors=errors,
         paper_fold=p.paper_fold,
     )
@@ -74,10 +75,10 @@ def main(snakemake):
         settings = StatisticsSettings.from_section(p.statistics)
         selection = SelectionSettings.from_section(p.selection)
         sums = measurement_sums(
-            pd.read_csv(inputs.kb_predictions), pd.read_csv(inputs.error_predictions)
+            read_table(inputs.kb_predictions), read_table(inputs.error_predictions)
         )
         models = model_sums(sums)
-        recommendation = compare_recommendation(pd.read_csv(inputs.recommendation), settings)
+        recommendation = compare_recommendation(read_table(inputs.recommendation), settings)
         comparisons = comparison_table(compare_models(models, settings), recommendation)
         errors = pd.read_parquet(inputs.errors)
         temperatures = pd.read_parquet(inputs.temperatures)

@@ -24,9 +24,11 @@ def _read(path: str, reader: str | None):
     """A table by its entry's reader, else by its suffix."""
     import pandas as pd
 
+    from thermaxis.tables import read_table
+
     if reader:
         return function(reader)(path)
-    return pd.read_parquet(path) if str(path).endswith(".parquet") else pd.read_csv(path)
+    return pd.read_parquet(path) if str(path).endswith(".parquet") else read_table(path)
 
 
 def _draw(figures: Sequence[Mapping], stamp: str | None, dpi: float | None) -> None:

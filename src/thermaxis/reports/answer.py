@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from thermaxis.tables import read_table
+
 __all__ = ["answer_of", "answer_sentence", "read_answer", "main"]
 
 
@@ -82,7 +84,7 @@ def answer_sentence(answer: dict) -> str:
 def read_answer(results: Path | str) -> dict:
     """The answer of ``results/<dataset>`` from its recommendation.csv and model.json."""
     results = Path(results)
-    folds = pd.read_csv(results / "tables" / "recommendation.csv", comment="#")
+    folds = read_table(results / "tables" / "recommendation.csv", comment="#")
     with open(results / "compensation" / "model.json", encoding="utf-8") as fh:
         deployment = json.load(fh)["deployment"]
     return answer_of(folds, deployment)

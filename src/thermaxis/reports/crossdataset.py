@@ -37,6 +37,7 @@ from thermaxis.config import StatisticsSettings, load_config, validate_config
 from thermaxis.errors import DataError
 from thermaxis.figures import registry
 from thermaxis.statistics.resampling import fold_mean_interval
+from thermaxis.tables import read_table
 
 # The figure table's entry of the one figure this command draws.
 FIGURE = registry.entry("heldout_error")
@@ -75,7 +76,7 @@ def read_metrics(path) -> pd.DataFrame:
     """One dataset's metrics.csv, checked for the columns the summary needs."""
     path = Path(path)
     try:
-        frame = pd.read_csv(
+        frame = read_table(
             path, keep_default_na=False, na_values=[""]
         )  # "n/a" is an error, not a gap
     except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:

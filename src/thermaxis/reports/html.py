@@ -33,6 +33,7 @@ from pathlib import Path
 import pandas as pd
 
 from thermaxis.reports.formatting import format_cell
+from thermaxis.tables import read_table
 
 __all__ = [
     "REPORT_CSS",
@@ -85,7 +86,7 @@ def load_table(path) -> pd.DataFrame:
     if path.suffix == ".parquet":
         return pd.read_parquet(path)
     if path.suffix == ".csv":
-        return pd.read_csv(path)
+        return read_table(path)
     raise ValueError(
         f"{path}: cannot read a {path.suffix or 'suffix-less'} file as a table; expected .csv or .parquet"
     )

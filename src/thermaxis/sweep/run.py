@@ -39,6 +39,7 @@ import pandas as pd
 from thermaxis.config import ModelSettings, SelectionSettings
 from thermaxis.method.metrics import METRIC_COLUMNS
 from thermaxis.sweep.plan import FACTORS, LEVEL_ORDER, Configuration, SelectionSpec, SweepGrid, Unit
+from thermaxis.tables import read_table as read_labelled
 
 __all__ = [
     "SUMMARY_COLUMNS",
@@ -342,7 +343,7 @@ def _as_summary_frame(rows: list[dict]) -> pd.DataFrame:
 
 def read_table(path) -> pd.DataFrame:
     """summary.csv or ranking.csv with the integer factors as nullable integers (empty = n/a)."""
-    return pd.read_csv(path, dtype={name: "Int64" for name in _INTEGER_FACTORS})
+    return read_labelled(path, dtype={name: "Int64" for name in _INTEGER_FACTORS})
 
 
 def collect_summary(frames: Iterable[pd.DataFrame]) -> pd.DataFrame:
