@@ -70,6 +70,11 @@ def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path
         logging.getLogger("py.warnings").warning(
             f"cd.py:7: ConvergenceWarning: Objective did not converge. Duality gap: {gap}"
         )
+    # PLS's, with the component it stopped at: a solver's warning too.
+    for k in (3, 4):
+        logging.getLogger("py.warnings").warning(
+            f"_pls.py:308: UserWarning: y residual is constant at iteration {k}"
+        )
     logging.getLogger("thermaxis").warning("fold S3: another text")
     for handler in logging.getLogger("thermaxis").handlers:
         handler.flush()
@@ -80,6 +85,7 @@ def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path
         "thermaxis warning: fold S3: another text",
     ]
     assert log.read_text().count("Objective did not converge") == 3
+    assert log.read_text().count("y residual is constant") == 2
     logging.captureWarnings(False)
 
 

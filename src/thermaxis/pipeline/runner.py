@@ -23,10 +23,14 @@ from thermaxis.errors import DataError
 __all__ = ["run_script", "atomic_path", "write_csv", "write_text"]
 
 
-# A solver's warning of this category differs in its numbers at every fit (LARS's
-# dropped regressor, a GP's length scale at its bound), so text alone would not
-# collapse it: a job shows its first one.
-_ONCE_PER_JOB = "ConvergenceWarning: "
+# A solver's warning differs in its numbers at every fit (LARS's dropped regressor, a
+# GP's length scale at its bound, the PLS component after which the target has nothing
+# left to fit), so text alone would not collapse it: a job shows its first one.
+_ONCE_PER_JOB = ("ConvergenceWarning: ", "y residual is constant at iteration")
+
+
+def _solver_warning(message: str) -> bool:
+    return any(marker in message for marker in _ONCE_PER_JOB)
 
 
 class _OneLine(logging.Formatter):
@@ -37,7 +41,7 @@ class _OneLine(logging.Formatter):
     def format(self, record):
         first = record.getMessage().splitlines()[0] if record.getMessage() else ""
         text = f"thermaxis warning: {self._LOCATION.sub('', first)}"
-        if _ONCE_PER_JOB in first:
+        if _solver_warning(first):
             text += " (the first of this job's solver warnings; the job's log has them all)"
         return text
 
@@ -54,7 +58,7 @@ class _Once(logging.Filter):
         if record.levelno != logging.WARNING:
             return False
         text = _OneLine().format(record)
-        key = _ONCE_PER_JOB if _ONCE_PER_JOB in record.getMessage() else text
+        key = "solver" if _solver_warning(record.getMessage()) else text
         if key in self._seen:
             return False
         self._seen.add(key)
