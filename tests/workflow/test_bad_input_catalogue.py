@@ -88,6 +88,12 @@ def _write_lines(path: Path, lines: list[str]) -> None:
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
+def _start_at(path: Path, time: str) -> None:
+    """Drop a log's rows before ``time`` (ISO 8601, as the log writes it)."""
+    lines = _lines(path)
+    _write_lines(path, lines[:1] + [line for line in lines[1:] if line.split(",")[0] >= time])
+
+
 def _cell(path: Path, line: int, column: str, value: str) -> None:
     """Set one cell (``line`` 1-based, header = 1) of a comma-separated file."""
     lines = _lines(path)
@@ -1103,6 +1109,17 @@ CASES = [
         lambda ds, w: _write_lines(ds / E2_BOX, _lines(ds / E2_BOX)[:30]),
         # Every box sensor (T1-T10) is unusable in E2 and leaves: two remain for three clusters.
         "3 clusters but only 2 sensors vary",
+        target="select:E2",
+    ),
+    Case(
+        "temp_every_log_starts_late",
+        # Every log of E2 starts 12 minutes after its first measurement ended: no sensor
+        # has a reading there, so every one is unusable in E2 and none is left.
+        lambda ds, w: [
+            _start_at(path, "2022-03-15T13:20:00")
+            for path in sorted((ds / "E2" / "temperatures").glob("*.csv"))
+        ],
+        "every sensor (T1, T2, T3, T4, T5, T6, T7, T8, T9, T10, T11, T12) misses a measurement",
         target="select:E2",
     ),
     Case(

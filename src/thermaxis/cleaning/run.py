@@ -262,6 +262,8 @@ def derived_inputs(tables: RunTables, lags_min, rates_min) -> pd.DataFrame:
     t = tables.temperatures
     unusable = pd.unique(t.loc[t["absolute_c"].isna(), "sensor"]).tolist()
     values = frame.drop(columns=["time", *unusable]).interpolate(limit_direction="both")
+    if values.columns.empty:  # no sensor usable in this run and no signal: nothing to filter
+        return pd.DataFrame(columns=columns)
     frame = pd.concat([frame[["time"]], values], axis=1)
     windows = tables.windows
     derived = time_inputs.inputs_at_measurements(
@@ -554,8 +556,10 @@ def model_inputs(
     wide = temperatures.pivot_table(
         index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True
     )
-    # A sensor unusable in every run has no value to pivot, and is still a column.
-    wide = wide.reindex(columns=pd.unique(temperatures["sensor"]))
+    # A sensor unusable in every run has no value to pivot, and is still a column; a
+    # measurement no sensor was read in (every log of the run starts late) is still a row.
+    read = pd.MultiIndex.from_frame(temperatures[["run", "measurement"]].drop_duplicates())
+    wide = wide.reindex(index=wide.index.union(read), columns=pd.unique(temperatures["sensor"]))
     if sensors is None:
         # Natural order (T2 before T10), so clusters and tables read like the paper's.
         sensors = sorted(wide.columns, key=natural_key)
