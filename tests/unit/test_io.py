@@ -274,3 +274,49 @@ def test_a_missing_operating_signal_column_is_refused(tmp_path):
     assert one_line(exc) == (
         f"{log}: missing column 'spindle_rpm' (declared for this source in dataset.yaml)"
     )
+
+
+def _with_signal(dataset_root, logged_from: str | None = None, empty_run: str | None = None):
+    """tiny_dataset with a spindle speed logged beside the temperatures (box's times)."""
+    edit_yaml(
+        dataset_root / "dataset.yaml",
+        lambda d: d.update(signals=[{"id": "spindle_rpm", "unit": "rpm", "source": "box"}]),
+    )
+    for run in ("R1", "R2"):
+        times = [
+            line.split(",")[0]
+            for line in (dataset_root / run / "temperatures" / "box.csv")
+            .read_text()
+            .splitlines()[1:]
+        ]
+        if logged_from and run == "R1":
+            times = [t for t in times if t >= logged_from]
+        value = "" if run == empty_run else "1500"
+        (dataset_root / run / "signals").mkdir()
+        (dataset_root / run / "signals" / "box.csv").write_text(
+            "time,spindle_rpm\n" + "".join(f"{t},{value}\n" for t in times)
+        )
+    return load_dataset(dataset_root)
+
+
+def test_a_signal_with_no_reading_in_a_run_is_refused(tiny_dataset):
+    dataset = _with_signal(tiny_dataset, empty_run="R2")
+    assert check_run_plausibility(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning) == []
+    with pytest.raises(DataError) as exc:
+        check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning)
+    assert one_line(exc).startswith(
+        f"{tiny_dataset / 'R2' / 'signals' / 'box.csv'}: column 'spindle_rpm': no reading in any row"
+    )
+
+
+def test_a_signal_log_that_starts_inside_the_measurements_is_named(tiny_dataset):
+    # The first measurement starts at 09:00; the speed is logged from 09:30 on. Held back
+    # by max_gap_s / 2 (300 s) at most, as a temperature is, it would be silently invented.
+    dataset = _with_signal(tiny_dataset, logged_from="2022-05-10T09:30:00")
+    notes = check_run_plausibility(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning)
+    assert notes == [
+        f"run R1: {tiny_dataset / 'R1' / 'signals' / 'box.csv'}: signal spindle_rpm has no reading "
+        "before 2022-05-10 09:30:00, 30 min after the first measurement starts; its first value "
+        "stands for it before then"
+    ]
+    assert check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning) == []

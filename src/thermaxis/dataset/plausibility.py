@@ -145,6 +145,7 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
             f"{interval_s:g} s is longer than run {raw.run} lasts ({span_s:g} s from its first to its last reading); "
             "expected a grid step well below the time between measurements",
         )
+    notes += signal_coverage(dataset, raw, windows, cleaning.temperatures.max_gap_s / 2.0)
     median_c = cleaning.plausible_median_c
     if not median_c[0] < median_c[1]:
         raise _error(
@@ -161,6 +162,42 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
         notes += sensor_median_warnings(
             medians, *median_c, where=str(folder / "temperatures" / f"{source}.csv")
         )
+    return notes
+
+
+def signal_coverage(dataset, raw, windows: pd.DataFrame, hold_s: float) -> list[str]:
+    """Refuse a declared signal with no reading in a run (every model that uses signals
+    reads it); warn where its log starts or ends more than ``hold_s`` (half of
+    ``temperatures.max_gap_s``, the temperatures' rule) inside the measurements, since a
+    signal is held at its first and last values there, which the log does not show."""
+    notes = []
+    first, last = windows["start"].min(), windows["end"].max()
+    offsets = dataset.clock_offsets_s()
+    for source, frame in raw.signals.items():
+        path = dataset.root / raw.run / "signals" / f"{source}.csv"
+        times = pd.to_datetime(frame["time"]) + pd.Timedelta(seconds=offsets.get(source, 0.0))
+        for signal in (c for c in frame.columns if c != "time"):
+            logged = times[np.isfinite(frame[signal].to_numpy(dtype=float))]
+            if logged.empty:
+                raise _error(
+                    path,
+                    f"column {signal!r}: no reading in any row; expected the signal's readings "
+                    f"over run {raw.run} (every model that uses the signal reads it)",
+                )
+            late = (logged.min() - first).total_seconds()
+            early = (last - logged.max()).total_seconds()
+            if late > hold_s:
+                notes.append(
+                    f"run {raw.run}: {path}: signal {signal} has no reading before {logged.min()}, "
+                    f"{late / 60:.0f} min after the first measurement starts; its first value stands "
+                    "for it before then"
+                )
+            if early > hold_s:
+                notes.append(
+                    f"run {raw.run}: {path}: signal {signal} has no reading after {logged.max()}, "
+                    f"{early / 60:.0f} min before the last measurement ends; its last value stands "
+                    "for it after then"
+                )
     return notes
 
 
