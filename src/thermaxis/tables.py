@@ -26,7 +26,6 @@ LABEL_COLUMNS = (
     "dataset",
     "candidate",
     "config_id",
-    "main_config",
 )
 
 

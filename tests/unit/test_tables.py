@@ -27,8 +27,9 @@ def test_labels_stay_text_and_numbers_stay_numbers(tmp_path):
 
 def test_a_sweep_table_keeps_its_labels_and_its_integer_factors(tmp_path):
     path = tmp_path / "summary.csv"
-    path.write_text("config_id,fold,n_clusters,degree,sensors\nc,02,3,,k=01+02\n")
+    path.write_text("config_id,fold,n_clusters,degree,sensors,main_config\nc,02,3,,k=01+02,True\n")
     table = read_sweep_table(path)
     assert table["fold"].tolist() == ["02"]
+    assert table["main_config"].tolist() == [True]  # a flag, not a label
     assert str(table["n_clusters"].dtype) == "Int64" and table["n_clusters"].tolist() == [3]
     assert table["degree"].isna().all()
