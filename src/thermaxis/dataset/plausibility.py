@@ -170,6 +170,8 @@ def signal_coverage(dataset, raw, windows: pd.DataFrame, hold_s: float) -> list[
     reads it); warn where its log starts or ends more than ``hold_s`` (half of
     ``temperatures.max_gap_s``, the temperatures' rule) inside the measurements, since a
     signal is held at its first and last values there, which the log does not show."""
+    if not raw.signals:
+        return []
     notes = []
     first, last = windows["start"].min(), windows["end"].max()
     offsets = dataset.clock_offsets_s()
