@@ -305,7 +305,7 @@ def save_figure(fig: Figure, paths, dpi: float | None = None) -> None:
                 )
                 if i == 0:
                     # The layout is in figure fractions: solved once for the first
-                    # format, it holds for the others (a third of a PDF's cost).
+                    # format, it holds for the others (a layout pass is about a quarter of a save).
                     fig.set_layout_engine("none")
     finally:
         plt.close(fig)
