@@ -320,3 +320,26 @@ def test_a_signal_log_that_starts_inside_the_measurements_is_named(tiny_dataset)
         "stands for it before then"
     ]
     assert check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning) == []
+
+
+def test_errors_written_in_mm_are_named(tiny_dataset):
+    # A few micrometres of drift written in mm: every reading below 0.05 um.
+    for path in (tiny_dataset / "R1" / "errors").glob("*.csv"):
+        lines = path.read_text().splitlines()
+        rows = [line.split(",") for line in lines[1:]]
+        path.write_text(
+            "\n".join(
+                [lines[0]] + [",".join([t, x, f"{float(e) / 1000:.9f}", d]) for t, x, e, d in rows]
+            )
+            + "\n"
+        )
+    dataset = load_dataset(tiny_dataset)
+    notes = check_run_plausibility(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning)
+    # The builder's largest R1 error, measurement 4 at 150 mm: -8.5 um/m x 0.15 m - 2.1 um
+    # = -3.375 um, written 0.003375 (mm); shown to 3 digits, 0.003375 rounds down in binary.
+    assert notes == [
+        f"run R1: {tiny_dataset / 'R1' / 'errors'}: every error reading is within ±0.00337 um, "
+        "below the 0.05 um a thermal error reaches; error_um is in micrometres (readings in mm "
+        "are 1000 times too small)"
+    ]
+    assert check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning) == []

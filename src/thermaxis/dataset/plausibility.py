@@ -128,6 +128,7 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
             ),
             lines,
         )
+    notes += error_scale_warnings(raw, folder)
     windows = raw.windows()
     overlapping = np.flatnonzero(windows["start"].to_numpy()[1:] < windows["end"].to_numpy()[:-1])
     if overlapping.size:
@@ -249,6 +250,25 @@ def check_time_range(path, parsed: pd.Series, values: pd.Series, column: str = "
         column,
         lambda i: f"expected a time between 1678 and 2261, got {values.iloc[i]!r}",
     )
+
+
+# A run whose every error reading is smaller than this (in um) was most likely written in
+# mm: thermal drift over hours and expansion along a stroke reach micrometres, and an
+# interferometer's noise alone is some hundredths of a micrometre.
+MIN_LARGEST_ERROR_UM = 0.05
+
+
+def error_scale_warnings(raw, folder: Path) -> list[str]:
+    """A warning for a run whose errors are all below :data:`MIN_LARGEST_ERROR_UM`."""
+    readings = [m["error_um"].to_numpy(dtype=float) for m in raw.measurements.values()]
+    largest = max((float(np.nanmax(np.abs(r))) for r in readings if r.size), default=0.0)
+    if largest >= MIN_LARGEST_ERROR_UM:
+        return []
+    return [
+        f"run {raw.run}: {error_source(folder)}: every error reading is within ±{largest:.3g} um, "
+        f"below the {MIN_LARGEST_ERROR_UM:g} um a thermal error reaches; error_um is in "
+        "micrometres (readings in mm are 1000 times too small)"
+    ]
 
 
 def check_error_readings(path, errors_um: np.ndarray, max_abs_um: float, lines=None) -> None:
