@@ -248,6 +248,16 @@ def test_measurements_ordered_by_time_not_name(tiny_dataset):
     assert raw.windows()["measurement"].tolist() == [1, 2, 3, 4]
 
 
+def _notes(dataset, run: str) -> list[str]:
+    """The run's plausibility warnings under the default cleaning settings."""
+    return check_run_plausibility(dataset, read_run(dataset, run), DEFAULTS.cleaning)
+
+
+def _warns_of_r1_only(dataset, message: str) -> None:
+    assert _notes(dataset, "R1") == [message]
+    assert _notes(dataset, "R2") == []
+
+
 def test_files_the_reader_skips_are_named(tiny_dataset):
     # Only *.csv is read: an XLSX beside the exports or an upper-case suffix would vanish
     # unsaid; a hidden file is left unmentioned.
@@ -256,12 +266,12 @@ def test_files_the_reader_skips_are_named(tiny_dataset):
     (errors / "M04.csv").rename(errors / "M04.CSV")
     (errors / ".DS_Store").write_bytes(b"")
     dataset = load_dataset(tiny_dataset)
-    notes = check_run_plausibility(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning)
+    notes = _notes(dataset, "R1")
     assert notes == [
         f"{errors}: skipped M04.CSV, M05.xlsx: only .csv files are read "
         "(export a spreadsheet as CSV, with a lower-case .csv suffix)"
     ]
-    other = check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning)
+    other = _notes(dataset, "R2")
     assert other == []
 
 
@@ -301,9 +311,9 @@ def _with_signal(dataset_root, logged_from: str | None = None, empty_run: str | 
 
 def test_a_signal_with_no_reading_in_a_run_is_refused(tiny_dataset):
     dataset = _with_signal(tiny_dataset, empty_run="R2")
-    assert check_run_plausibility(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning) == []
+    assert _notes(dataset, "R1") == []
     with pytest.raises(DataError) as exc:
-        check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning)
+        _notes(dataset, "R2")
     assert one_line(exc).startswith(
         f"{tiny_dataset / 'R2' / 'signals' / 'box.csv'}: column 'spindle_rpm': no reading in any row"
     )
@@ -313,13 +323,12 @@ def test_a_signal_log_that_starts_inside_the_measurements_is_named(tiny_dataset)
     # The first measurement starts at 09:00; the speed is logged from 09:30 on. Held back
     # by max_gap_s / 2 (300 s) at most, as a temperature is, it would be silently invented.
     dataset = _with_signal(tiny_dataset, logged_from="2022-05-10T09:30:00")
-    notes = check_run_plausibility(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning)
-    assert notes == [
+    _warns_of_r1_only(
+        dataset,
         f"run R1: {tiny_dataset / 'R1' / 'signals' / 'box.csv'}: signal spindle_rpm has no reading "
         "before 2022-05-10 09:30:00, 30 min after the first measurement starts; its first value "
-        "stands for it before then"
-    ]
-    assert check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning) == []
+        "stands for it before then",
+    )
 
 
 def test_errors_written_in_mm_are_named(tiny_dataset):
@@ -333,13 +342,11 @@ def test_errors_written_in_mm_are_named(tiny_dataset):
             )
             + "\n"
         )
-    dataset = load_dataset(tiny_dataset)
-    notes = check_run_plausibility(dataset, read_run(dataset, "R1"), DEFAULTS.cleaning)
     # The builder's largest R1 error, measurement 4 at 150 mm: -8.5 um/m x 0.15 m - 2.1 um
     # = -3.375 um, written 0.003375 (mm); shown to 3 digits, 0.003375 rounds down in binary.
-    assert notes == [
+    _warns_of_r1_only(
+        load_dataset(tiny_dataset),
         f"run R1: {tiny_dataset / 'R1' / 'errors'}: every error reading is within ±0.00337 um, "
         "below the 0.05 um a thermal error reaches; error_um is in micrometres (readings in mm "
-        "are 1000 times too small)"
-    ]
-    assert check_run_plausibility(dataset, read_run(dataset, "R2"), DEFAULTS.cleaning) == []
+        "are 1000 times too small)",
+    )
