@@ -371,6 +371,11 @@ def read_temperature_source(
             if sensor in columns
             else np.full(len(out), np.nan)
         )
+        if kind != "sensor" and out[sensor].isna().all():
+            raise DataError(
+                f"{path}: column {sensor!r}: no reading in any row; expected the signal's readings "
+                "(every model that uses the signal reads it)"
+            )
     return out
 
 
