@@ -28,7 +28,7 @@ from thermaxis.statistics import (
 from thermaxis.tables import read_table
 
 
-def audit_texts(inputs, p, output, errors, temperatures) -> dict:
+def audit_texts(inputs, p, output, errors, temperatures, error_predictions) -> dict:
     """paper_comparison and faithfulness (CSV and Markdown), from the reproduced tables."""
     tables = ReproducedTables(
         runs=read_table(inputs.summary),
@@ -42,7 +42,7 @@ def audit_texts(inputs, p, output, errors, temperatures) -> dict:
         metrics=read_table(inputs.metrics),
         coefficients=read_table(inputs.coefficients),
         sensitive_points=read_table(inputs.selection),
-        error_predictions=read_table(inputs.error_predictions),
+        error_predictions=error_predictions,
         errors=errors,
         paper_fold=p.paper_fold,
     )
@@ -74,9 +74,8 @@ def main(snakemake):
         p, inputs, output = snakemake.params, snakemake.input, snakemake.output
         settings = StatisticsSettings.from_section(p.statistics)
         selection = SelectionSettings.from_section(p.selection)
-        sums = measurement_sums(
-            read_table(inputs.kb_predictions), read_table(inputs.error_predictions)
-        )
+        error_predictions = read_table(inputs.error_predictions)
+        sums = measurement_sums(read_table(inputs.kb_predictions), error_predictions)
         models = model_sums(sums)
         recommendation = compare_recommendation(read_table(inputs.recommendation), settings)
         comparisons = comparison_table(compare_models(models, settings), recommendation)
@@ -99,7 +98,7 @@ def main(snakemake):
             output.stability: csv_text(stability, float_format="%.6f"),
         }
         if p.paper:
-            texts.update(audit_texts(inputs, p, output, errors, temperatures))
+            texts.update(audit_texts(inputs, p, output, errors, temperatures, error_predictions))
         write_texts(texts)
 
 
