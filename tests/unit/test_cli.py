@@ -66,6 +66,23 @@ def _leading_dash(ds: Path) -> None:
     (ds / "E2/errors/M03.csv").rename(ds / "E2/errors/-M03.csv")
 
 
+def _blank_later_error(ds: Path) -> None:
+    path = ds / "E4/errors/M07.csv"
+    lines = path.read_text().splitlines()
+    lines[4] = "2022-03-18T12:32:55,245,,+"  # file line 5
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _clock_put_back_an_hour(ds: Path) -> None:
+    """E3's box log from file line 600 (10:09:40, every 10 s from 08:30:00) an hour earlier."""
+    path = ds / "E3/temperatures/box.csv"
+    lines = path.read_text().splitlines()
+    for i in range(599, len(lines)):
+        hour = int(lines[i][11:13]) - 1
+        lines[i] = f"{lines[i][:11]}{hour:02d}{lines[i][13:]}"
+    path.write_text("\n".join(lines) + "\n")
+
+
 # The messages of tests/workflow/CATALOGUE.md for the same edits (<ds> is the dataset folder).
 @pytest.mark.parametrize(
     "edit, message",
@@ -74,8 +91,12 @@ def _leading_dash(ds: Path) -> None:
         (_bad_kind, "thermaxis error: <ds>/dataset.yaml: provenance/kind: 'guessed' is not one of ['simulated', 'measured']"),
         (_leading_dash, "thermaxis error: <ds>/E2/errors/-M03.csv: measurement '-M03' is not a safe name (expected "
                         "letters, digits, '_', '.', '-', starting with a letter, digit or '_', at most 128 characters)"),
+        # Files `check` reads beyond each run's first measurement: nothing is said to pass.
+        (_blank_later_error, "thermaxis error: <ds>/E4/errors/M07.csv: line 5, column 'error_um': expected a number, got ''"),
+        (_clock_put_back_an_hour, "thermaxis error: <ds>/E3/temperatures/box.csv: line 600, column 'time': time goes backwards "
+                                  "(2022-03-17 09:09:40 after 2022-03-17 10:09:30); a daylight-saving change? log in UTC or in standard time"),
     ],
-    ids=["runs_comma_separated", "yaml_bad_kind", "measurement_leading_dash"],
+    ids=["runs_comma_separated", "yaml_bad_kind", "measurement_leading_dash", "later_error_blank", "log_clock_dst"],
 )  # fmt: skip
 def test_check_refuses_a_bad_dataset_with_the_workflows_one_line(edit, message, tmp_path):
     ds = tmp_path / "cut"

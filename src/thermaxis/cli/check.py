@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from thermaxis.dataset.reader import read_measurements_of
+from thermaxis.dataset.reader import read_run
 from thermaxis.pipeline.preflight import Checked
 
 __all__ = ["overview_lines"]
@@ -11,8 +11,8 @@ __all__ = ["overview_lines"]
 def overview_lines(checked: Checked) -> list[str]:
     """Runs, measurements per run, sensors, positions and each run's time span, as lines.
 
-    Reads every run's measurements (the full reader's checks, which the workflow makes
-    in its first jobs), so a bad later file is named here too.
+    Reads every run's logs and measurements (the full reader's checks, which the
+    workflow makes in its first jobs), so a bad later file is named here too.
     """
     dataset = checked.dataset
     kind = "SIMULATED" if dataset.simulated else "MEASURED"
@@ -25,7 +25,7 @@ def overview_lines(checked: Checked) -> list[str]:
     ]
     width = max(len(r) for r in checked.runs)
     for run in checked.runs:
-        measurements, _, _ = read_measurements_of(dataset, run)
+        measurements = read_run(dataset, run).measurements
         firsts = [m["time"].min() for m in measurements.values()]
         lasts = [m["time"].max() for m in measurements.values()]
         span = (max(lasts) - min(firsts)).total_seconds() / 3600.0

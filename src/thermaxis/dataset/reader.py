@@ -38,6 +38,9 @@ RUN_COLUMNS = ("run", "condition", "description")
 ERROR_COLUMNS = ("time", "position_mm", "error_um")
 # One file per run holding every measurement, told apart by this column.
 MEASUREMENT_COLUMN = "measurement"
+# How far back (hours) a clock's step must go to be named as a likely daylight-saving
+# change: an hour less one sample interval of up to 30 min, and a minute's slack.
+DST_BACK_H = (0.5, 1.0 + 1.0 / 60.0)
 
 
 def _schema_error(path: Path, error: jsonschema.ValidationError, where: str = "") -> DataError:
@@ -326,12 +329,17 @@ def _parse_numbers(path: Path, frame: pd.DataFrame, column: str, allow_empty: bo
 
 def _check_time_order(path: Path, time: pd.Series, where: str = "") -> None:
     """Times must not go back; the series' index is the row's position in the file (header = line 1)."""
-    back = np.flatnonzero(np.diff(time.to_numpy().astype("int64")) < 0)
+    step = np.diff(time.to_numpy().astype("int64"))
+    back = np.flatnonzero(step < 0)
     if back.size:
         i = int(back[0]) + 1
+        # A clock put back by up to an hour, less the sample interval, is most often a
+        # daylight-saving change.
+        hour = DST_BACK_H[0] <= -step[i - 1] / 3.6e12 <= DST_BACK_H[1]
         raise DataError(
             f"{path}: line {int(time.index[i]) + 2}, column 'time': time goes backwards "
             f"({time.iloc[i]} after {time.iloc[i - 1]}){where}"
+            + ("; a daylight-saving change? log in UTC or in standard time" if hour else "")
         )
 
 
