@@ -23,6 +23,7 @@ def _deployment(ok: bool, change_r2: float):
         "candidate": "pointwise-mlr-all",
         "recommended_for_deployment": ok,
         "verdict": {
+            "max_worsening_um": 0.1,
             "runs": [
                 {
                     "run": "R1",
@@ -62,3 +63,13 @@ def test_no_safe_candidate_says_so_and_names_the_run_it_fails_on():
         and "more runs like R2" in text
     )
     assert "best" not in text
+
+
+def test_a_loss_the_verdict_tolerates_is_called_a_loss_not_a_gain():
+    # R2 gets worse by 0.06 µm, under the verdict's 0.1 µm: deployed, and said so.
+    text = answer_sentence(answer_of(_folds(), _deployment(True, 0.06)))
+    assert (
+        "Held-out run R2 decides it: largest |deviation| 5.00 -> 5.06 µm, worse by 0.06 µm, "
+        "within compensation.max_worsening_um 0.1 µm." in text
+    )
+    assert "the smallest gain" not in text

@@ -47,6 +47,18 @@ def answer_of(folds: pd.DataFrame, deployment: dict) -> dict:
         else {"largest_abs": "largest |deviation|", "E": "E of ISO 230-2"}[quantity],
         deciding_before_um=None if deciding is None else float(deciding[f"{quantity}_before_um"]),
         deciding_after_um=None if deciding is None else float(deciding[f"{quantity}_after_um"]),
+        max_worsening_um=deployment.get("verdict", {}).get("max_worsening_um"),
+    )
+
+
+def _least_helped(answer: dict) -> str:
+    """The deciding run's change in words: a gain, or a loss the verdict tolerates."""
+    loss = answer["deciding_after_um"] - answer["deciding_before_um"]
+    if loss <= 0:
+        return "the smallest gain"
+    return (
+        f"worse by {loss:.2f} µm, within compensation.max_worsening_um "
+        f"{answer['max_worsening_um']:g} µm"
     )
 
 
@@ -63,7 +75,7 @@ def answer_sentence(answer: dict) -> str:
         decides = (
             f" Held-out run {run} decides it: {answer['deciding_quantity']} "
             f"{answer['deciding_before_um']:.2f} -> "
-            f"{answer['deciding_after_um']:.2f} µm, the smallest gain."
+            f"{answer['deciding_after_um']:.2f} µm, {_least_helped(answer)}."
             if run
             else ""
         )
