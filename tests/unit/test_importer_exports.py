@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -186,3 +187,74 @@ def test_two_channels_of_one_id_are_refused_before_anything_is_written(tmp_path)
     with pytest.raises(DataError, match=r"rig.yaml: errors/channels: id 'X' given more than once"):
         import_dataset(path, tmp_path / "raw" / "rig")
     assert not (tmp_path / "raw").exists()
+
+
+def _european_export(path: Path, stamps: list[pd.Timestamp]) -> None:
+    """The _clock_table record as a German spreadsheet writes it: ';' between columns, a
+    decimal comma, the date and the time of day in columns of their own, Windows code page."""
+    lines = ["Datum;Uhrzeit;Temp A [°C];Temp B [°C];dx (um)"]
+    for i, t in enumerate(stamps):
+        temp_a = f"{20 + 2 * i / (len(stamps) - 1):.4f}".replace(".", ",")
+        lines.append(f"{t:%d.%m.%Y};{t:%H:%M:%S};{temp_a};21,0;{i},0")
+    path.write_bytes(("\r\n".join(lines) + "\r\n").encode("cp1252"))
+
+
+def _european_mapping(tmp_path: Path, csv: dict | None) -> Path:
+    path = _clock_mapping(tmp_path, "%d.%m.%Y %H:%M:%S")
+    mapping = yaml.safe_load(path.read_text())
+    mapping["source"] = "export.csv"
+    mapping["time"] = {"columns": ["Datum", "Uhrzeit"], "format": "%d.%m.%Y %H:%M:%S"}
+    mapping["sensors"] = [{"column": "Temp A [°C]", "id": "TA"}, {"column": "Temp B [°C]", "id": "TB"}]
+    if csv is not None:
+        mapping["csv"] = csv
+    path.write_text(yaml.safe_dump(mapping, allow_unicode=True), encoding="utf-8")
+    return path
+
+
+EUROPEAN = {"delimiter": ";", "decimal": ",", "encoding": "cp1252"}
+
+
+def test_a_european_spreadsheet_export_imports_as_its_plain_twin(tmp_path):
+    start = pd.Timestamp("2020-06-15 08:01:02")
+    times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]
+    _european_export(tmp_path / "export.csv", times)
+    dataset = load_dataset(import_dataset(_european_mapping(tmp_path, EUROPEAN), tmp_path / "eu").out)
+    # As in the plain ISO 8601 import above: R2 is [3600, 7200) s after 08:01:02.
+    late = pd.read_csv(dataset.root / "R2" / "errors.csv")
+    assert late["time"].tolist() == [
+        "2020-06-15T09:01:02",
+        "2020-06-15T09:21:02",
+        "2020-06-15T09:41:02",
+    ]
+    assert late["error_um"].tolist() == [6.0, 8.0, 10.0]
+    logged = pd.read_csv(dataset.root / "R1" / "temperatures" / "logger.csv")
+    assert logged["TA"].tolist()[:3] == [20.0, 20.1818, 20.3636]  # 20 + 2 i / 11, 4 decimals
+    assert "logged clock times of columns 'Datum' + 'Uhrzeit'" in dataset.meta["description"]
+
+
+@pytest.mark.parametrize(
+    "csv, message",
+    [
+        (None, "export.csv: not utf-8 text (byte 0xb0 at offset 22); set csv.encoding in the mapping"),
+        ({"encoding": "cp1252"}, "export.csv: one column 'Datum;Uhrzeit;Temp A [°C];Temp B [°C];dx (um)': "
+                                 "looks ';'-separated; set csv.delimiter: ';' in the mapping"),
+        ({"encoding": "cp1252", "delimiter": ";"}, "export.csv: row 2, column 'Temp A [°C]': expected a finite "
+                                                   "number, got '20,0000'; a decimal comma? set csv.decimal: ','"),
+        ({"encoding": "cp-9999"}, "clock.yaml: csv/encoding: unknown encoding 'cp-9999'"),
+    ],
+    ids=["encoding", "delimiter", "decimal", "unknown_encoding"],
+)  # fmt: skip
+def test_each_setting_a_european_export_needs_is_named_when_it_is_missing(tmp_path, csv, message):
+    _european_export(tmp_path / "export.csv", [pd.Timestamp("2020-06-15 08:00") + pd.Timedelta(hours=i) for i in range(3)])
+    with pytest.raises(DataError, match=re.escape(message)):
+        import_dataset(_european_mapping(tmp_path, csv), tmp_path / "raw" / "eu")
+    assert not (tmp_path / "raw").exists() or not any((tmp_path / "raw").iterdir())
+
+
+def test_split_clock_columns_need_a_format(tmp_path):
+    path = _european_mapping(tmp_path, EUROPEAN)
+    mapping = yaml.safe_load(path.read_text(encoding="utf-8"))
+    mapping["time"] = {"columns": ["Datum", "Uhrzeit"], "start": "2020-06-15T08:00:00"}
+    path.write_text(yaml.safe_dump(mapping, allow_unicode=True), encoding="utf-8")
+    with pytest.raises(DataError, match="clock.yaml: time:"):
+        import_dataset(path, tmp_path / "raw" / "eu")

@@ -10,8 +10,9 @@ clock, re-referencing, subsampling, how runs were cut) is appended to the genera
 ``dataset.yaml`` description, so it travels with the data.
 
 Time is a column of elapsed time in ``time.unit`` (s, min or h), a column of clock
-times (``time.format``: ``ISO8601`` or a strftime format), or one row every
-``time.interval_s``.  After the import each run is summarised (duration, samples,
+times (``time.format``: ``ISO8601`` or a strftime format; a date and a time of day in
+columns of their own are ``time.columns``), or one row every ``time.interval_s``. A CSV
+is read with the mapping's ``csv`` delimiter, decimal mark and encoding.  After the import each run is summarised (duration, samples,
 measurements) and a run too short or too long for a thermal test, or with fewer
 measurements than the workflow needs, is warned about with the likely unit mistake.
 
@@ -21,7 +22,9 @@ place; nothing half-written is left behind.
 
 from __future__ import annotations
 
+import codecs
 import copy
+import re
 import shutil
 import tempfile
 from collections.abc import Callable
@@ -47,6 +50,7 @@ __all__ = [
     "read_table",
     "read_numeric",
     "read_seconds",
+    "time_columns",
     "read_start",
     "split_runs",
     "measurements_of",
@@ -113,6 +117,13 @@ def load_mapping(path) -> dict:
         raise DataError(f"{path}: {where}: {errors[0].message}")
     fill_defaults(mapping, schema)
     mapping["time"].setdefault("column", None)
+    try:
+        codecs.lookup(mapping["csv"]["encoding"])
+    except LookupError:
+        raise DataError(
+            f"{path}: csv/encoding: unknown encoding {mapping['csv']['encoding']!r} "
+            "(expected a Python codec name, e.g. utf-8 or cp1252)"
+        ) from None
     _check_ids(path, mapping)
     return mapping
 
@@ -154,9 +165,20 @@ def _check_ids(path: Path, mapping: dict) -> None:
         )
 
 
-def read_table(path, sheet=0) -> pd.DataFrame:
-    """A wide table, one row per sample; column names stripped of surrounding spaces."""
+# The mapping's `csv` section when it gives none (the schema's defaults).
+PLAIN_CSV = {"delimiter": ",", "decimal": ".", "encoding": "utf-8"}
+# A cell such as 20,15 or -0,5: a number written with a decimal comma.
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+$")
+
+
+def read_table(path, sheet=0, csv: dict | None = None) -> pd.DataFrame:
+    """A wide table, one row per sample; column names stripped of surrounding spaces.
+
+    ``csv`` (the mapping's section: delimiter, decimal, encoding) says how a CSV is
+    written; an XLSX workbook carries its own.
+    """
     path = Path(path)
+    csv = {**PLAIN_CSV, **(csv or {})}
     if not path.is_file():
         raise DataError(f"{path}: file not found (the mapping's source)")
     suffix = path.suffix.lower()
@@ -164,12 +186,29 @@ def read_table(path, sheet=0) -> pd.DataFrame:
         if suffix in (".xlsx", ".xlsm"):
             frame = pd.read_excel(path, sheet_name=sheet)
         elif suffix in (".csv", ".txt"):
-            frame = pd.read_csv(path)
+            # utf-8-sig reads UTF-8 with or without the byte-order mark Excel writes.
+            encoding = "utf-8-sig" if codecs.lookup(csv["encoding"]).name == "utf-8" else csv["encoding"]
+            frame = pd.read_csv(
+                path, sep=csv["delimiter"], decimal=csv["decimal"], encoding=encoding
+            )
         else:
             raise DataError(f"{path}: expected a .csv or .xlsx table, got {suffix or 'no suffix'}")
+    except UnicodeDecodeError as exc:
+        raise DataError(
+            f"{path}: not {csv['encoding']} text (byte 0x{exc.object[exc.start]:02x} at offset "
+            f"{exc.start}); set csv.encoding in the mapping (cp1252 for a Windows export in "
+            "Western Europe)"
+        ) from None
     except (ValueError, KeyError) as exc:
         raise DataError(f"{path}: cannot read the table ({str(exc).splitlines()[0]})") from None
     frame.columns = [str(c).strip() for c in frame.columns]
+    if len(frame.columns) == 1:
+        other = next((d for d in (";", "\t", ",", "|") if d in frame.columns[0]), None)
+        if other and other != csv["delimiter"]:
+            raise DataError(
+                f"{path}: one column {frame.columns[0][:60]!r}: looks {other!r}-separated; "
+                f"set csv.delimiter: {other!r} in the mapping"
+            )
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
     return frame
@@ -189,37 +228,61 @@ def read_numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool
     bad = ~np.isfinite(values) & (frame[column].notna().to_numpy() if allow_empty else True)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
+        cell = frame[column].iloc[i]
+        hint = (
+            "; a decimal comma? set csv.decimal: ',' in the mapping"
+            if _DECIMAL_COMMA.match(str(cell).strip())
+            else ""
+        )
         raise DataError(
-            f"{path}: row {i + 2}, column {column!r}: expected a finite number, got {frame[column].iloc[i]!r}"
+            f"{path}: row {i + 2}, column {column!r}: expected a finite number, got {cell!r}{hint}"
         )
     return values
 
 
+def time_columns(time: dict) -> list[str]:
+    """The columns the mapping's ``time`` section reads the time from (none: ``interval_s``)."""
+    if time.get("columns"):
+        return list(time["columns"])
+    return [time["column"]] if time.get("column") else []
+
+
+def _words(columns: list[str]) -> str:
+    """Columns as messages name them: column 'time', or columns 'Datum' + 'Uhrzeit'."""
+    if len(columns) == 1:
+        return f"column {columns[0]!r}"
+    return "columns " + " + ".join(repr(c) for c in columns)
+
+
 def _clock(path: Path, frame: pd.DataFrame, time: dict) -> pd.DatetimeIndex:
-    """The clock-time column, parsed with the mapping's format; a zone is converted to UTC."""
-    column, fmt = time["column"], time["format"]
-    if column not in frame.columns:
-        raise DataError(
-            f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
-        )
-    text = frame[column].astype(str).str.strip()
+    """The clock-time column(s), parsed with the mapping's format; a zone is converted to UTC.
+
+    Several columns (a date and a time) are joined with a space, as ``format`` expects.
+    """
+    columns, fmt = time_columns(time), time["format"]
+    for column in columns:
+        if column not in frame.columns:
+            raise DataError(
+                f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
+            )
+    text = frame[columns].astype(str).apply(lambda col: col.str.strip()).agg(" ".join, axis=1)
     # utc=True: naive times stay as they are, zoned ones (even mixed offsets) become UTC.
     parsed = pd.to_datetime(text, format=fmt, errors="coerce", utc=True)
     if parsed.isna().any():
         i = int(np.flatnonzero(parsed.isna().to_numpy())[0])
         expected = "an ISO 8601 clock time" if fmt == "ISO8601" else f"a clock time in {fmt!r}"
         raise DataError(
-            f"{path}: row {i + 2}, column {column!r}: expected {expected}, got {text.iloc[i]!r}"
+            f"{path}: row {i + 2}, {_words(columns)}: expected {expected}, got {text.iloc[i]!r}"
         )
     return pd.DatetimeIndex(parsed).tz_localize(None)
 
 
-def _increasing(path: Path, column: str, t: np.ndarray) -> np.ndarray:
+def _increasing(path: Path, columns: list[str], t: np.ndarray) -> np.ndarray:
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         i = int(back[0]) + 1
         raise DataError(
-            f"{path}: row {i + 2}, column {column!r}: time does not increase ({t[i]:g} after {t[i - 1]:g} s)"
+            f"{path}: row {i + 2}, {_words(columns)}: time does not increase ({t[i]:g} after {t[i - 1]:g} s)"
         )
     return t
 
@@ -230,7 +293,7 @@ def read_seconds(path: Path, frame: pd.DataFrame, time: dict) -> np.ndarray:
     An elapsed-time column is scaled from its ``unit``; a clock-time column counts from its
     first row; without a column row i is at i x ``interval_s``. Time must increase.
     """
-    if time["column"] is None:
+    if not time_columns(time):
         return np.arange(len(frame), dtype=float) * float(time["interval_s"])
     if time.get("format"):
         clock = _clock(path, frame, time)
@@ -240,7 +303,7 @@ def read_seconds(path: Path, frame: pd.DataFrame, time: dict) -> np.ndarray:
             read_numeric(path, frame, time["column"], allow_empty=False)
             * TIME_UNITS_S[time["unit"]]
         )
-    return _increasing(path, time["column"], t)
+    return _increasing(path, time_columns(time), t)
 
 
 def read_start(path: Path, frame: pd.DataFrame, time: dict) -> pd.Timestamp:
@@ -371,7 +434,7 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
     notes = []
     if time.get("format"):
         notes.append(
-            f"Times are the logged clock times of column {time['column']!r} (format {time['format']}); "
+            f"Times are the logged clock times of {_words(time_columns(time))} (format {time['format']}); "
             "a time zone, where given, was converted to UTC."
         )
     elif time["column"]:
@@ -472,14 +535,14 @@ def _runs_rows(mapping_path: Path, mapping: dict, progress: Progress) -> list[tu
         for i, run in enumerate(mapping["runs"]):
             table_path = source / run["file"]
             progress(i, len(mapping["runs"]), f"reading {run['file']}")
-            frame = read_table(table_path, mapping["sheet"])
+            frame = read_table(table_path, mapping["sheet"], mapping["csv"])
             pieces.append(
                 (_tidy(table_path, frame, mapping), read_start(table_path, frame, mapping["time"]))
             )
         progress(len(mapping["runs"]), len(mapping["runs"]), "tables read")
         return pieces
     progress(0, 1, f"reading {source.name}")
-    frame = read_table(source, mapping["sheet"])
+    frame = read_table(source, mapping["sheet"], mapping["csv"])
     start = read_start(source, frame, mapping["time"])
     runs = split_runs(_tidy(source, frame, mapping), mapping, str(mapping_path))
     progress(1, 1, "table read")
