@@ -230,6 +230,10 @@ def test_a_european_spreadsheet_export_imports_as_its_plain_twin(tmp_path):
     logged = pd.read_csv(dataset.root / "R1" / "temperatures" / "logger.csv")
     assert logged["TA"].tolist()[:3] == [20.0, 20.1818, 20.3636]  # 20 + 2 i / 11, 4 decimals
     assert "logged clock times of columns 'Datum' + 'Uhrzeit'" in dataset.meta["description"]
+    assert (
+        "A CSV source was read with ';' between columns, a decimal comma and the cp1252 encoding"
+        in dataset.meta["description"]
+    )
 
 
 @pytest.mark.parametrize(

@@ -447,6 +447,13 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
             f"The source has no time column: row i is taken at i x {time['interval_s']:g} s after {time['start']}, "
             "an invented clock."
         )
+    if mapping["csv"] != PLAIN_CSV:
+        csv = mapping["csv"]
+        notes.append(
+            f"A CSV source was read with {csv['delimiter']!r} between columns, a decimal "
+            f"{'comma' if csv['decimal'] == ',' else 'point'} and the {csv['encoding']} encoding, "
+            "as the mapping states."
+        )
     split = mapping["split"]
     if split["by"] == "signal":
         notes.append(
