@@ -37,7 +37,7 @@ def _deployment(ok: bool, change_r2: float):
                     "largest_abs_after_um": 5.0 + change_r2,
                     "largest_abs_change_um": change_r2,
                 },
-            ]
+            ],
         },
     }
 

@@ -204,7 +204,10 @@ def _european_mapping(tmp_path: Path, csv: dict | None) -> Path:
     mapping = yaml.safe_load(path.read_text())
     mapping["source"] = "export.csv"
     mapping["time"] = {"columns": ["Datum", "Uhrzeit"], "format": "%d.%m.%Y %H:%M:%S"}
-    mapping["sensors"] = [{"column": "Temp A [°C]", "id": "TA"}, {"column": "Temp B [°C]", "id": "TB"}]
+    mapping["sensors"] = [
+        {"column": "Temp A [°C]", "id": "TA"},
+        {"column": "Temp B [°C]", "id": "TB"},
+    ]
     if csv is not None:
         mapping["csv"] = csv
     path.write_text(yaml.safe_dump(mapping, allow_unicode=True), encoding="utf-8")
@@ -218,7 +221,9 @@ def test_a_european_spreadsheet_export_imports_as_its_plain_twin(tmp_path):
     start = pd.Timestamp("2020-06-15 08:01:02")
     times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]
     _european_export(tmp_path / "export.csv", times)
-    dataset = load_dataset(import_dataset(_european_mapping(tmp_path, EUROPEAN), tmp_path / "eu").out)
+    dataset = load_dataset(
+        import_dataset(_european_mapping(tmp_path, EUROPEAN), tmp_path / "eu").out
+    )
     # As in the plain ISO 8601 import above: R2 is [3600, 7200) s after 08:01:02.
     late = pd.read_csv(dataset.root / "R2" / "errors.csv")
     assert late["time"].tolist() == [
@@ -249,7 +254,10 @@ def test_a_european_spreadsheet_export_imports_as_its_plain_twin(tmp_path):
     ids=["encoding", "delimiter", "decimal", "unknown_encoding"],
 )  # fmt: skip
 def test_each_setting_a_european_export_needs_is_named_when_it_is_missing(tmp_path, csv, message):
-    _european_export(tmp_path / "export.csv", [pd.Timestamp("2020-06-15 08:00") + pd.Timedelta(hours=i) for i in range(3)])
+    _european_export(
+        tmp_path / "export.csv",
+        [pd.Timestamp("2020-06-15 08:00") + pd.Timedelta(hours=i) for i in range(3)],
+    )
     with pytest.raises(DataError, match=re.escape(message)):
         import_dataset(_european_mapping(tmp_path, csv), tmp_path / "raw" / "eu")
     assert not (tmp_path / "raw").exists() or not any((tmp_path / "raw").iterdir())

@@ -5,7 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from thermaxis.compensation.iso230 import NOT_COMPUTED, QUANTITIES, single_pass_quantities
+from thermaxis.compensation.iso230 import (
+    NEEDS_READINGS,
+    NOT_COMPUTED,
+    QUANTITIES,
+    single_pass_quantities,
+)
 
 
 def test_three_targets_both_directions():
@@ -42,3 +47,13 @@ def test_quantities_needing_repeated_cycles_are_named_not_computed():
     assert not set(NOT_COMPUTED) & set(QUANTITIES)
     with pytest.raises(ValueError, match="at least one pass"):
         single_pass_quantities()
+
+
+def test_one_target_has_no_span_but_its_reversal():
+    # A single-point record: E_up, E_down and M are spans over one target (none); E spans
+    # the two directions' readings 0.5 and -0.25 (0.75), B is their difference.
+    q = single_pass_quantities([0.5], [-0.25])
+    assert all(math.isnan(q[name]) for name in ("E_up", "E_down", "M"))
+    assert (q["E"], q["B"]) == pytest.approx((0.75, 0.75))
+    assert math.isnan(single_pass_quantities(up=[0.5])["E_up"])
+    assert set(NEEDS_READINGS) == set(QUANTITIES)  # each one's note where it is not given

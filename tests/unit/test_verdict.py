@@ -59,3 +59,20 @@ def test_worsening_within_the_tolerance_is_still_recommended():
 def test_no_held_out_rows_is_refused():
     with pytest.raises(ValueError, match="needs at least one held-out run"):
         deployment_verdict(summary([]), max_worsening_um=0.1)
+
+
+def test_a_single_point_record_is_judged_on_its_largest_deviation_alone():
+    # One target read in one direction: no span, so no E (NaN) in any measurement.
+    nan = float("nan")
+    rows = [
+        ("R1", 1, 4.0, 1.0, nan, nan),
+        ("R1", 2, 6.0, 2.0, nan, nan),
+        ("R2", 1, 3.0, 2.5, nan, nan),
+    ]
+    verdict = deployment_verdict(summary(rows), max_worsening_um=0.1)
+    assert "E" not in verdict
+    assert verdict["largest_abs"]["median_reduction_um"] == pytest.approx(2.25)  # (6-2, 3-2.5)
+    assert sorted(verdict["runs"][0]) == [
+        "largest_abs_after_um", "largest_abs_before_um", "largest_abs_change_um", "run",
+    ]  # fmt: skip
+    assert verdict["recommended_for_deployment"] is True

@@ -264,14 +264,22 @@ def _iso_rows(
     label: dict, q_before: Mapping[str, float], q_after: Mapping[str, float]
 ) -> list[dict]:
     """The ISO 230-2 quantities one measurement gives, before and after, and those it cannot give."""
-    from thermaxis.compensation.iso230 import NEEDS_CYCLES, NOT_COMPUTED, QUANTITIES
+    from thermaxis.compensation.iso230 import NEEDS_CYCLES, NEEDS_READINGS, NOT_COMPUTED, QUANTITIES
 
     def row(name, description, before, after, computed, note):
         return {**label, "quantity": name, "description": description, "uncompensated_um": before,
                 "compensated_um": after, "computed": computed, "note": note}  # fmt: skip
 
+    given = {name: bool(np.isfinite(q_before[name])) for name in QUANTITIES}
     computed = [
-        row(name, description, q_before[name], q_after[name], bool(np.isfinite(q_before[name])), "")
+        row(
+            name,
+            description,
+            q_before[name],
+            q_after[name],
+            given[name],
+            "" if given[name] else NEEDS_READINGS[name],
+        )
         for name, description in QUANTITIES.items()
     ]
     return computed + [

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["QUANTITIES", "NOT_COMPUTED", "single_pass_quantities"]
+__all__ = ["QUANTITIES", "NEEDS_READINGS", "NOT_COMPUTED", "single_pass_quantities"]
 
 QUANTITIES = {
     "E_up": "unidirectional systematic positional deviation, + direction",
@@ -28,6 +28,16 @@ QUANTITIES = {
     "E": "bidirectional systematic positional deviation",
     "M": "mean bidirectional positional deviation",
     "B": "reversal value of the axis",
+}
+
+# What each quantity needs from one measurement, said where a measurement does not give it
+# (a single-point record, one direction only, readings missing).
+NEEDS_READINGS = {
+    "E_up": "needs a + pass read at two targets or more",
+    "E_down": "needs a - pass read at two targets or more",
+    "E": "needs both passes, or one pass read at two targets or more",
+    "M": "needs two targets or more read in both directions",
+    "B": "needs a target read in both directions",
 }
 
 NEEDS_CYCLES = "needs repeated approaches (ISO 230-2: 5 per target and direction); a thermal-drift pass has one"
@@ -44,8 +54,9 @@ NOT_COMPUTED = {
 
 
 def _span(values: np.ndarray) -> float:
+    """max - min of the readings; a span needs two (one target in one direction has none)."""
     finite = values[np.isfinite(values)]
-    return float(finite.max() - finite.min()) if finite.size else float("nan")
+    return float(finite.max() - finite.min()) if finite.size >= 2 else float("nan")
 
 
 def single_pass_quantities(up=None, down=None) -> dict[str, float]:

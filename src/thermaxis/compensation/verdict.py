@@ -30,12 +30,19 @@ QUANTITIES = (
 )
 
 
+def _available(summary: pd.DataFrame) -> list[tuple]:
+    """The quantities the held-out measurements give: E needs a span of readings, which a
+    single-point record (one target in one direction) does not have."""
+    return [q for q in QUANTITIES if summary[q[1]].notna().any()]
+
+
 def run_changes(summary: pd.DataFrame) -> pd.DataFrame:
-    """Per held-out run: each quantity's worst value over its measurements, before and after."""
+    """Per held-out run: each available quantity's worst value over its measurements, before
+    and after."""
     grouped = summary.groupby("run", sort=False)
     runs = sorted(grouped.groups, key=natural_key)
     columns = {"run": runs}
-    for name, before, after, _ in QUANTITIES:
+    for name, before, after, _ in _available(summary):
         worst_before = grouped[before].max().loc[runs].to_numpy(dtype=float)
         worst_after = grouped[after].max().loc[runs].to_numpy(dtype=float)
         columns[f"{name}_before_um"] = worst_before
@@ -58,7 +65,7 @@ def deployment_verdict(summary: pd.DataFrame, max_worsening_um: float) -> dict:
     changes = run_changes(summary)
     verdict: dict = {"held_out_runs": len(changes), "max_worsening_um": float(max_worsening_um)}
     reasons = []
-    for name, _, _, words in QUANTITIES:
+    for name, _, _, words in _available(summary):
         change = changes[f"{name}_change_um"].to_numpy()
         verdict[name] = {
             "improved_runs": int((change < 0).sum()),

@@ -187,7 +187,9 @@ def read_table(path, sheet=0, csv: dict | None = None) -> pd.DataFrame:
             frame = pd.read_excel(path, sheet_name=sheet)
         elif suffix in (".csv", ".txt"):
             # utf-8-sig reads UTF-8 with or without the byte-order mark Excel writes.
-            encoding = "utf-8-sig" if codecs.lookup(csv["encoding"]).name == "utf-8" else csv["encoding"]
+            encoding = (
+                "utf-8-sig" if codecs.lookup(csv["encoding"]).name == "utf-8" else csv["encoding"]
+            )
             frame = pd.read_csv(
                 path, sep=csv["delimiter"], decimal=csv["decimal"], encoding=encoding
             )
