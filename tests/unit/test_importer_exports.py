@@ -270,3 +270,32 @@ def test_split_clock_columns_need_a_format(tmp_path):
     path.write_text(yaml.safe_dump(mapping, allow_unicode=True), encoding="utf-8")
     with pytest.raises(DataError, match="clock.yaml: time:"):
         import_dataset(path, tmp_path / "raw" / "eu")
+
+
+def test_a_workbooks_typed_date_and_time_cells_are_read_whatever_their_display_format(tmp_path):
+    import datetime
+
+    import openpyxl
+
+    start = datetime.datetime(2020, 6, 15, 8, 1, 2)
+    book = openpyxl.Workbook()
+    sheet = book.active
+    sheet.append(["Datum", "Uhrzeit", "temp A", "temp B", "dx (um)"])
+    for i in range(12):
+        t = start + datetime.timedelta(minutes=10 * i)
+        sheet.append([t.date(), t.time(), 20 + 2 * i / 11, 21.0, float(i)])
+        sheet.cell(row=i + 2, column=1).number_format = "DD.MM.YYYY"  # as Excel shows it
+    book.save(tmp_path / "clock.xlsx")
+    path = _clock_mapping(tmp_path, "%d.%m.%Y %H:%M:%S")
+    mapping = yaml.safe_load(path.read_text())
+    mapping["source"] = "clock.xlsx"
+    mapping["time"] = {"columns": ["Datum", "Uhrzeit"], "format": "%d.%m.%Y %H:%M:%S"}
+    path.write_text(yaml.safe_dump(mapping))
+    dataset = load_dataset(import_dataset(path, tmp_path / "xlsx").out)
+    # As the CSV imports above: R2 is [3600, 7200) s after 08:01:02.
+    late = pd.read_csv(dataset.root / "R2" / "errors.csv")
+    assert late["time"].tolist() == [
+        "2020-06-15T09:01:02",
+        "2020-06-15T09:21:02",
+        "2020-06-15T09:41:02",
+    ]

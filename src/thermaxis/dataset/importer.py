@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import codecs
 import copy
+import datetime
 import re
 import shutil
 import tempfile
@@ -256,10 +257,19 @@ def _words(columns: list[str]) -> str:
     return "columns " + " + ".join(repr(c) for c in columns)
 
 
+def _typed_clock(column: pd.Series) -> bool:
+    """Whether a column holds a workbook's typed dates, times or timestamps, not text."""
+    if pd.api.types.is_datetime64_any_dtype(column):
+        return True
+    return bool(column.map(lambda v: isinstance(v, (datetime.date, datetime.time))).all())
+
+
 def _clock(path: Path, frame: pd.DataFrame, time: dict) -> pd.DatetimeIndex:
     """The clock-time column(s), parsed with the mapping's format; a zone is converted to UTC.
 
     Several columns (a date and a time) are joined with a space, as ``format`` expects.
+    A workbook's own date and time cells (typed, whatever their display format) are
+    read as they are, so ``format`` then describes text cells only.
     """
     columns, fmt = time_columns(time), time["format"]
     for column in columns:
@@ -267,6 +277,8 @@ def _clock(path: Path, frame: pd.DataFrame, time: dict) -> pd.DatetimeIndex:
             raise DataError(
                 f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
             )
+    if all(_typed_clock(frame[column]) for column in columns):
+        fmt = "ISO8601"  # pandas renders typed dates and times as ISO 8601 text
     text = frame[columns].astype(str).apply(lambda col: col.str.strip()).agg(" ".join, axis=1)
     # utc=True: naive times stay as they are, zoned ones (even mixed offsets) become UTC.
     parsed = pd.to_datetime(text, format=fmt, errors="coerce", utc=True)
