@@ -143,6 +143,37 @@ def test_importer_refuses_a_wrong_run_count_and_leaves_nothing(tmp_path):
     assert not (tmp_path / "raw").exists() or not any((tmp_path / "raw").iterdir())
 
 
+def test_a_speed_that_is_never_exactly_zero_at_rest_splits_with_a_tolerance(tmp_path):
+    path = _mapping(tmp_path)
+    table = pd.read_csv(tmp_path / "wide.csv")
+    # A logged standstill of 0.4 to 1.6 rpm: no sample is exactly 0, so without a tolerance
+    # the record is one active block.
+    at_rest = table["speed"] == 0
+    table.loc[at_rest, "speed"] = 0.4 + 1.2 * (np.arange(at_rest.sum()) % 2)
+    table.to_csv(tmp_path / "wide.csv", index=False)
+    with pytest.raises(DataError, match="found 1 run\\(s\\) but the mapping lists 3"):
+        import_dataset(path, tmp_path / "raw" / "wide")
+    mapping = yaml.safe_load(path.read_text())
+    mapping["split"]["tolerance"] = 2.0
+    path.write_text(yaml.safe_dump(mapping))
+    out = import_dataset(path, tmp_path / "raw" / "wide").out
+    # The same cut as exactly 0 at rest: run 2 starts at 1500 s.
+    assert pd.read_csv(out / "B2" / "errors.csv")["time"].iloc[0] == "2030-01-01T00:25:00"
+
+
+def test_a_signal_noisy_at_rest_is_named_when_it_cuts_too_many_runs(tmp_path):
+    path = _mapping(tmp_path)
+    table = pd.read_csv(tmp_path / "wide.csv")
+    table.loc[[2, 40], "speed"] = 3.0  # two blips at standstill: two more rest-to-active steps
+    table.to_csv(tmp_path / "wide.csv", index=False)
+    with pytest.raises(
+        DataError,
+        match="found 5 run\\(s\\) but the mapping lists 3; expected one entry in runs per "
+        "rest-to-active step; a signal that is not exactly 0 at rest\\? set split.tolerance",
+    ):
+        import_dataset(path, tmp_path / "raw" / "wide")
+
+
 def test_importer_names_a_missing_column(tmp_path):
     mapping = _mapping(tmp_path, sensors=[{"column": "temp C", "id": "TC"}])
     with pytest.raises(DataError, match=r"wide.csv: missing column 'temp C'"):

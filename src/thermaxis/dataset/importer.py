@@ -357,7 +357,9 @@ def split_runs(rows: pd.DataFrame, mapping: dict, where: str = "mapping") -> lis
     """
     split = mapping["split"]
     if split["by"] == "signal":
-        active = rows[split["signal"]].to_numpy(dtype=float) != float(split["rest"])
+        # NaN (a missing reading) is never within the tolerance: it counts as active, as before.
+        offset = np.abs(rows[split["signal"]].to_numpy(dtype=float) - float(split["rest"]))
+        active = ~(offset <= float(split["tolerance"]))
         starts = np.flatnonzero(active[1:] & ~active[:-1]) + 1
         if not active[0] and starts.size and starts[0] > 0:
             starts = starts[1:]  # the standstill before the first step belongs to the first run
@@ -373,9 +375,14 @@ def split_runs(rows: pd.DataFrame, mapping: dict, where: str = "mapping") -> lis
                     f"{where}: run {run['name']!r}: no sample in [{run['start_s']:g}, {run['end_s']:g}) s"
                 )
     if len(pieces) != len(mapping["runs"]):
+        noisy = (
+            f"; a signal that is not exactly {split['rest']:g} at rest? set split.tolerance"
+            if split["by"] == "signal" and len(pieces) > len(mapping["runs"])
+            else ""
+        )
         raise DataError(
             f"{where}: split by signal {split['signal']!r} found {len(pieces)} run(s) but the mapping lists "
-            f"{len(mapping['runs'])}; expected one entry in runs per rest-to-active step"
+            f"{len(mapping['runs'])}; expected one entry in runs per rest-to-active step{noisy}"
         )
     return [p.reset_index(drop=True) for p in pieces]
 
