@@ -151,7 +151,9 @@ def test_a_speed_that_is_never_exactly_zero_at_rest_splits_with_a_tolerance(tmp_
     at_rest = table["speed"] == 0
     table.loc[at_rest, "speed"] = 0.4 + 1.2 * (np.arange(at_rest.sum()) % 2)
     table.to_csv(tmp_path / "wide.csv", index=False)
-    with pytest.raises(DataError, match="found 1 run\\(s\\) but the mapping lists 3"):
+    with pytest.raises(
+        DataError, match="found 1 run\\(s\\) but the mapping lists 3; .*set split.tolerance"
+    ):
         import_dataset(path, tmp_path / "raw" / "wide")
     mapping = yaml.safe_load(path.read_text())
     mapping["split"]["tolerance"] = 2.0
