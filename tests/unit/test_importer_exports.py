@@ -136,6 +136,20 @@ def _clock_mapping(tmp_path: Path, fmt: str) -> Path:
     return path
 
 
+def _assert_r2_read_as_logged(dataset) -> pd.DataFrame:
+    """The record of _clock_table (every 10 min from 08:01:02, dx = the sample's index) after
+    the import of _clock_mapping: R2 is [3600, 7200) s, samples 6 .. 11, a measurement
+    every 20 min."""
+    late = pd.read_csv(dataset.root / "R2" / "errors.csv")
+    assert late["time"].tolist() == [
+        "2020-06-15T09:01:02",
+        "2020-06-15T09:21:02",
+        "2020-06-15T09:41:02",
+    ]
+    assert late["error_um"].tolist() == [6.0, 8.0, 10.0]
+    return late
+
+
 def test_clock_times_are_read_as_logged_in_iso_8601_or_a_stated_format(tmp_path):
     start = pd.Timestamp("2020-06-15 08:01:02")
     times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]  # 08:01:02 .. 09:51:02
@@ -143,14 +157,7 @@ def test_clock_times_are_read_as_logged_in_iso_8601_or_a_stated_format(tmp_path)
     dataset = load_dataset(
         import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "iso").out
     )
-    late = pd.read_csv(dataset.root / "R2" / "errors.csv")
-    # R2 is [3600, 7200) s after 08:01:02: samples 6 .. 11, a measurement every 20 min.
-    assert late["time"].tolist() == [
-        "2020-06-15T09:01:02",
-        "2020-06-15T09:21:02",
-        "2020-06-15T09:41:02",
-    ]
-    assert late["error_um"].tolist() == [6.0, 8.0, 10.0]
+    late = _assert_r2_read_as_logged(dataset)
     assert "logged clock times of column 'when'" in dataset.meta["description"]
 
     _clock_table(tmp_path / "clock.csv", [t.strftime("%d.%m.%Y %H:%M:%S") for t in times])
@@ -224,14 +231,7 @@ def test_a_european_spreadsheet_export_imports_as_its_plain_twin(tmp_path):
     dataset = load_dataset(
         import_dataset(_european_mapping(tmp_path, EUROPEAN), tmp_path / "eu").out
     )
-    # As in the plain ISO 8601 import above: R2 is [3600, 7200) s after 08:01:02.
-    late = pd.read_csv(dataset.root / "R2" / "errors.csv")
-    assert late["time"].tolist() == [
-        "2020-06-15T09:01:02",
-        "2020-06-15T09:21:02",
-        "2020-06-15T09:41:02",
-    ]
-    assert late["error_um"].tolist() == [6.0, 8.0, 10.0]
+    _assert_r2_read_as_logged(dataset)
     logged = pd.read_csv(dataset.root / "R1" / "temperatures" / "logger.csv")
     assert logged["TA"].tolist()[:3] == [20.0, 20.1818, 20.3636]  # 20 + 2 i / 11, 4 decimals
     assert "logged clock times of columns 'Datum' + 'Uhrzeit'" in dataset.meta["description"]
@@ -292,10 +292,4 @@ def test_a_workbooks_typed_date_and_time_cells_are_read_whatever_their_display_f
     mapping["time"] = {"columns": ["Datum", "Uhrzeit"], "format": "%d.%m.%Y %H:%M:%S"}
     path.write_text(yaml.safe_dump(mapping))
     dataset = load_dataset(import_dataset(path, tmp_path / "xlsx").out)
-    # As the CSV imports above: R2 is [3600, 7200) s after 08:01:02.
-    late = pd.read_csv(dataset.root / "R2" / "errors.csv")
-    assert late["time"].tolist() == [
-        "2020-06-15T09:01:02",
-        "2020-06-15T09:21:02",
-        "2020-06-15T09:41:02",
-    ]
+    _assert_r2_read_as_logged(dataset)
