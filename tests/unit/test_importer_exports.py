@@ -263,6 +263,24 @@ def test_each_setting_a_european_export_needs_is_named_when_it_is_missing(tmp_pa
     assert not (tmp_path / "raw").exists() or not any((tmp_path / "raw").iterdir())
 
 
+def test_a_date_without_its_time_of_day_is_named_as_a_coarse_clock(tmp_path):
+    stamps = [pd.Timestamp("2020-06-15 08:00") + pd.Timedelta(minutes=10 * i) for i in range(3)]
+    _european_export(tmp_path / "export.csv", stamps)
+    path = _european_mapping(tmp_path, EUROPEAN)
+    mapping = yaml.safe_load(path.read_text(encoding="utf-8"))
+    mapping["time"] = {"column": "Datum", "format": "%d.%m.%Y"}
+    path.write_text(yaml.safe_dump(mapping, allow_unicode=True), encoding="utf-8")
+    with pytest.raises(
+        DataError,
+        match=re.escape(
+            "export.csv: row 3, column 'Datum': time does not increase (0 after 0 s); a clock "
+            "coarser than the logging (a date without its time of day, or whole seconds logged "
+            "faster than once a second)?"
+        ),
+    ):
+        import_dataset(path, tmp_path / "raw" / "eu")
+
+
 def test_split_clock_columns_need_a_format(tmp_path):
     path = _european_mapping(tmp_path, EUROPEAN)
     mapping = yaml.safe_load(path.read_text(encoding="utf-8"))

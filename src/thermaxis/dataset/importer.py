@@ -295,8 +295,15 @@ def _increasing(path: Path, columns: list[str], t: np.ndarray) -> np.ndarray:
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         i = int(back[0]) + 1
+        repeated = (
+            "; a clock coarser than the logging (a date without its time of day, or whole "
+            "seconds logged faster than once a second)?"
+            if t[i] == t[i - 1]
+            else ""
+        )
         raise DataError(
-            f"{path}: row {i + 2}, {_words(columns)}: time does not increase ({t[i]:g} after {t[i - 1]:g} s)"
+            f"{path}: row {i + 2}, {_words(columns)}: time does not increase "
+            f"({t[i]:g} after {t[i - 1]:g} s){repeated}"
         )
     return t
 
