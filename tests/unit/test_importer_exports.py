@@ -311,3 +311,20 @@ def test_a_workbooks_typed_date_and_time_cells_are_read_whatever_their_display_f
     path.write_text(yaml.safe_dump(mapping))
     dataset = load_dataset(import_dataset(path, tmp_path / "xlsx").out)
     _assert_r2_read_as_logged(dataset)
+
+
+def test_a_text_cell_among_decimal_commas_is_the_cell_named(tmp_path):
+    start = pd.Timestamp("2020-06-15 08:01:02")
+    _european_export(
+        tmp_path / "export.csv", [start + pd.Timedelta(minutes=10 * i) for i in range(12)]
+    )
+    path = tmp_path / "export.csv"
+    text = path.read_bytes().decode("cp1252").replace(";21,0;1,0", ";defekt;1,0")  # row 3, temp B
+    path.write_bytes(text.encode("cp1252"))
+    with pytest.raises(
+        DataError,
+        match=re.escape(
+            "export.csv: row 3, column 'Temp B [°C]': expected a finite number, got 'defekt'"
+        ),
+    ):
+        import_dataset(_european_mapping(tmp_path, EUROPEAN), tmp_path / "raw" / "eu")

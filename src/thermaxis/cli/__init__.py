@@ -295,7 +295,7 @@ def _check(args) -> int:
 
     started = time.perf_counter()
     checked = check_before_jobs(_config(args.configfile, args.dataset))
-    # The overview reads every run's measurements, whose checks may still refuse one.
+    # The overview reads every run's logs and measurements, whose checks may still refuse one.
     overview = overview_lines(checked)
     print(f"thermaxis: {args.dataset}: every check before any job passed")
     print("\n".join(overview))

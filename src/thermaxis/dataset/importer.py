@@ -12,9 +12,10 @@ clock, re-referencing, subsampling, how runs were cut) is appended to the genera
 Time is a column of elapsed time in ``time.unit`` (s, min or h), a column of clock
 times (``time.format``: ``ISO8601`` or a strftime format; a date and a time of day in
 columns of their own are ``time.columns``), or one row every ``time.interval_s``. A CSV
-is read with the mapping's ``csv`` delimiter, decimal mark and encoding.  After the import each run is summarised (duration, samples,
-measurements) and a run too short or too long for a thermal test, or with fewer
-measurements than the workflow needs, is warned about with the likely unit mistake.
+is read with the mapping's ``csv`` delimiter, decimal mark and encoding. After the import
+each run is summarised (duration, samples, measurements) and a run too short or too long
+for a thermal test, or with fewer measurements than the workflow needs, is warned about
+with the likely unit mistake.
 
 The output is validated by :func:`thermaxis.dataset.reader.load_dataset` before it is moved into
 place; nothing half-written is left behind.
@@ -217,24 +218,32 @@ def read_table(path, sheet=0, csv: dict | None = None) -> pd.DataFrame:
     return frame
 
 
-def read_numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool) -> np.ndarray:
+def read_numeric(
+    path: Path, frame: pd.DataFrame, column: str, allow_empty: bool, decimal: str = "."
+) -> np.ndarray:
     """Column ``column`` of ``frame`` (read from ``path``) as floats.
 
     A cell that is not a finite number raises one line naming the file, the row and the
     column; with ``allow_empty`` an empty cell is a missing reading (NaN) instead.
+    ``decimal`` is the CSV's decimal mark.
     """
     if column not in frame.columns:
         raise DataError(
             f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
         )
-    values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+    cells = frame[column]
+    if decimal != "." and not pd.api.types.is_numeric_dtype(cells):
+        # pandas leaves a column as text when one cell is not a number: read the others
+        # with their decimal mark, so the message names the cell that is not.
+        cells = cells.map(lambda v: v.replace(decimal, ".") if isinstance(v, str) else v)
+    values = pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float)
     bad = ~np.isfinite(values) & (frame[column].notna().to_numpy() if allow_empty else True)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
         cell = frame[column].iloc[i]
         hint = (
             "; a decimal comma? set csv.decimal: ',' in the mapping"
-            if _DECIMAL_COMMA.match(str(cell).strip())
+            if decimal == "." and _DECIMAL_COMMA.match(str(cell).strip())
             else ""
         )
         raise DataError(
@@ -337,11 +346,12 @@ def read_start(path: Path, frame: pd.DataFrame, time: dict) -> pd.Timestamp:
 def _tidy(path: Path, frame: pd.DataFrame, mapping: dict) -> pd.DataFrame:
     """Seconds since the table's clock start, then every mapped column under its new id."""
     out = {"_t": read_seconds(path, frame, mapping["time"])}
+    decimal = mapping["csv"]["decimal"]
     for item in (*mapping["sensors"], *mapping["signals"]):
-        out[item["id"]] = read_numeric(path, frame, item["column"], allow_empty=True)
+        out[item["id"]] = read_numeric(path, frame, item["column"], True, decimal)
     for c, channel in enumerate(_channels(mapping)):
         for j, item in enumerate(channel["columns"]):
-            out[_error_key(c, j)] = read_numeric(path, frame, item["column"], allow_empty=True)
+            out[_error_key(c, j)] = read_numeric(path, frame, item["column"], True, decimal)
     return pd.DataFrame(out)
 
 
