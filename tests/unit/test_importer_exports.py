@@ -328,3 +328,62 @@ def test_a_text_cell_among_decimal_commas_is_the_cell_named(tmp_path):
         ),
     ):
         import_dataset(_european_mapping(tmp_path, EUROPEAN), tmp_path / "raw" / "eu")
+
+
+def _logger_export(path: Path) -> None:
+    """The _clock_table record as a logger writes it: its own lines above the header, a
+    blank line among them, and a units row below the header."""
+    start = pd.Timestamp("2020-06-15 08:01:02")
+    lines = [
+        "Instrument,GL220",
+        "",
+        "Channels,3",
+        "when,temp A,temp B,dx (um)",
+        "time,degC,degC,um",
+    ]
+    for i in range(12):
+        t = start + pd.Timedelta(minutes=10 * i)
+        lines.append(f"{t:%Y-%m-%d %H:%M:%S},{20 + 2 * i / 11:.4f},21.0,{i}")
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize(
+    "layout, message",
+    [
+        ({}, "clock.csv: cannot read the table (Error tokenizing data. C error: Expected 2 fields in "
+             "line 4, saw 4); lines above the header? set header_row"),
+        ({"header_row": 4}, "clock.csv: row 5, column 'when': expected an ISO 8601 clock time, got 'time'; "
+                            "a units row below the header? set units_rows: 1"),
+        ({"header_row": 4, "units_rows": 1}, None),
+    ],
+    ids=["lines_above", "units_row", "both_set"],
+)  # fmt: skip
+def test_a_loggers_own_lines_and_units_row_are_skipped_when_the_mapping_says(
+    tmp_path, layout, message
+):
+    _logger_export(tmp_path / "clock.csv")
+    path = _clock_mapping(tmp_path, "ISO8601")
+    mapping = {**yaml.safe_load(path.read_text()), **layout}
+    path.write_text(yaml.safe_dump(mapping))
+    if message:
+        with pytest.raises(DataError, match=re.escape(message)):
+            import_dataset(path, tmp_path / "raw")
+        return
+    _assert_r2_read_as_logged(load_dataset(import_dataset(path, tmp_path / "raw").out))
+
+
+def test_a_units_row_is_named_when_a_number_column_starts_with_a_unit(tmp_path):
+    _logger_export(tmp_path / "clock.csv")
+    path = _clock_mapping(tmp_path, "ISO8601")
+    mapping = yaml.safe_load(path.read_text())
+    mapping["time"] = {"interval_s": 600, "start": "2020-06-15T08:01:02"}  # the clock aside
+    mapping["header_row"] = 4
+    path.write_text(yaml.safe_dump(mapping))
+    with pytest.raises(
+        DataError,
+        match=re.escape(
+            "clock.csv: row 5, column 'temp A': expected a finite number, got 'degC'; a units "
+            "row below the header? set units_rows: 1"
+        ),
+    ):
+        import_dataset(path, tmp_path / "raw")

@@ -27,7 +27,7 @@ def read_record(spec: dict, spec_path: Path):
     mapping_path = (spec_path.parent / spec["mapping"]).resolve()
     mapping = importer.load_mapping(mapping_path)
     source = (mapping_path.parent / mapping["source"]).resolve()
-    frame = importer.read_table(source, mapping["sheet"], mapping["csv"])
+    frame = importer.read_table(source, *importer.table_layout(mapping))
     seconds = importer.read_seconds(source, frame, mapping["time"])
     temperatures = {
         s["id"]: importer.read_numeric(source, frame, s["column"], False)

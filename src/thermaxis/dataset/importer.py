@@ -50,6 +50,7 @@ __all__ = [
     "ImportReport",
     "load_mapping",
     "read_table",
+    "table_layout",
     "read_numeric",
     "read_seconds",
     "time_columns",
@@ -173,27 +174,37 @@ PLAIN_CSV = {"delimiter": ",", "decimal": ".", "encoding": "utf-8"}
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+$")
 
 
-def read_table(path, sheet=0, csv: dict | None = None) -> pd.DataFrame:
+def read_table(
+    path, sheet=0, csv: dict | None = None, header_row: int = 1, units_rows: int = 0
+) -> pd.DataFrame:
     """A wide table, one row per sample; column names stripped of surrounding spaces.
 
     ``csv`` (the mapping's section: delimiter, decimal, encoding) says how a CSV is
-    written; an XLSX workbook carries its own.
+    written; an XLSX workbook carries its own. ``header_row`` (1 = the first row) names
+    the columns; the rows above it and the ``units_rows`` below it are skipped. The
+    frame's ``attrs["first_row"]`` is the file's row of its first sample, for messages.
     """
     path = Path(path)
     csv = {**PLAIN_CSV, **(csv or {})}
     if not path.is_file():
         raise DataError(f"{path}: file not found (the mapping's source)")
     suffix = path.suffix.lower()
+    # 0-based rows to skip: above the header, and between it and the first sample.
+    skip = [*range(header_row - 1), *range(header_row, header_row + units_rows)]
     try:
         if suffix in (".xlsx", ".xlsm"):
-            frame = pd.read_excel(path, sheet_name=sheet)
+            frame = pd.read_excel(path, sheet_name=sheet, skiprows=skip)
         elif suffix in (".csv", ".txt"):
             # utf-8-sig reads UTF-8 with or without the byte-order mark Excel writes.
             encoding = (
                 "utf-8-sig" if codecs.lookup(csv["encoding"]).name == "utf-8" else csv["encoding"]
             )
             frame = pd.read_csv(
-                path, sep=csv["delimiter"], decimal=csv["decimal"], encoding=encoding
+                path,
+                sep=csv["delimiter"],
+                decimal=csv["decimal"],
+                encoding=encoding,
+                skiprows=skip,
             )
         else:
             raise DataError(f"{path}: expected a .csv or .xlsx table, got {suffix or 'no suffix'}")
@@ -204,8 +215,13 @@ def read_table(path, sheet=0, csv: dict | None = None) -> pd.DataFrame:
             "Western Europe)"
         ) from None
     except (ValueError, KeyError) as exc:
-        raise DataError(f"{path}: cannot read the table ({str(exc).splitlines()[0]})") from None
+        first = str(exc).splitlines()[0]
+        # The parser's "Expected 2 fields in line 12, saw 9": a logger's own lines above
+        # the header set a narrower table than the samples.
+        above = "; lines above the header? set header_row" if "fields in line" in first else ""
+        raise DataError(f"{path}: cannot read the table ({first}){above}") from None
     frame.columns = [str(c).strip() for c in frame.columns]
+    frame.attrs["first_row"] = header_row + units_rows + 1
     if len(frame.columns) == 1:
         other = next((d for d in (";", "\t", ",", "|") if d in frame.columns[0]), None)
         if other and other != csv["delimiter"]:
@@ -246,10 +262,25 @@ def read_numeric(
             if decimal == "." and _DECIMAL_COMMA.match(str(cell).strip())
             else ""
         )
+        hint = _units_hint(i, cell) or hint
         raise DataError(
-            f"{path}: row {i + 2}, column {column!r}: expected a finite number, got {cell!r}{hint}"
+            f"{path}: row {_row(frame, i)}, column {column!r}: expected a finite number, got {cell!r}{hint}"
         )
     return values
+
+
+def _units_hint(i: int, cell) -> str:
+    """A first sample that is a word (no digit, not inf or nan) is most often a unit."""
+    word = str(cell).strip() if isinstance(cell, str) else ""
+    if i == 0 and word and not any(ch.isdigit() for ch in word):
+        if word.lower().lstrip("+-") not in {"inf", "infinity", "nan"}:
+            return "; a units row below the header? set units_rows: 1"
+    return ""
+
+
+def _row(frame: pd.DataFrame, i: int) -> int:
+    """The file's row (1 = the first) of the frame's i-th sample."""
+    return frame.attrs.get("first_row", 2) + i
 
 
 def time_columns(time: dict) -> list[str]:
@@ -295,12 +326,13 @@ def _clock(path: Path, frame: pd.DataFrame, time: dict) -> pd.DatetimeIndex:
         i = int(np.flatnonzero(parsed.isna().to_numpy())[0])
         expected = "an ISO 8601 clock time" if fmt == "ISO8601" else f"a clock time in {fmt!r}"
         raise DataError(
-            f"{path}: row {i + 2}, {_words(columns)}: expected {expected}, got {text.iloc[i]!r}"
+            f"{path}: row {_row(frame, i)}, {_words(columns)}: expected {expected}, got "
+            f"{text.iloc[i]!r}{_units_hint(i, text.iloc[i])}"
         )
     return pd.DatetimeIndex(parsed).tz_localize(None)
 
 
-def _increasing(path: Path, columns: list[str], t: np.ndarray) -> np.ndarray:
+def _increasing(path: Path, frame: pd.DataFrame, columns: list[str], t: np.ndarray) -> np.ndarray:
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         i = int(back[0]) + 1
@@ -311,7 +343,7 @@ def _increasing(path: Path, columns: list[str], t: np.ndarray) -> np.ndarray:
             else ""
         )
         raise DataError(
-            f"{path}: row {i + 2}, {_words(columns)}: time does not increase "
+            f"{path}: row {_row(frame, i)}, {_words(columns)}: time does not increase "
             f"({t[i]:g} after {t[i - 1]:g} s){repeated}"
         )
     return t
@@ -333,7 +365,7 @@ def read_seconds(path: Path, frame: pd.DataFrame, time: dict) -> np.ndarray:
             read_numeric(path, frame, time["column"], allow_empty=False)
             * TIME_UNITS_S[time["unit"]]
         )
-    return _increasing(path, time_columns(time), t)
+    return _increasing(path, frame, time_columns(time), t)
 
 
 def read_start(path: Path, frame: pd.DataFrame, time: dict) -> pd.Timestamp:
@@ -573,6 +605,11 @@ def _runs_tsv(mapping: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def table_layout(mapping: dict) -> tuple:
+    """:func:`read_table`'s arguments after the path, from the mapping."""
+    return mapping["sheet"], mapping["csv"], mapping["header_row"], mapping["units_rows"]
+
+
 def _runs_rows(mapping_path: Path, mapping: dict, progress: Progress) -> list[tuple]:
     """Each run's tidy rows with the clock time of their 0 s, in the mapping's order."""
     source = (mapping_path.parent / mapping["source"]).resolve()
@@ -581,14 +618,14 @@ def _runs_rows(mapping_path: Path, mapping: dict, progress: Progress) -> list[tu
         for i, run in enumerate(mapping["runs"]):
             table_path = source / run["file"]
             progress(i, len(mapping["runs"]), f"reading {run['file']}")
-            frame = read_table(table_path, mapping["sheet"], mapping["csv"])
+            frame = read_table(table_path, *table_layout(mapping))
             pieces.append(
                 (_tidy(table_path, frame, mapping), read_start(table_path, frame, mapping["time"]))
             )
         progress(len(mapping["runs"]), len(mapping["runs"]), "tables read")
         return pieces
     progress(0, 1, f"reading {source.name}")
-    frame = read_table(source, mapping["sheet"], mapping["csv"])
+    frame = read_table(source, *table_layout(mapping))
     start = read_start(source, frame, mapping["time"])
     runs = split_runs(_tidy(source, frame, mapping), mapping, str(mapping_path))
     progress(1, 1, "table read")
