@@ -281,6 +281,21 @@ def test_a_date_without_its_time_of_day_is_named_as_a_coarse_clock(tmp_path):
         import_dataset(path, tmp_path / "raw" / "eu")
 
 
+def test_a_clock_put_back_an_hour_is_named_as_a_daylight_saving_change(tmp_path):
+    start = pd.Timestamp("2020-10-25 01:40:00")
+    times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]
+    times[6:] = [t - pd.Timedelta(hours=1) for t in times[6:]]  # 02:30, then 01:40 again
+    _clock_table(tmp_path / "clock.csv", [f"{t:%Y-%m-%d %H:%M:%S}" for t in times])
+    with pytest.raises(
+        DataError,
+        match=re.escape(
+            "clock.csv: row 8, column 'when': time does not increase (0 after 3000 s); "
+            "a daylight-saving change? log in UTC or in standard time"
+        ),
+    ):
+        import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "raw")
+
+
 def test_split_clock_columns_need_a_format(tmp_path):
     path = _european_mapping(tmp_path, EUROPEAN)
     mapping = yaml.safe_load(path.read_text(encoding="utf-8"))

@@ -39,7 +39,7 @@ import pandas as pd
 import yaml
 
 from thermaxis.config import fill_defaults
-from thermaxis.dataset.reader import load_dataset
+from thermaxis.dataset.reader import DST_BACK_H, load_dataset
 from thermaxis.errors import DataError
 from thermaxis.schemas import load_schema
 
@@ -336,15 +336,19 @@ def _increasing(path: Path, frame: pd.DataFrame, columns: list[str], t: np.ndarr
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         i = int(back[0]) + 1
-        repeated = (
-            "; a clock coarser than the logging (a date without its time of day, or whole "
-            "seconds logged faster than once a second)?"
-            if t[i] == t[i - 1]
-            else ""
-        )
+        back_h = (t[i - 1] - t[i]) / 3600.0
+        if back_h == 0:
+            hint = (
+                "; a clock coarser than the logging (a date without its time of day, or whole "
+                "seconds logged faster than once a second)?"
+            )
+        elif DST_BACK_H[0] <= back_h <= DST_BACK_H[1]:
+            hint = "; a daylight-saving change? log in UTC or in standard time"
+        else:
+            hint = ""
         raise DataError(
             f"{path}: row {_row(frame, i)}, {_words(columns)}: time does not increase "
-            f"({t[i]:g} after {t[i - 1]:g} s){repeated}"
+            f"({t[i]:g} after {t[i - 1]:g} s){hint}"
         )
     return t
 
