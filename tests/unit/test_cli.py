@@ -32,9 +32,12 @@ def _thermaxis(*args, cwd=REPO) -> subprocess.CompletedProcess:
     "dataset, expected",
     [
         ("data/raw/twin", ["dataset twin (SIMULATED)", "12 sensors: T1, T2", "14 target position(s)",
-                           "4 runs (held-out folds: E1, E2, E3, E4)", "E1     8 measurements"]),
+                           "4 runs (held-out folds: E1, E2, E3, E4)", "E1     8 measurements",
+                           # the twin's README: the box logs every 10 s, the HMI every 60 s
+                           "14 positions  logs: box 10 s, wireless 3", ", hmi 60 s\n"]),
         ("data/raw/fl_thermal", ["dataset fl_thermal (MEASURED)", "16 sensors", "1 target position(s): point-by-point",
-                                 "6 runs", "R6_variable    38 measurements"]),
+                                 "6 runs", "R6_variable    38 measurements",
+                                 "1 positions  logs: logger 15 s\n"]),  # its README: every 15 s
     ],
 )  # fmt: skip
 def test_check_passes_an_embedded_dataset_and_says_what_it_holds(dataset, expected):

@@ -9,7 +9,8 @@ __all__ = ["overview_lines"]
 
 
 def overview_lines(checked: Checked) -> list[str]:
-    """Runs, measurements per run, sensors, positions and each run's time span, as lines.
+    """Runs, measurements per run, sensors, positions, each run's time span and how often
+    each of its logs sampled, as lines.
 
     Reads every run's logs and measurements (the full reader's checks, which the
     workflow makes in its first jobs), so a bad later file is named here too.
@@ -25,7 +26,8 @@ def overview_lines(checked: Checked) -> list[str]:
     ]
     width = max(len(r) for r in checked.runs)
     for run in checked.runs:
-        measurements = read_run(dataset, run).measurements
+        raw = read_run(dataset, run)
+        measurements = raw.measurements
         firsts = [m["time"].min() for m in measurements.values()]
         lasts = [m["time"].max() for m in measurements.values()]
         span = (max(lasts) - min(firsts)).total_seconds() / 3600.0
@@ -33,6 +35,17 @@ def overview_lines(checked: Checked) -> list[str]:
         lines.append(
             f"  {run:<{width}}  {len(measurements):>4} measurements  {span:7.2f} h  "
             f"{min(firsts):%Y-%m-%d %H:%M} to {max(lasts):%Y-%m-%d %H:%M}  "
-            f"{'/'.join(map(str, sorted(positions)))} positions"
+            f"{'/'.join(map(str, sorted(positions)))} positions  "
+            f"logs: {_log_intervals({**raw.sources, **raw.signals})}"
         )
     return lines
+
+
+def _log_intervals(logs: dict) -> str:
+    """Each log file's median sample interval, by source: what the logger really did."""
+    return ", ".join(
+        f"{name} {log['time'].diff().median().total_seconds():.3g} s"
+        if len(log) > 1
+        else f"{name} one sample"
+        for name, log in logs.items()
+    )
