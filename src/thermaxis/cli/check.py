@@ -35,7 +35,7 @@ def overview_lines(checked: Checked) -> list[str]:
         lines.append(
             f"  {run:<{width}}  {len(measurements):>4} measurements  {span:7.2f} h  "
             f"{min(firsts):%Y-%m-%d %H:%M} to {max(lasts):%Y-%m-%d %H:%M}  "
-            f"{'/'.join(map(str, sorted(positions)))} positions  "
+            f"{'/'.join(map(str, sorted(positions)))} position{'' if positions == {1} else 's'}  "
             f"logs: {_log_intervals({**raw.sources, **raw.signals})}"
         )
     return lines
