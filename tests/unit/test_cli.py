@@ -86,6 +86,12 @@ def _clock_put_back_an_hour(ds: Path) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
+def _units_row(ds: Path) -> None:
+    path = ds / "E2/temperatures/hmi.csv"
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join([lines[0], ",degC", *lines[1:]]) + "\n")
+
+
 # The messages of tests/workflow/CATALOGUE.md for the same edits (<ds> is the dataset folder).
 @pytest.mark.parametrize(
     "edit, message",
@@ -98,8 +104,11 @@ def _clock_put_back_an_hour(ds: Path) -> None:
         (_blank_later_error, "thermaxis error: <ds>/E4/errors/M07.csv: line 5, column 'error_um': expected a number, got ''"),
         (_clock_put_back_an_hour, "thermaxis error: <ds>/E3/temperatures/box.csv: line 600, column 'time': time goes backwards "
                                   "(2022-03-17 09:09:40 after 2022-03-17 10:09:30); a daylight-saving change? log in UTC or in standard time"),
+        (_units_row, "thermaxis error: <ds>/E2/temperatures/hmi.csv: line 2, column 'time': expected an ISO 8601 time, "
+                     "got ''; a units row? the layout has none (temperatures in degrees C, errors in um: data/README.md)"),
     ],
-    ids=["runs_comma_separated", "yaml_bad_kind", "measurement_leading_dash", "later_error_blank", "log_clock_dst"],
+    ids=["runs_comma_separated", "yaml_bad_kind", "measurement_leading_dash", "later_error_blank", "log_clock_dst",
+         "log_units_row"],
 )  # fmt: skip
 def test_check_refuses_a_bad_dataset_with_the_workflows_one_line(edit, message, tmp_path):
     ds = tmp_path / "cut"

@@ -301,8 +301,17 @@ def _parse_time(path: Path, values: pd.Series) -> pd.Series:
     bad = parsed.isna().to_numpy()
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
+        cell = str(values.iloc[i]).strip()
+        # A first row with no digit in its time is most often a units row under the header.
+        units = (
+            "; a units row? the layout has none (temperatures in degrees C, errors in um: "
+            "data/README.md)"
+            if i == 0 and not any(ch.isdigit() for ch in cell)
+            else ""
+        )
         raise DataError(
-            f"{path}: line {i + 2}, column 'time': expected an ISO 8601 time, got {values.iloc[i]!r}"
+            f"{path}: line {i + 2}, column 'time': expected an ISO 8601 time, got "
+            f"{values.iloc[i]!r}{units}"
         )
     if getattr(parsed.dt, "tz", None) is not None:
         raise DataError(
