@@ -205,3 +205,17 @@ def test_snakemake_arguments_are_refused_where_no_snakemake_runs():
     with pytest.raises(SystemExit) as info:
         main(["check", "data/raw/twin", "--", "-n"])
     assert info.value.code == 2
+
+
+def test_a_semicolon_separated_controller_log_is_refused_naming_the_expected_separator(tmp_path):
+    from thermaxis.cli.compensate import read_log
+    from thermaxis.errors import DataError
+
+    log = tmp_path / "log.csv"
+    log.write_text("time_s;T1\n0;20,5\n60;20,7\n")
+    with pytest.raises(DataError) as refused:
+        read_log(log, ["T1"])
+    # No import mapping here: the message names the log's own format, not a mapping's setting.
+    assert str(refused.value) == (
+        f"{log}: one column 'time_s;T1': looks ';'-separated; expected ',' between columns"
+    )

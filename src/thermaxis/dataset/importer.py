@@ -185,6 +185,8 @@ def read_table(
     frame's ``attrs["first_row"]`` is the file's row of its first sample, for messages.
     """
     path = Path(path)
+    # Read under an import mapping, a message may name the mapping's setting that fixes it.
+    mapped = csv is not None
     csv = {**PLAIN_CSV, **(csv or {})}
     if not path.is_file():
         raise DataError(f"{path}: file not found (the mapping's source)")
@@ -209,25 +211,37 @@ def read_table(
         else:
             raise DataError(f"{path}: expected a .csv or .xlsx table, got {suffix or 'no suffix'}")
     except UnicodeDecodeError as exc:
+        fix = (
+            "; set csv.encoding in the mapping (cp1252 for a Windows export in Western Europe)"
+            if mapped
+            else ""
+        )
         raise DataError(
             f"{path}: not {csv['encoding']} text (byte 0x{exc.object[exc.start]:02x} at offset "
-            f"{exc.start}); set csv.encoding in the mapping (cp1252 for a Windows export in "
-            "Western Europe)"
+            f"{exc.start}){fix}"
         ) from None
     except (ValueError, KeyError) as exc:
         first = str(exc).splitlines()[0]
         # The parser's "Expected 2 fields in line 12, saw 9": a logger's own lines above
         # the header set a narrower table than the samples.
-        above = "; lines above the header? set header_row" if "fields in line" in first else ""
+        above = (
+            "; lines above the header? set header_row"
+            if mapped and "fields in line" in first
+            else ""
+        )
         raise DataError(f"{path}: cannot read the table ({first}){above}") from None
     frame.columns = [str(c).strip() for c in frame.columns]
-    frame.attrs["first_row"] = header_row + units_rows + 1
+    frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped)
     if len(frame.columns) == 1:
         other = next((d for d in (";", "\t", ",", "|") if d in frame.columns[0]), None)
         if other and other != csv["delimiter"]:
-            raise DataError(
-                f"{path}: one column {frame.columns[0][:60]!r}: looks {other!r}-separated; "
+            fix = (
                 f"set csv.delimiter: {other!r} in the mapping"
+                if mapped
+                else f"expected {csv['delimiter']!r} between columns"
+            )
+            raise DataError(
+                f"{path}: one column {frame.columns[0][:60]!r}: looks {other!r}-separated; {fix}"
             )
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
@@ -259,20 +273,22 @@ def read_numeric(
         cell = frame[column].iloc[i]
         hint = (
             "; a decimal comma? set csv.decimal: ',' in the mapping"
-            if decimal == "." and _DECIMAL_COMMA.match(str(cell).strip())
+            if frame.attrs.get("mapped")
+            and decimal == "."
+            and _DECIMAL_COMMA.match(str(cell).strip())
             else ""
         )
-        hint = _units_hint(i, cell) or hint
+        hint = _units_hint(frame, i, cell) or hint
         raise DataError(
             f"{path}: row {_row(frame, i)}, column {column!r}: expected a finite number, got {cell!r}{hint}"
         )
     return values
 
 
-def _units_hint(i: int, cell) -> str:
+def _units_hint(frame: pd.DataFrame, i: int, cell) -> str:
     """A first sample that is a word (no digit, not inf or nan) is most often a unit."""
     word = str(cell).strip() if isinstance(cell, str) else ""
-    if i == 0 and word and not any(ch.isdigit() for ch in word):
+    if frame.attrs.get("mapped") and i == 0 and word and not any(ch.isdigit() for ch in word):
         if word.lower().lstrip("+-") not in {"inf", "infinity", "nan"}:
             return "; a units row below the header? set units_rows: 1"
     return ""
@@ -327,7 +343,7 @@ def _clock(path: Path, frame: pd.DataFrame, time: dict) -> pd.DatetimeIndex:
         expected = "an ISO 8601 clock time" if fmt == "ISO8601" else f"a clock time in {fmt!r}"
         raise DataError(
             f"{path}: row {_row(frame, i)}, {_words(columns)}: expected {expected}, got "
-            f"{text.iloc[i]!r}{_units_hint(i, text.iloc[i])}"
+            f"{text.iloc[i]!r}{_units_hint(frame, i, text.iloc[i])}"
         )
     return pd.DatetimeIndex(parsed).tz_localize(None)
 
