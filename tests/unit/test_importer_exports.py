@@ -402,3 +402,17 @@ def test_a_units_row_is_named_when_a_number_column_starts_with_a_unit(tmp_path):
         ),
     ):
         import_dataset(path, tmp_path / "raw")
+
+
+def test_two_columns_of_one_name_are_refused(tmp_path):
+    (tmp_path / "clock.csv").write_text(
+        "when,temp A,temp B,temp A,dx (um)\n2020-06-15 08:00:00,20.0,21.0,22.0,0\n"
+    )
+    with pytest.raises(
+        DataError,
+        match=re.escape(
+            "clock.csv: row 1: column 'temp A' is named more than once (columns 2 and 4); "
+            "rename one so that the mapping can tell them apart"
+        ),
+    ):
+        import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "raw")

@@ -231,6 +231,7 @@ def read_table(
         )
         raise DataError(f"{path}: cannot read the table ({first}){above}") from None
     frame.columns = [str(c).strip() for c in frame.columns]
+    _check_unique_header(path, frame, header_row)
     frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped)
     if len(frame.columns) == 1:
         other = next((d for d in (";", "\t", ",", "|") if d in frame.columns[0]), None)
@@ -246,6 +247,20 @@ def read_table(
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
     return frame
+
+
+def _check_unique_header(path: Path, frame: pd.DataFrame, header_row: int) -> None:
+    """Two columns of one name are refused: pandas would call the second 'T1.1', and a
+    mapping naming 'T1' would take the first without a word."""
+    names = list(frame.columns)
+    for i, name in enumerate(names):
+        base, dot, number = name.rpartition(".")
+        if dot and number.isdigit() and base in names[:i]:
+            raise DataError(
+                f"{path}: row {header_row}: column {base!r} is named more than once "
+                f"(columns {names.index(base) + 1} and {i + 1}); rename one so that the mapping "
+                "can tell them apart"
+            )
 
 
 def read_numeric(
