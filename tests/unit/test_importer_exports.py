@@ -416,3 +416,15 @@ def test_two_columns_of_one_name_are_refused(tmp_path):
         ),
     ):
         import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "raw")
+
+
+def test_a_line_break_in_a_header_cell_reads_as_a_space(tmp_path):
+    start = pd.Timestamp("2020-06-15 08:01:02")
+    lines = ['when,"temp\nA",temp  B ,dx (um)']  # a spreadsheet's wrapped header cell, double space
+    lines += [
+        f"{start + pd.Timedelta(minutes=10 * i):%Y-%m-%d %H:%M:%S},20,21,{i}" for i in range(12)
+    ]
+    (tmp_path / "clock.csv").write_text("\n".join(lines) + "\n")
+    _assert_r2_read_as_logged(
+        load_dataset(import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "raw").out)
+    )

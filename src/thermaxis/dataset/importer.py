@@ -230,7 +230,7 @@ def read_table(
             else ""
         )
         raise DataError(f"{path}: cannot read the table ({first}){above}") from None
-    frame.columns = [str(c).strip() for c in frame.columns]
+    frame.columns = [header_name(c) for c in frame.columns]
     _check_unique_header(path, frame, header_row)
     frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped)
     if len(frame.columns) == 1:
@@ -247,6 +247,22 @@ def read_table(
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
     return frame
+
+
+def header_name(name) -> str:
+    """A column name as compared: white space around it and runs of it inside (a line
+    break in a spreadsheet's header cell) read as one space."""
+    return " ".join(str(name).split())
+
+
+def _column(path: Path, frame: pd.DataFrame, name: str) -> pd.Series:
+    """The table's column a mapping names, compared by :func:`header_name`."""
+    key = header_name(name)
+    if key not in frame.columns:
+        raise DataError(
+            f"{path}: missing column {key!r} (named in the mapping); the table has {', '.join(frame.columns)}"
+        )
+    return frame[key]
 
 
 def _check_unique_header(path: Path, frame: pd.DataFrame, header_row: int) -> None:
@@ -272,20 +288,17 @@ def read_numeric(
     column; with ``allow_empty`` an empty cell is a missing reading (NaN) instead.
     ``decimal`` is the CSV's decimal mark.
     """
-    if column not in frame.columns:
-        raise DataError(
-            f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
-        )
-    cells = frame[column]
+    read = cells = _column(path, frame, column)
+    column = read.name
     if decimal != "." and not pd.api.types.is_numeric_dtype(cells):
         # pandas leaves a column as text when one cell is not a number: read the others
         # with their decimal mark, so the message names the cell that is not.
         cells = cells.map(lambda v: v.replace(decimal, ".") if isinstance(v, str) else v)
     values = pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float)
-    bad = ~np.isfinite(values) & (frame[column].notna().to_numpy() if allow_empty else True)
+    bad = ~np.isfinite(values) & (read.notna().to_numpy() if allow_empty else True)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
-        cell = frame[column].iloc[i]
+        cell = read.iloc[i]
         hint = (
             "; a decimal comma? set csv.decimal: ',' in the mapping"
             if frame.attrs.get("mapped")
@@ -342,15 +355,12 @@ def _clock(path: Path, frame: pd.DataFrame, time: dict) -> pd.DatetimeIndex:
     A workbook's own date and time cells (typed, whatever their display format) are
     read as they are, so ``format`` then describes text cells only.
     """
-    columns, fmt = time_columns(time), time["format"]
-    for column in columns:
-        if column not in frame.columns:
-            raise DataError(
-                f"{path}: missing column {column!r} (named in the mapping); the table has {', '.join(frame.columns)}"
-            )
-    if all(_typed_clock(frame[column]) for column in columns):
+    read = [_column(path, frame, column) for column in time_columns(time)]
+    columns, fmt = [r.name for r in read], time["format"]
+    if all(_typed_clock(r) for r in read):
         fmt = "ISO8601"  # pandas renders typed dates and times as ISO 8601 text
-    text = frame[columns].astype(str).apply(lambda col: col.str.strip()).agg(" ".join, axis=1)
+    text = pd.concat(read, axis=1).astype(str).apply(lambda col: col.str.strip())
+    text = text.agg(" ".join, axis=1)
     # utc=True: naive times stay as they are, zoned ones (even mixed offsets) become UTC.
     parsed = pd.to_datetime(text, format=fmt, errors="coerce", utc=True)
     if parsed.isna().any():
