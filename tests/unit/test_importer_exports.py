@@ -428,3 +428,14 @@ def test_a_line_break_in_a_header_cell_reads_as_a_space(tmp_path):
     _assert_r2_read_as_logged(
         load_dataset(import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "raw").out)
     )
+
+
+def test_a_tab_separated_table_is_named_so_before_its_names_are_normalised(tmp_path):
+    from thermaxis.dataset.importer import read_table
+
+    path = tmp_path / "tabs.csv"
+    path.write_text("when\ttemp A\n2020-06-15 08:00:00\t20\n")
+    with pytest.raises(
+        DataError, match=re.escape("looks '\\t'-separated; set csv.delimiter: '\\t'")
+    ):
+        read_table(path, 0, {})

@@ -177,7 +177,7 @@ _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+$")
 def read_table(
     path, sheet=0, csv: dict | None = None, header_row: int = 1, units_rows: int = 0
 ) -> pd.DataFrame:
-    """A wide table, one row per sample; column names stripped of surrounding spaces.
+    """A wide table, one row per sample; column names as :func:`header_name` compares them.
 
     ``csv`` (the mapping's section: delimiter, decimal, encoding) says how a CSV is
     written; an XLSX workbook carries its own. ``header_row`` (1 = the first row) names
@@ -230,20 +230,19 @@ def read_table(
             else ""
         )
         raise DataError(f"{path}: cannot read the table ({first}){above}") from None
-    frame.columns = [header_name(c) for c in frame.columns]
-    _check_unique_header(path, frame, header_row)
-    frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped)
-    if len(frame.columns) == 1:
-        other = next((d for d in (";", "\t", ",", "|") if d in frame.columns[0]), None)
+    if len(frame.columns) == 1:  # before names are normalised: a tab is white space
+        only = str(frame.columns[0])
+        other = next((d for d in (";", "\t", ",", "|") if d in only), None)
         if other and other != csv["delimiter"]:
             fix = (
                 f"set csv.delimiter: {other!r} in the mapping"
                 if mapped
                 else f"expected {csv['delimiter']!r} between columns"
             )
-            raise DataError(
-                f"{path}: one column {frame.columns[0][:60]!r}: looks {other!r}-separated; {fix}"
-            )
+            raise DataError(f"{path}: one column {only[:60]!r}: looks {other!r}-separated; {fix}")
+    frame.columns = [header_name(c) for c in frame.columns]
+    _check_unique_header(path, frame, header_row)
+    frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped)
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
     return frame
