@@ -439,3 +439,19 @@ def test_a_tab_separated_table_is_named_so_before_its_names_are_normalised(tmp_p
         DataError, match=re.escape("looks '\\t'-separated; set csv.delimiter: '\\t'")
     ):
         read_table(path, 0, {})
+
+
+def test_errors_logged_in_mm_are_written_in_um_and_the_description_says_so(tmp_path):
+    start = pd.Timestamp("2020-06-15 08:01:02")
+    times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]
+    _clock_table(tmp_path / "clock.csv", [f"{t:%Y-%m-%d %H:%M:%S}" for t in times])
+    table = pd.read_csv(tmp_path / "clock.csv")
+    table["dx (um)"] = table["dx (um)"] / 1000.0  # the same displacement, logged in mm
+    table.to_csv(tmp_path / "clock.csv", index=False)
+    path = _clock_mapping(tmp_path, "ISO8601")
+    mapping = yaml.safe_load(path.read_text())
+    mapping["errors"]["unit"] = "mm"
+    path.write_text(yaml.safe_dump(mapping))
+    dataset = load_dataset(import_dataset(path, tmp_path / "raw").out)
+    _assert_r2_read_as_logged(dataset)  # 0.006 mm is 6 um, as logged in um above
+    assert "logged in mm and converted to um (x 1000)" in dataset.meta["description"]

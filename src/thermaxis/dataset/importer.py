@@ -45,6 +45,7 @@ from thermaxis.schemas import load_schema
 
 __all__ = [
     "TIME_UNITS_S",
+    "ERROR_UNITS_UM",
     "RunSummary",
     "Imported",
     "ImportReport",
@@ -63,6 +64,8 @@ __all__ = [
 ]
 
 TIME_UNITS_S = {"s": 1.0, "min": 60.0, "h": 3600.0}
+# The error columns' unit (errors.unit) in um, the raw layout's.
+ERROR_UNITS_UM = {"um": 1.0, "mm": 1000.0, "nm": 0.001}
 _UNIT_WORDS = {"s": "seconds", "min": "minutes", "h": "hours"}
 # A thermal test heats the axis for half an hour at least and no bench run lasts a week;
 # outside these a run's length is almost always a time column read in the wrong unit.
@@ -527,12 +530,14 @@ def _write_run(
         raise DataError(
             f"{folder.name}: the run's first error reading is missing; cannot re-reference to it"
         )
+    scale = ERROR_UNITS_UM[mapping["errors"]["unit"]]
     records = []
     for i, (_, sample) in enumerate(picked.iterrows(), start=1):
         for j, item in enumerate(columns):
             value = float(sample[keys[j]])
             if mapping["errors"]["rereference"] == "run_start":
                 value -= reference[j]
+            value *= scale
             if np.isfinite(value):
                 records.append(
                     (f"M{i:03d}", _iso(start, [sample["_t"]])[0], item["position_mm"], value)
@@ -561,6 +566,12 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
         notes.append(
             f"The source has no time column: row i is taken at i x {time['interval_s']:g} s after {time['start']}, "
             "an invented clock."
+        )
+    unit = mapping["errors"]["unit"]
+    if unit != "um":
+        notes.append(
+            f"The error columns were logged in {unit} and converted to um "
+            f"(x {ERROR_UNITS_UM[unit]:g})."
         )
     if mapping["csv"] != PLAIN_CSV:
         csv = mapping["csv"]
