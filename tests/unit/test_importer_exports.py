@@ -455,3 +455,35 @@ def test_errors_logged_in_mm_are_written_in_um_and_the_description_says_so(tmp_p
     dataset = load_dataset(import_dataset(path, tmp_path / "raw").out)
     _assert_r2_read_as_logged(dataset)  # 0.006 mm is 6 um, as logged in um above
     assert "logged in mm and converted to um (x 1000)" in dataset.meta["description"]
+
+
+@pytest.mark.parametrize(
+    "unit, kind, logged",
+    [
+        ("K", "absolute", lambda c: c + 273.15),  # 294.15 K
+        ("degF", "absolute", lambda c: c * 9.0 / 5.0 + 32.0),  # 69.8 F
+        ("degF", "rise", lambda c: c * 9.0 / 5.0),  # a rise of 37.8 F is 21 C, no offset
+    ],
+)
+def test_temperatures_logged_in_kelvin_or_fahrenheit_are_written_in_celsius(
+    tmp_path, unit, kind, logged
+):
+    start = pd.Timestamp("2020-06-15 08:01:02")
+    times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]
+    _clock_table(tmp_path / "clock.csv", [f"{t:%Y-%m-%d %H:%M:%S}" for t in times])
+    table = pd.read_csv(tmp_path / "clock.csv")
+    table["temp B"] = logged(21.0)
+    table.to_csv(tmp_path / "clock.csv", index=False)
+    path = _clock_mapping(tmp_path, "ISO8601")
+    mapping = {
+        **yaml.safe_load(path.read_text()),
+        "temperature_unit": unit,
+        "temperature_kind": kind,
+    }
+    path.write_text(yaml.safe_dump(mapping))
+    dataset = load_dataset(import_dataset(path, tmp_path / "raw").out)
+    logs = pd.read_csv(dataset.root / "R1" / "temperatures" / "logger.csv")
+    assert logs["TB"].to_numpy() == pytest.approx(21.0, abs=1e-9)
+    assert f"Temperatures were logged in {unit} and converted to degrees C." in (
+        dataset.meta["description"].replace("\n", " ")
+    )

@@ -64,6 +64,9 @@ __all__ = [
 ]
 
 TIME_UNITS_S = {"s": 1.0, "min": 60.0, "h": 3600.0}
+# A temperature unit (temperature_unit) as degrees C = (value - offset) x scale; a rise
+# takes the scale alone.
+TEMPERATURE_UNITS = {"degC": (0.0, 1.0), "K": (273.15, 1.0), "degF": (32.0, 5.0 / 9.0)}
 # The error columns' unit (errors.unit) in um, the raw layout's.
 ERROR_UNITS_UM = {"um": 1.0, "mm": 1000.0, "nm": 0.001}
 _UNIT_WORDS = {"s": "seconds", "min": "minutes", "h": "hours"}
@@ -497,6 +500,16 @@ def _iso(start: pd.Timestamp, seconds) -> list[str]:
     return [t.isoformat() for t in times]
 
 
+def _celsius(values: pd.Series, mapping: dict) -> pd.Series:
+    """Logged temperatures in degrees C (rises: by the unit's scale alone)."""
+    offset, scale = TEMPERATURE_UNITS[mapping["temperature_unit"]]
+    if mapping["temperature_unit"] == "degC":
+        return values  # as logged, digit for digit
+    if mapping["temperature_kind"] == "rise":
+        offset = 0.0
+    return (values - offset) * scale
+
+
 def _write_run(
     folder: Path, rows: pd.DataFrame, mapping: dict, start: pd.Timestamp, channel: int
 ) -> RunSummary:
@@ -504,7 +517,9 @@ def _write_run(
     times = _iso(start, rows["_t"])
     source = mapping["source_name"]
     (folder / "temperatures").mkdir(parents=True)
-    temps = pd.DataFrame({"time": times, **{s["id"]: rows[s["id"]] for s in mapping["sensors"]}})
+    temps = pd.DataFrame(
+        {"time": times, **{s["id"]: _celsius(rows[s["id"]], mapping) for s in mapping["sensors"]}}
+    )
     temps.to_csv(
         folder / "temperatures" / f"{source}.csv",
         index=False,
@@ -566,6 +581,10 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
         notes.append(
             f"The source has no time column: row i is taken at i x {time['interval_s']:g} s after {time['start']}, "
             "an invented clock."
+        )
+    if mapping["temperature_unit"] != "degC":
+        notes.append(
+            f"Temperatures were logged in {mapping['temperature_unit']} and converted to degrees C."
         )
     unit = mapping["errors"]["unit"]
     if unit != "um":
