@@ -150,6 +150,14 @@ def _assert_r2_read_as_logged(dataset) -> pd.DataFrame:
     return late
 
 
+def _assert_refused(mapping: Path, message: str) -> None:
+    """The import of ``mapping`` stops with ``message`` and leaves no output folder."""
+    out = mapping.parent / "raw"
+    with pytest.raises(DataError, match=re.escape(message)):
+        import_dataset(mapping, out)
+    assert not out.exists()
+
+
 def test_clock_times_are_read_as_logged_in_iso_8601_or_a_stated_format(tmp_path):
     start = pd.Timestamp("2020-06-15 08:01:02")
     times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]  # 08:01:02 .. 09:51:02
@@ -286,14 +294,11 @@ def test_a_clock_put_back_an_hour_is_named_as_a_daylight_saving_change(tmp_path)
     times = [start + pd.Timedelta(minutes=10 * i) for i in range(12)]
     times[6:] = [t - pd.Timedelta(hours=1) for t in times[6:]]  # 02:30, then 01:40 again
     _clock_table(tmp_path / "clock.csv", [f"{t:%Y-%m-%d %H:%M:%S}" for t in times])
-    with pytest.raises(
-        DataError,
-        match=re.escape(
-            "clock.csv: row 8, column 'when': time does not increase (0 after 3000 s); "
-            "a daylight-saving change? log in UTC or in standard time"
-        ),
-    ):
-        import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "raw")
+    _assert_refused(
+        _clock_mapping(tmp_path, "ISO8601"),
+        "clock.csv: row 8, column 'when': time does not increase (0 after 3000 s); "
+        "a daylight-saving change? log in UTC or in standard time",
+    )
 
 
 def test_split_clock_columns_need_a_format(tmp_path):
@@ -408,14 +413,11 @@ def test_two_columns_of_one_name_are_refused(tmp_path):
     (tmp_path / "clock.csv").write_text(
         "when,temp A,temp B,temp A,dx (um)\n2020-06-15 08:00:00,20.0,21.0,22.0,0\n"
     )
-    with pytest.raises(
-        DataError,
-        match=re.escape(
-            "clock.csv: row 1: column 'temp A' is named more than once (columns 2 and 4); "
-            "rename one so that the mapping can tell them apart"
-        ),
-    ):
-        import_dataset(_clock_mapping(tmp_path, "ISO8601"), tmp_path / "raw")
+    _assert_refused(
+        _clock_mapping(tmp_path, "ISO8601"),
+        "clock.csv: row 1: column 'temp A' is named more than once (columns 2 and 4); "
+        "rename one so that the mapping can tell them apart",
+    )
 
 
 def test_a_line_break_in_a_header_cell_reads_as_a_space(tmp_path):
