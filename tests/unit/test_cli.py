@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
@@ -86,6 +88,10 @@ def _clock_put_back_an_hour(ds: Path) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
+def _copied_measurement(ds: Path) -> None:
+    shutil.copy(ds / "E2/errors/M03.csv", ds / "E2/errors/M09.csv")
+
+
 def _units_row(ds: Path) -> None:
     path = ds / "E2/temperatures/hmi.csv"
     lines = path.read_text().splitlines()
@@ -104,11 +110,15 @@ def _units_row(ds: Path) -> None:
         (_blank_later_error, "thermaxis error: <ds>/E4/errors/M07.csv: line 5, column 'error_um': expected a number, got ''"),
         (_clock_put_back_an_hour, "thermaxis error: <ds>/E3/temperatures/box.csv: line 600, column 'time': time goes backwards "
                                   "(2022-03-17 09:09:40 after 2022-03-17 10:09:30); a daylight-saving change? log in UTC or in standard time"),
+        # The clean job's plausibility checks, made by `check` as well.
+        (_copied_measurement, "thermaxis error: <ds>/E2/errors/M09.csv: readings from 2022-03-15 13:51:09 overlap "
+                              "measurement M03 (2022-03-15 13:51:09 to 2022-03-15 13:53:55); expected one "
+                              "measurement at a time (a copied file?)"),
         (_units_row, "thermaxis error: <ds>/E2/temperatures/hmi.csv: line 2, column 'time': expected an ISO 8601 time, "
                      "got ''; a units row? the layout has none (temperatures in degrees C, errors in um: data/README.md)"),
     ],
     ids=["runs_comma_separated", "yaml_bad_kind", "measurement_leading_dash", "later_error_blank", "log_clock_dst",
-         "log_units_row"],
+         "copied_measurement", "log_units_row"],
 )  # fmt: skip
 def test_check_refuses_a_bad_dataset_with_the_workflows_one_line(edit, message, tmp_path):
     ds = tmp_path / "cut"
@@ -117,6 +127,24 @@ def test_check_refuses_a_bad_dataset_with_the_workflows_one_line(edit, message, 
     proc = _thermaxis("check", str(ds))
     assert proc.returncode == 1 and proc.stdout == ""
     assert proc.stderr == message.replace("<ds>", str(ds)) + "\n"
+
+
+def test_check_warns_as_the_clean_job_would_of_a_sensor_logged_in_fahrenheit(tmp_path):
+    ds = tmp_path / "cut"
+    shutil.copytree(REPO / "data/raw/twin", ds)
+    log = ds / "E2/temperatures/box.csv"
+    table = pd.read_csv(log, dtype=str)
+    celsius = pd.to_numeric(table["T3"])
+    table["T3"] = (celsius * 9 / 5 + 32).map("{:.3f}".format)
+    table.to_csv(log, index=False)
+    proc = _thermaxis("check", str(ds))
+    assert proc.returncode == 0, proc.stderr
+    median_f = float(np.median(np.round(celsius.to_numpy() * 9 / 5 + 32, 3)))
+    assert (
+        f"thermaxis warning: {log}: sensor T3: median {median_f:.1f} °C is outside the plausible "
+        f"5-60 °C of a machine structure (config temperatures.plausible_median_c); if it is in "
+        f"°F, that is {(median_f - 32) * 5 / 9:.1f} °C: expected °C"
+    ) in proc.stderr
 
 
 def test_every_subcommand_has_help_with_examples(capsys):

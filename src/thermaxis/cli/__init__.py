@@ -290,15 +290,17 @@ def _report(args) -> int:
 
 
 def _check(args) -> int:
-    from thermaxis.cli.check import overview_lines
+    from thermaxis.cli.check import overview
     from thermaxis.pipeline.preflight import check_before_jobs
 
     started = time.perf_counter()
     checked = check_before_jobs(_config(args.configfile, args.dataset))
     # The overview reads every run's logs and measurements, whose checks may still refuse one.
-    overview = overview_lines(checked)
+    lines, warnings = overview(checked)
     print(f"thermaxis: {args.dataset}: every check before any job passed")
-    print("\n".join(overview))
+    print("\n".join(lines))
+    for warning in warnings:
+        print(f"thermaxis warning: {warning}", file=sys.stderr)
     print(f"checked in {time.perf_counter() - started:.2f} s")
     return 0
 

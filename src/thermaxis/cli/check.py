@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
+from thermaxis.dataset.plausibility import check_run_plausibility
 from thermaxis.dataset.reader import read_run
 from thermaxis.pipeline.preflight import Checked
 
-__all__ = ["overview_lines"]
+__all__ = ["overview"]
 
 
-def overview_lines(checked: Checked) -> list[str]:
+def overview(checked: Checked) -> tuple[list[str], list[str]]:
     """Runs, measurements per run, sensors, positions, each run's time span and how often
-    each of its logs sampled, as lines.
+    each of its logs sampled, as lines; and the warnings the clean job would give first.
 
-    Reads every run's logs and measurements (the full reader's checks, which the
-    workflow makes in its first jobs), so a bad later file is named here too.
+    Reads every run's logs and measurements and makes the clean job's plausibility checks
+    (:func:`~thermaxis.dataset.plausibility.check_run_plausibility`: readings out of range,
+    overlapping measurements, errors that look like mm, implausible temperatures, a signal
+    log that starts late), so a bad later file is named here too.
     """
     dataset = checked.dataset
     kind = "SIMULATED" if dataset.simulated else "MEASURED"
@@ -25,8 +28,10 @@ def overview_lines(checked: Checked) -> list[str]:
         f"  {len(checked.runs)} runs (held-out folds: {', '.join(checked.folds)})",
     ]
     width = max(len(r) for r in checked.runs)
+    warnings = []
     for run in checked.runs:
         raw = read_run(dataset, run)
+        warnings += check_run_plausibility(dataset, raw, checked.settings.cleaning)
         measurements = raw.measurements
         firsts = [m["time"].min() for m in measurements.values()]
         lasts = [m["time"].max() for m in measurements.values()]
@@ -38,7 +43,7 @@ def overview_lines(checked: Checked) -> list[str]:
             f"{'/'.join(map(str, sorted(positions)))} position{'' if positions == {1} else 's'}  "
             f"logs: {_log_intervals({**raw.sources, **raw.signals})}"
         )
-    return lines
+    return lines, warnings
 
 
 def _log_intervals(logs: dict) -> str:
