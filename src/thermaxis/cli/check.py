@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import os
+from functools import partial
+
+from thermaxis.config import CleaningSettings
 from thermaxis.dataset.plausibility import check_run_plausibility
-from thermaxis.dataset.reader import read_run
+from thermaxis.dataset.reader import Dataset, read_run
+from thermaxis.pipeline.parallel import fold_workers, map_folds
 from thermaxis.pipeline.preflight import Checked
 
 __all__ = ["overview"]
@@ -16,7 +21,8 @@ def overview(checked: Checked) -> tuple[list[str], list[str]]:
     Reads every run's logs and measurements and makes the clean job's plausibility checks
     (:func:`~thermaxis.dataset.plausibility.check_run_plausibility`: readings out of range,
     overlapping measurements, errors that look like mm, implausible temperatures, a signal
-    log that starts late), so a bad later file is named here too.
+    log that starts late), so a bad later file is named here too. Runs are read on the
+    cores the clean job would use; the first bad run's error is raised, as in one process.
     """
     dataset = checked.dataset
     kind = "SIMULATED" if dataset.simulated else "MEASURED"
@@ -28,22 +34,33 @@ def overview(checked: Checked) -> tuple[list[str], list[str]]:
         f"  {len(checked.runs)} runs (held-out folds: {', '.join(checked.folds)})",
     ]
     width = max(len(r) for r in checked.runs)
+    workers = fold_workers(os.cpu_count() or 1, len(checked.runs), "clean")
+    read = partial(_run_overview, dataset=dataset, cleaning=checked.settings.cleaning)
     warnings = []
-    for run in checked.runs:
-        raw = read_run(dataset, run)
-        warnings += check_run_plausibility(dataset, raw, checked.settings.cleaning)
-        measurements = raw.measurements
-        firsts = [m["time"].min() for m in measurements.values()]
-        lasts = [m["time"].max() for m in measurements.values()]
-        span = (max(lasts) - min(firsts)).total_seconds() / 3600.0
-        positions = {len(m["position_mm"].unique()) for m in measurements.values()}
-        lines.append(
-            f"  {run:<{width}}  {len(measurements):>4} measurements  {span:7.2f} h  "
-            f"{min(firsts):%Y-%m-%d %H:%M} to {max(lasts):%Y-%m-%d %H:%M}  "
-            f"{'/'.join(map(str, sorted(positions)))} position{'' if positions == {1} else 's'}  "
-            f"logs: {_log_intervals({**raw.sources, **raw.signals})}"
-        )
+    for run, (line, notes) in zip(
+        checked.runs, map_folds(read, checked.runs, workers), strict=True
+    ):
+        lines.append(f"  {run:<{width}}  {line}")
+        warnings += notes
     return lines, warnings
+
+
+def _run_overview(run: str, dataset: Dataset, cleaning: CleaningSettings) -> tuple[str, list]:
+    """One run's summary (after its name) and its plausibility warnings."""
+    raw = read_run(dataset, run)
+    notes = check_run_plausibility(dataset, raw, cleaning)
+    measurements = raw.measurements
+    firsts = [m["time"].min() for m in measurements.values()]
+    lasts = [m["time"].max() for m in measurements.values()]
+    span = (max(lasts) - min(firsts)).total_seconds() / 3600.0
+    positions = {len(m["position_mm"].unique()) for m in measurements.values()}
+    line = (
+        f"{len(measurements):>4} measurements  {span:7.2f} h  "
+        f"{min(firsts):%Y-%m-%d %H:%M} to {max(lasts):%Y-%m-%d %H:%M}  "
+        f"{'/'.join(map(str, sorted(positions)))} position{'' if positions == {1} else 's'}  "
+        f"logs: {_log_intervals({**raw.sources, **raw.signals})}"
+    )
+    return line, notes
 
 
 def _log_intervals(logs: dict) -> str:
