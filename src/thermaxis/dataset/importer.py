@@ -39,7 +39,7 @@ import pandas as pd
 import yaml
 
 from thermaxis.config import fill_defaults
-from thermaxis.dataset.reader import DST_BACK_H, load_dataset
+from thermaxis.dataset.reader import clock_back_hint, load_dataset
 from thermaxis.errors import DataError
 from thermaxis.schemas import load_schema
 
@@ -248,7 +248,7 @@ def read_table(
             raise DataError(f"{path}: one column {only[:60]!r}: looks {other!r}-separated; {fix}")
     frame.columns = [header_name(c) for c in frame.columns]
     _check_unique_header(path, frame, header_row)
-    frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped)
+    frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped, decimal=csv["decimal"])
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
     return frame
@@ -284,15 +284,14 @@ def _check_unique_header(path: Path, frame: pd.DataFrame, header_row: int) -> No
             )
 
 
-def read_numeric(
-    path: Path, frame: pd.DataFrame, column: str, allow_empty: bool, decimal: str = "."
-) -> np.ndarray:
-    """Column ``column`` of ``frame`` (read from ``path``) as floats.
+def read_numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool) -> np.ndarray:
+    """Column ``column`` of ``frame`` (read from ``path``) as floats, with the decimal mark
+    :func:`read_table` read the table with.
 
     A cell that is not a finite number raises one line naming the file, the row and the
     column; with ``allow_empty`` an empty cell is a missing reading (NaN) instead.
-    ``decimal`` is the CSV's decimal mark.
     """
+    decimal = frame.attrs.get("decimal", ".")
     read = cells = _column(path, frame, column)
     column = read.name
     if decimal != "." and not pd.api.types.is_numeric_dtype(cells):
@@ -382,16 +381,12 @@ def _increasing(path: Path, frame: pd.DataFrame, columns: list[str], t: np.ndarr
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         i = int(back[0]) + 1
-        back_h = (t[i - 1] - t[i]) / 3600.0
-        if back_h == 0:
-            hint = (
-                "; a clock coarser than the logging (a date without its time of day, or whole "
-                "seconds logged faster than once a second)?"
-            )
-        elif DST_BACK_H[0] <= back_h <= DST_BACK_H[1]:
-            hint = "; a daylight-saving change? log in UTC or in standard time"
-        else:
-            hint = ""
+        hint = (
+            "; a clock coarser than the logging (a date without its time of day, or whole "
+            "seconds logged faster than once a second)?"
+            if t[i] == t[i - 1]
+            else clock_back_hint((t[i - 1] - t[i]) / 3600.0)
+        )
         raise DataError(
             f"{path}: row {_row(frame, i)}, {_words(columns)}: time does not increase "
             f"({t[i]:g} after {t[i - 1]:g} s){hint}"
@@ -428,12 +423,11 @@ def read_start(path: Path, frame: pd.DataFrame, time: dict) -> pd.Timestamp:
 def _tidy(path: Path, frame: pd.DataFrame, mapping: dict) -> pd.DataFrame:
     """Seconds since the table's clock start, then every mapped column under its new id."""
     out = {"_t": read_seconds(path, frame, mapping["time"])}
-    decimal = mapping["csv"]["decimal"]
     for item in (*mapping["sensors"], *mapping["signals"]):
-        out[item["id"]] = read_numeric(path, frame, item["column"], True, decimal)
+        out[item["id"]] = read_numeric(path, frame, item["column"], allow_empty=True)
     for c, channel in enumerate(_channels(mapping)):
         for j, item in enumerate(channel["columns"]):
-            out[_error_key(c, j)] = read_numeric(path, frame, item["column"], True, decimal)
+            out[_error_key(c, j)] = read_numeric(path, frame, item["column"], allow_empty=True)
     return pd.DataFrame(out)
 
 

@@ -43,6 +43,14 @@ MEASUREMENT_COLUMN = "measurement"
 DST_BACK_H = (0.5, 1.0 + 1.0 / 60.0)
 
 
+def clock_back_hint(hours: float) -> str:
+    """What a message adds for a clock put back by ``hours``: a clock put back by up to an
+    hour, less the sample interval, is most often a daylight-saving change."""
+    if DST_BACK_H[0] <= hours <= DST_BACK_H[1]:
+        return "; a daylight-saving change? log in UTC or in standard time"
+    return ""
+
+
 def _schema_error(path: Path, error: jsonschema.ValidationError, where: str = "") -> DataError:
     location = "/".join(str(p) for p in error.absolute_path) or "top level"
     prefix = f"{path}: {where}" if where else f"{path}: "
@@ -342,13 +350,10 @@ def _check_time_order(path: Path, time: pd.Series, where: str = "") -> None:
     back = np.flatnonzero(step < 0)
     if back.size:
         i = int(back[0]) + 1
-        # A clock put back by up to an hour, less the sample interval, is most often a
-        # daylight-saving change.
-        hour = DST_BACK_H[0] <= -step[i - 1] / 3.6e12 <= DST_BACK_H[1]
         raise DataError(
             f"{path}: line {int(time.index[i]) + 2}, column 'time': time goes backwards "
             f"({time.iloc[i]} after {time.iloc[i - 1]}){where}"
-            + ("; a daylight-saving change? log in UTC or in standard time" if hour else "")
+            f"{clock_back_hint(-step[i - 1] / 3.6e12)}"
         )
 
 
