@@ -15,9 +15,11 @@ from thermaxis.method.recommend import (
     _choose,
     candidate_view,
     default_candidates,
+    fold_scores,
     held_out_scores,
     recommend,
     recommendation_markdown,
+    training_sets,
 )
 
 DEFAULTS = Settings.from_config({})
@@ -139,6 +141,40 @@ def test_an_inner_group_fold_is_fitted_once_and_scored_over_all_its_rows():
     assert row["held_out"] == "R2+R3"
     assert row["rmse"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
     assert row["max_abs"] == pytest.approx(np.abs(residual).max(), rel=1e-9)
+
+
+def test_evaluations_on_the_same_training_runs_share_one_fit():
+    runs = ["R1", "R2", "R3", "R4"]
+    sets = {s.train: dict(s.scored) for s in training_sets(runs, [(r,) for r in runs], 12, 5)}
+    # By hand: four outer fits (three runs each) and the C(4, 2) = 6 pairs of runs the inner
+    # loops train on, each pair serving two outer folds: 10 fits where 4 x (1 + 3) = 16
+    # evaluations need one.
+    assert len(sets) == 10
+    assert sets[("R2", "R3", "R4")] == {("R1",): True}
+    assert sets[("R3", "R4")] == {("R2",): True, ("R1",): True}
+    # Above the limit an inner group fold of several runs is scored over its rows.
+    grouped = training_sets([f"R{i}" for i in range(1, 7)], [("R1", "R2")], 3, 2)
+    assert [dict(s.scored) for s in grouped] == [
+        {("R1", "R2"): True},
+        {("R3", "R4"): False},
+        {("R5", "R6"): False},
+    ]
+
+
+def test_shared_fits_give_the_scores_of_one_fit_per_evaluation():
+    X, Y = make_runs(n_runs=4)
+    candidates = [fixed("T1"), fixed("T2")]
+    runs = ["R1", "R2", "R3", "R4"]
+    shared = pd.concat(fold_scores(X, Y, candidates, runs, 1, 12, 5), ignore_index=True)
+    for row in shared.itertuples():
+        train = [r for r in runs if r not in (row.fold, row.held_out)]
+        by_hand = [c for c in candidates if c.name == row.candidate]
+        (alone,) = held_out_scores(
+            X, Y, [*train, row.held_out], [row.held_out], by_hand[0], 1, [], {}
+        )
+        assert row.rmse == pytest.approx(alone["rmse"], rel=1e-12)
+        assert row.max_abs == pytest.approx(alone["max_abs"], rel=1e-12)
+    assert len(shared) == 4 * 2 * (1 + 3)
 
 
 def test_above_the_limit_the_outer_loop_holds_out_groups_of_runs():

@@ -5,7 +5,6 @@ fold, the final one and the tables."""
 import io
 import json
 import logging
-from functools import partial
 
 import pandas as pd
 
@@ -60,22 +59,21 @@ def main(snakemake):
         outer = run_groups(p.folds, recommend.max_loco_runs, recommend.group_folds)
         # A bad-input test runs this script without Snakemake's threads: one process. The
         # work grows with the runs, however they are grouped.
-        workers = min(
-            fold_workers(getattr(snakemake, "threads", 1), len(p.folds), "recommend"), len(outer)
-        )
-        one_fold = partial(
-            fold_scores,
+        workers = fold_workers(getattr(snakemake, "threads", 1), len(p.folds), "recommend")
+        by_fold = fold_scores(
             X,
             Y,
             candidates,
+            outer,
             degree=degree,
             max_loco_runs=recommend.max_loco_runs,
             n_group_folds=recommend.group_folds,
             signals=p.signals,
             # Workers start without this job's logging: only one process says its progress.
             progress=log.info if workers == 1 else None,
+            map_sets=lambda one_set, sets: map_folds(one_set, sets, min(workers, len(sets))),
         )
-        by_run = pd.concat(map_folds(one_fold, outer, workers), ignore_index=True)
+        by_run = pd.concat(by_fold, ignore_index=True)
         texts = {
             path: csv_text(
                 by_run.loc[by_run["fold"] == fold].reset_index(drop=True), float_format="%.10g"

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -61,6 +62,10 @@ __all__ = [
     "candidate_view",
     "held_out_scores",
     "SCORE_COLUMNS",
+    "TrainingSet",
+    "training_sets",
+    "training_set_scores",
+    "outer_fold_scores",
     "fold_scores",
     "collect",
     "recommend",
@@ -163,15 +168,15 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> li
     ``fold`` is a run or a group of runs, fitted once: ``[(its name, metrics)]``, or with
     ``per_run`` ``[(run, metrics), ...]`` for each of its runs. Candidates that differ only
     in their algorithm share the selection (``cache``), as the main workflow's algorithms
-    share a fold's.
+    share a fold's; so do evaluations on the same training runs.
     """
     view, selectable, models = candidate_view(X, candidate, signals)
     # The recommendation never lets the held-out run into the choice of sensitive points.
     selection_settings = replace(candidate.selection, scope="training")
     decoupled = candidate.approach == "decoupled"
+    held = set(held_out_runs(fold))
     key = (
-        tuple(sorted(pd.unique(X["run"]))),
-        fold,
+        tuple(sorted(r for r in pd.unique(X["run"]) if r not in held)),
         tuple(selectable),
         selection_settings,
         decoupled,
@@ -240,6 +245,157 @@ def held_out_scores(
     return rows
 
 
+@dataclass(frozen=True)
+class TrainingSet:
+    """The evaluations that fit on the same training runs, done with one fit per candidate.
+
+    With leave-one-out on both loops, the inner fold of outer fold E3 that holds out E4
+    and the inner fold of outer fold E4 that holds out E3 both train on the other runs:
+    half the inner fits repeat one another. ``scored`` are the held-out groups, each with
+    whether it is scored run by run (an outer group, and any single run) or over all its
+    rows (an inner group fold of several runs).
+    """
+
+    train: tuple[str, ...]
+    scored: tuple[tuple[tuple[str, ...], bool], ...]
+
+
+def _outer_splits(runs, fold, max_loco_runs, n_group_folds):
+    """An outer fold's held-out runs, its training runs and its inner held-out groups."""
+    held = held_out_runs(fold)
+    train = [r for r in runs if r not in held]
+    # With two runs the training side of a fold is one run: nothing to compare candidates
+    # on without the held-out run, so the fold has no inner scores (collect says so).
+    splits = run_groups(train, max_loco_runs, n_group_folds) if len(train) >= 2 else []
+    return held, train, splits
+
+
+def training_sets(
+    runs: Sequence[str],
+    folds: Sequence[str | Sequence[str]],
+    max_loco_runs: int,
+    n_group_folds: int,
+) -> list[TrainingSet]:
+    """Every distinct set of training runs the outer ``folds`` and their inner loops fit on.
+
+    In the order first needed, outer folds in turn; :func:`outer_fold_scores` puts
+    their scores back into the folds' rows.
+    """
+    runs = natural_sorted(runs)
+    needed: dict[tuple[str, ...], dict[tuple[str, ...], bool]] = {}
+    for fold in folds:
+        held, train, splits = _outer_splits(runs, fold, max_loco_runs, n_group_folds)
+        needed.setdefault(tuple(train), {})[held] = True
+        for group in splits:
+            rest = tuple(r for r in train if r not in group)
+            needed.setdefault(rest, {})[tuple(group)] = len(group) == 1
+    return [TrainingSet(train, tuple(scored.items())) for train, scored in needed.items()]
+
+
+def training_set_scores(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    candidates: Sequence[Candidate],
+    training: TrainingSet,
+    degree: int,
+    signals: Sequence[str] = (),
+    progress: Callable[[str], None] | None = None,
+) -> dict[tuple[str, str], dict]:
+    """Every candidate fitted once on ``training.train``, scored on each held-out group.
+
+    ``{(candidate, held-out name): metrics}``: a run's name, or an inner group fold's
+    runs joined by "+". Groups scored run by run share one call (their runs are all held
+    out of the same fit); a group scored over its rows has its own.
+    """
+    say = progress or (lambda message: None)
+    by_run = [r for group, per_run in training.scored if per_run for r in group]
+    calls = [(tuple(by_run), True)] if by_run else []
+    calls += [(group, False) for group, per_run in training.scored if not per_run]
+    cache: dict = {}
+    out = {}
+    for candidate in candidates:
+        say(f"training runs {fold_name(training.train)}: {candidate.name}")
+        for group, per_run in calls:
+            for row in held_out_scores(
+                X, Y, [*training.train, *group], [group], candidate, degree, signals, cache,
+                per_run,
+            ):  # fmt: skip
+                out[(candidate.name, row["held_out"])] = {m: row[m] for m in METRICS}
+    return out
+
+
+SCORE_COLUMNS = ["kind", "fold", "candidate", "held_out", *METRICS]
+
+
+def outer_fold_scores(
+    runs: Sequence[str],
+    candidates: Sequence[Candidate],
+    fold: str | Sequence[str],
+    scores: Mapping[tuple[str, ...], Mapping[tuple[str, str], dict]],
+    max_loco_runs: int,
+    n_group_folds: int,
+) -> pd.DataFrame:
+    """Everything one outer fold contributes, from its training sets' ``scores``.
+
+    ``fold`` is a run, or a group of runs held out together: above ``max_loco_runs``
+    runs the outer loop deals them into ``n_group_folds`` groups as the inner loop does
+    (:func:`~thermaxis.method.folds.run_groups`), because leaving each run out would repeat
+    the whole inner loop per run, a cost that grows with the square of the runs. Every run
+    is still held out once; its row is its group's choice, fitted on the runs outside. Rows
+    of kind ``inner``: each candidate fitted on the training runs but one inner group,
+    scored on that group (the fold's runs are in none of them), repeated under each run
+    of the fold. Rows of kind ``loco``: each candidate fitted on every run outside the
+    fold, scored on each of its runs. ``scores`` maps each training set's runs to
+    :func:`training_set_scores`.
+    """
+    held, train, splits = _outer_splits(natural_sorted(runs), fold, max_loco_runs, n_group_folds)
+    rows: dict[str, list] = {run: [] for run in held}
+    for c in candidates:
+        for run in held:
+            metrics = scores[tuple(train)][(c.name, run)]
+            rows[run].append({"kind": "loco", "fold": run, "candidate": c.name,
+                              "held_out": run, **metrics})  # fmt: skip
+        for group in splits:
+            rest, name = tuple(r for r in train if r not in group), fold_name(group)
+            metrics = scores[rest][(c.name, name)]
+            for run in held:
+                rows[run].append({"kind": "inner", "fold": run, "candidate": c.name,
+                                  "held_out": name, **metrics})  # fmt: skip
+    return pd.DataFrame([r for run in held for r in rows[run]], columns=SCORE_COLUMNS)
+
+
+def fold_scores(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    candidates: Sequence[Candidate],
+    folds: Sequence[str | Sequence[str]],
+    degree: int,
+    max_loco_runs: int,
+    n_group_folds: int,
+    signals: Sequence[str] = (),
+    progress: Callable[[str], None] | None = None,
+    map_sets: Callable[[Callable, list], list] | None = None,
+) -> list[pd.DataFrame]:
+    """The rows of each outer fold (:func:`outer_fold_scores`), each training set fitted once.
+
+    ``map_sets(function, training_sets)`` runs the training sets (default: in turn; the
+    workflow spreads them over its cores, :func:`thermaxis.pipeline.parallel.map_folds`).
+    """
+    runs = natural_sorted(pd.unique(X["run"]).tolist())
+    if len(runs) < 2:
+        raise ValueError(f"{len(runs)} run: leave-one-condition-out needs at least 2")
+    sets = training_sets(runs, folds, max_loco_runs, n_group_folds)
+    one_set = partial(
+        training_set_scores, X, Y, candidates, degree=degree, signals=signals, progress=progress
+    )
+    done = (map_sets or (lambda f, items: [f(i) for i in items]))(one_set, sets)
+    scores = {s.train: d for s, d in zip(sets, done, strict=True)}
+    return [
+        outer_fold_scores(runs, candidates, fold, scores, max_loco_runs, n_group_folds)
+        for fold in folds
+    ]
+
+
 def _lowest(means: pd.Series, order: Sequence[str]) -> str:
     """The lowest mean; ties (to 1e-12 relative) go to the first listed."""
     best = min(means.loc[list(order)])
@@ -278,54 +434,6 @@ def _choose(
     ]
     name = _lowest(means, beaten) if beaten else BASELINE
     return name, float(means[name])
-
-
-SCORE_COLUMNS = ["kind", "fold", "candidate", "held_out", *METRICS]
-
-
-def fold_scores(
-    X: pd.DataFrame,
-    Y: pd.DataFrame,
-    candidates: Sequence[Candidate],
-    fold: str | Sequence[str],
-    degree: int,
-    max_loco_runs: int,
-    n_group_folds: int,
-    signals: Sequence[str] = (),
-    progress: Callable[[str], None] | None = None,
-) -> pd.DataFrame:
-    """Everything one outer fold contributes: its inner scores and its held-out errors.
-
-    ``fold`` is a run, or a group of runs held out together: above ``max_loco_runs``
-    runs the outer loop deals them into ``n_group_folds`` groups as the inner loop does
-    (:func:`~thermaxis.method.folds.run_groups`), because leaving each run out would repeat
-    the whole inner loop per run, a cost that grows with the square of the runs. Every run
-    is still held out once; its row is its group's choice, fitted on the runs outside. Rows
-    of kind ``inner``: each candidate fitted on the training runs but one inner group,
-    scored on that group (the fold's runs are in none of them), repeated under each run
-    of the fold. Rows of kind ``loco``: each candidate fitted on every run outside the
-    fold, scored on each of its runs.
-    """
-    runs = natural_sorted(pd.unique(X["run"]).tolist())
-    if len(runs) < 2:
-        raise ValueError(f"{len(runs)} run: leave-one-condition-out needs at least 2")
-    say = progress or (lambda message: None)
-    held = held_out_runs(fold)
-    train = [r for r in runs if r not in held]
-    # With two runs the training side of a fold is one run: nothing to compare candidates
-    # on without the held-out run, so the fold has no inner scores (collect says so).
-    splits = run_groups(train, max_loco_runs, n_group_folds) if len(train) >= 2 else []
-    cache: dict = {}
-    rows: dict[str, list] = {run: [] for run in held}
-    for candidate in candidates:
-        say(f"fold {fold_name(fold)}: {candidate.name}")
-        loco = held_out_scores(X, Y, runs, [held], candidate, degree, signals, cache, True)
-        inner = held_out_scores(X, Y, train, splits, candidate, degree, signals, cache)
-        for r in loco:
-            rows[r["held_out"]] += [{"kind": "loco", "fold": r["held_out"], **r}]
-        for run in held:
-            rows[run] += [{"kind": "inner", "fold": run, **r} for r in inner]
-    return pd.DataFrame([r for run in held for r in rows[run]], columns=SCORE_COLUMNS)
 
 
 def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
@@ -388,7 +496,8 @@ def recommend(
 
     ``reference`` names the candidate reported beside the choice (the paper's
     configuration). ``outer_folds`` default to every run. The workflow runs
-    :func:`fold_scores` as one job per fold and :func:`collect` once.
+    :func:`fold_scores` in one job, its training sets spread over the job's cores, and
+    :func:`collect` once.
     """
     folds = (
         list(outer_folds)
@@ -397,15 +506,12 @@ def recommend(
     )
     names = [c.name for c in candidates]
     _check_choice(names, reference, score)
+    outer = run_groups(folds, max_loco_runs, n_group_folds)
     scores = pd.concat(
-        [
-            fold_scores(
-                X, Y, candidates, f, degree, max_loco_runs, n_group_folds, signals, progress
-            )
-            for f in run_groups(folds, max_loco_runs, n_group_folds)
-        ],
+        fold_scores(X, Y, candidates, outer, degree, max_loco_runs, n_group_folds, signals,
+                    progress),
         ignore_index=True,
-    )
+    )  # fmt: skip
     return collect(scores, names, reference, score, level)
 
 
