@@ -165,21 +165,22 @@ class Compensator:
         return row
 
     def _changes(self, now: np.ndarray, then: np.ndarray) -> np.ndarray:
-        """Each regression's prediction at input row ``now`` minus at ``then``."""
+        """Each regression's prediction at each input row of ``now`` (cycles, inputs) minus
+        at ``then``: (cycles, regressions)."""
         changes = []
         for record in self.model["regressions"]:
             chosen = record["inputs"]
-            pair = evaluate_regression(record, np.vstack([now[chosen], then[chosen]]))
-            changes.append(pair[0] - pair[1])
-        return np.asarray(changes, dtype=float)
+            values = evaluate_regression(record, np.vstack([now[:, chosen], then[chosen]]))
+            changes.append(values[:-1] - values[-1])
+        return np.column_stack(changes).astype(float, copy=False)
 
     def regression_changes(
         self, temperatures: Mapping[str, float], reference: Mapping[str, float]
     ) -> np.ndarray:
         """Each regression's prediction at the current state minus at the reference state."""
         return self._changes(
-            self._input_row(temperatures, reference), self._input_row(reference, reference)
-        )
+            self._input_row(temperatures, reference)[None, :], self._input_row(reference, reference)
+        )[0]
 
     def predicted_change(
         self, temperatures: Mapping[str, float], reference: Mapping[str, float]
@@ -321,28 +322,34 @@ class Compensator:
                 derived = self.derived_inputs(times_s, temperatures)
             temperatures = [{**s, **d} for s, d in zip(temperatures, derived, strict=True)]
             reference = {**derived[0], **reference}
-        good = _zero_parameters(self.p0_mm, self.offset_only, self.positions_mm.size)
-        fault_since = None
+        # The faults first, cycle by cycle (a rate is measured against the last plausible
+        # reading); then every good cycle's regressions in one evaluation per regression,
+        # each cycle's row the one its faults were checked on (as parameters() builds it).
         last: dict[str, tuple[float, float]] = {}
-        steps = []
-        # The reference's input row, once, when the first good cycle needs it; a cycle's own
-        # row is the one its faults were checked on (as parameters() would build it).
-        then = None
+        checked = []
         for i, (time_s, sample) in enumerate(zip(times_s, temperatures, strict=False)):
             ages = ages_s[i] if ages_s is not None else {}
             reasons, row = self._faults_and_row(sample, reference, float(time_s), last, ages)
             last.update(self._plausible_readings(float(time_s), sample, ages))
+            checked.append((float(time_s), reasons, row))
+        rows = [row for _, reasons, row in checked if not reasons]
+        changes = iter(
+            self._changes(np.vstack(rows), self._input_row(reference, reference)) if rows else ()
+        )
+        good = _zero_parameters(self.p0_mm, self.offset_only, self.positions_mm.size)
+        fault_since = None
+        steps = []
+        for time_s, reasons, _ in checked:
             if not reasons:
-                then = self._input_row(reference, reference) if then is None else then
-                good = self._parameters_of(self._changes(row, then))
+                good = self._parameters_of(next(changes))
                 fault_since = None
-                steps.append(Step(float(time_s), good, "ok"))
+                steps.append(Step(time_s, good, "ok"))
                 continue
-            fault_since = float(time_s) if fault_since is None else fault_since
+            fault_since = time_s if fault_since is None else fault_since
             if f.policy == "hold":
-                steps.append(Step(float(time_s), good, "hold", reasons))
+                steps.append(Step(time_s, good, "hold", reasons))
                 continue
-            elapsed_min = (float(time_s) - fault_since) / 60.0
+            elapsed_min = (time_s - fault_since) / 60.0
             scale = (
                 max(0.0, 1.0 - elapsed_min / f.ramp_to_zero_min) if f.ramp_to_zero_min > 0 else 0.0
             )
@@ -352,5 +359,5 @@ class Compensator:
                 tan_beta=good.tan_beta * scale,
                 curve_um=tuple(v * scale for v in good.curve_um),
             )
-            steps.append(Step(float(time_s), ramped, "ramp", reasons))
+            steps.append(Step(time_s, ramped, "ramp", reasons))
         return steps
