@@ -79,6 +79,10 @@ STYLE: dict[str, object] = {
     "xtick.direction": "in",
     "ytick.direction": "in",
     "figure.dpi": 100,
+    # Every figure asks for its layout by name (:func:`figure`); a user's matplotlibrc
+    # must not give one to the figures save_figure strips of theirs.
+    "figure.autolayout": False,
+    "figure.constrained_layout.use": False,
     "savefig.dpi": 300,
     "savefig.bbox": None,
     "svg.hashsalt": "thermaxis",
@@ -305,7 +309,9 @@ def save_figure(fig: Figure, paths, dpi: float | None = None) -> None:
                 )
                 if i == 0:
                     # The layout is in figure fractions: solved once for the first
-                    # format, it holds for the others (a layout pass is about a quarter of a save).
-                    fig.set_layout_engine("none")
+                    # format, it holds for the others. No engine at all, not "none": with
+                    # "none"'s placeholder engine savefig still lays the figure out in a
+                    # draw pass of its own before every later format (the same bytes).
+                    fig.set_layout_engine(None)
     finally:
         plt.close(fig)
