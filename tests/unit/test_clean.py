@@ -10,7 +10,7 @@ import pytest
 
 from helpers import DEFAULTS
 from thermaxis.cleaning.clock import estimate_clock_offset
-from thermaxis.cleaning.passes import combine_passes
+from thermaxis.cleaning.passes import combine_passes, run_targets, without_strays
 from thermaxis.cleaning.temperatures import (
     CleanedTemperatures,
     clean_temperatures,
@@ -511,6 +511,25 @@ def test_target_read_in_one_pass_only_keeps_that_reading_with_a_warning():
     curve, warnings = combine_passes(m, TARGETS, DEFAULTS.cleaning.errors, name="m03")
     assert curve[225.0] == -1.0
     assert len(warnings) == 1 and "m03" in warnings[0] and "225" in warnings[0]
+
+
+def test_a_position_few_measurements_read_is_a_stray_reading_not_a_target():
+    line = [0.0, -1.0, -2.0, -3.0, -4.0]
+    run = {f"M{i}": two_passes(line, line) for i in range(1, 6)}
+    extra = pd.DataFrame([[run["M3"]["time"].iloc[2], 215.0, -9.0, "+"]], columns=run["M3"].columns)
+    run["M3"] = pd.concat([run["M3"], extra], ignore_index=True)
+    # By hand: 215 mm is read by 1 of 5 measurements, no majority, so not a target.
+    targets = run_targets(run)
+    assert targets.tolist() == TARGETS
+    kept, why = without_strays(run, targets)
+    assert list(why) == ["M3"] and "215 mm read by 1 of the run's 5 measurements" in why["M3"]
+    assert len(kept["M3"]) == 10 and 215.0 not in kept["M3"]["position_mm"].tolist()
+    curve, _ = combine_passes(kept["M3"], targets, DEFAULTS.cleaning.errors)
+    np.testing.assert_allclose(curve.to_numpy(), line)
+    # Read by three of five it is a target, missing in two.
+    for name in ("M1", "M2"):
+        run[name] = pd.concat([run[name], extra], ignore_index=True)
+    assert 215.0 in run_targets(run).tolist()
 
 
 def test_missing_target_reading_is_dropped_with_a_warning():

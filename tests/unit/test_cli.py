@@ -92,6 +92,11 @@ def _copied_measurement(ds: Path) -> None:
     shutil.copy(ds / "E2/errors/M03.csv", ds / "E2/errors/M09.csv")
 
 
+def _targets_differ(ds: Path) -> None:
+    for path in (ds / "E3/errors").glob("*.csv"):
+        path.write_text(path.read_text().replace(",445,", ",455,"))
+
+
 def _units_row(ds: Path) -> None:
     path = ds / "E2/temperatures/hmi.csv"
     lines = path.read_text().splitlines()
@@ -116,9 +121,12 @@ def _units_row(ds: Path) -> None:
                               "measurement at a time (a copied file?)"),
         (_units_row, "thermaxis error: <ds>/E2/temperatures/hmi.csv: line 2, column 'time': expected an ISO 8601 time, "
                      "got ''; a units row? the layout has none (temperatures in degrees C, errors in um: data/README.md)"),
+        # The assemble job's comparison of the runs' targets.
+        (_targets_differ, "thermaxis error: <ds>/E3/errors: run E3 reads 14 target positions, run E1 14 (455 mm is not "
+                          "a target of run E1); expected the same targets in every run"),
     ],
     ids=["runs_comma_separated", "yaml_bad_kind", "measurement_leading_dash", "later_error_blank", "log_clock_dst",
-         "copied_measurement", "log_units_row"],
+         "copied_measurement", "log_units_row", "targets_differ"],
 )  # fmt: skip
 def test_check_refuses_a_bad_dataset_with_the_workflows_one_line(edit, message, tmp_path):
     ds = tmp_path / "cut"

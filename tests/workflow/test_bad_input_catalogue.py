@@ -1139,6 +1139,18 @@ CASES = [
         target="clean:E2",
     ),
     Case(
+        "error_stray_position",
+        # One reading at 195 mm, between two targets, that no other measurement reads.
+        lambda ds, w: _write_lines(
+            ds / E2_M03,
+            [*_lines(ds / E2_M03)[:2], "2022-03-15T13:51:12,195,-1.5,+", *_lines(ds / E2_M03)[2:]],
+        ),
+        "195 mm read by 1 of the run's 8 measurements, not one of its targets; left out",
+        E2_M03,
+        target="clean:E2",
+        fails=False,
+    ),
+    Case(
         "error_zero_duration",
         lambda ds, w: _write_lines(
             ds / E2_M03,

@@ -12,6 +12,8 @@ from thermaxis.config import ErrorCleaning
 __all__ = [
     "combine_passes",
     "foreign_targets",
+    "run_targets",
+    "without_strays",
 ]
 # Positions closer than this are the same target (readings are logged to 1e-3 mm at best).
 _POSITION_TOL_MM = 1e-6
@@ -25,6 +27,56 @@ def _listed(positions) -> str:
     return shown + (f", ... ({len(positions)} in all)" if len(positions) > 6 else "")
 
 
+def _read_levels(measurements: dict[str, pd.DataFrame]) -> dict[str, np.ndarray]:
+    return {
+        name: np.unique(np.round(m["position_mm"].to_numpy(dtype=float), 6))
+        for name, m in measurements.items()
+    }
+
+
+def _own_levels(read: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The positions more than half of the measurements read, every position read, and
+    how many measurements read each."""
+    levels, counts = np.unique(np.concatenate(list(read.values())), return_counts=True)
+    return levels[counts > len(read) / 2], levels, counts
+
+
+def run_targets(measurements: dict[str, pd.DataFrame]) -> np.ndarray:
+    """A run's targets: the positions more than half of its measurements read, as logged.
+
+    A position fewer measurements read is a stray reading, not a target
+    (:func:`without_strays`); when no position has a majority (measurements that share
+    none), every position read is a target and the later checks name the mismatch.
+    """
+    own, levels, _ = _own_levels(_read_levels(measurements))
+    logged = np.unique(
+        np.concatenate([m["position_mm"].to_numpy(dtype=float) for m in measurements.values()])
+    )
+    return logged[np.isin(np.round(logged, 6), own if own.size else levels)]
+
+
+def without_strays(
+    measurements: dict[str, pd.DataFrame], targets: np.ndarray
+) -> tuple[dict[str, pd.DataFrame], dict[str, str]]:
+    """Each measurement without its readings at positions that are not ``targets``, and
+    per measurement that had any, what was left out and why (for a warning)."""
+    read = _read_levels(measurements)
+    _, levels, counts = _own_levels(read)
+    count = dict(zip(levels, counts, strict=True))
+    kept, why = {}, {}
+    for name, m in measurements.items():
+        position = m["position_mm"].to_numpy(dtype=float)
+        at_target = (np.abs(position[:, None] - targets[None, :]) <= _POSITION_TOL_MM).any(axis=1)
+        kept[name] = m if at_target.all() else m[at_target]
+        if not at_target.all():
+            stray = np.unique(np.round(position[~at_target], 6))
+            why[name] = (
+                f"position(s) {_listed(stray)} mm read by {count[stray[0]]} of the run's "
+                f"{len(read)} measurements, not one of its targets; left out"
+            )
+    return kept, why
+
+
 def foreign_targets(
     measurements: dict[str, pd.DataFrame], max_missing_fraction: float
 ) -> tuple[str, str] | None:
@@ -34,14 +86,12 @@ def foreign_targets(
     are not its targets. A
     measurement whose positions miss more of them than ``max_missing_fraction`` allows
     would otherwise make every measurement of the run look incomplete; when its positions
-    are the run's targets shifted by one distance, the message says by how much.
+    are the run's targets shifted by one distance, the message says by how much. A
+    measurement that reads all of them and a stray position besides is not one
+    (:func:`without_strays`).
     """
-    read = {
-        name: np.unique(np.round(m["position_mm"].to_numpy(dtype=float), 6))
-        for name, m in measurements.items()
-    }
-    levels, counts = np.unique(np.concatenate(list(read.values())), return_counts=True)
-    own = levels[counts > len(read) / 2]
+    read = _read_levels(measurements)
+    own, _, _ = _own_levels(read)
     if own.size == 0:
         return None
     for name, positions in read.items():

@@ -52,12 +52,6 @@ class RunTables:
     notes: tuple[str, ...] = field(default=())
 
 
-def _targets(raw: RawRun) -> np.ndarray:
-    """The run's target set: every position read in any of its measurements."""
-    positions = np.concatenate([m["position_mm"].to_numpy() for m in raw.measurements.values()])
-    return np.unique(positions)
-
-
 def minutes_since_first(times, windows: pd.DataFrame):
     """Minutes since the start of the run's first measurement (the paper's time axis)."""
     return (times - windows["start"].iloc[0]) / pd.Timedelta(minutes=1)
@@ -292,9 +286,12 @@ def _combined_errors(raw: RawRun, cleaning: CleaningSettings) -> tuple[list[pd.S
     if foreign is not None:
         name, why = foreign
         raise DataError(f"measurement {raw.error_origin(name)}: {why}")
-    targets = _targets(raw)
+    targets = passes.run_targets(raw.measurements)
+    measurements, strays = passes.without_strays(raw.measurements, targets)
     combined, notes = [], []
-    for name, measurement in raw.measurements.items():
+    for name, measurement in measurements.items():
+        if name in strays:
+            notes.append(f"measurement {raw.error_origin(name)}: {strays[name]}")
         curve, warns = passes.combine_passes(
             measurement, targets, cleaning.errors, name=raw.error_origin(name)
         )

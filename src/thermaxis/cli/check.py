@@ -5,8 +5,11 @@ from __future__ import annotations
 import os
 from functools import partial
 
+import pandas as pd
+
+from thermaxis.cleaning.passes import run_targets
 from thermaxis.config import CleaningSettings
-from thermaxis.dataset.plausibility import check_run_plausibility
+from thermaxis.dataset.plausibility import check_run_plausibility, check_same_targets
 from thermaxis.dataset.reader import Dataset, read_run
 from thermaxis.pipeline.parallel import fold_workers, map_folds
 from thermaxis.pipeline.preflight import Checked
@@ -21,8 +24,9 @@ def overview(checked: Checked) -> tuple[list[str], list[str]]:
     Reads every run's logs and measurements and makes the clean job's plausibility checks
     (:func:`~thermaxis.dataset.plausibility.check_run_plausibility`: readings out of range,
     overlapping measurements, errors that look like mm, implausible temperatures, a signal
-    log that starts late), so a bad later file is named here too. Runs are read on the
-    cores the clean job would use; the first bad run's error is raised, as in one process.
+    log that starts late), so a bad later file is named here too, and compares the runs'
+    targets as the assemble job does. Runs are read on the cores the clean job would use;
+    the first bad run's error is raised, as in one process.
     """
     dataset = checked.dataset
     kind = "SIMULATED" if dataset.simulated else "MEASURED"
@@ -36,17 +40,19 @@ def overview(checked: Checked) -> tuple[list[str], list[str]]:
     width = max(len(r) for r in checked.runs)
     workers = fold_workers(os.cpu_count() or 1, len(checked.runs), "clean")
     read = partial(_run_overview, dataset=dataset, cleaning=checked.settings.cleaning)
-    warnings = []
-    for run, (line, notes) in zip(
+    warnings, targets = [], []
+    for run, (line, notes, positions) in zip(
         checked.runs, map_folds(read, checked.runs, workers), strict=True
     ):
         lines.append(f"  {run:<{width}}  {line}")
         warnings += notes
+        targets.append(pd.DataFrame({"run": run, "position_mm": positions}))
+    check_same_targets(pd.concat(targets, ignore_index=True), dataset.root)
     return lines, warnings
 
 
-def _run_overview(run: str, dataset: Dataset, cleaning: CleaningSettings) -> tuple[str, list]:
-    """One run's summary (after its name) and its plausibility warnings."""
+def _run_overview(run: str, dataset: Dataset, cleaning: CleaningSettings) -> tuple:
+    """One run's summary (after its name), its plausibility warnings and its targets."""
     raw = read_run(dataset, run)
     notes = check_run_plausibility(dataset, raw, cleaning)
     measurements = raw.measurements
@@ -60,7 +66,7 @@ def _run_overview(run: str, dataset: Dataset, cleaning: CleaningSettings) -> tup
         f"{'/'.join(map(str, sorted(positions)))} position{'' if positions == {1} else 's'}  "
         f"logs: {_log_intervals({**raw.sources, **raw.signals})}"
     )
-    return line, notes
+    return line, notes, run_targets(measurements)
 
 
 def _log_intervals(logs: dict) -> str:

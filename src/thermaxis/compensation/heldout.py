@@ -147,10 +147,13 @@ def pass_deviations(
     raw_run, targets: Sequence[float], max_missing_fraction: float
 ) -> dict[int, dict[str, np.ndarray]]:
     """Per measurement (1-based, time order) and direction ("+", "-"), the deviation at each target [um]."""
-    from thermaxis.cleaning.passes import combine_passes
+    from thermaxis.cleaning.passes import combine_passes, without_strays
 
+    # A stray reading (a position few of the run's measurements read) was left out of the
+    # run by the clean job, which said so; it is left out here too.
+    measurements, _ = without_strays(raw_run.measurements, np.asarray(targets, dtype=float))
     out = {}
-    for number, (name, measurement) in enumerate(raw_run.measurements.items(), start=1):
+    for number, (name, measurement) in enumerate(measurements.items(), start=1):
         label = raw_run.error_origin(name)
         passes = {}
         for direction in sorted(set(measurement["direction"]), reverse=True):  # "+" before "-"
