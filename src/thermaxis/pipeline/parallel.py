@@ -26,9 +26,10 @@ __all__ = ["FOLDS_PER_WORKER", "map_folds", "fold_workers"]
 # A second process pays only when there are folds to share: the job's own process does a
 # fold while a worker starts (a new interpreter importing the library, about 1.5-2.5 s),
 # and a job holding two cores keeps Snakemake from starting another job on the second.
-# A fold of the models job fits each configuration once (tenths of a second), a fold of
-# the recommendation runs every candidate's inner loop (1 s on 3 runs of 5 measurements,
-# 3.9 s on the twin), a run of the clean job is read and cleaned in 0.2-0.4 s (the twin,
+# A fold of the models job fits each configuration once (tenths of a second); the
+# recommendation's folds share their fits by training runs, so its processes take training
+# sets, about 1 s each on the twin (10 of them for 4 folds), while its folds still set how
+# many processes pay; a run of the clean job is read and cleaned in 0.2-0.4 s (the twin,
 # fl_thermal).
 FOLDS_PER_WORKER = {"models": 4, "recommend": 2, "clean": 8}
 
