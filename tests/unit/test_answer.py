@@ -73,3 +73,14 @@ def test_a_loss_the_verdict_tolerates_is_called_a_loss_not_a_gain():
         "within compensation.max_worsening_um 0.1 µm." in text
     )
     assert "the smallest gain" not in text
+
+
+def test_a_candidate_that_helps_no_run_is_not_sent_back_for_more_runs():
+    # R1 gains nothing either: by hand its change is +0.05 µm, R2's +0.3 µm, no gain
+    # beyond the verdict's 0.1 µm anywhere (an axis that hardly drifts).
+    deployment = _deployment(False, 0.3)
+    deployment["verdict"]["runs"][0].update(largest_abs_after_um=6.05, largest_abs_change_um=0.05)
+    text = answer_sentence(answer_of(_folds(), deployment))
+    assert "helps no held-out run by more than 0.1 µm" in text
+    assert "makes R2 worse (largest |deviation| 5.00 -> 5.30 µm)" in text
+    assert "more runs" not in text

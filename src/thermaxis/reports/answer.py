@@ -24,7 +24,7 @@ def answer_of(folds: pd.DataFrame, deployment: dict) -> dict:
     """The numbers of the answer from recommendation.csv's folds and model.json's deployment."""
     runs = pd.DataFrame(deployment.get("verdict", {}).get("runs", []))
     ok = bool(deployment.get("recommended_for_deployment"))
-    deciding = None
+    deciding, best_gain = None, None
     if len(runs):
         # The run that decides: the largest change of either quantity of the verdict
         # (made worst when refused, helped least when deployed).
@@ -33,6 +33,7 @@ def answer_of(folds: pd.DataFrame, deployment: dict) -> dict:
         row, column = divmod(int(changes.argmax()), len(quantities))
         quantity = quantities[column]
         deciding = runs.iloc[row]
+        best_gain = float(-changes.min())
     return dict(
         candidate=str(deployment.get("candidate", "")),
         recommended=ok,
@@ -48,6 +49,7 @@ def answer_of(folds: pd.DataFrame, deployment: dict) -> dict:
         deciding_before_um=None if deciding is None else float(deciding[f"{quantity}_before_um"]),
         deciding_after_um=None if deciding is None else float(deciding[f"{quantity}_after_um"]),
         max_worsening_um=deployment.get("verdict", {}).get("max_worsening_um"),
+        best_gain_um=best_gain,
     )
 
 
@@ -87,6 +89,17 @@ def answer_sentence(answer: dict) -> str:
         if run
         else " no held-out run shows it helps; it needs more runs"
     )
+    if run and answer.get("best_gain_um") is not None:
+        tolerance = answer["max_worsening_um"] or 0.0
+        if answer["best_gain_um"] <= tolerance:
+            # A run like the others would not help a model that helps none of them: say
+            # what the runs show instead (a stable axis, or temperatures that miss the drift).
+            fails = (
+                f" it helps no held-out run by more than {tolerance:g} µm (compensation."
+                f"max_worsening_um) and makes {run} worse ({answer['deciding_quantity']} "
+                f"{answer['deciding_before_um']:.2f} -> {answer['deciding_after_um']:.2f} µm); "
+                "nothing here shows that the temperatures predict this axis's drift"
+            )
     return (
         f"Do not compensate with any candidate. Closest: {answer['candidate']}, {error}; but"
         f"{fails}."
