@@ -39,7 +39,8 @@ def _thermaxis(*args, cwd=REPO) -> subprocess.CompletedProcess:
                            "14 positions  logs: box 10 s, wireless 3", ", hmi 60 s\n"]),
         ("data/raw/fl_thermal", ["dataset fl_thermal (MEASURED)", "16 sensors", "1 target position(s): point-by-point",
                                  "6 runs", "R6_variable    38 measurements",
-                                 "1 position  logs: logger 15 s\n"]),  # its README: every 15 s
+                                 # its README: every 15 s, the speed with the temperatures
+                                 "1 position  logs: logger 15 s, signals: logger 15 s\n"]),
     ],
 )  # fmt: skip
 def test_check_passes_an_embedded_dataset_and_says_what_it_holds(dataset, expected):

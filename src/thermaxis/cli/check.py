@@ -64,7 +64,8 @@ def _run_overview(run: str, dataset: Dataset, cleaning: CleaningSettings) -> tup
         f"{len(measurements):>4} measurements  {span:7.2f} h  "
         f"{min(firsts):%Y-%m-%d %H:%M} to {max(lasts):%Y-%m-%d %H:%M}  "
         f"{'/'.join(map(str, sorted(positions)))} position{'' if positions == {1} else 's'}  "
-        f"logs: {_log_intervals({**raw.sources, **raw.signals})}"
+        f"logs: {_log_intervals(raw.sources)}"
+        + (f", signals: {_log_intervals(raw.signals)}" if raw.signals else "")
     )
     return line, notes, run_targets(measurements)
 
