@@ -11,7 +11,12 @@ import yaml
 from helpers import DEFAULTS
 from helpers.builders import set_csv_cell
 from thermaxis.dataset.plausibility import check_run_plausibility
-from thermaxis.dataset.reader import load_dataset, read_run, read_temperature_source
+from thermaxis.dataset.reader import (
+    clock_back_hint,
+    load_dataset,
+    read_run,
+    read_temperature_source,
+)
 from thermaxis.errors import DataError
 
 
@@ -200,6 +205,22 @@ def test_time_going_backwards(tiny_dataset):
         read_run(load_dataset(tiny_dataset), "R1")
     msg = one_line(exc)
     assert "box.csv" in msg and "line 22" in msg and "backwards" in msg
+
+
+@pytest.mark.parametrize(
+    "back_s, interval_s, named",
+    [
+        (3590.0, 10.0, True),  # a 10 s log put back an hour: 10:09:30, then 09:09:40
+        (3000.0, 600.0, True),  # a 10 min log: 02:30, then 01:40
+        (1800.0, 1800.0, True),  # a 30 min log: the step back is half an hour
+        (2400.0, 5.0, False),  # readings 5 s apart going back 40 min: no clock change
+        (3600.0 - 10.0, 3600.0, False),  # hourly samples cannot show an hour put back
+    ],
+)
+def test_a_step_back_is_named_a_daylight_saving_change_only_at_an_hour_less_the_interval(
+    back_s, interval_s, named
+):
+    assert bool(clock_back_hint(back_s, interval_s)) is named
 
 
 def test_same_position_twice_with_different_values(tiny_dataset):

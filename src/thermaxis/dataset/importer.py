@@ -39,7 +39,7 @@ import pandas as pd
 import yaml
 
 from thermaxis.config import fill_defaults
-from thermaxis.dataset.reader import clock_back_hint, load_dataset
+from thermaxis.dataset.reader import clock_back_hint, load_dataset, median_step_s
 from thermaxis.errors import DataError
 from thermaxis.schemas import load_schema
 
@@ -385,7 +385,7 @@ def _increasing(path: Path, frame: pd.DataFrame, columns: list[str], t: np.ndarr
             "; a clock coarser than the logging (a date without its time of day, or whole "
             "seconds logged faster than once a second)?"
             if t[i] == t[i - 1]
-            else clock_back_hint((t[i - 1] - t[i]) / 3600.0)
+            else clock_back_hint(t[i - 1] - t[i], median_step_s(t))
         )
         raise DataError(
             f"{path}: row {_row(frame, i)}, {_words(columns)}: time does not increase "

@@ -38,17 +38,25 @@ RUN_COLUMNS = ("run", "condition", "description")
 ERROR_COLUMNS = ("time", "position_mm", "error_um")
 # One file per run holding every measurement, told apart by this column.
 MEASUREMENT_COLUMN = "measurement"
-# How far back (hours) a clock's step must go to be named as a likely daylight-saving
-# change: an hour less one sample interval of up to 30 min, and a minute's slack.
-DST_BACK_H = (0.5, 1.0 + 1.0 / 60.0)
+# A clock put back an hour between two samples logged ``interval`` apart shows a step back
+# of an hour less that interval; give or take a minute, or half an interval.
+DST_S = 3600.0
 
 
-def clock_back_hint(hours: float) -> str:
-    """What a message adds for a clock put back by ``hours``: a clock put back by up to an
-    hour, less the sample interval, is most often a daylight-saving change."""
-    if DST_BACK_H[0] <= hours <= DST_BACK_H[1]:
+def clock_back_hint(back_s: float, interval_s: float) -> str:
+    """What a message adds for a clock that went back ``back_s`` seconds in a log sampled
+    about every ``interval_s`` seconds: the step of a daylight-saving change, most often."""
+    expected = DST_S - interval_s
+    if expected > 0 and abs(back_s - expected) <= max(60.0, interval_s / 2):
         return "; a daylight-saving change? log in UTC or in standard time"
     return ""
+
+
+def median_step_s(seconds: np.ndarray) -> float:
+    """The median of a time series' forward steps, in seconds (0 without any)."""
+    steps = np.diff(seconds)
+    forward = steps[steps > 0]
+    return float(np.median(forward)) if forward.size else 0.0
 
 
 def _schema_error(path: Path, error: jsonschema.ValidationError, where: str = "") -> DataError:
@@ -346,14 +354,15 @@ def _parse_numbers(path: Path, frame: pd.DataFrame, column: str, allow_empty: bo
 
 def _check_time_order(path: Path, time: pd.Series, where: str = "") -> None:
     """Times must not go back; the series' index is the row's position in the file (header = line 1)."""
-    step = np.diff(time.to_numpy().astype("int64"))
+    ns = time.to_numpy().astype("int64")
+    step = np.diff(ns)
     back = np.flatnonzero(step < 0)
     if back.size:
         i = int(back[0]) + 1
         raise DataError(
             f"{path}: line {int(time.index[i]) + 2}, column 'time': time goes backwards "
             f"({time.iloc[i]} after {time.iloc[i - 1]}){where}"
-            f"{clock_back_hint(-step[i - 1] / 3.6e12)}"
+            f"{clock_back_hint(-step[i - 1] / 1e9, median_step_s(ns / 1e9))}"
         )
 
 
