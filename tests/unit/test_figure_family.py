@@ -5,8 +5,8 @@ import pandas as pd
 from thermaxis.figures.family import draw_family, family_workers
 
 
-def test_workers_come_with_eight_figures_each_up_to_the_cores():
-    assert [family_workers(2, n) for n in (1, 15, 16, 40)] == [1, 1, 2, 2]
+def test_workers_come_with_sixteen_figures_each_up_to_the_cores():
+    assert [family_workers(2, n) for n in (1, 31, 32, 40)] == [1, 1, 2, 2]
     assert family_workers(1, 100) == 1
 
 

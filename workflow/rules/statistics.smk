@@ -46,6 +46,9 @@ rule statistics:
         f"{LOGS}/statistics.log",
     benchmark:
         f"{BENCH}/statistics.tsv"
+    # On the longest chain (the figures of the results wait for it): before the reports
+    # that only the index waits for.
+    priority: 1
     conda:
         ENV
     resources:

@@ -15,9 +15,12 @@ from thermaxis.figures.registry import function
 
 __all__ = ["MIN_FIGURES_PER_WORKER", "draw_family", "family_workers"]
 
-# A worker's start (Python, the library, matplotlib: about 2 s) against about 0.5 s per
-# figure drawn and saved as PNG and PDF.
-MIN_FIGURES_PER_WORKER = 8
+# A worker's start (Python, the library, matplotlib: about 2.5 CPU-s) against about
+# 0.6 s per figure drawn and saved as PNG and PDF, and a job of two processes holds two
+# cores: Snakemake starts it only when both are free, while a one-process job runs beside
+# any other. A second process pays from about 32 figures (the twin's 24 prediction
+# figures: one process, 13 CPU-s less over the cold run, docs/performance.md).
+MIN_FIGURES_PER_WORKER = 16
 
 
 def _read(path: str, reader: str | None):
