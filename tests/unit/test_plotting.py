@@ -530,6 +530,13 @@ def test_caption_has_the_simulated_phrase_iff_simulated(figure_id, simulated):
     assert "twin" in caption and "{" not in caption
 
 
+def test_a_simulated_dataset_other_than_the_twin_is_not_called_the_twin():
+    caption = captions.figure_caption("fig5_unzeroed", "scale", True, twin=False, run="E1")
+    assert caption.endswith("Dataset: scale. Simulated data, not measurements of a machine.")
+    assert "thermal twin" not in caption
+    assert captions.provenance_note(False, twin=False) is None
+
+
 def test_caption_fills_details_and_names_the_paper_figure():
     caption = captions.figure_caption("fig9_other_runs", "lab", False, runs=["E2", "E3"])
     assert "runs E2, E3" in caption and "paper's Fig. 9." in caption

@@ -11,7 +11,7 @@ from pathlib import Path
 from thermaxis import vocabulary
 from thermaxis.dataset.summary import data_statement
 from thermaxis.figures import registry
-from thermaxis.figures.captions import figure_caption
+from thermaxis.figures.captions import figure_caption, provenance_note
 from thermaxis.figures.family import family_workers
 from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
 from thermaxis.pipeline import preflight
@@ -58,6 +58,8 @@ DATA_STATEMENT = data_statement(
 )
 # The paper's audit and report belong only to a dataset that reproduces the paper.
 PAPER = DATASET.reproduces == "xu2023"
+# The note stamped on the dataset's figures (None for measured data).
+STAMP = provenance_note(SIMULATED, twin=PAPER)
 AMBIENT = CHECKED.ambient
 HEADLINE = (
     PAPER_HEADLINE
@@ -207,6 +209,7 @@ OTHER_RUNS = [r for r in RUNS if r != FIG_RUN]
 FACTS = registry.Facts(
     dataset_name=DATASET.name,
     simulated=SIMULATED,
+    twin=PAPER,
     decoupled=DECOUPLED,
     ambient=AMBIENT is not None,
     run=FIG_RUN,
@@ -323,7 +326,9 @@ def embedded(figure_id, **details):
     stem = registry.stem_of(figure_id, **details)
     return {
         "path": f"{OUT}/figures/{stem}.{EMBED_FORMAT}",
-        "caption": figure_caption(figure_id, DATASET.name, SIMULATED, **details),
+        "caption": figure_caption(
+            figure_id, DATASET.name, SIMULATED, twin=PAPER, **details
+        ),
     }
 
 
@@ -509,7 +514,7 @@ def paper_report_figures():
 def condition_captions(run):
     """Captions of the figures a condition report draws for its run."""
     return {
-        f: figure_caption(f, DATASET.name, SIMULATED, run=run)
+        f: figure_caption(f, DATASET.name, SIMULATED, twin=PAPER, run=run)
         for f in (
             "fig5_unzeroed",
             "fig6_error_vs_time",

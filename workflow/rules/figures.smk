@@ -30,7 +30,7 @@ for family, figures in FIGURE_FAMILIES.items():
             **rule_resources(family),
         params:
             figures=figure_specs(figures),
-            simulated=SIMULATED,
+            stamp=STAMP,
             dpi=SETTINGS.figures.dpi,
         script:
             "../scripts/plot.py"

@@ -88,6 +88,7 @@ rule condition_report:
             sections(*DATA_SECTIONS),
             run=lambda run: run,
             captions=condition_captions,
+            stamp=STAMP,
         ),
     shell:
         RUN_NOTEBOOK_PAGES
@@ -121,7 +122,7 @@ rule conditions_report:
         title=f"Conditions report: all runs ({DATASET.name})",
         statement=DATA_STATEMENT,
         parameters=lambda w, input: notebook_parameters(
-            input, sections(*DATA_SECTIONS), runs=RUNS
+            input, sections(*DATA_SECTIONS), runs=RUNS, stamp=STAMP
         ),
     shell:
         RUN_NOTEBOOK

@@ -1,7 +1,6 @@
 """One family of figures per job: each figure of the rule's table entries drawn from its
 tables and saved (thermaxis.figures.family), over the job's threads."""
 
-from thermaxis.figures import captions
 from thermaxis.figures.family import draw_family, family_workers
 from thermaxis.pipeline.runner import run_script
 
@@ -10,8 +9,7 @@ def main(snakemake):
     figures = snakemake.params.figures
     # A bad-input test runs this script without Snakemake's threads: one process.
     workers = family_workers(getattr(snakemake, "threads", 1), len(figures))
-    stamp = captions.SIMULATED_NOTE if snakemake.params.simulated else None
-    draw_family(figures, stamp, snakemake.params.dpi, workers)
+    draw_family(figures, snakemake.params.stamp, snakemake.params.dpi, workers)
 
 
 run_script(main, snakemake)

@@ -8,10 +8,29 @@ from __future__ import annotations
 
 import string
 
-__all__ = ["DISPLAY_NAMES", "SIMULATED_NOTE", "figure_caption"]
+__all__ = [
+    "DISPLAY_NAMES",
+    "OTHER_SIMULATED_NOTE",
+    "SIMULATED_NOTE",
+    "figure_caption",
+    "provenance_note",
+]
 
 
+# What a simulated dataset's figures are stamped with and their captions end with: the
+# twin names what it stands in for; any other simulated dataset only what it is not.
 SIMULATED_NOTE = "Simulated data (thermal twin), not the paper's measurements."
+OTHER_SIMULATED_NOTE = "Simulated data, not measurements of a machine."
+
+
+def provenance_note(simulated: bool, twin: bool = True) -> str | None:
+    """The note of a dataset's figures: :data:`SIMULATED_NOTE` for the twin (a simulated
+    dataset that reproduces the paper), :data:`OTHER_SIMULATED_NOTE` for any other
+    simulated one, None for measured data."""
+    if not simulated:
+        return None
+    return SIMULATED_NOTE if twin else OTHER_SIMULATED_NOTE
+
 
 # How the model labels of the tables (thermaxis.method.models) read in legends and captions;
 # unknown labels are shown as they are.
@@ -129,7 +148,9 @@ def _detail_text(key: str, value) -> str:
     return _display(value)
 
 
-def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details) -> str:
+def figure_caption(
+    figure_id: str, dataset_name: str, simulated: bool, twin: bool = True, **details
+) -> str:
     """One English caption for a figure of the pipeline.
 
     Parameters
@@ -142,8 +163,10 @@ def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details
     dataset_name : str
         Name of the dataset the figure was drawn from.
     simulated : bool
-        Whether the dataset is simulated; if so the caption ends with
-        :data:`SIMULATED_NOTE`.
+        Whether the dataset is simulated; if so the caption ends with its
+        :func:`provenance_note`.
+    twin : bool
+        Whether a simulated dataset is the thermal twin (it reproduces the paper).
     **details
         Exactly the placeholders the caption needs, e.g. ``run="E1"``, ``runs=["E2", "E3"]``,
         ``fold``, ``approach``, ``algorithm``, ``target``.
@@ -174,5 +197,5 @@ def figure_caption(figure_id: str, dataset_name: str, simulated: bool, **details
         parts.append(f"Counterpart of the paper's Fig. {paper_figure}.")
     parts.append(f"Dataset: {dataset_name}.")
     if simulated:
-        parts.append(SIMULATED_NOTE)
+        parts.append(provenance_note(simulated, twin))
     return " ".join(parts)

@@ -74,6 +74,7 @@ class Facts:
     units: Mapping = field(default_factory=dict)  # operating signals' units (Fig. 10)
     selection: Mapping = field(default_factory=dict)  # config selection (the sweep's heat map)
     degree: int = 1  # config decoupling.degree (the sweep's heat map)
+    twin: bool = True  # a simulated dataset that reproduces the paper (its figures' note)
     always: bool = True
 
 
@@ -334,7 +335,9 @@ def caption_of(figure: Figure, facts: Facts, wildcards: Mapping[str, str] | None
         k: _fill(v, wildcards) if isinstance(v, str) and wildcards else v
         for k, v in figure.caption.items()
     }
-    return figure_caption(figure.id, facts.dataset_name, facts.simulated, **details)
+    return figure_caption(
+        figure.id, facts.dataset_name, facts.simulated, twin=facts.twin, **details
+    )
 
 
 # --------------------------------------------------------------------------- drawn by their id

@@ -313,12 +313,14 @@ def figures_html(entries: dict, *names: str) -> str:
     )
 
 
-def plot_html(fig, caption: str, simulated: bool, dpi: float = 150) -> str:
-    """A :mod:`thermaxis.figures` figure drawn in the notebook, stamped like the workflow's when simulated."""
-    from thermaxis.figures import captions, style
+def plot_html(fig, caption: str, stamp: str | None, dpi: float = 150) -> str:
+    """A :mod:`thermaxis.figures` figure drawn in the notebook, stamped as the workflow
+    stamps its figures: ``stamp`` is the dataset's
+    :func:`~thermaxis.figures.captions.provenance_note` (None for measured data)."""
+    from thermaxis.figures import style
 
-    if simulated:
-        style.stamp_provenance(fig, captions.SIMULATED_NOTE)
+    if stamp:
+        style.stamp_provenance(fig, stamp)
     return figure_html(figure_png(fig, dpi), caption)
 
 
