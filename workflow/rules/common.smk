@@ -50,14 +50,14 @@ DATASET = CHECKED.dataset
 RUNS = CHECKED.runs
 FOLDS = CHECKED.folds
 SIMULATED = DATASET.simulated
+# The paper's audit and report belong only to a dataset that reproduces the paper.
+PAPER = DATASET.reproduces == "xu2023"
 DATA_STATEMENT = data_statement(
     DATASET.name,
     SIMULATED,
     DATASET.meta["provenance"].get("citation", ""),
-    reproduces_paper=DATASET.reproduces == "xu2023",
+    reproduces_paper=PAPER,
 )
-# The paper's audit and report belong only to a dataset that reproduces the paper.
-PAPER = DATASET.reproduces == "xu2023"
 # The note stamped on the dataset's figures (None for measured data).
 STAMP = provenance_note(SIMULATED, twin=PAPER)
 AMBIENT = CHECKED.ambient

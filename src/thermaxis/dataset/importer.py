@@ -26,6 +26,7 @@ from __future__ import annotations
 import codecs
 import copy
 import datetime
+import functools
 import re
 import shutil
 import tempfile
@@ -174,8 +175,14 @@ def _check_ids(path: Path, mapping: dict) -> None:
         )
 
 
-# The mapping's `csv` section when it gives none (the schema's defaults).
-PLAIN_CSV = {"delimiter": ",", "decimal": ".", "encoding": "utf-8"}
+@functools.cache
+def _plain_csv() -> dict:
+    """The ``csv`` section of a mapping that gives none: the schema's defaults."""
+    section: dict = {}
+    fill_defaults(section, load_schema("import_mapping")["properties"]["csv"])
+    return section
+
+
 # A cell such as 20,15 or -0,5: a number written with a decimal comma.
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+$")
 
@@ -193,7 +200,7 @@ def read_table(
     path = Path(path)
     # Read under an import mapping, a message may name the mapping's setting that fixes it.
     mapped = csv is not None
-    csv = {**PLAIN_CSV, **(csv or {})}
+    csv = {**_plain_csv(), **(csv or {})}
     if not path.is_file():
         raise DataError(f"{path}: file not found (the mapping's source)")
     suffix = path.suffix.lower()
@@ -586,7 +593,7 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
             f"The error columns were logged in {unit} and converted to um "
             f"(x {ERROR_UNITS_UM[unit]:g})."
         )
-    if mapping["csv"] != PLAIN_CSV:
+    if mapping["csv"] != _plain_csv():
         csv = mapping["csv"]
         notes.append(
             f"A CSV source was read with {csv['delimiter']!r} between columns, a decimal "
