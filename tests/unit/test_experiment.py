@@ -13,6 +13,7 @@ from helpers.builders import synthetic_temperatures
 from helpers.truth import EQ9_B, EQ9_K, POSITIONS, eq9_errors
 from thermaxis.method.folds import (
     evaluate_configuration,
+    fold_metrics,
     select_for_fold,
     selection_from_dict,
     selection_table,
@@ -79,6 +80,26 @@ def test_fold_models_ignore_the_held_out_errors(eq9_data, approach, algorithm):
         a.error_predictions["predicted"], b.error_predictions["predicted"]
     )
     assert not np.allclose(a.error_predictions["measured"], b.error_predictions["measured"])
+
+
+@pytest.mark.parametrize(
+    "approach, algorithm", [("decoupled", "gpr"), ("decoupled", "svr"), ("pointwise", "gpr")]
+)
+def test_fold_metrics_are_the_metrics_of_the_full_evaluation(eq9_data, approach, algorithm):
+    X, Y = eq9_data
+    selection = select_for_fold(X, Y, "E2", DEFAULTS.selection, 2)
+    full = evaluate_configuration(X, Y, ["E2", "E3"], approach, algorithm, selection, SMALL_SVR, 2)
+    metrics = fold_metrics(X, Y, ["E2", "E3"], approach, algorithm, selection, SMALL_SVR, 2)
+    pd.testing.assert_frame_equal(metrics, full.metrics)
+    # Run by run: each run's RMSE of its own residuals, in plain numpy.
+    by_run = fold_metrics(X, Y, ["E2", "E3"], approach, algorithm, selection, SMALL_SVR, 2, True)
+    errors = by_run[by_run["target"] == "error"].set_index("fold")
+    table = full.error_predictions
+    for run in ("E2", "E3"):
+        rows = table[table["run"] == run]
+        residual = rows["measured"].to_numpy() - rows["predicted"].to_numpy()
+        assert errors.loc[run, "rmse"] == np.sqrt(np.mean(residual**2))
+        assert errors.loc[run, "max_abs"] == np.abs(residual).max()
 
 
 def test_fixed_paper_points_recover_eq9(eq9_data):

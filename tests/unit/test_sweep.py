@@ -207,7 +207,7 @@ def test_batch_rows_are_the_library_functions_metrics():
 def test_identical_model_inputs_are_evaluated_once(monkeypatch, algorithm):
     X, Y = _inputs()
     calls = []
-    original = folds.evaluate_configuration
+    original = folds.fold_metrics
 
     def counting(*args, **kwargs):
         calls.append(args[2:5])
@@ -221,7 +221,7 @@ def test_identical_model_inputs_are_evaluated_once(monkeypatch, algorithm):
 
         return counted
 
-    monkeypatch.setattr(folds, "evaluate_configuration", counting)
+    monkeypatch.setattr(folds, "fold_metrics", counting)
     for name in ("decoupled_metrics", "pointwise_metrics"):
         monkeypatch.setattr(batched, name, counting_sets(getattr(batched, name)))
     # "all" puts every sensor in k and b, and its pointwise common set is the first

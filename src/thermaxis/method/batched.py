@@ -34,7 +34,7 @@ from thermaxis.config import ModelSettings
 from thermaxis.method import linear
 from thermaxis.method.decouple import compose_curve
 from thermaxis.method.folds import _split_fold, fold_name, sensor_columns
-from thermaxis.method.metrics import prediction_metrics
+from thermaxis.method.metrics import metric_frame
 from thermaxis.method.models import (
     _KB_COLUMNS,
     _features,
@@ -138,21 +138,6 @@ def _columns(index: dict, points, signals) -> tuple[int, ...]:
     return (*(index[s] for s in points), *range(len(index), len(index) + len(signals)))
 
 
-def _frame(
-    label: dict, rows: list[tuple[str, np.ndarray, np.ndarray]], runs: np.ndarray | None = None
-) -> pd.DataFrame:
-    """Metrics per target; with ``runs`` (each test row's run), per run too, ``fold`` the run."""
-    if runs is None:
-        return pd.DataFrame(
-            [{**label, "target": target, **prediction_metrics(m, p)} for target, m, p in rows]
-        )
-    return pd.concat(
-        [_frame({**label, "fold": run}, [(t, m[runs == run], p[runs == run]) for t, m, p in rows])
-         for run in pd.unique(runs)],
-        ignore_index=True,
-    )  # fmt: skip
-
-
 def decoupled_metrics(
     X: pd.DataFrame,
     Y: pd.DataFrame,
@@ -203,7 +188,7 @@ def decoupled_metrics(
         # Eq. 7's ascending powers: b, k, c2, c3.
         curve = compose_curve(np.column_stack([b, k_and_shape]), positions, float(positions[0]))
         frames.append(
-            _frame(
+            metric_frame(
                 label,
                 [
                     ("k", kb_test[_KB_COLUMNS["k"]].to_numpy(), k_and_shape[:, 0]),
@@ -245,4 +230,4 @@ def pointwise_metrics(
     label = {"fold": fold_name(fold), "approach": "pointwise", "algorithm": algorithm}
     measured = Y_test.to_numpy(dtype=float)
     runs = X_test["run"].to_numpy() if per_run else None
-    return [_frame(label, [("error", measured, predicted[s])], runs) for s in sets]
+    return [metric_frame(label, [("error", measured, predicted[s])], runs) for s in sets]

@@ -24,7 +24,7 @@ from thermaxis.config import ModelSettings, SelectionSettings
 from thermaxis.errors import SelectionWarning
 from thermaxis.labels import natural_sorted, sort_naturally
 from thermaxis.method.features import decouple_rows, relative_temperatures
-from thermaxis.method.metrics import prediction_metrics
+from thermaxis.method.metrics import metric_frame
 from thermaxis.method.selection import (
     SensitivePoints,
     common_points,
@@ -39,6 +39,7 @@ __all__ = [
     "FoldResult",
     "select_for_fold",
     "evaluate_configuration",
+    "fold_metrics",
     "selection_table",
     "selection_to_dict",
     "selection_from_dict",
@@ -342,27 +343,63 @@ def evaluate_configuration(
     ``degree`` is the decoupling's (config ``decoupling.degree``); the point-by-point
     approach never decouples and ignores it (``None`` allowed).
     """
-    X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
-    estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
+    estimator, X_test, Y_test = _fit_held_out(
+        X, Y, fold, approach, algorithm, selection, model, degree
+    )
     label = {"fold": fold_name(fold), "approach": approach, "algorithm": algorithm}
+    kb_measured, kb_predicted, predicted = _predictions(estimator, X_test, Y_test, approach, degree)
+    level = model.interval_level
+    lower = upper = np.full_like(predicted, np.nan)
+    if algorithm == "gpr":
+        lower, upper = estimator.predict_interval(X_test, level=level)
     measured = Y_test.to_numpy(dtype=float)
-    predicted, lower, upper = _predicted_errors(estimator, X_test, algorithm, model.interval_level)
-    if approach == "decoupled":
-        metric_rows, kb_frame = _kb_tables(
-            estimator, X_test, Y_test, label, model.interval_level, degree
-        )
-    else:
-        metric_rows, kb_frame = [], _empty_kb()
-    metric_rows.append({**label, "target": "error", **prediction_metrics(measured, predicted)})
     return FoldResult(
-        metrics=pd.DataFrame(metric_rows),
+        metrics=metric_frame(label, _compared(measured, kb_measured, kb_predicted, predicted)),
         coefficients=_coefficient_table(estimator, label),
-        kb_predictions=kb_frame,
+        kb_predictions=(
+            _empty_kb()
+            if kb_predicted is None
+            else _kb_table(estimator, X_test, label, level, kb_measured, kb_predicted)
+        ),
         error_predictions=_error_table(
             label, X_test, np.asarray(Y.columns, dtype=float), measured, predicted, lower, upper
         ),
         fitting=pd.DataFrame([{**label, **note} for note in estimator.fit_notes_]),
     )
+
+
+def fold_metrics(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    fold: str,
+    approach: str,
+    algorithm: str,
+    selection: FoldSelection,
+    model: ModelSettings,
+    degree: int | None,
+    per_run: bool = False,
+) -> pd.DataFrame:
+    """``evaluate_configuration(...).metrics`` alone: no intervals, coefficients or tables of
+    predictions, which cost a sweep or a recommendation more than the metrics they score.
+
+    ``per_run``: a fold of several runs (:func:`held_out_runs`) is scored run by run, each
+    row's ``fold`` its run, from one fit.
+    """
+    estimator, X_test, Y_test = _fit_held_out(
+        X, Y, fold, approach, algorithm, selection, model, degree
+    )
+    label = {"fold": fold_name(fold), "approach": approach, "algorithm": algorithm}
+    compared = _compared(
+        Y_test.to_numpy(dtype=float), *_predictions(estimator, X_test, Y_test, approach, degree)
+    )
+    return metric_frame(label, compared, X_test["run"].to_numpy() if per_run else None)
+
+
+def _fit_held_out(X, Y, fold, approach, algorithm, selection, model, degree):
+    """The configuration fitted on every run but ``fold``, and ``fold``'s own X and Y."""
+    X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
+    estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
+    return estimator, X_test, Y_test
 
 
 def _split_fold(X: pd.DataFrame, Y: pd.DataFrame, fold: str):
@@ -374,29 +411,39 @@ def _split_fold(X: pd.DataFrame, Y: pd.DataFrame, fold: str):
     return (*train, X.loc[test].reset_index(drop=True), Y.loc[test].reset_index(drop=True))
 
 
-def _predicted_errors(estimator, X_test: pd.DataFrame, algorithm: str, level: float):
-    """Predicted error curves of the held-out measurements, with the GPR's interval (NaN otherwise)."""
-    predicted = np.asarray(estimator.predict(X_test), dtype=float)
-    lower = upper = np.full_like(predicted, np.nan)
-    if algorithm == "gpr":
-        lower, upper = estimator.predict_interval(X_test, level=level)
-    return predicted, lower, upper
-
-
-def _kb_tables(
-    estimator, X_test, Y_test, label: dict, level: float, degree: int
-) -> tuple[list[dict], pd.DataFrame]:
-    """Metrics and predictions of the slope k and the intercept b of the held-out measurements."""
-    kb_measured = decouple_rows(X_test, Y_test, degree=degree)
+def _predictions(estimator, X_test, Y_test, approach, degree):
+    """Measured and predicted decoupling coefficients (both None point by point), then the
+    predicted error curves; each regression predicts the held-out rows once."""
+    if approach != "decoupled":
+        return None, None, np.asarray(estimator.predict(X_test), dtype=float)
     kb_predicted = estimator.predict_kb(X_test)
+    kb_measured = decouple_rows(X_test, Y_test, degree=degree)
+    return kb_measured, kb_predicted, estimator.compose(kb_predicted)
+
+
+_KB_TARGETS = (("k", "k_um_per_m"), ("b", "b_um"))
+
+
+def _compared(measured, kb_measured, kb_predicted, predicted) -> list[tuple]:
+    """(target, measured, predicted) of the slope k and the intercept b (decoupled only),
+    then of the error curves: what :func:`metric_frame` scores."""
+    rows = [
+        (target, kb_measured[column].to_numpy(), kb_predicted[column].to_numpy())
+        for target, column in (_KB_TARGETS if kb_predicted is not None else ())
+    ]
+    return [*rows, ("error", measured, predicted)]
+
+
+def _kb_table(
+    estimator, X_test, label: dict, level: float, kb_measured, kb_predicted
+) -> pd.DataFrame:
+    """Measured and predicted slope k and intercept b of the held-out measurements (a GPR's interval too)."""
     kb_interval = (
         estimator.predict_kb_interval(X_test, level) if label["algorithm"] == "gpr" else None
     )
-    metric_rows, frames = [], []
-    for target, column in (("k", "k_um_per_m"), ("b", "b_um")):
-        measured = kb_measured[column].to_numpy()
+    frames = []
+    for target, column in _KB_TARGETS:
         predicted = kb_predicted[column].to_numpy()
-        metric_rows.append({**label, "target": target, **prediction_metrics(measured, predicted)})
         lower, upper = (
             kb_interval[column]
             if kb_interval is not None
@@ -410,14 +457,14 @@ def _kb_tables(
                     "measurement": X_test["measurement"].to_numpy(),
                     "time_min": X_test["time_min"].to_numpy(),
                     "target": target,
-                    "measured": measured,
+                    "measured": kb_measured[column].to_numpy(),
                     "predicted": predicted,
                     "lower": lower,
                     "upper": upper,
                 }
             )
         )
-    return metric_rows, pd.concat(frames, ignore_index=True)
+    return pd.concat(frames, ignore_index=True)
 
 
 def _error_table(

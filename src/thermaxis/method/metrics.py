@@ -7,11 +7,13 @@ means the axis erred more (in the positive sense) than predicted.
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 __all__ = [
     "METRIC_COLUMNS",
     "METRICS_CSV_COLUMNS",
     "prediction_metrics",
+    "metric_frame",
 ]
 
 METRIC_COLUMNS = ("rmse", "max_abs", "mae", "residual_min", "residual_max")
@@ -57,3 +59,18 @@ def prediction_metrics(measured, predicted) -> dict[str, float]:
         "residual_min": float(residual.min()),
         "residual_max": float(residual.max()),
     }
+
+
+def metric_frame(label: dict, compared, runs=None) -> pd.DataFrame:
+    """One row of :func:`prediction_metrics` per (target, measured, predicted) of ``compared``,
+    after ``label``'s columns; with ``runs`` (each compared row's run), one per run and
+    target, ``fold`` the run, in the order the runs first appear."""
+    if runs is None:
+        return pd.DataFrame(
+            [{**label, "target": target, **prediction_metrics(m, p)} for target, m, p in compared]
+        )
+    return pd.concat(
+        [metric_frame({**label, "fold": run}, [(t, m[runs == run], p[runs == run]) for t, m, p in compared])
+         for run in pd.unique(runs)],
+        ignore_index=True,
+    )  # fmt: skip

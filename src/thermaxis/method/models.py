@@ -822,7 +822,10 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
 
     def predict(self, X: pd.DataFrame) -> np.ndarray:
         """Predicted error curves, shape (n rows, n positions) in um."""
-        kb = self.predict_kb(X)
+        return self.compose(self.predict_kb(X))
+
+    def compose(self, kb: pd.DataFrame) -> np.ndarray:
+        """Error curves (n rows, n positions, um) from :meth:`predict_kb`'s coefficients (Eq. 7)."""
         coefficients = np.column_stack(
             [
                 kb["b_um"],

@@ -20,8 +20,8 @@ pipeline would deploy; the held-out run reaches no choice. The final recommendat
 the same choice made on all runs, whose scores are the candidates' own
 leave-one-condition-out errors.
 
-Every evaluation is :func:`thermaxis.method.folds.evaluate_configuration` after
-:func:`~thermaxis.method.folds.select_for_fold`: the function the main workflow and the
+Every evaluation is :func:`thermaxis.method.folds.fold_metrics` (the metrics of the
+models rule's ``evaluate_configuration``) after :func:`~thermaxis.method.folds.select_for_fold`: the function the main workflow and the
 sweep use, with sensitive points always chosen on the training runs only.
 """
 
@@ -44,14 +44,13 @@ from thermaxis.labels import natural_sorted
 from thermaxis.method.batched import batchable, decoupled_metrics, pointwise_metrics
 from thermaxis.method.folds import (
     META,
-    evaluate_configuration,
+    fold_metrics,
     fold_name,
     held_out_runs,
     run_groups,
     select_for_fold,
 )
 from thermaxis.method.inputs import base_of, parse_input_name
-from thermaxis.method.metrics import prediction_metrics
 from thermaxis.reports.formatting import markdown_table
 from thermaxis.statistics.paired import wilcoxon_p
 
@@ -197,18 +196,10 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> li
                                    [selection.pointwise], per_run=per_run)
         )  # fmt: skip
     else:
-        result = evaluate_configuration(
+        metrics = fold_metrics(
             view, Y, fold, candidate.approach, candidate.algorithm, selection, models,
-            degree if decoupled else None,
+            degree if decoupled else None, per_run=per_run,
         )  # fmt: skip
-        metrics = result.metrics
-        if per_run:
-            by_run = result.error_predictions.groupby("run", sort=False)
-            metrics = pd.DataFrame(
-                [{"fold": run, "target": "error",
-                  **prediction_metrics(rows["measured"], rows["predicted"])}
-                 for run, rows in by_run]
-            )  # fmt: skip
     errors = metrics.loc[metrics["target"] == "error"]
     return [
         (row["fold"], {name: float(row[name]) for name in METRICS}) for _, row in errors.iterrows()

@@ -1,8 +1,8 @@
 """Evaluating a sweep: every configuration of a batch on its fold, then the summary and ranking.
 
 Each configuration is evaluated on every fold by
-:func:`thermaxis.method.folds.evaluate_configuration`, the function the main workflow's
-``models`` rule calls: the sweep has no model code of its own, and its metric
+:func:`thermaxis.method.folds.fold_metrics`, the metrics of the function the main
+workflow's ``models`` rule calls: the sweep has no model code of its own, and its metric
 columns are :data:`thermaxis.method.metrics.METRIC_COLUMNS`. The grid, units and batches are
 planned by :mod:`thermaxis.sweep.plan`; the figures are in :mod:`thermaxis.figures`.
 
@@ -186,12 +186,12 @@ def _evaluate(
     X, Y, fold: str, config: Configuration, selection, model: ModelSettings
 ) -> pd.DataFrame | str:
     """The metrics of one evaluation, or its one-line error message."""
-    from thermaxis.method.folds import evaluate_configuration
+    from thermaxis.method.folds import fold_metrics
 
     try:
-        return evaluate_configuration(
+        return fold_metrics(
             X, Y, fold, config.approach, config.algorithm, selection, model, config.degree
-        ).metrics
+        )
     except ValueError as exc:
         return str(exc).splitlines()[0]
 
