@@ -26,6 +26,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from thermaxis.figures import captions, style
 from thermaxis.figures import paper as paper_figures
 from thermaxis.figures import predictions as prediction_figures
+from thermaxis.figures import statistics as statistics_figures
 
 STEP_MIN = 20.0
 
@@ -399,6 +400,70 @@ def test_fig12_orders_runs_naturally():
     )
     ax_k = paper_figures.fig12_slope_intercept(kb).axes[0]
     assert [line.get_label() for line in lines_of(ax_k)] == ["Run E2", "Run E10"]
+
+
+def test_long_names_keep_their_ends_and_stay_distinct():
+    long = "run_" + "x" * 40
+    shown = style.short_names([f"{long}_0", f"{long}_1", "R3"])
+    # 20 characters: the first 9, an ellipsis, the last 10.
+    assert shown == {
+        f"{long}_0": "run_xxxxx…xxxxxxxx_0",
+        f"{long}_1": "run_xxxxx…xxxxxxxx_1",
+        "R3": "R3",
+    }
+    # Names that differ only in the middle widen (21 characters) until they differ.
+    dates = ["2026-03-01_spindle_warmup_A", "2026-03-02_spindle_warmup_A"]
+    assert list(style.short_names(dates).values()) == [
+        "2026-03-01…e_warmup_A",
+        "2026-03-02…e_warmup_A",
+    ]
+
+
+def test_long_run_and_sensor_names_leave_room_for_the_axes():
+    long = "run_" + "x" * 40
+    runs = [f"{long}_{i}" for i in range(3)]
+    stability = pd.DataFrame(
+        [
+            dict(fold=fold, target=target, sensor=f"sensor_{'y' * 30}_{s}", chosen=s == 0,
+                 frequency=0.5)
+            for fold in runs for target in ("k", "b", "pointwise") for s in range(5)
+        ]
+    )  # fmt: skip
+    kb = pd.DataFrame(
+        dict(run=np.repeat(runs, 2), measurement=[1, 2] * 3, k_um_per_m=1.0, b_um=0.0)
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # "constrained_layout not applied" among them
+        for fig in (statistics_figures.fig_selection_stability(stability),
+                    paper_figures.fig12_slope_intercept(kb)):  # fmt: skip
+            FigureCanvasAgg(fig).draw()
+            for ax in fig.axes:
+                box = ax.get_position()
+                wide = 0.1 if ax.get_label() != "<colorbar>" else 0.0
+                assert box.width > wide and box.height > 0.1
+    legend = [line.get_label() for line in lines_of(fig.axes[0])]
+    assert legend == [
+        "Run run_xxxxx…xxxxxxxx_0",
+        "Run run_xxxxx…xxxxxxxx_1",
+        "Run run_xxxxx…xxxxxxxx_2",
+    ]
+
+
+def test_the_top_legend_takes_fewer_columns_only_where_four_would_overrun_the_figure():
+    recommendation = pd.DataFrame(
+        dict(fold=["E1", "E2"], rmse_um=1.0, max_abs_um=2.0, paper_rmse_um=1.5,
+             paper_max_abs_um=2.5)
+    )  # fmt: skip
+    fig = prediction_figures.fig_recommendation(recommendation)
+    FigureCanvasAgg(fig).draw()
+    (legend,) = fig.legends
+    # "paper's configuration, held out" beside "recommendation, held out" is wider than
+    # a single column's 3.5 in: one above the other.
+    assert legend._ncols == 1
+    assert legend.get_window_extent().width <= fig.bbox.width
+    runs = pd.DataFrame(dict(run=["E1", "E2", "E3", "E4"], measurement=1, k_um_per_m=1.0, b_um=0.0))
+    (legend,) = paper_figures.fig12_slope_intercept(runs).legends
+    assert legend._ncols == 4
 
 
 def _bands(ax):

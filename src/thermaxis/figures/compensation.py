@@ -6,7 +6,7 @@ import matplotlib
 import pandas as pd
 from matplotlib.figure import Figure
 
-from thermaxis.figures.style import CATEGORICAL_COLORS, MARKERS, STYLE, TIME_LABEL
+from thermaxis.figures.style import CATEGORICAL_COLORS, MARKERS, STYLE, TIME_LABEL, short_name
 
 __all__ = ["fig_compensation_drift"]
 
@@ -53,7 +53,7 @@ def fig_compensation_drift(summary: pd.DataFrame, fold) -> Figure:
             )
         ax.set_xlabel(TIME_LABEL)
         ax.set_ylabel("Largest |deviation| over the stroke (µm)")
-        ax.set_title(f"Held-out run {fold}: thermal drift", loc="left")
+        ax.set_title(f"Held-out run {short_name(fold)}: thermal drift", loc="left")
         ax.set_ylim(bottom=0)
         ax.legend(loc="best")
     return fig

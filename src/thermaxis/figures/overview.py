@@ -18,6 +18,7 @@ from thermaxis.figures.style import (  # noqa: E402
     _new_figure,
     _require_columns,
     _styled,
+    short_name,
 )
 from thermaxis.labels import natural_key  # noqa: E402
 
@@ -62,7 +63,7 @@ def fig_runs_overview(errors: pd.DataFrame) -> Figure:
             markersize=2,
             color=CATEGORICAL_COLORS[0],
         )
-        ax.set_title(str(run), fontsize=7, loc="left")
+        ax.set_title(short_name(run), fontsize=7, loc="left")
         ax.tick_params(labelsize=6)
         if i % COLUMNS == 0:
             ax.set_ylabel("max |error| (µm)", fontsize=6)

@@ -61,6 +61,8 @@ from thermaxis.figures.style import (
     _styled,
     _time_label,
     _top_legend,
+    short_name,
+    short_names,
     single_position,
 )
 from thermaxis.labels import natural_sorted
@@ -138,7 +140,7 @@ def fig2_positioning_error(errors: pd.DataFrame, run) -> Figure:
     ax.plot(
         curve.index.to_numpy(dtype=float),
         curve.to_numpy(dtype=float),
-        label=f"Run {run}, first measurement",
+        label=f"Run {short_name(run)}, first measurement",
         **_categorical_style(0),
     )
     ax.set_xlabel(POSITION_LABEL)
@@ -166,6 +168,7 @@ def fig3_ambient(ambient: pd.DataFrame) -> Figure:
     runs = natural_sorted(ambient["run"])
     fig = _new_figure(SINGLE_COLUMN_IN, 2.4)
     ax = fig.subplots()
+    shown = short_names(runs)
     for i, run in enumerate(runs):
         series = ambient[ambient["run"] == run].sort_values("elapsed_min", kind="stable")
         series = series[np.isfinite(series["temperature_c"].to_numpy(dtype=float))]
@@ -173,7 +176,7 @@ def fig3_ambient(ambient: pd.DataFrame) -> Figure:
             series["elapsed_min"].to_numpy(dtype=float),
             series["temperature_c"].to_numpy(dtype=float),
             markevery=_markevery(len(series)),
-            label=f"Run {run}",
+            label=f"Run {shown[str(run)]}",
             **_categorical_style(i),
         )
     ax.set_xlabel(TIME_LABEL)
@@ -391,11 +394,12 @@ def fig9_other_runs(errors: pd.DataFrame, runs: Sequence) -> Figure:
     nrows = math.ceil(len(runs) / ncols)
     fig = _new_figure(DOUBLE_COLUMN_IN, 2.4 * nrows)
     axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
+    shown = short_names(runs)
     for i, (run, run_errors) in enumerate(zip(runs, selected, strict=False)):
         ax = axes[i]
         _curves_by_measurement(fig, ax, run_errors, "error_um")
         ax.set_ylabel(ERROR_LABEL)
-        ax.set_title(f"{_panel_label(i)} Run {run}", loc="left")
+        ax.set_title(f"{_panel_label(i)} Run {shown[str(run)]}", loc="left")
     for ax in axes[len(runs) :]:
         ax.remove()
     return fig
@@ -491,7 +495,7 @@ def _draw_rises(ax, series: pd.DataFrame, sensors: Sequence[str]) -> int:
         ok = np.isfinite(values) & np.isfinite(elapsed)
         if ok.any():
             rises[sensor] = (elapsed[ok], values[ok] - np.interp(0.0, elapsed[ok], values[ok]))
-    named = set(rises)
+    named, shown = set(rises), short_names(rises)
     if len(rises) > MAX_NAMED_RISES:
         # The largest |rise| first, ties in the given order; drawn in the given order.
         ranked = sorted(rises, key=lambda s: -float(np.abs(rises[s][1]).max()))
@@ -507,7 +511,7 @@ def _draw_rises(ax, series: pd.DataFrame, sensors: Sequence[str]) -> int:
             x,
             rise,
             markevery=_markevery(x.size),
-            label=str(sensor),
+            label=shown[str(sensor)],
             zorder=2,
             **_categorical_style(i),
         )
@@ -550,14 +554,21 @@ def fig12_slope_intercept(kb: pd.DataFrame) -> Figure:
     runs = natural_sorted(kb["run"])
     fig = _new_figure(SINGLE_COLUMN_IN, 3.6)
     ax_k, ax_b = fig.subplots(2, 1, sharex=True)
+    shown = short_names(runs)
     for i, run in enumerate(runs):
         rows = kb[kb["run"] == run].sort_values("measurement", kind="stable")
         m = rows["measurement"].to_numpy(dtype=float)
         ax_k.plot(
-            m, rows["k_um_per_m"].to_numpy(dtype=float), label=f"Run {run}", **_categorical_style(i)
+            m,
+            rows["k_um_per_m"].to_numpy(dtype=float),
+            label=f"Run {shown[str(run)]}",
+            **_categorical_style(i),
         )
         ax_b.plot(
-            m, rows["b_um"].to_numpy(dtype=float), label=f"Run {run}", **_categorical_style(i)
+            m,
+            rows["b_um"].to_numpy(dtype=float),
+            label=f"Run {shown[str(run)]}",
+            **_categorical_style(i),
         )
     ax_k.set_ylabel("Slope k (µm/m)")
     ax_b.set_ylabel("Intercept b (µm)")

@@ -34,6 +34,8 @@ from thermaxis.figures.style import (
     _styled,
     _time_label,
     _top_legend,
+    short_name,
+    short_names,
     single_position,
 )
 from thermaxis.labels import natural_key, natural_sorted
@@ -138,7 +140,7 @@ def fig_kb_prediction(kb_pred: pd.DataFrame, fold, approach: str, algorithm: str
             ax.set_ylabel(label if col == 0 else "")
             ax.xaxis.set_major_locator(MaxNLocator(integer=True))
             if row == 0:
-                ax.set_title(f"Held-out run {run}", loc="left")
+                ax.set_title(f"Held-out run {short_name(run)}", loc="left")
                 ax.legend(loc="best")
         axes[-1, col].set_xlabel("Measurement")
     return fig
@@ -190,7 +192,7 @@ def fig_error_prediction(err_pred: pd.DataFrame, fold, approach: str, algorithm:
             _prediction_in_time(
                 axes[0, col], axes[1, col], rows[rows["run"] == run], algorithm, first=col == 0
             )
-            axes[0, col].set_title(f"Held-out run {run}", loc="left")
+            axes[0, col].set_title(f"Held-out run {short_name(run)}", loc="left")
         return fig
     for col, run in enumerate(runs):
         _prediction_along_stroke(
@@ -236,7 +238,7 @@ def _prediction_along_stroke(
             label=_time_label(t),
         )
     ax_res.axhline(0.0, color="0.3", linewidth=0.5, zorder=0)
-    ax_curve.set_title(f"Held-out run {run}", loc="left")
+    ax_curve.set_title(f"Held-out run {short_name(run)}", loc="left")
     ax_curve.set_ylabel(ERROR_LABEL if first else "")
     ax_res.set_ylabel("Residual (µm)" if first else "")
     ax_res.set_xlabel(POSITION_LABEL)
@@ -337,7 +339,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
                 )
     ax_rmse.set_ylabel(f"RMSE{suffix}")
     ax_max.set_ylabel(f"Max |residual|{suffix}")
-    labels = [str(f) for f in folds]
+    labels = list(short_names(folds).values())
     # Long run names or many folds would overlap side by side: slant them.
     slanted = sum(len(label) for label in labels) > 40 or max(map(len, labels)) > 6
     ax_max.set_xticks(

@@ -17,6 +17,7 @@ from thermaxis.figures.style import (  # noqa: E402
     _new_figure,
     _require_columns,
     _styled,
+    short_names,
 )
 from thermaxis.labels import natural_key, natural_sorted  # noqa: E402
 
@@ -40,9 +41,14 @@ def fig_selection_stability(stability: pd.DataFrame) -> Figure:
     targets = [t for t in _TARGETS if t in set(stability["target"])]
     folds = natural_sorted(stability["fold"].astype(str))
     sensors = sorted(set(stability["sensor"].astype(str)), key=natural_key)
+    shown_folds = list(short_names(folds).values())
+    longest = max(map(len, shown_folds), default=0)
+    # Many folds, or long run names, side by side would overlap: slanted, they need height.
+    slanted = len(folds) > 4 or longest > 6
     fig = _new_figure(
         SINGLE_COLUMN_IN if len(targets) == 1 else DOUBLE_COLUMN_IN,
-        0.6 + 0.17 * len(sensors),
+        # At least the colour bar's label high, whatever few sensors there are.
+        max(2.0, 0.6 + 0.17 * len(sensors)) + (0.03 * longest if slanted else 0.0),
     )
     axes = np.atleast_1d(fig.subplots(1, len(targets), sharey=True))
     image = None
@@ -57,14 +63,13 @@ def fig_selection_stability(stability: pd.DataFrame) -> Figure:
         image = ax.imshow(grid, cmap=ORDERED_CMAP, vmin=0.0, vmax=1.0, aspect="auto")
         ys, xs = np.nonzero(chosen)
         ax.scatter(xs, ys, s=30, facecolors="none", edgecolors="black", linewidths=0.7)
-        slanted = len(folds) > 4  # long run names side by side would overlap
         ax.set_xticks(
             range(len(folds)),
-            folds,
+            shown_folds,
             rotation=30 if slanted else 0,
             ha="right" if slanted else "center",
         )
-        ax.set_yticks(range(len(sensors)), sensors)
+        ax.set_yticks(range(len(sensors)), list(short_names(sensors).values()))
         ax.set_title(_TARGETS[target])
         ax.set_xlabel("Fold (held-out run)")
         ax.grid(False)

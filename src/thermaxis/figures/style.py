@@ -15,6 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from cycler import cycler  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.cm import ScalarMappable  # noqa: E402
 from matplotlib.colors import ListedColormap, Normalize  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
@@ -147,6 +148,36 @@ def _select(table: pd.DataFrame, name: str, **equals) -> pd.DataFrame:
 # --------------------------------------------------------------------------- helpers
 
 
+# Characters of a run, sensor or dataset name in a tick label, a legend or a panel title:
+# a longer name squeezes the axes until constrained layout gives up. Captions and tables
+# keep every name whole.
+NAME_WIDTH = 20
+
+
+def short_names(names: Iterable) -> dict[str, str]:
+    """Each name as a figure shows it: one longer than :data:`NAME_WIDTH` keeps its start
+    and its end around an ellipsis, the width growing until the shortened names are as
+    distinct as the names (runs often differ only in a date or a suffix)."""
+    names = list(dict.fromkeys(str(n) for n in names))
+    for width in range(NAME_WIDTH, max(map(len, names), default=0)):
+        shown = {n: _shortened(n, width) for n in names}
+        if len(set(shown.values())) == len(names):
+            return shown
+    return {n: n for n in names}
+
+
+def short_name(name) -> str:
+    """One name as a figure shows it (:func:`short_names`)."""
+    return _shortened(str(name), NAME_WIDTH)
+
+
+def _shortened(name: str, width: int) -> str:
+    if len(name) <= width:
+        return name
+    head = (width - 1) // 2
+    return f"{name[:head]}…{name[len(name) - (width - 1 - head) :]}"
+
+
 def _new_figure(width: float, height: float, **kwargs) -> Figure:
     return Figure(figsize=(width, height), layout="constrained", **kwargs)
 
@@ -186,9 +217,15 @@ def _add_legend(ax, n_entries: int) -> None:
 
 
 def _top_legend(fig: Figure, ax) -> None:
-    """Legend of ``ax`` above the axes, where it can hide no data whatever the curves do."""
+    """Legend of ``ax`` above the axes, where it can hide no data whatever the curves do:
+    in up to four columns, fewer where long labels side by side would overrun the figure."""
     handles, labels = ax.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 4))
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    for ncol in range(min(len(labels), 4), 0, -1):
+        legend = fig.legend(handles, labels, loc="outside upper center", ncol=ncol)
+        if ncol == 1 or legend.get_window_extent(renderer).width <= fig.bbox.width:
+            return
+        legend.remove()
 
 
 def _ordered_norm(values: Sequence[float]) -> Normalize:
