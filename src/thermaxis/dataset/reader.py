@@ -390,24 +390,26 @@ def read_temperature_source(
                 raise DataError(
                     f"{path}: missing column {signal!r} (declared for this source in dataset.yaml)"
                 )
-    out = pd.DataFrame({"time": _parse_time(path, frame["time"])})
-    _check_time_order(path, out["time"])
+    times = pd.DataFrame({"time": _parse_time(path, frame["time"])})
+    _check_time_order(path, times["time"])
+    readings = {}
     for sensor in expected_sensors:
         # A declared temperature sensor without a column in this run's log has no reading,
         # as an empty column has none: cleaning names it and it leaves this run's folds;
         # one sensor must not cost the dataset (issue 33). An operating signal is every
         # model's input: without it the run cannot be modelled, so it is refused above.
-        out[sensor] = (
+        readings[sensor] = (
             _parse_numbers(path, frame, sensor, allow_empty=True)
             if sensor in columns
-            else np.full(len(out), np.nan)
+            else np.full(len(times), np.nan)
         )
-        if kind != "sensor" and out[sensor].isna().all():
+        if kind != "sensor" and np.isnan(readings[sensor]).all():
             raise DataError(
                 f"{path}: column {sensor!r}: no reading in any row; expected the signal's readings "
                 "(every model that uses the signal reads it)"
             )
-    return out
+    # Joined at once: a column added at a time fragments the frame of a 100-sensor log.
+    return pd.concat([times, pd.DataFrame(readings, index=times.index)], axis=1)
 
 
 def _parse_readings(path: Path, frame: pd.DataFrame) -> pd.DataFrame:
