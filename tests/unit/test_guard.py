@@ -17,6 +17,7 @@ from helpers import DEFAULTS
 from thermaxis.dataset import plausibility, safety
 from thermaxis.errors import DataError
 from thermaxis.method import selection
+from thermaxis.method.folds import select_for_fold
 from thermaxis.reports.formatting import format_cell
 
 REPO = Path(__file__).resolve().parents[2]
@@ -242,19 +243,25 @@ def test_constant_sensor_is_left_out_with_a_warning():
         assert selection.informative_sensors(frame, (), "fold E2") == ["T1", "T3"]
 
 
-def test_more_clusters_than_varying_sensors_names_the_config_key():
-    frame = pd.DataFrame(
-        {"T1": [20.0, 21.0, 22.0], "T2": [25.0, 25.0, 25.0], "T3": [1.0, 1.0, 1.5]}
-    )
-    with (
-        pytest.warns(UserWarning),
-        pytest.raises(
-            DataError, match="config selection.n_clusters: 3 clusters but only 2 sensors vary"
-        ),
-    ):
-        selection.informative_sensors(frame, (), "fold E2", n_clusters=3)
-    with pytest.warns(UserWarning):
-        assert selection.informative_sensors(frame, (), "fold E2", n_clusters=2) == ["T1", "T3"]
+def test_more_clusters_than_varying_sensors_make_each_sensor_a_sensitive_point():
+    # Two training runs of three measurements; T2 is constant, so two sensors vary.
+    X = pd.DataFrame(
+        {"run": ["E1"] * 3 + ["E2"] * 3 + ["E3"] * 3, "measurement": [1, 2, 3] * 3,
+         "time_min": [0.0, 20.0, 40.0] * 3,
+         "T1": [20.0, 21.0, 22.5, 20.2, 21.4, 22.1, 19.0, 20.0, 21.0],
+         "T2": [25.0] * 9,
+         "T3": [1.0, 1.2, 1.5, 1.1, 1.1, 1.6, 0.0, 1.0, 2.0]}
+    )  # fmt: skip
+    Y = pd.DataFrame({0.0: np.linspace(0.0, -4.0, 9), 100.0: np.linspace(0.0, -5.0, 9)})
+    with pytest.warns(UserWarning) as caught:
+        chosen = select_for_fold(X, Y, "E3", replace(DEFAULTS.selection, n_clusters=3), 1)
+    messages = [str(w.message) for w in caught]
+    assert "fold E3: sensor T2 is constant over the training measurements" in messages[0]
+    assert (
+        "fold E3: 3 clusters (selection.n_clusters) but only 2 sensors vary over its training "
+        "measurements; each is a cluster of its own, and a sensitive point"
+    ) in messages
+    assert sorted(chosen.k_sensors) == sorted(chosen.b_sensors) == ["T1", "T3"]
 
 
 def test_constant_fixed_sensor_is_refused():

@@ -29,7 +29,7 @@ _TIME_ZONE = re.compile(
 )
 
 
-def check_dataset_shape(dataset, config) -> None:
+def check_dataset_shape(dataset) -> None:
     """Dataset-level needs of the workflow, named before any job starts.
 
     Lists and stats the run folders' data files (safe names, regular files of bounded
@@ -75,14 +75,6 @@ def check_dataset_shape(dataset, config) -> None:
             dataset.root,
             "one measurement per run; the drift (intercept b) and every model need at least 2 measurements "
             "in a run (expected several measurements while the axis heats up)",
-        )
-    selection = config["selection"]
-    n_sensors = len(dataset.sensors)
-    if selection["method"] in ("fuzzy_grey", "correlation") and selection["n_clusters"] > n_sensors:
-        raise _error(
-            "config selection.n_clusters",
-            f"{selection['n_clusters']} clusters but {dataset.root / 'dataset.yaml'} declares {n_sensors} "
-            f"sensors (expected at most {n_sensors})",
         )
 
 

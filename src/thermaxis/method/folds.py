@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -209,10 +209,19 @@ def select_for_fold(
     fixed = (
         tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
     )
-    clustered = settings.n_clusters if settings.method in ("fuzzy_grey", "correlation") else 0
-    sensors = informative_sensors(
-        X[sensor_columns(X)], fixed, where=f"fold {name}", n_clusters=clustered
-    )
+    sensors = informative_sensors(X[sensor_columns(X)], fixed, where=f"fold {name}")
+    if settings.method in ("fuzzy_grey", "correlation") and settings.n_clusters > len(sensors):
+        # More clusters than sensors that vary: each sensor is a cluster of its own, and
+        # so a sensitive point (a dataset of two sensors, a fold whose others are constant).
+        varying = "1 sensor varies" if len(sensors) == 1 else f"{len(sensors)} sensors vary"
+        warnings.warn(
+            f"fold {name}: {settings.n_clusters} clusters (selection.n_clusters) but only "
+            f"{varying} over its training measurements; each is a cluster of its own, and a "
+            "sensitive point",
+            SelectionWarning,
+            stacklevel=2,
+        )
+        settings = replace(settings, n_clusters=len(sensors))
     absolute = X[sensors]
     relative = (relative_temperatures(X) if relative is None else relative)[sensors]
     k_points = b_points = None
@@ -241,7 +250,8 @@ def select_for_fold(
         n_common = min(settings.pointwise_common, distinct)
         if n_common < settings.pointwise_common:
             warnings.warn(
-                f"fold {name}: only {distinct} distinct sensors were selected over the positions; "
+                f"fold {name}: only {distinct} distinct sensor{'s were' if distinct != 1 else ' was'} "
+                "selected over the positions; "
                 f"the point-by-point common set has {n_common} instead of {settings.pointwise_common}",
                 SelectionWarning,
                 stacklevel=2,

@@ -638,7 +638,7 @@ def common_points(
 
 
 def informative_sensors(
-    temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str, n_clusters: int = 0
+    temperatures: pd.DataFrame, fixed: tuple[str, ...], where: str
 ) -> list[str]:
     """Sensors that vary over the samples; a constant one is named and left out.
 
@@ -668,12 +668,5 @@ def informative_sensors(
             f"{where}: sensor {sensor} is constant over the training measurements; left out of the selection",
             SelectionWarning,
             stacklevel=2,
-        )
-    varying = len(temperatures.columns) - len(constant)
-    if n_clusters > varying:
-        raise _error(
-            "config selection.n_clusters",
-            f"{n_clusters} clusters but only {varying} sensors vary over the training measurements of {where} "
-            f"(expected at most {varying})",
         )
     return [str(s) for s in temperatures.columns if str(s) not in constant]

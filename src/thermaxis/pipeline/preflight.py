@@ -100,7 +100,7 @@ def check_before_jobs(config: dict) -> Checked:
     config = validate_config(config)
     settings = Settings.from_validated(config)
     dataset = load_dataset(config["dataset"])
-    plausibility.check_dataset_shape(dataset, config)
+    plausibility.check_dataset_shape(dataset)
     runs = list(dataset.run_ids)
     out = str(safety.check_inside(f"results/{dataset.name}", "results", what="results folder"))
     for folder in (out, f"logs/{dataset.name}", f"benchmarks/{dataset.name}"):
