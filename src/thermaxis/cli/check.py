@@ -32,7 +32,8 @@ def overview(checked: Checked) -> tuple[list[str], list[str]]:
     kind = "SIMULATED" if dataset.simulated else "MEASURED"
     lines = [
         f"dataset {dataset.name} ({kind}) in {dataset.root}",
-        f"  {len(dataset.sensors)} sensors: {', '.join(dataset.sensors)}",
+        f"  {len(dataset.sensors)} sensor{'' if len(dataset.sensors) == 1 else 's'}: "
+        f"{', '.join(dataset.sensors)}",
         f"  {checked.n_positions} target position(s)"
         + ("" if checked.n_positions >= 2 else ": point-by-point models only, no slope/intercept"),
         f"  {len(checked.runs)} runs (held-out folds: {', '.join(checked.folds)})",
