@@ -371,3 +371,20 @@ def test_errors_written_in_mm_are_named(tiny_dataset):
         "below the 0.05 um a thermal error reaches; error_um is in micrometres (readings in mm "
         "are 1000 times too small)",
     )
+
+
+def test_a_log_line_cut_short_is_named_and_a_blank_reading_is_not(tmp_path):
+    log = tmp_path / "box.csv"
+    log.write_text(
+        "time,S1,S2\n2022-05-10T09:00:00,20.1,21.0\n2022-05-10T09:00:10,,21.1\n2022-05-10T09:00:20,20.3\n"
+    )
+    with pytest.raises(
+        DataError, match=r"box.csv: line 4: 2 comma-separated fields but the header has 3"
+    ):
+        read_temperature_source(log, ["S1", "S2"], {"S1", "S2"})
+    log.write_text(
+        "time,S1,S2\n2022-05-10T09:00:00,20.1,21.0\n2022-05-10T09:00:10,,21.1\n2022-05-10T09:00:20,20.3,\n"
+    )
+    frame = read_temperature_source(log, ["S1", "S2"], {"S1", "S2"})
+    np.testing.assert_array_equal(frame["S1"], [20.1, np.nan, 20.3])
+    np.testing.assert_array_equal(frame["S2"], [21.0, 21.1, np.nan])

@@ -696,6 +696,20 @@ CASES = [
         "clean:E2",
     ),
     Case(
+        "error_line_cut_short",
+        lambda ds, w: _write_lines(
+            ds / E2_M03,
+            _lines(ds / E2_M03)[:3]
+            + [_lines(ds / E2_M03)[3].rsplit(",", 2)[0]]
+            + _lines(ds / E2_M03)[4:],
+        ),
+        "line 4: 2 comma-separated fields but the header has 4; expected 4 fields (time, "
+        "position_mm, error_um, direction), an empty one for a missing value",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
         "position_text",
         lambda ds, w: _cell(ds / E2_M03, 3, "position_mm", "x"),
         "column 'position_mm': expected a number",
@@ -925,6 +939,18 @@ CASES = [
         "temp_value_text",
         lambda ds, w: _cell(ds / E2_BOX, 7, "T3", "hot"),
         "line 7, column 'T3': expected a number, got 'hot'",
+        E2_BOX,
+        7,
+        "clean:E2",
+    ),
+    Case(
+        # A logger stopped mid-write: the parser would pad the line with blanks.
+        "temp_line_cut_short",
+        lambda ds, w: _write_lines(
+            ds / E2_BOX,
+            _lines(ds / E2_BOX)[:6] + [_lines(ds / E2_BOX)[6][:25]] + _lines(ds / E2_BOX)[7:],
+        ),
+        "line 7: 2 comma-separated fields but the header has 11; expected 11 fields (time, T1,",
         E2_BOX,
         7,
         "clean:E2",

@@ -308,7 +308,25 @@ def _read_csv(path: Path) -> pd.DataFrame:
     frame.columns = [str(c).strip() for c in frame.columns]
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
+    # The parser pads a row that ends early with empty cells, as if they were blanks: a
+    # line cut short (a logger stopped mid-write) would pass as missing readings. Only a
+    # file with an empty last cell can hold such a row, so only that one is scanned.
+    if (frame.iloc[:, -1] == "").any():
+        _check_short_rows(path, list(frame.columns))
     return frame
+
+
+def _check_short_rows(path: Path, names: list[str]) -> None:
+    with open(path, newline="", encoding="utf-8-sig") as fh:
+        rows = csv.reader(fh)
+        next(rows, None)
+        for row in rows:
+            if row and len(row) < len(names):
+                raise DataError(
+                    f"{path}: line {rows.line_num}: {len(row)} comma-separated fields but the "
+                    f"header has {len(names)}; expected {len(names)} fields ({', '.join(names)}), "
+                    "an empty one for a missing value (a line cut short?)"
+                )
 
 
 def _parse_time(path: Path, values: pd.Series) -> pd.Series:
