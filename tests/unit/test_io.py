@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+import warnings
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ from thermaxis.dataset.plausibility import check_run_plausibility
 from thermaxis.dataset.reader import (
     clock_back_hint,
     load_dataset,
+    read_measurement,
     read_run,
     read_temperature_source,
 )
@@ -373,18 +375,29 @@ def test_errors_written_in_mm_are_named(tiny_dataset):
     )
 
 
-def test_a_log_line_cut_short_is_named_and_a_blank_reading_is_not(tmp_path):
+def test_a_line_cut_short_is_named_in_a_log_and_refused_in_a_measurement(tmp_path):
     log = tmp_path / "box.csv"
     log.write_text(
         "time,S1,S2\n2022-05-10T09:00:00,20.1,21.0\n2022-05-10T09:00:10,,21.1\n2022-05-10T09:00:20,20.3\n"
     )
-    with pytest.raises(
-        DataError, match=r"box.csv: line 4: 2 comma-separated fields but the header has 3"
+    with pytest.warns(
+        UserWarning, match=r"box.csv: line 4: 2 comma-separated fields but the header has 3"
     ):
-        read_temperature_source(log, ["S1", "S2"], {"S1", "S2"})
-    log.write_text(
-        "time,S1,S2\n2022-05-10T09:00:00,20.1,21.0\n2022-05-10T09:00:10,,21.1\n2022-05-10T09:00:20,20.3,\n"
-    )
-    frame = read_temperature_source(log, ["S1", "S2"], {"S1", "S2"})
+        frame = read_temperature_source(log, ["S1", "S2"], {"S1", "S2"})
     np.testing.assert_array_equal(frame["S1"], [20.1, np.nan, 20.3])
     np.testing.assert_array_equal(frame["S2"], [21.0, 21.1, np.nan])
+    # A blank written as such is a missing sample, without a word.
+    log.write_text(log.read_text().replace("20.3\n", "20.3,\n"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_temperature_source(log, ["S1", "S2"], {"S1", "S2"})
+    measurement = tmp_path / "M01.csv"
+    measurement.write_text(
+        "time,position_mm,error_um,direction\n2022-05-10T09:00:00,0,1.5,+\n2022-05-10T09:00:05,50\n"
+    )
+    with pytest.raises(DataError) as exc:
+        read_measurement(measurement)
+    assert one_line(exc) == (
+        f"{measurement}: line 3: 2 comma-separated fields but the header has 4; expected 4 fields "
+        "(time, position_mm, error_um, direction), an empty one for a missing value (a line cut short?)"
+    )

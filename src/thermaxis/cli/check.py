@@ -11,6 +11,7 @@ from thermaxis.cleaning.passes import run_targets
 from thermaxis.config import CleaningSettings
 from thermaxis.dataset.plausibility import check_run_plausibility, check_same_targets
 from thermaxis.dataset.reader import Dataset, read_run
+from thermaxis.errors import recorded
 from thermaxis.pipeline.parallel import fold_workers, map_folds
 from thermaxis.pipeline.preflight import Checked
 
@@ -54,8 +55,9 @@ def overview(checked: Checked) -> tuple[list[str], list[str]]:
 
 def _run_overview(run: str, dataset: Dataset, cleaning: CleaningSettings) -> tuple:
     """One run's summary (after its name), its plausibility warnings and its targets."""
-    raw = read_run(dataset, run)
-    notes = check_run_plausibility(dataset, raw, cleaning)
+    # The reader's own warnings (a log line cut short) join the plausibility notes.
+    raw, raised = recorded(read_run, dataset, run)
+    notes = [message for message, *_ in raised] + check_run_plausibility(dataset, raw, cleaning)
     measurements = raw.measurements
     firsts = [m["time"].min() for m in measurements.values()]
     lasts = [m["time"].max() for m in measurements.values()]

@@ -9,6 +9,7 @@ what was expected.  The reader never repairs anything: repairs belong to
 from __future__ import annotations
 
 import csv
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -291,7 +292,10 @@ def load_dataset(root) -> Dataset:
     return Dataset(root=root, meta=meta, runs=runs, sensors=sensors)
 
 
-def _read_csv(path: Path) -> pd.DataFrame:
+def _read_csv(path: Path, short_rows_missing: bool = False) -> pd.DataFrame:
+    """A data file's cells as text. ``short_rows_missing``: a row with fewer fields than
+    the header is read with its missing fields empty, with a warning (a log); otherwise
+    it is refused (a measurement, whose every reading is needed)."""
     if safety.check_regular_file(path, what="data file") == 0:
         raise DataError(f"{path}: empty file, expected a header and data rows")
     safety.sniff_delimited(path, ",")
@@ -309,24 +313,37 @@ def _read_csv(path: Path) -> pd.DataFrame:
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
     # The parser pads a row that ends early with empty cells, as if they were blanks: a
-    # line cut short (a logger stopped mid-write) would pass as missing readings. Only a
-    # file with an empty last cell can hold such a row, so only that one is scanned.
+    # line cut short (a logger stopped mid-write) would pass unsaid. Only a file with an
+    # empty last cell can hold such a row, so only that one is scanned.
     if (frame.iloc[:, -1] == "").any():
-        _check_short_rows(path, list(frame.columns))
+        _check_short_rows(path, list(frame.columns), short_rows_missing)
     return frame
 
 
-def _check_short_rows(path: Path, names: list[str]) -> None:
+def _check_short_rows(path: Path, names: list[str], missing: bool) -> None:
+    short = []
     with open(path, newline="", encoding="utf-8-sig") as fh:
         rows = csv.reader(fh)
         next(rows, None)
         for row in rows:
             if row and len(row) < len(names):
-                raise DataError(
-                    f"{path}: line {rows.line_num}: {len(row)} comma-separated fields but the "
-                    f"header has {len(names)}; expected {len(names)} fields ({', '.join(names)}), "
-                    "an empty one for a missing value (a line cut short?)"
-                )
+                short.append((rows.line_num, len(row)))
+                if not missing:
+                    break
+    if not short:
+        return
+    line, n_fields = short[0]
+    what = f"{path}: line {line}: {n_fields} comma-separated fields but the header has {len(names)}"
+    if not missing:
+        raise DataError(
+            f"{what}; expected {len(names)} fields ({', '.join(names)}), an empty one for a "
+            "missing value (a line cut short?)"
+        )
+    more = f" (and {len(short) - 1} more line(s))" if len(short) > 1 else ""
+    warnings.warn(
+        f"{what}{more}; a line cut short? Its missing fields are read as missing samples",
+        stacklevel=3,
+    )
 
 
 def _parse_time(path: Path, values: pd.Series) -> pd.Series:
@@ -389,7 +406,7 @@ def read_temperature_source(
 ) -> pd.DataFrame:
     """One source's log: ``time`` + one float column per sensor (or signal; NaN = missing)."""
     path = Path(path)
-    frame = _read_csv(path)
+    frame = _read_csv(path, short_rows_missing=True)
     if "time" not in frame.columns:
         raise DataError(f"{path}: missing column 'time' (expected time + one column per {kind})")
     columns = [c for c in frame.columns if c != "time"]
