@@ -498,3 +498,26 @@ def test_bench_markdown_names_the_cores_and_the_targets():
     assert "2 usable cores" in text and "--cores 2" in text
     assert "| results_noop | 1.5 | 1.2 | 200 | 210 | 0 | yes | again |" in text
     assert "| no-op rerun <= 2 s | 1.5 s | yes |" in text
+
+
+def test_a_cluster_count_above_the_sensors_that_vary_fails_that_unit_not_the_sweep():
+    X, Y = _inputs()
+    X["S4"] = 25.0  # constant: three sensors vary
+    grid = replace(
+        DEFAULTS.sweep.grid,
+        methods=("correlation",),
+        n_clusters=(3, 4),
+        similarities=("pearson",),
+        grades=("deng",),
+        degrees=(1,),
+        algorithms=("mlr",),
+    )
+    units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
+    rows = sweep_run.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
+    by_count = rows.groupby("n_clusters")["status"].agg(set)
+    # A swept count is the count used: 4 is not quietly evaluated as 3.
+    assert by_count[3] == {"ok"}
+    assert by_count[4] == {
+        "selection failed: fold R2: 4 clusters (selection.n_clusters) but only 3 sensors vary "
+        "over its training measurements; expected at most 3"
+    }

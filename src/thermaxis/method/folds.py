@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.config import ModelSettings, SelectionSettings
-from thermaxis.errors import SelectionWarning
+from thermaxis.errors import DataError, SelectionWarning
 from thermaxis.labels import natural_sorted, sort_naturally
 from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.method.metrics import metric_frame
@@ -186,6 +186,7 @@ def select_for_fold(
     decoupled: bool = True,
     pointwise: bool = True,
     relative: pd.DataFrame | None = None,
+    cap_clusters: bool = True,
 ) -> FoldSelection:
     """Sensitive points for k (absolute temperatures), b and each position (relative ones).
 
@@ -200,6 +201,8 @@ def select_for_fold(
     ``relative``: :func:`relative_temperatures` of ``X``, when the caller has it (the
     sweep selects thousands of times on one X); a run's values depend on its own rows
     only, so they are the same whichever runs the fold keeps.
+    ``cap_clusters``: more clusters than sensors that vary make each sensor a cluster (a
+    warning); False (the sweep) refuses instead, so a swept cluster count is the one used.
     """
     name = fold_name(fold)
     if settings.scope == "training":
@@ -214,10 +217,14 @@ def select_for_fold(
         # More clusters than sensors that vary: each sensor is a cluster of its own, and
         # so a sensitive point (a dataset of two sensors, a fold whose others are constant).
         varying = "1 sensor varies" if len(sensors) == 1 else f"{len(sensors)} sensors vary"
-        warnings.warn(
+        what = (
             f"fold {name}: {settings.n_clusters} clusters (selection.n_clusters) but only "
-            f"{varying} over its training measurements; each is a cluster of its own, and a "
-            "sensitive point",
+            f"{varying} over its training measurements"
+        )
+        if not cap_clusters:
+            raise DataError(f"{what}; expected at most {len(sensors)}")
+        warnings.warn(
+            f"{what}; each is a cluster of its own, and a sensitive point",
             SelectionWarning,
             stacklevel=2,
         )

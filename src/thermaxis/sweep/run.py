@@ -165,6 +165,7 @@ def _unit_selections(
                 decoupled=True,
                 pointwise=with_pointwise,
                 relative=relative,
+                cap_clusters=False,
             )
         except ValueError as exc:
             out[degree] = f"selection failed: {str(exc).splitlines()[0]}"
@@ -175,8 +176,9 @@ def _unit_selections(
         settings = unit.selection.settings(base, grid.fixed)
         try:
             out[None] = select_for_fold(
-                X, Y, unit.fold, settings, None, decoupled=False, relative=relative
-            )
+                X, Y, unit.fold, settings, None, decoupled=False, relative=relative,
+                cap_clusters=False,
+            )  # fmt: skip
         except ValueError as exc:
             out[None] = f"selection failed: {str(exc).splitlines()[0]}"
     return out
