@@ -20,6 +20,7 @@ from threadpoolctl import threadpool_limits
 
 from helpers import DEFAULTS
 from thermaxis.config import Settings, load_config
+from thermaxis.errors import SelectionWarning
 from thermaxis.method import batched, folds
 from thermaxis.method.folds import evaluate_configuration, select_for_fold
 from thermaxis.method.metrics import METRIC_COLUMNS
@@ -513,7 +514,8 @@ def test_a_cluster_count_above_the_sensors_that_vary_fails_that_unit_not_the_swe
         algorithms=("mlr",),
     )
     units, _ = sweep_plan.plan_units(grid, ["R2"], ["S1", "S2", "S3", "S4"])
-    rows = sweep_run.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
+    with pytest.warns(SelectionWarning, match="fold R2: sensor S4 is constant"):
+        rows = sweep_run.run_batch(X, Y, units, grid, DEFAULTS.selection, DEFAULTS.models)
     by_count = rows.groupby("n_clusters")["status"].agg(set)
     # A swept count is the count used: 4 is not quietly evaluated as 3.
     assert by_count[3] == {"ok"}
