@@ -21,7 +21,8 @@ the same choice made on all runs, whose scores are the candidates' own
 leave-one-condition-out errors.
 
 Every evaluation is :func:`thermaxis.method.folds.fold_metrics` (the metrics of the
-models rule's ``evaluate_configuration``) after :func:`~thermaxis.method.folds.select_for_fold`: the function the main workflow and the
+models rule's ``evaluate_configuration``) after
+:func:`~thermaxis.method.folds.select_for_fold`: the functions the main workflow and the
 sweep use, with sensitive points always chosen on the training runs only.
 """
 
