@@ -23,9 +23,10 @@ def test_fold_workers_take_four_folds_each_and_never_exceed_the_cores():
     assert fold_workers(16, 43, "models") == 10
 
 
-def test_a_recommendation_worker_takes_two_folds_or_more():
-    assert [fold_workers(2, n, "recommend") for n in (1, 2, 3, 4, 43)] == [1, 1, 1, 2, 2]
-    assert fold_workers(16, 6, "recommend") == 3
+def test_a_recommendation_worker_takes_eight_folds_or_more():
+    # The twin (4 folds) and fl_thermal (6) recommend in one process; 43 runs in two.
+    assert [fold_workers(2, n, "recommend") for n in (1, 4, 6, 15, 16, 43)] == [1, 1, 1, 1, 2, 2]
+    assert fold_workers(16, 43, "recommend") == 5
 
 
 @pytest.mark.parametrize("workers", [1, 2])

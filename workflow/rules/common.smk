@@ -968,6 +968,34 @@ def rule_resources(name):
     return per_attempt(*RESOURCES.get(name, RESOURCES["default"]))
 
 
+# --------------------------------------------------------------------------- priorities
+# Of the jobs ready at once, Snakemake starts the one of highest priority. A rule ranks by
+# the longest chain of work from its start to the end of the run, in the jobs' times of
+# the twin and fl_thermal (benchmarks/): the fits feed every later stage; the prediction
+# figures, the largest job, feed the model pages; the compensation feeds the results
+# figures and three reports. Left to its ties, Snakemake gave the core the prediction
+# figures waited for to a report that only the index needs (docs/performance.md).
+PRIORITY = {
+    "models": 9,
+    "recommend": 9,
+    "fig_predictions": 8,
+    "compensation": 7,
+    "statistics": 6,
+    "fig_results": 5,
+    "fig_data": 4,
+    "condition_report": 4,
+    "conditions_report": 4,
+    "model_report": 3,
+    "paper_report": 2,
+    "dataset_report": 1,
+}
+
+
+def rule_priority(name):
+    """The ``priority:`` of rule ``name`` (PRIORITY; 0 for a rule not listed)."""
+    return PRIORITY.get(name, 0)
+
+
 # --------------------------------------------------------------------------- targets
 def all_outputs():
     return [

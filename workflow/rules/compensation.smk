@@ -46,6 +46,7 @@ rule compensation:
         f"{LOGS}/compensation/compensation.log",
     benchmark:
         f"{BENCH}/compensation/compensation.tsv"
+    priority: rule_priority("compensation")
     conda:
         ENV
     resources:

@@ -22,6 +22,7 @@ for family, figures in FIGURE_FAMILIES.items():
             f"{LOGS}/figures/{family}.log",
         benchmark:
             f"{BENCH}/figures/{family}.tsv"
+        priority: rule_priority(family)
         conda:
             ENV
         # Snakemake gives at most --cores; the job deals its figures to that many workers.

@@ -57,8 +57,7 @@ rule models:
         f"{LOGS}/models.log",
     benchmark:
         f"{BENCH}/models.tsv"
-    # Next on the longest chain, after the recommendation (recommend.smk).
-    priority: 1
+    priority: rule_priority("models")
     conda:
         ENV
     threads: FOLD_THREADS["models"]

@@ -25,8 +25,7 @@ rule recommend:
         f"{LOGS}/recommend.log",
     benchmark:
         f"{BENCH}/recommend.tsv"
-    # The longest chain of the DAG starts here: first of the jobs ready with it.
-    priority: 2
+    priority: rule_priority("recommend")
     conda:
         ENV
     threads: FOLD_THREADS["recommend"]

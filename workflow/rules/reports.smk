@@ -38,6 +38,7 @@ rule dataset_report:
         f"{LOGS}/reports/dataset_report.log",
     benchmark:
         f"{BENCH}/reports/dataset_report.tsv"
+    priority: rule_priority("dataset_report")
     conda:
         ENV
     resources:
@@ -75,6 +76,7 @@ rule condition_report:
         f"{LOGS}/reports/condition_report.log",
     benchmark:
         f"{BENCH}/reports/condition_report.tsv"
+    priority: rule_priority("condition_report")
     conda:
         ENV
     resources:
@@ -114,6 +116,7 @@ rule conditions_report:
         f"{LOGS}/reports/conditions.log",
     benchmark:
         f"{BENCH}/reports/conditions.tsv"
+    priority: rule_priority("conditions_report")
     conda:
         ENV
     resources:
@@ -149,6 +152,7 @@ rule model_report:
         f"{LOGS}/reports/model_report.log",
     benchmark:
         f"{BENCH}/reports/model_report.tsv"
+    priority: rule_priority("model_report")
     conda:
         ENV
     resources:
@@ -204,6 +208,7 @@ rule paper_report:
         f"{LOGS}/reports/paper_report.log",
     benchmark:
         f"{BENCH}/reports/paper_report.tsv"
+    priority: rule_priority("paper_report")
     conda:
         ENV
     resources:

@@ -46,9 +46,7 @@ rule statistics:
         f"{LOGS}/statistics.log",
     benchmark:
         f"{BENCH}/statistics.tsv"
-    # On the longest chain (the figures of the results wait for it): before the reports
-    # that only the index waits for.
-    priority: 1
+    priority: rule_priority("statistics")
     conda:
         ENV
     resources:
