@@ -137,6 +137,31 @@ def test_classes_for_count_on_textbook_example():
     assert classes_for_count(closure, 1) == ([(0, 1, 2, 3, 4)], 0.4)
 
 
+def test_classes_for_count_equals_scipy_components_at_every_level_of_a_tied_matrix():
+    # An unsymmetric matrix on 40 sensors, mostly weak links, with many ties (entries in
+    # steps of 0.05, so some counts are skipped where several links join at once): for
+    # each distinct entry, from the largest down, scipy's connected components of the cut
+    # (linked where either direction reaches eta); the first entry giving each count is
+    # what classes_for_count must return for it.
+    from scipy.sparse.csgraph import connected_components
+
+    rng = np.random.default_rng(7)
+    E = np.round(rng.random((40, 40)) ** 12 * 20) / 20
+    expected = {}
+    for eta in np.unique(E)[::-1]:
+        count, labels = connected_components((E >= eta) | (E.T >= eta), directed=False)
+        members = {}
+        for sensor, label in enumerate(labels):
+            members.setdefault(label, []).append(sensor)
+        classes = sorted(tuple(m) for m in members.values())
+        expected.setdefault(count, (classes, float(eta)))
+    assert len(expected) > 5
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for count, answer in expected.items():
+            assert classes_for_count(E, count) == answer
+
+
 def test_lambda_cut_eta_between_levels_gives_same_partition_as_next_level_up():
     # Any eta in (0.5, 0.6] cuts exactly like 0.6.
     assert lambda_cut_classes(TEXTBOOK_CLOSURE, 0.55) == lambda_cut_classes(TEXTBOOK_CLOSURE, 0.6)

@@ -274,6 +274,52 @@ def lambda_cut_classes(E, eta: float) -> list[tuple[int, ...]]:
     return classes
 
 
+def _cuts_by_count(rel: np.ndarray) -> dict[int, tuple[list[tuple[int, ...]], float]]:
+    """Every partition the lambda-cuts of ``rel`` give, by its number of classes, each
+    with the largest eta that gives it (an entry of ``rel``).
+
+    The cuts nest: sensors i and j are linked from eta = max(r_ij, r_ji) down, so as eta
+    falls through the distinct link strengths classes only merge (single linkage). One
+    pass of union-find over the links, strongest first, therefore yields every cut;
+    :func:`lambda_cut_classes` at each of the up to n^2 distinct entries took O(n^4),
+    minutes on 100 sensors.
+    """
+    n = rel.shape[0]
+    parent = list(range(n))
+
+    def root(k: int) -> int:
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+
+    def partition() -> list[tuple[int, ...]]:
+        # Members in ascending order, classes by their first member: lambda_cut_classes' order.
+        classes: dict[int, list[int]] = {}
+        for k in range(n):
+            classes.setdefault(root(k), []).append(k)
+        return [tuple(members) for members in classes.values()]
+
+    first, second = np.triu_indices(n, k=1)
+    strength = np.maximum(rel, rel.T)[first, second]
+    top = float(rel.max())
+    by_count: dict[int, tuple[list[tuple[int, ...]], float]] = {}
+    if not strength.size or strength.max() < top:
+        by_count[n] = ([(k,) for k in range(n)], top)
+    order = np.argsort(-strength, kind="stable")
+    # Links of equal strength join at one eta: the bounds of each run of them in ``order``.
+    bounds = [*np.unique(-strength[order], return_index=True)[1], order.size]
+    count = n
+    for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
+        for link in order[start:stop]:
+            a, b = root(int(first[link])), root(int(second[link]))
+            if a != b:
+                parent[max(a, b)] = min(a, b)
+                count -= 1
+        by_count.setdefault(count, (partition(), float(strength[order[start]])))
+    return by_count
+
+
 def classes_for_count(E, n_classes: int) -> tuple[list[tuple[int, ...]], float]:
     """The lambda-cut of E that yields ``n_classes`` classes, and its eta.
 
@@ -309,11 +355,7 @@ def classes_for_count(E, n_classes: int) -> tuple[list[tuple[int, ...]], float]:
     if isinstance(n_classes, bool) or int(n_classes) != n_classes or not (1 <= n_classes <= n):
         raise ValueError(f"n_classes must be an integer in [1, {n}], got {n_classes}")
     n_classes = int(n_classes)
-    by_count: dict[int, tuple[list[tuple[int, ...]], float]] = {}
-    for level in np.unique(rel)[::-1]:
-        classes = lambda_cut_classes(rel, float(level))
-        # Keep the first (largest) eta for each count: the canonical level.
-        by_count.setdefault(len(classes), (classes, float(level)))
+    by_count = _cuts_by_count(rel)
     if n_classes in by_count:
         return by_count[n_classes]
     obtained = min(by_count, key=lambda c: (abs(c - n_classes), -c))
