@@ -5,9 +5,11 @@ import pandas as pd
 from thermaxis.figures.family import draw_family, family_workers
 
 
-def test_workers_come_with_sixteen_figures_each_up_to_the_cores():
-    assert [family_workers(2, n) for n in (1, 31, 32, 40)] == [1, 1, 2, 2]
-    assert family_workers(1, 100) == 1
+def test_workers_come_with_sixty_four_figures_each_up_to_the_cores():
+    # 12 runs' 72 prediction figures: one process; 43 runs' 258: two.
+    assert [family_workers(2, n) for n in (1, 72, 127, 128, 258)] == [1, 1, 1, 2, 2]
+    assert family_workers(1, 300) == 1
+    assert family_workers(16, 258) == 4
 
 
 def _specs(tmp_path, folder):

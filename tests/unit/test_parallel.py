@@ -23,10 +23,14 @@ def test_fold_workers_take_four_folds_each_and_never_exceed_the_cores():
     assert fold_workers(16, 43, "models") == 10
 
 
-def test_a_recommendation_worker_takes_eight_folds_or_more():
-    # The twin (4 folds) and fl_thermal (6) recommend in one process; 43 runs in two.
-    assert [fold_workers(2, n, "recommend") for n in (1, 4, 6, 15, 16, 43)] == [1, 1, 1, 1, 2, 2]
-    assert fold_workers(16, 43, "recommend") == 5
+def test_the_recommendation_takes_a_second_worker_where_the_models_do():
+    # The twin (4 folds) and fl_thermal (6) recommend in one process; 8 runs and more in two.
+    counts = (1, 4, 6, 7, 8, 12, 43)
+    assert [fold_workers(2, n, "recommend") for n in counts] == [1, 1, 1, 1, 2, 2, 2]
+    assert [fold_workers(2, n, "recommend") for n in counts] == [
+        fold_workers(2, n, "models") for n in counts
+    ]
+    assert fold_workers(16, 43, "recommend") == 10
 
 
 @pytest.mark.parametrize("workers", [1, 2])

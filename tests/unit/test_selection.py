@@ -137,6 +137,18 @@ def test_classes_for_count_on_textbook_example():
     assert classes_for_count(closure, 1) == ([(0, 1, 2, 3, 4)], 0.4)
 
 
+def test_closure_equals_the_papers_squaring_on_a_tied_matrix():
+    # Eq. 2 as the paper computes it: R, R o R, ... until a square repeats.
+    rng = np.random.default_rng(11)
+    A = np.round(rng.random((25, 25)), 1)
+    R = np.maximum(A, A.T)
+    np.fill_diagonal(R, 1.0)
+    squared = R
+    while not np.array_equal(max_min_compose(squared, squared), squared):
+        squared = max_min_compose(squared, squared)
+    np.testing.assert_array_equal(fuzzy_equivalence(R), squared)
+
+
 def test_classes_for_count_equals_scipy_components_at_every_level_of_a_tied_matrix():
     # An unsymmetric matrix on 40 sensors, mostly weak links, with many ties (entries in
     # steps of 0.05, so some counts are skipped where several links join at once): for

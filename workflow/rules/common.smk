@@ -969,15 +969,18 @@ def rule_resources(name):
 
 
 # --------------------------------------------------------------------------- priorities
-# Of the jobs ready at once, Snakemake starts the one of highest priority. A rule ranks by
-# the longest chain of work from its start to the end of the run, in the jobs' times of
-# the twin and fl_thermal (benchmarks/): the fits feed every later stage; the prediction
-# figures, the largest job, feed the model pages; the compensation feeds the results
-# figures and three reports. Left to its ties, Snakemake gave the core the prediction
-# figures waited for to a report that only the index needs (docs/performance.md).
+# Of the jobs ready at once, Snakemake starts the set with the largest sum of priorities
+# that fits the cores. A rule ranks by the longest chain of work from its start to the end
+# of the run, in the jobs' times of the twin and fl_thermal (benchmarks/): the fits feed
+# every later stage; the prediction figures, the largest job, feed the model pages; the
+# compensation feeds the results figures and three reports. Left to its ties, Snakemake
+# gave the core the prediction figures waited for to a report that only the index needs.
+# The recommendation's chain is the longest and grows fastest with the runs: above any
+# two other priorities together, it never waits for both cores behind two one-core jobs,
+# as it did for 49 s on a 12-run record (docs/performance.md).
 PRIORITY = {
+    "recommend": 20,
     "models": 9,
-    "recommend": 9,
     "fig_predictions": 8,
     "compensation": 7,
     "statistics": 6,

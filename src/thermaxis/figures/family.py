@@ -16,11 +16,13 @@ from thermaxis.figures.registry import function
 __all__ = ["MIN_FIGURES_PER_WORKER", "draw_family", "family_workers"]
 
 # A worker's start (Python, the library, matplotlib: about 2.5 CPU-s) against about
-# 0.6 s per figure drawn and saved as PNG and PDF, and a job of two processes holds two
-# cores: Snakemake starts it only when both are free, while a one-process job runs beside
-# any other. A second process pays from about 32 figures (the twin's 24 prediction
-# figures: one process, 13 CPU-s less over the cold run, docs/performance.md).
-MIN_FIGURES_PER_WORKER = 16
+# 0.45 s per figure drawn and saved as PNG and PDF, and a job of two processes holds two
+# cores: Snakemake starts it only when both are free, and its scheduler prefers two ready
+# one-core jobs to it, while a one-process job runs beside any other. On a 12-run record
+# the 72 prediction figures in two processes waited 30 s for both cores; a second process
+# pays where the family is most of what is left to do, from 128 figures (the 43-run
+# record's 258; docs/performance.md).
+MIN_FIGURES_PER_WORKER = 64
 
 
 def _read(path: str, reader: str | None):

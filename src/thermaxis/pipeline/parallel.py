@@ -31,10 +31,12 @@ __all__ = ["FOLDS_PER_WORKER", "map_folds", "fold_workers"]
 # sets, about 1 s each on the twin (10 of them for 4 folds), while its folds still set how
 # many processes pay. The recommendation runs beside the models, figures and reports: a
 # second process shortened the twin's job (4 folds) by 1 s and fl_thermal's (6) by 5 s but
-# lengthened both runs, holding both cores while other jobs were ready; it pays where the
-# recommendation is most of the run. A run of the clean job is read and cleaned in
-# 0.2-0.4 s (the twin, fl_thermal).
-FOLDS_PER_WORKER = {"models": 4, "recommend": 8, "clean": 8}
+# lengthened both runs, holding both cores while other jobs were ready. The models and the
+# recommendation, ready together, change at the same fold count: a two-core job waits
+# for both cores, so beside a one-core recommendation the models waited 126 s on a 12-run
+# record, one core idle for 88 s (docs/performance.md). A run of the clean job is read and
+# cleaned in 0.2-0.4 s (the twin, fl_thermal).
+FOLDS_PER_WORKER = {"models": 4, "recommend": 4, "clean": 8}
 
 
 def fold_workers(cores: int, n_folds: int, stage: str) -> int:

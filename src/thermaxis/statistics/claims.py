@@ -158,11 +158,9 @@ def _held_out_squares(X, y, folds, representation, selection: SelectionSettings)
         test = (X["run"] == fold).to_numpy()
         train = ~test
         where = f"claims, fold {fold}"
-        usable = [
-            s
-            for s in informative_sensors(absolute.loc[train], (), where)
-            if s in informative_sensors(relative.loc[train], (), where)
-        ]
+        usable = informative_sensors(absolute.loc[train], (), where)
+        informative = set(informative_sensors(relative.loc[train], (), where))
+        usable = [s for s in usable if s in informative]
         points = select_sensitive_points(
             T.loc[train, usable],
             y[train],
