@@ -195,7 +195,7 @@ def fuzzy_equivalence(R) -> np.ndarray:
     tree of R holds a strongest chain for every pair, so the closure is built here while
     the tree grows (Prim), in O(n^2): a sensor joining through a link of strength w to
     tree sensor p reaches every tree sensor k at min(w, t(R)[p, k]). The squarings took
-    O(n^3 log n) time and an n^3 temporary (minutes and 200 MB per call on 300 sensors).
+    O(n^3 log n) time and an n^3 temporary (0.9 s and 216 MB a call on 300 sensors).
     Entries are entries of R either way (min and max only select), so the two agree
     exactly (tests/unit/test_selection.py).
 
@@ -293,9 +293,9 @@ def _cuts_by_count(rel: np.ndarray) -> dict[int, tuple[list[tuple[int, ...]], fl
 
     The cuts nest: sensors i and j are linked from eta = max(r_ij, r_ji) down, so as eta
     falls through the distinct link strengths classes only merge (single linkage). One
-    pass of union-find over the links, strongest first, therefore yields every cut;
-    :func:`lambda_cut_classes` at each of the up to n^2 distinct entries took O(n^4),
-    minutes on 100 sensors.
+    pass of union-find over the links, strongest first, therefore yields every cut. A
+    :func:`lambda_cut_classes` search at each distinct entry took 0.07 s a call on 100
+    sensors, 16 s of a 100-sensor record's statistics job.
     """
     n = rel.shape[0]
     parent = list(range(n))
