@@ -423,6 +423,24 @@ def test_fold_comparison_bars_carry_their_intervals_and_the_stability_map_its_sh
     np.testing.assert_allclose(image, [[1.0, 0.0], [0.5, 2 / 3]])
 
 
+def test_the_stability_map_of_many_sensors_keeps_the_sensors_some_subset_chose():
+    from thermaxis.figures.statistics import fig_selection_stability
+
+    # 100 sensors; chosen by a fold: T5 (E1), T7 (E2); chosen by a subset only: T50 (E2).
+    rows = []
+    for fold in ("E1", "E2"):
+        for i in range(1, 101):
+            sensor = f"T{i}"
+            chosen = (fold, sensor) in {("E1", "T5"), ("E2", "T7")}
+            share = {("E1", "T5"): 1.0, ("E2", "T7"): 0.5, ("E2", "T50"): 0.25}
+            rows.append({"fold": fold, "target": "k", "sensor": sensor, "chosen": chosen,
+                         "frequency": share.get((fold, sensor), 0.0)})  # fmt: skip
+    ax = fig_selection_stability(pd.DataFrame(rows)).axes[0]
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["T5", "T7", "T50"]
+    np.testing.assert_allclose(ax.images[0].get_array(), [[1.0, 0.0], [0.0, 0.5], [0.0, 0.25]])
+    assert ax.get_ylabel() == "Sensor (the 3 of 100 chosen in some subset)"
+
+
 def test_candidates_means_over_folds_get_scipys_fold_bootstrap_interval():
     from thermaxis.statistics import fold_means
 

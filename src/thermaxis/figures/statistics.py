@@ -24,6 +24,9 @@ from thermaxis.labels import natural_key, natural_sorted  # noqa: E402
 __all__ = ["fig_selection_stability", "fig_sweep_critical_difference"]
 
 _TARGETS = {"k": "slope k", "b": "intercept b", "pointwise": "point-by-point common set"}
+# Above this many sensors the stability map keeps only the sensors chosen somewhere: a row
+# per sensor of a 300-sensor record made the figure 52 in high, nearly all of it zeros.
+MAX_STABILITY_ROWS = 40
 # How many of the sweep's best configurations the critical-difference figure shows.
 TOP_CONFIGURATIONS = 15
 
@@ -33,7 +36,9 @@ def fig_selection_stability(stability: pd.DataFrame) -> Figure:
     """Per target a sensors x folds map of how often each sensor is chosen (0 to 1).
 
     ``stability`` is tables/selection_stability.csv. Ringed cells: the fold's own choice.
-    Folds with no subset to resample (one training run) are left blank.
+    Folds with no subset to resample (one training run) are left blank. Above
+    :data:`MAX_STABILITY_ROWS` sensors, a sensor no subset chose has no row, and the axis
+    label says how many are shown.
     """
     _require_columns(
         stability, ("fold", "target", "sensor", "chosen", "frequency"), "selection_stability"
@@ -41,6 +46,11 @@ def fig_selection_stability(stability: pd.DataFrame) -> Figure:
     targets = [t for t in _TARGETS if t in set(stability["target"])]
     folds = natural_sorted(stability["fold"].astype(str))
     sensors = sorted(set(stability["sensor"].astype(str)), key=natural_key)
+    n_sensors = len(sensors)
+    if n_sensors > MAX_STABILITY_ROWS:
+        picked = stability["chosen"].astype(bool) | (stability["frequency"].fillna(0) > 0)
+        kept = set(stability.loc[picked, "sensor"].astype(str))
+        sensors = [s for s in sensors if s in kept] or sensors
     shown_folds = list(short_names(folds).values())
     longest = max(map(len, shown_folds), default=0)
     # Many folds, or long run names, side by side would overlap: slanted, they need height.
@@ -73,7 +83,11 @@ def fig_selection_stability(stability: pd.DataFrame) -> Figure:
         ax.set_title(_TARGETS[target])
         ax.set_xlabel("Fold (held-out run)")
         ax.grid(False)
-    axes[0].set_ylabel("Sensor")
+    axes[0].set_ylabel(
+        "Sensor"
+        if len(sensors) == n_sensors
+        else f"Sensor (the {len(sensors)} of {n_sensors} chosen in some subset)"
+    )
     if image is not None:
         fig.colorbar(image, ax=list(axes), label="Share of subsets choosing it", shrink=0.9)
     return fig
