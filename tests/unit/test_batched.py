@@ -183,3 +183,36 @@ def test_what_is_not_batched():
     assert not batchable("lasso", MODELS, Y) and batchable("ridge", SEARCHED, Y)
     Y.iloc[3, 2] = np.nan
     assert not batchable("mlr", MODELS, Y)
+
+
+@pytest.mark.parametrize("n_inputs", [5, 40])
+def test_the_ridge_search_scores_every_strength_as_scikit_learns_pipeline(n_inputs):
+    # Inner leave-one-run-out RMSE of StandardScaler + Ridge (y standardised too), one
+    # pipeline per output, strength and held-out run, averaged over the runs: fewer and
+    # more inputs than training rows (3 runs x 6 rows = 18).
+    from sklearn.compose import TransformedTargetRegressor
+    from sklearn.linear_model import Ridge
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
+    from thermaxis.method.batched import _ridge_inner_rmse
+
+    rng = np.random.default_rng(5)
+    held = np.repeat(np.arange(4), 6)
+    X = rng.normal(size=(held.size, n_inputs)) + held[:, None]
+    Y = np.column_stack([X[:, 0] - 2 * X[:, 1], X[:, 2] ** 2]) + rng.normal(0, 0.1, (held.size, 2))
+    alphas = [0.01, 1.0, 100.0]
+    expected = np.zeros((len(alphas), 2))
+    for a, alpha in enumerate(alphas):
+        for output in range(2):
+            for group in range(4):
+                model = make_pipeline(
+                    StandardScaler(),
+                    TransformedTargetRegressor(
+                        regressor=Ridge(alpha=alpha), transformer=StandardScaler()
+                    ),
+                )
+                model.fit(X[held != group], Y[held != group, output])
+                residual = Y[held == group, output] - model.predict(X[held == group])
+                expected[a, output] += np.sqrt(np.mean(residual**2)) / 4
+    np.testing.assert_allclose(_ridge_inner_rmse(X, Y, held, alphas), expected, rtol=1e-9)

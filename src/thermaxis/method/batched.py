@@ -42,6 +42,7 @@ from thermaxis.method.models import (
     decouple_rows,
     inner_group_splitter,
     pls_fits,
+    ridge_grid_predictions,
 )
 
 __all__ = ["batchable", "decoupled_metrics", "pointwise_metrics"]
@@ -84,7 +85,10 @@ class _Fitter:
             held = np.empty(self.runs.size, dtype=int)
             for g, (_, rows) in enumerate(splitter.split(train, targets[:, 0], self.runs)):
                 held[rows] = g
-            scores = np.array([self._inner_rmse(train, targets, held, p) for p in self.grid])
+            if self.algorithm == "ridge":
+                scores = _ridge_inner_rmse(train, targets, held, [p["alpha"] for p in self.grid])
+            else:
+                scores = np.array([self._inner_rmse(train, targets, held, p) for p in self.grid])
             # The first best grid point, NaN last, as GridSearchCV ranks them.
             chosen = np.argmin(np.where(np.isnan(scores), np.inf, scores), axis=0)
         out = np.empty((test.shape[0], targets.shape[1]))
@@ -108,6 +112,35 @@ class _Fitter:
         residual = targets - fit.predictions[:, 0, :]
         rmse = [np.sqrt(np.mean(residual[held == g] ** 2, axis=0)) for g in groups]
         return np.mean(rmse, axis=0)
+
+
+def _ridge_inner_rmse(train, targets, held, alphas) -> np.ndarray:
+    """``_inner_rmse`` of ridge at every strength: (strengths, outputs).
+
+    Each inner split is standardised as the pipeline does (``StandardScaler`` on its
+    training rows) and solved for the whole strength grid and every output from one SVD
+    (:func:`thermaxis.method.models.ridge_grid_predictions`), instead of one eigensystem
+    per strength, and one scikit-learn refit per strength where that system was ill-
+    conditioned (many lagged inputs, few training rows).
+    """
+    from sklearn.preprocessing import StandardScaler
+
+    groups = np.unique(held)
+    rmse = np.empty((len(groups), len(alphas), targets.shape[1]))
+    for i, group in enumerate(groups):
+        fit, out = held != group, held == group
+        x_scaler = StandardScaler().fit(train[fit])
+        y_scaler = StandardScaler().fit(targets[fit])
+        standardised = ridge_grid_predictions(
+            (train[fit] - x_scaler.mean_) / x_scaler.scale_,
+            (targets[fit] - y_scaler.mean_) / y_scaler.scale_,
+            (train[out] - x_scaler.mean_) / x_scaler.scale_,
+            alphas,
+        )
+        for a, values in enumerate(standardised):
+            predicted = values * y_scaler.scale_ + y_scaler.mean_
+            rmse[i, a] = np.sqrt(np.mean((targets[out] - predicted) ** 2, axis=0))
+    return rmse.mean(axis=0)
 
 
 def _subset_predictions(

@@ -341,13 +341,15 @@ def _search_scores(algorithm, X, y, splits, regressors, scores):
 def ridge_grid_predictions(X_train, y_train, X_test, alphas: Sequence[float]) -> list:
     """Ridge's predictions of ``X_test`` at every strength in ``alphas``, from one SVD.
 
+    ``y_train`` is one output (n,) or several (n, m), each fitted on its own.
+
     Ridge with its intercept is w = V diag(s / (s^2 + alpha)) U'(y - mean y) on the
     centred inputs X - mean X = U diag(s) V', so a search over the strength grid costs one
     decomposition per inner split, not one solve per strength (a strength grid on many
     lagged inputs was most of a compensation job). Ridge's own fit to rounding
     (test_models); a direction the training rows do not span (s = 0) gets no weight.
     """
-    x_mean, y_mean = X_train.mean(axis=0), y_train.mean()
+    x_mean, y_mean = X_train.mean(axis=0), y_train.mean(axis=0)
     U, s, Vt = np.linalg.svd(X_train - x_mean, full_matrices=False)
     projected = U.T @ (y_train - y_mean)
     test = (X_test - x_mean) @ Vt.T
@@ -355,7 +357,8 @@ def ridge_grid_predictions(X_train, y_train, X_test, alphas: Sequence[float]) ->
     for alpha in alphas:
         denominator = s**2 + alpha
         shrink = np.divide(s, denominator, out=np.zeros_like(s), where=denominator > 0)
-        predictions.append(test @ (shrink * projected) + y_mean)
+        # Transposed twice so that a 2-D y_train (one column per output) scales each row.
+        predictions.append(test @ (shrink * projected.T).T + y_mean)
     return predictions
 
 
