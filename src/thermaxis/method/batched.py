@@ -14,7 +14,8 @@ is chosen as :func:`thermaxis.method.models.fit_by_group_search` chooses it: the
 inner split of the training runs, RMSE of each held-out group, the first best grid point;
 every grid point's held-out predictions come from one leave-one-group-out call of the
 core (:func:`thermaxis.method.linear.loco_fit`, the Gram matrices downdated by each
-group), for every output at once.
+group), for every output at once; a ridge's whole strength grid comes from one SVD per
+inner group (:func:`_ridge_inner_rmse`).
 
 Operating signals (``models.signals``) join every point set as logged, after the
 temperatures, as the estimators add them.  What is not batched stays with
