@@ -44,6 +44,7 @@ from thermaxis.method.models import (
     inner_group_splitter,
     pls_fits,
     ridge_grid_predictions,
+    standardised_split,
 )
 
 __all__ = ["batchable", "decoupled_metrics", "pointwise_metrics"]
@@ -118,28 +119,20 @@ class _Fitter:
 def _ridge_inner_rmse(train, targets, held, alphas) -> np.ndarray:
     """``_inner_rmse`` of ridge at every strength: (strengths, outputs).
 
-    Each inner split is standardised as the pipeline does (``StandardScaler`` on its
-    training rows) and solved for the whole strength grid and every output from one SVD
+    Each inner split is standardised as the pipeline does
+    (:func:`thermaxis.method.models.standardised_split`) and solved for the whole strength
+    grid and every output from one SVD
     (:func:`thermaxis.method.models.ridge_grid_predictions`), instead of one eigensystem
     per strength, and one scikit-learn refit per strength where that system was ill-
     conditioned (many lagged inputs, few training rows).
     """
-    from sklearn.preprocessing import StandardScaler
-
     groups = np.unique(held)
     rmse = np.empty((len(groups), len(alphas), targets.shape[1]))
     for i, group in enumerate(groups):
         fit, out = held != group, held == group
-        x_scaler = StandardScaler().fit(train[fit])
-        y_scaler = StandardScaler().fit(targets[fit])
-        standardised = ridge_grid_predictions(
-            (train[fit] - x_scaler.mean_) / x_scaler.scale_,
-            (targets[fit] - y_scaler.mean_) / y_scaler.scale_,
-            (train[out] - x_scaler.mean_) / x_scaler.scale_,
-            alphas,
-        )
-        for a, values in enumerate(standardised):
-            predicted = values * y_scaler.scale_ + y_scaler.mean_
+        X_fit, X_out, y_fit, y_mean, y_scale = standardised_split(train, targets, fit, out)
+        for a, values in enumerate(ridge_grid_predictions(X_fit, y_fit, X_out, alphas)):
+            predicted = values * y_scale + y_mean
             rmse[i, a] = np.sqrt(np.mean((targets[out] - predicted) ** 2, axis=0))
     return rmse.mean(axis=0)
 

@@ -60,6 +60,7 @@ __all__ = [
     "fit_by_group_search",
     "lasso_path_predictions",
     "ridge_grid_predictions",
+    "standardised_split",
     "linear_terms",
     "predict_with_std",
     "relative_temperatures",
@@ -301,18 +302,36 @@ def _search_splits(X, y, groups, inner: tuple[int, int], max_group_folds: int | 
     return splits[:max_group_folds]
 
 
+def standardised_split(X, y, train, test) -> tuple:
+    """A hold-out as the pipeline sees it: ``StandardScaler`` fitted on the training rows of
+    X and of y (one output (n,) or several (n, m), each scaled on its own).
+
+    Returns X's training and held-out rows and y's training rows standardised, and y's
+    mean and scale to undo it (scalars for one output).
+    """
+    y_train = y[train]
+    x_scaler = StandardScaler().fit(X[train])
+    y_scaler = StandardScaler().fit(y_train.reshape(len(y_train), -1))
+    y_mean, y_scale = y_scaler.mean_, y_scaler.scale_
+    if y_train.ndim == 1:
+        y_mean, y_scale = y_mean[0], y_scale[0]
+    # StandardScaler.transform's own arithmetic (minus mean_, over scale_), without its
+    # input checks, which cost more than the fits of a small grid.
+    return (
+        (X[train] - x_scaler.mean_) / x_scaler.scale_,
+        (X[test] - x_scaler.mean_) / x_scaler.scale_,
+        (y_train - y_mean) / y_scale,
+        y_mean,
+        y_scale,
+    )
+
+
 def _search_scores(algorithm, X, y, splits, regressors, scores):
     """Fill ``scores[candidate, split]`` with minus the RMSE of each hold-out, as
     GridSearchCV's ``neg_root_mean_squared_error`` scores it; ``regressors``: one
     :func:`_base_regressor` per grid point, fitted afresh on each hold-out."""
     for split, (train, test) in enumerate(splits):
-        x_scaler = StandardScaler().fit(X[train])
-        y_scaler = StandardScaler().fit(y[train].reshape(-1, 1))
-        # StandardScaler.transform's own arithmetic (minus mean_, over scale_), without its
-        # input checks, which cost more than the fits of a small grid.
-        X_train = (X[train] - x_scaler.mean_) / x_scaler.scale_
-        X_test = (X[test] - x_scaler.mean_) / x_scaler.scale_
-        y_train = (y[train] - y_scaler.mean_[0]) / y_scaler.scale_[0]
+        X_train, X_test, y_train, y_mean, y_scale = standardised_split(X, y, train, test)
         if algorithm == "lasso":
             standardised = lasso_path_predictions(
                 X_train, y_train, X_test, [r.alpha for r in regressors]
@@ -334,7 +353,7 @@ def _search_scores(algorithm, X, y, splits, regressors, scores):
             # StandardScaler.inverse_transform's own arithmetic (times scale_, plus
             # mean_), without its input checks, which cost more than the prediction.
             predicted = np.asarray(values, dtype=float).reshape(-1)
-            predicted = predicted * y_scaler.scale_[0] + y_scaler.mean_[0]
+            predicted = predicted * y_scale + y_mean
             scores[c, split] = -np.sqrt(np.mean((y[test] - predicted) ** 2))
 
 
