@@ -216,3 +216,23 @@ def test_the_ridge_search_scores_every_strength_as_scikit_learns_pipeline(n_inpu
                 residual = Y[held == group, output] - model.predict(X[held == group])
                 expected[a, output] += np.sqrt(np.mean(residual**2)) / 4
     np.testing.assert_allclose(_ridge_inner_rmse(X, Y, held, alphas), expected, rtol=1e-9)
+
+
+def test_the_held_out_rows_never_reach_the_ridge_search():
+    # The searched ridge predicts held-out rows A and B; B's temperatures are then changed
+    # wildly. A's predictions do not move: the strength was chosen, and the model fitted,
+    # on the training runs alone.
+    from thermaxis.method.batched import _Fitter
+
+    rng = np.random.default_rng(9)
+    runs = np.repeat(np.array(["R1", "R2", "R3", "R4"]), 6)
+    train = rng.normal(size=(runs.size, 30)) + np.repeat(np.arange(4), 6)[:, None]
+    targets = np.column_stack([train[:, 0] - train[:, 3], train[:, 5]])
+    targets = targets + rng.normal(0, 0.2, targets.shape)
+    held_a, held_b = rng.normal(size=(5, 30)), rng.normal(size=(5, 30))
+    fitter = _Fitter("ridge", replace(DEFAULTS.models, searched=("ridge",)), runs)
+    assert fitter.grid is not None and len(fitter.grid) > 1
+    before = fitter._searched(train, targets, np.vstack([held_a, held_b]))
+    after = fitter._searched(train, targets, np.vstack([held_a, 100.0 * held_b + 50.0]))
+    np.testing.assert_array_equal(before[:5], after[:5])
+    assert not np.allclose(before[5:], after[5:])
