@@ -20,7 +20,7 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
 from thermaxis.method import linear
-from thermaxis.method.linear import loco_fit, standardised_fit, subset_fit
+from thermaxis.method.linear import loco_fit, scaler_moments, standardised_fit, subset_fit
 
 RTOL = 1e-9
 ALPHA = 0.7
@@ -111,6 +111,26 @@ def test_standardised_fit_equals_one_pipeline_per_output(algorithm, correlation)
     )
     assert not fit.refitted
     check_against_reference(algorithm, X, Y, X, fit.intercept, fit.slopes, fit.predictions)
+
+
+def test_scaler_moments_are_standard_scalers_bit_for_bit():
+    # The inner searches standardise every hold-out with these instead of fitting a
+    # StandardScaler: the same bits, or the searches' choices could move.
+    rng = np.random.default_rng(3)
+    columns = [
+        rng.normal(0.0, 1.0, 37),
+        1e6 + rng.normal(0.0, 1e-3, 37),  # a large level, a small spread
+        np.full(37, 21.3),  # a sensor that never moved: scale 1
+        np.r_[np.full(36, 7.0), 7.0 + 1e-15],  # constant to rounding: scale 1
+        np.linspace(-3.0, 5.0, 37) ** 3,
+        np.zeros(37),
+    ]
+    for W in (np.column_stack(columns), np.column_stack(columns)[:5], rng.normal(size=(2, 1))):
+        scaler = StandardScaler().fit(W)
+        mean, scale = scaler_moments(W)
+        assert mean.tobytes() == scaler.mean_.tobytes()
+        assert scale.tobytes() == scaler.scale_.tobytes()
+    assert scaler_moments(np.column_stack(columns))[1][2:4].tolist() == [1.0, 1.0]
 
 
 @pytest.mark.filterwarnings("ignore:y residual is constant")

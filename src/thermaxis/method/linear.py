@@ -59,6 +59,7 @@ __all__ = [
     "PLS_LIMIT",
     "LinearFit",
     "loco_fit",
+    "scaler_moments",
     "standardised_fit",
     "subset_fit",
 ]
@@ -205,18 +206,35 @@ def _check_subsets(subsets, p: int) -> np.ndarray:
     return subsets
 
 
-def _moments(W):
-    """Count, mean, centred cross products and StandardScaler's variance of the rows W.
-
-    The mean and the variance are computed as StandardScaler computes them (sum / n, and
-    the corrected two-pass variance), so that its constant-feature test sees the same
-    numbers; cross products are of centred data, never raw sums.
-    """
+def _mean_variance(W):
+    """Count, mean, centred rows and variance of the rows W, as StandardScaler computes them
+    (sum / n, and the corrected two-pass variance of Chan, Golub and LeVeque)."""
     n = W.shape[0]
     mean = W.sum(axis=0) / n
     Wc = W - mean
     variance = ((Wc**2).sum(axis=0) - Wc.sum(axis=0) ** 2 / n) / n
+    return n, mean, Wc, variance
+
+
+def _moments(W):
+    """Count, mean, centred cross products and StandardScaler's variance of the rows W.
+
+    The mean and the variance are StandardScaler's own numbers (:func:`_mean_variance`), so
+    that its constant-feature test sees them; cross products are of centred data, never raw
+    sums.
+    """
+    n, mean, Wc, variance = _mean_variance(W)
     return n, mean, Wc.T @ Wc, variance
+
+
+def scaler_moments(W) -> tuple[np.ndarray, np.ndarray]:
+    """``StandardScaler().fit(W)``'s ``mean_`` and ``scale_``, bit for bit, for (n, m) rows
+    without NaN, and without its input checks: an inner search's hold-outs are small, and
+    the checks cost more than the fits of its grid."""
+    n, mean, _, variance = _mean_variance(np.asarray(W, dtype=float))
+    scale = np.sqrt(variance)
+    scale[_is_constant(variance, mean, n)] = 1.0
+    return mean, scale
 
 
 def _downdate(full, held, W, train):

@@ -48,6 +48,7 @@ from thermaxis.method.features import ID_COLUMNS as _ID_COLUMNS
 from thermaxis.method.features import KB_COLUMNS as _KB_COLUMNS
 from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.method.gp_kernel import ScaledRBFWithNoise
+from thermaxis.method.linear import scaler_moments
 from thermaxis.method.svr_grid import svr_grid_predictions
 from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
 
@@ -310,16 +311,14 @@ def standardised_split(X, y, train, test) -> tuple:
     mean and scale to undo it (scalars for one output).
     """
     y_train = y[train]
-    x_scaler = StandardScaler().fit(X[train])
-    y_scaler = StandardScaler().fit(y_train.reshape(len(y_train), -1))
-    y_mean, y_scale = y_scaler.mean_, y_scaler.scale_
+    x_mean, x_scale = scaler_moments(X[train])
+    y_mean, y_scale = scaler_moments(y_train.reshape(len(y_train), -1))
     if y_train.ndim == 1:
         y_mean, y_scale = y_mean[0], y_scale[0]
-    # StandardScaler.transform's own arithmetic (minus mean_, over scale_), without its
-    # input checks, which cost more than the fits of a small grid.
+    # StandardScaler.transform's own arithmetic (minus mean_, over scale_).
     return (
-        (X[train] - x_scaler.mean_) / x_scaler.scale_,
-        (X[test] - x_scaler.mean_) / x_scaler.scale_,
+        (X[train] - x_mean) / x_scale,
+        (X[test] - x_mean) / x_scale,
         (y_train - y_mean) / y_scale,
         y_mean,
         y_scale,
