@@ -41,6 +41,11 @@ DRYRUN_REPEATS = 3
 ONE_RULE_SNAKEFILE = (
     'rule all:\n    output:\n        "done.txt"\n    shell:\n        "touch {output}"\n'
 )
+# The same rule with one parameter: to hash a finished job's parameters, Snakemake imports
+# pandas whenever it is installed (docs/performance.md, twelfth session).
+ONE_RULE_PARAMS_SNAKEFILE = ONE_RULE_SNAKEFILE.replace(
+    "    shell:", "    params:\n        x=1\n    shell:"
+)
 
 
 def prepare_workdir(root: Path, repo: Path = REPO) -> Path:
@@ -165,19 +170,34 @@ def run_bench(
                                   "snakemake --cores N on nothing (make results after set-up)", env, timeout_s))  # fmt: skip
             record(measure("results_noop", _snakemake(cores), work, logs / "results_noop.log",
                            "the same again: nothing to do", env, timeout_s))  # fmt: skip
-            baseline = scratch / "one_rule"
-            baseline.mkdir(parents=True, exist_ok=True)
-            (baseline / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
-            subprocess.run(
-                _snakemake(cores),
-                cwd=baseline,
-                env=env,
-                capture_output=True,
-                check=True,
-                timeout=timeout_s,
-            )
-            record(measure("one_rule_noop", _snakemake(cores), baseline, logs / "one_rule_noop.log",
-                           "a one-rule Snakemake workflow with nothing to do (the floor)", env, timeout_s))  # fmt: skip
+            for name, snakefile, what in (
+                ("one_rule_noop", ONE_RULE_SNAKEFILE,
+                 "a one-rule Snakemake workflow with nothing to do (the floor)"),
+                ("one_rule_params_noop", ONE_RULE_PARAMS_SNAKEFILE,
+                 "the same rule with one params entry (Snakemake then imports pandas)"),
+            ):  # fmt: skip
+                baseline = scratch / name
+                baseline.mkdir(parents=True, exist_ok=True)
+                (baseline / "Snakefile").write_text(snakefile)
+                subprocess.run(
+                    _snakemake(cores),
+                    cwd=baseline,
+                    env=env,
+                    capture_output=True,
+                    check=True,
+                    timeout=timeout_s,
+                )
+                record(
+                    measure(
+                        name,
+                        _snakemake(cores),
+                        baseline,
+                        logs / f"{name}.log",
+                        what,
+                        env,
+                        timeout_s,
+                    )
+                )
             base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
             alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
             (work / "bench_param.yaml").write_text(
