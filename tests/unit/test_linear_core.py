@@ -20,7 +20,8 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
 from thermaxis.method import linear
-from thermaxis.method.linear import loco_fit, scaler_moments, standardised_fit, subset_fit
+from thermaxis.method.linear import loco_fit, standardised_fit, subset_fit
+from thermaxis.method.scaling import scaler_moments
 
 RTOL = 1e-9
 ALPHA = 0.7

@@ -52,6 +52,7 @@ from typing import NamedTuple
 import numpy as np
 
 from thermaxis.errors import raise_again, recorded
+from thermaxis.method.scaling import is_constant, mean_variance
 
 __all__ = [
     "ALGORITHMS",
@@ -59,7 +60,6 @@ __all__ = [
     "PLS_LIMIT",
     "LinearFit",
     "loco_fit",
-    "scaler_moments",
     "standardised_fit",
     "subset_fit",
 ]
@@ -70,7 +70,6 @@ PLS_LIMIT = 1e-5
 # A downdated variance may be this many times smaller than the full data's before the
 # fold is summed from its rows (cancellation costs log10 of the ratio in digits).
 _DOWNDATE_LOSS = 100.0
-_EPS = np.finfo(np.float64).eps
 
 
 class LinearFit(NamedTuple):
@@ -206,35 +205,15 @@ def _check_subsets(subsets, p: int) -> np.ndarray:
     return subsets
 
 
-def _mean_variance(W):
-    """Count, mean, centred rows and variance of the rows W, as StandardScaler computes them
-    (sum / n, and the corrected two-pass variance of Chan, Golub and LeVeque)."""
-    n = W.shape[0]
-    mean = W.sum(axis=0) / n
-    Wc = W - mean
-    variance = ((Wc**2).sum(axis=0) - Wc.sum(axis=0) ** 2 / n) / n
-    return n, mean, Wc, variance
-
-
 def _moments(W):
     """Count, mean, centred cross products and StandardScaler's variance of the rows W.
 
-    The mean and the variance are StandardScaler's own numbers (:func:`_mean_variance`), so
+    The mean and the variance are StandardScaler's own numbers (:func:`mean_variance`), so
     that its constant-feature test sees them; cross products are of centred data, never raw
     sums.
     """
-    n, mean, Wc, variance = _mean_variance(W)
+    n, mean, Wc, variance = mean_variance(W)
     return n, mean, Wc.T @ Wc, variance
-
-
-def scaler_moments(W) -> tuple[np.ndarray, np.ndarray]:
-    """``StandardScaler().fit(W)``'s ``mean_`` and ``scale_``, bit for bit, for (n, m) rows
-    without NaN, and without its input checks: an inner search's hold-outs are small, and
-    the checks cost more than the fits of its grid."""
-    n, mean, _, variance = _mean_variance(np.asarray(W, dtype=float))
-    scale = np.sqrt(variance)
-    scale[_is_constant(variance, mean, n)] = 1.0
-    return mean, scale
 
 
 def _downdate(full, held, W, train):
@@ -252,11 +231,6 @@ def _downdate(full, held, W, train):
     if np.any(diag * _DOWNDATE_LOSS <= np.diag(S)):
         return _moments(W[train])
     return n_t, mean - (n_held / n_t) * d, S_t, diag / n_t
-
-
-def _is_constant(variance, mean, n):
-    # StandardScaler's bound on the rounding of the two-pass variance (sklearn _is_constant_feature).
-    return variance <= n * _EPS * variance + (n * mean * _EPS) ** 2
 
 
 # --------------------------------------------------------------------------- solving
@@ -277,7 +251,7 @@ def _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components)
     mean = np.stack([st[1] for st in stats])  # (F, p + m)
     S = np.stack([st[2] for st in stats])
     variance = np.stack([st[3] for st in stats])
-    constant = _is_constant(variance, mean, n_t[:, None])
+    constant = is_constant(variance, mean, n_t[:, None])
     scale = np.where(constant, 1.0, np.sqrt(variance))[:, :p]
     # The standardised system of every sensor (Z'Z with Z = (x - mean) / scale, Z'y); a
     # constant sensor's row and column are zero, a constant output's column too.

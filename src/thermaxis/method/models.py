@@ -48,7 +48,7 @@ from thermaxis.method.features import ID_COLUMNS as _ID_COLUMNS
 from thermaxis.method.features import KB_COLUMNS as _KB_COLUMNS
 from thermaxis.method.features import decouple_rows, relative_temperatures
 from thermaxis.method.gp_kernel import ScaledRBFWithNoise
-from thermaxis.method.linear import scaler_moments
+from thermaxis.method.scaling import scaler_moments
 from thermaxis.method.svr_grid import svr_grid_predictions
 from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
 
