@@ -97,8 +97,8 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
     if "results_noop" in by_name and "one_rule_noop" in by_name:
         params = by_name.get("one_rule_params_noop")
         note = (
-            f"; the one rule with one params entry: {params.wall_s:.1f} s, "
-            f"{params.wall_s / by_name['one_rule_noop'].wall_s:.2f} x"
+            f"; against the one rule with one params entry ({params.wall_s:.1f} s): "
+            f"{by_name['results_noop'].wall_s / params.wall_s:.2f} x"
             if params is not None
             else ""
         )
