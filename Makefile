@@ -62,11 +62,12 @@ env:
 # The Slurm executor plugin is not in .venv: Snakemake imports every installed executor
 # plugin at each start, and plugin 2.8.0 then waits up to 10 s for an absent Slurm
 # controller (docs/slurm-plugin-startup.md). Cluster runs (profiles/slurm) and tests/slurm
-# use .venv-slurm instead: a venv layered on .venv (a .pth adds .venv's site-packages, so
-# every pinned package is .venv's own copy) plus envs/requirements-slurm.txt, and Snakemake
-# reinstalled at its pin for the `snakemake` command in .venv-slurm/bin. Installing all the
-# pins a second time took 75 s; the layer takes seconds. Its hash stamp covers both files
-# and pyproject.toml. Made only by this target, never by `env`.
+# use .venv-slurm instead: a venv layered on .venv, made by .venv's own Python so both run
+# the same interpreter. A .pth adds .venv's site-packages, so every pinned package is
+# .venv's own copy; on top come envs/requirements-slurm.txt and Snakemake again at its pin,
+# for the `snakemake` command in .venv-slurm/bin. Installing all the pins a second time
+# took 75 s; the layer takes seconds. Its hash stamp covers both files and pyproject.toml.
+# Made only by this target, never by `env`.
 SLURM_VENV := .venv-slurm
 SLURM_STAMP := $(SLURM_VENV)/.thermaxis-env.sha256
 .PHONY: slurm-env
@@ -76,7 +77,7 @@ slurm-env: env
 	if [ ! -x "$(SLURM_VENV)/bin/python" ] || [ "$$want" != "$$have" ]; then \
 		echo "setting up $(SLURM_VENV) on $(VENV) with envs/requirements-slurm.txt"; \
 		rm -rf "$(SLURM_VENV)"; \
-		"$(PYTHON)" -m venv "$(SLURM_VENV)"; \
+		"$(BIN)/python" -m venv "$(SLURM_VENV)"; \
 		echo '*' > "$(SLURM_VENV)/.gitignore"; \
 		purelib='import sysconfig; print(sysconfig.get_path("purelib"))'; \
 		base="$$(cd "$$("$(BIN)/python" -c "$$purelib")" && pwd -P)"; \
