@@ -132,6 +132,21 @@ def test_repeated_timestamp_with_different_values_is_averaged():
     assert qc_of(result, "T1")["n_duplicates"] == 1
 
 
+def test_repeated_timestamps_with_different_values_are_named_exact_repeats_are_not():
+    # T1 is read twice at 20 s (20.1 and 20.3) and at 40 s (20.5 and 20.45); T2 repeats its
+    # 20 s reading exactly; the whole 60 s row is repeated. The box's clock is 5 s off.
+    s = np.array([0, 10, 20, 20, 30, 40, 40, 50, 60, 60.0])
+    t1 = [20.0, 20.1, 20.1, 20.3, 20.4, 20.5, 20.45, 20.6, 20.7, 20.7]
+    t2 = [21.0, 21.1, 21.2, 21.2, 21.3, 21.4, 21.4, 21.5, 21.6, 21.6]
+    result = clean({"box": source(s, T1=t1, T2=t2)}, offsets={"box": 5.0})
+    merged = result.merged.set_index("sensor")
+    assert list(merged.index) == ["T1"]
+    assert merged.loc["T1", "source"] == "box"
+    assert merged.loc["T1", "n_timestamps"] == 2
+    assert merged.loc["T1", "first"] == at([20])[0]  # as the file has it, before the offset
+    assert merged.loc["T1", "spread_c"] == pytest.approx(0.2)
+
+
 def test_open_circuit_value_at_a_repeated_timestamp_never_enters_the_mean():
     s = np.array([0, 10, 20, 20, 30, 40.0])
     values = np.array([20.0, 20.1, 850.0, 20.25, 20.3, 20.4])

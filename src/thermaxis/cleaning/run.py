@@ -170,6 +170,7 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
         for u in unusable
     )
     notes.extend(_excursion_text(raw, row) for row in cleaned.excursions.itertuples())
+    notes.extend(_merged_text(dataset, raw, row) for row in cleaned.merged.itertuples())
     left_out = {u.sensor for u in unusable}
     flat = _flat_sensors(dataset, raw, cleaned.frame, [s for s in sensors if s not in left_out])
     notes.extend(f.text for f in flat)
@@ -402,6 +403,15 @@ def _excursion_text(raw: RawRun, row) -> str:
         f"run {raw.run}: sensor {row.sensor} ({row.source}) departs {row.size_c:+.2f} C from its trend "
         f"from {row.start} to {row.end} ({row.duration_s:.0f} s) and returns: an excursion, "
         f"{row.action} (temperatures.excursions)"
+    )
+
+
+def _merged_text(dataset: Dataset, raw: RawRun, row) -> str:
+    """One line per sensor whose log repeats a timestamp with different readings."""
+    return (
+        f"run {raw.run}: {_temperature_file(dataset, raw.run, row.source)}: sensor {row.sensor} has "
+        f"{row.n_timestamps} repeated timestamp(s) with different readings, the first at {row.first} "
+        f"(up to {row.spread_c:.3g} C apart); the readings of each were merged into their mean"
     )
 
 

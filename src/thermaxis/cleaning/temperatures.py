@@ -15,7 +15,8 @@ The order of the steps matters:
 3. **Out-of-range** readings (open or short circuit, e.g. 850 C or -200 C) are removed
    before anything statistical: one such value would dominate any mean.
 4. **Repeated timestamps** with different values are merged into their mean (after
-   step 3, so an open-circuit value never enters the mean).
+   step 3, so an open-circuit value never enters the mean), and each sensor that had
+   them is named in a warning (``merged``).
 5. **Spikes** (:func:`spike_mask`) on the native series, so the test sees the raw
    sampling and not interpolated points: a spike is one or two samples beyond both
    neighbours that returns, judged against a limit that cannot fall below two steps of
@@ -61,6 +62,7 @@ __all__ = [
     "QC_COLUMNS",
     "GAP_COLUMNS",
     "EXCURSION_COLUMNS",
+    "MERGED_COLUMNS",
     "MAX_SPIKE_SAMPLES",
     "interior_excursions",
     "neighbour_residuals",
@@ -99,6 +101,7 @@ QC_COLUMNS = [
 ]
 GAP_COLUMNS = ["sensor", "start", "end", "duration_s", "kind"]
 EXCURSION_COLUMNS = ["sensor", "source", "start", "end", "duration_s", "size_c", "action"]
+MERGED_COLUMNS = ["sensor", "source", "n_timestamps", "first", "spread_c"]
 
 
 @dataclass(frozen=True)
@@ -113,12 +116,17 @@ class CleanedTemperatures:
     excursions : one row per departure that jumped away and back (:func:`excursions`),
             columns :data:`EXCURSION_COLUMNS` (``start``/``end``: its first and last
             departing samples; ``size_c`` signed).
+    merged : one row per sensor whose log repeats a timestamp with different readings
+            (step 4), columns :data:`MERGED_COLUMNS`: how many such timestamps, the
+            first as the file has it (before any clock offset), and the largest spread
+            of readings merged into one mean.
     """
 
     frame: pd.DataFrame
     qc: pd.DataFrame
     gaps: pd.DataFrame
     excursions: pd.DataFrame
+    merged: pd.DataFrame
 
 
 # ----------------------------------------------------------------------------- spikes
@@ -401,6 +409,7 @@ class _Native:
     n_spikes: int
     clock_offset_s: float
     excursions: tuple[tuple[int, int, float], ...] = ()  # (start ns, end ns, size C)
+    merged: tuple[int, int, float] | None = None  # (timestamps, first in the file ns, spread C)
     offset_estimated: bool = False
 
 
@@ -426,13 +435,21 @@ def _clean_source(
     out_of_range = ~np.isnan(values) & ((values < low) | (values > high))
     values = np.where(out_of_range, np.nan, values)
 
+    merged: list = [None] * len(sensors)
     if t.size and np.any(np.diff(t) == 0):
         grouped = pd.DataFrame(values, columns=sensors).groupby(t, sort=True)
         counts = grouped.count().to_numpy()
         duplicates = duplicates + np.clip(counts - 1, 0, None).sum(axis=0)
-        merged = grouped.mean()
-        values = merged.to_numpy(dtype=float)
-        t = merged.index.to_numpy(dtype=np.int64)
+        means = grouped.mean()
+        # A timestamp logged twice with different readings: merged, and said (step 4).
+        spread = (grouped.max() - grouped.min()).to_numpy()
+        conflicting = (counts >= 2) & (spread > 0)
+        stamps = means.index.to_numpy(dtype=np.int64) - int(round(offset_s * _NS))
+        for j in np.flatnonzero(conflicting.any(axis=0)):
+            rows = np.flatnonzero(conflicting[:, j])
+            merged[j] = (int(rows.size), int(stamps[rows[0]]), float(spread[rows, j].max()))
+        values = means.to_numpy(dtype=float)
+        t = means.index.to_numpy(dtype=np.int64)
 
     natives = []
     for j, sensor in enumerate(sensors):
@@ -469,6 +486,7 @@ def _clean_source(
                 n_spikes=int(spikes.sum()),
                 clock_offset_s=float(offset_s),
                 excursions=events,
+                merged=merged[j],
             )
         )
     return natives
@@ -616,6 +634,7 @@ def clean_temperatures(
         qc=pd.DataFrame(qc_rows, columns=QC_COLUMNS),
         gaps=_gap_table(gap_rows),
         excursions=_excursion_table(natives, settings.excursions),
+        merged=_merged_table(natives),
     )
 
 
@@ -632,6 +651,14 @@ def _excursion_table(natives: list[_Native], policy: str) -> pd.DataFrame:
     table["end"] = table["end"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
     table = table.astype({"duration_s": float, "size_c": float})
     return sort_naturally(table, ["start", "sensor"])
+
+
+def _merged_table(natives: list[_Native]) -> pd.DataFrame:
+    """Every sensor whose log repeats a timestamp with different readings (:data:`MERGED_COLUMNS`)."""
+    rows = [(n.sensor, n.source, *n.merged) for n in natives if n.merged is not None]
+    table = pd.DataFrame(rows, columns=MERGED_COLUMNS)
+    table["first"] = table["first"].to_numpy(dtype=np.int64).astype("datetime64[ns]")
+    return table.astype({"n_timestamps": int, "spread_c": float})
 
 
 def _native_series(
