@@ -9,8 +9,10 @@ import pandas as pd
 import pytest
 
 from helpers import DEFAULTS
+from helpers.builders import write_dataset
 from thermaxis.cleaning.clock import estimate_clock_offset
 from thermaxis.cleaning.passes import combine_passes, run_targets, without_strays
+from thermaxis.cleaning.run import clean_run, cleaning_events
 from thermaxis.cleaning.temperatures import (
     CleanedTemperatures,
     clean_temperatures,
@@ -143,8 +145,26 @@ def test_repeated_timestamps_with_different_values_are_named_exact_repeats_are_n
     assert list(merged.index) == ["T1"]
     assert merged.loc["T1", "source"] == "box"
     assert merged.loc["T1", "n_timestamps"] == 2
-    assert merged.loc["T1", "first"] == at([20])[0]  # as the file has it, before the offset
+    assert merged.loc["T1", "first"] == at([25])[0]  # on the corrected clock, as excursions
     assert merged.loc["T1", "spread_c"] == pytest.approx(0.2)
+
+
+def test_a_merged_timestamp_is_a_warning_naming_the_file_and_a_cleaning_event(tmp_path):
+    dataset = write_dataset(tmp_path / "tiny")
+    log = dataset / "R1" / "temperatures" / "box.csv"
+    lines = log.read_text().splitlines()
+    cells = lines[10].split(",")
+    repeated = [cells[0], f"{float(cells[2]) + 0.25:.6f}"]  # S2 read again, 0.25 C higher
+    lines.insert(11, ",".join([repeated[0], cells[1], repeated[1], *cells[3:]]))
+    log.write_text("\n".join(lines) + "\n")
+    cleaned = clean_run(dataset, "R1", DEFAULTS.cleaning, [])
+    assert cleaned.error is None
+    (warning,) = [w for w in cleaned.warnings if "repeated timestamp" in w]
+    assert str(log) in warning and "sensor S2 has 1 repeated" in warning
+    (event,) = cleaning_events(cleaned.tables.qc).itertuples()
+    assert (event.run, event.sensor, event.finding) == ("R1", "S2", "repeated_timestamps")
+    assert event.start == event.end == pd.Timestamp(cells[0])  # the log has no clock offset
+    assert event.size_c == pytest.approx(0.25)
 
 
 def test_open_circuit_value_at_a_repeated_timestamp_never_enters_the_mean():

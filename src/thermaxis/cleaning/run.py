@@ -184,7 +184,9 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     return RunTables(
         run=run,
         series=series,
-        qc=_with_run(_qc_table(cleaned.qc, findings, cleaned.excursions, unusable, flat), run),
+        qc=_with_run(
+            _qc_table(cleaned.qc, findings, cleaned.excursions, cleaned.merged, unusable, flat), run
+        ),
         gaps=_with_run(cleaned.gaps, run),
         errors=tidy_errors(run, condition, windows, combined),
         temperatures=tidy_temperatures(run, condition, windows, at_measurements[sensors]),
@@ -331,15 +333,23 @@ def _finding_origin(raw: RawRun, row) -> str:
 
 # The QC table's columns of the temperature findings (excursions, unusable sensors).
 EVENT_COLUMNS = ["start", "end", "size_c"]
+MERGED_ACTION = "merged into the mean of their readings"
 
 
 def _qc_table(
-    temperature_qc: pd.DataFrame, findings: pd.DataFrame, excursions: pd.DataFrame, unusable, flat
+    temperature_qc: pd.DataFrame,
+    findings: pd.DataFrame,
+    excursions: pd.DataFrame,
+    merged: pd.DataFrame,
+    unusable,
+    flat,
 ) -> pd.DataFrame:
     """One QC table: a row per sensor, then a row per finding.
 
-    Displacement findings have sensor ``error_um``; a temperature excursion, an unusable
-    or a flat sensor names its sensor, with ``start``, ``end`` and (excursions) ``size_c``.
+    Displacement findings have sensor ``error_um``; a temperature excursion, a sensor
+    with repeated timestamps of different readings, an unusable or a flat sensor names
+    its sensor, with ``start``, ``end`` and (excursions, repeated timestamps: the largest
+    spread) ``size_c``.
     """
     events = [
         findings.assign(sensor="error_um", source="errors"),
@@ -357,6 +367,22 @@ def _qc_table(
                     for r in excursions.itertuples()
                 ],
                 "action": excursions["action"],
+            }
+        ),
+        pd.DataFrame(
+            {
+                "sensor": merged["sensor"],
+                "source": merged["source"],
+                "finding": "repeated_timestamps",
+                "start": merged["first"],
+                "end": merged["first"],
+                "size_c": merged["spread_c"],
+                "cause": [
+                    f"{r.n_timestamps} timestamp(s) logged more than once with different readings, "
+                    f"up to {r.spread_c:.3g} C apart; start: the first"
+                    for r in merged.itertuples()
+                ],
+                "action": MERGED_ACTION,
             }
         ),
         _sensor_rows(unusable, "unusable", "left out of every fold's candidate sensors"),
@@ -411,7 +437,7 @@ def _merged_text(dataset: Dataset, raw: RawRun, row) -> str:
     return (
         f"run {raw.run}: {_temperature_file(dataset, raw.run, row.source)}: sensor {row.sensor} has "
         f"{row.n_timestamps} repeated timestamp(s) with different readings, the first at {row.first} "
-        f"(up to {row.spread_c:.3g} C apart); the readings of each were merged into their mean"
+        f"(up to {row.spread_c:.3g} C apart); each was {MERGED_ACTION}"
     )
 
 

@@ -118,8 +118,8 @@ class CleanedTemperatures:
             departing samples; ``size_c`` signed).
     merged : one row per sensor whose log repeats a timestamp with different readings
             (step 4), columns :data:`MERGED_COLUMNS`: how many such timestamps, the
-            first as the file has it (before any clock offset), and the largest spread
-            of readings merged into one mean.
+            first (on the corrected clock, as excursions), and the largest spread of
+            readings merged into one mean.
     """
 
     frame: pd.DataFrame
@@ -409,7 +409,7 @@ class _Native:
     n_spikes: int
     clock_offset_s: float
     excursions: tuple[tuple[int, int, float], ...] = ()  # (start ns, end ns, size C)
-    merged: tuple[int, int, float] | None = None  # (timestamps, first in the file ns, spread C)
+    merged: tuple[int, int, float] | None = None  # (timestamps, first ns, largest spread C)
     offset_estimated: bool = False
 
 
@@ -444,12 +444,11 @@ def _clean_source(
         # A timestamp logged twice with different readings: merged, and said (step 4).
         spread = (grouped.max() - grouped.min()).to_numpy()
         conflicting = (counts >= 2) & (spread > 0)
-        stamps = means.index.to_numpy(dtype=np.int64) - int(round(offset_s * _NS))
-        for j in np.flatnonzero(conflicting.any(axis=0)):
-            rows = np.flatnonzero(conflicting[:, j])
-            merged[j] = (int(rows.size), int(stamps[rows[0]]), float(spread[rows, j].max()))
         values = means.to_numpy(dtype=float)
         t = means.index.to_numpy(dtype=np.int64)
+        for j in np.flatnonzero(conflicting.any(axis=0)):
+            rows = np.flatnonzero(conflicting[:, j])
+            merged[j] = (int(rows.size), int(t[rows[0]]), float(spread[rows, j].max()))
 
     natives = []
     for j, sensor in enumerate(sensors):
