@@ -706,7 +706,7 @@ def index_figures():
 INDEX_TABLES = [
     ("Runs", f"{OUT}/tables/dataset_summary.csv", ""),
     (
-        "Cleaning events: excursions, unusable sensors, displacement findings",
+        "Cleaning events: excursions, unusable and flat sensors, merged timestamps, displacement findings",
         f"{OUT}/tables/cleaning_events.csv",
         "docs/your-data.md",
     ),
