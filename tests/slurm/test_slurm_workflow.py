@@ -13,6 +13,7 @@ has no executor plugin (docs/slurm-plugin-startup.md).
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import time
@@ -136,20 +137,28 @@ def local_results(tmp_path_factory):
     return _results(work)
 
 
-def _running_job(rule: str, timeout: float = 300.0) -> str:
-    """The Slurm id of the first RUNNING job of ``rule`` (the plugin puts the rule in the
-    comment)."""
+def _running_job(rule: str, log: Path, timeout: float = 300.0) -> str:
+    """The Slurm id of the first RUNNING job of ``rule`` in the run logging to ``log``.
+
+    The plugin names every job of a run after the run's id, which the log gives ("SLURM
+    run ID: ..."), and puts the rule in the comment: another run's job on the same cluster
+    is never taken for this one's.
+    """
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        out = subprocess.run(
-            ["squeue", "-h", "-t", "RUNNING", "-o", "%i|%k"], capture_output=True, text=True
-        ).stdout
-        for line in out.splitlines():
-            job, _, comment = line.partition("|")
-            if f"rule_{rule}" in comment:
-                return job.strip()
+        run = re.search(r"SLURM run ID: (\S+)", log.read_text())
+        if run:
+            out = subprocess.run(
+                ["squeue", "-h", "-t", "RUNNING", "-n", run.group(1), "-o", "%i|%k"],
+                capture_output=True,
+                text=True,
+            ).stdout
+            for line in out.splitlines():
+                job, _, comment = line.partition("|")
+                if f"rule_{rule}" in comment:
+                    return job.strip()
         time.sleep(0.5)
-    raise AssertionError(f"no RUNNING Slurm job of rule {rule} within {timeout:.0f} s")
+    raise AssertionError(f"no RUNNING Slurm job of rule {rule} of this run within {timeout:.0f} s")
 
 
 def _start(work: Path, command: list[str], log: Path, env: dict) -> subprocess.Popen:
@@ -175,7 +184,7 @@ def test_scancel_fails_cleanly_then_resubmits_and_the_rerun_is_byte_identical_to
     first = _slurm_command(config, "--retries", "0")
     first = [*first[: first.index("--") + 1], TARGETS[0]]
     run = _start(work, first, tmp_path / "run.log", slurm_env)
-    killed = _running_job("models")
+    killed = _running_job("models", tmp_path / "run.log")
     subprocess.run(["scancel", killed], check=True)
     output = _finish(run, tmp_path / "run.log")
     assert run.returncode != 0
@@ -189,7 +198,7 @@ def test_scancel_fails_cleanly_then_resubmits_and_the_rerun_is_byte_identical_to
     # 2. The rerun, with the profile's retries: its models job is killed too,
     # resubmitted, and the run completes with the local run's bytes.
     rerun = _start(work, _slurm_command(config), tmp_path / "rerun.log", slurm_env)
-    killed_again = _running_job("models")
+    killed_again = _running_job("models", tmp_path / "rerun.log")
     subprocess.run(["scancel", killed_again], check=True)
     output = _finish(rerun, tmp_path / "rerun.log")
     assert rerun.returncode == 0, output[-5000:]
