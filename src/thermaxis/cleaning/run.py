@@ -353,37 +353,33 @@ def _qc_table(
     """
     events = [
         findings.assign(sensor="error_um", source="errors"),
-        pd.DataFrame(
-            {
-                "sensor": excursions["sensor"],
-                "source": excursions["source"],
-                "finding": "excursion",
-                "start": excursions["start"],
-                "end": excursions["end"],
-                "size_c": excursions["size_c"],
-                "cause": [
-                    f"departs {r.size_c:+.2f} C from its trend for {r.duration_s:.0f} s and returns: "
-                    "a real event, or a sensor fault?"
-                    for r in excursions.itertuples()
-                ],
-                "action": excursions["action"],
-            }
+        _finding_rows(
+            "excursion",
+            excursions["sensor"],
+            excursions["source"],
+            excursions["start"],
+            excursions["end"],
+            [
+                f"departs {r.size_c:+.2f} C from its trend for {r.duration_s:.0f} s and returns: "
+                "a real event, or a sensor fault?"
+                for r in excursions.itertuples()
+            ],
+            excursions["action"],
+            size_c=excursions["size_c"],
         ),
-        pd.DataFrame(
-            {
-                "sensor": merged["sensor"],
-                "source": merged["source"],
-                "finding": "repeated_timestamps",
-                "start": merged["first"],
-                "end": merged["first"],
-                "size_c": merged["spread_c"],
-                "cause": [
-                    f"{r.n_timestamps} timestamp(s) logged more than once with different readings, "
-                    f"up to {r.spread_c:.3g} C apart; start: the first"
-                    for r in merged.itertuples()
-                ],
-                "action": MERGED_ACTION,
-            }
+        _finding_rows(
+            "repeated_timestamps",
+            merged["sensor"],
+            merged["source"],
+            merged["first"],
+            merged["first"],
+            [
+                f"{r.n_timestamps} timestamp(s) logged more than once with different readings, "
+                f"up to {r.spread_c:.3g} C apart; start: the first"
+                for r in merged.itertuples()
+            ],
+            MERGED_ACTION,
+            size_c=merged["spread_c"],
         ),
         _sensor_rows(unusable, "unusable", "left out of every fold's candidate sensors"),
         _sensor_rows(flat, "flat", "kept"),
@@ -395,18 +391,36 @@ def _qc_table(
     )
 
 
-def _sensor_rows(found: list, finding: str, action: str) -> pd.DataFrame:
-    """The QC rows of sensor findings (:class:`SensorFinding`) of one kind."""
+def _finding_rows(
+    finding: str, sensor, source, start, end, cause, action, size_c=None
+) -> pd.DataFrame:
+    """The QC rows of temperature findings of one kind: the sensor and its source, where in
+    time, why and what was done; ``size_c`` where the finding has a size."""
+    sizes = {} if size_c is None else {"size_c": size_c}
     return pd.DataFrame(
         {
-            "sensor": [f.sensor for f in found],
-            "source": [f.source for f in found],
+            "sensor": sensor,
+            "source": source,
             "finding": finding,
-            "start": [f.start for f in found],
-            "end": [f.end for f in found],
-            "cause": [f.text for f in found],
+            "start": start,
+            "end": end,
+            **sizes,
+            "cause": cause,
             "action": action,
         }
+    )
+
+
+def _sensor_rows(found: list, finding: str, action: str) -> pd.DataFrame:
+    """The QC rows of sensor findings (:class:`SensorFinding`) of one kind."""
+    return _finding_rows(
+        finding,
+        [f.sensor for f in found],
+        [f.source for f in found],
+        [f.start for f in found],
+        [f.end for f in found],
+        [f.text for f in found],
+        action,
     )
 
 
