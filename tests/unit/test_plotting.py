@@ -23,7 +23,7 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from thermaxis.figures import captions, style
+from thermaxis.figures import captions, font_subsets, style
 from thermaxis.figures import paper as paper_figures
 from thermaxis.figures import predictions as prediction_figures
 from thermaxis.figures import statistics as statistics_figures
@@ -240,6 +240,32 @@ def test_save_figure_is_byte_identical_across_renders(tiny, tmp_path, name):
     svg = outputs[0][2].decode()
     assert "<dc:date>" not in svg and "Matplotlib v" not in svg
     assert b"CreationDate" not in outputs[0][1]
+
+
+def test_a_reused_font_subset_writes_the_pdf_matplotlib_writes_alone(tiny, tmp_path, monkeypatch):
+    """save_figure subsets a glyph set's font once per process; every PDF must still be the
+    bytes of matplotlib's own writer, which subsets anew each time."""
+    from matplotlib.backends import _backend_pdf_ps
+
+    matplotlib_own = _backend_pdf_ps.get_glyphs_subset
+    made = []
+
+    def counted(fontfile, glyphs):
+        made.append(frozenset(glyphs))
+        return matplotlib_own(fontfile, glyphs)
+
+    monkeypatch.setattr(font_subsets, "_make_subset", counted)
+    font_subsets._saved_subset.cache_clear()
+    make = all_figures(tiny)["error_prediction"]
+    for attempt in ("a", "b", "c"):
+        style.save_figure(make(), tmp_path / f"{attempt}.pdf")
+    assert _backend_pdf_ps.get_glyphs_subset is matplotlib_own  # restored after saving
+    with matplotlib.rc_context(style.STYLE):
+        make().savefig(tmp_path / "plain.pdf", metadata=style._SAVE_METADATA["pdf"])
+    plain = (tmp_path / "plain.pdf").read_bytes()
+    assert all((tmp_path / f"{a}.pdf").read_bytes() == plain for a in ("a", "b", "c"))
+    assert len(made) == len(set(made)) >= 1  # three PDFs, one subset per glyph set
+    font_subsets._saved_subset.cache_clear()
 
 
 def test_save_figure_rejects_an_unknown_suffix_before_writing(tiny, tmp_path):

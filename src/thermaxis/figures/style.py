@@ -21,6 +21,7 @@ from matplotlib.colors import ListedColormap, Normalize  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from thermaxis.figures.captions import SIMULATED_NOTE
+from thermaxis.figures.font_subsets import shared_font_subsets
 from thermaxis.labels import natural_sorted
 
 __all__ = [
@@ -337,7 +338,7 @@ def save_figure(fig: Figure, paths, dpi: float | None = None) -> None:
                 f"cannot save figure as {path.name!r}; expected a .png, .pdf or .svg suffix"
             )
     try:
-        with matplotlib.rc_context(STYLE):
+        with matplotlib.rc_context(STYLE), shared_font_subsets():
             for i, path in enumerate(paths):
                 fmt = path.suffix.lower().lstrip(".")
                 path.parent.mkdir(parents=True, exist_ok=True)
