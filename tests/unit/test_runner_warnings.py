@@ -80,12 +80,23 @@ def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path
         handler.flush()
     err = capsys.readouterr().err.splitlines()
     assert err == [
-        "thermaxis warning: Objective did not converge. Duality gap: 4.1e-02 (the first of "
-        "this job's solver warnings; the job's log has them all)",
+        "thermaxis warning: lasso: Objective did not converge. Duality gap: 4.1e-02 (the "
+        f"first of this job's solver warnings; {log} has them all)",
         "thermaxis warning: fold S3: another text",
     ]
     assert log.read_text().count("Objective did not converge") == 3
     assert log.read_text().count("y residual is constant") == 2
+    # The next job's first is PLS's: scikit-learn's text does not say which model it is.
+    _configure_logging(str(tmp_path / "next.log"))
+    logging.getLogger("py.warnings").warning(
+        "_pls.py:308: UserWarning: y residual is constant at iteration 2"
+    )
+    for handler in logging.getLogger("thermaxis").handlers:
+        handler.flush()
+    assert capsys.readouterr().err.splitlines() == [
+        "thermaxis warning: PLS: y residual is constant at iteration 2 (the first of this "
+        f"job's solver warnings; {tmp_path / 'next.log'} has them all)"
+    ]
     logging.captureWarnings(False)
 
 

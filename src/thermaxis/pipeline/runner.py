@@ -27,23 +27,47 @@ __all__ = ["run_script", "atomic_path", "write_csv", "write_text"]
 # GP's length scale at its bound, the PLS component after which the target has nothing
 # left to fit), so text alone would not collapse it: a job shows its first one.
 _ONCE_PER_JOB = ("ConvergenceWarning: ", "y residual is constant at iteration")
+# scikit-learn's texts do not say which model spoke: the terminal line does, where the
+# text is one model's own.
+_SOLVERS = (
+    ("y residual is constant at iteration", "PLS"),
+    ("parameter length_scale", "Gaussian process"),
+    ("parameter constant_value", "Gaussian process"),
+    ("parameter noise_level", "Gaussian process"),
+    ("Objective did not converge", "lasso"),
+    ("Regressors in active set degenerate", "lasso"),
+    ("Solver terminated early", "SVR"),
+)
 
 
 def _solver_warning(message: str) -> bool:
     return any(marker in message for marker in _ONCE_PER_JOB)
 
 
+def _solver_of(message: str) -> str:
+    return next((f"{model}: " for marker, model in _SOLVERS if marker in message), "")
+
+
 class _OneLine(logging.Formatter):
-    """``thermaxis warning: <message>``; a captured Python warning loses its source location."""
+    """``thermaxis warning: <message>``; a captured Python warning loses its source location.
+
+    A solver's warning names its model and the log (``log_path``) that has all of them."""
 
     _LOCATION = re.compile(r"^.*?:\d+: \w*Warning: ")
 
+    def __init__(self, log_path: str | None = None):
+        super().__init__()
+        self._log = log_path or "the job's log"
+
     def format(self, record):
         first = record.getMessage().splitlines()[0] if record.getMessage() else ""
-        text = f"thermaxis warning: {self._LOCATION.sub('', first)}"
+        text = self._LOCATION.sub("", first)
         if _solver_warning(first):
-            text += " (the first of this job's solver warnings; the job's log has them all)"
-        return text
+            text = (
+                f"{_solver_of(first)}{text} (the first of this job's solver warnings; "
+                f"{self._log} has them all)"
+            )
+        return f"thermaxis warning: {text}"
 
 
 class _Once(logging.Filter):
@@ -111,7 +135,7 @@ def _configure_logging(log_path: str | None) -> logging.Logger:
     # A warning only in a log file nobody opens is silence: the terminal gets it too
     # (errors reach it through run_script's one line).
     terminal = logging.StreamHandler(sys.stderr)
-    terminal.setFormatter(_OneLine())
+    terminal.setFormatter(_OneLine(log_path))
     terminal.addFilter(_Once())
     logger.addHandler(handler)
     log_only_logger = logging.getLogger(_LOG_ONLY)
