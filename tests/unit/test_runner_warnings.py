@@ -126,3 +126,26 @@ def test_a_value_error_is_one_line_on_the_terminal_and_its_traceback_is_in_the_l
     with pytest.raises(SystemExit):
         run_script(lambda _: _raise(DataError("x.csv: line 3: bad")), _job_with_log(data_log))
     assert "Traceback" not in data_log.read_text()
+
+
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_job_uses_at_most_its_snakemake_threads_for_blas(tmp_path, threads):
+    import numpy  # noqa: F401  (loads the BLAS threadpoolctl reports)
+    from threadpoolctl import threadpool_limits
+
+    seen = []
+    job = types.SimpleNamespace(log=[str(tmp_path / "job.log")], threads=threads)
+    with threadpool_limits(limits=4, user_api="blas"):  # a machine of 4 cores, say
+        before = _blas_threads()
+        run_script(lambda _: seen.append(_blas_threads()), job)
+        after = _blas_threads()
+    assert before and set(before) == {4}
+    assert seen == [[threads] * len(before)]
+    assert after == before  # restored for whatever the process does next
+    logging.captureWarnings(False)
