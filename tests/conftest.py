@@ -14,6 +14,15 @@ from helpers.runs import Built, Run, make_built, make_lines_run
 from helpers.workflow import run_snakemake, workflow_workdir  # noqa: F401
 
 
+def pytest_configure(config):
+    """One BLAS thread per test process, as a workflow job on one core has
+    (thermaxis.pipeline.runner): `make test` runs a process per core, and OpenBLAS threads
+    beside them would only wait for one another on the tests' small systems."""
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=1, user_api="blas")
+
+
 @pytest.fixture
 def tiny_dataset(tmp_path):
     return write_dataset(tmp_path / "tiny")
