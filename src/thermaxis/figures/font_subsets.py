@@ -6,7 +6,7 @@ with fontTools costs more than drawing a figure (about 0.1 s against 0.05–0.1 
 family's figures share a handful of glyph sets: the twin's 24 prediction figures use 6.
 Within :func:`shared_font_subsets`, a glyph set's subset is made once and its bytes are
 handed to every later PDF that needs the same glyphs, so each PDF is byte-identical to
-one written without it (``tests/unit/test_figure_family.py``).
+one written without it (``tests/unit/test_plotting.py``).
 
 The hook is matplotlib's private function, patched only while a figure is saved and
 restored after. matplotlib is pinned (``envs/``); a release that renames the function
