@@ -268,6 +268,31 @@ def test_a_reused_font_subset_writes_the_pdf_matplotlib_writes_alone(tiny, tmp_p
     font_subsets._saved_subset.cache_clear()
 
 
+def test_saves_in_two_threads_leave_matplotlibs_subsetter_in_place(tiny, tmp_path):
+    import threading
+
+    from matplotlib.backends import _backend_pdf_ps
+
+    matplotlib_own = _backend_pdf_ps.get_glyphs_subset
+    entered, release = threading.Barrier(2), threading.Event()
+
+    def save(name):
+        with font_subsets.shared_font_subsets():
+            entered.wait()
+            release.wait()
+        style.save_figure(all_figures(tiny)["fig2"](), tmp_path / f"{name}.pdf")
+
+    first = threading.Thread(target=save, args=("a",))
+    first.start()
+    with font_subsets.shared_font_subsets():
+        entered.wait()
+        release.set()
+        first.join()  # the other thread left first: the hook stays for this one
+        assert _backend_pdf_ps.get_glyphs_subset is font_subsets._get_glyphs_subset
+    assert _backend_pdf_ps.get_glyphs_subset is matplotlib_own
+    assert (tmp_path / "a.pdf").read_bytes()[:5] == b"%PDF-"
+
+
 def test_save_figure_rejects_an_unknown_suffix_before_writing(tiny, tmp_path):
     fig = paper_figures.fig2_positioning_error(tiny["errors"], "R1")
     with pytest.raises(ValueError, match="suffix"):

@@ -8,14 +8,15 @@ Within :func:`shared_font_subsets`, a glyph set's subset is made once and its by
 handed to every later PDF that needs the same glyphs, so each PDF is byte-identical to
 one written without it (``tests/unit/test_plotting.py``).
 
-The hook is matplotlib's private function, patched only while a figure is saved and
-restored after. matplotlib is pinned (``envs/``); a release that renames the function
-fails the byte-identity test, not a run.
+The hook is matplotlib's private function, patched only while a figure is saved (in any
+thread) and restored after. matplotlib is pinned (``envs/``); a release that renames the
+function fails the byte-identity test, not a run.
 """
 
 from __future__ import annotations
 
 import functools
+import threading
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
@@ -56,12 +57,26 @@ def _get_glyphs_subset(fontfile, glyphs: Iterable[int]):
     return _backend_pdf_ps.SubsetResults(_SavedSubset(data), dict(index_map))._as_cm()
 
 
+# Saves in several threads share one hook: the first to enter installs it, the last to
+# leave puts back what was there.
+_lock = threading.Lock()
+_active = 0
+_replaced = [_make_subset]
+
+
 @contextmanager
 def shared_font_subsets() -> Iterator[None]:
     """Within the block, PDFs with the same glyphs of a font embed one subset's bytes."""
-    previous = _backend_pdf_ps.get_glyphs_subset
-    _backend_pdf_ps.get_glyphs_subset = _get_glyphs_subset
+    global _active
+    with _lock:
+        if _active == 0:
+            _replaced[0] = _backend_pdf_ps.get_glyphs_subset
+            _backend_pdf_ps.get_glyphs_subset = _get_glyphs_subset
+        _active += 1
     try:
         yield
     finally:
-        _backend_pdf_ps.get_glyphs_subset = previous
+        with _lock:
+            _active -= 1
+            if _active == 0:
+                _backend_pdf_ps.get_glyphs_subset = _replaced[0]
