@@ -12,6 +12,7 @@ has no executor plugin (docs/slurm-plugin-startup.md).
 
 from __future__ import annotations
 
+import fcntl
 import os
 import re
 import shutil
@@ -28,6 +29,8 @@ from helpers.workflow import run_snakemake, snakemake_env, workflow_workdir
 pytestmark = pytest.mark.slurm
 
 START = REPO / "tests" / "slurm" / "start_slurm.sh"
+# start_slurm.sh's state folder (its default, or THERMAXIS_SLURM_STATE as it reads it).
+STATE = Path(os.environ.get("THERMAXIS_SLURM_STATE", "/var/lib/thermaxis-slurm"))
 STOP = REPO / "tests" / "slurm" / "stop_slurm.sh"
 SLURM_BIN = REPO / ".venv-slurm" / "bin"
 TARGETS = (
@@ -58,22 +61,42 @@ CONFIG = {
 
 @pytest.fixture(scope="module")
 def slurm():
-    """The one-node cluster; stopped afterwards if this fixture started it."""
+    """The one-node cluster; stopped afterwards by the last test suite using it, if a test
+    suite started it.
+
+    Every suite holds a shared lock on the cluster's state folder while it runs. At the end,
+    the suite that can take it exclusively is the last, and stops the cluster when a suite
+    found it down (the mark ``started_by_tests``). A cluster that was running before any
+    suite began is left running.
+    """
     if os.geteuid() != 0:
         pytest.skip(
             "Slurm test: needs root to start the one-node cluster (tests/slurm/start_slurm.sh)"
         )
-    was_up = (
-        shutil.which("scontrol") is not None
-        and "UP" in subprocess.run(["scontrol", "ping"], capture_output=True, text=True).stdout
-    )
-    proc = subprocess.run(["bash", str(START)], capture_output=True, text=True, timeout=300)
-    if proc.returncode != 0:
-        reason = (proc.stderr.strip().splitlines() or ["no message"])[-1]
-        pytest.skip(f"Slurm test: the one-node cluster did not start: {reason}")
-    yield
-    if not was_up:
-        subprocess.run(["bash", str(STOP)], capture_output=True, timeout=60)
+    STATE.mkdir(parents=True, exist_ok=True)
+    mark = STATE / "started_by_tests"
+    with open(STATE / "users.lock", "a") as users:
+        fcntl.flock(users, fcntl.LOCK_SH)
+        up = (
+            shutil.which("scontrol") is not None
+            and "UP" in subprocess.run(["scontrol", "ping"], capture_output=True, text=True).stdout
+        )
+        if not up:
+            mark.touch()
+        proc = subprocess.run(["bash", str(START)], capture_output=True, text=True, timeout=300)
+        if proc.returncode != 0:
+            reason = (proc.stderr.strip().splitlines() or ["no message"])[-1]
+            if not up:
+                mark.unlink()
+            pytest.skip(f"Slurm test: the one-node cluster did not start: {reason}")
+        yield
+        try:
+            fcntl.flock(users, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return  # another suite still uses it
+        if mark.exists():
+            subprocess.run(["bash", str(STOP)], capture_output=True, timeout=60)
+            mark.unlink()
 
 
 @pytest.fixture(scope="module")
