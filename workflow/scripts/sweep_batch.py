@@ -2,7 +2,6 @@
 
 import pandas as pd
 import sklearn
-from threadpoolctl import threadpool_limits
 
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import ModelSettings, SelectionSettings, SweepSettings
@@ -24,13 +23,11 @@ def main(snakemake):
     )
     total = sum(len(grid.unit_configurations(u.selection, p.decoupled)) for u in mine)
     progress = sweep_run.Progress(total, f"sweep batch {batch + 1}/{p.n_batches}")
-    # Batches already occupy every core: BLAS threads would only compete with them.
-    # The inputs were validated when assembled; scikit-learn's per-call re-checks cost
-    # ~20% of a point-by-point SVR evaluation and change no number.
-    with (
-        threadpool_limits(limits=1),
-        sklearn.config_context(assume_finite=True, skip_parameter_validation=True),
-    ):
+    # One thread: run_script holds BLAS and OpenMP to the rule's threads (1), as batches
+    # already occupy every core. The inputs were validated when assembled;
+    # scikit-learn's per-call re-checks cost ~20% of a point-by-point SVR evaluation and
+    # change no number.
+    with sklearn.config_context(assume_finite=True, skip_parameter_validation=True):
         rows = sweep_run.run_batch(
             X,
             Y,

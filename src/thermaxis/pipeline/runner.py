@@ -26,11 +26,12 @@ __all__ = ["run_script", "atomic_path", "write_csv", "write_text"]
 # A solver's warning differs in its numbers at every fit (LARS's dropped regressor, a
 # GP's length scale at its bound, the PLS component after which the target has nothing
 # left to fit), so text alone would not collapse it: a job shows its first one.
-_ONCE_PER_JOB = ("ConvergenceWarning: ", "y residual is constant at iteration")
+_PLS_EXHAUSTED = "y residual is constant at iteration"
+_ONCE_PER_JOB = ("ConvergenceWarning: ", _PLS_EXHAUSTED)
 # scikit-learn's texts do not say which model spoke: the terminal line does, where the
 # text is one model's own.
 _SOLVERS = (
-    ("y residual is constant at iteration", "PLS"),
+    (_PLS_EXHAUSTED, "PLS"),
     ("parameter length_scale", "Gaussian process"),
     ("parameter constant_value", "Gaussian process"),
     ("parameter noise_level", "Gaussian process"),
@@ -151,8 +152,8 @@ def _configure_logging(log_path: str | None) -> logging.Logger:
 
 
 @contextmanager
-def _blas_threads(threads: int):
-    """BLAS (OpenBLAS) uses at most the job's Snakemake ``threads``.
+def _thread_pools(threads: int):
+    """BLAS (OpenBLAS) and OpenMP use at most the job's Snakemake ``threads``.
 
     Snakemake runs other jobs on the cores it did not give this one, and OpenBLAS would
     otherwise start a thread per core in every job. On the pipeline's small systems the
@@ -161,7 +162,7 @@ def _blas_threads(threads: int):
     """
     from threadpoolctl import threadpool_limits
 
-    with threadpool_limits(limits=max(1, int(threads)), user_api="blas"):
+    with threadpool_limits(limits=max(1, int(threads))):
         yield
 
 
@@ -171,7 +172,7 @@ def run_script(main, snakemake) -> None:
     logger = _configure_logging(log)
     warnings.simplefilter("default")
     try:
-        with _blas_threads(getattr(snakemake, "threads", 1)):
+        with _thread_pools(getattr(snakemake, "threads", 1)):
             main(snakemake)
     except (DataError, ValueError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
