@@ -61,16 +61,16 @@ def _get_glyphs_subset(fontfile, glyphs: Iterable[int]):
 # leave puts back what was there.
 _lock = threading.Lock()
 _active = 0
-_replaced = [_make_subset]
+_replaced = _make_subset
 
 
 @contextmanager
 def shared_font_subsets() -> Iterator[None]:
     """Within the block, PDFs with the same glyphs of a font embed one subset's bytes."""
-    global _active
+    global _active, _replaced
     with _lock:
         if _active == 0:
-            _replaced[0] = _backend_pdf_ps.get_glyphs_subset
+            _replaced = _backend_pdf_ps.get_glyphs_subset
             _backend_pdf_ps.get_glyphs_subset = _get_glyphs_subset
         _active += 1
     try:
@@ -79,4 +79,4 @@ def shared_font_subsets() -> Iterator[None]:
         with _lock:
             _active -= 1
             if _active == 0:
-                _backend_pdf_ps.get_glyphs_subset = _replaced[0]
+                _backend_pdf_ps.get_glyphs_subset = _replaced
