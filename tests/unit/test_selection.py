@@ -201,7 +201,7 @@ def test_classes_for_count_tie_prefers_finer_partition_and_warns():
 def test_classes_for_count_takes_nearest_count_when_not_tied():
     E = np.full((4, 4), 0.3)
     np.fill_diagonal(E, 1.0)  # achievable counts: 4 (eta 1) and 1 (eta 0.3)
-    with pytest.warns(UserWarning, match=r"2 classes.*using 1 classes"):
+    with pytest.warns(UserWarning, match=r"2 classes.*using 1 class instead"):
         classes, eta = classes_for_count(E, 2)
     assert classes == [(0, 1, 2, 3)]
     assert eta == 0.3

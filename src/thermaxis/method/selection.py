@@ -374,7 +374,8 @@ def classes_for_count(E, n_classes: int) -> tuple[list[tuple[int, ...]], float]:
     obtained = min(by_count, key=lambda c: (abs(c - n_classes), -c))
     warnings.warn(
         f"no lambda-cut gives {n_classes} classes (ties in the equivalence matrix); "
-        f"using {obtained} classes instead (achievable counts: {sorted(by_count)})",
+        f"using {obtained} class{'' if obtained == 1 else 'es'} instead (achievable counts: "
+        f"{sorted(by_count)})",
         SelectionWarning,
         stacklevel=2,
     )
