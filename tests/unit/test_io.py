@@ -375,6 +375,25 @@ def test_errors_written_in_mm_are_named(tiny_dataset):
     )
 
 
+def test_positions_written_in_metres_are_named(tiny_dataset):
+    # The builder's targets 0, 50, 100 and 150 mm written in metres: 0.15 mm end to end.
+    for path in (tiny_dataset / "R1" / "errors").glob("*.csv"):
+        lines = path.read_text().splitlines()
+        rows = [line.split(",") for line in lines[1:]]
+        path.write_text(
+            "\n".join(
+                [lines[0]] + [",".join([t, f"{float(x) / 1000:g}", e, d]) for t, x, e, d in rows]
+            )
+            + "\n"
+        )
+    _warns_of_r1_only(
+        load_dataset(tiny_dataset),
+        f"run R1: {tiny_dataset / 'R1' / 'errors'}: its 4 targets span 0.15 mm, below the 1 mm "
+        "an axis's targets span; expected position_mm in millimetres (positions in metres are "
+        "1000 times too small)",
+    )
+
+
 def test_a_line_cut_short_is_named_in_a_log_and_refused_in_a_measurement(tmp_path):
     log = tmp_path / "box.csv"
     log.write_text(

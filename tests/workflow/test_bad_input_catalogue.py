@@ -536,6 +536,16 @@ CASES = [
         "runs.tsv",
     ),
     Case(
+        "runs_description_too_long",
+        lambda ds, w: _write_lines(
+            ds / "runs.tsv",
+            _lines(ds / "runs.tsv")[:2] + [_lines(ds / "runs.tsv")[2] + "x" * 200_000],
+        ),
+        "line 3: field larger than field limit (131072); expected short tab-separated fields",
+        "runs.tsv",
+        3,
+    ),
+    Case(
         "runs_field_count",
         lambda ds, w: _write_lines(
             ds / "runs.tsv", _lines(ds / "runs.tsv")[:2] + [_lines(ds / "runs.tsv")[2] + "\textra"]
@@ -809,6 +819,18 @@ CASES = [
         ),
         "re:line 4: 5 comma-separated fields but the header has 4; expected 4 fields "
         "\\(time, position_mm, error_um, direction\\)$",
+        E2_M03,
+        4,
+        "clean:E2",
+    ),
+    Case(
+        # pandas reads a field of any length; Python's csv module, which looks for lines
+        # cut short, stops at 131,072 characters.
+        "error_field_too_long",
+        lambda ds, w: _write_lines(
+            ds / E2_M03, _lines(ds / E2_M03)[:3] + ["x" * 200_000] + _lines(ds / E2_M03)[3:]
+        ),
+        "line 4: field larger than field limit (131072); expected short comma-separated fields",
         E2_M03,
         4,
         "clean:E2",

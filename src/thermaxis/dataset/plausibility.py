@@ -121,6 +121,7 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
             lines,
         )
     notes += error_scale_warnings(raw, folder)
+    notes += position_scale_warnings(raw, folder)
     windows = raw.windows()
     overlapping = np.flatnonzero(windows["start"].to_numpy()[1:] < windows["end"].to_numpy()[:-1])
     if overlapping.size:
@@ -254,6 +255,29 @@ def error_scale_warnings(raw, folder: Path) -> list[str]:
         f"run {raw.run}: {error_source(folder)}: every error reading is within ±{largest:.3g} um, "
         f"below the {MIN_LARGEST_ERROR_UM:g} um a thermal error reaches; error_um is in "
         "micrometres (readings in mm are 1000 times too small)"
+    ]
+
+
+# Targets of a linear axis (ISO 230-2) are spread along its stroke, tens of millimetres at
+# the very least; a run whose targets all lie within this (in mm) was most likely written
+# in metres.
+MIN_TARGET_SPAN_MM = 1.0
+
+
+def position_scale_warnings(raw, folder: Path) -> list[str]:
+    """A warning for a run of three or more targets that all lie within :data:`MIN_TARGET_SPAN_MM`."""
+    positions = np.unique(
+        np.concatenate([m["position_mm"].to_numpy(dtype=float) for m in raw.measurements.values()])
+    )
+    positions = positions[np.isfinite(positions)]
+    # Two close positions are a single point read with jitter more often than a stroke.
+    if positions.size < 3 or positions[-1] - positions[0] >= MIN_TARGET_SPAN_MM:
+        return []
+    return [
+        f"run {raw.run}: {error_source(folder)}: its {positions.size} targets span "
+        f"{positions[-1] - positions[0]:.3g} mm, below the {MIN_TARGET_SPAN_MM:g} mm an axis's "
+        "targets span; expected position_mm in millimetres (positions in metres are 1000 times "
+        "too small)"
     ]
 
 

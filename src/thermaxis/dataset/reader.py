@@ -211,7 +211,7 @@ def _read_runs(path: Path) -> pd.DataFrame:
         raise DataError(f"{path}: file not found (every dataset needs runs.tsv)")
     safety.sniff_delimited(path, "\t", safety.MAX_SHEET_BYTES)
     with open(path, encoding="utf-8-sig", newline="") as fh:
-        rows = list(csv.reader(fh, delimiter="\t"))
+        rows = [row for _, row in _csv_rows(fh, path, "\t")]
     if not rows:
         raise DataError(
             f"{path}: empty file, expected a tab-separated header {' '.join(RUN_COLUMNS)}"
@@ -320,14 +320,32 @@ def _read_csv(path: Path, short_rows_missing: bool = False) -> pd.DataFrame:
     return frame
 
 
+def _csv_rows(fh, path: Path, delimiter: str):
+    """(line number, fields) of each row; a line the csv module refuses (a field longer
+    than its limit) is a DataError naming it, as pandas, which read the file first, has
+    no such limit."""
+    rows = csv.reader(fh, delimiter=delimiter)
+    kind = "tab" if delimiter == "\t" else "comma"
+    while True:
+        try:
+            row = next(rows)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise DataError(
+                f"{path}: line {rows.line_num}: {exc}; expected short {kind}-separated fields"
+            ) from None
+        yield rows.line_num, row
+
+
 def _check_short_rows(path: Path, names: list[str], missing: bool) -> None:
     short = []
     with open(path, newline="", encoding="utf-8-sig") as fh:
-        rows = csv.reader(fh)
+        rows = _csv_rows(fh, path, ",")
         next(rows, None)
-        for row in rows:
+        for line, row in rows:
             if row and len(row) < len(names):
-                short.append((rows.line_num, len(row)))
+                short.append((line, len(row)))
                 if not missing:
                     break
     if not short:
