@@ -13,11 +13,27 @@ __all__ = [
     "SelectionWarning",
     "raise_again",
     "recorded",
+    "shown",
 ]
+
+# A cell echoed in a message is cut to this many characters of its repr: a message stays
+# one readable line whatever a file holds (a 5 MB line, a pasted document).
+SHOWN_CHARS = 60
 
 
 class DataError(ValueError):
     """A raw input that does not follow the documented layout."""
+
+
+def shown(cell) -> str:
+    """A data cell as a message quotes it: its repr, a numpy number as a plain one ('inf',
+    not 'np.float64(inf)'), cut to :data:`SHOWN_CHARS` characters with its length said."""
+    if hasattr(cell, "item") and type(cell).__module__ == "numpy":
+        cell = cell.item()
+    text = repr(cell)
+    if len(text) <= SHOWN_CHARS:
+        return text
+    return f"{text[:SHOWN_CHARS]}... ({len(str(cell)):,} characters)"
 
 
 class SelectionWarning(UserWarning):

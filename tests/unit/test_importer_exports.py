@@ -10,7 +10,13 @@ import pandas as pd
 import pytest
 import yaml
 
-from thermaxis.dataset.importer import RunSummary, import_dataset, run_warnings
+from thermaxis.dataset.importer import (
+    RunSummary,
+    import_dataset,
+    read_numeric,
+    read_table,
+    run_warnings,
+)
 from thermaxis.dataset.reader import load_dataset
 from thermaxis.errors import DataError
 
@@ -489,3 +495,29 @@ def test_temperatures_logged_in_kelvin_or_fahrenheit_are_written_in_celsius(
     assert f"Temperatures were logged in {unit} and converted to degrees C." in (
         dataset.meta["description"].replace("\n", " ")
     )
+
+
+@pytest.mark.parametrize(
+    "cell, quoted",
+    [
+        ("inf", "inf"),  # read as a number: named as one, not as numpy's np.float64(inf)
+        ("x" * 5000, "'" + "x" * 59 + "... (5,000 characters)"),  # a pasted document, cut
+        ("hot", "'hot'"),
+    ],
+    ids=["infinite", "long_text", "word"],
+)
+def test_a_cell_that_is_not_a_finite_number_is_quoted_readably(tmp_path, cell, quoted):
+    path = tmp_path / "log.csv"
+    path.write_text(f"time_s,T1\n0,20.1\n10,{cell}\n")
+    with pytest.raises(DataError) as raised:
+        read_numeric(path, read_table(path), "T1", allow_empty=True)
+    assert str(raised.value) == (
+        f"{path}: row 3, column 'T1': expected a finite number, got {quoted}"
+    )
+
+
+def test_an_empty_table_is_one_line_saying_what_was_expected(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text("")
+    with pytest.raises(DataError, match=r"log\.csv: empty file, expected a header and data rows$"):
+        read_table(path)

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.config import ErrorCleaning
+from thermaxis.errors import shown
 
 __all__ = [
     "combine_passes",
@@ -125,7 +126,7 @@ def _passes(measurement: pd.DataFrame, label: str) -> dict[str, pd.DataFrame]:
     bad = ~direction.isin(["+", "-"])
     if bad.any():
         raise ValueError(
-            f"{label}: column 'direction': expected '+' or '-', got {direction[bad].iloc[0]!r}"
+            f"{label}: column 'direction': expected '+' or '-', got {shown(direction[bad].iloc[0])}"
         )
     return {d: measurement[direction.to_numpy() == d] for d in ("+", "-") if (direction == d).any()}
 

@@ -344,7 +344,8 @@ def _compensate(args) -> int:
             tmp,
         )
     fallback = table[table["status"] != "ok"]
-    print(f"wrote {out} ({len(table)} cycles, {len(fallback)} on the fallback policy) and {figure}")
+    cycles = f"{len(table)} cycle{'' if len(table) == 1 else 's'}"
+    print(f"wrote {out} ({cycles}, {len(fallback)} on the fallback policy) and {figure}")
     sentence = model.model.get("deployment", {}).get("sentence")
     if sentence:
         print(f"the model's deployment verdict: {sentence}")

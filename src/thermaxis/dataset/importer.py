@@ -41,7 +41,7 @@ import yaml
 
 from thermaxis.config import fill_defaults
 from thermaxis.dataset.reader import clock_back_hint, load_dataset, median_step_s
-from thermaxis.errors import DataError
+from thermaxis.errors import DataError, shown
 from thermaxis.schemas import load_schema
 
 __all__ = [
@@ -233,6 +233,8 @@ def read_table(
             f"{path}: not {csv['encoding']} text (byte 0x{exc.object[exc.start]:02x} at offset "
             f"{exc.start}){fix}"
         ) from None
+    except pd.errors.EmptyDataError:
+        raise DataError(f"{path}: empty file, expected a header and data rows") from None
     except (ValueError, KeyError) as exc:
         first = str(exc).splitlines()[0]
         # The parser's "Expected 2 fields in line 12, saw 9": a logger's own lines above
@@ -319,7 +321,7 @@ def read_numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool
         )
         hint = _units_hint(frame, i, cell) or hint
         raise DataError(
-            f"{path}: row {_row(frame, i)}, column {column!r}: expected a finite number, got {cell!r}{hint}"
+            f"{path}: row {_row(frame, i)}, column {column!r}: expected a finite number, got {shown(cell)}{hint}"
         )
     return values
 
@@ -379,7 +381,7 @@ def _clock(path: Path, frame: pd.DataFrame, time: dict) -> pd.DatetimeIndex:
         expected = "an ISO 8601 clock time" if fmt == "ISO8601" else f"a clock time in {fmt!r}"
         raise DataError(
             f"{path}: row {_row(frame, i)}, {_words(columns)}: expected {expected}, got "
-            f"{text.iloc[i]!r}{_units_hint(frame, i, text.iloc[i])}"
+            f"{shown(text.iloc[i])}{_units_hint(frame, i, text.iloc[i])}"
         )
     return pd.DatetimeIndex(parsed).tz_localize(None)
 

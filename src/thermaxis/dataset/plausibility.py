@@ -11,6 +11,7 @@ import pandas as pd
 
 from thermaxis.dataset.layout import error_source
 from thermaxis.dataset.safety import _error, check_inside, check_name, check_regular_file
+from thermaxis.errors import shown
 
 __all__ = [
     "check_dataset_shape",
@@ -223,7 +224,7 @@ def check_time_zones(path, values: pd.Series, column: str = "time") -> None:
         zoned,
         column,
         lambda i: (
-            f"expected a time without a time zone (one zone per dataset), got {values.iloc[i]!r}"
+            f"expected a time without a time zone (one zone per dataset), got {shown(values.iloc[i])}"
         ),
     )
 
@@ -235,7 +236,7 @@ def check_time_range(path, parsed: pd.Series, values: pd.Series, column: str = "
         path,
         (years < 1678) | (years > 2261),
         column,
-        lambda i: f"expected a time between 1678 and 2261, got {values.iloc[i]!r}",
+        lambda i: f"expected a time between 1678 and 2261, got {shown(values.iloc[i])}",
     )
 
 

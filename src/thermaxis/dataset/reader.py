@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.dataset import layout, plausibility, safety
-from thermaxis.errors import DataError
+from thermaxis.errors import DataError, shown
 from thermaxis.labels import natural_key
 from thermaxis.schemas import load_schema
 
@@ -200,7 +200,7 @@ def _numeric_descriptors(runs: pd.DataFrame, path: Path) -> pd.DataFrame:
             if infinite.any():
                 i = int(np.flatnonzero(infinite)[0])
                 raise DataError(
-                    f"{path}: run {runs['run'].iloc[i]!r}, column {column!r}: expected a finite number, got {cells.iloc[i]!r}"
+                    f"{path}: run {runs['run'].iloc[i]!r}, column {column!r}: expected a finite number, got {shown(cells.iloc[i])}"
                 )
             runs[column] = numbers.astype(float)
     return runs
@@ -246,7 +246,7 @@ def _read_runs(path: Path) -> pd.DataFrame:
                 record[name] = _coerce_cell(cell.strip(), kind)
             except ValueError:
                 raise DataError(
-                    f"{path}: line {lineno}, column {name!r}: expected {'an integer' if kind == 'integer' else 'a finite number'}, got {cell!r}"
+                    f"{path}: line {lineno}, column {name!r}: expected {'an integer' if kind == 'integer' else 'a finite number'}, got {shown(cell)}"
                 ) from None
         errors = list(validator.iter_errors(record))
         if errors:
@@ -380,7 +380,7 @@ def _parse_time(path: Path, values: pd.Series) -> pd.Series:
         )
         raise DataError(
             f"{path}: line {i + 2}, column 'time': expected an ISO 8601 time, got "
-            f"{values.iloc[i]!r}{units}"
+            f"{shown(values.iloc[i])}{units}"
         )
     if getattr(parsed.dt, "tz", None) is not None:
         raise DataError(
@@ -400,7 +400,7 @@ def _parse_numbers(path: Path, frame: pd.DataFrame, column: str, allow_empty: bo
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise DataError(
-            f"{path}: line {i + 2}, column {column!r}: expected a number, got {frame[column].iloc[i]!r}"
+            f"{path}: line {i + 2}, column {column!r}: expected a number, got {shown(frame[column].iloc[i])}"
         )
     return numbers
 
@@ -480,7 +480,7 @@ def _parse_readings(path: Path, frame: pd.DataFrame) -> pd.DataFrame:
         if bad.any():
             i = int(np.flatnonzero(bad.to_numpy())[0])
             raise DataError(
-                f"{path}: line {i + 2}, column 'direction': expected '+' or '-', got {frame['direction'].iloc[i]!r}"
+                f"{path}: line {i + 2}, column 'direction': expected '+' or '-', got {shown(frame['direction'].iloc[i])}"
             )
         out["direction"] = direction.to_numpy(dtype=object)
     else:
@@ -527,7 +527,7 @@ def _read_run_file(path: Path) -> tuple[dict[str, pd.DataFrame], dict[str, np.nd
         i = int(np.flatnonzero(bad.to_numpy())[0])
         raise DataError(
             f"{path}: line {i + 2}, column {MEASUREMENT_COLUMN!r}: expected a measurement name matching "
-            f"{safety.NAME_PATTERN}, got {frame[MEASUREMENT_COLUMN].iloc[i]!r}"
+            f"{safety.NAME_PATTERN}, got {shown(frame[MEASUREMENT_COLUMN].iloc[i])}"
         )
     readings = _parse_readings(path, frame)
     out, lines = {}, {}

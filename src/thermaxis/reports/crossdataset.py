@@ -34,7 +34,7 @@ import pandas as pd
 import yaml
 
 from thermaxis.config import StatisticsSettings, load_config, validate_config
-from thermaxis.errors import DataError
+from thermaxis.errors import DataError, shown
 from thermaxis.figures import registry
 from thermaxis.statistics.resampling import fold_mean_interval
 from thermaxis.tables import read_table
@@ -92,7 +92,7 @@ def read_metrics(path) -> pd.DataFrame:
         if bad.any():
             row = int(np.flatnonzero(bad.to_numpy())[0]) + 2  # header is line 1
             raise DataError(
-                f"{path}: line {row}, column {column!r}: expected a number, got {frame[column].iloc[row - 2]!r}"
+                f"{path}: line {row}, column {column!r}: expected a number, got {shown(frame[column].iloc[row - 2])}"
             )
         frame[column] = values
     return frame
