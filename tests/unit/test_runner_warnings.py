@@ -97,6 +97,19 @@ def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path
         "thermaxis warning: PLS: y residual is constant at iteration 2 (the first of this "
         f"job's solver warnings; {tmp_path / 'next.log'} has them all)"
     ]
+    # The Gaussian process's L-BFGS-B: its first line ends where scipy's reason begins.
+    _configure_logging(str(tmp_path / "gp.log"))
+    logging.getLogger("py.warnings").warning(
+        "_optimize.py:445: ConvergenceWarning: lbfgs failed to converge after 19 "
+        "iteration(s) (status=2):\nABNORMAL: \n\nIncrease the number of iterations."
+    )
+    for handler in logging.getLogger("thermaxis").handlers:
+        handler.flush()
+    assert capsys.readouterr().err.splitlines() == [
+        "thermaxis warning: Gaussian process: lbfgs failed to converge after 19 iteration(s) "
+        f"(status=2) (the first of this job's solver warnings; {tmp_path / 'gp.log'} has them "
+        "all)"
+    ]
     logging.captureWarnings(False)
 
 

@@ -35,6 +35,8 @@ _SOLVERS = (
     ("parameter length_scale", "Gaussian process"),
     ("parameter constant_value", "Gaussian process"),
     ("parameter noise_level", "Gaussian process"),
+    # scipy's L-BFGS-B, which only the Gaussian process's optimiser uses here.
+    ("lbfgs failed to converge", "Gaussian process"),
     ("Objective did not converge", "lasso"),
     ("Regressors in active set degenerate", "lasso"),
     ("Solver terminated early", "SVR"),
@@ -62,7 +64,8 @@ class _OneLine(logging.Formatter):
 
     def format(self, record):
         first = record.getMessage().splitlines()[0] if record.getMessage() else ""
-        text = self._LOCATION.sub("", first)
+        # A first line that introduces the next ("...(status=2):") stands alone here.
+        text = self._LOCATION.sub("", first).rstrip(":")
         if _solver_warning(first):
             text = (
                 f"{_solver_of(first)}{text} (the first of this job's solver warnings; "
