@@ -725,3 +725,15 @@ def test_fig10_with_many_sensors_names_those_that_rise_most():
     assert len(fig.axes[0].get_lines()) == 31
     named = {line.get_label(): line for line in lines_of(fig.axes[0])}
     np.testing.assert_allclose(named["T30"].get_ydata(), 0.3 * t)
+
+
+def test_a_sweep_that_varies_no_cluster_count_draws_a_heat_map_saying_so():
+    # A one-sensor dataset: no n_clusters of the grid fits, only 'all' and 'fixed' ran.
+    from thermaxis.figures.sweep import fig_sweep_heatmap
+
+    fig = fig_sweep_heatmap({"decoupled": pd.DataFrame(), "pointwise": pd.DataFrame()})
+    (ax,) = fig.axes
+    assert not ax.axison
+    assert [t.get_text().startswith("No configuration of this sweep varies") for t in ax.texts] == [
+        True
+    ]

@@ -32,9 +32,9 @@ def fig_sweep_heatmap(tables: dict[str, pd.DataFrame], titles: dict[str, str] | 
     """
     tables = {k: v for k, v in tables.items() if v.size}
     if not tables:
-        raise ValueError(
-            "sweep heat map: no configuration sweeps n_clusters; expected fuzzy_grey or correlation in sweep.methods"
-        )
+        # A grid of 'all' and 'fixed' only, or a dataset with fewer sensors than every
+        # n_clusters: the rest of the sweep stands, and the figure says why it is empty.
+        return _no_cluster_counts()
     values = np.concatenate([t.to_numpy(dtype=float).ravel() for t in tables.values()])
     values = values[np.isfinite(values)]
     with matplotlib.rc_context(STYLE):
@@ -67,6 +67,23 @@ def fig_sweep_heatmap(tables: dict[str, pd.DataFrame], titles: dict[str, str] | 
             fig.colorbar(
                 image, ax=list(axes), label="Mean held-out max |residual| (µm)", shrink=0.9
             )
+    return fig
+
+
+def _no_cluster_counts() -> Figure:
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=(DOUBLE_COLUMN_IN, 1.2), layout="constrained")
+        ax = fig.subplots()
+        ax.set_axis_off()
+        ax.text(
+            0.5,
+            0.5,
+            "No configuration of this sweep varies the number of clusters: no fuzzy_grey or\n"
+            "correlation setting of sweep.methods and sweep.n_clusters fits the dataset.",
+            ha="center",
+            va="center",
+            transform=ax.transAxes,
+        )
     return fig
 
 
