@@ -354,17 +354,17 @@ def test_a_signal_log_that_starts_inside_the_measurements_is_named(tiny_dataset)
     )
 
 
+def _rewrite_r1_errors(dataset, row) -> None:
+    """Every measurement of run R1 with each row's (time, position, error, direction) mapped by ``row``."""
+    for path in (dataset / "R1" / "errors").glob("*.csv"):
+        lines = path.read_text().splitlines()
+        rows = [row(*line.split(",")) for line in lines[1:]]
+        path.write_text("\n".join([lines[0]] + [",".join(r) for r in rows]) + "\n")
+
+
 def test_errors_written_in_mm_are_named(tiny_dataset):
     # A few micrometres of drift written in mm: every reading below 0.05 um.
-    for path in (tiny_dataset / "R1" / "errors").glob("*.csv"):
-        lines = path.read_text().splitlines()
-        rows = [line.split(",") for line in lines[1:]]
-        path.write_text(
-            "\n".join(
-                [lines[0]] + [",".join([t, x, f"{float(e) / 1000:.9f}", d]) for t, x, e, d in rows]
-            )
-            + "\n"
-        )
+    _rewrite_r1_errors(tiny_dataset, lambda t, x, e, d: [t, x, f"{float(e) / 1000:.9f}", d])
     # The builder's largest R1 error, measurement 4 at 150 mm: -8.5 um/m x 0.15 m - 2.1 um
     # = -3.375 um, written 0.003375 (mm); shown to 3 digits, 0.003375 rounds down in binary.
     _warns_of_r1_only(
@@ -377,15 +377,7 @@ def test_errors_written_in_mm_are_named(tiny_dataset):
 
 def test_positions_written_in_metres_are_named(tiny_dataset):
     # The builder's targets 0, 50, 100 and 150 mm written in metres: 0.15 mm end to end.
-    for path in (tiny_dataset / "R1" / "errors").glob("*.csv"):
-        lines = path.read_text().splitlines()
-        rows = [line.split(",") for line in lines[1:]]
-        path.write_text(
-            "\n".join(
-                [lines[0]] + [",".join([t, f"{float(x) / 1000:g}", e, d]) for t, x, e, d in rows]
-            )
-            + "\n"
-        )
+    _rewrite_r1_errors(tiny_dataset, lambda t, x, e, d: [t, f"{float(x) / 1000:g}", e, d])
     _warns_of_r1_only(
         load_dataset(tiny_dataset),
         f"run R1: {tiny_dataset / 'R1' / 'errors'}: its 4 targets span 0.15 mm, below the 1 mm "

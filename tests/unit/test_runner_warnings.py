@@ -62,6 +62,13 @@ def test_a_warning_another_job_reports_goes_to_this_jobs_log_only(tmp_path, caps
     logging.captureWarnings(False)
 
 
+def _terminal(capsys) -> list[str]:
+    """The lines the job's logging printed so far."""
+    for handler in logging.getLogger("thermaxis").handlers:
+        handler.flush()
+    return capsys.readouterr().err.splitlines()
+
+
 def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path, capsys):
     # A lasso's warning carries its duality gap, different at every fit: 3 texts, 1 line.
     log = tmp_path / "job.log"
@@ -91,9 +98,7 @@ def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path
     logging.getLogger("py.warnings").warning(
         "_pls.py:308: UserWarning: y residual is constant at iteration 2"
     )
-    for handler in logging.getLogger("thermaxis").handlers:
-        handler.flush()
-    assert capsys.readouterr().err.splitlines() == [
+    assert _terminal(capsys) == [
         "thermaxis warning: PLS: y residual is constant at iteration 2 (the first of this "
         f"job's solver warnings; {tmp_path / 'next.log'} has them all)"
     ]
@@ -103,9 +108,7 @@ def test_a_solvers_convergence_warnings_reach_the_terminal_once_per_job(tmp_path
         "_optimize.py:445: ConvergenceWarning: lbfgs failed to converge after 19 "
         "iteration(s) (status=2):\nABNORMAL: \n\nIncrease the number of iterations."
     )
-    for handler in logging.getLogger("thermaxis").handlers:
-        handler.flush()
-    assert capsys.readouterr().err.splitlines() == [
+    assert _terminal(capsys) == [
         "thermaxis warning: Gaussian process: lbfgs failed to converge after 19 iteration(s) "
         f"(status=2) (the first of this job's solver warnings; {tmp_path / 'gp.log'} has them "
         "all)"
