@@ -231,6 +231,10 @@ def test_fahrenheit_and_kelvin_hints_convert_the_median():
     assert notes[1].startswith("box.csv: sensor T4: median 4.0 °C")
     # 300 K = 26.85 °C.
     assert "if it is in kelvin, that is 26.9 °C" in notes[2]
+    # A logger's overflow value: three significant digits, not two hundred.
+    (huge,) = plausibility.sensor_median_warnings({"T1": 1e200}, 5, 60, "box.csv")
+    assert huge.startswith("box.csv: sensor T1: median 1e+200 °C is outside")
+    assert "if it is in kelvin, that is 1e+200 °C" in huge
 
 
 def test_constant_sensor_is_left_out_with_a_warning():

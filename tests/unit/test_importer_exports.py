@@ -521,3 +521,71 @@ def test_an_empty_table_is_one_line_saying_what_was_expected(tmp_path):
     path.write_text("")
     with pytest.raises(DataError, match=r"log\.csv: empty file, expected a header and data rows$"):
         read_table(path)
+
+
+def _edited_clock_mapping(tmp_path: Path, edit) -> Path:
+    """_clock_mapping's ISO 8601 record (every 10 min from 08:01:02; R1 [0, 3600) s, R2
+    [3600, 7200) s), edited."""
+    start = pd.Timestamp("2020-06-15 08:01:02")
+    _clock_table(
+        tmp_path / "clock.csv",
+        [(start + pd.Timedelta(minutes=10 * i)).strftime("%Y-%m-%d %H:%M:%S") for i in range(12)],
+    )
+    path = _clock_mapping(tmp_path, "ISO8601")
+    mapping = yaml.safe_load(path.read_text())
+    edit(mapping)
+    path.write_text(yaml.safe_dump(mapping))
+    return path
+
+
+def _elapsed(mapping: dict) -> None:
+    mapping["time"] = {"column": "temp B", "start": "yesterday"}
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (lambda m: m["runs"][1].update(start_s=1800),
+         "run 'R2' [1800, 7200) s overlaps run 'R1' [0, 3600) s; expected ranges that do not "
+         "overlap (a sample belongs to one run)"),
+        (lambda m: m["runs"][1].update(start_s=7200, end_s=3600),
+         "run 'R2': start_s 7200 is not before end_s 3600; expected [start_s, end_s) in seconds "
+         "since the record's start"),
+        (lambda m: m["sensors"].append({"column": "temp A", "id": "TA2"}),
+         "column 'temp A' is mapped twice (TA and TA2); expected each column of the table under "
+         "one id"),
+        (lambda m: m["errors"]["columns"].append({"column": "temp B", "position_mm": 10}),
+         "column 'temp B' is mapped twice (TB and an error column)"),
+        (lambda m: m.update(licence_file="LICENSE"), "licence_file: "),
+        (_elapsed, "time/start: expected an ISO 8601 time, got 'yesterday'"),
+    ],
+    ids=["overlapping_runs", "reversed_range", "sensor_twice", "error_is_a_sensor",
+         "licence_missing", "start_not_a_time"],
+)  # fmt: skip
+def test_a_mapping_that_contradicts_itself_is_refused_before_the_table_is_read(
+    tmp_path, edit, message
+):
+    _assert_refused(_edited_clock_mapping(tmp_path, edit), f"clock.yaml: {message}")
+
+
+def test_a_spreadsheets_trailing_empty_rows_are_no_samples(tmp_path):
+    path = _edited_clock_mapping(tmp_path, lambda m: None)
+    table = tmp_path / "clock.csv"
+    table.write_text(table.read_text() + ",,,\n" * 3)
+    late = _assert_r2_read_as_logged(load_dataset(import_dataset(path, tmp_path / "raw").out))
+    assert len(late) == 3
+
+
+def test_an_error_column_without_a_reading_in_a_run_is_refused(tmp_path):
+    path = _edited_clock_mapping(tmp_path, lambda m: None)
+    table = tmp_path / "clock.csv"
+    lines = table.read_text().splitlines()
+    # R2 is [3600, 7200) s: the rows from 09:01:02 on (file lines 8 to 13) lose their dx.
+    table.write_text(
+        "\n".join(lines[:7] + [line.rsplit(",", 1)[0] + "," for line in lines[7:]]) + "\n"
+    )
+    _assert_refused(
+        path,
+        "clock.csv: run 'R2': column(s) 'dx (um)' have no reading at any of the run's 3 "
+        "measurement(s) (one every 1200 s); expected error readings",
+    )

@@ -135,7 +135,71 @@ def load_mapping(path) -> dict:
             "(expected a Python codec name, e.g. utf-8 or cp1252)"
         ) from None
     _check_ids(path, mapping)
+    _check_columns(path, mapping)
+    _check_ranges(path, mapping)
+    _check_start_and_licence(path, mapping)
     return mapping
+
+
+def _check_columns(path: Path, mapping: dict) -> None:
+    """One id per table column: a column mapped twice would be one sensor under two names
+    (two perfectly collinear inputs) or a temperature read as an error."""
+    seen: dict[str, str] = {}
+    named = [(s["column"], s["id"]) for s in (*mapping["sensors"], *mapping["signals"])]
+    named += [
+        (
+            c["column"],
+            f"an error column of channel {channel['id']}" if channel["id"] else "an error column",
+        )
+        for channel in _channels(mapping)
+        for c in channel["columns"]
+    ]
+    for column, what in named:
+        key = header_name(column)
+        if key in seen:
+            raise DataError(
+                f"{path}: column {key!r} is mapped twice ({seen[key]} and {what}); expected "
+                "each column of the table under one id"
+            )
+        seen[key] = what
+
+
+def _check_ranges(path: Path, mapping: dict) -> None:
+    """Runs cut by time ranges hold distinct samples: a sample in two runs would sit in a
+    training run and in the run held out from it."""
+    if mapping["split"]["by"] != "ranges":
+        return
+    for run in mapping["runs"]:
+        if not run["start_s"] < run["end_s"]:
+            raise DataError(
+                f"{path}: run {run['name']!r}: start_s {run['start_s']:g} is not before end_s "
+                f"{run['end_s']:g}; expected [start_s, end_s) in seconds since the record's start"
+            )
+    ordered = sorted(mapping["runs"], key=lambda r: (r["start_s"], r["end_s"]))
+    for earlier, later in zip(ordered, ordered[1:], strict=False):
+        if later["start_s"] < earlier["end_s"]:
+            raise DataError(
+                f"{path}: run {later['name']!r} [{later['start_s']:g}, {later['end_s']:g}) s "
+                f"overlaps run {earlier['name']!r} [{earlier['start_s']:g}, {earlier['end_s']:g}) s; "
+                "expected ranges that do not overlap (a sample belongs to one run)"
+            )
+
+
+def _check_start_and_licence(path: Path, mapping: dict) -> None:
+    start = mapping["time"].get("start")
+    if start is not None:
+        try:
+            pd.Timestamp(start)
+        except (ValueError, TypeError):
+            raise DataError(
+                f"{path}: time/start: expected an ISO 8601 time, got {shown(start)}"
+            ) from None
+    licence = mapping.get("licence_file")
+    if licence and not (path.parent / licence).is_file():
+        raise DataError(
+            f"{path}: licence_file: {path.parent / licence} not found; expected the source's "
+            "licence text (it travels with the data)"
+        )
 
 
 def _check_ids(path: Path, mapping: dict) -> None:
@@ -258,6 +322,9 @@ def read_table(
     frame.columns = [header_name(c) for c in frame.columns]
     _check_unique_header(path, frame, header_row)
     frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped, decimal=csv["decimal"])
+    # A spreadsheet's export often ends in rows of empty cells (",,,"): no samples.
+    filled = np.flatnonzero(frame.notna().any(axis=1).to_numpy())
+    frame = frame.iloc[: filled[-1] + 1] if filled.size else frame.iloc[:0]
     if frame.empty:
         raise DataError(f"{path}: no data rows below the header")
     return frame
@@ -321,7 +388,8 @@ def read_numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool
         )
         hint = _units_hint(frame, i, cell) or hint
         raise DataError(
-            f"{path}: row {_row(frame, i)}, column {column!r}: expected a finite number, got {shown(cell)}{hint}"
+            f"{path}: row {_row(frame, i)}, column {column!r}: expected a finite number, got "
+            f"{'an empty cell' if pd.isna(cell) else shown(cell)}{hint}"
         )
     return values
 
@@ -560,6 +628,13 @@ def _write_run(
                 records.append(
                     (f"M{i:03d}", _iso(start, [sample["_t"]])[0], item["position_mm"], value)
                 )
+    if not records:
+        raise DataError(
+            f"{mapping['source']}: run {folder.name!r}: column(s) "
+            f"{', '.join(repr(c['column']) for c in columns)} have no reading at any of the run's "
+            f"{len(picked)} measurement(s) (one every {mapping['errors']['every_s']:g} s); "
+            "expected error readings"
+        )
     errors = pd.DataFrame(records, columns=["measurement", "time", "position_mm", "error_um"])
     errors.to_csv(folder / "errors.csv", index=False, float_format="%.6g", lineterminator="\n")
     t = rows["_t"].to_numpy(dtype=float)

@@ -305,6 +305,11 @@ def _refuse_first_row(path, bad: np.ndarray, column: str, what, lines=None) -> N
         raise _error(path, f"line {line}, column {column!r}: {what(i)}")
 
 
+def _degrees(value: float) -> str:
+    # A logger's overflow value (1e200) in a hundred digits would bury the sentence.
+    return f"{value:.1f}" if abs(value) < 1e5 else f"{value:.3g}"
+
+
 def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: str) -> list[str]:
     """One warning per sensor whose median temperature is implausible for a machine structure."""
     notes = []
@@ -315,8 +320,8 @@ def sensor_median_warnings(medians: dict, low_c: float, high_c: float, where: st
                 ("kelvin", median - 273.15) if median > 200 else ("°F", (median - 32.0) * 5.0 / 9.0)
             )
             notes.append(
-                f"{where}: sensor {sensor}: median {median:.1f} °C is outside the plausible {low_c:g}-{high_c:g} °C "
+                f"{where}: sensor {sensor}: median {_degrees(median)} °C is outside the plausible {low_c:g}-{high_c:g} °C "
                 f"of a machine structure (config temperatures.plausible_median_c); if it is in {unit}, "
-                f"that is {celsius:.1f} °C: expected °C"
+                f"that is {_degrees(celsius)} °C: expected °C"
             )
     return notes
