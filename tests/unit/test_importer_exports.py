@@ -107,7 +107,8 @@ def test_the_same_mapping_without_a_unit_warns_naming_the_runs_and_the_unit(tmp_
 
 
 def test_seconds_read_as_hours_suggest_seconds():
-    long = (RunSummary("R1", 5 * 3600 * 3600.0, 100, 9000),)  # 18000 "h": a 5 h run in seconds
+    # 18000 "h": 5 h runs in seconds.
+    long = tuple(RunSummary(r, 5 * 3600 * 3600.0, 100, 9000) for r in ("R1", "R2"))
     (warning,) = run_warnings("d", {"column": "t", "unit": "h"}, 600.0, long)
     assert (
         "implausibly long" in warning and "set time.unit: s (they would last 5 h to 5 h)" in warning
@@ -588,4 +589,14 @@ def test_an_error_column_without_a_reading_in_a_run_is_refused(tmp_path):
         path,
         "clock.csv: run 'R2': column(s) 'dx (um)' have no reading at any of the run's 3 "
         "measurement(s) (one every 1200 s); expected error readings",
+    )
+
+
+def test_a_single_run_is_warned_of_at_the_import():
+    (warning,) = run_warnings(
+        "d", {"column": "t", "unit": "s"}, 600.0, (RunSummary("R1", 5 * 3600.0, 100, 9),)
+    )
+    assert warning == (
+        "d: 1 run; leave-one-condition-out needs at least 2, so the workflow refuses such a "
+        "dataset (list more runs, or split the record)"
     )

@@ -863,6 +863,11 @@ def run_warnings(name: str, time: dict, every_s: float, runs: tuple[RunSummary, 
                 f"{_span(max(durations))}, implausibly {what} for a thermal test (expected "
                 f"{_span(low)} to {_span(high)}); {_unit_hint(time, durations)}"
             )
+    if len(runs) < 2:
+        out.append(
+            f"{name}: {len(runs)} run; leave-one-condition-out needs at least 2, so the "
+            "workflow refuses such a dataset (list more runs, or split the record)"
+        )
     few = [r for r in runs if r.measurements < MIN_MEASUREMENTS]
     if few:
         out.append(
