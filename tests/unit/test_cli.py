@@ -256,3 +256,17 @@ def test_a_semicolon_separated_controller_log_is_refused_naming_the_expected_sep
     assert str(refused.value) == (
         f"{log}: one column 'time_s;T1': looks ';'-separated; expected ',' between columns"
     )
+
+
+def test_a_controller_log_without_a_sensor_of_the_model_names_it_as_the_models(tmp_path):
+    from thermaxis.cli.compensate import read_log
+    from thermaxis.errors import DataError
+
+    log = tmp_path / "log.csv"
+    log.write_text("time_s,T1\n0,20.5\n60,20.7\n")
+    with pytest.raises(DataError) as refused:
+        read_log(log, ["T1", "T2"])
+    assert str(refused.value) == (
+        f"{log}: missing column 'T2', a sensor the model reads; expected one column per sensor "
+        "of the model (T1, T2)"
+    )

@@ -5,7 +5,9 @@ The data are noise-free: at targets 0, 500 and 1000 mm the error is
 so every controller value below is worked out by hand.
 """
 
+import copy
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -170,3 +172,26 @@ def test_a_decoupled_model_reads_the_signal_in_both_its_slope_and_its_intercept(
                                       {"T1": 30.0, "T2": 25.0, "spindle": 1000.0})  # fmt: skip
     assert p.k0_mm == pytest.approx(0.007, abs=1e-9)
     assert p.tan_beta == pytest.approx(-46e-6, abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        # Python's JSON reader turns NaN, Infinity and 1e999 into floats a controller would apply.
+        (lambda m: m["regressions"][0].update(constant=math.inf),
+         "regressions/0/constant: expected a finite number, got inf"),
+        (lambda m: m["regressions"][1]["coefficients"].__setitem__(1, math.nan),
+         "regressions/1/coefficients/1: expected a finite number, got nan"),
+        # The fixture's regressions read inputs 0 and 1 of its 2.
+        (lambda m: m["regressions"][0].update(inputs=[0, 2]),
+         "regressions/0/inputs: index 2 is beyond the model's 2 inputs (expected 0 to 1)"),
+        (lambda m: m["regressions"][2].update(coefficients=[1.0]),
+         "regressions/2/coefficients: 1 number(s) for 2 input(s); expected one per input"),
+    ],
+    ids=["infinite_constant", "nan_coefficient", "input_beyond", "coefficient_missing"],
+)  # fmt: skip
+def test_a_model_a_controller_could_not_apply_is_refused_in_one_line(fitted, edit, message):
+    model = copy.deepcopy(fitted)
+    edit(model)
+    with pytest.raises(ValueError, match=f"^{re.escape('model.json: ' + message)}$"):
+        validate_model(model)

@@ -37,6 +37,12 @@ def read_log(path, sensors) -> tuple[np.ndarray, list[dict]]:
             f"{path}: no time column; expected 'time' (ISO 8601 clock times) or 'time_s' "
             f"(seconds), then one column per sensor of the model ({', '.join(sensors)})"
         )
+    missing = [s for s in sensors if s not in frame.columns]
+    if missing:
+        raise DataError(
+            f"{path}: missing column {missing[0]!r}, a sensor the model reads; expected one "
+            f"column per sensor of the model ({', '.join(sensors)})"
+        )
     seconds = read_seconds(path, frame, time)
     columns = {s: read_numeric(path, frame, s, allow_empty=True) for s in sensors}
     samples = [{s: float(columns[s][i]) for s in sensors} for i in range(len(frame))]

@@ -33,6 +33,7 @@ and one coefficient per degree C, kernel regressions (SVR, GPR) as an RBF expans
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict
 
@@ -284,6 +285,13 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
     if errors:
         path = "/".join(map(str, errors[0].absolute_path)) or "top level"
         raise ValueError(f"{where}: {path}: {errors[0].message}")
+    # Python's JSON reader takes NaN, Infinity and 1e999; a controller would apply them.
+    for path, value in _numbers(record, ()):
+        if not math.isfinite(value):
+            raise ValueError(
+                f"{where}: {'/'.join(map(str, path))}: expected a finite number, got {value}"
+            )
+    _check_regression_shapes(record, where)
     # The runtime computes a derived input from its name; a definition saying otherwise
     # would describe a model other than the one run.
     for i, spec in enumerate(record["inputs"]):
@@ -297,6 +305,51 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
                     f"{where}: inputs/{i}/definition: does not match the input's name "
                     f"{spec['sensor']!r}; expected {expected}"
                 )
+
+
+def _numbers(node, path: tuple):
+    """(path, value) of every float in a JSON document."""
+    if isinstance(node, float):
+        yield path, node
+    elif isinstance(node, Mapping):
+        for key, value in node.items():
+            yield from _numbers(value, (*path, key))
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            yield from _numbers(value, (*path, i))
+
+
+def _check_regression_shapes(record: Mapping, where: str) -> None:
+    """Each regression reads inputs the model has, with one number per input (and per
+    centre): the schema checks types, not how many."""
+    n_inputs = len(record["inputs"])
+    for i, regression in enumerate(record["regressions"]):
+        at = f"{where}: regressions/{i}"
+        beyond = [j for j in regression["inputs"] if j >= n_inputs]
+        if beyond:
+            raise ValueError(
+                f"{at}/inputs: index {beyond[0]} is beyond the model's {n_inputs} inputs "
+                f"(expected 0 to {n_inputs - 1})"
+            )
+        n = len(regression["inputs"])
+        if regression["form"] == "affine":
+            sized = {"coefficients": regression["coefficients"]}
+        else:
+            sized = {
+                "input_mean": regression["input_mean"],
+                "input_scale": regression["input_scale"],
+                **{f"centres/{c}": row for c, row in enumerate(regression["centres"])},
+            }
+        for name, values in sized.items():
+            if len(values) != n:
+                raise ValueError(
+                    f"{at}/{name}: {len(values)} number(s) for {n} input(s); expected one per input"
+                )
+        if regression["form"] == "rbf" and len(regression["weights"]) != len(regression["centres"]):
+            raise ValueError(
+                f"{at}/weights: {len(regression['weights'])} weight(s) for "
+                f"{len(regression['centres'])} centre(s); expected one per centre"
+            )
 
 
 # --------------------------------------------------------------------------- fitting and held-out evaluation
