@@ -23,6 +23,7 @@ from pathlib import Path
 
 import jsonschema
 
+from thermaxis.errors import schema_message
 from thermaxis.schemas import load_trusted_yaml, schema_path
 from thermaxis.sweep.plan import SweepGrid
 from thermaxis.vocabulary import SEARCHABLE
@@ -92,7 +93,7 @@ def validate_config(config: dict, schema_path=CONFIG_SCHEMA) -> dict:
     )
     if errors:
         where = "/".join(map(str, errors[0].absolute_path)) or "top level"
-        raise ValueError(f"config {where}: {errors[0].message}")
+        raise ValueError(f"config {where}: {schema_message(errors[0])}")
     filled["dataset"] = dataset_of(filled)
     return filled
 

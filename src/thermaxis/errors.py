@@ -13,6 +13,7 @@ __all__ = [
     "SelectionWarning",
     "raise_again",
     "recorded",
+    "schema_message",
     "shown",
 ]
 
@@ -34,6 +35,15 @@ def shown(cell) -> str:
     if len(text) <= SHOWN_CHARS:
         return text
     return f"{text[:SHOWN_CHARS]}... ({len(str(cell)):,} characters)"
+
+
+def schema_message(error) -> str:
+    """A JSON-schema error's message with the value it quotes :func:`shown`: jsonschema
+    starts it with the value's whole repr (a 14-number list, a pasted document)."""
+    whole = repr(error.instance)
+    if error.message.startswith(whole):
+        return shown(error.instance) + error.message[len(whole) :]
+    return error.message
 
 
 class SelectionWarning(UserWarning):

@@ -411,3 +411,16 @@ def test_run_plausibility_refuses_overlaps_and_a_grid_step_longer_than_the_run(t
     plausibility.check_run_plausibility(
         dataset, _raw_run([0, 20], 20.0), _plausibility_config(interval_s=1320.0)
     )
+
+
+def test_a_schema_error_quotes_a_long_value_cut_with_its_length():
+    import jsonschema
+
+    from thermaxis.errors import schema_message
+
+    (error,) = jsonschema.Draft202012Validator({"maxItems": 2}).iter_errors([1] * 100)
+    # repr([1] * 100): "[" + 100 ones + 99 ", " + "]" = 300 characters; its first 60 are
+    # "[" and 19 "1, " and "1,".
+    assert schema_message(error) == "[" + "1, " * 19 + "1,... (300 characters) is too long"
+    (short,) = jsonschema.Draft202012Validator({"maxItems": 2}).iter_errors([1, 2, 3])
+    assert schema_message(short) == "[1, 2, 3] is too long"

@@ -187,8 +187,20 @@ def test_a_decoupled_model_reads_the_signal_in_both_its_slope_and_its_intercept(
          "regressions/0/inputs: index 2 is beyond the model's 2 inputs (expected 0 to 1)"),
         (lambda m: m["regressions"][2].update(coefficients=[1.0]),
          "regressions/2/coefficients: 1 number(s) for 2 input(s); expected one per input"),
+        (lambda m: m["inputs"][0].update(sensor="T9"),
+         "inputs/0/sensor: 'T9' is not of a sensor the model reads (expected one of T1, spindle)"),
+        (lambda m: m["inputs"][1].update(training_min_c=5000.0),
+         "inputs/1: training_min_c 5000 is above training_max_c 4000; expected the training "
+         "range low to high"),
+        (lambda m: m["fallback"].update(plausible_c=[90.0, -10.0]),
+         "fallback/plausible_c: expected [low, high] with low < high, got [90, -10]"),
+        # Three targets, three regressions: a 3 x 3 basis; one row short.
+        (lambda m: m["curve_basis"].pop(),
+         "curve_basis: expected 3 row(s) of 3 number(s) (one per regression), got 2 row(s) of 3"),
     ],
-    ids=["infinite_constant", "nan_coefficient", "input_beyond", "coefficient_missing"],
+    ids=["infinite_constant", "nan_coefficient", "input_beyond", "coefficient_missing",
+         "unknown_sensor", "training_range_reversed", "plausible_range_reversed",
+         "curve_basis_short"],
 )  # fmt: skip
 def test_a_model_a_controller_could_not_apply_is_refused_in_one_line(fitted, edit, message):
     model = copy.deepcopy(fitted)

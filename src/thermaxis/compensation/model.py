@@ -47,6 +47,7 @@ from thermaxis.config import (
     FallbackSettings,
     ModelSettings,
 )
+from thermaxis.errors import schema_message
 from thermaxis.method.decouple import MM_PER_M
 from thermaxis.method.features import relative_temperatures
 from thermaxis.method.inputs import base_of, input_definition
@@ -284,14 +285,14 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
     )
     if errors:
         path = "/".join(map(str, errors[0].absolute_path)) or "top level"
-        raise ValueError(f"{where}: {path}: {errors[0].message}")
+        raise ValueError(f"{where}: {path}: {schema_message(errors[0])}")
     # Python's JSON reader takes NaN, Infinity and 1e999; a controller would apply them.
     for path, value in _numbers(record, ()):
         if not math.isfinite(value):
             raise ValueError(
                 f"{where}: {'/'.join(map(str, path))}: expected a finite number, got {value}"
             )
-    _check_regression_shapes(record, where)
+    _check_consistency(record, where)
     # The runtime computes a derived input from its name; a definition saying otherwise
     # would describe a model other than the one run.
     for i, spec in enumerate(record["inputs"]):
@@ -317,6 +318,40 @@ def _numbers(node, path: tuple):
     elif isinstance(node, list):
         for i, value in enumerate(node):
             yield from _numbers(value, (*path, i))
+
+
+def _check_consistency(record: Mapping, where: str) -> None:
+    """What the schema cannot say: each input is of a sensor the model reads, with a
+    training range low to high; the plausible range is low to high; the controller's
+    matrices have a row per line term (b, k) and per position, a column per regression."""
+    sensors = {base_of(s) for s in record["sensors"]}
+    for i, spec in enumerate(record["inputs"]):
+        if base_of(spec["sensor"]) not in sensors:
+            raise ValueError(
+                f"{where}: inputs/{i}/sensor: {spec['sensor']!r} is not of a sensor the model "
+                f"reads (expected one of {', '.join(record['sensors'])})"
+            )
+        if not spec["training_min_c"] <= spec["training_max_c"]:
+            raise ValueError(
+                f"{where}: inputs/{i}: training_min_c {spec['training_min_c']:g} is above "
+                f"training_max_c {spec['training_max_c']:g}; expected the training range low to high"
+            )
+    low, high = record["fallback"]["plausible_c"]
+    if not low < high:
+        raise ValueError(
+            f"{where}: fallback/plausible_c: expected [low, high] with low < high, got "
+            f"[{low:g}, {high:g}]"
+        )
+    n_regressions = len(record["regressions"])
+    for name, rows in (("line_weights", 2), ("curve_basis", len(record["positions_mm"]))):
+        matrix = record[name]
+        if len(matrix) != rows or any(len(row) != n_regressions for row in matrix):
+            raise ValueError(
+                f"{where}: {name}: expected {rows} row(s) of {n_regressions} number(s) (one per "
+                f"regression), got {len(matrix)} row(s) of "
+                f"{', '.join(sorted({str(len(row)) for row in matrix})) or 'none'}"
+            )
+    _check_regression_shapes(record, where)
 
 
 def _check_regression_shapes(record: Mapping, where: str) -> None:

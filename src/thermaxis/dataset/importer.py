@@ -41,7 +41,7 @@ import yaml
 
 from thermaxis.config import fill_defaults
 from thermaxis.dataset.reader import clock_back_hint, load_dataset, median_step_s
-from thermaxis.errors import DataError, shown
+from thermaxis.errors import DataError, schema_message, shown
 from thermaxis.schemas import load_schema
 
 __all__ = [
@@ -124,7 +124,7 @@ def load_mapping(path) -> dict:
     )
     if errors:
         where = "/".join(map(str, errors[0].absolute_path)) or "top level"
-        raise DataError(f"{path}: {where}: {errors[0].message}")
+        raise DataError(f"{path}: {where}: {schema_message(errors[0])}")
     fill_defaults(mapping, schema)
     mapping["time"].setdefault("column", None)
     try:

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.dataset import layout, plausibility, safety
-from thermaxis.errors import DataError, shown
+from thermaxis.errors import DataError, schema_message, shown
 from thermaxis.labels import natural_key
 from thermaxis.schemas import load_schema
 
@@ -63,7 +63,7 @@ def median_step_s(seconds: np.ndarray) -> float:
 def _schema_error(path: Path, error: jsonschema.ValidationError, where: str = "") -> DataError:
     location = "/".join(str(p) for p in error.absolute_path) or "top level"
     prefix = f"{path}: {where}" if where else f"{path}: "
-    return DataError(f"{prefix}{location}: {error.message}")
+    return DataError(f"{prefix}{location}: {schema_message(error)}")
 
 
 @dataclass(frozen=True)
@@ -252,7 +252,7 @@ def _read_runs(path: Path) -> pd.DataFrame:
         if errors:
             err = errors[0]
             column = err.absolute_path[0] if err.absolute_path else ""
-            raise DataError(f"{path}: line {lineno}, column {column!r}: {err.message}")
+            raise DataError(f"{path}: line {lineno}, column {column!r}: {schema_message(err)}")
         records.append(record)
     runs = pd.DataFrame.from_records(records, columns=header)
     dup = runs["run"][runs["run"].duplicated()]
