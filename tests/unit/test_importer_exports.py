@@ -539,8 +539,8 @@ def _edited_clock_mapping(tmp_path: Path, edit) -> Path:
     return path
 
 
-def _elapsed(mapping: dict) -> None:
-    mapping["time"] = {"column": "temp B", "start": "yesterday"}
+def _elapsed(start: str):
+    return lambda mapping: mapping.update(time={"column": "temp B", "start": start})
 
 
 @pytest.mark.parametrize(
@@ -558,10 +558,11 @@ def _elapsed(mapping: dict) -> None:
         (lambda m: m["errors"]["columns"].append({"column": "temp B", "position_mm": 10}),
          "column 'temp B' is mapped twice (TB and an error column)"),
         (lambda m: m.update(licence_file="LICENSE"), "licence_file: "),
-        (_elapsed, "time/start: expected an ISO 8601 time, got 'yesterday'"),
+        (_elapsed("yesterday"), "time/start: expected an ISO 8601 time, got 'yesterday'"),
+        (_elapsed(""), "time/start: expected an ISO 8601 time, got ''"),
     ],
     ids=["overlapping_runs", "reversed_range", "sensor_twice", "error_is_a_sensor",
-         "licence_missing", "start_not_a_time"],
+         "licence_missing", "start_not_a_time", "start_empty"],
 )  # fmt: skip
 def test_a_mapping_that_contradicts_itself_is_refused_before_the_table_is_read(
     tmp_path, edit, message

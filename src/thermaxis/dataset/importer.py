@@ -189,11 +189,11 @@ def _check_start_and_licence(path: Path, mapping: dict) -> None:
     start = mapping["time"].get("start")
     if start is not None:
         try:
-            pd.Timestamp(start)
+            parsed = pd.Timestamp(start)
         except (ValueError, TypeError):
-            raise DataError(
-                f"{path}: time/start: expected an ISO 8601 time, got {shown(start)}"
-            ) from None
+            parsed = pd.NaT
+        if pd.isna(parsed):  # pandas reads "" and "NaT" as no time at all
+            raise DataError(f"{path}: time/start: expected an ISO 8601 time, got {shown(start)}")
     licence = mapping.get("licence_file")
     if licence and not (path.parent / licence).is_file():
         raise DataError(
