@@ -270,3 +270,14 @@ def test_a_controller_log_without_a_sensor_of_the_model_names_it_as_the_models(t
         f"{log}: missing column 'T2', a sensor the model reads; expected one column per sensor "
         "of the model (T1, T2)"
     )
+
+
+@pytest.mark.parametrize("cores", ["0", "-3", "2.5", "many"])
+def test_a_core_count_snakemake_cannot_run_with_is_refused_before_it_starts(cores, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["run", "data/raw/twin", "--cores", cores])
+    assert info.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"thermaxis run: error: argument --cores: expected 'all' or a whole number of cores "
+        f"from 1, got {cores!r}"
+    )

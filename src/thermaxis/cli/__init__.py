@@ -43,8 +43,19 @@ def _subcommand(sub, name: str, summary: str, examples: tuple[str, ...], handler
     return parser
 
 
+def _cores(text: str) -> str:
+    """``all`` or a whole number of cores from 1: Snakemake runs with 0, and every job fails."""
+    if text == "all" or (text.isdigit() and int(text) >= 1):
+        return text
+    raise argparse.ArgumentTypeError(
+        f"expected 'all' or a whole number of cores from 1, got {text!r}"
+    )
+
+
 def _snakemake_parser(parser) -> None:
-    parser.add_argument("--cores", default="all", help="cores Snakemake may use (default: all)")
+    parser.add_argument(
+        "--cores", type=_cores, default="all", help="cores Snakemake may use (default: all)"
+    )
     parser.epilog += "\n\nArguments after -- go to Snakemake as they are."
 
 
