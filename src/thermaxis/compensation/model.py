@@ -33,7 +33,6 @@ and one coefficient per degree C, kernel regressions (SVR, GPR) as an RBF expans
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict
 
@@ -47,6 +46,7 @@ from thermaxis.config import (
     FallbackSettings,
     ModelSettings,
 )
+from thermaxis.dataset.safety import check_finite
 from thermaxis.errors import schema_message
 from thermaxis.method.decouple import MM_PER_M
 from thermaxis.method.features import relative_temperatures
@@ -287,12 +287,9 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
         path = "/".join(map(str, errors[0].absolute_path)) or "top level"
         raise ValueError(f"{where}: {path}: {schema_message(errors[0])}")
     # Python's JSON reader takes NaN, Infinity and 1e999; a controller would apply them.
-    for path, value in _numbers(record, ()):
-        if not math.isfinite(value):
-            raise ValueError(
-                f"{where}: {'/'.join(map(str, path))}: expected a finite number, got {value}"
-            )
+    check_finite(where, record)
     _check_consistency(record, where)
+    _check_regression_shapes(record, where)
     # The runtime computes a derived input from its name; a definition saying otherwise
     # would describe a model other than the one run.
     for i, spec in enumerate(record["inputs"]):
@@ -306,18 +303,6 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
                     f"{where}: inputs/{i}/definition: does not match the input's name "
                     f"{spec['sensor']!r}; expected {expected}"
                 )
-
-
-def _numbers(node, path: tuple):
-    """(path, value) of every float in a JSON document."""
-    if isinstance(node, float):
-        yield path, node
-    elif isinstance(node, Mapping):
-        for key, value in node.items():
-            yield from _numbers(value, (*path, key))
-    elif isinstance(node, list):
-        for i, value in enumerate(node):
-            yield from _numbers(value, (*path, i))
 
 
 def _check_consistency(record: Mapping, where: str) -> None:
@@ -351,7 +336,6 @@ def _check_consistency(record: Mapping, where: str) -> None:
                 f"regression), got {len(matrix)} row(s) of "
                 f"{', '.join(sorted({str(len(row)) for row in matrix})) or 'none'}"
             )
-    _check_regression_shapes(record, where)
 
 
 def _check_regression_shapes(record: Mapping, where: str) -> None:

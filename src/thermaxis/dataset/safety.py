@@ -175,12 +175,14 @@ def load_yaml(path, max_bytes: int = MAX_SHEET_BYTES):
         ) from None
     except RecursionError:
         raise _error(path, "YAML nested too deeply (expected a flat mapping of metadata)") from None
-    _check_finite(path, doc, [])
+    check_finite(path, doc)
     return doc
 
 
-def _check_finite(path: Path, node, where: list) -> None:
-    """A .inf or .nan anywhere in the sheet (an offset, a target) would poison every number after it."""
+def check_finite(path, node, where: list | None = None) -> None:
+    """A .inf or .nan anywhere in a document (a sheet's offset, a model's coefficient)
+    would poison every number after it; ``where`` is the path to ``node``."""
+    where = where or []
     if isinstance(node, float) and not math.isfinite(node):
         raise _error(
             path,
@@ -194,7 +196,7 @@ def _check_finite(path: Path, node, where: list) -> None:
         else ()
     )
     for key, child in children:
-        _check_finite(path, child, [*where, key])
+        check_finite(path, child, [*where, key])
 
 
 def _decode(path: Path, data: bytes) -> str:
