@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -20,6 +21,7 @@ from thermaxis.cleaning.temperatures import (
 )
 from thermaxis.config import Settings, load_config
 from thermaxis.dataset.importer import import_dataset, measurements_of
+from thermaxis.dataset.plausibility import signal_coverage
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.errors import DataError
 from thermaxis.method.folds import evaluate_configuration, select_for_fold
@@ -232,6 +234,41 @@ def test_signals_are_held_as_steps_on_the_grid():
     held = signals_on_grid({"plc": log}, {}, grid)
     # Before the first sample: its value; from 95 s to 200 s: 3000; no ramp in between.
     assert held["rpm"].tolist() == [0, 0, 0, 0, 0, 0, 3000, 3000, 3000, 3000, 3000, 0, 0]
+
+
+def _signal_run(rpm):
+    """A run whose only signal log (plc.csv, one reading a minute) reads ``rpm``."""
+    t0 = pd.Timestamp("2024-01-01T00:00:00")
+    times = t0 + pd.to_timedelta(60 * np.arange(len(rpm)), unit="s")
+    log = pd.DataFrame({"time": times, "rpm": np.asarray(rpm, dtype=float)})
+    windows = pd.DataFrame({"start": [times[0]], "end": [times[-1]]})
+    dataset = SimpleNamespace(root=Path("/data/d"), clock_offsets_s=lambda: {})
+    return dataset, SimpleNamespace(run="R1", signals={"plc": log}), windows, log
+
+
+def test_a_signal_reading_no_signal_reaches_is_missing_and_named():
+    dataset, raw, windows, log = _signal_run([0.0, 3000.0, 1e300, 3000.0, 0.0])
+    (note,) = signal_coverage(dataset, raw, windows, hold_s=300.0)
+    assert note == (
+        "run R1: /data/d/R1/signals/plc.csv: signal rpm: 1 reading(s) beyond ±1e+09 (the first, "
+        "1e+300, at 2024-01-01 00:02:00) treated as missing, the reading before each held: a "
+        "logger's overflow or fault value, not an operating state"
+    )
+    # On a grid every 30 s the 1e300 at 120 s is skipped: 3000 from 60 s holds until 240 s.
+    grid = log["time"].iloc[0] + pd.to_timedelta(np.arange(0, 271, 30), unit="s")
+    held = signals_on_grid(raw.signals, {}, grid)
+    assert held["rpm"].tolist() == [0, 0, 3000, 3000, 3000, 3000, 3000, 3000, 0, 0]
+
+
+def test_a_signal_with_no_usable_reading_is_refused_in_one_line():
+    dataset, raw, windows, _ = _signal_run([-2e9, np.nan, 5e9])
+    with pytest.raises(DataError) as refused:
+        signal_coverage(dataset, raw, windows, hold_s=300.0)
+    assert str(refused.value) == (
+        "/data/d/R1/signals/plc.csv: column 'rpm': every reading is beyond ±1e+09 (the first, "
+        "-2e+09, at 2024-01-01 00:00:00); expected the signal in the unit dataset.yaml declares "
+        "for it"
+    )
 
 
 def test_importer_takes_one_file_per_run_without_a_time_column(tmp_path):

@@ -54,6 +54,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from thermaxis.cleaning._timebase import _NS, MAD_TO_SIGMA, _as_ns, _iso, _timestamp_ns
 from thermaxis.cleaning.clock import _best_offset
 from thermaxis.config import TemperatureCleaning
+from thermaxis.dataset.plausibility import usable_signal_readings
 from thermaxis.labels import sort_naturally
 
 __all__ = [
@@ -719,8 +720,9 @@ def signals_on_grid(
     """Operating signals on the temperature grid, each held at its last logged value.
 
     Signals are set points or programme states (a spindle speed, a feed), not physical
-    quantities with noise: no limits and no spike filter apply, and a step stays a
-    step instead of being smeared into a ramp.  Before a signal's first sample it
+    quantities with noise: no spike filter applies, and a step stays a step instead of
+    being smeared into a ramp. A reading no signal reaches (a logger's overflow value,
+    :func:`~thermaxis.dataset.plausibility.usable_signal_readings`) counts as missing.  Before a signal's first sample it
     takes that sample's value: the grid starts a margin before the first measurement,
     which may be the record's first sample.
     """
@@ -730,7 +732,7 @@ def signals_on_grid(
         t = _as_ns(frame["time"]) + int(round(float(clock_offsets_s.get(name, 0.0)) * _NS))
         for signal in (c for c in frame.columns if c != "time"):
             v = frame[signal].to_numpy(dtype=float)
-            ok = np.isfinite(v)
+            ok = usable_signal_readings(v)
             ts, vs = t[ok], v[ok]
             last = np.clip(np.searchsorted(ts, grid, side="right") - 1, 0, None)
             columns[signal] = vs[last] if vs.size else np.full(grid.size, np.nan)

@@ -21,6 +21,8 @@ __all__ = [
     "check_time_range",
     "check_error_readings",
     "sensor_median_warnings",
+    "MAX_ABS_SIGNAL",
+    "usable_signal_readings",
 ]
 # No linear axis is a kilometre long: beyond this a position is a unit or logging fault.
 MAX_ABS_POSITION_MM = 1e6
@@ -160,11 +162,52 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
     return notes
 
 
+# No operating signal a controller logs (a speed in rpm, a feed in mm/min, a load in %, a
+# current in A, a power in W) reaches a billion in its unit: beyond it a reading is a
+# logger's overflow or fault value, not an operating state.
+MAX_ABS_SIGNAL = 1e9
+
+
+def usable_signal_readings(values) -> np.ndarray:
+    """Which readings of an operating signal are usable: finite and within ±:data:`MAX_ABS_SIGNAL`.
+
+    Signals are set points and states with real steps, so no spike rule fits them; a reading
+    beyond the bound is treated as missing (cleaning holds the reading before it).
+    """
+    values = np.asarray(values, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(values) & (np.abs(values) <= MAX_ABS_SIGNAL)
+
+
+def _signal_range_note(
+    run: str, path, signal: str, times: pd.Series, values: pd.Series
+) -> list[str]:
+    """Warn of a signal's readings beyond :data:`MAX_ABS_SIGNAL`; refuse a signal with no other."""
+    values = values.to_numpy(dtype=float)
+    beyond = ~np.isnan(values) & ~usable_signal_readings(values)
+    if not beyond.any():
+        return []
+    first = int(np.flatnonzero(beyond)[0])
+    which = f"the first, {values[first]:g}, at {times.iloc[first]}"
+    if not usable_signal_readings(values).any():
+        raise _error(
+            path,
+            f"column {signal!r}: every reading is beyond ±{MAX_ABS_SIGNAL:g} ({which}); expected the "
+            "signal in the unit dataset.yaml declares for it",
+        )
+    return [
+        f"run {run}: {path}: signal {signal}: {int(beyond.sum())} reading(s) beyond "
+        f"±{MAX_ABS_SIGNAL:g} ({which}) treated as missing, the reading before each held: a "
+        "logger's overflow or fault value, not an operating state"
+    ]
+
+
 def signal_coverage(dataset, raw, windows: pd.DataFrame, hold_s: float) -> list[str]:
-    """Warn where a signal's log starts or ends more than ``hold_s`` (half of
+    """Warn of a signal's readings beyond :data:`MAX_ABS_SIGNAL` (treated as missing), and
+    where a signal's log starts or ends more than ``hold_s`` (half of
     ``temperatures.max_gap_s``, the temperatures' rule) inside the measurements, since a
     signal is held at its first and last values there, which the log does not show. (The
-    reader refuses a signal with no reading in a run.)"""
+    reader refuses a signal with no reading in a run; this, one with no usable reading.)"""
     if not raw.signals:
         return []
     notes = []
@@ -174,7 +217,8 @@ def signal_coverage(dataset, raw, windows: pd.DataFrame, hold_s: float) -> list[
         path = dataset.root / raw.run / "signals" / f"{source}.csv"
         times = frame["time"] + pd.Timedelta(seconds=offsets.get(source, 0.0))
         for signal in (c for c in frame.columns if c != "time"):
-            logged = times[frame[signal].notna()]
+            notes += _signal_range_note(raw.run, path, signal, frame["time"], frame[signal])
+            logged = times[usable_signal_readings(frame[signal])]
             late = (logged.min() - first).total_seconds()
             early = (last - logged.max()).total_seconds()
             if late > hold_s:
