@@ -11,6 +11,7 @@ import yaml
 
 from helpers import DEFAULTS
 from helpers.builders import set_csv_cell
+from thermaxis.cleaning.run import clean_run
 from thermaxis.dataset.plausibility import check_run_plausibility
 from thermaxis.dataset.reader import (
     clock_back_hint,
@@ -138,15 +139,6 @@ def test_a_missing_sensor_column_is_a_sensor_without_readings_in_that_run(tiny_d
     box = read_run(load_dataset(tiny_dataset), "R1").sources["box"]
     assert list(box.columns) == ["time", "S1", "S2", "S3"]
     assert box["S3"].isna().all() and box["S2"].notna().all()
-
-
-def test_missing_temperature_file(tiny_dataset):
-    (tiny_dataset / "R1" / "temperatures" / "box.csv").unlink()
-    ds = load_dataset(tiny_dataset)
-    with pytest.raises(DataError) as exc:
-        read_run(ds, "R1")
-    msg = one_line(exc)
-    assert "box.csv" in msg and "file not found" in msg
 
 
 def test_unparseable_time(tiny_dataset):
@@ -296,6 +288,57 @@ def test_files_the_reader_skips_are_named(tiny_dataset):
     ]
     other = _notes(dataset, "R2")
     assert other == []
+
+
+def _probe_logs_s3(root) -> None:
+    """tiny_dataset with S3 logged by a second source, ``probe``, at box's times."""
+
+    def move_s3(meta):
+        meta["sensors"][2]["source"] = "probe"
+        meta["sources"].append({"name": "probe", "clock_note": "reference", "clock_offset_s": 0})
+
+    edit_yaml(root / "dataset.yaml", move_s3)
+    for run in ("R1", "R2"):
+        box = root / run / "temperatures" / "box.csv"
+        rows = [line.split(",") for line in box.read_text().splitlines()]
+        box.write_text("".join(",".join(r[:3]) + "\n" for r in rows))
+        (box.parent / "probe.csv").write_text("".join(f"{r[0]},{r[3]}\n" for r in rows))
+
+
+def test_a_source_without_a_log_in_one_run_costs_its_sensors_there(tiny_dataset):
+    # Issue 33: one logger that recorded nothing in one run costs its sensors in that run
+    # (they leave the candidates, as a sensor without a column does), not the dataset.
+    _probe_logs_s3(tiny_dataset)
+    missing = tiny_dataset / "R1" / "temperatures" / "probe.csv"
+    missing.unlink()
+    dataset = load_dataset(tiny_dataset)
+    probe = read_run(dataset, "R1").sources["probe"]
+    assert (len(probe), list(probe.columns)) == (0, ["time", "S3"])
+    assert _notes(dataset, "R1") == [
+        f"run R1: {missing}: no log of source probe in this run; its sensor(s) S3 have no "
+        "reading here"
+    ]
+    assert _notes(dataset, "R2") == []
+    cleaned = clean_run(tiny_dataset, "R1", DEFAULTS.cleaning, ())
+    assert cleaned.error is None
+    assert cleaned.tables.temperatures["sensor"].unique().tolist() == ["S1", "S2", "S3"]
+    assert (
+        cleaned.tables.temperatures.loc[cleaned.tables.temperatures["sensor"] == "S3", "absolute_c"]
+        .isna()
+        .all()
+    )
+    assert any("S3 leaves the candidate sensors of every fold" in w for w in cleaned.warnings)
+
+
+def test_a_run_without_any_temperature_log_is_refused(tiny_dataset):
+    folder = tiny_dataset / "R1" / "temperatures"
+    (folder / "box.csv").unlink()
+    with pytest.raises(DataError) as exc:
+        read_run(load_dataset(tiny_dataset), "R1")
+    assert one_line(exc) == (
+        f"{folder}: no temperature log; expected one CSV per source that dataset.yaml declares "
+        "sensors for (box.csv)"
+    )
 
 
 def test_a_missing_operating_signal_column_is_refused(tmp_path):

@@ -1057,11 +1057,20 @@ CASES = [
         E2_HMI,
         target="clean:E2",
     ),
+    # One logger that recorded nothing in a run costs its sensors there (issue 33).
     Case(
         "temp_missing_source",
         lambda ds, w: (ds / E2_HMI).unlink(),
-        "data file not found",
+        "no log of source hmi in this run; its sensor(s) T12 have no reading here",
         E2_HMI,
+        target="clean:E2",
+        fails=False,
+    ),
+    Case(
+        "temp_every_source_missing",
+        lambda ds, w: [p.unlink() for p in (ds / "E2/temperatures").glob("*.csv")],
+        "no temperature log; expected one CSV per source that dataset.yaml declares sensors for",
+        "E2/temperatures",
         target="clean:E2",
     ),
     Case(

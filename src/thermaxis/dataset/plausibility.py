@@ -81,6 +81,19 @@ def check_dataset_shape(dataset) -> None:
         )
 
 
+def missing_logs(dataset, raw) -> list[str]:
+    """A note per temperature source with no log file in the run: its sensors have no
+    reading there (the reader reads the absent file as a log without rows), which costs
+    them, not the run."""
+    return [
+        f"run {raw.run}: {dataset.root / raw.run / 'temperatures' / f'{source}.csv'}: no log of "
+        f"source {source} in this run; its sensor(s) {', '.join(dataset.sensors_of(source))} "
+        "have no reading here"
+        for source, log in raw.sources.items()
+        if log.empty and not (dataset.root / raw.run / "temperatures" / f"{source}.csv").exists()
+    ]
+
+
 def skipped_files(folder: Path) -> list[str]:
     """A note per data folder of a run holding files the reader skips: only ``*.csv`` is
     read, so an XLSX left beside the exports, or an ``M01.CSV``, would vanish unsaid.
@@ -105,7 +118,7 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
     """Refuse implausible readings or a grid step longer than the run; warn of implausible
     medians and of files the reader skips."""
     folder = dataset.root / raw.run
-    notes = skipped_files(folder)
+    notes = skipped_files(folder) + missing_logs(dataset, raw)
     for name, measurement in raw.measurements.items():
         # The file and its lines as read; a run built in memory has neither.
         path = raw.error_files.get(name, name)

@@ -593,7 +593,18 @@ def _read_logs(folder: Path, dataset: Dataset, kind: str) -> dict[str, pd.DataFr
         expected = of(source)
         if expected:
             path = safety.check_inside(folder / f"{source}.csv", dataset.root, what=f"{kind} file")
+            if kind == "sensor" and not path.is_symlink() and not path.exists():
+                # A logger that recorded nothing in this run costs its sensors there, not the
+                # run (issue 33): they have no reading, as a missing column has none. An
+                # operating signal is every model's input: its log is required.
+                logs[source] = _no_readings(expected)
+                continue
             logs[source] = read_temperature_source(path, expected, known, kind)
+    if kind == "sensor" and not any(len(log) for log in logs.values()):
+        raise DataError(
+            f"{folder}: no temperature log; expected one CSV per source that dataset.yaml "
+            f"declares sensors for ({', '.join(f'{s}.csv' for s in logs)})"
+        )
     if folder.is_dir():
         for extra in sorted(folder.glob("*.csv")):
             if extra.stem not in dataset.sources:
@@ -606,6 +617,16 @@ def _read_logs(folder: Path, dataset: Dataset, kind: str) -> dict[str, pd.DataFr
                     f"{extra}: source {extra.stem!r} logs no {kind} declared in dataset.yaml"
                 )
     return logs
+
+
+def _no_readings(sensors) -> pd.DataFrame:
+    """A source's log with its sensors' columns and no reading (its file is absent)."""
+    return pd.DataFrame(
+        {
+            "time": pd.Series([], dtype="datetime64[ns]"),
+            **{s: pd.Series([], dtype=float) for s in sensors},
+        }
+    )
 
 
 def _measurement_source(dataset: Dataset, run: str) -> tuple[Path, list[Path]]:
