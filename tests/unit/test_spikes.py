@@ -221,6 +221,26 @@ def test_an_isolated_5_c_spike_is_still_replaced_and_is_no_excursion():
     assert excursions(t[kept], x[kept], _limit(t[kept], x[kept])) == []
 
 
+@pytest.mark.parametrize("interval_s", [1.0, 10.0, 60.0])
+def test_an_up_and_down_glitch_is_one_spike_and_no_excursion(interval_s):
+    # +3 C then -3 C off a noisy quantised ramp (interference that overshoots and
+    # undershoots): each half lies beside the other, so neither alone returns to the trend.
+    # Both go, and the record has no excursion left; before, the pair was kept and a
+    # later pair made a false 'excursion' of every sample between them.
+    t, x = quantised_ramp("steepening", 0.1, interval_s, noise_c=0.03, seed=5)
+    for i in (t.size // 3, 2 * t.size // 3):
+        x[i] += 3.0
+        x[i + 1] -= 3.0
+    assert np.flatnonzero(spike_mask(t, x, **LIMITS)).tolist() == [
+        t.size // 3,
+        t.size // 3 + 1,
+        2 * t.size // 3,
+        2 * t.size // 3 + 1,
+    ]
+    kept = ~spike_mask(t, x, **LIMITS)
+    assert excursions(t[kept], x[kept], _limit(t[kept], x[kept])) == []
+
+
 def test_a_departure_that_does_not_return_is_no_spike():
     # The sensor: off its rise by 2.8 C, then 1.6, 1.8, 1.5, 1.4 on 5-minute logging.
     t = np.arange(40) * 300.0

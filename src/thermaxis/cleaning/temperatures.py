@@ -196,6 +196,21 @@ def interior_excursions(x: np.ndarray, width: int) -> np.ndarray:
     return np.maximum(above, below)
 
 
+def _bipolar_excursions(x: np.ndarray) -> np.ndarray:
+    """How far each pair of adjacent samples lies beyond both flanking samples, one above
+    them and the other below (a glitch that overshoots and undershoots).
+
+    Element i is for the pair starting at sample i + 1, as :func:`interior_excursions`
+    with width 2; <= 0 unless the pair straddles both flanks, which no trend's samples do.
+    """
+    n = max(x.size - 3, 0)
+    left, first, second, right = x[:n], x[1 : n + 1], x[2 : n + 2], x[3 : n + 3]
+    high, low = np.maximum(left, right), np.minimum(left, right)
+    return np.maximum(
+        np.minimum(first - high, low - second), np.minimum(low - first, second - high)
+    )
+
+
 def _end_excursion(t_min: np.ndarray, x: np.ndarray, width: int, rate: float) -> float:
     """How far the first ``width`` samples lie beyond what the rate limit allows from the next sample.
 
@@ -216,6 +231,10 @@ def _blocks(
     found = []
     for width in range(1, MAX_SPIKE_SAMPLES + 1):
         excursions = interior_excursions(x, width)
+        if width == 2:
+            # Each sample of an up-and-down pair fails the single-sample test: its
+            # neighbour is the other half of the glitch, so the flanks seem off trend.
+            excursions = np.maximum(excursions, _bipolar_excursions(x))
         found += [
             (float(excursions[i]), int(i) + 1, width) for i in np.flatnonzero(excursions > limit)
         ]
@@ -274,8 +293,8 @@ def spike_mask(
     """Boolean mask of the samples that are spikes: short, isolated departures that return.
 
     A block of one or two adjacent samples (:data:`MAX_SPIKE_SAMPLES`) is a spike when
-    every sample of it lies beyond both samples flanking the block, on the same side,
-    by more than :func:`spike_limit`, its samples span at most ``window_s`` (config
+    every sample of it lies beyond both samples flanking the block, on the same side (or,
+    for two, one above both and the other below both), by more than :func:`spike_limit`, its samples span at most ``window_s`` (config
     ``temperatures.spike_window_s``), and the flanking samples lie on one local trend
     (:func:`_returns`): the series comes back to where it was heading. A sample between
     its neighbours is never a spike, so a trend is kept however steep, steepening or
