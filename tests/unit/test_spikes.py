@@ -241,6 +241,25 @@ def test_an_up_and_down_glitch_is_one_spike_and_no_excursion(interval_s):
     assert excursions(t[kept], x[kept], _limit(t[kept], x[kept])) == []
 
 
+def test_heavy_tailed_noise_on_a_flat_sensor_makes_no_excursion():
+    # A noisy sensor whose readings scatter with heavy tails (Student t, 3 degrees of
+    # freedom) on a slow random wander, every 15 s, as fl_thermal's T16: nothing departs.
+    # Two noise extremes must not tilt the trend a departure is measured from (before,
+    # 9 'excursions' in these 20 records, up to 5.5 h long); a lone reading that the
+    # spike filter leaves may still be named.
+    longest = 0
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        wander = np.zeros(2000)
+        for k in range(1, wander.size):
+            wander[k] = 0.9 * wander[k - 1] + rng.normal(0.0, 0.03)
+        t, x = np.arange(wander.size) * 15.0, 25.0 + wander + 0.07 * rng.standard_t(3, wander.size)
+        kept = ~spike_mask(t, x, **LIMITS)
+        found = excursions(t[kept], x[kept], _limit(t[kept], x[kept]))
+        longest = max([longest, *(last - first + 1 for first, last, _ in found)])
+    assert longest == 1
+
+
 def test_a_departure_that_does_not_return_is_no_spike():
     # The sensor: off its rise by 2.8 C, then 1.6, 1.8, 1.5, 1.4 on 5-minute logging.
     t = np.arange(40) * 300.0

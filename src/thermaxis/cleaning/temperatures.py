@@ -379,12 +379,29 @@ def _jump_back(jumps: np.ndarray, at: np.ndarray, k: int, limit: float) -> int |
     return None
 
 
+# Readings on each side of a departure that stand for the trend across it.
+_FLANK_READINGS = 5
+
+
+def _trend_across(t: np.ndarray, x: np.ndarray, i: int, j: int) -> np.ndarray:
+    """The trend at readings ``i .. j - 1``: the line joining the medians (time and value)
+    of up to :data:`_FLANK_READINGS` readings just before ``i`` and from ``j`` on.
+
+    Medians, not the two readings next to the departure: on a noisy sensor one reading
+    tilts the line by its noise, and every reading between then seems to depart.
+    """
+    before, after = slice(max(i - _FLANK_READINGS, 0), i), slice(j, j + _FLANK_READINGS)
+    t0, x0 = np.median(t[before]), np.median(x[before])
+    t1, x1 = np.median(t[after]), np.median(x[after])
+    return x0 + (x1 - x0) * (t[i:j] - t0) / (t1 - t0)
+
+
 def excursions(t_s, values, limit: float) -> list[tuple[int, int, float]]:
     """Departures that jump away from a sensor's trend and jump back: (first, last, size).
 
     ``first`` and ``last`` index the departing samples; ``size`` is the signed median
-    distance from the straight line joining the samples just before and just after it,
-    which stand for the trend across it. A jump is a step beyond the local trend by
+    distance from the trend across it (:func:`_trend_across`: the line joining the
+    readings just before and just after it, each side's median). A jump is a step beyond the local trend by
     more than twice ``limit`` (:func:`_jumps`: a noisy, quantised ramp's steps reach
     one limit now and then, and over a long span its curvature alone lifts it off the
     line joining its ends); a departure starts with a jump and ends with
@@ -402,7 +419,7 @@ def excursions(t_s, values, limit: float) -> list[tuple[int, int, float]]:
             k += 1
             continue
         i, j = at[k], at[back]
-        line = x[i - 1] + (x[j] - x[i - 1]) * (t[i:j] - t[i - 1]) / (t[j] - t[i - 1])
+        line = _trend_across(t, x, i, j)
         departure = (x[i:j] - line) * np.sign(jumps[i])
         if np.median(departure) > limit:
             found.append((int(i), int(j - 1), float(np.sign(jumps[i]) * np.median(departure))))
