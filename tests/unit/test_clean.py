@@ -244,6 +244,19 @@ def test_clean_temperatures_estimates_offsets_against_the_reference_source():
     assert qc.loc["T7", "clock_offset_s"] == 0.0
 
 
+def test_a_clock_offset_that_cannot_be_estimated_stays_as_declared():
+    # hmi logs a sensor that stays at 30 C: no transient to align, so its declared +5 s
+    # stands, and the run goes on (one logger's clock must not cost the run).
+    box_s = np.arange(0, 9600, 10.0)
+    box = source(box_s, T7=warm_up(box_s), T10=30 + 0 * box_s)
+    hmi = source(box_s, T12=30 + 0 * box_s)
+    result = clean({"box": box, "hmi": hmi}, {"hmi": 5.0}, estimate_clock_offsets=True)
+    ((which, why),) = result.unestimated
+    assert which == "hmi" and why.startswith("cannot estimate a clock offset")
+    qc = result.qc.set_index("sensor")
+    assert qc.loc["T12", "clock_offset_s"] == 5.0 and not qc.loc["T12", "offset_estimated"]
+
+
 def test_clock_offset_estimation_refuses_without_overlap_or_shared_transient():
     s = np.arange(0, 200, 10.0)
     series = pd.Series(warm_up(s), index=at(s))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import shutil
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -328,6 +329,27 @@ def test_a_source_without_a_log_in_one_run_costs_its_sensors_there(tiny_dataset)
         .all()
     )
     assert any("S3 leaves the candidate sensors of every fold" in w for w in cleaned.warnings)
+
+
+def test_a_clock_offset_that_cannot_be_estimated_is_named_and_the_run_goes_on(tiny_dataset):
+    _probe_logs_s3(tiny_dataset)
+    probe = tiny_dataset / "R1" / "temperatures" / "probe.csv"
+    rows = probe.read_text().splitlines()
+    probe.write_text(
+        "".join(f"{r.split(',')[0]},{'S3' if i == 0 else '25.0'}\n" for i, r in enumerate(rows))
+    )
+    settings = replace(
+        DEFAULTS.cleaning,
+        temperatures=replace(DEFAULTS.cleaning.temperatures, estimate_clock_offsets=True),
+    )
+    cleaned = clean_run(tiny_dataset, "R1", settings, ())
+    assert cleaned.error is None
+    assert [w for w in cleaned.warnings if "clock offset" in w] == [
+        # S3 reads 25.0 throughout: nothing to align.
+        f"run R1: {probe}: clock offset not estimated: the series overlap too little for a "
+        "search of +/-120 s or do not vary; the 0 s that dataset.yaml declares is used "
+        "(correct it there if the clock is off)"
+    ]
 
 
 def test_a_run_without_any_temperature_log_is_refused(tiny_dataset):

@@ -128,6 +128,9 @@ class CleanedTemperatures:
     gaps: pd.DataFrame
     excursions: pd.DataFrame
     merged: pd.DataFrame
+    # (source, why) per source whose clock offset could not be estimated: it keeps the
+    # declared offset (qc's offset_estimated is False for its sensors).
+    unestimated: tuple[tuple[str, str], ...] = ()
 
 
 # ----------------------------------------------------------------------------- spikes
@@ -530,8 +533,13 @@ def _clean_source(
 
 def _estimate_offsets(
     natives: list[_Native], sources: Sequence[str], settings: TemperatureCleaning
-) -> None:
-    """Shift every non-reference source by its estimated residual offset (in place)."""
+) -> list[tuple[str, str]]:
+    """Shift every non-reference source by its estimated residual offset (in place).
+
+    A source whose offset cannot be estimated (no shared transient, too little overlap)
+    keeps its declared one: one logger's clock must not cost the run. Returns those
+    sources, each with why.
+    """
     by_source = {s: [n for n in natives if n.source == s] for s in sources}
     reference = settings.reference_source
     if reference is None:
@@ -541,6 +549,7 @@ def _estimate_offsets(
             f"reference_source {reference!r} is not one of the run's sources {list(sources)}"
         )
     ref = [(n.t, n.v) for n in by_source[reference]]
+    unestimated = []
     for source in sources:
         if source == reference:
             continue
@@ -554,7 +563,8 @@ def _estimate_offsets(
                 settings.offset_step_s,
             )
         except ValueError as exc:
-            raise ValueError(f"source {source!r}: {exc}") from None
+            unestimated.append((source, str(exc)))
+            continue
         shift = int(round(best_offset * _NS))
         for native in by_source[source]:
             native.t = native.t + shift
@@ -563,6 +573,7 @@ def _estimate_offsets(
             )
             native.clock_offset_s += best_offset
             native.offset_estimated = True
+    return unestimated
 
 
 # ----------------------------------------------------------------------------- grid
@@ -649,14 +660,16 @@ def clean_temperatures(
     Raises
     ------
     ValueError
-        A sensor in two sources, a source without ``time`` or going back in time, an
-        empty grid, or a clock offset that cannot be estimated.
+        A sensor in two sources, a source without ``time`` or going back in time, or an
+        empty grid. (A clock offset that cannot be estimated is kept as declared and
+        listed in ``unestimated``.)
     """
     if not sources:
         raise ValueError("no temperature sources: expected at least one source DataFrame")
     natives = _native_series(sources, clock_offsets_s, settings)
+    unestimated = []
     if settings.estimate_clock_offsets and len(sources) > 1:
-        _estimate_offsets(natives, list(sources), settings)
+        unestimated = _estimate_offsets(natives, list(sources), settings)
     grid = _grid(*_grid_span(natives, start, end), int(round(settings.interval_s * _NS)))
     columns = {"time": grid.astype("datetime64[ns]")}
     qc_rows, gap_rows = [], []
@@ -671,6 +684,7 @@ def clean_temperatures(
         gaps=_gap_table(gap_rows),
         excursions=_excursion_table(natives, settings.excursions),
         merged=_merged_table(natives),
+        unestimated=tuple(unestimated),
     )
 
 
