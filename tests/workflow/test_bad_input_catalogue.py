@@ -64,6 +64,11 @@ class Case:
 # --------------------------------------------------------------------------- #
 # editing helpers
 # --------------------------------------------------------------------------- #
+def _remove_csv_files(folder: Path) -> None:
+    for path in folder.glob("*.csv"):
+        path.unlink()
+
+
 def _text(path: Path, old: str, new: str, count: int = 1) -> None:
     text = path.read_text(encoding="utf-8")
     assert old in text, f"{old!r} not in {path}"
@@ -911,7 +916,7 @@ CASES = [
     ),
     Case(
         "error_no_files",
-        lambda ds, w: [p.unlink() for p in (ds / "E2/errors").glob("*.csv")],
+        lambda ds, w: _remove_csv_files(ds / "E2/errors"),
         "0 measurement(s)",
         "E2/errors",
         target="clean:E2",
@@ -1068,7 +1073,7 @@ CASES = [
     ),
     Case(
         "temp_every_source_missing",
-        lambda ds, w: [p.unlink() for p in (ds / "E2/temperatures").glob("*.csv")],
+        lambda ds, w: _remove_csv_files(ds / "E2/temperatures"),
         "no temperature log; expected one CSV per source that dataset.yaml declares sensors for",
         "E2/temperatures",
         target="clean:E2",
