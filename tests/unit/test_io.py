@@ -352,15 +352,40 @@ def test_a_clock_offset_that_cannot_be_estimated_is_named_and_the_run_goes_on(ti
     ]
 
 
-def test_a_run_without_any_temperature_log_is_refused(tiny_dataset):
+def test_a_source_whose_log_has_only_its_header_costs_its_sensors_there(tiny_dataset):
+    _probe_logs_s3(tiny_dataset)
+    header_only = tiny_dataset / "R2" / "temperatures" / "probe.csv"
+    header_only.write_text("time,S3\n")
+    dataset = load_dataset(tiny_dataset)
+    assert len(read_run(dataset, "R2").sources["probe"]) == 0
+    assert _notes(dataset, "R2") == [
+        f"run R2: {header_only}: no data rows below the header; its sensor(s) S3 have no "
+        "reading here"
+    ]
+
+
+@pytest.mark.parametrize("empty", ["absent", "header only"])
+def test_a_run_without_any_temperature_reading_is_refused(tiny_dataset, empty):
     folder = tiny_dataset / "R1" / "temperatures"
-    (folder / "box.csv").unlink()
+    if empty == "absent":
+        (folder / "box.csv").unlink()
+    else:
+        (folder / "box.csv").write_text("time,S1,S2,S3\n")
     with pytest.raises(DataError) as exc:
         read_run(load_dataset(tiny_dataset), "R1")
     assert one_line(exc) == (
-        f"{folder}: no temperature log; expected one CSV per source that dataset.yaml declares "
-        "sensors for (box.csv)"
+        f"{folder}: no temperature reading (every log absent or without data rows); expected "
+        "one CSV per source that dataset.yaml declares sensors for (box.csv)"
     )
+
+
+def test_a_signal_log_without_data_rows_is_refused(tmp_path):
+    # A signal is every model's input: unlike a temperature log, its log must have rows.
+    log = tmp_path / "plc.csv"
+    log.write_text("time,spindle_rpm\n")
+    with pytest.raises(DataError) as exc:
+        read_temperature_source(log, ["spindle_rpm"], {"spindle_rpm"}, "signal")
+    assert one_line(exc) == f"{log}: no data rows below the header"
 
 
 def test_a_missing_operating_signal_column_is_refused(tmp_path):

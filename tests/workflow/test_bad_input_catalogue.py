@@ -1072,9 +1072,18 @@ CASES = [
         fails=False,
     ),
     Case(
+        "temp_header_only",
+        lambda ds, w: (ds / E2_HMI).write_text("time,T12\n", encoding="utf-8"),
+        "no data rows below the header; its sensor(s) T12 have no reading here",
+        E2_HMI,
+        target="clean:E2",
+        fails=False,
+    ),
+    Case(
         "temp_every_source_missing",
         lambda ds, w: _remove_csv_files(ds / "E2/temperatures"),
-        "no temperature log; expected one CSV per source that dataset.yaml declares sensors for",
+        "no temperature reading (every log absent or without data rows); expected one CSV per "
+        "source that dataset.yaml declares sensors for",
         "E2/temperatures",
         target="clean:E2",
     ),

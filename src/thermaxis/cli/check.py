@@ -78,6 +78,6 @@ def _log_intervals(logs: dict) -> str:
     return ", ".join(
         f"{name} {log['time'].diff().median().total_seconds():.3g} s"
         if len(log) > 1
-        else f"{name} {'one sample' if len(log) else 'no log'}"
+        else f"{name} {'one sample' if len(log) else 'no readings'}"
         for name, log in logs.items()
     )

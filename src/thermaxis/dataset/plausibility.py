@@ -82,16 +82,23 @@ def check_dataset_shape(dataset) -> None:
 
 
 def missing_logs(dataset, raw) -> list[str]:
-    """A note per temperature source with no log file in the run: its sensors have no
-    reading there (the reader reads the absent file as a log without rows), which costs
-    them, not the run."""
-    return [
-        f"run {raw.run}: {dataset.root / raw.run / 'temperatures' / f'{source}.csv'}: no log of "
-        f"source {source} in this run; its sensor(s) {', '.join(dataset.sensors_of(source))} "
-        "have no reading here"
-        for source, log in raw.sources.items()
-        if log.empty and not (dataset.root / raw.run / "temperatures" / f"{source}.csv").exists()
-    ]
+    """A note per temperature source whose log in the run is absent or has no data rows:
+    its sensors have no reading there (the reader reads such a log as one without rows),
+    which costs them, not the run."""
+    notes = []
+    for source, log in raw.sources.items():
+        if log.empty:
+            path = dataset.root / raw.run / "temperatures" / f"{source}.csv"
+            what = (
+                "no data rows below the header"
+                if path.exists()
+                else f"no log of source {source} in this run"
+            )
+            notes.append(
+                f"run {raw.run}: {path}: {what}; its sensor(s) "
+                f"{', '.join(dataset.sensors_of(source))} have no reading here"
+            )
+    return notes
 
 
 def skipped_files(folder: Path) -> list[str]:

@@ -292,10 +292,13 @@ def load_dataset(root) -> Dataset:
     return Dataset(root=root, meta=meta, runs=runs, sensors=sensors)
 
 
-def _read_csv(path: Path, short_rows_missing: bool = False) -> pd.DataFrame:
+def _read_csv(
+    path: Path, short_rows_missing: bool = False, header_only: bool = False
+) -> pd.DataFrame:
     """A data file's cells as text. ``short_rows_missing``: a row with fewer fields than
     the header is read with its missing fields empty, with a warning (a log); otherwise
-    it is refused (a measurement, whose every reading is needed)."""
+    it is refused (a measurement, whose every reading is needed). ``header_only``: a
+    header without data rows is read as no rows rather than refused."""
     if safety.check_regular_file(path, what="data file") == 0:
         raise DataError(f"{path}: empty file, expected a header and data rows")
     safety.sniff_delimited(path, ",")
@@ -310,7 +313,7 @@ def _read_csv(path: Path, short_rows_missing: bool = False) -> pd.DataFrame:
     except pd.errors.ParserError as exc:
         raise DataError(f"{path}: not a valid CSV file ({str(exc).splitlines()[0]})") from None
     frame.columns = [str(c).strip() for c in frame.columns]
-    if frame.empty:
+    if frame.empty and not header_only:
         raise DataError(f"{path}: no data rows below the header")
     # The parser pads a row that ends early with empty cells, as if they were blanks: a
     # line cut short (a logger stopped mid-write) would pass unsaid. Only a file with an
@@ -424,7 +427,9 @@ def read_temperature_source(
 ) -> pd.DataFrame:
     """One source's log: ``time`` + one float column per sensor (or signal; NaN = missing)."""
     path = Path(path)
-    frame = _read_csv(path, short_rows_missing=True)
+    # A temperature logger that recorded nothing in a run costs its sensors there, as an
+    # absent log does (_read_logs); a signal's readings are every model's input.
+    frame = _read_csv(path, short_rows_missing=True, header_only=kind == "sensor")
     if "time" not in frame.columns:
         raise DataError(f"{path}: missing column 'time' (expected time + one column per {kind})")
     columns = [c for c in frame.columns if c != "time"]
@@ -602,8 +607,8 @@ def _read_logs(folder: Path, dataset: Dataset, kind: str) -> dict[str, pd.DataFr
             logs[source] = read_temperature_source(path, expected, known, kind)
     if kind == "sensor" and not any(len(log) for log in logs.values()):
         raise DataError(
-            f"{folder}: no temperature log; expected one CSV per source that dataset.yaml "
-            f"declares sensors for ({', '.join(f'{s}.csv' for s in logs)})"
+            f"{folder}: no temperature reading (every log absent or without data rows); expected "
+            f"one CSV per source that dataset.yaml declares sensors for ({', '.join(f'{s}.csv' for s in logs)})"
         )
     if folder.is_dir():
         for extra in sorted(folder.glob("*.csv")):
