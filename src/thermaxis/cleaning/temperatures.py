@@ -297,7 +297,8 @@ def spike_mask(
 
     A block of one or two adjacent samples (:data:`MAX_SPIKE_SAMPLES`) is a spike when
     every sample of it lies beyond both samples flanking the block, on the same side (or,
-    for two, one above both and the other below both), by more than :func:`spike_limit`, its samples span at most ``window_s`` (config
+    for two, one above both and the other below both), by more than :func:`spike_limit`,
+    its samples span at most ``window_s`` (config
     ``temperatures.spike_window_s``), and the flanking samples lie on one local trend
     (:func:`_returns`): the series comes back to where it was heading. A sample between
     its neighbours is never a spike, so a trend is kept however steep, steepening or
@@ -404,8 +405,8 @@ def excursions(t_s, values, limit: float) -> list[tuple[int, int, float]]:
 
     ``first`` and ``last`` index the departing samples; ``size`` is the signed median
     distance from the trend across it (:func:`_trend_across`: the line joining the
-    readings just before and just after it, each side's median). A jump is a step beyond the local trend by
-    more than twice ``limit`` (:func:`_jumps`: a noisy, quantised ramp's steps reach
+    readings just before and just after it, each side's median). A jump is a step beyond
+    the local trend by more than twice ``limit`` (:func:`_jumps`: a noisy, quantised ramp's steps reach
     one limit now and then, and over a long span its curvature alone lifts it off the
     line joining its ends); a departure starts with a jump and ends with
     the jump that undoes it (:func:`_jump_back`), its samples beyond that line, on the
@@ -772,8 +773,8 @@ def signals_on_grid(
     Signals are set points or programme states (a spindle speed, a feed), not physical
     quantities with noise: no spike filter applies, and a step stays a step instead of
     being smeared into a ramp. A reading no signal reaches (a logger's overflow value,
-    :func:`~thermaxis.dataset.plausibility.usable_signal_readings`) counts as missing.  Before a signal's first sample it
-    takes that sample's value: the grid starts a margin before the first measurement,
+    :func:`~thermaxis.dataset.plausibility.usable_signal_readings`) counts as missing.
+    Before a signal's first sample it takes that sample's value: the grid starts a margin before the first measurement,
     which may be the record's first sample.
     """
     grid = _as_ns(grid_times)
