@@ -121,8 +121,12 @@ def _points(
         chosen = s.fixed_for(target)
         unknown = [c for c in chosen if c not in T.columns]
         if unknown:
+            # A declared sensor is missing here when cleaning left it out (no reading in
+            # some measurement): the clean job's warning says where.
             raise ValueError(
-                f"config selection.fixed.{target}: unknown sensor {unknown[0]!r} (dataset has {', '.join(T.columns)})"
+                f"config selection.fixed.{target}: sensor {unknown[0]!r} is not a candidate; "
+                f"expected one of {', '.join(T.columns)} (a sensor that is not in dataset.yaml, "
+                "or that lacks a reading in some measurement, is none)"
             )
         return SensitivePoints(
             clusters=tuple((c,) for c in chosen), selected=chosen, grades={}, eta=float("nan")
