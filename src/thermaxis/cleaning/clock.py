@@ -21,6 +21,15 @@ _MIN_PEAK_CORRELATION = 0.5
 # ----------------------------------------------------------------------------- clock offsets
 
 
+class OffsetNotFound(ValueError):
+    """No clock offset could be estimated. ``reason`` says why in a phrase, without the
+    message's advice: the cleaning quotes it when it keeps the declared offset instead."""
+
+    def __init__(self, message: str, reason: str):
+        super().__init__(message)
+        self.reason = reason
+
+
 def _detrend(t: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Residuals of a straight line in time, fitted per row of ``values``."""
     tc = t - t.mean()
@@ -110,20 +119,22 @@ def _best_offset(series, reference, max_offset_s: float, step_s: float):
         if np.isfinite(corr).any() and np.nanmax(corr) > best_peak:
             best_peak, best_corr = float(np.nanmax(corr)), corr
     if best_corr is None:
-        raise ValueError(
-            "cannot estimate a clock offset: the series overlap too little for a search of "
-            f"+/-{max_offset_s:g} s or do not vary"
+        reason = (
+            f"the series overlap too little for a search of +/-{max_offset_s:g} s or do not vary"
         )
+        raise OffsetNotFound(f"cannot estimate a clock offset: {reason}", reason)
     if best_peak < _MIN_PEAK_CORRELATION:
-        raise ValueError(
-            f"cannot estimate a clock offset: best correlation {best_peak:.2f} < {_MIN_PEAK_CORRELATION} "
-            "(no shared transient; give the offset in dataset.yaml instead)"
+        reason = f"best correlation {best_peak:.2f} < {_MIN_PEAK_CORRELATION}"
+        raise OffsetNotFound(
+            f"cannot estimate a clock offset: {reason} "
+            "(no shared transient; give the offset in dataset.yaml instead)",
+            reason,
         )
     j = int(np.nanargmax(best_corr))
     if j in (0, best_corr.size - 1):
-        raise ValueError(
-            f"estimated clock offset reaches the search limit +/-{max_offset_s:g} s "
-            "(no shared transient? give the offset in dataset.yaml instead)"
+        reason = f"estimated clock offset reaches the search limit +/-{max_offset_s:g} s"
+        raise OffsetNotFound(
+            f"{reason} (no shared transient? give the offset in dataset.yaml instead)", reason
         )
     # A parabola through the peak and its neighbours refines the lag below one step.
     c0, c1, c2 = best_corr[j - 1], best_corr[j], best_corr[j + 1]

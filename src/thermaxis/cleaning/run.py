@@ -155,9 +155,8 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     offsets = dataset.clock_offsets_s()
     notes.extend(
         f"run {run}: {_temperature_file(dataset, run, source)}: clock offset not estimated: "
-        f"{why.removeprefix('cannot estimate a clock offset: ').split(' (')[0]}; the "
-        f"{offsets.get(source, 0.0):g} s that dataset.yaml declares is used (correct it there "
-        "if the clock is off)"
+        f"{why}; the {offsets.get(source, 0.0):g} s that dataset.yaml declares is used (correct "
+        "it there if the clock is off)"
         for source, why in cleaned.unestimated
     )
     at_measurements = temperature_cleaning.temperatures_in_windows(

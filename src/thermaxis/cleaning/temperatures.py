@@ -52,7 +52,7 @@ import pandas as pd
 from numpy.lib.stride_tricks import sliding_window_view
 
 from thermaxis.cleaning._timebase import _NS, MAD_TO_SIGMA, _as_ns, _iso, _timestamp_ns
-from thermaxis.cleaning.clock import _best_offset
+from thermaxis.cleaning.clock import OffsetNotFound, _best_offset
 from thermaxis.config import TemperatureCleaning
 from thermaxis.dataset.plausibility import usable_signal_readings
 from thermaxis.labels import sort_naturally
@@ -128,8 +128,9 @@ class CleanedTemperatures:
     gaps: pd.DataFrame
     excursions: pd.DataFrame
     merged: pd.DataFrame
-    # (source, why) per source whose clock offset could not be estimated: it keeps the
-    # declared offset (qc's offset_estimated is False for its sensors).
+    # (source, why) per source whose clock offset could not be estimated (why: the
+    # OffsetNotFound's reason): it keeps the declared offset (qc's offset_estimated is
+    # False for its sensors).
     unestimated: tuple[tuple[str, str], ...] = ()
 
 
@@ -563,8 +564,8 @@ def _estimate_offsets(
                 settings.max_offset_s,
                 settings.offset_step_s,
             )
-        except ValueError as exc:
-            unestimated.append((source, str(exc)))
+        except OffsetNotFound as exc:
+            unestimated.append((source, exc.reason))
             continue
         shift = int(round(best_offset * _NS))
         for native in by_source[source]:
