@@ -200,16 +200,16 @@ def usable_signal_readings(values) -> np.ndarray:
 
 
 def _signal_range_note(
-    run: str, path, signal: str, times: pd.Series, values: pd.Series
+    run: str, path, signal: str, times: pd.Series, values: np.ndarray, usable: np.ndarray
 ) -> list[str]:
-    """Warn of a signal's readings beyond :data:`MAX_ABS_SIGNAL`; refuse a signal with no other."""
-    values = values.to_numpy(dtype=float)
-    beyond = ~np.isnan(values) & ~usable_signal_readings(values)
+    """Warn of a signal's readings beyond :data:`MAX_ABS_SIGNAL` (``usable``: those within,
+    :func:`usable_signal_readings`); refuse a signal with no other."""
+    beyond = ~np.isnan(values) & ~usable
     if not beyond.any():
         return []
     first = int(np.flatnonzero(beyond)[0])
     which = f"the first, {values[first]:g}, at {times.iloc[first]}"
-    if not usable_signal_readings(values).any():
+    if not usable.any():
         raise _error(
             path,
             f"column {signal!r}: every reading is beyond ±{MAX_ABS_SIGNAL:g} ({which}); expected the "
@@ -237,8 +237,10 @@ def signal_coverage(dataset, raw, windows: pd.DataFrame, hold_s: float) -> list[
         path = dataset.root / raw.run / "signals" / f"{source}.csv"
         times = frame["time"] + pd.Timedelta(seconds=offsets.get(source, 0.0))
         for signal in (c for c in frame.columns if c != "time"):
-            notes += _signal_range_note(raw.run, path, signal, frame["time"], frame[signal])
-            logged = times[usable_signal_readings(frame[signal])]
+            values = frame[signal].to_numpy(dtype=float)
+            usable = usable_signal_readings(values)
+            notes += _signal_range_note(raw.run, path, signal, frame["time"], values, usable)
+            logged = times[usable]
             late = (logged.min() - first).total_seconds()
             early = (last - logged.max()).total_seconds()
             if late > hold_s:
