@@ -16,6 +16,7 @@ import pandas as pd
 from thermaxis.cleaning import displacement, passes
 from thermaxis.cleaning import temperatures as temperature_cleaning
 from thermaxis.config import CleaningSettings
+from thermaxis.dataset.layout import log_file
 from thermaxis.dataset.plausibility import check_run_plausibility
 from thermaxis.dataset.reader import Dataset, RawRun, load_dataset, read_run
 from thermaxis.errors import DataError
@@ -463,7 +464,7 @@ def _merged_text(dataset: Dataset, raw: RawRun, row) -> str:
 
 
 def _temperature_file(dataset: Dataset, run: str, source: str):
-    return dataset.root / run / "temperatures" / f"{source}.csv"
+    return log_file(dataset.root / run, source)
 
 
 def _cleaned_temperatures(

@@ -1,4 +1,4 @@
-"""Where a run keeps its interferometer measurements (the raw-data layout of data/README.md).
+"""Where a run keeps its interferometer measurements and its logs (the raw-data layout of data/README.md).
 
 Either one CSV per measurement in ``<run>/errors/``, or every measurement in one
 ``<run>/errors.csv`` told apart by its ``measurement`` column. The reader and the
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["ERRORS_FOLDER", "ERRORS_FILE", "error_source"]
+__all__ = ["ERRORS_FOLDER", "ERRORS_FILE", "error_source", "log_file"]
 
 ERRORS_FOLDER = "errors"
 ERRORS_FILE = "errors.csv"
@@ -21,3 +21,9 @@ def error_source(run_folder) -> Path:
     run_folder = Path(run_folder)
     one_file = run_folder / ERRORS_FILE
     return one_file if one_file.exists() else run_folder / ERRORS_FOLDER
+
+
+def log_file(run_folder, source: str, kind: str = "temperatures") -> Path:
+    """``<run>/temperatures/<source>.csv``, or with ``kind="signals"`` ``<run>/signals/<source>.csv``:
+    one source's log in a run, as the checks name it."""
+    return Path(run_folder) / kind / f"{source}.csv"

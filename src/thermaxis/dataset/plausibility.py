@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from thermaxis.dataset.layout import error_source
+from thermaxis.dataset.layout import error_source, log_file
 from thermaxis.dataset.safety import _error, check_inside, check_name, check_regular_file
 from thermaxis.errors import shown
 
@@ -88,7 +88,7 @@ def missing_logs(dataset, raw) -> list[str]:
     notes = []
     for source, log in raw.sources.items():
         if log.empty:
-            path = dataset.root / raw.run / "temperatures" / f"{source}.csv"
+            path = log_file(dataset.root / raw.run, source)
             what = (
                 "no data rows below the header"
                 if path.exists()
@@ -176,9 +176,7 @@ def check_run_plausibility(dataset, raw, cleaning) -> list[str]:
             over="ignore"
         ):  # the median of two readings near 1e308 is inf: still implausible
             medians = frame.drop(columns="time").median().to_dict()
-        notes += sensor_median_warnings(
-            medians, *median_c, where=str(folder / "temperatures" / f"{source}.csv")
-        )
+        notes += sensor_median_warnings(medians, *median_c, where=str(log_file(folder, source)))
     return notes
 
 
@@ -234,7 +232,7 @@ def signal_coverage(dataset, raw, windows: pd.DataFrame, hold_s: float) -> list[
     first, last = windows["start"].min(), windows["end"].max()
     offsets = dataset.clock_offsets_s()
     for source, frame in raw.signals.items():
-        path = dataset.root / raw.run / "signals" / f"{source}.csv"
+        path = log_file(dataset.root / raw.run, source, "signals")
         times = frame["time"] + pd.Timedelta(seconds=offsets.get(source, 0.0))
         for signal in (c for c in frame.columns if c != "time"):
             values = frame[signal].to_numpy(dtype=float)
