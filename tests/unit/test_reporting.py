@@ -167,6 +167,34 @@ def test_remote_loads_finds_scripts_styles_images_but_not_links():
     assert not any("doi.org" in f for f in found)
 
 
+def test_a_page_shows_outputs_and_markdown_with_each_html_output_focusable():
+    png = b"\x89PNG"
+    figure = rep.figure_html(png, "Fig. 1", alt="the figure")
+    nb = nbformat.v4.new_notebook(
+        cells=[
+            nbformat.v4.new_markdown_cell("## Section *one*"),
+            nbformat.v4.new_code_cell(
+                "secret_input()",
+                outputs=[
+                    nbformat.v4.new_output(
+                        "display_data", data={"text/html": f"<p>first</p>{figure}"}
+                    ),
+                    nbformat.v4.new_output("display_data", data={"text/html": "<p>second</p>"}),
+                ],
+            ),
+        ]
+    )
+    page = notebooks.notebook_to_html(nb, "A title")
+    assert "<title>A title</title>" in page
+    assert re.search(r"<h2[^>]*>Section <em>one</em>", page)
+    assert "secret_input" not in page  # code hidden
+    outputs = re.findall(r'<div class="[^"]*jp-OutputArea-output[^"]*"[^>]*>', page)
+    assert len(outputs) == 2 and all('tabindex="0"' in div for div in outputs)
+    assert re.findall(r"<img [^>]*>", page) == [
+        f'<img src="data:image/png;base64,{base64.b64encode(png).decode()}" alt="the figure">'
+    ]
+
+
 def test_strip_volatile_drops_time_stamps_and_fixes_the_injected_cell_id():
     nb = {
         "metadata": {
