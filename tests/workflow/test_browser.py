@@ -1,8 +1,8 @@
 """The HTML reports in a real browser: headless Chromium loads them from a local server.
 
 Every image must decode, the console must show no error, nothing may be requested from
-anywhere but the local server (or ``data:`` URIs), and the data statement must be on the
-first screen. A screenshot of each page is saved in the test's tmp folder. The two index
+anywhere but the local server (or ``data:`` URIs), the data statement must be on the
+first screen, and no page may scroll sideways (a wide table scrolls in its own box). A screenshot of each page is saved in the test's tmp folder. The two index
 pages (the dataset's and ``results/index.html`` across datasets) must also link only
 files that exist and show the held-out errors of ``metrics.csv``, read here with the
 csv module.
@@ -162,6 +162,12 @@ def test_page_renders_images_without_console_errors(page, browser, server, tmp_p
     )
     assert "SIMULATED DATA" in text
     assert "SIMULATED data" in text or page == "index.html"  # across datasets: names them
+
+    # A wide table scrolls inside its own box: the page itself never scrolls sideways.
+    width, viewport = browser.execute_script(
+        "return [document.documentElement.scrollWidth, document.documentElement.clientWidth]"
+    )
+    assert width <= viewport, f"{page}: {width} px wide in a {viewport} px window"
 
     shot = tmp_path / (page.replace("/", "_").removesuffix(".html") + ".png")
     assert browser.save_screenshot(str(shot))

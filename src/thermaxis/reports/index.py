@@ -243,7 +243,8 @@ def _headline_html(headline: Headline) -> str:
         '<section id="grid"><h2>The reproduction: the paper\'s approach × algorithm grid</h2>',
         f"<p>{html.escape(_grid_sentence(headline.ranking))}</p>",
         f"<p>{_inline_markdown(headline.recommendation)}</p>" if headline.answer else "",
-        '<div id="headline-models">',
+        # Eleven columns: the table scrolls inside its box, not the page.
+        '<div id="headline-models" class="tx-scroll">',
         table_html(
             headline.ranking,
             "%.2f",
