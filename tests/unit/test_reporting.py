@@ -225,11 +225,14 @@ def test_strip_volatile_drops_time_stamps_and_fixes_the_injected_cell_id():
 
 def test_pages_share_one_kernel_but_not_its_names(tmp_path):
     """Three pages of one notebook in one kernel: each sees its own parameter, none sees a
-    name the page before defined, and each counts its cells from 1 as a fresh kernel does."""
+    name the page before defined (an underscored one neither), and each counts its cells
+    from 1 as a fresh kernel does."""
     nb = nbformat.v4.new_notebook(
         cells=[
             nbformat.v4.new_code_cell("x = 0", metadata={"tags": ["parameters"]}),
-            nbformat.v4.new_code_cell("print(x, 'left' in dir())\nleft = x"),
+            nbformat.v4.new_code_cell(
+                "print(x, 'left' in dir(), '_left' in dir())\nleft = _left = x"
+            ),
             nbformat.v4.new_code_cell("x * 10"),
         ]
     )
@@ -251,7 +254,7 @@ def test_pages_share_one_kernel_but_not_its_names(tmp_path):
         code = [c for c in done.cells if c.cell_type == "code"]
         # The parameters cell, papermill's injected cell, then the notebook's two cells.
         assert [c.execution_count for c in code] == [1, 2, 3, 4]
-        assert code[2].outputs[0]["text"] == f"{i} False\n"
+        assert code[2].outputs[0]["text"] == f"{i} False False\n"
         assert code[3].outputs[0]["data"]["text/plain"] == str(10 * i)
         assert code[3].outputs[0]["execution_count"] == 4
         assert f"page {i}" in page["html"].read_text(encoding="utf-8")
