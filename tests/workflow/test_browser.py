@@ -2,10 +2,10 @@
 
 Every image must decode, the console must show no error, nothing may be requested from
 anywhere but the local server (or ``data:`` URIs), the data statement must be on the
-first screen, and no page may scroll sideways (a wide table scrolls in its own box). A screenshot of each page is saved in the test's tmp folder. The two index
-pages (the dataset's and ``results/index.html`` across datasets) must also link only
-files that exist and show the held-out errors of ``metrics.csv``, read here with the
-csv module.
+first screen, and no page may scroll sideways (a wide table scrolls in its own box). A
+screenshot of each page is saved in the test's tmp folder. The two index pages (the
+dataset's and ``results/index.html`` across datasets) must also link only files that
+exist and show the held-out errors of ``metrics.csv``, read here with the csv module.
 
 Needs the Debian packages ``chromium`` and ``chromium-driver`` (``.ci/run`` installs
 them); without them the test is skipped with a message.

@@ -101,8 +101,9 @@ def _exporter():
     """One exporter per process: its templates load once for every page of a report.
 
     nbconvert's HTMLExporter parses every page it renders again with BeautifulSoup, to give
-    images without alternative text a placeholder and to make outputs focusable: a
-    quarter of a page's conversion, 0.2 s a page and 0.5 s for a process's first. Here
+    images without alternative text a placeholder and to make outputs focusable: more
+    than half of a page's conversion (0.1-0.3 s a page, 0.2 s more for a process's
+    first). Here
     every image has its text (:func:`thermaxis.reports.html.figure_html`) and the template
     makes the outputs focusable (``_TEMPLATE``), so the page is the template's rendering,
     with HTMLExporter's two filters (the data type without widgets: reports have none).
