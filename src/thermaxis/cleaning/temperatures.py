@@ -407,9 +407,9 @@ def excursions(t_s, values, limit: float) -> list[tuple[int, int, float]]:
     ``first`` and ``last`` index the departing samples; ``size`` is the signed median
     distance from the trend across it (:func:`_trend_across`: the line joining the
     readings just before and just after it, each side's median). A jump is a step beyond
-    the local trend by more than twice ``limit`` (:func:`_jumps`: a noisy, quantised ramp's steps reach
-    one limit now and then, and over a long span its curvature alone lifts it off the
-    line joining its ends); a departure starts with a jump and ends with
+    the local trend by more than twice ``limit`` (:func:`_jumps`: a noisy, quantised
+    ramp's steps reach one limit now and then, and over a long span its curvature alone
+    lifts it off the line joining its ends); a departure starts with a jump and ends with
     the jump that undoes it (:func:`_jump_back`), its samples beyond that line, on the
     first jump's side, by more than ``limit`` at their median. A jump never undone is a
     change of level, not a departure.
@@ -775,8 +775,8 @@ def signals_on_grid(
     quantities with noise: no spike filter applies, and a step stays a step instead of
     being smeared into a ramp. A reading no signal reaches (a logger's overflow value,
     :func:`~thermaxis.dataset.plausibility.usable_signal_readings`) counts as missing.
-    Before a signal's first sample it takes that sample's value: the grid starts a margin before the first measurement,
-    which may be the record's first sample.
+    Before a signal's first sample it takes that sample's value: the grid starts a margin
+    before the first measurement, which may be the record's first sample.
     """
     grid = _as_ns(grid_times)
     columns = {"time": grid.astype("datetime64[ns]")}

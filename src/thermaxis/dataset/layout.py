@@ -1,4 +1,4 @@
-"""Where a run keeps its interferometer measurements and its logs (the raw-data layout of data/README.md).
+"""Where a run keeps its measurements and its logs (the raw-data layout of data/README.md).
 
 Either one CSV per measurement in ``<run>/errors/``, or every measurement in one
 ``<run>/errors.csv`` told apart by its ``measurement`` column. The reader and the
@@ -24,6 +24,6 @@ def error_source(run_folder) -> Path:
 
 
 def log_file(run_folder, source: str, kind: str = "temperatures") -> Path:
-    """``<run>/temperatures/<source>.csv``, or with ``kind="signals"`` ``<run>/signals/<source>.csv``:
-    one source's log in a run, as the checks name it."""
+    """One source's log in a run, as the checks name it: ``<run>/temperatures/<source>.csv``,
+    or with ``kind="signals"`` ``<run>/signals/<source>.csv``."""
     return Path(run_folder) / kind / f"{source}.csv"
