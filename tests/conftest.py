@@ -4,14 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-# REPO, run_snakemake and workflow_workdir are not used here: tests/workflow/
-# test_bad_input_catalogue.py still imports them from conftest by name. Drop them once it
-# imports them from helpers.
-from helpers import REPO  # noqa: F401
 from helpers.builders import write_dataset
 from helpers.locks import library_lock
 from helpers.runs import Built, Run, make_built, make_lines_run
-from helpers.workflow import run_snakemake, workflow_workdir  # noqa: F401
 
 
 def pytest_configure(config):

@@ -39,7 +39,8 @@ from types import SimpleNamespace
 import pytest
 import yaml
 
-from conftest import REPO, run_snakemake, workflow_workdir
+from helpers import REPO
+from helpers.workflow import run_snakemake, workflow_workdir
 from thermaxis.config import merge
 from thermaxis.pipeline import preflight
 
