@@ -67,8 +67,15 @@ def test_a_claims_table_without_its_columns_is_named():
 
 
 def _page(**headline) -> str:
+    # Held-out run <E2>: largest |deviation| 1.0 -> 1.5 um, beyond the 0.1 um tolerated.
+    verdict = {"held_out_runs": 1, "max_worsening_um": 0.1,
+               "largest_abs": {"improved_runs": 0, "worsened_runs": 1, "median_reduction_um": -0.5,
+                               "worst_increase_um": 0.5},
+               "runs": [{"run": "<E2>", "largest_abs_before_um": 1.0, "largest_abs_after_um": 1.5,
+                         "largest_abs_change_um": 0.5}],
+               "recommended_for_deployment": False}  # fmt: skip
     deployment = {"candidate": "decoupled-mlr-all", "model": "recommended",
-                  "recommended_for_deployment": False, "sentence": "Worsens <E2>."}  # fmt: skip
+                  "recommended_for_deployment": False, "verdict": verdict}  # fmt: skip
     figure = IndexFigure("fig5_unzeroed", "Fig. 5 of run <x>", "figures/f.png",
                          (("png", "figures/f.png"), ("pdf", "figures/f.pdf")))  # fmt: skip
     return render_index(
@@ -85,7 +92,13 @@ def test_the_page_leads_with_the_answer_and_escapes_every_value():
     page = _page(claims=claims_table(_claims(), "claims.csv"))
     assert page.index('id="answer"') < page.index('id="figures"') < page.index('id="tables"')
     assert "<R1>" not in page and "&lt;R1&gt;" in page and "ds&lt;1&gt;" in page
-    assert "Worsens &lt;E2&gt;." in page and "not recommended for deployment" in page
+    assert "not recommended for deployment" in page
+    # The verdict's words in the page's unit (model.json and the exports keep ASCII "um").
+    assert (
+        "held-out run &lt;E2&gt;: largest |deviation| over the stroke 1.00 -&gt; 1.50 µm "
+        "(+0.50 µm, more than compensation.max_worsening_um = 0.1 µm)." in page
+    )
+    assert " um" not in page
     assert "decoupling &lt;b&gt;halves&lt;/b&gt; the error" in page and ">holds<" in page
     # The best model's mean RMSE, in full precision for the sort and rounded for reading.
     assert re.search(r'data-value="1\.0">1\.00</td>', page)

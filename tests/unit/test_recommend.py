@@ -289,6 +289,11 @@ def test_the_page_says_which_folds_had_no_inner_split_to_choose_on():
         "Fold(s) R1, R2 had a single training run, so no inner split to choose on: they keep "
         "the paper's configuration." in page
     )
+    # The means over the two folds: RMSE (5.0 + 1.5) / 2, largest |residual| (8.0 + 3.5) / 2.
+    assert (
+        "a mean held-out RMSE of 3.25 µm and a mean largest |residual| of 5.75 µm, against "
+        "3.25 and 5.75 µm for the paper's configuration" in page
+    )
     chosen = folds.assign(inner_score=[0.9, np.nan])
     page = recommendation_markdown(
         Recommendation(chosen, pd.DataFrame(), pd.DataFrame(), "paper", "max_abs"), "x"

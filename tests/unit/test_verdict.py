@@ -48,6 +48,20 @@ def test_a_run_made_worse_withdraws_the_recommendation_and_says_why():
     assert "NOT recommended for deployment" in verdict_sentence(verdict)
 
 
+def test_the_sentence_is_ascii_for_exports_and_in_micrometres_for_pages():
+    verdict = deployment_verdict(summary(ROWS), max_worsening_um=0.1)
+    head = (
+        "On 3 held-out run(s) compensating improves 2 and worsens 1 (largest |deviation| over "
+        "the stroke; median reduction 0.50 {u}, worst increase 7.70 {u}). NOT recommended for "
+        "deployment: held-out run R2: largest |deviation| over the stroke 8.30 -> 16.00 {u} "
+        "(+7.70 {u}, more than compensation.max_worsening_um = 0.1 {u}); held-out run R2: E of "
+        "ISO 230-2 1.00 -> 3.00 {u} (+2.00 {u}, more than compensation.max_worsening_um = 0.1 {u})."
+    )
+    assert verdict_sentence(verdict) == head.format(u="um")
+    assert verdict_sentence(verdict).isascii()
+    assert verdict_sentence(verdict, unit="µm") == head.format(u="µm")
+
+
 def test_worsening_within_the_tolerance_is_still_recommended():
     rows = [("R1", 1, 2.0, 1.0, 1.0, 0.5), ("R2", 1, 2.0, 2.05, 1.0, 1.0)]
     verdict = deployment_verdict(summary(rows), max_worsening_um=0.1)

@@ -64,8 +64,7 @@ def deployment_verdict(summary: pd.DataFrame, max_worsening_um: float) -> dict:
         )
     changes = run_changes(summary)
     verdict: dict = {"held_out_runs": len(changes), "max_worsening_um": float(max_worsening_um)}
-    reasons = []
-    for name, _, _, words in _available(summary):
+    for name, _, _, _ in _available(summary):
         change = changes[f"{name}_change_um"].to_numpy()
         verdict[name] = {
             "improved_runs": int((change < 0).sum()),
@@ -73,32 +72,45 @@ def deployment_verdict(summary: pd.DataFrame, max_worsening_um: float) -> dict:
             "median_reduction_um": float(-np.median(change)),
             "worst_increase_um": float(max(change.max(), 0.0)),
         }
-        for row in changes.itertuples(index=False):
-            increase = getattr(row, f"{name}_change_um")
-            if increase > max_worsening_um:
-                reasons.append(
-                    f"held-out run {row.run}: {words} {getattr(row, f'{name}_before_um'):.2f} -> "
-                    f"{getattr(row, f'{name}_after_um'):.2f} um (+{increase:.2f} um, more than "
-                    f"compensation.max_worsening_um = {max_worsening_um:g} um)"
-                )
     verdict["runs"] = [
         {k: (str(v) if k == "run" else float(v)) for k, v in row.items()}
         for row in changes.to_dict("records")
     ]
+    # ASCII "um": model.json's words go into the controller exports' headers.
+    reasons = _reasons(verdict, "um")
     verdict["recommended_for_deployment"] = not reasons
     verdict["reasons"] = reasons
     return verdict
 
 
-def verdict_sentence(verdict: dict) -> str:
-    """The verdict in one or two sentences, for export headers, reports and the index."""
+def _reasons(verdict: dict, unit: str) -> list[str]:
+    """Every held-out run and quantity that compensating worsens by more than
+    ``max_worsening_um``, in words, quantity by quantity."""
+    limit = verdict["max_worsening_um"]
+    reasons = []
+    for name, _, _, words in QUANTITIES:
+        for run in verdict["runs"]:
+            increase = run.get(f"{name}_change_um")
+            if increase is not None and increase > limit:
+                reasons.append(
+                    f"held-out run {run['run']}: {words} {run[f'{name}_before_um']:.2f} -> "
+                    f"{run[f'{name}_after_um']:.2f} {unit} (+{increase:.2f} {unit}, more than "
+                    f"compensation.max_worsening_um = {limit:g} {unit})"
+                )
+    return reasons
+
+
+def verdict_sentence(verdict: dict, unit: str = "um") -> str:
+    """The verdict in one or two sentences: with ``unit`` "um" (ASCII) for model.json and the
+    export headers, "µm" for pages and the terminal."""
     n = verdict["held_out_runs"]
     largest = verdict["largest_abs"]
     text = (
         f"On {n} held-out run(s) compensating improves {largest['improved_runs']} and worsens "
         f"{largest['worsened_runs']} (largest |deviation| over the stroke; median reduction "
-        f"{largest['median_reduction_um']:.2f} um, worst increase {largest['worst_increase_um']:.2f} um)."
+        f"{largest['median_reduction_um']:.2f} {unit}, worst increase "
+        f"{largest['worst_increase_um']:.2f} {unit})."
     )
     if verdict["recommended_for_deployment"]:
         return text + " Recommended for deployment."
-    return text + " NOT recommended for deployment: " + "; ".join(verdict["reasons"]) + "."
+    return text + " NOT recommended for deployment: " + "; ".join(_reasons(verdict, unit)) + "."

@@ -719,8 +719,8 @@ def recommendation_markdown(recommendation: Recommendation, statement: str) -> s
         f"# Recommended model\n\n{statement}\n\n"
         f"Recommended (chosen on all runs): **{recommendation.final}**. Chosen fold by fold without the "
         f"held-out run (score: mean inner {recommendation.score}), the pipeline's choice leaves a mean "
-        f"held-out RMSE of {s['rmse_um']:.2f} um and a mean largest |residual| of {s['max_abs_um']:.2f} um, "
-        f"against {s['paper_rmse_um']:.2f} and {s['paper_max_abs_um']:.2f} um for the paper's configuration "
+        f"held-out RMSE of {s['rmse_um']:.2f} µm and a mean largest |residual| of {s['max_abs_um']:.2f} µm, "
+        f"against {s['paper_rmse_um']:.2f} and {s['paper_max_abs_um']:.2f} µm for the paper's configuration "
         f"on the same folds.\n\n"
     )
     unchosen = f.loc[f["inner_score"].isna(), "fold"].astype(str).tolist()

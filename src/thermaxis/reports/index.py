@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from thermaxis.compensation.verdict import verdict_sentence
 from thermaxis.errors import DataError
 from thermaxis.reports.html import (
     REPORT_CSS,
@@ -206,10 +207,12 @@ def _verdict_html(deployment: dict) -> str:
         if ok
         else '<span class="tx-verdict-no">not recommended for deployment</span>'
     )
+    verdict = deployment.get("verdict")
+    sentence = verdict_sentence(verdict, unit="µm") if verdict else ""
     return (
         f"<p>Deployed model: <strong>{html.escape(str(deployment.get('candidate', '')))}</strong> "
         f"(config <code>compensation.model: {html.escape(str(deployment.get('model', '')))}</code>); "
-        f"{word}. {html.escape(str(deployment.get('sentence', '')))}</p>"
+        f"{word}. {html.escape(sentence)}</p>"
     )
 
 
