@@ -102,7 +102,7 @@ def _reasons(verdict: dict, unit: str) -> list[str]:
 
 def verdict_sentence(verdict: dict, unit: str = "um") -> str:
     """The verdict in one or two sentences: with ``unit`` "um" (ASCII) for model.json and the
-    export headers, "µm" for pages and the terminal."""
+    export headers, "µm" for the index and the model reports."""
     n = verdict["held_out_runs"]
     largest = verdict["largest_abs"]
     text = (
