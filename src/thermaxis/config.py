@@ -445,10 +445,13 @@ class FallbackSettings:
 @dataclass(frozen=True)
 class CompensationSettings:
     """Which model is deployed, the configured approach and algorithm (``model: paper``; a
-    single-position dataset uses pointwise), the verdict's tolerance and the fallback."""
+    single-position dataset uses pointwise), what the verdict's tolerance and test rest on
+    and the fallback."""
 
     model: str  # recommended | paper | a candidate's name
-    max_worsening_um: float
+    accuracy_ppm: float
+    tolerance_floor_um: float
+    significance: float
     approach: str
     algorithm: str
     fallback: FallbackSettings
@@ -458,7 +461,9 @@ class CompensationSettings:
         c = compensation
         return cls(
             model=c["model"],
-            max_worsening_um=float(c["max_worsening_um"]),
+            accuracy_ppm=float(c["accuracy_ppm"]),
+            tolerance_floor_um=float(c["tolerance_floor_um"]),
+            significance=float(c["significance"]),
             approach=c["approach"],
             algorithm=c["algorithm"],
             fallback=FallbackSettings(

@@ -1,9 +1,25 @@
-"""The deployment verdict: counts, medians and refusals worked out by hand."""
+"""The deployment verdict: counts, tests and intervals worked out by hand, and the three
+outcomes on synthetic records built like logger records."""
 
+import math
+
+import numpy as np
 import pandas as pd
 import pytest
+from scipy.stats import binom
 
-from thermaxis.compensation.verdict import deployment_verdict, run_changes, verdict_sentence
+from thermaxis.compensation.heldout import held_out_tables
+from thermaxis.compensation.runtime import ControllerParameters, Step
+from thermaxis.compensation.verdict import (
+    clopper_pearson,
+    deployment_verdict,
+    median_interval,
+    run_changes,
+    runs_needed,
+    sign_test_p,
+    tolerance_um,
+    verdict_sentence,
+)
 
 
 def summary(rows):
@@ -31,48 +47,101 @@ def test_worst_values_per_run_in_natural_order():
     assert changes["E_change_um"].tolist() == pytest.approx([-1.0, 2.0, -0.1])
 
 
-def test_a_run_made_worse_withdraws_the_recommendation_and_says_why():
-    verdict = deployment_verdict(summary(ROWS), max_worsening_um=0.1)
+def test_the_tolerance_is_the_accuracy_over_the_stroke_and_never_below_the_floor():
+    # 0.5 ppm of 260 mm = 0.5e-6 * 260e3 um = 0.13 um; of 100 mm 0.05 um, under the 0.1 um floor.
+    assert tolerance_um(260.0, 0.5, 0.1) == pytest.approx(0.13)
+    assert tolerance_um(100.0, 0.5, 0.1) == 0.1
+    assert tolerance_um(0.0, 0.5, 0.1) == 0.1  # a single-point record
+
+
+def test_the_sign_test_by_hand():
+    # 3 of 4 improve: P(X >= 3) = (C(4,3) + C(4,4)) / 16 = 5/16; 7 of 8: (8 + 1) / 256.
+    assert sign_test_p(4, 3) == 5 / 16
+    assert sign_test_p(8, 7) == 9 / 256
+    assert sign_test_p(5, 0) == 1.0
+    assert sign_test_p(1000, 600) == pytest.approx(binom.sf(599, 1000, 0.5), rel=1e-9)
+
+
+def test_runs_needed_is_the_fewest_improving_runs_that_pass():
+    # 3 of 4 plus m improving: p = (n + 1) / 2^n with n = 4 + m, one run not improved:
+    # 6/32, 7/64, 8/128 = 0.0625 > 0.05, 9/256 = 0.035 <= 0.05 at m = 4.
+    assert runs_needed(4, 3, 0.05) == 4
+    assert runs_needed(8, 7, 0.05) == 0
+
+
+def test_the_clopper_pearson_ends_are_one_sided_bounds():
+    low, high = clopper_pearson(4, 3, 0.05)
+    # The lower end L solves P(X >= 3 | n=4, L) = 0.05; the upper end U P(X <= 3 | U) = 0.05.
+    tail = lambda p: sum(math.comb(4, i) * p**i * (1 - p) ** (4 - i) for i in (3, 4))  # noqa: E731
+    assert tail(low) == pytest.approx(0.05, abs=1e-9)
+    assert 1 - high**4 == pytest.approx(0.05, abs=1e-9)
+    assert clopper_pearson(3, 0, 0.05)[0] == 0.0 and clopper_pearson(3, 3, 0.05)[1] == 1.0
+    # Lower end above 1/2 exactly when the sign test passes: 7 of 8 (p = 9/256) does.
+    assert clopper_pearson(8, 7, 0.05)[0] > 0.5 > clopper_pearson(4, 3, 0.05)[0]
+
+
+def test_the_median_interval_is_two_order_statistics():
+    # n = 8: P(X <= 1) = 9/256 <= 0.05 < P(X <= 2) = 37/256, so j = 2: (x_(2), x_(7)),
+    # coverage 1 - 2 * 9/256.
+    assert median_interval([8, 1, 7, 2, 6, 3, 5, 4], 0.05) == (2.0, 7.0, 1 - 18 / 256)
+    # n = 3: even the extremes miss with P(X = 0) = 1/8 > 0.05: the full range, 1 - 2/8.
+    assert median_interval([3, 1, 2], 0.05) == (1.0, 3.0, 0.75)
+
+
+def test_a_change_within_the_tolerance_is_unchanged():
+    # Changes exact in binary: R2 +0.125, R3 -0.125, at a tolerance of 0.125: neither beyond.
+    rows = [("R1", 1, 2.0, 1.0, 1.0, 0.5), ("R2", 1, 2.0, 2.125, 1.0, 1.0),
+            ("R3", 1, 2.0, 1.875, 1.0, 1.0)]  # fmt: skip
+    verdict = deployment_verdict(summary(rows), tolerance=0.125, significance=0.05)
+    assert [r["effect"] for r in verdict["runs"]] == ["improved", "unchanged", "unchanged"]
+    assert (verdict["improved_runs"], verdict["unchanged_runs"]) == (1, 2)
+    assert verdict["outcome"] == "not_recommended"  # 1 of 3: at most half
+    verdict = deployment_verdict(summary(rows), tolerance=0.1, significance=0.05)
+    assert [r["effect"] for r in verdict["runs"]] == ["improved", "worsened", "improved"]
+
+
+def test_a_run_worse_in_e_alone_is_worsened():
+    rows = [("R1", 1, 8.0, 3.0, 1.0, 1.5)]  # largest |deviation| -5, E +0.5
+    verdict = deployment_verdict(summary(rows), tolerance=0.1, significance=0.05)
+    assert verdict["runs"][0]["effect"] == "worsened" and verdict["worsened"] == ["R1"]
+
+
+def test_the_hand_made_rows():
+    verdict = deployment_verdict(summary(ROWS), tolerance=0.1, significance=0.05)
+    # R1 improves, R2 worsens (+7.7 and E +2), R10 improves (-0.5 and E -0.1: E within).
+    assert [r["effect"] for r in verdict["runs"]] == ["improved", "worsened", "improved"]
+    assert verdict["sign_test_p"] == 4 / 8  # P(X >= 2 | n = 3) = (3 + 1) / 8
     largest = verdict["largest_abs"]
-    assert (largest["improved_runs"], largest["worsened_runs"]) == (2, 1)
-    assert largest["median_reduction_um"] == pytest.approx(0.5)  # median of 5.0, -7.7, 0.5
-    assert largest["worst_increase_um"] == pytest.approx(7.7)
-    assert verdict["E"]["worst_increase_um"] == pytest.approx(2.0)
+    assert largest["median_change_um"] == pytest.approx(-0.5)  # of -5.0, 7.7, -0.5
+    assert (largest["worst_run"], largest["worst_change_um"]) == ("R2", pytest.approx(7.7))
+    assert largest["worst_share_of_uncompensated"] == pytest.approx(7.7 / 8.3)
+    assert verdict["E"]["worst_change_um"] == pytest.approx(2.0)
+    assert verdict["outcome"] == "not_established"
     assert verdict["recommended_for_deployment"] is False
-    assert verdict["reasons"] == [
-        "held-out run R2: largest |deviation| over the stroke 8.30 -> 16.00 um "
-        "(+7.70 um, more than compensation.max_worsening_um = 0.1 um)",
-        "held-out run R2: E of ISO 230-2 1.00 -> 3.00 um "
-        "(+2.00 um, more than compensation.max_worsening_um = 0.1 um)",
-    ]
-    assert "NOT recommended for deployment" in verdict_sentence(verdict)
+    # 2 of 3 plus m: 1 - (C(n,0) + C(n,1)) ... by hand (n+1)/2^n <= 0.05 first at n = 8: m = 5.
+    assert verdict["runs_needed"] == 5
 
 
 def test_the_sentence_is_ascii_for_exports_and_in_micrometres_for_pages():
-    verdict = deployment_verdict(summary(ROWS), max_worsening_um=0.1)
+    verdict = deployment_verdict(summary(ROWS), tolerance=0.1, significance=0.05)
+    # 2 of 3: the share's ends solve 3L^2 - 2L^3 = 0.05 (L = 0.135) and 1 - U^3 = 0.05
+    # (U = 0.983); the median's interval is the full range, 1 - 2/8 = 75 %.
     head = (
-        "On 3 held-out run(s) compensating improves 2 and worsens 1 (largest |deviation| over "
-        "the stroke; median reduction 0.50 {u}, worst increase 7.70 {u}). NOT recommended for "
-        "deployment: held-out run R2: largest |deviation| over the stroke 8.30 -> 16.00 {u} "
-        "(+7.70 {u}, more than compensation.max_worsening_um = 0.1 {u}); held-out run R2: E of "
-        "ISO 230-2 1.00 -> 3.00 {u} (+2.00 {u}, more than compensation.max_worsening_um = 0.1 {u})."
+        "Not established: of 3 held-out run(s) compensating improves 2 beyond the +/-0.10 {u} "
+        "the measurement resolves (67%, 90% interval 14% to 98%; sign test p = 0.5 > 0.05), "
+        "leaves 0 unchanged and worsens 1; median change of the largest |deviation| -0.50 {u} "
+        "(75% interval -5.00 to +7.70 {u}). It worsens R2 (worst R2: +7.70 {u}, 93% of its "
+        "uncompensated error). Too few runs to tell: 5 more held-out run(s) that it improves "
+        "would establish it, at the conditions of R2 or outside those tested."
     )
     assert verdict_sentence(verdict) == head.format(u="um")
     assert verdict_sentence(verdict).isascii()
     assert verdict_sentence(verdict, unit="µm") == head.format(u="µm")
 
 
-def test_worsening_within_the_tolerance_is_still_recommended():
-    rows = [("R1", 1, 2.0, 1.0, 1.0, 0.5), ("R2", 1, 2.0, 2.05, 1.0, 1.0)]
-    verdict = deployment_verdict(summary(rows), max_worsening_um=0.1)
-    assert verdict["recommended_for_deployment"] is True
-    assert verdict["largest_abs"]["worsened_runs"] == 1
-    assert verdict_sentence(verdict).endswith("Recommended for deployment.")
-
-
 def test_no_held_out_rows_is_refused():
     with pytest.raises(ValueError, match="needs at least one held-out run"):
-        deployment_verdict(summary([]), max_worsening_um=0.1)
+        deployment_verdict(summary([]), tolerance=0.1, significance=0.05)
 
 
 def test_a_single_point_record_is_judged_on_its_largest_deviation_alone():
@@ -83,10 +152,106 @@ def test_a_single_point_record_is_judged_on_its_largest_deviation_alone():
         ("R1", 2, 6.0, 2.0, nan, nan),
         ("R2", 1, 3.0, 2.5, nan, nan),
     ]
-    verdict = deployment_verdict(summary(rows), max_worsening_um=0.1)
+    verdict = deployment_verdict(summary(rows), tolerance=0.1, significance=0.05)
     assert "E" not in verdict
-    assert verdict["largest_abs"]["median_reduction_um"] == pytest.approx(2.25)  # (6-2, 3-2.5)
+    assert verdict["largest_abs"]["median_change_um"] == pytest.approx(-2.25)  # (-4, -0.5)
     assert sorted(verdict["runs"][0]) == [
-        "largest_abs_after_um", "largest_abs_before_um", "largest_abs_change_um", "run",
+        "effect", "largest_abs_after_um", "largest_abs_before_um", "largest_abs_change_um", "run",
     ]  # fmt: skip
-    assert verdict["recommended_for_deployment"] is True
+    assert verdict["improved_runs"] == 2
+
+
+def test_the_verdict_reads_the_paired_changes_and_the_config_only():
+    """No number of a held-out run reaches the tolerance, and the rule sees only the
+    paired changes: replacing every run's values by others with the same changes leaves
+    the verdict's evidence and outcome as they were; replacing them by anything leaves the
+    tolerance and the level as the config set them."""
+    verdict = deployment_verdict(summary(ROWS), tolerance=0.1, significance=0.05)
+    shifted = summary(ROWS)
+    for column in shifted.columns[2:]:
+        shifted[column] += 50.0  # before and after alike: the same changes
+    same = deployment_verdict(shifted, tolerance=0.1, significance=0.05)
+    keys = ["outcome", "improved_runs", "unchanged_runs", "worsened_runs", "worsened",
+            "sign_test_p", "share_interval", "runs_needed"]  # fmt: skip
+    assert {k: same[k] for k in keys} == {k: verdict[k] for k in keys}
+    for name in ("median_change_um", "median_interval_um", "worst_run"):
+        assert same["largest_abs"][name] == pytest.approx(verdict["largest_abs"][name])
+    other = summary(ROWS)
+    other.iloc[:, 2:] = np.random.default_rng(0).uniform(0, 100, size=(len(ROWS), 4))
+    replaced = deployment_verdict(other, tolerance=0.1, significance=0.05)
+    assert (replaced["tolerance_um"], replaced["significance"]) == (0.1, 0.05)
+
+
+# -------------------------------------------------- synthetic records built like logger records
+
+TARGETS = np.arange(185.0, 446.0, 20.0)  # the paper's 14 targets, a 260 mm stroke
+TOLERANCE = tolerance_um(TARGETS[-1] - TARGETS[0], 0.5, 0.1)  # 0.13 um
+
+
+def _run_summary(run: str, speed_rpm: float, ambient_c: float, gain: float) -> pd.DataFrame:
+    """One held-out run as compensation.heldout tabulates it: six measurements 20 min apart
+    while the axis warms at a rate set by its condition (spindle speed, ambient), read in
+    both directions with 2 um of reversal, and a controller that applies ``gain`` times
+    the true drift's opposite (0.9: a model that tracks the run; above 2: a run unlike
+    those it was trained on, over-compensated)."""
+    minutes = np.arange(6) * 20.0
+    warm = 1.0 - np.exp(-minutes / 60.0)
+    # Slope (um/m) and intercept (um) of the deviation line grow with speed and ambient.
+    k = (speed_rpm / 1000.0) * 12.0 * warm + 0.8 * (ambient_c - 20.0)
+    b = (speed_rpm / 1000.0) * 6.0 * warm - 0.5 * (ambient_c - 20.0)
+    deviations = {
+        m + 1: {"+": b[m] + k[m] * TARGETS / 1000.0 + 1.0, "-": b[m] + k[m] * TARGETS / 1000.0 - 1.0}
+        for m in range(6)
+    }
+    steps = []
+    for m in range(6):
+        dk, db = k[m] - k[0], b[m] - b[0]  # the drift since the pitch table (measurement 1)
+        p = ControllerParameters(-gain * db / 1000.0, -gain * dk * 1e-6, 0.0, (), 0.0, False)
+        steps.append(Step(minutes[m] * 60.0, p, "ok"))
+    tables = held_out_tables(run, steps, minutes, deviations, TARGETS, [s.parameters for s in steps])
+    return tables["summary"]
+
+
+def _record(conditions) -> pd.DataFrame:
+    return pd.concat(
+        [_run_summary(f"E{i}", *c) for i, c in enumerate(conditions, start=1)], ignore_index=True
+    )
+
+
+def test_forty_four_runs_most_improved_is_recommended_and_names_the_edge():
+    # 44 conditions: 4 speeds x 11 ambients; the 4 hottest high-speed runs are unlike the rest.
+    conditions = [(s, a, 0.9) for s in (1000, 2000, 3000, 4000) for a in np.linspace(18, 26, 11)]
+    unlike = {40, 41, 42, 43}  # 0-based: E41-E44, 4000 rpm at the warmest ambients
+    conditions = [(s, a, 2.6 if i in unlike else g) for i, (s, a, g) in enumerate(conditions)]
+    verdict = deployment_verdict(_record(conditions), TOLERANCE, 0.05)
+    assert (verdict["improved_runs"], verdict["worsened_runs"]) == (40, 4)
+    assert verdict["worsened"] == ["E41", "E42", "E43", "E44"]
+    assert verdict["sign_test_p"] == pytest.approx(binom.sf(39, 44, 0.5), rel=1e-9)
+    assert verdict["outcome"] == "recommended" and verdict["recommended_for_deployment"]
+    assert verdict["largest_abs"]["median_change_um"] < 0
+    text = verdict_sentence(verdict)
+    assert text.startswith("Recommended for deployment: of 44 held-out run(s)")
+    assert "It worsens E41, E42, E43 and E44" in text and "the edge of the conditions" in text
+
+
+def test_six_runs_half_worsened_by_several_micrometres_is_not_recommended():
+    conditions = [(1000, 20, 0.9), (2000, 22, 3.0), (3000, 20, 0.9), (3000, 24, 3.0),
+                  (2000, 19, 0.9), (4000, 23, 3.0)]  # fmt: skip
+    verdict = deployment_verdict(_record(conditions), TOLERANCE, 0.05)
+    assert verdict["worsened"] == ["E2", "E4", "E6"]
+    changes = [r["largest_abs_change_um"] for r in verdict["runs"] if r["effect"] == "worsened"]
+    assert min(changes) > 3.0  # several um
+    assert verdict["outcome"] == "not_recommended" and verdict["runs_needed"] is None
+    assert verdict_sentence(verdict).startswith("NOT recommended for deployment: of 6 held-out")
+
+
+def test_four_runs_three_improved_is_not_established_and_says_what_is_needed():
+    conditions = [(1000, 20, 0.9), (2000, 22, 0.9), (3000, 24, 2.6), (4000, 20, 0.9)]
+    verdict = deployment_verdict(_record(conditions), TOLERANCE, 0.05)
+    assert verdict["improved_runs"] == 3 and verdict["worsened"] == ["E3"]
+    assert verdict["sign_test_p"] == 5 / 16
+    assert verdict["outcome"] == "not_established" and verdict["runs_needed"] == 4
+    assert verdict_sentence(verdict).endswith(
+        "Too few runs to tell: 4 more held-out run(s) that it improves would establish it, "
+        "at the conditions of E3 or outside those tested."
+    )

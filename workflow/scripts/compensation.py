@@ -22,7 +22,7 @@ from thermaxis.compensation import heldout, runtime
 from thermaxis.compensation import model as comp_model
 from thermaxis.compensation.exports import file_header
 from thermaxis.compensation.plc import structured_text
-from thermaxis.compensation.verdict import deployment_verdict, verdict_sentence
+from thermaxis.compensation.verdict import deployment_verdict, tolerance_um, verdict_sentence
 from thermaxis.config import (
     CompensationSettings,
     DecouplingSettings,
@@ -166,13 +166,20 @@ def fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps) -> tuple[str,
 
 
 def with_verdict(fitted: dict, summary: pd.DataFrame, choice, settings) -> dict:
-    """model.json: the fitted model with its deployment verdict from the held-out runs."""
-    verdict = deployment_verdict(summary, settings.max_worsening_um)
+    """model.json: the fitted model with its deployment verdict from the held-out runs.
+
+    The per-run tolerance is the instrument's accuracy over the measured stroke (the span
+    of the model's positions): config and layout, never a held-out value.
+    """
+    stroke_mm = float(max(fitted["positions_mm"]) - min(fitted["positions_mm"]))
+    tolerance = tolerance_um(stroke_mm, settings.accuracy_ppm, settings.tolerance_floor_um)
+    verdict = deployment_verdict(summary, tolerance, settings.significance)
     fitted = dict(fitted)
     fitted["deployment"] = {
         **fitted["deployment"],
         "recommended_by_the_evidence": choice["final"]["name"],
         "verdict": verdict,
+        "outcome": verdict["outcome"],
         "recommended_for_deployment": verdict["recommended_for_deployment"],
         "sentence": verdict_sentence(verdict),
     }

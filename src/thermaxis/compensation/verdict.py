@@ -1,22 +1,47 @@
 """Does compensating help? The deployment verdict from the held-out runs.
 
 Each held-out run was compensated by the model of its own fold, which never saw it
-(:func:`thermaxis.compensation.heldout.held_out_tables`). A run is *improved* when its
-largest |deviation| over the stroke and both directions, over all its measurements,
-is smaller after compensating than before, and likewise for E of ISO 230-2; it is
-*worsened* when either grows. A compensation that makes any held-out run worse by more
-than ``max_worsening_um`` in either quantity is not recommended for deployment: it is
-still written, and says so.
+(:func:`thermaxis.compensation.heldout.held_out_tables`). The verdict rests on the paired
+change of each run (compensated minus uncompensated) of its largest |deviation| over the
+stroke and both directions, and of E of ISO 230-2, each the worst over its measurements:
+
+- a run is *improved* when a quantity shrinks by more than the tolerance and none grows
+  by more; *worsened* when one grows by more; *unchanged* otherwise. The tolerance is
+  what the measurement resolves (:func:`tolerance_um`), from the config, never from a run;
+- **recommended** when more than half the runs improve with confidence (the one-sided
+  sign test of "at most half improve", p <= significance) and the median change of the
+  largest |deviation| is a reduction; the runs it worsens are the edge of the conditions
+  it was tested on;
+- **not recommended** when at most half the runs improve, or the median change is an
+  increase;
+- **not established** otherwise: the runs lean to improvement but are too few; the verdict
+  says how many more improving runs would pass the test.
+
+A compensation that is not recommended is still written, and says so. The rule and its
+sources: docs/recommendation.md.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pandas as pd
 
 from thermaxis.labels import natural_key
 
-__all__ = ["QUANTITIES", "run_changes", "deployment_verdict", "verdict_sentence"]
+__all__ = [
+    "QUANTITIES",
+    "OUTCOMES",
+    "tolerance_um",
+    "sign_test_p",
+    "clopper_pearson",
+    "median_interval",
+    "runs_needed",
+    "run_changes",
+    "deployment_verdict",
+    "verdict_sentence",
+]
 
 # (name in the verdict, column before, column after, words)
 QUANTITIES = (
@@ -28,6 +53,51 @@ QUANTITIES = (
     ),
     ("E", "E_uncompensated_um", "E_compensated_um", "E of ISO 230-2"),
 )
+OUTCOMES = ("recommended", "not_established", "not_recommended")
+
+
+def tolerance_um(stroke_mm: float, accuracy_ppm: float, floor_um: float) -> float:
+    """The per-run change the measurement resolves: the instrument's stated linear accuracy
+    over the measured stroke, and never below ``floor_um``. 1 ppm of 1 mm is 1e-3 um."""
+    return max(float(floor_um), float(accuracy_ppm) * float(stroke_mm) * 1e-3)
+
+
+def sign_test_p(n: int, improved: int) -> float:
+    """One-sided p of "at most half the runs improve": P(X >= improved), X ~ Binomial(n, 1/2).
+    An unchanged run counts as not improved."""
+    # Exact integers: the division is the only rounding, at any n.
+    return sum(math.comb(n, i) for i in range(max(improved, 0), n + 1)) / 2**n
+
+
+def clopper_pearson(n: int, k: int, alpha: float) -> tuple[float, float]:
+    """The exact interval of a share k/n: each end a one-sided 1 - alpha bound (two-sided
+    1 - 2 alpha), so the lower end exceeds 1/2 exactly when the sign test passes at alpha."""
+    from scipy.stats import beta
+
+    lower = 0.0 if k == 0 else float(beta.ppf(alpha, k, n - k + 1))
+    upper = 1.0 if k == n else float(beta.ppf(1.0 - alpha, k + 1, n - k))
+    return lower, upper
+
+
+def median_interval(values, alpha: float) -> tuple[float, float, float]:
+    """The distribution-free interval of a median from order statistics: (x_(j), x_(n-j+1))
+    with the largest j whose one-sided miss P(Binomial(n, 1/2) <= j - 1) is at most alpha;
+    with too few values, the full range. Returns (low, high, its two-sided coverage)."""
+    x = np.sort(np.asarray(values, dtype=float))
+    n = x.size
+    j = 1
+    while j < (n + 1) // 2 and 1.0 - sign_test_p(n, j + 1) <= alpha:
+        j += 1
+    coverage = 1.0 - 2.0 * (1.0 - sign_test_p(n, j))
+    return float(x[j - 1]), float(x[n - j]), max(coverage, 0.0)
+
+
+def runs_needed(n: int, improved: int, alpha: float) -> int:
+    """The fewest further runs, all improving, after which the sign test passes at alpha."""
+    m = 0
+    while sign_test_p(n + m, improved + m) > alpha:
+        m += 1
+    return m
 
 
 def _available(summary: pd.DataFrame) -> list[tuple]:
@@ -51,66 +121,136 @@ def run_changes(summary: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(columns)
 
 
-def deployment_verdict(summary: pd.DataFrame, max_worsening_um: float) -> dict:
-    """The verdict ``model.json`` carries, from the held-out summary table (one row per measurement).
+def _effects(changes: pd.DataFrame, names: list[str], tolerance: float) -> list[str]:
+    """Each run improved, unchanged or worsened beyond ``tolerance``, over every quantity."""
+    values = changes[[f"{name}_change_um" for name in names]].to_numpy(dtype=float)
+    worse = (values > tolerance).any(axis=1)
+    better = (values < -tolerance).any(axis=1) & ~worse
+    return ["worsened" if w else "improved" if b else "unchanged" for w, b in zip(worse, better)]
 
-    Returns a JSON-ready dict: the number of held-out runs; per quantity how many runs
-    improve and worsen, the median reduction and the worst increase; the per-run
-    values; ``recommended_for_deployment`` and the reasons when it is false.
+
+def _quantity(changes: pd.DataFrame, name: str, alpha: float) -> dict:
+    """One quantity's median change with its interval, and its worst run."""
+    change = changes[f"{name}_change_um"].to_numpy(dtype=float)
+    low, high, coverage = median_interval(change, alpha)
+    worst = int(change.argmax())
+    before = float(changes[f"{name}_before_um"].iloc[worst])
+    return {
+        "median_change_um": float(np.median(change)),
+        "median_interval_um": [low, high],
+        "median_interval_coverage": coverage,
+        "worst_run": str(changes["run"].iloc[worst]),
+        "worst_change_um": float(change[worst]),
+        "worst_share_of_uncompensated": float(change[worst] / before) if before > 0 else None,
+    }
+
+
+def _outcome(n: int, improved: int, p: float, median_change: float, alpha: float) -> str:
+    if 2 * improved <= n or median_change > 0:
+        return "not_recommended"
+    if p <= alpha and median_change < 0:
+        return "recommended"
+    return "not_established"
+
+
+def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: float) -> dict:
+    """The verdict ``model.json`` carries, from the held-out summary table (one row per
+    measurement), the per-run ``tolerance`` [um] and the sign test's ``significance``.
+
+    Returns a JSON-ready dict: the counts of improved, unchanged and worsened runs (and
+    their names), the share improved with its interval and the sign test's p, per quantity
+    the median change with its interval and the worst run, the per-run values, the
+    ``outcome`` (one of :data:`OUTCOMES`), ``runs_needed`` when not established, and
+    ``recommended_for_deployment``.
     """
     if summary.empty:
         raise ValueError(
             "no held-out measurements: the deployment verdict needs at least one held-out run"
         )
     changes = run_changes(summary)
-    verdict: dict = {"held_out_runs": len(changes), "max_worsening_um": float(max_worsening_um)}
-    for name, _, _, _ in _available(summary):
-        change = changes[f"{name}_change_um"].to_numpy()
-        verdict[name] = {
-            "improved_runs": int((change < 0).sum()),
-            "worsened_runs": int((change > 0).sum()),
-            "median_reduction_um": float(-np.median(change)),
-            "worst_increase_um": float(max(change.max(), 0.0)),
-        }
+    names = [name for name, _, _, _ in _available(summary)]
+    effects = _effects(changes, names, tolerance)
+    n, improved = len(changes), effects.count("improved")
+    p = sign_test_p(n, improved)
+    low, high = clopper_pearson(n, improved, significance)
+    verdict: dict = {
+        "held_out_runs": n,
+        "tolerance_um": float(tolerance),
+        "significance": float(significance),
+        "improved_runs": improved,
+        "unchanged_runs": effects.count("unchanged"),
+        "worsened_runs": effects.count("worsened"),
+        "worsened": [r for r, e in zip(changes["run"], effects) if e == "worsened"],
+        "share_improved": improved / n,
+        "share_interval": [low, high],
+        "sign_test_p": p,
+    }
+    for name in names:
+        verdict[name] = _quantity(changes, name, significance)
+    outcome = _outcome(n, improved, p, verdict["largest_abs"]["median_change_um"], significance)
+    verdict["outcome"] = outcome
+    verdict["runs_needed"] = (
+        max(runs_needed(n, improved, significance), 1) if outcome == "not_established" else None
+    )
+    verdict["recommended_for_deployment"] = outcome == "recommended"
     verdict["runs"] = [
-        {k: (str(v) if k == "run" else float(v)) for k, v in row.items()}
-        for row in changes.to_dict("records")
+        {**{k: (str(v) if k == "run" else float(v)) for k, v in row.items()}, "effect": effect}
+        for row, effect in zip(changes.to_dict("records"), effects)
     ]
-    # ASCII "um": model.json's words go into the controller exports' headers.
-    reasons = _reasons(verdict, "um")
-    verdict["recommended_for_deployment"] = not reasons
-    verdict["reasons"] = reasons
     return verdict
 
 
-def _reasons(verdict: dict, unit: str) -> list[str]:
-    """Every held-out run and quantity that compensating worsens by more than
-    ``max_worsening_um``, in words, quantity by quantity."""
-    limit = verdict["max_worsening_um"]
-    reasons = []
-    for name, _, _, words in QUANTITIES:
-        for run in verdict["runs"]:
-            increase = run.get(f"{name}_change_um")
-            if increase is not None and increase > limit:
-                reasons.append(
-                    f"held-out run {run['run']}: {words} {run[f'{name}_before_um']:.2f} -> "
-                    f"{run[f'{name}_after_um']:.2f} {unit} (+{increase:.2f} {unit}, more than "
-                    f"compensation.max_worsening_um = {limit:g} {unit})"
-                )
-    return reasons
+def _names(runs: list[str]) -> str:
+    return ", ".join(runs[:-1]) + f" and {runs[-1]}" if len(runs) > 1 else runs[0]
 
 
 def verdict_sentence(verdict: dict, unit: str = "um") -> str:
-    """The verdict in one or two sentences: with ``unit`` "um" (ASCII) for model.json and the
-    export headers, "µm" for the index and the model reports."""
-    n = verdict["held_out_runs"]
+    """The verdict in a few sentences, the same words on every surface: with ``unit`` "um"
+    (ASCII) for model.json and the export headers, "µm" for the index, the model reports and
+    the answer line."""
+    n, k, alpha = verdict["held_out_runs"], verdict["improved_runs"], verdict["significance"]
     largest = verdict["largest_abs"]
-    text = (
-        f"On {n} held-out run(s) compensating improves {largest['improved_runs']} and worsens "
-        f"{largest['worsened_runs']} (largest |deviation| over the stroke; median reduction "
-        f"{largest['median_reduction_um']:.2f} {unit}, worst increase "
-        f"{largest['worst_increase_um']:.2f} {unit})."
+    low, high = verdict["share_interval"]
+    m_low, m_high = largest["median_interval_um"]
+    p = verdict["sign_test_p"]
+    evidence = (
+        f"of {n} held-out run(s) compensating improves {k} beyond the "
+        f"+/-{verdict['tolerance_um']:.2f} {unit} the measurement resolves "
+        f"({k / n:.0%}, {1 - 2 * alpha:.0%} interval {low:.0%} to {high:.0%}; sign test "
+        f"p = {p:.2g} {'<=' if p <= alpha else '>'} {alpha:g}), leaves "
+        f"{verdict['unchanged_runs']} unchanged and worsens {verdict['worsened_runs']}; "
+        f"median change of the largest |deviation| {largest['median_change_um']:+.2f} {unit} "
+        f"({largest['median_interval_coverage']:.0%} interval {m_low:+.2f} to "
+        f"{m_high:+.2f} {unit})."
     )
-    if verdict["recommended_for_deployment"]:
-        return text + " Recommended for deployment."
-    return text + " NOT recommended for deployment: " + "; ".join(_reasons(verdict, unit)) + "."
+    worsened = verdict["worsened"]
+    worst = ""
+    if worsened:
+        share = largest["worst_share_of_uncompensated"]
+        of = f", {share:.0%} of its uncompensated error" if share is not None else ""
+        worst = (
+            f" It worsens {_names(worsened)} (worst {largest['worst_run']}: "
+            f"{largest['worst_change_um']:+.2f} {unit}{of})"
+        )
+    outcome = verdict["outcome"]
+    if outcome == "recommended":
+        edge = f"{worst}: the edge of the conditions it was tested on." if worsened else ""
+        return f"Recommended for deployment: {evidence}{edge}"
+    if outcome == "not_established":
+        where = (
+            f"at the conditions of {_names(worsened)} or outside those tested"
+            if worsened
+            else "at conditions outside those tested, or repeats of them"
+        )
+        return (
+            f"Not established: {evidence}{worst + '.' if worsened else ''} Too few runs to tell: "
+            f"{verdict['runs_needed']} more held-out run(s) that it improves would establish it, "
+            f"{where}."
+        )
+    nothing = (
+        " It helps no held-out run beyond the tolerance: nothing here shows that the "
+        "temperatures predict this axis's drift."
+        if k == 0
+        else ""
+    )
+    return f"NOT recommended for deployment: {evidence}{worst + '.' if worsened else ''}{nothing}"

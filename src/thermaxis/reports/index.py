@@ -200,19 +200,22 @@ def _head(title: str, extra_css: str = "") -> list[str]:
     ]
 
 
+# The verdict's outcome as the answer box shows it (the class colours it).
+OUTCOME_WORDS = {
+    "recommended": ("tx-verdict-yes", "recommended for deployment"),
+    "not_established": ("tx-verdict-no", "not established, too few held-out runs to tell"),
+    "not_recommended": ("tx-verdict-no", "not recommended for deployment"),
+}
+
+
 def _verdict_html(deployment: dict) -> str:
-    ok = deployment.get("recommended_for_deployment")
-    word = (
-        '<span class="tx-verdict-yes">compensating helps: recommended for deployment</span>'
-        if ok
-        else '<span class="tx-verdict-no">not recommended for deployment</span>'
-    )
-    verdict = deployment.get("verdict")
-    sentence = verdict_sentence(verdict, unit="µm") if verdict else ""
+    verdict = deployment["verdict"]
+    css, words = OUTCOME_WORDS[verdict["outcome"]]
     return (
         f"<p>Deployed model: <strong>{html.escape(str(deployment.get('candidate', '')))}</strong> "
         f"(config <code>compensation.model: {html.escape(str(deployment.get('model', '')))}</code>); "
-        f"{word}. {html.escape(sentence)}</p>"
+        f'<span class="{css}">{words}</span>. '
+        f"{html.escape(verdict_sentence(verdict, unit='µm'))}</p>"
     )
 
 
@@ -374,7 +377,7 @@ def answers_table(summary: pd.DataFrame, answers: dict[str, dict]) -> pd.DataFra
             else f"none (closest: {a['candidate']})",
             "held-out RMSE, µm": a["rmse_um"],
             "paper's configuration, µm": a["paper_rmse_um"],
-            "verdict": "recommended for deployment" if a["recommended"] else "do not compensate",
+            "verdict": OUTCOME_WORDS[a["outcome"]][1],
         }
         for name, a in sorted(answers.items())
     ]
