@@ -7,6 +7,7 @@ import re
 import pandas as pd
 import pytest
 
+from thermaxis.compensation.verdict import deployment_verdict
 from thermaxis.errors import DataError
 from thermaxis.reports.crossdataset import model_ranking
 from thermaxis.reports.index import (
@@ -67,13 +68,11 @@ def test_a_claims_table_without_its_columns_is_named():
 
 
 def _page(**headline) -> str:
-    # Held-out run <E2>: largest |deviation| 1.0 -> 1.5 um, beyond the 0.1 um tolerated.
-    verdict = {"held_out_runs": 1, "max_worsening_um": 0.1,
-               "largest_abs": {"improved_runs": 0, "worsened_runs": 1, "median_reduction_um": -0.5,
-                               "worst_increase_um": 0.5},
-               "runs": [{"run": "<E2>", "largest_abs_before_um": 1.0, "largest_abs_after_um": 1.5,
-                         "largest_abs_change_um": 0.5}],
-               "recommended_for_deployment": False}  # fmt: skip
+    # Held-out run <E2>: largest |deviation| 1.0 -> 1.5 um, beyond the 0.1 um tolerance.
+    rows = pd.DataFrame({"run": ["<E2>"], "measurement": [1],
+                         "largest_abs_uncompensated_um": [1.0], "largest_abs_compensated_um": [1.5],
+                         "E_uncompensated_um": [0.5], "E_compensated_um": [0.5]})  # fmt: skip
+    verdict = deployment_verdict(rows, tolerance=0.1, significance=0.05)
     deployment = {"candidate": "decoupled-mlr-all", "model": "recommended",
                   "recommended_for_deployment": False, "verdict": verdict}  # fmt: skip
     figure = IndexFigure("fig5_unzeroed", "Fig. 5 of run <x>", "figures/f.png",
@@ -94,10 +93,8 @@ def test_the_page_leads_with_the_answer_and_escapes_every_value():
     assert "<R1>" not in page and "&lt;R1&gt;" in page and "ds&lt;1&gt;" in page
     assert "not recommended for deployment" in page
     # The verdict's words in the page's unit (model.json and the exports keep ASCII "um").
-    assert (
-        "held-out run &lt;E2&gt;: largest |deviation| over the stroke 1.00 -&gt; 1.50 µm "
-        "(+0.50 µm, more than compensation.max_worsening_um = 0.1 µm)." in page
-    )
+    assert "of 1 held-out run(s) compensating improves 0 beyond the +/-0.10 µm" in page
+    assert "It worsens &lt;E2&gt; (worst &lt;E2&gt;: +0.50 µm, 50% of its uncompensated" in page
     assert " um" not in page
     assert "decoupling &lt;b&gt;halves&lt;/b&gt; the error" in page and ">holds<" in page
     # The best model's mean RMSE, in full precision for the sort and rounded for reading.

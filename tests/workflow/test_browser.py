@@ -301,12 +301,12 @@ def test_the_answer_box_leads_the_dataset_index_with_the_numbers_of_its_tables(
     assert deployment["candidate"] in text
     assert f"held-out RMSE {rmse:.2f} µm against {paper:.2f} µm" in text, text
     assert f"{after:.2f} µm compensated against {before:.2f} µm uncompensated" in text, text
-    if deployment["recommended_for_deployment"]:
-        assert (
-            text.startswith(f"Deploy {deployment['candidate']}:")
-            and "Recommended for deployment" in text
-        )
-    else:
-        assert text.startswith("Do not compensate with any candidate."), text
+    candidate = deployment["candidate"]
+    opening = {
+        "recommended": f"Deploy {candidate}:",
+        "not_established": f"Not yet: {candidate},",
+        "not_recommended": "Do not compensate with any candidate.",
+    }[deployment["outcome"]]
+    assert text.startswith(opening), text
     others = [s for s in _sentences_calling_a_model_best(body) if deployment["candidate"] not in s]
     assert others == [], others

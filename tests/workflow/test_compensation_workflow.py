@@ -73,3 +73,27 @@ def test_compensation_algorithm_outside_the_fitted_ones_stops_with_one_line(tmp_
         "models.algorithms (mlr)"
     )
     assert line in proc.stderr
+
+
+def test_the_verdict_reads_the_same_on_every_surface(lines_run, capsys):
+    """model.json's outcome and sentence, the exports' headers, the Structured Text block,
+    the index's answer box and the answer line `make results` prints: one wording."""
+    import html
+
+    from thermaxis.compensation.verdict import OUTCOMES, verdict_sentence
+    from thermaxis.reports import answer
+
+    out = lines_run.out
+    deployment = json.loads((out / "compensation" / "model.json").read_text())["deployment"]
+    verdict = deployment["verdict"]
+    assert deployment["outcome"] == verdict["outcome"] in OUTCOMES
+    assert deployment["recommended_for_deployment"] is (verdict["outcome"] == "recommended")
+    ascii_words, page_words = verdict_sentence(verdict), verdict_sentence(verdict, unit="µm")
+    assert deployment["sentence"] == ascii_words and ascii_words.isascii()
+    for table in TABLES:
+        header = (out / "compensation" / f"{table}.csv").read_text().split("\n# Convention")[0]
+        assert header.endswith(f"# Deployment: {ascii_words}"), (table, header)
+    assert f"Deployment: {ascii_words}" in (out / "compensation" / "ThermalCompensation.st").read_text()
+    assert html.escape(page_words) in (out / "index.html").read_text(encoding="utf-8")
+    answer.main([str(out)])
+    assert page_words in capsys.readouterr().out.splitlines()[-1]

@@ -74,7 +74,7 @@ def test_make_results_after_one_target_of_an_extra_dataset(tmp_path):
     last = proc.stdout.splitlines()[-1]
     assert last.startswith("a: ") and last.endswith("See results/a/index.html"), last
     assert last.split(": ", 1)[1].startswith(
-        ("Deploy ", "Do not compensate with any candidate.")
+        ("Deploy ", "Not yet: ", "Do not compensate with any candidate.")
     ), last
     summary = pd.read_csv(checkout / "results" / "_datasets" / "summary.csv")
     assert summary["dataset"].unique().tolist() == ["a"]
