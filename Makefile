@@ -26,7 +26,7 @@ export PYTHONHASHSEED := 0
 # directory' around its output and bury the answer line; the answer stays last.
 MAKEFLAGS += --no-print-directory
 
-.PHONY: env results import test lint fmt clean twin twin-calibrate twin-conflicts report sweep bench help
+.PHONY: env results import test lint fmt clean twin twin-calibrate twin-conflicts report sweep bench docs help
 
 help:
 	@echo "make help            this list"
@@ -43,6 +43,7 @@ help:
 	@echo "make report          Snakemake report: results/<dataset>/report.zip"
 	@echo "make sweep           sweep cluster counts x selection x algorithms x decoupling degree"
 	@echo "make bench           benchmark; writes results/bench/bench.json and bench.md"
+	@echo "make docs            rewrite the result blocks of README.md and docs/*.md from results/ (after make results)"
 	@echo "make clean           remove results/, logs/, benchmarks/, .snakemake/"
 
 # The stamp holds a hash of the pins and the package metadata; any change reinstalls.
@@ -156,6 +157,13 @@ sweep: env
 # Many minutes (cold run, sweep, scale series up to 50 runs); e.g. BENCH_ARGS="--runs 5 10".
 bench: env
 	$(BIN)/python -m tools.bench --out results/bench $(BENCH_ARGS)
+
+# The README's and the guides' result figures come from results/, never by hand
+# (thermaxis.reports.docblocks); RESULTS and DOCS for another tree or other files.
+RESULTS ?= results
+DOCS ?= README.md $(wildcard docs/*.md)
+docs: env
+	$(BIN)/python -m thermaxis.reports.docblocks --results $(RESULTS) $(DOCS)
 
 clean:
 	rm -rf results logs benchmarks .snakemake

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.paper.equations import published_targets
-from thermaxis.paper.faithfulness import docs_block, faithfulness, update_docs
+from thermaxis.paper.faithfulness import faithfulness
 from thermaxis.paper.published import load_table
 
 
@@ -92,14 +92,6 @@ def test_each_target_holds_or_not_by_its_tolerance():
     # k = -306.494 + 30 (13.247 - 6.629 + 3.326) = -8.174; |b| = 0.576 -> RMS 0.576 > 0.5.
     eq9 = table.set_index("target")["reproduced"]
     assert eq9.filter(like="Eq. 9").tolist() == ["8.174", "0.576"]
-
-
-def test_the_docs_block_is_replaced_whole():
-    table = pd.DataFrame({"target": ["a"], "published": ["1"], "reproduced": ["2"],
-                          "tolerance": ["+-1"], "holds": ["yes"]})  # fmt: skip
-    docs = "head\n" + docs_block(table.assign(reproduced=["9"])) + "\ntail\n"
-    assert update_docs(docs, table) == "head\n" + docs_block(table) + "\ntail\n"
-    assert "| a | 1 | 2 | +-1 | yes |" in update_docs(docs, table)
 
 
 def test_a_dataset_without_the_papers_sensors_gets_eq9_as_not_holding():

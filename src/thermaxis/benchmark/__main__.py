@@ -71,14 +71,20 @@ def comparison(spec: dict, spec_path: Path) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def markdown(table: pd.DataFrame, spec: dict) -> str:
+def shown_table(table: pd.DataFrame) -> pd.DataFrame:
+    """The comparison as comparison.md and the guides show it: thermaxis's MAE, each
+    published model's, and the chosen inputs."""
     shown = table[["channel", "mae_um", *[c for c in table.columns if c.startswith("published_mae_um: ")],
                    "inputs", "ridge_alpha"]]  # fmt: skip
-    shown = shown.rename(
+    return shown.rename(
         columns=lambda c: c.replace("published_mae_um: ", "published: ").replace(
             "mae_um", "thermaxis MAE (um)"
         )
     )
+
+
+def markdown(table: pd.DataFrame, spec: dict) -> str:
+    shown = shown_table(table)
     wins = int(table["below_best_published"].sum())
     head = (
         f"# {spec['name']}: the authors' protocol (train {spec['protocol']['train']}, test {spec['protocol']['test']} "
