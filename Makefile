@@ -159,11 +159,12 @@ bench: env
 	$(BIN)/python -m tools.bench --out results/bench $(BENCH_ARGS)
 
 # The README's and the guides' result figures come from results/, never by hand
-# (thermaxis.reports.docblocks); RESULTS and DOCS for another tree or other files.
+# (thermaxis.reports.docblocks); RESULTS and DOCS for another tree or other files,
+# DOCBLOCKS_ARGS=--check to list the stale blocks only.
 RESULTS ?= results
 DOCS ?= README.md $(wildcard docs/*.md)
 docs: env
-	$(BIN)/python -m thermaxis.reports.docblocks --results $(RESULTS) $(DOCS)
+	$(BIN)/python -m thermaxis.reports.docblocks --results $(RESULTS) $(DOCBLOCKS_ARGS) $(DOCS)
 
 clean:
 	rm -rf results logs benchmarks .snakemake

@@ -64,6 +64,7 @@ SHARED_RUN_FILES = {
     "tests/slurm/test_slurm_workflow.py": "slurm",
     "tests/workflow/test_workflow.py": "lines_run",
     "tests/workflow/test_compensation_workflow.py": "lines_run",
+    "tests/workflow/test_docs_workflow.py": "lines_run",
     "tests/workflow/test_interrupted_run.py": "lines_run",
     "tests/workflow/test_sweep_workflow.py": "lines_run",
     "tests/workflow/test_cli_workflow.py": "lines_run",
