@@ -51,7 +51,9 @@ def test_check_lists_the_stale_blocks_and_writing_makes_them_fresh(tmp_path, cap
     assert main(["--check", "--results", str(tmp_path), str(guide)]) == 1
     assert f"stale: {guide}: results block benchmark rec" in capsys.readouterr().err
     assert main(["--results", str(tmp_path), str(guide)]) == 0
-    assert "old 3.38" not in guide.read_text() and "| ch2 | 4.5 | 4 | b | 100 |" in guide.read_text()
+    assert (
+        "old 3.38" not in guide.read_text() and "| ch2 | 4.5 | 4 | b | 100 |" in guide.read_text()
+    )
     assert main(["--check", "--results", str(tmp_path), str(guide)]) == 0
 
 
@@ -88,7 +90,9 @@ def test_the_readme_quotes_no_result_outside_its_blocks():
 def test_the_guides_blocks_agree_with_the_results_tree_when_there_is_one():
     """After `make results` (and `make docs`), every block says what results/ says."""
     results = REPO / "results"
-    named = {n for p in GUIDES for _, names, _ in blocks_of(p.read_text(encoding="utf-8")) for n in names}
+    named = {
+        n for p in GUIDES for _, names, _ in blocks_of(p.read_text(encoding="utf-8")) for n in names
+    }
     if not all((results / n).is_dir() or (results / "_benchmarks" / n).is_dir() for n in named):
         pytest.skip("no results tree of the embedded datasets here (make results)")
     assert main(["--check", "--results", str(results), *map(str, GUIDES)]) == 0

@@ -200,7 +200,10 @@ def _run_summary(run: str, speed_rpm: float, ambient_c: float, gain: float) -> p
     k = (speed_rpm / 1000.0) * 12.0 * warm + 0.8 * (ambient_c - 20.0)
     b = (speed_rpm / 1000.0) * 6.0 * warm - 0.5 * (ambient_c - 20.0)
     deviations = {
-        m + 1: {"+": b[m] + k[m] * TARGETS / 1000.0 + 1.0, "-": b[m] + k[m] * TARGETS / 1000.0 - 1.0}
+        m + 1: {
+            "+": b[m] + k[m] * TARGETS / 1000.0 + 1.0,
+            "-": b[m] + k[m] * TARGETS / 1000.0 - 1.0,
+        }
         for m in range(6)
     }
     steps = []
@@ -208,7 +211,9 @@ def _run_summary(run: str, speed_rpm: float, ambient_c: float, gain: float) -> p
         dk, db = k[m] - k[0], b[m] - b[0]  # the drift since the pitch table (measurement 1)
         p = ControllerParameters(-gain * db / 1000.0, -gain * dk * 1e-6, 0.0, (), 0.0, False)
         steps.append(Step(minutes[m] * 60.0, p, "ok"))
-    tables = held_out_tables(run, steps, minutes, deviations, TARGETS, [s.parameters for s in steps])
+    tables = held_out_tables(
+        run, steps, minutes, deviations, TARGETS, [s.parameters for s in steps]
+    )
     return tables["summary"]
 
 

@@ -93,7 +93,10 @@ def test_the_verdict_reads_the_same_on_every_surface(lines_run, capsys):
     for table in TABLES:
         header = (out / "compensation" / f"{table}.csv").read_text().split("\n# Convention")[0]
         assert header.endswith(f"# Deployment: {ascii_words}"), (table, header)
-    assert f"Deployment: {ascii_words}" in (out / "compensation" / "ThermalCompensation.st").read_text()
+    assert (
+        f"Deployment: {ascii_words}"
+        in (out / "compensation" / "ThermalCompensation.st").read_text()
+    )
     assert html.escape(page_words) in (out / "index.html").read_text(encoding="utf-8")
     answer.main([str(out)])
     assert page_words in capsys.readouterr().out.splitlines()[-1]

@@ -55,8 +55,15 @@ def test_make_docs_writes_the_answer_and_the_held_out_error_from_results(lines_r
     with open(out / "tables" / "metrics.csv", encoding="utf-8") as fh:
         metrics = [r for r in csv.DictReader(fh) if r["target"] == "error"]
     for approach, algorithm in {(r["approach"], r["algorithm"]) for r in metrics}:
-        values = [float(r["rmse"]) for r in metrics if (r["approach"], r["algorithm"]) == (approach, algorithm)]
-        assert f"| {approach} | {algorithm} | {len(values)} | {sum(values) / len(values):.2f} |" in text
+        values = [
+            float(r["rmse"])
+            for r in metrics
+            if (r["approach"], r["algorithm"]) == (approach, algorithm)
+        ]
+        assert (
+            f"| {approach} | {algorithm} | {len(values)} | {sum(values) / len(values):.2f} |"
+            in text
+        )
     # Fresh now; the stale text is found stale.
     assert _make_docs(results, guide, "DOCBLOCKS_ARGS=--check").returncode == 0
     guide.write_text(stale, encoding="utf-8")

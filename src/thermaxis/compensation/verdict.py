@@ -126,7 +126,10 @@ def _effects(changes: pd.DataFrame, names: list[str], tolerance: float) -> list[
     values = changes[[f"{name}_change_um" for name in names]].to_numpy(dtype=float)
     worse = (values > tolerance).any(axis=1)
     better = (values < -tolerance).any(axis=1) & ~worse
-    return ["worsened" if w else "improved" if b else "unchanged" for w, b in zip(worse, better)]
+    return [
+        "worsened" if w else "improved" if b else "unchanged"
+        for w, b in zip(worse, better, strict=True)
+    ]
 
 
 def _quantity(changes: pd.DataFrame, name: str, alpha: float) -> dict:
@@ -180,7 +183,7 @@ def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: fl
         "improved_runs": improved,
         "unchanged_runs": effects.count("unchanged"),
         "worsened_runs": effects.count("worsened"),
-        "worsened": [r for r, e in zip(changes["run"], effects) if e == "worsened"],
+        "worsened": [r for r, e in zip(changes["run"], effects, strict=True) if e == "worsened"],
         "share_improved": improved / n,
         "share_interval": [low, high],
         "sign_test_p": p,
@@ -195,7 +198,7 @@ def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: fl
     verdict["recommended_for_deployment"] = outcome == "recommended"
     verdict["runs"] = [
         {**{k: (str(v) if k == "run" else float(v)) for k, v in row.items()}, "effect": effect}
-        for row, effect in zip(changes.to_dict("records"), effects)
+        for row, effect in zip(changes.to_dict("records"), effects, strict=True)
     ]
     return verdict
 

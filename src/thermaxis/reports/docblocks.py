@@ -35,7 +35,9 @@ BLOCK = re.compile(
 
 def _need(path: Path) -> Path:
     if not path.is_file():
-        raise DataError(f"{path}: missing; the guides' result blocks are made from it (make results)")
+        raise DataError(
+            f"{path}: missing; the guides' result blocks are made from it (make results)"
+        )
     return path
 
 
@@ -144,8 +146,11 @@ def render(kind: str, names: list[str], results: Path, where: str) -> str:
 def rewrite(text: str, results: Path, where: str = "the guide") -> str:
     """``text`` with every block's body made again from ``results``."""
     return BLOCK.sub(
-        lambda m: m["begin"] + render(m["spec"].split()[0], m["spec"].split()[1:], results, where)
-        + m["end"],
+        lambda m: (
+            m["begin"]
+            + render(m["spec"].split()[0], m["spec"].split()[1:], results, where)
+            + m["end"]
+        ),
         text,
     )
 
