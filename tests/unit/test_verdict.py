@@ -260,3 +260,11 @@ def test_four_runs_three_improved_is_not_established_and_says_what_is_needed():
         "Too few runs to tell: 4 more held-out run(s) that it improves would establish it, "
         "at the conditions of E3 or outside those tested."
     )
+
+
+def test_a_quantity_some_runs_do_not_give_is_summed_up_over_those_that_do():
+    nan = float("nan")
+    rows = [("R1", 1, 4.0, 1.0, nan, nan), ("R2", 1, 3.0, 2.5, 2.0, 3.0)]
+    verdict = deployment_verdict(summary(rows), tolerance=0.1, significance=0.05)
+    assert verdict["E"]["median_change_um"] == 1.0 and verdict["E"]["worst_run"] == "R2"
+    assert [r["effect"] for r in verdict["runs"]] == ["improved", "worsened"]

@@ -43,15 +43,10 @@ __all__ = [
     "verdict_sentence",
 ]
 
-# (name in the verdict, column before, column after, words)
+# (name in the verdict, column before, column after) of the held-out summary table
 QUANTITIES = (
-    (
-        "largest_abs",
-        "largest_abs_uncompensated_um",
-        "largest_abs_compensated_um",
-        "largest |deviation| over the stroke",
-    ),
-    ("E", "E_uncompensated_um", "E_compensated_um", "E of ISO 230-2"),
+    ("largest_abs", "largest_abs_uncompensated_um", "largest_abs_compensated_um"),
+    ("E", "E_uncompensated_um", "E_compensated_um"),
 )
 OUTCOMES = ("recommended", "not_established", "not_recommended")
 
@@ -112,7 +107,7 @@ def run_changes(summary: pd.DataFrame) -> pd.DataFrame:
     grouped = summary.groupby("run", sort=False)
     runs = sorted(grouped.groups, key=natural_key)
     columns = {"run": runs}
-    for name, before, after, _ in _available(summary):
+    for name, before, after in _available(summary):
         worst_before = grouped[before].max().loc[runs].to_numpy(dtype=float)
         worst_after = grouped[after].max().loc[runs].to_numpy(dtype=float)
         columns[f"{name}_before_um"] = worst_before
@@ -133,16 +128,18 @@ def _effects(changes: pd.DataFrame, names: list[str], tolerance: float) -> list[
 
 
 def _quantity(changes: pd.DataFrame, name: str, alpha: float) -> dict:
-    """One quantity's median change with its interval, and its worst run."""
-    change = changes[f"{name}_change_um"].to_numpy(dtype=float)
+    """One quantity's median change with its interval, and its worst run, over the runs
+    that give it (E needs a span of readings)."""
+    given = changes[np.isfinite(changes[f"{name}_change_um"].to_numpy(dtype=float))]
+    change = given[f"{name}_change_um"].to_numpy(dtype=float)
     low, high, coverage = median_interval(change, alpha)
     worst = int(change.argmax())
-    before = float(changes[f"{name}_before_um"].iloc[worst])
+    before = float(given[f"{name}_before_um"].iloc[worst])
     return {
         "median_change_um": float(np.median(change)),
         "median_interval_um": [low, high],
         "median_interval_coverage": coverage,
-        "worst_run": str(changes["run"].iloc[worst]),
+        "worst_run": str(given["run"].iloc[worst]),
         "worst_change_um": float(change[worst]),
         "worst_share_of_uncompensated": float(change[worst] / before) if before > 0 else None,
     }
@@ -171,7 +168,7 @@ def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: fl
             "no held-out measurements: the deployment verdict needs at least one held-out run"
         )
     changes = run_changes(summary)
-    names = [name for name, _, _, _ in _available(summary)]
+    names = [name for name, _, _ in _available(summary)]
     effects = _effects(changes, names, tolerance)
     n, improved = len(changes), effects.count("improved")
     p = sign_test_p(n, improved)
