@@ -269,3 +269,11 @@ def write_real_record(root: Path) -> Path:
         log_start_s=-120.0,
         log_end_margin_s=-300.0,
     )
+
+
+def held_out_summary(rows) -> pd.DataFrame:
+    """A held-out summary table (compensation/summary.csv, the verdict's input) from rows of
+    (run, measurement, largest |deviation| before, after, E before, after)."""
+    columns = ["run", "measurement", "largest_abs_uncompensated_um", "largest_abs_compensated_um",
+               "E_uncompensated_um", "E_compensated_um"]  # fmt: skip
+    return pd.DataFrame(rows, columns=columns)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
+from helpers.builders import held_out_summary
 from thermaxis.compensation.verdict import deployment_verdict, verdict_sentence
 from thermaxis.reports.answer import answer_of, answer_sentence
 
@@ -22,10 +23,9 @@ def _folds():
 def _deployment(changes):
     """A deployment whose verdict the real verdict function wrote, from runs R1.. whose
     largest |deviation| goes from 6 um by ``changes`` (E alike)."""
-    rows = [(f"R{i}", 1, 6.0, 6.0 + c, 2.0, 2.0 + c / 3) for i, c in enumerate(changes, 1)]
-    frame = pd.DataFrame(rows, columns=["run", "measurement", "largest_abs_uncompensated_um",
-                                        "largest_abs_compensated_um", "E_uncompensated_um",
-                                        "E_compensated_um"])  # fmt: skip
+    frame = held_out_summary(
+        [(f"R{i}", 1, 6.0, 6.0 + c, 2.0, 2.0 + c / 3) for i, c in enumerate(changes, 1)]
+    )
     verdict = deployment_verdict(frame, tolerance=0.1, significance=0.05)
     return {"candidate": "pointwise-mlr-all", "verdict": verdict}
 

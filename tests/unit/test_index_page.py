@@ -7,6 +7,7 @@ import re
 import pandas as pd
 import pytest
 
+from helpers.builders import held_out_summary
 from thermaxis.compensation.verdict import deployment_verdict
 from thermaxis.errors import DataError
 from thermaxis.reports.crossdataset import model_ranking
@@ -69,9 +70,7 @@ def test_a_claims_table_without_its_columns_is_named():
 
 def _page(**headline) -> str:
     # Held-out run <E2>: largest |deviation| 1.0 -> 1.5 um, beyond the 0.1 um tolerance.
-    rows = pd.DataFrame({"run": ["<E2>"], "measurement": [1],
-                         "largest_abs_uncompensated_um": [1.0], "largest_abs_compensated_um": [1.5],
-                         "E_uncompensated_um": [0.5], "E_compensated_um": [0.5]})  # fmt: skip
+    rows = held_out_summary([("<E2>", 1, 1.0, 1.5, 0.5, 0.5)])
     verdict = deployment_verdict(rows, tolerance=0.1, significance=0.05)
     deployment = {"candidate": "decoupled-mlr-all", "model": "recommended",
                   "recommended_for_deployment": False, "verdict": verdict}  # fmt: skip

@@ -16,7 +16,9 @@ import pandas as pd
 import pytest
 
 from helpers import REPO
+from helpers.builders import held_out_summary
 from helpers.workflow import FIXED_EPOCH
+from thermaxis.compensation.verdict import deployment_verdict
 from thermaxis.reports import html as rep
 from thermaxis.reports import index as index_page
 from thermaxis.reports import notebooks, provenance, summaries
@@ -324,7 +326,9 @@ def test_index_page_links_and_states_the_data():
             "max_abs": [2.0],
         }  # fmt: skip
     )
-    headline = index_page.Headline(model_ranking(metrics), "Recommended: x.", {})
+    verdict = deployment_verdict(held_out_summary([("R1", 1, 2.0, 1.0, 1.0, 0.5)]), 0.1, 0.05)
+    deployment = {"candidate": "x", "model": "recommended", "verdict": verdict}
+    headline = index_page.Headline(model_ranking(metrics), "Recommended: x.", deployment)
     page = index_page.render_index(
         "twin", "Dataset `twin`: SIMULATED data.", True, headline, sections=sections
     )

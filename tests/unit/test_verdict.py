@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 from scipy.stats import binom
 
+from helpers.builders import held_out_summary as summary
 from thermaxis.compensation.heldout import held_out_tables
 from thermaxis.compensation.runtime import ControllerParameters, Step
 from thermaxis.compensation.verdict import (
@@ -20,13 +21,6 @@ from thermaxis.compensation.verdict import (
     tolerance_um,
     verdict_sentence,
 )
-
-
-def summary(rows):
-    columns = ["run", "measurement", "largest_abs_uncompensated_um", "largest_abs_compensated_um",
-               "E_uncompensated_um", "E_compensated_um"]  # fmt: skip
-    return pd.DataFrame(rows, columns=columns)
-
 
 # R1 improves (8 -> 3), R2 worsens (8.3 -> 16.0 at its worst measurement), R10 improves a little.
 ROWS = [
