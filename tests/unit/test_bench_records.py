@@ -7,6 +7,7 @@ import yaml
 
 from helpers import REPO
 from tools.bench.records import channel_mapping, record_quality, without_signals
+from tools.bench.replay import replay, replay_markdown, with_table
 
 
 def test_record_quality_reads_the_workflows_tables(tmp_path):
@@ -47,3 +48,38 @@ def test_without_signals_drops_the_declaration_and_the_logs(tmp_path):
     spec = yaml.safe_load((dataset / "dataset.yaml").read_text(encoding="utf-8"))
     assert spec == {"name": "fl_thermal_ch2"}
     assert not (dataset / "R1" / "signals").exists() and (dataset / "R1" / "temperatures").is_dir()
+
+
+def _toy_scores():
+    """Three runs; inner RMSE favours the evidence ridge, inner largest |residual| the
+    paper's configuration; held out: paper 4, ridge with lags 3, evidence ridge 2 µm."""
+    rows = []
+    inner = {"paper": (9.0, 1.0), "baseline-ridge+lags": (5.0, 5.0), "evidence-ridge": (1.0, 6.0)}
+    outer = {"paper": 4.0, "baseline-ridge+lags": 3.0, "evidence-ridge": 2.0}
+    runs = ["A", "B", "C"]
+    for fold in runs:
+        for name in inner:
+            rows.append({"kind": "loco", "fold": fold, "candidate": name, "held_out": fold,
+                         "rmse": outer[name], "max_abs": outer[name], "mae": 0.0,
+                         "residual_min": 0.0, "residual_max": 0.0})  # fmt: skip
+            for held in (r for r in runs if r != fold):
+                rmse, max_abs = inner[name]
+                rows.append({"kind": "inner", "fold": fold, "candidate": name, "held_out": held,
+                             "rmse": rmse, "max_abs": max_abs, "mae": 0.0,
+                             "residual_min": 0.0, "residual_max": 0.0})  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_the_replay_applies_each_rule_to_the_inner_scores_alone(tmp_path):
+    figures = replay(_toy_scores())
+    # Lowest mean inner RMSE: the evidence ridge in every fold, 2 µm held out; lowest inner
+    # largest |residual|: the paper's configuration, 4 µm; the previous rule: two inner
+    # runs give a signed-rank p of at least 1/4, so the ridge with lags stands, 3 µm.
+    assert list(figures.values()) == [2.0, 4.0, 3.0, 4.0, 3.0, 2.0]
+    table = replay_markdown({"toy": _toy_scores()})
+    assert "| **lowest mean inner RMSE** (kept) | 2.00 (1.00) |" in table
+    assert "| the paper's configuration always | 4.00 (2.00) |" in table
+    doc = tmp_path / "doc.md"
+    doc.write_text("before\n<!-- replay:start -->\nold\n<!-- replay:end -->\nafter\n")
+    doc.write_text(with_table(doc.read_text(), table))
+    assert doc.read_text() == f"before\n<!-- replay:start -->\n{table}<!-- replay:end -->\nafter\n"

@@ -232,9 +232,7 @@ def test_with_two_runs_no_fold_is_chosen_but_the_final_choice_is_made():
 
 def test_the_lowest_mean_inner_score_chooses_ties_to_the_first_listed():
     def rows(name, values):
-        return [
-            {"candidate": name, "held_out": f"R{i}", "rmse": v} for i, v in enumerate(values)
-        ]
+        return [{"candidate": name, "held_out": f"R{i}", "rmse": v} for i, v in enumerate(values)]
 
     def choose(*tables, order):
         return _choose(pd.DataFrame([r for t in tables for r in t]), order, "rmse")

@@ -110,7 +110,9 @@ def test_evidence_ridge_block_equals_compensator():
     now, ref = (32.0, 26.5), (30.0, 25.0)
     expected = {
         row[0]: row[2]
-        for row in twincat(comp.parameters({"T1": now[0], "T2": now[1]}, {"T1": ref[0], "T2": ref[1]}))
+        for row in twincat(
+            comp.parameters({"T1": now[0], "T2": now[1]}, {"T1": ref[0], "T2": ref[1]})
+        )
     }
     got = st_twincat(c, np.array(now), np.array(ref))
     for parameter, value in expected.items():

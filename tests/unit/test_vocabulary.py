@@ -119,7 +119,9 @@ def test_both_validators_resolve_the_refs(override, where):
         validate({"dataset": "x", **override}, str(schema_path("config")), set_default=True)
     filled = {"dataset": "x"}
     validate(filled, str(schema_path("config")), set_default=True)
-    assert filled["models"]["algorithms"] == [a for a in ALGORITHMS if a not in ("lasso", "bayesridge")]
+    assert filled["models"]["algorithms"] == [
+        a for a in ALGORITHMS if a not in ("lasso", "bayesridge")
+    ]
 
 
 def test_the_model_schema_refuses_an_unknown_algorithm():
@@ -130,7 +132,10 @@ def test_the_model_schema_refuses_an_unknown_algorithm():
         e.message
         for e in validator.iter_errors({"approach": "pointwise", "algorithm": "elasticnet"})
     ]
-    assert "'elasticnet' is not one of ['mlr', 'svr', 'ridge', 'lasso', 'pls', 'gpr', 'bayesridge']" in errors
+    assert (
+        "'elasticnet' is not one of ['mlr', 'svr', 'ridge', 'lasso', 'pls', 'gpr', 'bayesridge']"
+        in errors
+    )
     assert not any("'pointwise'" in message for message in errors)
 
 

@@ -58,7 +58,9 @@ def without_signals(dataset: Path) -> None:
     spec_path = dataset / "dataset.yaml"
     spec = yaml.safe_load(spec_path.read_text(encoding="utf-8"))
     spec.pop("signals", None)
-    spec_path.write_text(yaml.safe_dump(spec, sort_keys=False, allow_unicode=True), encoding="utf-8")
+    spec_path.write_text(
+        yaml.safe_dump(spec, sort_keys=False, allow_unicode=True), encoding="utf-8"
+    )
     for logs in dataset.glob("*/signals"):
         shutil.rmtree(logs)
 

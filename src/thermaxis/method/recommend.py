@@ -369,9 +369,7 @@ def fold_scores(
     )
     done = (map_sets or (lambda f, items: [f(i) for i in items]))(one_set, sets)
     scores = {s.train: d for s, d in zip(sets, done, strict=True)}
-    return [
-        outer_fold_scores(runs, candidates, fold, scores) for fold in folds
-    ]
+    return [outer_fold_scores(runs, candidates, fold, scores) for fold in folds]
 
 
 def _lowest(means: pd.Series, order: Sequence[str]) -> str:
@@ -404,7 +402,9 @@ def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
         raise ValueError(f"reference candidate {reference!r} is not one of {list(names)}")
 
 
-def collect(scores: pd.DataFrame, names: Sequence[str], reference: str, score: str) -> Recommendation:
+def collect(
+    scores: pd.DataFrame, names: Sequence[str], reference: str, score: str
+) -> Recommendation:
     """The choice of every outer fold, and the final one, from the folds' scores."""
     _check_choice(names, reference, score)
     scores = scores.loc[scores["candidate"].isin(names)]
@@ -588,7 +588,9 @@ def default_candidates(
         False,
     )
     candidates = [
-        Candidate("paper", first, "mlr", selection, replace(models, signals=(), searched=()), False),
+        Candidate(
+            "paper", first, "mlr", selection, replace(models, signals=(), searched=()), False
+        ),
         evidence_candidate(selection, models, decoupled, signals),
         evidence_candidate(selection, models, decoupled, signals, baseline_lags_min),
         baseline_candidate(selection, models, baseline_lags_min),
@@ -601,8 +603,12 @@ def default_candidates(
     if kernel:
         candidates.append(
             Candidate(
-                "pointwise-svr", "pointwise", "svr", selection,
-                replace(models, signals=(), searched=()), False,
+                "pointwise-svr",
+                "pointwise",
+                "svr",
+                selection,
+                replace(models, signals=(), searched=()),
+                False,
             )  # fmt: skip
         )
     return candidates
