@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 import yaml
+from scipy.optimize import nnls
 
 from helpers import REPO
 from tools.bench.records import channel_mapping, record_quality, without_signals
 from tools.bench.replay import replay, replay_markdown, with_table
+from tools.bench.stacking import stacking_weights
 
 
 def test_record_quality_reads_the_workflows_tables(tmp_path):
@@ -83,3 +86,22 @@ def test_the_replay_applies_each_rule_to_the_inner_scores_alone(tmp_path):
     doc.write_text("before\n<!-- replay:start -->\nold\n<!-- replay:end -->\nafter\n")
     doc.write_text(with_table(doc.read_text(), table))
     assert doc.read_text() == f"before\n<!-- replay:start -->\n{table}<!-- replay:end -->\nafter\n"
+
+
+def test_stacking_weights_by_hand_and_by_scipy():
+    # Three candidates on four rows: the measurement is exactly 1/4 of the first plus 3/4
+    # of the second; the third is unrelated. The least-squares weights are (1/4, 3/4, 0),
+    # non-negative and summing to one without scaling.
+    a = np.array([1.0, 0.0, 2.0, -1.0])
+    b = np.array([0.0, 1.0, 1.0, 3.0])
+    c = np.array([5.0, -4.0, 0.5, 0.0])
+    P = np.column_stack([a, b, c])
+    np.testing.assert_allclose(stacking_weights(P, 0.25 * a + 0.75 * b), [0.25, 0.75, 0.0],
+                               atol=1e-12)  # fmt: skip
+    # Twice the measurement: scipy's NNLS gives (0.5, 1.5, 0), scaled to sum to one.
+    y = 0.5 * a + 1.5 * b
+    raw, _ = nnls(P, y)
+    np.testing.assert_allclose(stacking_weights(P, y), raw / raw.sum(), atol=1e-12)
+    np.testing.assert_allclose(stacking_weights(P, y), [0.25, 0.75, 0.0], atol=1e-12)
+    # No candidate helps (every weight zero): equal weights.
+    np.testing.assert_allclose(stacking_weights(np.abs(P), -np.ones(4)), [1 / 3] * 3)

@@ -17,6 +17,7 @@ from thermaxis.method.recommend import (
     candidate_view,
     default_candidates,
     fold_scores,
+    held_out_predictions,
     held_out_scores,
     recommend,
     recommendation_markdown,
@@ -352,3 +353,16 @@ def test_the_page_says_which_folds_had_no_inner_split_to_choose_on():
         Recommendation(chosen, pd.DataFrame(), pd.DataFrame(), "paper", "max_abs"), "x"
     )
     assert "Fold(s) R2 had a single training run" in page
+
+
+def test_held_out_predictions_are_the_fit_on_the_other_runs():
+    X, Y = make_runs(n_runs=4)
+    runs, predicted = held_out_predictions(X, Y, ("R2", "R4"), fixed("T1"), 1, [], {})
+    # By hand: least squares of each position's error on T1's rise, fitted on R1 and R3.
+    rise = X["T1"] - X.groupby("run")["T1"].transform("first")
+    train, test = X["run"].isin(["R1", "R3"]).to_numpy(), X["run"].isin(["R2", "R4"]).to_numpy()
+    A = np.column_stack([np.ones(train.sum()), rise[train]])
+    coef, *_ = np.linalg.lstsq(A, Y.to_numpy()[train], rcond=None)
+    expected = np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
+    assert list(runs) == list(X.loc[test, "run"])
+    np.testing.assert_allclose(predicted, expected, rtol=1e-9, atol=1e-9)

@@ -121,13 +121,13 @@ def replay_markdown(records: dict[str, pd.DataFrame]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def with_table(document: str, table: str) -> str:
-    """``document`` with the block between the replay markers replaced by ``table``."""
-    if START not in document or END not in document:
-        raise ValueError(f"the document has no {START} ... {END} block")
-    head, rest = document.split(START, 1)
-    _, tail = rest.split(END, 1)
-    return f"{head}{START}\n{table}{END}{tail}"
+def with_table(document: str, table: str, start: str = START, end: str = END) -> str:
+    """``document`` with the block between the markers ``start`` and ``end`` replaced by ``table``."""
+    if start not in document or end not in document:
+        raise ValueError(f"the document has no {start} ... {end} block")
+    head, rest = document.split(start, 1)
+    _, tail = rest.split(end, 1)
+    return f"{head}{start}\n{table}{end}{tail}"
 
 
 def main(argv=None) -> int:

@@ -43,6 +43,7 @@ from thermaxis.labels import natural_sorted
 from thermaxis.method.batched import batchable, decoupled_metrics, pointwise_metrics
 from thermaxis.method.folds import (
     META,
+    fit_held_out,
     fold_metrics,
     fold_name,
     held_out_runs,
@@ -58,6 +59,7 @@ __all__ = [
     "Recommendation",
     "candidate_view",
     "held_out_scores",
+    "held_out_predictions",
     "SCORE_COLUMNS",
     "TrainingSet",
     "training_sets",
@@ -161,13 +163,11 @@ def _seen_lag(name: str, lags_min: Sequence[float]) -> bool:
     return kind == "lag" and any(np.isclose(seconds, 60.0 * m) for m in lags_min)
 
 
-def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> list[tuple]:
-    """Select on the training rows of X, fit, predict ``fold``: its error metrics.
+def _fold_setup(X, Y, fold, candidate, degree, signals, cache):
+    """A candidate's view of X, its model settings and its selection on the training rows.
 
-    ``fold`` is a run or a group of runs, fitted once: ``[(its name, metrics)]``, or with
-    ``per_run`` ``[(run, metrics), ...]`` for each of its runs. Candidates that differ only
-    in their algorithm share the selection (``cache``), as the main workflow's algorithms
-    share a fold's; so do evaluations on the same training runs.
+    Candidates that differ only in their algorithm share the selection (``cache``), as the
+    main workflow's algorithms share a fold's; so do evaluations on the same training runs.
     """
     view, selectable, models = candidate_view(X, candidate, signals)
     # The recommendation never lets the held-out run into the choice of sensitive points.
@@ -185,7 +185,17 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> li
             view[selectable], Y, fold, selection_settings, degree if decoupled else None,
             decoupled=decoupled, pointwise=not decoupled,
         )  # fmt: skip
-    selection = cache[key]
+    return view, models, cache[key]
+
+
+def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> list[tuple]:
+    """Select on the training rows of X, fit, predict ``fold``: its error metrics.
+
+    ``fold`` is a run or a group of runs, fitted once: ``[(its name, metrics)]``, or with
+    ``per_run`` ``[(run, metrics), ...]`` for each of its runs.
+    """
+    view, models, selection = _fold_setup(X, Y, fold, candidate, degree, signals, cache)
+    decoupled = candidate.approach == "decoupled"
     if batchable(candidate.algorithm, models, Y):
         # The numpy core: the same numbers as evaluate_configuration to 1e-9.
         (metrics,) = (
@@ -204,6 +214,31 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> li
     return [
         (row["fold"], {name: float(row[name]) for name in METRICS}) for _, row in errors.iterrows()
     ]
+
+
+def held_out_predictions(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    fold: Sequence[str],
+    candidate: Candidate,
+    degree: int,
+    signals: Sequence[str],
+    cache: dict,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The error curves of the runs ``fold`` predicted by ``candidate`` fitted on the rest of X.
+
+    ``(run of each held-out row, predictions (rows, positions))``, the rows in X's order,
+    selected and fitted as :func:`held_out_scores` scores them (what a combination of
+    candidates is fitted on and judged by).
+    """
+    view, models, selection = _fold_setup(X, Y, fold, candidate, degree, signals, cache)
+    decoupled = candidate.approach == "decoupled"
+    estimator, X_test, _ = fit_held_out(
+        view, Y, fold, candidate.approach, candidate.algorithm, selection, models,
+        degree if decoupled else None,
+    )  # fmt: skip
+    predicted = estimator.predict(X_test)
+    return X_test["run"].to_numpy(), np.asarray(predicted, dtype=float)
 
 
 def held_out_scores(
