@@ -9,6 +9,7 @@ from scipy.optimize import nnls
 
 from helpers import REPO
 from tools.bench.records import channel_mapping, record_quality, without_signals
+from tools.bench.replay import main as replay_main
 from tools.bench.replay import replay, replay_markdown, with_table
 from tools.bench.stacking import stacking_weights
 
@@ -105,3 +106,21 @@ def test_stacking_weights_by_hand_and_by_scipy():
     np.testing.assert_allclose(stacking_weights(P, y), [0.25, 0.75, 0.0], atol=1e-12)
     # No candidate helps (every weight zero): equal weights.
     np.testing.assert_allclose(stacking_weights(np.abs(P), -np.ones(4)), [1 / 3] * 3)
+
+
+def test_the_replay_command_writes_the_table_into_the_document(tmp_path, capsys):
+    scores = _toy_scores()
+    folds = tmp_path / "results" / "toy" / "recommend" / "folds"
+    folds.mkdir(parents=True)
+    for fold, rows in scores.groupby("fold"):
+        rows.to_csv(folds / f"{fold}.csv", index=False)
+    doc = tmp_path / "doc.md"
+    doc.write_text("<!-- replay:start -->\n<!-- replay:end -->\n")
+    assert replay_main([str(tmp_path / "results"), "--doc", str(doc)]) == 0
+    assert (
+        doc.read_text()
+        == f"<!-- replay:start -->\n{replay_markdown({'toy': scores})}<!-- replay:end -->\n"
+    )
+    (tmp_path / "empty").mkdir()
+    assert replay_main([str(tmp_path / "empty")]) == 2
+    assert "no <record>/recommend/folds/*.csv" in capsys.readouterr().err
