@@ -15,6 +15,7 @@ from thermaxis.method.recommend import (
     Recommendation,
     _choose,
     candidate_view,
+    candidates_for,
     default_candidates,
     fold_scores,
     held_out_predictions,
@@ -366,3 +367,14 @@ def test_held_out_predictions_are_the_fit_on_the_other_runs():
     expected = np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
     assert list(runs) == list(X.loc[test, "run"])
     np.testing.assert_allclose(predicted, expected, rtol=1e-9, atol=1e-9)
+
+
+def test_the_kernel_candidate_is_capped_by_the_runs_not_the_others():
+    settings = Settings.from_config({"recommend": {"kernel_max_runs": 6}})
+
+    def names(n_runs):
+        return [c.name for c in candidates_for(settings.selection, settings.models,
+                                               settings.recommend, False, [], n_runs)]  # fmt: skip
+
+    assert names(6)[-1] == "pointwise-svr"
+    assert names(7) == names(6)[:-1]
