@@ -128,21 +128,23 @@ def test_run_groups_become_group_folds_above_the_limit():
     assert groups[0] == ("R1", "R2", "R3")  # contiguous, in natural order
 
 
-def test_an_inner_group_fold_is_fitted_once_and_scored_over_all_its_rows():
+def test_a_group_of_held_out_runs_is_fitted_once_and_scored_run_by_run():
     X, Y = make_runs(n_runs=6)
     group = ("R2", "R3")
-    (row,) = held_out_scores(X, Y, ["R1", "R2", "R3", "R4"], [group], fixed("T1"), 1, [], {})
+    rows = held_out_scores(X, Y, ["R1", "R2", "R3", "R4"], [group], fixed("T1"), 1, [], {})
     # By hand: per position, least squares of the error on T1's rise since the run's first
-    # measurement, fitted on R1 and R4 (R5, R6 are outside the training runs), pooled
-    # over R2 and R3's rows.
+    # measurement, fitted on R1 and R4 (R5, R6 are outside the training runs), each of R2
+    # and R3 scored over its own rows.
     rise = X["T1"] - X.groupby("run")["T1"].transform("first")
-    train, test = X["run"].isin(["R1", "R4"]).to_numpy(), X["run"].isin(group).to_numpy()
+    train = X["run"].isin(["R1", "R4"]).to_numpy()
     A = np.column_stack([np.ones(train.sum()), rise[train]])
     coef, *_ = np.linalg.lstsq(A, Y.to_numpy()[train], rcond=None)
-    residual = Y.to_numpy()[test] - np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
-    assert row["held_out"] == "R2+R3"
-    assert row["rmse"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
-    assert row["max_abs"] == pytest.approx(np.abs(residual).max(), rel=1e-9)
+    assert [row["held_out"] for row in rows] == ["R2", "R3"]
+    for row in rows:
+        test = (X["run"] == row["held_out"]).to_numpy()
+        residual = Y.to_numpy()[test] - np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
+        assert row["rmse"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
+        assert row["max_abs"] == pytest.approx(np.abs(residual).max(), rel=1e-9)
 
 
 def test_evaluations_on_the_same_training_runs_share_one_fit():

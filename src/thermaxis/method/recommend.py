@@ -188,11 +188,11 @@ def _fold_setup(X, Y, fold, candidate, degree, signals, cache):
     return view, models, cache[key]
 
 
-def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> list[tuple]:
+def _error_metrics(X, Y, fold, candidate, degree, signals, cache) -> list[tuple]:
     """Select on the training rows of X, fit, predict ``fold``: its error metrics.
 
-    ``fold`` is a run or a group of runs, fitted once: ``[(its name, metrics)]``, or with
-    ``per_run`` ``[(run, metrics), ...]`` for each of its runs.
+    ``fold`` is a run or a group of runs, fitted once: ``[(run, metrics), ...]`` for each
+    of its runs.
     """
     view, models, selection = _fold_setup(X, Y, fold, candidate, degree, signals, cache)
     decoupled = candidate.approach == "decoupled"
@@ -200,15 +200,15 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> li
         # The numpy core: the same numbers as evaluate_configuration to 1e-9.
         (metrics,) = (
             decoupled_metrics(view, Y, fold, candidate.algorithm, models, degree,
-                              [(selection.k_sensors, selection.b_sensors)], per_run=per_run)
+                              [(selection.k_sensors, selection.b_sensors)], per_run=True)
             if decoupled
             else pointwise_metrics(view, Y, fold, candidate.algorithm, models,
-                                   [selection.pointwise], per_run=per_run)
+                                   [selection.pointwise], per_run=True)
         )  # fmt: skip
     else:
         metrics = fold_metrics(
             view, Y, fold, candidate.approach, candidate.algorithm, selection, models,
-            degree if decoupled else None, per_run=per_run,
+            degree if decoupled else None, per_run=True,
         )  # fmt: skip
     errors = metrics.loc[metrics["target"] == "error"]
     return [
@@ -250,23 +250,18 @@ def held_out_scores(
     degree: int,
     signals: Sequence[str],
     cache: dict,
-    per_run: bool = False,
 ) -> list[dict]:
-    """Each held-out group's error when ``candidate`` is fitted on the rest of ``train_runs``.
+    """Each held-out run's error when ``candidate`` is fitted on the rest of ``train_runs``.
 
-    A group of one run is that run; a larger group (a group fold) is fitted once and
-    scored over all its rows, ``held_out`` naming its runs joined by "+", or with
-    ``per_run`` run by run: one fit per group, not per run, keeps a loop over many runs
-    at a fixed number of fits. Rows of X and Y outside ``train_runs`` are never seen: not
-    by the selection, the fit or the scaling.
+    Each group of ``held_out`` is fitted once and scored run by run: one fit per group,
+    not per run. Rows of X and Y outside ``train_runs`` are never seen: not by the
+    selection, the fit or the scaling.
     """
     keep = X["run"].isin(train_runs).to_numpy()
     X, Y = X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True)
     rows = []
     for group in held_out:
-        for name, metrics in _error_metrics(
-            X, Y, group, candidate, degree, signals, cache, per_run
-        ):
+        for name, metrics in _error_metrics(X, Y, group, candidate, degree, signals, cache):
             rows.append({"candidate": candidate.name, "held_out": name, **metrics})
     return rows
 
@@ -337,7 +332,7 @@ def training_set_scores(
         say(f"training runs {fold_name(training.train)}: {candidate.name}")
         for row in held_out_scores(
             X, Y, [*training.train, *training.scored], [training.scored], candidate, degree,
-            signals, cache, per_run=True,
+            signals, cache,
         ):  # fmt: skip
             out[(candidate.name, row["held_out"])] = {m: row[m] for m in METRICS}
     return out
