@@ -130,30 +130,34 @@ def with_table(document: str, table: str, start: str = START, end: str = END) ->
     return f"{head}{start}\n{table}{end}{tail}"
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench.replay", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument(
-        "results", type=Path, help="a results folder holding <record>/recommend/folds"
-    )
-    parser.add_argument(
-        "--doc", type=Path, help="write the table between the replay markers of this file"
-    )
+def table_command(argv, prog: str, doc: str, table_of, start: str, end: str) -> int:
+    """A command printing ``table_of(results folder)`` and, with ``--doc``, writing it between
+    the markers ``start`` and ``end`` of that document; a ValueError is one line, status 2."""
+    parser = argparse.ArgumentParser(prog, description=doc)
+    parser.add_argument("results", type=Path, help="a bench results folder of records")
+    parser.add_argument("--doc", type=Path, help="the document to write the table into")
     args = parser.parse_args(argv)
-    records = record_scores(args.results)
-    if not records:
-        print(
-            f"thermaxis error: {args.results}: no <record>/recommend/folds/*.csv", file=sys.stderr
-        )
+    try:
+        table = table_of(args.results)
+    except ValueError as exc:
+        print(f"thermaxis error: {exc}", file=sys.stderr)
         return 2
-    table = replay_markdown(records)
     if args.doc:
-        args.doc.write_text(
-            with_table(args.doc.read_text(encoding="utf-8"), table), encoding="utf-8"
-        )
+        text = args.doc.read_text(encoding="utf-8")
+        args.doc.write_text(with_table(text, table, start, end), encoding="utf-8")
     print(table, end="")
     return 0
+
+
+def _replay_table(results: Path) -> str:
+    records = record_scores(results)
+    if not records:
+        raise ValueError(f"{results}: no <record>/recommend/folds/*.csv")
+    return replay_markdown(records)
+
+
+def main(argv=None) -> int:
+    return table_command(argv, "python -m tools.bench.replay", __doc__, _replay_table, START, END)
 
 
 if __name__ == "__main__":

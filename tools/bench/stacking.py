@@ -21,7 +21,6 @@ chooses one candidate (docs/recommendation.md says why). Evaluation only.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -40,7 +39,7 @@ from thermaxis.method.recommend import (
     held_out_predictions,
     training_sets,
 )
-from tools.bench.replay import record_scores, with_table
+from tools.bench.replay import record_scores, table_command
 
 __all__ = ["stacking_weights", "stacked_rmse", "STACKS"]
 
@@ -160,18 +159,9 @@ def stacking_table(results: Path) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench.stacking", description=__doc__.splitlines()[0]
+    return table_command(
+        argv, "python -m tools.bench.stacking", __doc__, stacking_table, START, END
     )
-    parser.add_argument("results", type=Path, help="a bench results folder of records")
-    parser.add_argument("--doc", type=Path, help="write the table between the stacking markers")
-    args = parser.parse_args(argv)
-    table = stacking_table(args.results)
-    if args.doc:
-        text = args.doc.read_text(encoding="utf-8")
-        args.doc.write_text(with_table(text, table, START, END), encoding="utf-8")
-    print(table, end="")
-    return 0
 
 
 if __name__ == "__main__":
