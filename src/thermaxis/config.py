@@ -492,11 +492,11 @@ class ExtraCandidate:
 @dataclass(frozen=True)
 class RecommendSettings:
     score: str  # max_abs | rmse
-    level: float  # of the signed-rank test that lets a candidate displace the baseline
     lags_min: tuple[float, ...]
     baseline_lags_min: tuple[float, ...]
-    max_loco_runs: int
+    max_loco_runs: int  # of the outer loop; the inner one always leaves one run out
     group_folds: int
+    kernel_max_runs: int
     extra_candidates: tuple[ExtraCandidate, ...]
 
     @classmethod
@@ -515,11 +515,11 @@ class RecommendSettings:
         )
         return cls(
             score=r["score"],
-            level=float(r["level"]),
             lags_min=tuple(float(v) for v in r["lags_min"]),
             baseline_lags_min=tuple(float(v) for v in r["baseline_lags_min"]),
             max_loco_runs=int(r["max_loco_runs"]),
             group_folds=int(r["group_folds"]),
+            kernel_max_runs=int(r["kernel_max_runs"]),
             extra_candidates=extra,
         )
 

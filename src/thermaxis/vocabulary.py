@@ -14,8 +14,10 @@ APPROACHES = ("decoupled", "pointwise")
 
 # Multiple linear regression and support-vector regression (the paper's two), ridge,
 # lasso (a sparse model: it also selects sensors), partial least squares and
-# Gaussian-process regression.
-ALGORITHMS = ("mlr", "svr", "ridge", "lasso", "pls", "gpr")
+# Gaussian-process regression, and the evidence ridge ("bayesridge": a ridge whose strength
+# maximises the evidence of the training rows, scikit-learn's BayesianRidge, so it needs no
+# inner search).
+ALGORITHMS = ("mlr", "svr", "ridge", "lasso", "pls", "gpr", "bayesridge")
 
 # The algorithms whose strength (ridge and lasso alpha, PLS components) an inner search
 # on the training runs may choose; the SVR always searches its grid.

@@ -59,8 +59,7 @@ def make_lines_run(tmp: Path) -> Run:
     # No model reports (notebooks are the costliest jobs, and this run is made twice, see
     # test_interrupted_run): the reports build `built` has them and checks their bytes.
     # The paper's decoupled model is deployed: its controller line (K0, tan beta, P0) is the
-    # compensation exactly, which test_cli_workflow replays; on these three runs the
-    # recommendation keeps the plain baseline, a point-by-point ridge with lags.
+    # compensation exactly, which test_cli_workflow replays.
     config = tiny_config(
         work,
         dataset,

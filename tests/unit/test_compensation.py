@@ -184,7 +184,7 @@ def _training_data():
     return pd.DataFrame(rows), pd.DataFrame(curves, columns=x)
 
 
-@pytest.mark.parametrize("algorithm", ["mlr", "pls", "svr", "gpr"])
+@pytest.mark.parametrize("algorithm", ["mlr", "pls", "bayesridge", "svr", "gpr"])
 def test_model_json_predicts_what_the_estimator_predicts(algorithm):
     X, Y = _training_data()
     grid = {"C": [10.0], "epsilon": [0.05], "gamma": ["scale"]}

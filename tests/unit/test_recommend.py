@@ -10,12 +10,15 @@ from thermaxis.config import Settings
 from thermaxis.method.folds import run_groups
 from thermaxis.method.recommend import (
     BASELINE,
+    EVIDENCE,
     Candidate,
     Recommendation,
     _choose,
     candidate_view,
+    candidates_for,
     default_candidates,
     fold_scores,
+    held_out_predictions,
     held_out_scores,
     recommend,
     recommendation_markdown,
@@ -67,7 +70,7 @@ CANDIDATES = [fixed("T3"), fixed("T2"), fixed("T1"), fixed("T4")]
 
 def run(X, Y, **kwargs):
     return recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, score="max_abs",
-                     level=0.05, max_loco_runs=12, n_group_folds=5, **kwargs)  # fmt: skip
+                     max_loco_runs=12, n_group_folds=5, **kwargs)  # fmt: skip
 
 
 def test_the_candidate_that_made_the_data_is_chosen_on_every_fold():
@@ -110,7 +113,6 @@ def test_ties_go_to_the_candidate_listed_first():
         reference="pointwise-mlr-T3",
         degree=1,
         score="rmse",
-        level=0.05,
         max_loco_runs=12,
         n_group_folds=5,
     )
@@ -126,38 +128,43 @@ def test_run_groups_become_group_folds_above_the_limit():
     assert groups[0] == ("R1", "R2", "R3")  # contiguous, in natural order
 
 
-def test_an_inner_group_fold_is_fitted_once_and_scored_over_all_its_rows():
+def test_a_group_of_held_out_runs_is_fitted_once_and_scored_run_by_run():
     X, Y = make_runs(n_runs=6)
     group = ("R2", "R3")
-    (row,) = held_out_scores(X, Y, ["R1", "R2", "R3", "R4"], [group], fixed("T1"), 1, [], {})
+    rows = held_out_scores(X, Y, ["R1", "R2", "R3", "R4"], [group], fixed("T1"), 1, [], {})
     # By hand: per position, least squares of the error on T1's rise since the run's first
-    # measurement, fitted on R1 and R4 (R5, R6 are outside the training runs), pooled
-    # over R2 and R3's rows.
+    # measurement, fitted on R1 and R4 (R5, R6 are outside the training runs), each of R2
+    # and R3 scored over its own rows.
     rise = X["T1"] - X.groupby("run")["T1"].transform("first")
-    train, test = X["run"].isin(["R1", "R4"]).to_numpy(), X["run"].isin(group).to_numpy()
+    train = X["run"].isin(["R1", "R4"]).to_numpy()
     A = np.column_stack([np.ones(train.sum()), rise[train]])
     coef, *_ = np.linalg.lstsq(A, Y.to_numpy()[train], rcond=None)
-    residual = Y.to_numpy()[test] - np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
-    assert row["held_out"] == "R2+R3"
-    assert row["rmse"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
-    assert row["max_abs"] == pytest.approx(np.abs(residual).max(), rel=1e-9)
+    assert [row["held_out"] for row in rows] == ["R2", "R3"]
+    for row in rows:
+        test = (X["run"] == row["held_out"]).to_numpy()
+        residual = Y.to_numpy()[test] - np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
+        assert row["rmse"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
+        assert row["max_abs"] == pytest.approx(np.abs(residual).max(), rel=1e-9)
 
 
 def test_evaluations_on_the_same_training_runs_share_one_fit():
     runs = ["R1", "R2", "R3", "R4"]
-    sets = {s.train: dict(s.scored) for s in training_sets(runs, [(r,) for r in runs], 12, 5)}
+    sets = {s.train: s.scored for s in training_sets(runs, [(r,) for r in runs])}
     # By hand: four outer fits (three runs each) and the C(4, 2) = 6 pairs of runs the inner
     # loops train on, each pair serving two outer folds: 10 fits where 4 x (1 + 3) = 16
     # evaluations need one.
     assert len(sets) == 10
-    assert sets[("R2", "R3", "R4")] == {("R1",): True}
-    assert sets[("R3", "R4")] == {("R2",): True, ("R1",): True}
-    # Above the limit an inner group fold of several runs is scored over its rows.
-    grouped = training_sets([f"R{i}" for i in range(1, 7)], [("R1", "R2")], 3, 2)
-    assert [dict(s.scored) for s in grouped] == [
-        {("R1", "R2"): True},
-        {("R3", "R4"): False},
-        {("R5", "R6"): False},
+    assert sets[("R2", "R3", "R4")] == ("R1",)
+    assert sets[("R3", "R4")] == ("R2", "R1")
+    # An outer group of two runs out of six: its training set, then the inner loop leaves
+    # each of the other four runs out alone, however many runs there are.
+    grouped = training_sets([f"R{i}" for i in range(1, 7)], [("R1", "R2")])
+    assert [(s.train, s.scored) for s in grouped] == [
+        (("R3", "R4", "R5", "R6"), ("R1", "R2")),
+        (("R4", "R5", "R6"), ("R3",)),
+        (("R3", "R5", "R6"), ("R4",)),
+        (("R3", "R4", "R6"), ("R5",)),
+        (("R3", "R4", "R5"), ("R6",)),
     ]
 
 
@@ -165,7 +172,7 @@ def test_shared_fits_give_the_scores_of_one_fit_per_evaluation():
     X, Y = make_runs(n_runs=4)
     candidates = [fixed("T1"), fixed("T2")]
     runs = ["R1", "R2", "R3", "R4"]
-    shared = pd.concat(fold_scores(X, Y, candidates, runs, 1, 12, 5), ignore_index=True)
+    shared = pd.concat(fold_scores(X, Y, candidates, runs, 1), ignore_index=True)
     for row in shared.itertuples():
         train = [r for r in runs if r not in (row.fold, row.held_out)]
         by_hand = [c for c in candidates if c.name == row.candidate]
@@ -180,7 +187,7 @@ def test_shared_fits_give_the_scores_of_one_fit_per_evaluation():
 def test_above_the_limit_the_outer_loop_holds_out_groups_of_runs():
     X, Y = make_runs(n_runs=6)
     result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1,
-                       score="max_abs", level=0.05, max_loco_runs=4,
+                       score="max_abs", max_loco_runs=4,
                        n_group_folds=3)  # fmt: skip
     # Six runs above a limit of four: three outer groups, R1+R2, R3+R4, R5+R6, every run
     # still a row, each chosen without its group.
@@ -227,40 +234,90 @@ def test_with_two_runs_no_fold_is_chosen_but_the_final_choice_is_made():
     assert result.final == "pointwise-mlr-T1"
 
 
-def test_a_candidate_displaces_the_baseline_only_with_evidence_in_mean_and_in_ranks():
+def test_the_lowest_mean_inner_score_chooses_ties_to_the_first_listed():
     def rows(name, values):
-        return [
-            {"candidate": name, "held_out": f"R{i}", "max_abs": v} for i, v in enumerate(values)
-        ]
+        return [{"candidate": name, "held_out": f"R{i}", "rmse": v} for i, v in enumerate(values)]
 
     def choose(*tables, order):
-        return _choose(pd.DataFrame([r for t in tables for r in t]), order, "max_abs", 0.05)
+        return _choose(pd.DataFrame([r for t in tables for r in t]), order, "rmse")
 
-    # Five inner runs, worked by hand. "lucky" has a lower mean than the baseline (0.96 vs
-    # 1.1) but its paired differences -0.6, +0.6, -0.3, -0.2, +0.2 have mean -0.06 and
-    # standard error 0.21: no evidence. "steady" is 0.2 better on every run: mean -0.2,
-    # standard error 0, and all five signs negative, which one of the 2**5 equally likely
-    # sign patterns under "no improvement" matches: one-sided p = 1/32 <= 0.05.
+    # By hand: means 1.1 (baseline), (0.4 + 1.6 + 1.0 + 0.9 + 1.3) / 5 = 1.04 (lucky) and
+    # 0.9 (steady). The cross-validation selector takes the lowest, with no baseline privilege.
     base = rows(BASELINE, [1.0, 1.0, 1.3, 1.1, 1.1])
     lucky = rows("lucky", [0.4, 1.6, 1.0, 0.9, 1.3])
     steady = rows("steady", [0.8, 0.8, 1.1, 0.9, 0.9])
-    assert choose(base, lucky, order=["lucky", BASELINE]) == (BASELINE, pytest.approx(1.1))
-    assert choose(base, lucky, steady, order=["lucky", "steady", BASELINE]) == (
+    assert choose(base, lucky, order=[BASELINE, "lucky"]) == ("lucky", pytest.approx(1.04))
+    assert choose(base, lucky, steady, order=[BASELINE, "lucky", "steady"]) == (
         "steady",
         pytest.approx(0.9),
     )
-    # Three inner runs, "steady" better on each: p = 1/2**3 = 0.125, so the baseline
-    # stands though the standard error is 0. Below five runs nothing reaches 0.05.
-    assert choose(base[:3], steady[:3], order=["steady", BASELINE])[0] == BASELINE
-    # Without the baseline the lowest mean chooses, as before.
-    assert choose(lucky, steady, order=["lucky", "steady"])[0] == "steady"
+    # The same scores under another name: the one listed first.
+    again = rows("again", [0.8, 0.8, 1.1, 0.9, 0.9])
+    assert choose(again, steady, order=["steady", "again"])[0] == "steady"
+    assert choose(again, steady, order=["again", "steady"])[0] == "again"
 
 
-def test_the_plain_baseline_is_always_a_candidate_and_sees_only_its_own_lags():
+def test_replacing_the_held_out_runs_data_changes_no_choice_of_its_fold():
+    X, Y = make_runs(n_runs=5, seed=4)
+    candidates = [*CANDIDATES, replace(fixed("T1"), name="evidence-T1", algorithm="bayesridge")]
+    kwargs = dict(reference="pointwise-mlr-T3", degree=1, score="rmse", max_loco_runs=12,
+                  n_group_folds=5)  # fmt: skip
+    honest = recommend(X, Y, candidates, **kwargs)
+    # R2's temperatures and errors replaced by noise and by a constant: whatever the fold
+    # R2 chooses, and how it scores its candidates, is fitted on R1, R3, R4, R5 alone.
+    rng = np.random.default_rng(11)
+    at = (X["run"] == "R2").to_numpy()
+    noisy_X, noisy_Y = X.copy(), Y.copy()
+    noisy_X.loc[at, ["T1", "T2", "T3", "T4"]] = rng.normal(50.0, 9.0, size=(at.sum(), 4))
+    noisy_Y.loc[at] = 123.0
+    noisy = recommend(noisy_X, noisy_Y, candidates, **kwargs)
+    before = honest.folds.set_index("fold").loc["R2"]
+    after = noisy.folds.set_index("fold").loc["R2"]
+    assert after["chosen"] == before["chosen"]
+    assert after["inner_score"] == pytest.approx(before["inner_score"], rel=1e-12)
+    inner = [r.inner.loc[r.inner["fold"] == "R2"].reset_index(drop=True) for r in (honest, noisy)]
+    pd.testing.assert_frame_equal(inner[0], inner[1], rtol=1e-12)
+    # The held-out error itself sees the new data (a constant 123 um is far from the fit).
+    assert after["rmse_um"] > 10 * before["rmse_um"]
+
+
+def test_the_inner_loop_leaves_one_run_out_above_the_outer_limit():
+    X, Y = make_runs(n_runs=7, n_measurements=5)
+    result = recommend(X, Y, CANDIDATES[:2], reference="pointwise-mlr-T3", degree=1,
+                       score="rmse", max_loco_runs=3, n_group_folds=2)  # fmt: skip
+    # Seven runs above an outer limit of three: two outer groups (R1-R4, R5-R7); inside
+    # each, every training run is held out on its own.
+    inner = result.inner.loc[result.inner["fold"] == "R1"]
+    assert sorted(set(inner["held_out"])) == ["R5", "R6", "R7"]
+    inner = result.inner.loc[result.inner["fold"] == "R6"]
+    assert sorted(set(inner["held_out"])) == ["R1", "R2", "R3", "R4"]
+
+
+def test_the_plain_references_are_always_candidates_and_see_only_their_own_lags():
     candidates = default_candidates(
         DEFAULTS.selection, DEFAULTS.models, True, ["S"], (30.0,), (20.0, 60.0, 180.0)
     )
-    baseline = candidates[-1]
+    by_name = {c.name: c for c in candidates}
+    assert list(by_name) == [
+        "paper", EVIDENCE, f"{EVIDENCE}+lags", BASELINE, "decoupled-pls-all",
+        "decoupled-pls-all+lags", "pointwise-svr",
+    ]  # fmt: skip
+    # The evidence ridge: decoupled over every sensor with the declared signal, no search.
+    evidence = by_name[EVIDENCE]
+    assert (evidence.approach, evidence.algorithm, evidence.selection.method) == (
+        "decoupled", "bayesridge", "all",
+    )  # fmt: skip
+    assert evidence.models.signals == ("S",) and evidence.models.searched == ()
+    assert by_name[f"{EVIDENCE}+lags"].lags_min == (20.0, 60.0, 180.0)
+    # One position: point by point; beyond recommend.kernel_max_runs, no kernel candidate.
+    single = default_candidates(
+        DEFAULTS.selection, DEFAULTS.models, False, [], (), (60.0,), kernel=False
+    )
+    assert [c.name for c in single] == [
+        "paper", EVIDENCE, f"{EVIDENCE}+lags", BASELINE, "pointwise-pls-all",
+    ]  # fmt: skip
+    assert {c.approach for c in single} == {"pointwise"}
+    baseline = by_name[BASELINE]
     assert (baseline.name, baseline.approach, baseline.algorithm) == (
         BASELINE,
         "pointwise",
@@ -299,3 +356,27 @@ def test_the_page_says_which_folds_had_no_inner_split_to_choose_on():
         Recommendation(chosen, pd.DataFrame(), pd.DataFrame(), "paper", "max_abs"), "x"
     )
     assert "Fold(s) R2 had a single training run" in page
+
+
+def test_held_out_predictions_are_the_fit_on_the_other_runs():
+    X, Y = make_runs(n_runs=4)
+    runs, predicted = held_out_predictions(X, Y, ("R2", "R4"), fixed("T1"), 1, [], {})
+    # By hand: least squares of each position's error on T1's rise, fitted on R1 and R3.
+    rise = X["T1"] - X.groupby("run")["T1"].transform("first")
+    train, test = X["run"].isin(["R1", "R3"]).to_numpy(), X["run"].isin(["R2", "R4"]).to_numpy()
+    A = np.column_stack([np.ones(train.sum()), rise[train]])
+    coef, *_ = np.linalg.lstsq(A, Y.to_numpy()[train], rcond=None)
+    expected = np.column_stack([np.ones(test.sum()), rise[test]]) @ coef
+    assert list(runs) == list(X.loc[test, "run"])
+    np.testing.assert_allclose(predicted, expected, rtol=1e-9, atol=1e-9)
+
+
+def test_the_kernel_candidate_is_capped_by_the_runs_not_the_others():
+    settings = Settings.from_config({"recommend": {"kernel_max_runs": 6}})
+
+    def names(n_runs):
+        return [c.name for c in candidates_for(settings.selection, settings.models,
+                                               settings.recommend, False, [], n_runs)]  # fmt: skip
+
+    assert names(6)[-1] == "pointwise-svr"
+    assert names(7) == names(6)[:-1]

@@ -98,6 +98,27 @@ def test_st_values_equal_compensator(exported, now, ref):
         assert got[parameter] == pytest.approx(value, abs=1e-9), parameter
 
 
+def test_evidence_ridge_block_equals_compensator():
+    # The evidence ridge is affine: its block carries constants and coefficients like MLR's,
+    # its standardisation folded in, and the parsed block must give Compensator's values.
+    X, Y = exact_runs(wobble_um=0.3)
+    estimator = DecoupledAxisModel(("T1",), ("T2",), algorithm="bayesridge").fit(X, Y)
+    model = model_record(estimator, "decoupled", "bayesridge", X, RAMP, dataset="exact")
+    assert {r["form"] for r in model["regressions"]} == {"affine"}
+    c = parsed_constants(structured_text(model, "SIMULATED test data."))
+    comp = Compensator(model)
+    now, ref = (32.0, 26.5), (30.0, 25.0)
+    expected = {
+        row[0]: row[2]
+        for row in twincat(
+            comp.parameters({"T1": now[0], "T2": now[1]}, {"T1": ref[0], "T2": ref[1]})
+        )
+    }
+    got = st_twincat(c, np.array(now), np.array(ref))
+    for parameter, value in expected.items():
+        assert got[parameter] == pytest.approx(value, abs=1e-9), parameter
+
+
 def test_hand_worked_signs(exported):
     # T1 30 -> 32: k rises 26 um/m; T2 rises 1.5: b falls 16.5 um. Compensation = -change:
     # offset_0 = +16.5 um = 165 (0.1 um), coefficient = -26 um/m,

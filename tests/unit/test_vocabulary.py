@@ -68,9 +68,10 @@ def test_every_algorithm_and_approach_setting_of_the_config_refers_to_the_vocabu
         "sweep/approaches",
     ]
     config = load_schema("config")["properties"]
-    # Every algorithm but lasso (a candidate of the recommendation, not of the paper's
-    # comparison) and both approaches are the defaults, in the vocabulary's order.
-    paper_set = tuple(a for a in ALGORITHMS if a != "lasso")
+    # Every algorithm but lasso and the evidence ridge (candidates of the recommendation,
+    # not of the paper's comparison) and both approaches are the defaults, in the
+    # vocabulary's order.
+    paper_set = tuple(a for a in ALGORITHMS if a not in ("lasso", "bayesridge"))
     assert tuple(config["models"]["properties"]["algorithms"]["default"]) == paper_set
     assert tuple(config["sweep"]["properties"]["algorithms"]["default"]) == paper_set
     assert tuple(config["sweep"]["properties"]["approaches"]["default"]) == APPROACHES
@@ -118,7 +119,9 @@ def test_both_validators_resolve_the_refs(override, where):
         validate({"dataset": "x", **override}, str(schema_path("config")), set_default=True)
     filled = {"dataset": "x"}
     validate(filled, str(schema_path("config")), set_default=True)
-    assert filled["models"]["algorithms"] == [a for a in ALGORITHMS if a != "lasso"]
+    assert filled["models"]["algorithms"] == [
+        a for a in ALGORITHMS if a not in ("lasso", "bayesridge")
+    ]
 
 
 def test_the_model_schema_refuses_an_unknown_algorithm():
@@ -129,7 +132,10 @@ def test_the_model_schema_refuses_an_unknown_algorithm():
         e.message
         for e in validator.iter_errors({"approach": "pointwise", "algorithm": "elasticnet"})
     ]
-    assert "'elasticnet' is not one of ['mlr', 'svr', 'ridge', 'lasso', 'pls', 'gpr']" in errors
+    assert (
+        "'elasticnet' is not one of ['mlr', 'svr', 'ridge', 'lasso', 'pls', 'gpr', 'bayesridge']"
+        in errors
+    )
     assert not any("'pointwise'" in message for message in errors)
 
 

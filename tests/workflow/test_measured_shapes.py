@@ -79,7 +79,7 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
     # replay reads the temperature and signal logs.
     lagged = work / "lagged.yaml"
     lagged.write_text(yaml.safe_dump({"recommend": {"lags_min": [30]},
-                                      "compensation": {"model": "pointwise-mlr-all+signals+lags"}}))  # fmt: skip
+                                      "compensation": {"model": "pointwise-pls-all+lags"}}))  # fmt: skip
     run_snakemake(
         work,
         "--configfile",
@@ -105,7 +105,7 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
     comp = out / "compensation"
     model = json.loads((comp / "model.json").read_text())
     assert model["approach"] == "pointwise"
-    assert model["deployment"]["candidate"] == "pointwise-mlr-all+signals+lags"
+    assert model["deployment"]["candidate"] == "pointwise-pls-all+lags"
     inputs = [(i["sensor"], i["temperature"]) for i in model["inputs"]]
     # Every sensor and its lag (selection "all"), then the signal and its lag, as logged.
     temperatures = ["S1", "S2", "S3", "S1@lag30min", "S2@lag30min", "S3@lag30min"]

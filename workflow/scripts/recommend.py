@@ -66,8 +66,6 @@ def main(snakemake):
             candidates,
             outer,
             degree=degree,
-            max_loco_runs=recommend.max_loco_runs,
-            n_group_folds=recommend.group_folds,
             signals=p.signals,
             # Workers start without this job's logging: only one process says its progress.
             progress=log.info if workers == 1 else None,
@@ -85,7 +83,7 @@ def main(snakemake):
             [read_table(io.StringIO(texts[path])) for path in output.scores], ignore_index=True
         )
         names = [c.name for c in candidates]
-        result = collect(scores, names, "paper", recommend.score, recommend.level)
+        result = collect(scores, names, "paper", recommend.score)
         means = fold_means(result.loco, StatisticsSettings.from_section(p.statistics))
         table = candidate_table(candidates).join(means, on="candidate")
         record = choice_record(result, candidates)

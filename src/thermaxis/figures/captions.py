@@ -36,6 +36,7 @@ def provenance_note(simulated: bool, twin: bool = True) -> str | None:
 # unknown labels are shown as they are.
 DISPLAY_NAMES = {
     "mlr": "MLR", "svr": "SVR", "gpr": "GPR", "pls": "PLS", "ridge": "ridge", "lasso": "lasso",
+    "bayesridge": "evidence ridge",
     "decoupled": "decoupled", "pointwise": "point-by-point",
 }  # fmt: skip
 

@@ -40,6 +40,7 @@ __all__ = [
     "select_for_fold",
     "evaluate_configuration",
     "fold_metrics",
+    "fit_held_out",
     "selection_table",
     "selection_to_dict",
     "selection_from_dict",
@@ -364,7 +365,7 @@ def evaluate_configuration(
     ``degree`` is the decoupling's (config ``decoupling.degree``); the point-by-point
     approach never decouples and ignores it (``None`` allowed).
     """
-    estimator, X_test, Y_test = _fit_held_out(
+    estimator, X_test, Y_test = fit_held_out(
         X, Y, fold, approach, algorithm, selection, model, degree
     )
     label = {"fold": fold_name(fold), "approach": approach, "algorithm": algorithm}
@@ -406,7 +407,7 @@ def fold_metrics(
     ``per_run``: a fold of several runs (:func:`held_out_runs`) is scored run by run, each
     row's ``fold`` its run, from one fit.
     """
-    estimator, X_test, Y_test = _fit_held_out(
+    estimator, X_test, Y_test = fit_held_out(
         X, Y, fold, approach, algorithm, selection, model, degree
     )
     label = {"fold": fold_name(fold), "approach": approach, "algorithm": algorithm}
@@ -416,7 +417,7 @@ def fold_metrics(
     return metric_frame(label, compared, X_test["run"].to_numpy() if per_run else None)
 
 
-def _fit_held_out(X, Y, fold, approach, algorithm, selection, model, degree):
+def fit_held_out(X, Y, fold, approach, algorithm, selection, model, degree):
     """The configuration fitted on every run but ``fold``, and ``fold``'s own X and Y."""
     X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
     estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)

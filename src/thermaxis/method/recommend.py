@@ -8,12 +8,10 @@ it has not seen. Answering it honestly needs two loops:
 
 * the *outer* loop holds out one condition (run) at a time: it is the unseen condition;
 * the *inner* loop, on the remaining training runs alone, scores every candidate by
-  leave-one-condition-out (or by k group folds above ``max_loco_runs`` training runs)
-  and chooses against the plain baseline (:data:`BASELINE`, always a candidate): a
-  candidate displaces it only when its paired improvement over the inner held-out runs
-  exceeds one standard error and passes a one-sided signed-rank test (:func:`_choose`);
-  among those the best mean inner score wins, ties to the candidate listed first (the
-  default list runs from simple to complex).
+  leave-one-condition-out, one run at a time whatever the number of runs, and chooses
+  the candidate with the lowest mean inner score (:func:`_choose`: the cross-validation
+  selector, or discrete super learner, of van der Laan, Polley and Hubbard 2007), ties
+  to the candidate listed first (the default list runs from simple to complex).
 
 The chosen candidate's error on the outer held-out run is the estimate of what the
 pipeline would deploy; the held-out run reaches no choice. The final recommendation is
@@ -45,6 +43,7 @@ from thermaxis.labels import natural_sorted
 from thermaxis.method.batched import batchable, decoupled_metrics, pointwise_metrics
 from thermaxis.method.folds import (
     META,
+    fit_held_out,
     fold_metrics,
     fold_name,
     held_out_runs,
@@ -53,7 +52,6 @@ from thermaxis.method.folds import (
 )
 from thermaxis.method.inputs import base_of, parse_input_name
 from thermaxis.reports.formatting import markdown_table
-from thermaxis.statistics.paired import wilcoxon_p
 
 __all__ = [
     "SCORES",
@@ -61,6 +59,7 @@ __all__ = [
     "Recommendation",
     "candidate_view",
     "held_out_scores",
+    "held_out_predictions",
     "SCORE_COLUMNS",
     "TrainingSet",
     "training_sets",
@@ -71,7 +70,9 @@ __all__ = [
     "recommend",
     "default_candidates",
     "BASELINE",
+    "EVIDENCE",
     "baseline_candidate",
+    "evidence_candidate",
     "extra_candidates",
     "candidate_table",
     "candidates_for",
@@ -162,13 +163,11 @@ def _seen_lag(name: str, lags_min: Sequence[float]) -> bool:
     return kind == "lag" and any(np.isclose(seconds, 60.0 * m) for m in lags_min)
 
 
-def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> list[tuple]:
-    """Select on the training rows of X, fit, predict ``fold``: its error metrics.
+def _fold_setup(X, Y, fold, candidate, degree, signals, cache):
+    """A candidate's view of X, its model settings and its selection on the training rows.
 
-    ``fold`` is a run or a group of runs, fitted once: ``[(its name, metrics)]``, or with
-    ``per_run`` ``[(run, metrics), ...]`` for each of its runs. Candidates that differ only
-    in their algorithm share the selection (``cache``), as the main workflow's algorithms
-    share a fold's; so do evaluations on the same training runs.
+    Candidates that differ only in their algorithm share the selection (``cache``), as the
+    main workflow's algorithms share a fold's; so do evaluations on the same training runs.
     """
     view, selectable, models = candidate_view(X, candidate, signals)
     # The recommendation never lets the held-out run into the choice of sensitive points.
@@ -186,25 +185,60 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache, per_run) -> li
             view[selectable], Y, fold, selection_settings, degree if decoupled else None,
             decoupled=decoupled, pointwise=not decoupled,
         )  # fmt: skip
-    selection = cache[key]
+    return view, models, cache[key]
+
+
+def _error_metrics(X, Y, fold, candidate, degree, signals, cache) -> list[tuple]:
+    """Select on the training rows of X, fit, predict ``fold``: its error metrics.
+
+    ``fold`` is a run or a group of runs, fitted once: ``[(run, metrics), ...]`` for each
+    of its runs.
+    """
+    view, models, selection = _fold_setup(X, Y, fold, candidate, degree, signals, cache)
+    decoupled = candidate.approach == "decoupled"
     if batchable(candidate.algorithm, models, Y):
         # The numpy core: the same numbers as evaluate_configuration to 1e-9.
         (metrics,) = (
             decoupled_metrics(view, Y, fold, candidate.algorithm, models, degree,
-                              [(selection.k_sensors, selection.b_sensors)], per_run=per_run)
+                              [(selection.k_sensors, selection.b_sensors)], per_run=True)
             if decoupled
             else pointwise_metrics(view, Y, fold, candidate.algorithm, models,
-                                   [selection.pointwise], per_run=per_run)
+                                   [selection.pointwise], per_run=True)
         )  # fmt: skip
     else:
         metrics = fold_metrics(
             view, Y, fold, candidate.approach, candidate.algorithm, selection, models,
-            degree if decoupled else None, per_run=per_run,
+            degree if decoupled else None, per_run=True,
         )  # fmt: skip
     errors = metrics.loc[metrics["target"] == "error"]
     return [
         (row["fold"], {name: float(row[name]) for name in METRICS}) for _, row in errors.iterrows()
     ]
+
+
+def held_out_predictions(
+    X: pd.DataFrame,
+    Y: pd.DataFrame,
+    fold: Sequence[str],
+    candidate: Candidate,
+    degree: int,
+    signals: Sequence[str],
+    cache: dict,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The error curves of the runs ``fold`` predicted by ``candidate`` fitted on the rest of X.
+
+    ``(run of each held-out row, predictions (rows, positions))``, the rows in X's order,
+    selected and fitted as :func:`held_out_scores` scores them (what a combination of
+    candidates is fitted on and judged by).
+    """
+    view, models, selection = _fold_setup(X, Y, fold, candidate, degree, signals, cache)
+    decoupled = candidate.approach == "decoupled"
+    estimator, X_test, _ = fit_held_out(
+        view, Y, fold, candidate.approach, candidate.algorithm, selection, models,
+        degree if decoupled else None,
+    )  # fmt: skip
+    predicted = estimator.predict(X_test)
+    return X_test["run"].to_numpy(), np.asarray(predicted, dtype=float)
 
 
 def held_out_scores(
@@ -216,23 +250,18 @@ def held_out_scores(
     degree: int,
     signals: Sequence[str],
     cache: dict,
-    per_run: bool = False,
 ) -> list[dict]:
-    """Each held-out group's error when ``candidate`` is fitted on the rest of ``train_runs``.
+    """Each held-out run's error when ``candidate`` is fitted on the rest of ``train_runs``.
 
-    A group of one run is that run; a larger group (a group fold) is fitted once and
-    scored over all its rows, ``held_out`` naming its runs joined by "+", or with
-    ``per_run`` run by run: one fit per group, not per run, keeps a loop over many runs
-    at a fixed number of fits. Rows of X and Y outside ``train_runs`` are never seen: not
-    by the selection, the fit or the scaling.
+    Each group of ``held_out`` is fitted once and scored run by run: one fit per group,
+    not per run. Rows of X and Y outside ``train_runs`` are never seen: not by the
+    selection, the fit or the scaling.
     """
     keep = X["run"].isin(train_runs).to_numpy()
     X, Y = X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True)
     rows = []
     for group in held_out:
-        for name, metrics in _error_metrics(
-            X, Y, group, candidate, degree, signals, cache, per_run
-        ):
+        for name, metrics in _error_metrics(X, Y, group, candidate, degree, signals, cache):
             rows.append({"candidate": candidate.name, "held_out": name, **metrics})
     return rows
 
@@ -243,45 +272,43 @@ class TrainingSet:
 
     With leave-one-out on both loops, the inner fold of outer fold E3 that holds out E4
     and the inner fold of outer fold E4 that holds out E3 both train on the other runs:
-    half the inner fits repeat one another. ``scored`` are the held-out groups, each with
-    whether it is scored run by run (an outer group, and any single run) or over all its
-    rows (an inner group fold of several runs).
+    half the inner fits repeat one another. ``scored`` are the held-out runs, each scored
+    on its own, from one fit (an outer group's runs, and the inner loops' single runs).
     """
 
     train: tuple[str, ...]
-    scored: tuple[tuple[tuple[str, ...], bool], ...]
+    scored: tuple[str, ...]
 
 
-def _outer_splits(runs, fold, max_loco_runs, n_group_folds):
-    """An outer fold's held-out runs, its training runs and its inner held-out groups."""
+def _outer_splits(runs, fold):
+    """An outer fold's held-out runs, its training runs and its inner held-out runs.
+
+    The inner loop leaves one training run out at a time at every size: each run is one
+    paired piece of evidence, and on the linear core a fit costs little, so none is
+    pooled into a group fold (a kernel candidate is capped instead, ``kernel_max_runs``).
+    """
     held = held_out_runs(fold)
     train = [r for r in runs if r not in held]
     # With two runs the training side of a fold is one run: nothing to compare candidates
     # on without the held-out run, so the fold has no inner scores (collect says so).
-    splits = run_groups(train, max_loco_runs, n_group_folds) if len(train) >= 2 else []
+    splits = [(run,) for run in train] if len(train) >= 2 else []
     return held, train, splits
 
 
-def training_sets(
-    runs: Sequence[str],
-    folds: Sequence[str | Sequence[str]],
-    max_loco_runs: int,
-    n_group_folds: int,
-) -> list[TrainingSet]:
+def training_sets(runs: Sequence[str], folds: Sequence[str | Sequence[str]]) -> list[TrainingSet]:
     """Every distinct set of training runs the outer ``folds`` and their inner loops fit on.
 
     In the order first needed, outer folds in turn; :func:`outer_fold_scores` puts
     their scores back into the folds' rows.
     """
     runs = natural_sorted(runs)
-    needed: dict[tuple[str, ...], dict[tuple[str, ...], bool]] = {}
+    needed: dict[tuple[str, ...], dict[str, None]] = {}
     for fold in folds:
-        held, train, splits = _outer_splits(runs, fold, max_loco_runs, n_group_folds)
-        needed.setdefault(tuple(train), {})[held] = True
-        for group in splits:
-            rest = tuple(r for r in train if r not in group)
-            needed.setdefault(rest, {})[tuple(group)] = len(group) == 1
-    return [TrainingSet(train, tuple(scored.items())) for train, scored in needed.items()]
+        held, train, splits = _outer_splits(runs, fold)
+        needed.setdefault(tuple(train), {}).update(dict.fromkeys(held))
+        for (run,) in splits:
+            needed.setdefault(tuple(r for r in train if r != run), {})[run] = None
+    return [TrainingSet(train, tuple(scored)) for train, scored in needed.items()]
 
 
 def training_set_scores(
@@ -293,26 +320,21 @@ def training_set_scores(
     signals: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
 ) -> dict[tuple[str, str], dict]:
-    """Every candidate fitted once on ``training.train``, scored on each held-out group.
+    """Every candidate fitted once on ``training.train``, scored on each held-out run.
 
-    ``{(candidate, held-out name): metrics}``: a run's name, or an inner group fold's
-    runs joined by "+". Groups scored run by run share one call (their runs are all held
-    out of the same fit); a group scored over its rows has its own.
+    ``{(candidate, run): metrics}``: the held-out runs share one call (they are all held
+    out of the same fit).
     """
     say = progress or (lambda message: None)
-    by_run = [r for group, per_run in training.scored if per_run for r in group]
-    calls = [(tuple(by_run), True)] if by_run else []
-    calls += [(group, False) for group, per_run in training.scored if not per_run]
     cache: dict = {}
     out = {}
     for candidate in candidates:
         say(f"training runs {fold_name(training.train)}: {candidate.name}")
-        for group, per_run in calls:
-            for row in held_out_scores(
-                X, Y, [*training.train, *group], [group], candidate, degree, signals, cache,
-                per_run,
-            ):  # fmt: skip
-                out[(candidate.name, row["held_out"])] = {m: row[m] for m in METRICS}
+        for row in held_out_scores(
+            X, Y, [*training.train, *training.scored], [training.scored], candidate, degree,
+            signals, cache,
+        ):  # fmt: skip
+            out[(candidate.name, row["held_out"])] = {m: row[m] for m in METRICS}
     return out
 
 
@@ -324,23 +346,20 @@ def outer_fold_scores(
     candidates: Sequence[Candidate],
     fold: str | Sequence[str],
     scores: Mapping[tuple[str, ...], Mapping[tuple[str, str], dict]],
-    max_loco_runs: int,
-    n_group_folds: int,
 ) -> pd.DataFrame:
     """Everything one outer fold contributes, from its training sets' ``scores``.
 
-    ``fold`` is a run, or a group of runs held out together: above ``max_loco_runs``
-    runs the outer loop deals them into ``n_group_folds`` groups as the inner loop does
+    ``fold`` is a run, or a group of runs held out together: above
+    ``recommend.max_loco_runs`` runs the outer loop deals them into groups
     (:func:`~thermaxis.method.folds.run_groups`), because leaving each run out would repeat
     the whole inner loop per run, a cost that grows with the square of the runs. Every run
     is still held out once; its row is its group's choice, fitted on the runs outside. Rows
-    of kind ``inner``: each candidate fitted on the training runs but one inner group,
-    scored on that group (the fold's runs are in none of them), repeated under each run
-    of the fold. Rows of kind ``loco``: each candidate fitted on every run outside the
+    of kind ``inner``: each candidate fitted on the training runs but one, scored on that
+    run (the fold's runs are in none of them), repeated under each run of the fold. Rows of kind ``loco``: each candidate fitted on every run outside the
     fold, scored on each of its runs. ``scores`` maps each training set's runs to
     :func:`training_set_scores`.
     """
-    held, train, splits = _outer_splits(natural_sorted(runs), fold, max_loco_runs, n_group_folds)
+    held, train, splits = _outer_splits(natural_sorted(runs), fold)
     rows: dict[str, list] = {run: [] for run in held}
     for c in candidates:
         for run in held:
@@ -362,8 +381,6 @@ def fold_scores(
     candidates: Sequence[Candidate],
     folds: Sequence[str | Sequence[str]],
     degree: int,
-    max_loco_runs: int,
-    n_group_folds: int,
     signals: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
     map_sets: Callable[[Callable, list], list] | None = None,
@@ -376,16 +393,13 @@ def fold_scores(
     runs = natural_sorted(pd.unique(X["run"]).tolist())
     if len(runs) < 2:
         raise ValueError(f"{len(runs)} run: leave-one-condition-out needs at least 2")
-    sets = training_sets(runs, folds, max_loco_runs, n_group_folds)
+    sets = training_sets(runs, folds)
     one_set = partial(
         training_set_scores, X, Y, candidates, degree=degree, signals=signals, progress=progress
     )
     done = (map_sets or (lambda f, items: [f(i) for i in items]))(one_set, sets)
     scores = {s.train: d for s, d in zip(sets, done, strict=True)}
-    return [
-        outer_fold_scores(runs, candidates, fold, scores, max_loco_runs, n_group_folds)
-        for fold in folds
-    ]
+    return [outer_fold_scores(runs, candidates, fold, scores) for fold in folds]
 
 
 def _lowest(means: pd.Series, order: Sequence[str]) -> str:
@@ -394,38 +408,19 @@ def _lowest(means: pd.Series, order: Sequence[str]) -> str:
     return next(n for n in order if np.isclose(means[n], best, rtol=1e-12, atol=0.0))
 
 
-def _choose(
-    scores: pd.DataFrame, order: Sequence[str], score: str, level: float
-) -> tuple[str, float]:
-    """The candidate the scores support: the baseline, unless another beats it beyond the noise.
+def _choose(scores: pd.DataFrame, order: Sequence[str], score: str) -> tuple[str, float]:
+    """The candidate with the lowest mean held-out score over the held-out runs.
 
-    With the baseline (:data:`BASELINE`) among ``order``, another candidate displaces it
-    only when its paired differences over the held-out runs show an improvement twice:
-    their mean plus one standard error is below zero (the one-standard-error rule), and a
-    one-sided Wilcoxon signed-rank test rejects "no improvement" at ``level``. Among those
-    the lowest mean wins. On a few runs the lowest mean of twenty candidates is mostly the
-    luckiest, and a standard error from three differences is itself noise: the rank test's
-    level holds whatever the count, and below 5 held-out runs nothing reaches 0.05
-    (docs/recommendation.md gives the measured cost). Without the baseline: the lowest
-    mean. Ties go to the candidate listed first.
+    The cross-validation selector (the discrete super learner of van der Laan, Polley and
+    Hubbard 2007): with every held-out run a piece of evidence, its risk is within a
+    constant of the best candidate's as the runs grow, for a fixed, small list of
+    candidates; so the list is kept short and structurally different
+    (:func:`default_candidates`). Ties (to 1e-12 relative) go to the candidate listed
+    first, the simpler one.
     """
     wide = scores.pivot_table(index="held_out", columns="candidate", values=score, sort=True)
-    means = wide.mean()
-    if BASELINE not in order:
-        name = _lowest(means, order)
-        return name, float(means[name])
-    differences = wide[[c for c in order if c != BASELINE]].sub(wide[BASELINE], axis=0)
-    n = len(differences)
-    # One held-out run gives no spread: nothing is shown to beat the baseline.
-    error = differences.std(ddof=1) / np.sqrt(n) if n >= 2 else differences.mean() * 0 + np.inf
-    beaten = [
-        c
-        for c in differences.columns
-        if differences[c].mean() + error[c] < 0
-        and wilcoxon_p(differences[c], alternative="less") <= level
-    ]
-    name = _lowest(means, beaten) if beaten else BASELINE
-    return name, float(means[name])
+    name = _lowest(wide.mean(), order)
+    return name, float(wide.mean()[name])
 
 
 def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
@@ -438,7 +433,7 @@ def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
 
 
 def collect(
-    scores: pd.DataFrame, names: Sequence[str], reference: str, score: str, level: float
+    scores: pd.DataFrame, names: Sequence[str], reference: str, score: str
 ) -> Recommendation:
     """The choice of every outer fold, and the final one, from the folds' scores."""
     _check_choice(names, reference, score)
@@ -453,7 +448,7 @@ def collect(
         fold_inner = inner.loc[inner["fold"] == fold]
         # No inner scores (one training run): the reference stands, unchosen.
         chosen, inner_score = (
-            _choose(fold_inner, names, score, level) if len(fold_inner) else (reference, np.nan)
+            _choose(fold_inner, names, score) if len(fold_inner) else (reference, np.nan)
         )
         rows.append(
             {
@@ -466,7 +461,7 @@ def collect(
                 "paper_max_abs_um": at.loc[(reference, fold), "max_abs"],
             }
         )
-    final, _ = _choose(loco, names, score, level)
+    final, _ = _choose(loco, names, score)
     return Recommendation(pd.DataFrame(rows), inner.reset_index(drop=True), loco, final, score)
 
 
@@ -477,7 +472,6 @@ def recommend(
     reference: str,
     degree: int,
     score: str,
-    level: float,
     max_loco_runs: int,
     n_group_folds: int,
     signals: Sequence[str] = (),
@@ -487,7 +481,8 @@ def recommend(
     """Nested leave-one-condition-out choice among ``candidates`` (simplest first).
 
     ``reference`` names the candidate reported beside the choice (the paper's
-    configuration). ``outer_folds`` default to every run. The workflow runs
+    configuration). ``outer_folds`` default to every run, each held out alone up to
+    ``max_loco_runs`` runs and in ``n_group_folds`` groups above. The workflow runs
     :func:`fold_scores` in one job, its training sets spread over the job's cores, and
     :func:`collect` once.
     """
@@ -500,11 +495,9 @@ def recommend(
     _check_choice(names, reference, score)
     outer = run_groups(folds, max_loco_runs, n_group_folds)
     scores = pd.concat(
-        fold_scores(X, Y, candidates, outer, degree, max_loco_runs, n_group_folds, signals,
-                    progress),
-        ignore_index=True,
-    )  # fmt: skip
-    return collect(scores, names, reference, score, level)
+        fold_scores(X, Y, candidates, outer, degree, signals, progress), ignore_index=True
+    )
+    return collect(scores, names, reference, score)
 
 
 def candidate_table(candidates: Sequence[Candidate]) -> pd.DataFrame:
@@ -539,6 +532,7 @@ def summary_of(recommendation: Recommendation) -> Mapping[str, float]:
 
 
 BASELINE = "baseline-ridge+lags"
+EVIDENCE = "evidence-ridge"
 
 
 def baseline_candidate(
@@ -561,6 +555,32 @@ def baseline_candidate(
     )
 
 
+def evidence_candidate(
+    selection: SelectionSettings,
+    models: ModelSettings,
+    decoupled: bool,
+    signals: Sequence[str],
+    lags_min: Sequence[float] = (),
+) -> Candidate:
+    """The evidence ridge (:data:`EVIDENCE`, with ``lags_min`` ``+lags``): the other plain reference.
+
+    scikit-learn's BayesianRidge (algorithm ``bayesridge``) on standardised inputs, over
+    every sensor, with the declared operating ``signals`` as inputs; decoupled where there
+    are several positions (k on absolute temperatures, b on their rise, Eq. 9), point by
+    point otherwise. Its strength maximises the evidence of the training rows, so it needs
+    no inner search and spends no run on one.
+    """
+    return Candidate(
+        EVIDENCE + ("+lags" if lags_min else ""),
+        "decoupled" if decoupled else "pointwise",
+        "bayesridge",
+        replace(selection, method="all"),
+        replace(models, signals=tuple(signals), searched=()),
+        bool(lags_min),
+        tuple(lags_min),
+    )
+
+
 def default_candidates(
     selection: SelectionSettings,
     models: ModelSettings,
@@ -568,60 +588,60 @@ def default_candidates(
     signals: Sequence[str],
     lags_min: Sequence[float],
     baseline_lags_min: Sequence[float],
+    kernel: bool = True,
 ) -> list[Candidate]:
-    """The default list, simplest first: the paper's configuration, its variants, regularised models.
+    """A short list of structurally different candidates, simplest first.
 
     * ``paper``: the configured selection, the decoupled approach (point by point for a
-      single-position dataset) and MLR, as the paper models;
-    * the same selection with the other approach and with the SVR;
-    * MLR over every sensor, and ridge, lasso and PLS over every sensor with their
-      strength chosen by an inner search on the training runs;
-    * with ``lags_min``, the MLR and regularised candidates again with those lags;
-    * with operating ``signals``, the regularised candidates again with them as inputs
-      (and their lags with ``lags_min``);
-    * last, the plain baseline (:func:`baseline_candidate`, lags ``baseline_lags_min``).
+      single-position dataset) and MLR, as the paper models (also the reference);
+    * the evidence ridge over every sensor (:func:`evidence_candidate`), without and with
+      the lags ``baseline_lags_min``;
+    * the plain baseline (:func:`baseline_candidate`): ridge over every sensor's rise and
+      its lags ``baseline_lags_min``, its strength searched;
+    * PLS over every sensor with the operating signals, its components searched, and with
+      ``lags_min`` again with those lags;
+    * with ``kernel``, the point-by-point SVR on the configured selection (a kernel model's
+      inner search is costly: config ``recommend.kernel_max_runs`` caps it).
+
+    Each is a different kind of model (selected points, shrinkage by the evidence or by a
+    search, latent components, a kernel): the choice among a few such candidates is
+    what the runs can support; twenty near-duplicates made it noise.
     """
-    lags_min = tuple(lags_min)
-    time_inputs = bool(lags_min)
-    approaches = ["decoupled", "pointwise"] if decoupled else ["pointwise"]
-    plain = replace(models, signals=(), searched=())
-    searched = replace(plain, searched=("ridge", "lasso", "pls"))
+    first = "decoupled" if decoupled else "pointwise"
     every_sensor = replace(selection, method="all")
-    candidates = [Candidate("paper", approaches[0], "mlr", selection, plain, False)]
-    for approach in approaches:
-        for algorithm in ("mlr", "svr"):
-            if (approach, algorithm) != (approaches[0], "mlr"):
-                candidates.append(
-                    Candidate(
-                        f"{approach}-{algorithm}", approach, algorithm, selection, plain, False
-                    )
-                )
-    regularised = [
-        Candidate(f"{approach}-{algorithm}-all", approach, algorithm, every_sensor, searched, False)
-        for approach in approaches
-        for algorithm in ("mlr", "ridge", "lasso", "pls")
+    pls = Candidate(
+        f"{first}-pls-all",
+        first,
+        "pls",
+        every_sensor,
+        replace(models, signals=tuple(signals), searched=("pls",)),
+        False,
+    )
+    candidates = [
+        Candidate(
+            "paper", first, "mlr", selection, replace(models, signals=(), searched=()), False
+        ),
+        evidence_candidate(selection, models, decoupled, signals),
+        evidence_candidate(selection, models, decoupled, signals, baseline_lags_min),
+        baseline_candidate(selection, models, baseline_lags_min),
+        pls,
     ]
-    candidates += regularised
-    if time_inputs:
-        linear = [c for c in candidates if c.algorithm != "svr"]
-        candidates += [
-            replace(c, name=f"{c.name}+lags", time_inputs=True, lags_min=lags_min) for c in linear
-        ]
-    if signals:
-        with_signals = replace(searched, signals=tuple(signals))
-        for c in regularised:
-            candidates.append(replace(c, name=f"{c.name}+signals", models=with_signals))
-            if time_inputs:
-                candidates.append(
-                    replace(
-                        c,
-                        name=f"{c.name}+signals+lags",
-                        models=with_signals,
-                        time_inputs=True,
-                        lags_min=lags_min,
-                    )
-                )
-    return [*candidates, baseline_candidate(selection, models, baseline_lags_min)]
+    if lags_min:
+        candidates.append(
+            replace(pls, name=f"{pls.name}+lags", time_inputs=True, lags_min=tuple(lags_min))
+        )
+    if kernel:
+        candidates.append(
+            Candidate(
+                "pointwise-svr",
+                "pointwise",
+                "svr",
+                selection,
+                replace(models, signals=(), searched=()),
+                False,
+            )  # fmt: skip
+        )
+    return candidates
 
 
 def extra_candidates(
@@ -651,8 +671,13 @@ def candidates_for(
     recommend_settings,
     decoupled: bool,
     signals: Sequence[str],
+    n_runs: int,
 ) -> list[Candidate]:
-    """The configured candidate list: the defaults, then the user's (config ``recommend``)."""
+    """The configured candidate list: the defaults, then the user's (config ``recommend``).
+
+    The kernel candidate is in the list only up to ``recommend.kernel_max_runs`` runs: its
+    search is a kernel fit per grid point and inner run, nested twice.
+    """
     return [
         *default_candidates(
             selection,
@@ -661,6 +686,7 @@ def candidates_for(
             signals,
             recommend_settings.lags_min,
             recommend_settings.baseline_lags_min,
+            kernel=n_runs <= recommend_settings.kernel_max_runs,
         ),
         *extra_candidates(recommend_settings, selection, models, signals),
     ]
@@ -674,6 +700,7 @@ def configured_candidates(params) -> list[Candidate]:
         RecommendSettings.from_section(params.recommend),
         params.decoupled,
         params.signals,
+        len(params.folds),
     )
 
 

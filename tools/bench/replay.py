@@ -1,0 +1,164 @@
+"""Replay choice rules on the recommendation's fold scores of every record at hand.
+
+``python -m tools.bench.replay RESULTS [--doc docs/recommendation.md]`` reads each
+``RESULTS/<record>/recommend/folds/*.csv`` (what the ``recommend`` job wrote: every
+candidate's inner and outer scores), makes each rule's choice per outer fold from the
+inner scores alone, and gives the mean held-out RMSE of the choices beside the two
+plain references and the paper's configuration on the same folds. With ``--doc`` the
+table replaces the block between the replay markers of that file, so the document's
+figures come from the score files, never typed by hand.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from thermaxis.labels import natural_sorted
+from thermaxis.method.recommend import BASELINE, EVIDENCE, collect
+from thermaxis.statistics.paired import wilcoxon_p
+from thermaxis.tables import read_table
+
+__all__ = ["RULES", "replay", "replay_markdown", "previous_rule"]
+
+START, END = "<!-- replay:start -->", "<!-- replay:end -->"
+
+
+def previous_rule(inner: pd.DataFrame, order: Sequence[str]) -> str:
+    """The rule replaced on 2026-12-07: the ridge with lags stands unless another candidate's
+    paired inner differences have mean + one standard error below zero and a one-sided
+    signed-rank p at most 0.05; among those the lowest mean (largest |residual|)."""
+    wide = inner.pivot_table(index="held_out", columns="candidate", values="max_abs")
+    differences = wide.drop(columns=BASELINE).sub(wide[BASELINE], axis=0)
+    n = len(differences)
+    if n < 2:
+        return BASELINE
+    error = differences.std(ddof=1) / np.sqrt(n)
+    beaten = [
+        c
+        for c in differences.columns
+        if differences[c].mean() + error[c] < 0
+        and wilcoxon_p(differences[c], alternative="less") <= 0.05
+    ]
+    means = wide.mean()
+    return min(beaten, key=lambda c: (means[c], list(order).index(c))) if beaten else BASELINE
+
+
+def _kept(score: str) -> Callable[[pd.DataFrame, Sequence[str]], pd.Series]:
+    def rule(scores: pd.DataFrame, order: Sequence[str]) -> pd.Series:
+        return collect(scores, order, "paper", score).folds.set_index("fold")["chosen"]
+
+    return rule
+
+
+def _previous(scores: pd.DataFrame, order: Sequence[str]) -> pd.Series:
+    inner = scores.loc[scores["kind"] == "inner"]
+    folds = natural_sorted(pd.unique(scores["fold"]).tolist())
+    return pd.Series(
+        {
+            f: previous_rule(inner.loc[inner["fold"] == f], order)
+            if (inner["fold"] == f).any()
+            else "paper"
+            for f in folds
+        }
+    )
+
+
+RULES = {
+    "**lowest mean inner RMSE** (kept)": _kept("rmse"),
+    "lowest mean inner largest \\|residual\\|": _kept("max_abs"),
+    "ridge with lags unless 1 SE + signed-rank (previous)": _previous,
+}
+
+
+def replay(scores: pd.DataFrame) -> dict[str, float]:
+    """Mean held-out RMSE (µm) of each rule's choices and of the references, on one record."""
+    order = list(dict.fromkeys(scores["candidate"]))
+    outer = scores.loc[scores["kind"] == "loco"].set_index(["candidate", "held_out"])["rmse"]
+    out = {}
+    for name, rule in RULES.items():
+        chosen = rule(scores, order)
+        out[name] = float(np.mean([outer[(c, fold)] for fold, c in chosen.items()]))
+    folds = chosen.index
+    for name in ("paper", BASELINE, EVIDENCE):
+        out[name] = float(np.mean([outer[(name, fold)] for fold in folds]))
+    return out
+
+
+def record_scores(results: Path) -> dict[str, pd.DataFrame]:
+    """Each record's fold scores under ``results``, in natural order of the record names."""
+    records = {}
+    for folder in natural_sorted([p.name for p in results.iterdir() if (p / "recommend").is_dir()]):
+        files = sorted((results / folder / "recommend" / "folds").glob("*.csv"))
+        if files:
+            records[folder] = pd.concat([read_table(f) for f in files], ignore_index=True)
+    return records
+
+
+def replay_markdown(records: dict[str, pd.DataFrame]) -> str:
+    """One row per rule (and reference), one column per record: RMSE (÷ the better reference)."""
+    figures = {name: replay(scores) for name, scores in records.items()}
+    names = list(figures)
+    lines = [
+        "| rule or reference | " + " | ".join(names) + " |",
+        "|---|" + "---:|" * len(names),
+    ]
+    rows = [*RULES, BASELINE, EVIDENCE, "paper"]
+    labels = {BASELINE: f"`{BASELINE}` always", EVIDENCE: f"`{EVIDENCE}` always",
+              "paper": "the paper's configuration always"}  # fmt: skip
+    for row in rows:
+        cells = []
+        for name in names:
+            f = figures[name]
+            better = min(f[BASELINE], f[EVIDENCE])
+            cells.append(f"{f[row]:.2f} ({f[row] / better:.2f})")
+        lines.append(f"| {labels.get(row, row)} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def with_table(document: str, table: str, start: str = START, end: str = END) -> str:
+    """``document`` with the block between the markers ``start`` and ``end`` replaced by ``table``."""
+    if start not in document or end not in document:
+        raise ValueError(f"the document has no {start} ... {end} block")
+    head, rest = document.split(start, 1)
+    _, tail = rest.split(end, 1)
+    return f"{head}{start}\n{table}{end}{tail}"
+
+
+def table_command(argv, prog: str, doc: str, table_of, start: str, end: str) -> int:
+    """A command printing ``table_of(results folder)`` and, with ``--doc``, writing it between
+    the markers ``start`` and ``end`` of that document; a ValueError is one line, status 2."""
+    parser = argparse.ArgumentParser(prog, description=doc)
+    parser.add_argument("results", type=Path, help="a bench results folder of records")
+    parser.add_argument("--doc", type=Path, help="the document to write the table into")
+    args = parser.parse_args(argv)
+    try:
+        table = table_of(args.results)
+    except ValueError as exc:
+        print(f"thermaxis error: {exc}", file=sys.stderr)
+        return 2
+    if args.doc:
+        text = args.doc.read_text(encoding="utf-8")
+        args.doc.write_text(with_table(text, table, start, end), encoding="utf-8")
+    print(table, end="")
+    return 0
+
+
+def _replay_table(results: Path) -> str:
+    records = record_scores(results)
+    if not records:
+        raise ValueError(f"{results}: no <record>/recommend/folds/*.csv")
+    return replay_markdown(records)
+
+
+def main(argv=None) -> int:
+    return table_command(argv, "python -m tools.bench.replay", __doc__, _replay_table, START, END)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,168 @@
+"""What combining the candidates would give: stacking replayed on the records at hand.
+
+``python -m tools.bench.stacking RESULTS [--doc docs/recommendation.md]`` refits every
+candidate of each ``RESULTS/<record>`` (its ``recommend/choice.json`` lists them, its
+``assembled/`` tables are the inputs) in both loops of the nested leave-one-condition-out,
+keeping the held-out predictions the recommendation's scores are made of, and judges
+three combinations fixed from the literature before any record was replayed:
+
+* the super learner (van der Laan, Polley and Hubbard 2007; Breiman 1996, "Stacked
+  regressions"): non-negative weights fitted by least squares on the candidates' inner
+  held-out predictions and scaled to sum to one (the R package SuperLearner's
+  ``method.NNLS``), over every candidate;
+* the same over the linear candidates only, whose combination is one linear model, so it
+  could be exported like one (a kernel model's expansion cannot share an affine block);
+* the equal average of the two plain references (the ridge with lags, the evidence ridge).
+
+Each outer fold's weights come from its inner runs alone; the held-out run is predicted
+by the candidates fitted on the other runs. Not deployed: the recommendation still
+chooses one candidate (docs/recommendation.md says why). Evaluation only.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import nnls
+
+from thermaxis.cleaning.run import model_inputs
+from thermaxis.config import Settings
+from thermaxis.labels import natural_sorted
+from thermaxis.method.recommend import (
+    BASELINE,
+    EVIDENCE,
+    candidate_from_record,
+    held_out_predictions,
+    training_sets,
+)
+from tools.bench.replay import record_scores, table_command
+
+__all__ = ["stacking_weights", "stacked_rmse", "STACKS"]
+
+START, END = "<!-- stacking:start -->", "<!-- stacking:end -->"
+KERNELS = ("svr", "gpr")
+
+
+def stacking_weights(predictions: np.ndarray, measured: np.ndarray) -> np.ndarray:
+    """Non-negative least-squares weights of the columns of ``predictions``, summing to one.
+
+    ``predictions`` (n, candidates), ``measured`` (n,). All zero (no candidate helps) gives
+    equal weights, as SuperLearner does.
+    """
+    weights, _ = nnls(predictions, measured)
+    total = weights.sum()
+    return weights / total if total > 0 else np.full(weights.size, 1.0 / weights.size)
+
+
+def _record_inputs(folder: Path):
+    """X, Y, the candidates and the declared signals of one bench record's results."""
+    assembled = folder / "assembled"
+    signals = pd.read_parquet(assembled / "signals.parquet")
+    X, Y = model_inputs(
+        pd.read_parquet(assembled / "errors.parquet"),
+        pd.read_parquet(assembled / "temperatures.parquet"),
+        signals=signals,
+        inputs=pd.read_parquet(assembled / "inputs.parquet"),
+    )
+    choice = json.loads((folder / "recommend" / "choice.json").read_text(encoding="utf-8"))
+    models = Settings.from_config({}).models
+    candidates = [candidate_from_record(r, models) for r in choice["candidates"].values()]
+    return X, Y, candidates, sorted(pd.unique(signals["signal"]).tolist())
+
+
+def _predictions(X, Y, candidates, signals, degree) -> dict:
+    """``{(training runs, candidate): (run per row, predictions)}`` over both loops."""
+    runs = natural_sorted(pd.unique(X["run"]).tolist())
+    out = {}
+    for training in training_sets(runs, runs):
+        keep = X["run"].isin([*training.train, *training.scored]).to_numpy()
+        X_set, Y_set = X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True)
+        cache: dict = {}
+        for c in candidates:
+            out[(training.train, c.name)] = held_out_predictions(
+                X_set, Y_set, training.scored, c, degree, signals, cache
+            )
+    return out
+
+
+def _rows(predicted, train, name, run) -> np.ndarray:
+    runs, values = predicted[(train, name)]
+    return values[runs == run]
+
+
+def stacked_rmse(X, Y, names, predicted, stack) -> float:
+    """Mean over the outer runs of the held-out RMSE of ``stack``'s combination of ``names``."""
+    runs = natural_sorted(pd.unique(X["run"]).tolist())
+    measured = {r: Y.loc[(X["run"] == r).to_numpy()].to_numpy(dtype=float) for r in runs}
+    rmse = []
+    for held in runs:
+        train = tuple(r for r in runs if r != held)
+        inner = [
+            (
+                np.column_stack(
+                    [
+                        _rows(predicted, tuple(r for r in train if r != i), n, i).ravel()
+                        for n in names
+                    ]
+                ),
+                measured[i].ravel(),
+            )  # fmt: skip
+            for i in train
+        ]
+        P = np.vstack([p for p, _ in inner])
+        y = np.concatenate([m for _, m in inner])
+        weights = stack(P, y)
+        outer = np.column_stack([_rows(predicted, train, n, held).ravel() for n in names])
+        rmse.append(np.sqrt(np.mean((measured[held].ravel() - outer @ weights) ** 2)))
+    return float(np.mean(rmse))
+
+
+def _equal(P, y):
+    return np.full(P.shape[1], 1.0 / P.shape[1])
+
+
+STACKS = {
+    "super learner, every candidate": (lambda cs: [c.name for c in cs], stacking_weights),
+    "super learner, linear candidates": (
+        lambda cs: [c.name for c in cs if c.algorithm not in KERNELS],
+        stacking_weights,
+    ),
+    "equal average of the two plain references": (lambda cs: [BASELINE, EVIDENCE], _equal),
+}
+
+
+def stacking_table(results: Path) -> str:
+    """One row per combination, one column per record: mean held-out RMSE (÷ the better reference)."""
+    degree = Settings.from_config({}).decoupling.degree
+    names = list(record_scores(results))
+    figures = {}
+    for record in names:
+        X, Y, candidates, signals = _record_inputs(results / record)
+        predicted = _predictions(X, Y, candidates, signals, degree)
+        scores = record_scores(results)[record]
+        outer = scores.loc[scores["kind"] == "loco"].groupby("candidate")["rmse"].mean()
+        better = min(outer[BASELINE], outer[EVIDENCE])
+        figures[record] = {
+            label: stacked_rmse(X, Y, pick(candidates), predicted, stack) / better
+            for label, (pick, stack) in STACKS.items()
+        } | {"_better": better}
+    lines = ["| combination | " + " | ".join(names) + " |", "|---|" + "---:|" * len(names)]
+    for label in STACKS:
+        cells = [f"{figures[r][label] * figures[r]['_better']:.2f} ({figures[r][label]:.2f})"
+                 for r in names]  # fmt: skip
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    return table_command(
+        argv, "python -m tools.bench.stacking", __doc__, stacking_table, START, END
+    )
+
+
+if __name__ == "__main__":
+    sys.exit(main())
