@@ -104,15 +104,25 @@ def test_a_bad_metrics_cell_leaves_its_dataset_out_with_one_line_naming_file_lin
     assert summary["dataset"].unique().tolist() == ["fl_thermal"]
 
 
-def test_only_the_datasets_asked_for_are_read(two_datasets, capsys):
+def test_every_dataset_under_results_is_read_unless_named(two_datasets, capsys):
+    # A third dataset built by another command (thermaxis run of one dataset) is listed too.
+    _result(two_datasets, "extra", "measured", "R1,pointwise,mlr,error,2.0,3.0,1,-3,1\n")
     # A user's own dataset, run for one target: metrics but no provenance yet.
     mine = _result(two_datasets, "mine", "measured", "R1,pointwise,mlr,error,5.0,9.0,1,-9,1\n")
     (mine / "provenance.json").unlink()
-    assert crossdataset.main(["--results", str(two_datasets), *ASKED]) == 0
+    (two_datasets / "_benchmarks" / "fl_thermal").mkdir(parents=True)  # not a dataset
+    assert crossdataset.main(["--results", str(two_datasets)]) == 0
     assert "mine" not in capsys.readouterr().err
+    summary = pd.read_csv(two_datasets / "_datasets" / "summary.csv")
+    assert sorted(summary["dataset"].unique()) == ["extra", "fl_thermal", "twin"]
+    page = (two_datasets / "index.html").read_text()
+    assert ">extra<" in page and "mine" not in page and "_benchmarks" not in page
+    # Named, only those are read.
+    assert crossdataset.main(["--results", str(two_datasets), *ASKED]) == 0
     summary = pd.read_csv(two_datasets / "_datasets" / "summary.csv")
     assert sorted(summary["dataset"].unique()) == ["fl_thermal", "twin"]
     # Asked for, it is left out with a warning naming its folder and what is missing.
+    capsys.readouterr()
     assert crossdataset.main(["--results", str(two_datasets), *ASKED, "mine"]) == 0
     err = capsys.readouterr().err
     assert (

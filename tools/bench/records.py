@@ -1,7 +1,7 @@
 """The recommendation against the plain nested ridge, on every embedded and public record.
 
 Issue 33's figures: on every embedded dataset, and on the public FL_THERMAL record's five
-displacement channels (``../shared/realdata/fl_thermal``, imported with the embedded
+displacement channels (``data/sources/fl_thermal``, imported with the embedded
 mapping ``data/import/fl_thermal.yaml``, channel swapped, 6 runs cut by speed step), the
 recommendation's mean held-out RMSE against the baseline candidate's
 (``baseline-ridge+lags``: a ridge over every sensor's rise and its causal lags at
@@ -67,10 +67,8 @@ def record_quality(results: Path) -> dict:
 
 
 def import_channels(repo: Path, scratch: Path, env: dict, timeout_s: float) -> list[Path]:
-    """FL_THERMAL channels 1-5 as datasets under ``scratch``; none when the record is absent."""
+    """FL_THERMAL channels 1-5 as datasets under ``scratch``, from the record in data/sources."""
     mapping = repo / "data" / "import" / "fl_thermal.yaml"
-    if not mapping.is_file() or not Path(channel_mapping(mapping, 1)["source"]).is_file():
-        return []
     out = []
     for channel in CHANNELS:
         spec = channel_mapping(mapping, channel)
