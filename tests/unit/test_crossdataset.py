@@ -148,3 +148,40 @@ def test_missing_column_and_missing_provenance_are_named(two_datasets):
         DataError, match="fl_thermal/provenance.json: expected the workflow's provenance"
     ):
         crossdataset.dataset_kind(two_datasets / "fl_thermal")
+
+
+def _summary(datasets: dict[str, list[str]], algorithms: list[str]) -> pd.DataFrame:
+    rows = [
+        {"dataset": name, "data": "measured", "approach": approach, "algorithm": algorithm,
+         "mean_max_abs_um": 3.0, "worst_max_abs_um": 5.0}
+        for name, approaches in datasets.items()
+        for approach in approaches
+        for algorithm in algorithms
+    ]  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize(
+    "datasets",
+    [
+        {"fl_thermal": ["pointwise"]},  # five long labels in a row overran the figure
+        {"fl_thermal": ["pointwise"], "twin": ["decoupled", "pointwise"]},
+        {"a_long_dataset_name": ["pointwise"], "b": ["pointwise"], "c": ["decoupled"]},
+    ],
+)
+def test_the_figure_is_drawn_whole_inside_its_canvas(datasets):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from thermaxis.figures import registry
+
+    summary = _summary(datasets, ["mlr", "svr", "ridge", "pls", "gpr"])
+    fig = registry.function(crossdataset.FIGURE.draw)(summary)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()  # the layout, as saving the figure makes it
+    drawn = fig.get_tightbbox(canvas.get_renderer())  # inches, every label and the legend
+    pixel = 1 / fig.dpi
+    assert drawn.x0 >= -pixel and drawn.y0 >= -pixel, drawn
+    assert drawn.x1 <= fig.get_figwidth() + pixel and drawn.y1 <= fig.get_figheight() + pixel, drawn
+    assert len(fig.legends[0].get_texts()) == len(
+        summary.drop_duplicates(["approach", "algorithm"])
+    )
