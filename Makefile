@@ -92,10 +92,13 @@ slurm-env: env
 # page across datasets and each dataset's answer, last (`thermaxis run`). After any
 # interruption this completes the run: incomplete outputs are made again and a dead run's
 # lock is cleared; a Snakemake still running here is left alone (README). First the
-# FL_THERMAL authors' protocol on their own record (data/sources/fl_thermal), so the
-# answers end the output.
+# published protocols of BENCHMARKS on their records (data/sources/; docs/benchmarks.md),
+# so the answers end the output.
+BENCHMARKS ?= data/benchmarks/fl_thermal.yaml
 results: env
-	@$(BIN)/python -m thermaxis.benchmark data/benchmarks/fl_thermal.yaml --out results/_benchmarks/fl_thermal
+	@for spec in $(BENCHMARKS); do \
+		$(BIN)/python -m thermaxis.benchmark "$$spec" --out "results/_benchmarks/$$(basename "$$spec" .yaml)"; \
+	done
 	@$(THERMAXIS) run $(THERMAXIS_OPTIONS) </dev/null
 
 # Re-import the embedded measured dataset from its public record (data/sources/fl_thermal).

@@ -81,21 +81,23 @@ def server(results):
 def two_datasets(built, tmp_path_factory):
     """A results folder holding two datasets' results, as two `thermaxis run`s leave it, its
     page across datasets made as they make it (from every dataset under results/, none
-    named); served. The built dataset, and one whose tables hold its held-out errors as
-    five point-by-point algorithms': the long legend that was cut at the figure's edge."""
+    named); served. Each holds the built dataset's held-out errors as five point-by-point
+    algorithms': five long legend entries, the row that was cut at the figure's edge."""
     from thermaxis.reports import crossdataset
 
-    results = tmp_path_factory.mktemp("two") / "results"
-    (results / "many_models" / "tables").mkdir(parents=True)
-    (results / "rep").symlink_to(built.out, target_is_directory=True)
-    shutil.copy(built.out / "provenance.json", results / "many_models")
     with open(built.out / "tables" / "metrics.csv", newline="", encoding="utf-8") as fh:
         rows = [r for r in csv.DictReader(fh) if r["target"] == "error"]
-    with open(results / "many_models" / "tables" / "metrics.csv", "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        for algorithm in ("mlr", "svr", "ridge", "pls", "gpr"):
-            writer.writerows({**r, "approach": "pointwise", "algorithm": algorithm} for r in rows)
+    results = tmp_path_factory.mktemp("two") / "results"
+    for name in ("models_a", "models_b"):
+        (results / name / "tables").mkdir(parents=True)
+        shutil.copy(built.out / "provenance.json", results / name)
+        with open(results / name / "tables" / "metrics.csv", "w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            writer.writeheader()
+            for algorithm in ("mlr", "svr", "ridge", "pls", "gpr"):
+                writer.writerows(
+                    {**r, "approach": "pointwise", "algorithm": algorithm} for r in rows
+                )
     assert crossdataset.main(["--results", str(results), "--formats", "png"]) == 0
     with _serving(results) as url:
         yield url
@@ -366,7 +368,7 @@ def test_no_figure_of_the_page_across_datasets_is_cut(browser, two_datasets):
     listed = browser.execute_script(
         "return Array.from(document.querySelectorAll('#answer li')).map(li => li.innerText)"
     )
-    assert [item.split(" ", 1)[0] for item in listed] == ["many_models", "rep"], listed
+    assert [item.split(" ", 1)[0] for item in listed] == ["models_a", "models_b"], listed
     sources = browser.execute_script(
         "return Array.from(document.images).map(i => [i.src, i.complete, i.naturalWidth])"
     )
