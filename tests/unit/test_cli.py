@@ -247,6 +247,21 @@ def test_sweep_and_report_put_their_targets_after_the_options(started):
     report = [*sweep, "--report", "results/twin/report.zip"]
     assert started[0] == [*sweep, "--", "sweep"]
     assert started[-2:] == [report, ["answers", "results/twin"]]
+    # As Snakemake's own parser reads them: one logger, the target a target.
+    from snakemake.cli import get_argument_parser
+
+    parsed = get_argument_parser().parse_args(started[0][len(WRAPPER) :])
+    assert (parsed.logger, parsed.targets, parsed.config) == (
+        ["rich"],
+        ["sweep"],
+        ["dataset=data/raw/twin"],
+    )
+    parsed = get_argument_parser().parse_args(report[len(WRAPPER) :])
+    assert (parsed.logger, str(parsed.report), parsed.targets) == (
+        ["rich"],
+        "results/twin/report.zip",
+        set(),
+    )
 
 
 def test_snakemake_arguments_are_refused_where_no_snakemake_runs():
