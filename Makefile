@@ -11,14 +11,11 @@ CORES ?= all
 # bar of jobs done of total and the rules running on a terminal; the job table and the
 # outcome otherwise), and the rules' warnings; `make results V=1` prints Snakemake's own
 # full output, every rule, reason and shell command. The full log is in .snakemake/log/
-# either way.
+# either way. The Snakemake targets run through the `thermaxis` command (docs/cli.md), so
+# `thermaxis run` prints what `make results` prints.
 V ?= 0
-ifeq ($(V),1)
-SNAKEMAKE_OUTPUT := --printshellcmds
-else
-SNAKEMAKE_OUTPUT := --logger rich
-endif
-SNAKEMAKE := $(BIN)/snakemake --cores $(CORES) $(SNAKEMAKE_OUTPUT)
+THERMAXIS := $(BIN)/thermaxis
+THERMAXIS_OPTIONS := --cores $(CORES)$(if $(filter 1,$(V)), --verbose)
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
@@ -40,8 +37,8 @@ help:
 	@echo "make twin            regenerate data/raw/twin (byte-identical) from the committed twin parameters"
 	@echo "make twin-calibrate  refit src/thermaxis/twin_params.json to the paper's published targets, then regenerate data/raw/twin (RESUME= : from the priors)"
 	@echo "make twin-conflicts  optimise each group of the paper's targets alone and in pairs: docs/twin-conflicts.md"
-	@echo "make report          Snakemake report: results/<dataset>/report.zip"
-	@echo "make sweep           sweep cluster counts x selection x algorithms x decoupling degree"
+	@echo "make report          Snakemake report of every embedded dataset: results/<dataset>/report.zip"
+	@echo "make sweep           sweep cluster counts x selection x algorithms x decoupling degree (first dataset)"
 	@echo "make bench           benchmark; writes results/bench/bench.json and bench.md"
 	@echo "make docs            rewrite the result blocks of README.md and docs/*.md from results/ (after make results)"
 	@echo "make clean           remove results/, logs/, benchmarks/, .snakemake/"
@@ -92,27 +89,22 @@ slurm-env: env
 		echo "$$want" > "$(SLURM_STAMP)"; \
 	fi
 
-# Every dataset of config `datasets` (config/config.yaml), one Snakemake run each. After
-# any interruption this completes the run: incomplete outputs are made again and a dead
-# run's lock is cleared; a Snakemake still running here is left alone (README).
+# Every dataset of config `datasets` (config/config.yaml), one Snakemake run each, then the
+# page across datasets and each dataset's answer, last (`thermaxis run`). After any
+# interruption this completes the run: incomplete outputs are made again and a dead run's
+# lock is cleared; a Snakemake still running here is left alone (README). First the
+# published protocols of BENCHMARKS on their records (data/sources/; docs/benchmarks.md),
+# so the answers end the output.
+BENCHMARKS ?= data/benchmarks/fl_thermal.yaml
 results: env
-	@$(BIN)/python -c "from thermaxis.config import load_config; print('\n'.join(load_config()['datasets']))" \
-	| while IFS= read -r ds; do \
-		echo "== $$ds"; \
-		$(BIN)/python -m thermaxis.pipeline.resume $(SNAKEMAKE) --config dataset="$$ds" </dev/null || exit 1; \
+	@for spec in $(BENCHMARKS); do \
+		$(BIN)/python -m thermaxis.benchmark "$$spec" --out "results/_benchmarks/$$(basename "$$spec" .yaml)"; \
 	done
-	@$(BIN)/python -m thermaxis.reports.crossdataset --results results
-	@# The FL_THERMAL authors' protocol on their own record (needs the public record beside the checkout).
-	@if [ -f ../shared/realdata/fl_thermal/data.xlsx ]; then \
-		$(BIN)/python -m thermaxis.benchmark data/benchmarks/fl_thermal.yaml --out results/_benchmarks/fl_thermal; \
-	else echo "thermaxis: benchmark fl_thermal skipped: ../shared/realdata/fl_thermal/data.xlsx is not beside the checkout"; fi
-	@$(BIN)/python -c "from thermaxis.config import load_config; from thermaxis.dataset.reader import load_dataset; \
-		print('\n'.join('results/' + load_dataset(d).name for d in load_config()['datasets']))" \
-	| xargs $(BIN)/python -m thermaxis.reports.answer
+	@$(THERMAXIS) run $(THERMAXIS_OPTIONS) </dev/null
 
-# Re-import the embedded measured dataset from its public source (shared/realdata).
+# Re-import the embedded measured dataset from its public record (data/sources/fl_thermal).
 import: env
-	$(BIN)/thermaxis import data/import/fl_thermal.yaml --out data/raw/fl_thermal
+	$(THERMAXIS) import data/import/fl_thermal.yaml --out data/raw/fl_thermal
 
 # Both tiers (tests/unit, tests/workflow) and tests/slurm (skipped without Slurm), on
 # PYTEST_WORKERS pytest-xdist workers; the tests of one shared workflow run stay on one
@@ -146,13 +138,12 @@ twin-conflicts: env
 	$(BIN)/python -m thermaxis.twin conflicts
 
 report: results
-	$(SNAKEMAKE) --report "results/twin/report.zip"
+	$(THERMAXIS) report --zip $(THERMAXIS_OPTIONS)
 
-# The index links the sweep report only if it exists when the index is built, so an
-# index that is already there is rebuilt after the sweep.
+# The sweep of the first dataset of config `datasets`; its index is rebuilt after it, to
+# link the sweep report (`thermaxis sweep`).
 sweep: env
-	$(BIN)/python -m thermaxis.pipeline.resume $(SNAKEMAKE) sweep
-	if [ -f results/twin/index.html ]; then $(SNAKEMAKE) --forcerun index -- results/twin/index.html; fi
+	$(THERMAXIS) sweep $(THERMAXIS_OPTIONS)
 
 # Many minutes (cold run, sweep, scale series up to 50 runs); e.g. BENCH_ARGS="--runs 5 10".
 bench: env

@@ -16,7 +16,7 @@ import yaml
 
 from helpers import REPO
 from thermaxis.cli import build_parser, main
-from thermaxis.cli.progress import ProgressBar, relay_snakemake
+from thermaxis.cli.progress import ProgressBar
 
 
 def _thermaxis(*args, cwd=REPO) -> subprocess.CompletedProcess:
@@ -197,45 +197,71 @@ def test_progress_is_a_bar_on_a_terminal_and_lines_elsewhere(tmp_path):
     assert lines == ["[2/4] batch\n"]
     ProgressBar(bar, tty=True)(2, 4, "batch")
     assert bar[0].startswith("\r[" + "#" * 15 + "." * 15 + "] 2/4 batch")
-    # Snakemake's step counts become the bar on a terminal; other lines pass through.
-    out, shown = Stream(), Stream()
-    relay_snakemake(
-        ["rule sweep_batch:\n", "3 of 8 steps (38%) done\n"], ProgressBar(shown, tty=True), out
-    )
-    assert out == ["rule sweep_batch:\n"] and "3/8 jobs done" in shown[0]
 
 
-def test_run_goes_through_the_recovery_wrapper_with_snakemakes_arguments(monkeypatch):
+WRAPPER = [
+    sys.executable,
+    "-m",
+    "thermaxis.pipeline.resume",
+    str(Path(sys.executable).with_name("snakemake")),
+]
+
+
+@pytest.fixture
+def started(monkeypatch):
+    """The commands the CLI would start, and the summary and answers it would write."""
     import thermaxis.cli as cli
-    from thermaxis.reports import crossdataset
+    from thermaxis.reports import answer, crossdataset
 
     started = []
     monkeypatch.chdir(REPO)
-    monkeypatch.setattr(
-        cli, "_wrapped", lambda command, progress=False: started.append(command) or 0
-    )
-    monkeypatch.setattr(crossdataset, "main", lambda argv: started.append(argv) or 0)
-    assert main(["run", "data/raw/twin", "data/raw/fl_thermal", "--cores", "1", "--", "-n"]) == 0
-    wrapper = [
-        sys.executable,
-        "-m",
-        "thermaxis.pipeline.resume",
-        str(Path(sys.executable).with_name("snakemake")),
-    ]
+    monkeypatch.setattr(cli, "_wrapped", lambda command: started.append(command) or 0)
+    monkeypatch.setattr(crossdataset, "main", lambda argv: started.append(["summary", *argv]) or 0)
+    monkeypatch.setattr(answer, "main", lambda argv: started.append(["answers", *argv]) or 0)
+    return started
+
+
+def test_run_goes_through_the_recovery_wrapper_quietly_then_summary_then_answers(started):
+    assert main(["run", "data/raw/twin", "data/raw/fl_thermal", "--cores", "1", "--", "-F"]) == 0
     assert started == [
-        [*wrapper, "--cores", "1", "--printshellcmds", "-n", "--config", "dataset=data/raw/twin"],
-        [
-            *wrapper,
-            "--cores",
-            "1",
-            "--printshellcmds",
-            "-n",
-            "--config",
-            "dataset=data/raw/fl_thermal",
-        ],
-        # then the summary and page across the datasets just run, as make results does
-        ["--results", "results", "--datasets", "twin", "fl_thermal"],
+        [*WRAPPER, "--cores", "1", "--logger=rich", "-F", "--config", "dataset=data/raw/twin"],
+        [*WRAPPER, "--cores", "1", "--logger=rich", "-F", "--config", "dataset=data/raw/fl_thermal"],
+        # every dataset under results/, not only those just run; the answers last
+        ["summary", "--results", "results"],
+        ["answers", "results/twin", "results/fl_thermal"],
+    ]  # fmt: skip
+
+
+def test_verbose_gives_snakemakes_own_output_and_a_dry_run_writes_nothing(started):
+    assert main(["run", "data/raw/twin", "--verbose", "--", "-n"]) == 0
+    assert started == [
+        [*WRAPPER, "--cores", "all", "--printshellcmds", "-n", "--config", "dataset=data/raw/twin"]
     ]
+
+
+def test_sweep_and_report_put_their_targets_after_the_options(started):
+    """A target right after ``--logger rich`` was read as a second logger (issue 62)."""
+    assert main(["sweep", "data/raw/twin", "--cores", "2"]) == 0
+    assert main(["report", "data/raw/twin", "--zip", "--cores", "2"]) == 0
+    sweep = [*WRAPPER, "--cores", "2", "--logger=rich", "--config", "dataset=data/raw/twin"]
+    report = [*sweep, "--report", "results/twin/report.zip"]
+    assert started[0] == [*sweep, "--", "sweep"]
+    assert started[-2:] == [report, ["answers", "results/twin"]]
+    # As Snakemake's own parser reads them: one logger, the target a target.
+    from snakemake.cli import get_argument_parser
+
+    parsed = get_argument_parser().parse_args(started[0][len(WRAPPER) :])
+    assert (parsed.logger, parsed.targets, parsed.config) == (
+        ["rich"],
+        ["sweep"],
+        ["dataset=data/raw/twin"],
+    )
+    parsed = get_argument_parser().parse_args(report[len(WRAPPER) :])
+    assert (parsed.logger, str(parsed.report), parsed.targets) == (
+        ["rich"],
+        "results/twin/report.zip",
+        set(),
+    )
 
 
 def test_snakemake_arguments_are_refused_where_no_snakemake_runs():

@@ -104,15 +104,25 @@ def test_a_bad_metrics_cell_leaves_its_dataset_out_with_one_line_naming_file_lin
     assert summary["dataset"].unique().tolist() == ["fl_thermal"]
 
 
-def test_only_the_datasets_asked_for_are_read(two_datasets, capsys):
+def test_every_dataset_under_results_is_read_unless_named(two_datasets, capsys):
+    # A third dataset built by another command (thermaxis run of one dataset) is listed too.
+    _result(two_datasets, "extra", "measured", "R1,pointwise,mlr,error,2.0,3.0,1,-3,1\n")
     # A user's own dataset, run for one target: metrics but no provenance yet.
     mine = _result(two_datasets, "mine", "measured", "R1,pointwise,mlr,error,5.0,9.0,1,-9,1\n")
     (mine / "provenance.json").unlink()
-    assert crossdataset.main(["--results", str(two_datasets), *ASKED]) == 0
+    (two_datasets / "_benchmarks" / "fl_thermal").mkdir(parents=True)  # not a dataset
+    assert crossdataset.main(["--results", str(two_datasets)]) == 0
     assert "mine" not in capsys.readouterr().err
+    summary = pd.read_csv(two_datasets / "_datasets" / "summary.csv")
+    assert sorted(summary["dataset"].unique()) == ["extra", "fl_thermal", "twin"]
+    page = (two_datasets / "index.html").read_text()
+    assert ">extra<" in page and "mine" not in page and "_benchmarks" not in page
+    # Named, only those are read.
+    assert crossdataset.main(["--results", str(two_datasets), *ASKED]) == 0
     summary = pd.read_csv(two_datasets / "_datasets" / "summary.csv")
     assert sorted(summary["dataset"].unique()) == ["fl_thermal", "twin"]
     # Asked for, it is left out with a warning naming its folder and what is missing.
+    capsys.readouterr()
     assert crossdataset.main(["--results", str(two_datasets), *ASKED, "mine"]) == 0
     err = capsys.readouterr().err
     assert (
@@ -138,3 +148,40 @@ def test_missing_column_and_missing_provenance_are_named(two_datasets):
         DataError, match="fl_thermal/provenance.json: expected the workflow's provenance"
     ):
         crossdataset.dataset_kind(two_datasets / "fl_thermal")
+
+
+def _summary(datasets: dict[str, list[str]], algorithms: list[str]) -> pd.DataFrame:
+    rows = [
+        {"dataset": name, "data": "measured", "approach": approach, "algorithm": algorithm,
+         "mean_max_abs_um": 3.0, "worst_max_abs_um": 5.0}
+        for name, approaches in datasets.items()
+        for approach in approaches
+        for algorithm in algorithms
+    ]  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize(
+    "datasets",
+    [
+        {"fl_thermal": ["pointwise"]},  # five long labels in a row overran the figure
+        {"fl_thermal": ["pointwise"], "twin": ["decoupled", "pointwise"]},
+        {"a_long_dataset_name": ["pointwise"], "b": ["pointwise"], "c": ["decoupled"]},
+    ],
+)
+def test_the_figure_is_drawn_whole_inside_its_canvas(datasets):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from thermaxis.figures import registry
+
+    summary = _summary(datasets, ["mlr", "svr", "ridge", "pls", "gpr"])
+    fig = registry.function(crossdataset.FIGURE.draw)(summary)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()  # the layout, as saving the figure makes it
+    drawn = fig.get_tightbbox(canvas.get_renderer())  # inches, every label and the legend
+    pixel = 1 / fig.dpi
+    assert drawn.x0 >= -pixel and drawn.y0 >= -pixel, drawn
+    assert drawn.x1 <= fig.get_figwidth() + pixel and drawn.y1 <= fig.get_figheight() + pixel, drawn
+    assert len(fig.legends[0].get_texts()) == len(
+        summary.drop_duplicates(["approach", "algorithm"])
+    )

@@ -113,3 +113,18 @@ def test_a_figure_gets_its_facts_and_its_caption():
     assert registry.stem_of(
         "kb_prediction", fold="E4", approach="decoupled", algorithm="svr", run="E1"
     ) == ("kb_prediction_E4_decoupled_svr")
+
+
+def test_a_per_fold_figure_files_its_fold_in_the_report():
+    """Snakemake fills report fields from a job's wildcards, and a family's job has none:
+    `make report` stopped at `'Wildcards' object has no attribute 'fold'` (issue 62)."""
+    by_stem = {f.stem: f for f in registry.expand(FACTS, "all")}
+    fields = by_stem["kb_prediction_{fold}_decoupled_svr"].report_fields({"fold": "E3"})
+    assert fields == {
+        "subcategory": "E3",
+        "labels": {"figure": "Figs. 14/16", "fold": "E3", "approach": "decoupled",
+                   "algorithm": "svr"},
+    }  # fmt: skip
+    # A figure of no fold keeps its fields as they are.
+    fig9 = by_stem["fig9_other_runs"]
+    assert fig9.report_fields({}) == {"subcategory": fig9.subcategory, "labels": fig9.labels}

@@ -64,3 +64,23 @@ def test_every_repository_file_the_makefile_reads_is_tracked():
     assert ignored == [], f"ignored by .gitignore: {ignored}"
     for name in named:
         assert (REPO / name).is_file(), name
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="make is not installed")
+@pytest.mark.parametrize("verbose, option", [("0", ""), ("1", " --verbose")])
+def test_the_snakemake_targets_run_the_thermaxis_command_and_v1_makes_it_verbose(verbose, option):
+    """One code path: `make results/sweep/report` print what `thermaxis run/sweep/report` do
+    (docs/cli.md); test_make_results and test_make_targets run them."""
+    proc = subprocess.run(
+        ["make", "-n", "-f", str(MAKEFILE), "-o", "env", "results", "sweep",
+         "report", f"V={verbose}", "CORES=2"],
+        cwd=REPO, capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    commands = [line.split("thermaxis ", 1)[1] for line in proc.stdout.splitlines()
+                if "/thermaxis " in line]  # fmt: skip
+    assert commands == [
+        f"run --cores 2{option} </dev/null",
+        f"sweep --cores 2{option}",
+        f"report --zip --cores 2{option}",
+    ]

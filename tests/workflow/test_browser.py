@@ -13,8 +13,10 @@ them); without them the test is skipped with a message.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import functools
+import io
 import json
 import shutil
 import threading
@@ -56,17 +58,49 @@ def results(built, tmp_path_factory) -> Path:
     return results
 
 
-@pytest.fixture(scope="module")
-def server(results):
-    """The results folder over http://127.0.0.1:<free port>/."""
+@contextlib.contextmanager
+def _serving(folder: Path):
+    """``folder`` over http://127.0.0.1:<free port>/."""
     httpd = ThreadingHTTPServer(
-        ("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(results))
+        ("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(folder))
     )
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
     thread.start()
     yield f"http://127.0.0.1:{httpd.server_address[1]}"
     httpd.shutdown()
     httpd.server_close()
+
+
+@pytest.fixture(scope="module")
+def server(results):
+    with _serving(results) as url:
+        yield url
+
+
+@pytest.fixture(scope="module")
+def two_datasets(built, tmp_path_factory):
+    """A results folder holding two datasets' results, as two `thermaxis run`s leave it, its
+    page across datasets made as they make it (from every dataset under results/, none
+    named); served. Each holds the built dataset's held-out errors as five point-by-point
+    algorithms': five long legend entries, the row that was cut at the figure's edge."""
+    from thermaxis.reports import crossdataset
+
+    with open(built.out / "tables" / "metrics.csv", newline="", encoding="utf-8") as fh:
+        rows = [r for r in csv.DictReader(fh) if r["target"] == "error"]
+    results = tmp_path_factory.mktemp("two") / "results"
+    for name in ("models_a", "models_b"):
+        (results / name / "tables").mkdir(parents=True)
+        shutil.copy(built.out / "provenance.json", results / name)
+        with open(results / name / "tables" / "metrics.csv", "w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            writer.writeheader()
+            for algorithm in ("mlr", "svr", "ridge", "pls", "gpr"):
+                writer.writerows(
+                    {**r, "approach": "pointwise", "algorithm": algorithm} for r in rows
+                )
+    assert crossdataset.main(["--results", str(results), "--formats", "png"]) == 0
+    with _serving(results) as url:
+        yield url
 
 
 @pytest.fixture(scope="module")
@@ -310,3 +344,36 @@ def test_the_answer_box_leads_the_dataset_index_with_the_numbers_of_its_tables(
     assert text.startswith(opening), text
     others = [s for s in _sentences_calling_a_model_best(body) if deployment["candidate"] not in s]
     assert others == [], others
+
+
+def _touches_an_edge(png: bytes) -> list[str]:
+    """The edges of an image where a pixel differs from the background (its corner's colour):
+    a label or legend the figure's layout cut off."""
+    import matplotlib.image as mpimg
+    import numpy as np
+
+    pixels = mpimg.imread(io.BytesIO(png), format="png")
+    background = pixels[0, 0]
+    edges = {
+        "top": pixels[0],
+        "bottom": pixels[-1],
+        "left": pixels[:, 0],
+        "right": pixels[:, -1],
+    }
+    return [side for side, line in edges.items() if not np.all(line == background)]
+
+
+def test_no_figure_of_the_page_across_datasets_is_cut(browser, two_datasets):
+    browser.get(f"{two_datasets}/index.html")
+    listed = browser.execute_script(
+        "return Array.from(document.querySelectorAll('#answer li')).map(li => li.innerText)"
+    )
+    assert [item.split(" ", 1)[0] for item in listed] == ["models_a", "models_b"], listed
+    sources = browser.execute_script(
+        "return Array.from(document.images).map(i => [i.src, i.complete, i.naturalWidth])"
+    )
+    assert sources, "the page across datasets has no figure"
+    for src, complete, width in sources:
+        assert complete and width > 0, src
+        with urllib.request.urlopen(src, timeout=10) as response:
+            assert _touches_an_edge(response.read()) == [], f"{src}: cut at its edge"

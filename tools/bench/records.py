@@ -1,7 +1,7 @@
 """The recommendation against two plain references and the paper's, on every record at hand.
 
 Issue 61's figures: on every embedded dataset, and on the public FL_THERMAL record's five
-displacement channels (``../shared/realdata/fl_thermal``, imported with the embedded
+displacement channels (``data/sources/fl_thermal``, imported with the embedded
 mapping ``data/import/fl_thermal.yaml``, channel swapped, 6 runs cut by speed step, the
 spindle-speed signal dropped after the cut; the embedded ``fl_thermal`` is channel 1 with
 it), the recommendation's mean held-out RMSE against the two plain references
@@ -89,11 +89,9 @@ def record_quality(results: Path) -> dict:
 
 
 def import_channels(repo: Path, scratch: Path, env: dict, timeout_s: float) -> list[Path]:
-    """FL_THERMAL channels 1-5 without the speed signal as datasets under ``scratch``; none
-    when the record is absent."""
+    """FL_THERMAL channels 1-5 without the speed signal as datasets under ``scratch``, from
+    the record in data/sources."""
     mapping = repo / "data" / "import" / "fl_thermal.yaml"
-    if not mapping.is_file() or not Path(channel_mapping(mapping, 1)["source"]).is_file():
-        return []
     out = []
     for channel in CHANNELS:
         spec = channel_mapping(mapping, channel)

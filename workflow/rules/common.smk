@@ -271,11 +271,7 @@ def figure_output(figure, wildcards):
         paths,
         caption="../report/figure.rst",
         category=CATEGORY[figure.category],
-        subcategory=figure.subcategory,
-        labels={
-            k: v.format(**wildcards) if isinstance(v, str) else v
-            for k, v in figure.labels.items()
-        },
+        **figure.report_fields(wildcards),
     )
 
 

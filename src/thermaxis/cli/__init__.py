@@ -56,6 +56,12 @@ def _snakemake_parser(parser) -> None:
     parser.add_argument(
         "--cores", type=_cores, default="all", help="cores Snakemake may use (default: all)"
     )
+    parser.add_argument(
+        "--verbose",
+        action="store_true",
+        help="Snakemake's full output: every rule, reason and shell command (default: "
+        "a progress bar and the rules' warnings, as make results prints; make V=1)",
+    )
     parser.epilog += "\n\nArguments after -- go to Snakemake as they are."
 
 
@@ -82,7 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
         (
             "thermaxis run                      # every dataset of config `datasets`",
             "thermaxis run data/raw/twin --cores 2",
-            "thermaxis run data/raw/mine -- --dry-run",
+            "thermaxis run data/raw/mine --verbose -- --dry-run",
         ),
         _run,
     )
@@ -173,15 +179,15 @@ def build_parser() -> argparse.ArgumentParser:
     report = _subcommand(
         sub,
         "report",
-        "Build a dataset's pages (index.html and the reports), or Snakemake's report as a zip.",
+        "Build each dataset's pages (index.html and the reports), or Snakemake's report as a zip.",
         ("thermaxis report", "thermaxis report data/raw/fl_thermal", "thermaxis report --zip"),
         _report,
     )
     report.add_argument(
-        "dataset",
-        nargs="?",
+        "datasets",
+        nargs="*",
         metavar="DATASET",
-        help="dataset folder (default: the first of config `datasets`)",
+        help="dataset folders (default: config `datasets`)",
     )
     report.add_argument(
         "--zip",
@@ -204,76 +210,65 @@ def _config(configfiles=(), dataset: str | None = None) -> dict:
     return validate_config(overrides or {})
 
 
-def _snakemake_command(cores: str, extra: list[str]) -> list[str]:
+def _snakemake_command(args, extra: list[str]) -> list[str]:
+    """Snakemake through the recovery wrapper of ``make results``, quiet unless ``--verbose``."""
     if not Path("Snakefile").is_file():
         raise DataError(f"{Path.cwd()}: no Snakefile; {CHECKOUT_NEEDED}")
     snakemake = Path(sys.executable).with_name("snakemake")
+    # "--logger=rich", not "--logger rich": the option takes one or more loggers, and would
+    # take a target that follows it for a second one.
+    output = "--printshellcmds" if args.verbose else "--logger=rich"
     return [
         sys.executable, "-m", "thermaxis.pipeline.resume", str(snakemake),
-        "--cores", cores, "--printshellcmds", *extra,
+        "--cores", args.cores, output, *args.snakemake_args, *extra,
     ]  # fmt: skip
 
 
-def _wrapped(command: list[str], progress: bool = False) -> int:
-    """Snakemake through the recovery wrapper; with ``progress`` its step counts as a bar."""
-    if not progress:
-        return subprocess.run(command, stdin=subprocess.DEVNULL).returncode
-    from thermaxis.cli.progress import ProgressBar, relay_snakemake
-
-    with subprocess.Popen(
-        command, stdin=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, bufsize=1
-    ) as proc:
-        relay_snakemake(proc.stderr, ProgressBar(), sys.stderr)
-    return proc.returncode
+def _wrapped(command: list[str]) -> int:
+    return subprocess.run(command, stdin=subprocess.DEVNULL).returncode
 
 
-def _dataset_arg(dataset: str | None) -> str:
-    from thermaxis.config import dataset_of
+def _datasets(args) -> list[str]:
+    return args.datasets or _config()["datasets"]
 
-    return dataset or dataset_of(_config())
+
+def _dry_run(args) -> bool:
+    return any(a in ("-n", "--dry-run", "--dryrun") for a in args.snakemake_args)
 
 
 def _run(args) -> int:
-    from thermaxis.reports import crossdataset
+    """Each dataset's workflow, the page across every dataset under results/, then the answers."""
+    from thermaxis.reports import answer, crossdataset
 
-    datasets = args.datasets or _config()["datasets"]
+    datasets = _datasets(args)
     for dataset in datasets:
         print(f"== {dataset}", flush=True)
-        command = _snakemake_command(
-            args.cores, [*args.snakemake_args, "--config", f"dataset={dataset}"]
-        )
-        code = _wrapped(command)
+        code = _wrapped(_snakemake_command(args, ["--config", f"dataset={dataset}"]))
         if code:
             return code
-    # The summary of the datasets just run (their results/<name> folders), as make results does.
-    names = crossdataset.configured_datasets({"datasets": datasets})
-    return crossdataset.main(["--results", "results", "--datasets", *names]) if names else 1
+    if _dry_run(args):
+        return 0  # nothing was built to summarise
+    code = crossdataset.main(["--results", "results"])
+    if code:
+        return code
+    # The answers last, so the terminal ends with them.
+    return answer.main([str(_results_of(dataset)) for dataset in datasets])
 
 
 def _sweep(args) -> int:
-    dataset = _dataset_arg(args.dataset)
-    command = _snakemake_command(
-        args.cores, ["sweep", *args.snakemake_args, "--config", f"dataset={dataset}"]
-    )
-    code = _wrapped(command, progress=True)
+    from thermaxis.config import dataset_of
+
+    dataset = args.dataset or dataset_of(_config())
+    code = _wrapped(_snakemake_command(args, ["--config", f"dataset={dataset}", "--", "sweep"]))
     if code:
         return code
     # The index links the sweep report only if it existed when the index was built.
     index = _results_of(dataset) / "index.html"
-    if not index.is_file():
+    if not index.is_file() or _dry_run(args):
         return 0
     return _wrapped(
         _snakemake_command(
-            args.cores,
-            [
-                *args.snakemake_args,
-                "--forcerun",
-                "index",
-                "--config",
-                f"dataset={dataset}",
-                "--",
-                str(index),
-            ],
+            args, ["--forcerun", "index", "--config", f"dataset={dataset}", "--", str(index)]
         )
     )
 
@@ -285,19 +280,19 @@ def _results_of(dataset: str) -> Path:
 
 
 def _report(args) -> int:
-    dataset = _dataset_arg(args.dataset)
-    out = _results_of(dataset)
-    target = ["--report", str(out / "report.zip")] if args.zip else [str(out / "index.html")]
-    code = _wrapped(
-        _snakemake_command(
-            args.cores, [*target, *args.snakemake_args, "--config", f"dataset={dataset}"]
-        )
-    )
-    if code == 0 and (out / "compensation" / "model.json").is_file():
-        from thermaxis.reports.answer import main as answers
+    from thermaxis.reports import answer
 
-        answers([str(out)])
-    return code
+    folders = []
+    for dataset in _datasets(args):
+        out = _results_of(dataset)
+        target = (
+            ["--report", str(out / "report.zip")] if args.zip else ["--", str(out / "index.html")]
+        )
+        code = _wrapped(_snakemake_command(args, ["--config", f"dataset={dataset}", *target]))
+        if code:
+            return code
+        folders.append(str(out))
+    return 0 if _dry_run(args) else answer.main(folders)
 
 
 def _check(args) -> int:

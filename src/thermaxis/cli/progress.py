@@ -6,15 +6,12 @@ terminal gets one line that fills up.
 
 from __future__ import annotations
 
-import re
 import sys
 from typing import TextIO
 
-__all__ = ["ProgressBar", "SNAKEMAKE_STEPS", "relay_snakemake"]
+__all__ = ["ProgressBar"]
 
 BAR_WIDTH = 30
-# Snakemake's own count after each finished job: "12 of 40 steps (30%) done".
-SNAKEMAKE_STEPS = re.compile(r"^(?P<done>\d+) of (?P<total>\d+) steps \(\d+%\) done")
 
 
 class ProgressBar:
@@ -44,16 +41,3 @@ class ProgressBar:
         if self._open:
             self.stream.write("\n")
             self._open = False
-
-
-def relay_snakemake(lines, bar: ProgressBar, out: TextIO) -> None:
-    """Pass Snakemake's output through; on a terminal its step counts become the bar."""
-    for line in lines:
-        match = SNAKEMAKE_STEPS.match(line)
-        if match and bar.tty:
-            bar(int(match["done"]), int(match["total"]), "jobs done")
-            continue
-        bar.close()
-        out.write(line)
-        out.flush()
-    bar.close()

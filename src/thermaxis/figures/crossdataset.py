@@ -59,7 +59,7 @@ def fig_heldout_error(summary: pd.DataFrame):
         ax.set_xticks(range(len(datasets)), labels)
         ax.set_ylabel("Held-out max |residual| (µm)\nmean over folds, whisker: worst")
         ax.grid(axis="x", visible=False)
-        ax.legend(
-            ncols=min(len(series), 5), loc="upper left", bbox_to_anchor=(0, -0.18), fontsize=6.5
-        )
+        # Below the tick labels, in the columns that fit: an axes legend anchored outside
+        # the axes was cut at the figure's edge with five long labels in a row.
+        style._bottom_legend(fig, ax)
     return fig

@@ -122,6 +122,20 @@ class Figure:
     def per_fold(self) -> bool:
         return "{fold}" in self.stem
 
+    def report_fields(self, wildcards: Mapping[str, str]) -> dict:
+        """Subcategory and labels of the Snakemake report with a per-fold job's fold filled in.
+
+        A figure family's job has no wildcards (every fold's figure is one of its outputs),
+        so Snakemake, which fills the report's fields from the job's wildcards, must get
+        them filled already.
+        """
+        return {
+            "subcategory": self.subcategory and _fill(self.subcategory, wildcards),
+            "labels": {
+                k: _fill(v, wildcards) if isinstance(v, str) else v for k, v in self.labels.items()
+            },
+        }
+
 
 ERRORS = "assembled/errors.parquet"
 RUN = Fact("run")

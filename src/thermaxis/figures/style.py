@@ -220,10 +220,21 @@ def _add_legend(ax, n_entries: int) -> None:
 def _top_legend(fig: Figure, ax) -> None:
     """Legend of ``ax`` above the axes, where it can hide no data whatever the curves do:
     in up to four columns, fewer where long labels side by side would overrun the figure."""
+    _fitting_legend(fig, ax, "outside upper center", 4)
+
+
+def _bottom_legend(fig: Figure, ax, max_columns: int = 5) -> None:
+    """Legend of ``ax`` below the axes and their tick labels, as :func:`_top_legend`."""
+    _fitting_legend(fig, ax, "outside lower center", max_columns)
+
+
+def _fitting_legend(fig: Figure, ax, loc: str, max_columns: int) -> None:
+    """A figure legend the layout makes room for, in as many columns (up to ``max_columns``)
+    as fit the figure's width: one wider than the figure is cut at its edge."""
     handles, labels = ax.get_legend_handles_labels()
     renderer = FigureCanvasAgg(fig).get_renderer()
-    for ncol in range(min(len(labels), 4), 0, -1):
-        legend = fig.legend(handles, labels, loc="outside upper center", ncol=ncol)
+    for ncol in range(min(len(labels), max_columns), 0, -1):
+        legend = fig.legend(handles, labels, loc=loc, ncol=ncol)
         if ncol == 1 or legend.get_window_extent(renderer).width <= fig.bbox.width:
             return
         legend.remove()

@@ -2,16 +2,18 @@
 
 Each dataset's workflow run writes ``results/<dataset>/tables/metrics.csv`` (one row
 per fold x approach x algorithm x target, see :data:`thermaxis.method.metrics.METRICS_CSV_COLUMNS`).
-This module reads the tables of the datasets it is asked for (by default those of config
-``datasets``, the ones ``make results`` builds) and summarises the error curves' held-out
-residuals (target ``error``) over the leave-one-condition-out folds:
+This module reads the tables of the datasets it is asked for (by default every dataset
+whose results are under ``results/``: each folder holding the workflow's
+``provenance.json``, whichever command built it) and summarises the error curves'
+held-out residuals (target ``error``) over the leave-one-condition-out folds:
 mean RMSE, mean and worst max |residual|.  Whether a dataset is simulated comes from
 its own ``dataset.yaml`` (found through ``provenance.json``), so the summary says so
 for every row.
 
-A dataset whose folder cannot be read (not built yet, or built only in part, or
-broken) is left out with a warning naming it; other folders under ``results/`` (a
-user's own dataset run for one target, say) are not looked at.
+A dataset whose folder cannot be read (broken, or asked for by name before it was
+built) is left out with a warning naming it; other folders under ``results/`` (a
+user's own dataset run for one target, with no ``provenance.json`` yet, say) are not
+looked at.
 
 Command line (writes ``summary.csv``, ``summary.md`` and the figure table's ``heldout_error``
 in every format, ``heldout_error.{png,pdf}`` by default, and the page across datasets,
@@ -49,7 +51,7 @@ __all__ = [
     "summarise",
     "model_ranking",
     "to_markdown",
-    "configured_datasets",
+    "datasets_under",
     "main",
 ]
 
@@ -227,20 +229,14 @@ def to_markdown(summary: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
-def configured_datasets(config: Mapping) -> list[str]:
-    """Names (``results/<name>``) of the datasets of ``config["datasets"]`` that can be loaded.
+def datasets_under(results: Path) -> list[str]:
+    """Names of the folders of ``results`` that hold a dataset's run of the workflow.
 
-    A folder that cannot is left out with a warning: its results cannot be there either.
+    ``provenance.json`` marks one: the workflow writes it for every whole run
+    (target ``all``); a run of one target does not, nor do ``_datasets``, ``_benchmarks``
+    or ``bench``.
     """
-    from thermaxis.dataset.reader import load_dataset
-
-    names = []
-    for folder in config["datasets"]:
-        try:
-            names.append(load_dataset(folder).name)
-        except (DataError, ValueError, OSError) as exc:
-            _warn(f"dataset {folder} left out: {str(exc).splitlines()[0]}")
-    return names
+    return sorted(path.parent.name for path in Path(results).glob("*/provenance.json"))
 
 
 def _warn(message: str) -> None:
@@ -273,7 +269,7 @@ def main(argv=None) -> int:
         "--datasets",
         nargs="+",
         default=None,
-        help="names of the datasets to compare (default: those of config datasets)",
+        help="names of the datasets to compare (default: every dataset under --results)",
     )
     parser.add_argument(
         "--formats", nargs="+", default=["png", "pdf"], help="figure formats (default: png pdf)"
@@ -288,7 +284,7 @@ def main(argv=None) -> int:
     out = Path(args.out) if args.out else results / "_datasets"
     try:
         config = load_config(args.config)
-        names = args.datasets if args.datasets is not None else configured_datasets(config)
+        names = args.datasets if args.datasets is not None else datasets_under(results)
         metrics, kinds = _readable(results, names)
         statistics = StatisticsSettings.from_section(config["statistics"])
         summary = summarise(metrics, kinds, statistics)
