@@ -1,7 +1,7 @@
 """No import circle between the modules of src/thermaxis.
 
 The imports are read with ``ast`` (no module is executed): ``import a.b``, ``from a import
-b`` and relative imports (``from .fit import x``, ``from .. import errors``), wherever they
+b`` and relative imports (``from .solver import x``, ``from .. import errors``), wherever they
 stand. An import is *deferred* when it sits inside a function (it runs when the function is
 called) and *module level* otherwise (class bodies and ``if``/``try`` blocks run at import
 time); imports under ``if TYPE_CHECKING:`` never run and are left out.
@@ -213,7 +213,7 @@ def test_the_walk_sees_the_library(found):
     edges = {(item.source, item.target) for item in found}
     # Three imports written three ways: absolute, relative (twin/__init__.py), deferred.
     assert ("thermaxis.compensation.runtime", "thermaxis.compensation.model") in edges
-    assert ("thermaxis.twin", "thermaxis.twin.fit") in edges
+    assert ("thermaxis.twin", "thermaxis.twin.solver") in edges
     deferred = {(item.source, item.target) for item in found if item.deferred}
     assert ("thermaxis.compensation.model", "thermaxis.method.folds") in deferred
 

@@ -13,12 +13,8 @@ from helpers.builders import write_dataset
 from thermaxis.cleaning.clock import estimate_clock_offset
 from thermaxis.cleaning.passes import combine_passes, run_targets, without_strays
 from thermaxis.cleaning.run import clean_run, cleaning_events
-from thermaxis.cleaning.temperatures import (
-    CleanedTemperatures,
-    clean_temperatures,
-    gap_overlaps,
-    temperatures_in_windows,
-)
+from thermaxis.cleaning.temperatures import CleanedTemperatures, clean_temperatures
+from thermaxis.cleaning.windows import gap_overlaps, temperatures_in_windows
 
 T0 = pd.Timestamp("2022-05-10T09:00:00")  # a whole multiple of 10 s since the epoch
 SETTINGS = DEFAULTS.cleaning.temperatures

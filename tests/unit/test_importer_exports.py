@@ -10,13 +10,9 @@ import pandas as pd
 import pytest
 import yaml
 
-from thermaxis.dataset.importer import (
-    RunSummary,
-    import_dataset,
-    read_numeric,
-    read_table,
-    run_warnings,
-)
+from thermaxis.dataset.import_parsing import read_numeric, read_table
+from thermaxis.dataset.import_writing import RunSummary
+from thermaxis.dataset.importer import import_dataset, run_warnings
 from thermaxis.dataset.reader import load_dataset
 from thermaxis.errors import DataError
 
@@ -440,7 +436,7 @@ def test_a_line_break_in_a_header_cell_reads_as_a_space(tmp_path):
 
 
 def test_a_tab_separated_table_is_named_so_before_its_names_are_normalised(tmp_path):
-    from thermaxis.dataset.importer import read_table
+    from thermaxis.dataset.import_parsing import read_table
 
     path = tmp_path / "tabs.csv"
     path.write_text("when\ttemp A\n2020-06-15 08:00:00\t20\n")

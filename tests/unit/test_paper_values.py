@@ -432,3 +432,30 @@ def test_paper_dir_is_overridable(tmp_path):
     (tmp_path / source.name).write_text(edited, encoding="utf-8")
     eq9 = published.load_table("eq9_decoupled_mlr.csv", paper_dir=tmp_path)
     assert eq9.loc[(eq9["target"] == "k") & (eq9["term"] == "const"), "value"].item() == -1.5
+
+
+def test_the_twins_table5_is_the_transcription_read_with_the_csv_module():
+    # The twin's calibration targets are the 64 numbers of table5_slope_intercept.csv,
+    # here parsed with the csv module and float(), apart from the package's reader.
+    import csv
+
+    from thermaxis.twin.problem import paper_table5
+
+    with open(published.PAPER_DIR / "table5_slope_intercept.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    expected: dict[str, list[tuple[int, float, float]]] = {}
+    for row in rows:
+        expected.setdefault(row["run"], []).append(
+            (int(row["measurement"]), float(row["k_um_per_m"]), float(row["b_um"]))
+        )
+    table5 = paper_table5()
+    assert list(table5) == sorted(expected) == list(RUNS)
+    for run, measurements in expected.items():
+        measurements.sort()
+        assert [m for m, _, _ in measurements] == list(range(1, 9))
+        # Exact: both sides parse the same decimal strings to the nearest double.
+        assert table5[run] == (
+            tuple(k for _, k, _ in measurements),
+            tuple(b for _, _, b in measurements),
+        )
+    assert sum(len(k) + len(b) for k, b in table5.values()) == 64

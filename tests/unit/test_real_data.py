@@ -14,13 +14,12 @@ import yaml
 
 from helpers import DEFAULTS
 from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
-from thermaxis.cleaning.temperatures import (
-    clean_temperatures,
-    gap_overlaps,
-    signals_on_grid,
-)
+from thermaxis.cleaning.signals import signals_on_grid
+from thermaxis.cleaning.temperatures import clean_temperatures
+from thermaxis.cleaning.windows import gap_overlaps
 from thermaxis.config import Settings, load_config
-from thermaxis.dataset.importer import import_dataset, measurements_of
+from thermaxis.dataset.import_parsing import measurements_of
+from thermaxis.dataset.importer import import_dataset
 from thermaxis.dataset.plausibility import signal_coverage
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.errors import DataError

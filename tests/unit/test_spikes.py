@@ -9,14 +9,14 @@ import pandas as pd
 import pytest
 
 from helpers import DEFAULTS, REPO
-from thermaxis.cleaning.temperatures import (
-    clean_temperatures,
+from thermaxis.cleaning.spikes import (
     excursions,
     noise_sigma,
     resolution,
     spike_limit,
     spike_mask,
 )
+from thermaxis.cleaning.temperatures import clean_temperatures
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.twin import faults
 

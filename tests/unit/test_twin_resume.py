@@ -6,30 +6,30 @@ import json
 
 import pytest
 
-from thermaxis.twin import fit
+from thermaxis.twin import stages
 from thermaxis.twin.__main__ import _resume_point
 
-NAMES = [stage.name for stage in fit.STAGES]
+NAMES = [stage.name for stage in stages.STAGES]
 
 
 def test_a_resume_goes_on_at_the_stage_after_the_last_one_recorded():
-    assert NAMES[fit._resume_index("kept targets with Eq. 9, pipeline")] == (
+    assert NAMES[stages.resume_index("kept targets with Eq. 9, pipeline")] == (
         "Table 3 restart 1, pipeline"
     )
-    assert NAMES[fit._resume_index("Table 3 restart 6, pipeline")] == (
+    assert NAMES[stages.resume_index("Table 3 restart 6, pipeline")] == (
         "held-out RMSE restart 1, pipeline"
     )
 
 
 def test_after_the_last_stage_only_the_polish_is_left():
-    assert fit._resume_index("held-out RMSE restart 11, pipeline") == len(fit.STAGES)
+    assert stages.resume_index("held-out RMSE restart 11, pipeline") == len(stages.STAGES)
 
 
 @pytest.mark.parametrize("after", ["Table 6", "polish", "no such stage"])
 def test_a_resume_needs_a_known_stage_followed_by_a_restart(after):
     # After "Table 6" comes a stage that does not start afresh; a polished file is finished.
     with pytest.raises(ValueError, match="cannot resume after stage"):
-        fit._resume_index(after)
+        stages.resume_index(after)
 
 
 def test_a_file_without_a_stage_record_names_itself(tmp_path):

@@ -15,7 +15,8 @@ from pathlib import Path
 import pandas as pd
 
 from thermaxis.benchmark.chronological import block, evaluate_channel, input_sets
-from thermaxis.dataset import importer
+from thermaxis.dataset.import_mapping import load_mapping, table_layout
+from thermaxis.dataset.import_parsing import read_numeric, read_seconds, read_table
 from thermaxis.dataset.safety import load_yaml
 from thermaxis.errors import DataError
 from thermaxis.pipeline.runner import write_csv, write_text
@@ -25,19 +26,15 @@ from thermaxis.reports.formatting import markdown_table
 def read_record(spec: dict, spec_path: Path):
     """Seconds, temperatures, operating signals and the displacement channels of the record."""
     mapping_path = (spec_path.parent / spec["mapping"]).resolve()
-    mapping = importer.load_mapping(mapping_path)
+    mapping = load_mapping(mapping_path)
     source = (mapping_path.parent / mapping["source"]).resolve()
-    frame = importer.read_table(source, *importer.table_layout(mapping))
-    seconds = importer.read_seconds(source, frame, mapping["time"])
+    frame = read_table(source, *table_layout(mapping))
+    seconds = read_seconds(source, frame, mapping["time"])
     temperatures = {
-        s["id"]: importer.read_numeric(source, frame, s["column"], False)
-        for s in mapping["sensors"]
+        s["id"]: read_numeric(source, frame, s["column"], False) for s in mapping["sensors"]
     }
-    signals = {
-        s["id"]: importer.read_numeric(source, frame, s["column"], False)
-        for s in mapping["signals"]
-    }
-    channels = {c: importer.read_numeric(source, frame, c, False) for c in spec["channels"]}
+    signals = {s["id"]: read_numeric(source, frame, s["column"], False) for s in mapping["signals"]}
+    channels = {c: read_numeric(source, frame, c, False) for c in spec["channels"]}
     return seconds, temperatures, signals, channels
 
 

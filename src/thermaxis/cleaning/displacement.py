@@ -11,7 +11,7 @@ records break that:
   interferometer or gauge was reset or re-zeroed mid-run): the unzeroed drift after it
   is measured from another datum.
 
-Both are judged like temperature spikes (:func:`thermaxis.cleaning.temperatures.spike_mask`):
+Both are judged like temperature spikes (:func:`thermaxis.cleaning.spikes.spike_mask`):
 by how far a value lies beyond both of its neighbours, so a drift however fast or
 curved is never flagged. An outlier is a reading beyond both neighbouring readings at its
 target; a step is a change between two measurements beyond both neighbouring changes of
@@ -28,7 +28,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from thermaxis.cleaning.temperatures import (
+from thermaxis.cleaning.spikes import (
     interior_excursions,
     neighbour_residuals,
     sigma_of_residuals,

@@ -14,7 +14,9 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.cleaning import displacement, passes
-from thermaxis.cleaning import temperatures as temperature_cleaning
+from thermaxis.cleaning.signals import signals_on_grid
+from thermaxis.cleaning.temperatures import clean_temperatures
+from thermaxis.cleaning.windows import gap_overlaps, temperatures_in_windows
 from thermaxis.config import CleaningSettings
 from thermaxis.dataset.layout import log_file
 from thermaxis.dataset.plausibility import check_run_plausibility
@@ -160,9 +162,7 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
         "it there if the clock is off)"
         for source, why in cleaned.unestimated
     )
-    at_measurements = temperature_cleaning.temperatures_in_windows(
-        cleaned.frame, windows, how=cleaning.window
-    )
+    at_measurements = temperatures_in_windows(cleaned.frame, windows, how=cleaning.window)
     sensors = [s for s in dataset.sensors if s in at_measurements.columns]
     if cleaning.allow_long_gaps:
         notes.extend(f"{run}: {o.text}" for o in overlaps)
@@ -182,12 +182,8 @@ def clean_and_assemble_run(dataset: Dataset, raw: RawRun, cleaning: CleaningSett
     left_out = {u.sensor for u in unusable}
     flat = _flat_sensors(dataset, raw, cleaned.frame, [s for s in sensors if s not in left_out])
     notes.extend(f.text for f in flat)
-    signal_frame = temperature_cleaning.signals_on_grid(
-        raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"]
-    )
-    signal_values = temperature_cleaning.temperatures_in_windows(
-        signal_frame, windows, how=cleaning.window
-    )
+    signal_frame = signals_on_grid(raw.signals, dataset.clock_offsets_s(), cleaned.frame["time"])
+    signal_values = temperatures_in_windows(signal_frame, windows, how=cleaning.window)
     series = _with_elapsed(cleaned.frame, windows)
     return RunTables(
         run=run,
@@ -476,7 +472,7 @@ def _cleaned_temperatures(
     margin = pd.Timedelta(seconds=max(60.0, 3 * settings.interval_s))
     start, end = windows["start"].min() - margin, windows["end"].max() + margin
     try:
-        cleaned = temperature_cleaning.clean_temperatures(
+        cleaned = clean_temperatures(
             raw.sources, dataset.clock_offsets_s(), settings, start=start, end=end
         )
     except ValueError as exc:
@@ -485,9 +481,7 @@ def _cleaned_temperatures(
         s: _temperature_file(dataset, raw.run, source)
         for s, source in _source_of(dataset, raw).items()
     }
-    overlaps = temperature_cleaning.gap_overlaps(
-        cleaned.gaps, windows, max_gap_s=settings.max_gap_s, files=files
-    )
+    overlaps = gap_overlaps(cleaned.gaps, windows, max_gap_s=settings.max_gap_s, files=files)
     return cleaned, overlaps
 
 

@@ -14,7 +14,7 @@ import pandas as pd
 
 from thermaxis.compensation.model import UM_PER_MM
 from thermaxis.compensation.runtime import Compensator, Step
-from thermaxis.dataset.importer import read_numeric, read_seconds, read_table
+from thermaxis.dataset.import_parsing import read_numeric, read_seconds, read_table
 from thermaxis.errors import DataError
 from thermaxis.method.decouple import MM_PER_M
 

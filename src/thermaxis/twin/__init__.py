@@ -11,21 +11,22 @@ paper's published fits (Table 5, Eq. 8, Eq. 9) and results (Tables 3, 4, 6, 7, 8
 * :mod:`~thermaxis.twin.observe` -- sensors and interferometer;
 * :mod:`~thermaxis.twin.faults` -- the real-log faults seeded into the raw files;
 * :mod:`~thermaxis.twin.results` -- the paper's results as calibration margins;
-* :mod:`~thermaxis.twin.fit` -- the staged calibration (published fits, then results);
+* :mod:`~thermaxis.twin.problem` -- the forward problem and the published targets;
+* :mod:`~thermaxis.twin.stages`, :mod:`~thermaxis.twin.solver` -- the staged calibration
+  (published fits, then results) and its least squares;
 * :mod:`~thermaxis.twin.calibration` -- that calibration through the pipeline;
 * :mod:`~thermaxis.twin.generate`, :mod:`~thermaxis.twin.report` -- files and documents;
 * :mod:`~thermaxis.twin.scale` -- benchmark datasets.
 """
 
 from .calibration import calibrate
-from .fit import PAPER_TABLE5, FitResult
 from .generate import generate_dataset
 from .model import TwinParams, load_params, save_params
 from .report import pipeline_view
 from .scale import ScaleSpec, generate_scale
+from .solver import FitResult
 
 __all__ = [
-    "PAPER_TABLE5",
     "FitResult",
     "calibrate",
     "generate_dataset",

@@ -76,14 +76,14 @@ def main(argv: list[str] | None = None) -> int:
 
         generate_dataset(args.out, args.truth)
     elif args.command == "calibrate":
-        from . import fit
         from .calibration import calibrate
         from .generate import generate_dataset
+        from .stages import resume_index
 
         try:
             resume = _resume_point(args.resume) if args.resume else None
             if resume is not None:
-                fit._resume_index(resume[1])
+                resume_index(resume[1])
         except (OSError, ValueError) as exc:
             print(f"error: {args.resume}: {exc}", file=sys.stderr)
             return 2
@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         summary = {
             "method": f"scipy.optimize.least_squares on the noise-free model, {start}, "
-            "staged (thermaxis.twin.fit.STAGES), then the compass search on the workflow's "
+            "staged (thermaxis.twin.stages.STAGES), then the compass search on the workflow's "
             "faithfulness table (thermaxis.twin.polish)",
             **{f"rms_{name}": round(value, 4) for name, value in result.rms.items()},
             **{name: round(value, 4) for name, value in result.summary.items()},

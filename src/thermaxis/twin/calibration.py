@@ -1,4 +1,4 @@
-"""``make twin-calibrate``: the staged calibration of :mod:`thermaxis.twin.fit`, through the pipeline.
+"""``make twin-calibrate``: the staged calibration of :mod:`thermaxis.twin.solver`, through the pipeline.
 
 The later stages correct the noise-free model towards what the pipeline's own cleaning,
 assembly and decoupling make of the twin's raw files; this module writes those files
@@ -14,10 +14,11 @@ from pathlib import Path
 import pandas as pd
 
 from . import conditions as cond
-from . import fit
 from . import model as mdl
+from . import solver
 from .generate import simulate_records, write_runs
 from .polish import polish
+from .problem import RunObservables
 from .report import PipelineView, faithfulness_table, pipeline_view
 
 __all__ = ["pipeline_observables", "faithfulness_of", "calibrate"]
@@ -33,7 +34,7 @@ def _pipeline_view_of(params: mdl.TwinParams) -> PipelineView:
         return pipeline_view(Path(tmp))
 
 
-def pipeline_observables(params: mdl.TwinParams) -> dict[str, fit.RunObservables]:
+def pipeline_observables(params: mdl.TwinParams) -> dict[str, RunObservables]:
     """What the pipeline makes of the twin's raw files: k, b, curves and window means."""
     return _pipeline_view_of(params).observables()
 
@@ -47,10 +48,10 @@ def calibrate(
     step_s: float = cond.STEP_S,
     workers: int = 2,
     resume: tuple[mdl.TwinParams, str] | None = None,
-) -> fit.FitResult:
-    """The staged fit (:data:`thermaxis.twin.fit.STAGES`) with the pipeline's correction,
+) -> solver.FitResult:
+    """The staged fit (:data:`thermaxis.twin.stages.STAGES`) with the pipeline's correction,
     then the compass search on the faithfulness table (:mod:`thermaxis.twin.polish`)."""
-    return fit.calibrate(
+    return solver.calibrate(
         pipeline_observables,
         step_s,
         workers,

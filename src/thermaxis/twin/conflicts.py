@@ -1,7 +1,7 @@
 """Which of the paper's targets the twin can meet together: the optimiser's best per pair.
 
 ``make twin-conflicts`` (``python -m thermaxis.twin conflicts``). The calibration
-(:mod:`thermaxis.twin.fit`) meets Table 6, Table 5, Eq. 9 and the decoupled and
+(:mod:`thermaxis.twin.solver`) meets Table 6, Table 5, Eq. 9 and the decoupled and
 point-by-point MLR residuals, but not Table 3's 34 of 42 per-position points. Whether
 that is the optimiser's failure or a conflict between targets is measured here, not
 argued:
@@ -12,7 +12,7 @@ argued:
   priors and every physical bound of :mod:`thermaxis.twin.model` in force;
 * each optimisation starts from the committed calibration, runs :data:`BUDGET`
   evaluations of the same least squares as the calibration's stages, with the same
-  defect correction towards the pipeline (:meth:`~thermaxis.twin.fit._Objective.correct_to_pipeline`);
+  defect correction towards the pipeline (:meth:`~thermaxis.twin.solver._Objective.correct_to_pipeline`);
 * at its end the twin's raw files are written and run through the pipeline again, and
   every target is read from what the pipeline assembles.
 
@@ -20,7 +20,7 @@ Two groups conflict when optimising them together leaves either worse than optim
 it alone. The table says by how much. The committed calibration is the compromise, by
 this rule: Table 6 first, always; then the kept targets (Table 5, Eq. 9, Table 1's
 ambient) within their acceptance; then the results, weighted by their tolerances
-(:data:`thermaxis.twin.fit.STAGES`).
+(:data:`thermaxis.twin.stages.STAGES`).
 """
 
 from __future__ import annotations
@@ -31,13 +31,22 @@ from itertools import combinations
 import numpy as np
 
 from . import conditions as cond
-from . import fit
 from . import model as mdl
+from . import solver
+from .problem import (
+    PARTITION_DELTA,
+    _problem,
+    fold_data,
+    result_residuals,
+    rms_by_target,
+    target_residuals,
+)
 from .results import partition_margins
+from .stages import Stage
 
 __all__ = ["GROUPS", "BUDGET", "Experiment", "conflicts", "conflicts_markdown"]
 
-#: Each group: the result terms (fit.RESULT_TOLERANCE) and published fits it adds.
+#: Each group: the result terms (thermaxis.twin.problem.RESULT_TOLERANCE) and published fits it adds.
 GROUPS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "Table 3": (("table3_points",), ()),
     "held-out MLR": (("heldout",), ()),
@@ -61,10 +70,10 @@ class Experiment:
     values: dict[str, float]
 
 
-def _stage(groups: tuple[str, ...]) -> fit.Stage:
+def _stage(groups: tuple[str, ...]) -> Stage:
     results = ALWAYS + tuple(r for g in groups for r in GROUPS[g][0])
     published = {p for g in groups for p in GROUPS[g][1]}
-    return fit.Stage(
+    return Stage(
         " + ".join(groups),
         results=results,
         max_evaluations=BUDGET,
@@ -74,27 +83,27 @@ def _stage(groups: tuple[str, ...]) -> fit.Stage:
     )
 
 
-def _best_etas(objective: fit._Objective, x: np.ndarray) -> np.ndarray:
+def _best_etas(objective: solver._Objective, x: np.ndarray) -> np.ndarray:
     """The lambda-cut thresholds at which the committed twin's partitions hold best."""
     runs = objective.observables(x)
-    data = fit.fold_data(runs, objective.results.fold)
-    grid = np.round(np.arange(fit._ETA_RANGE[0], fit._ETA_RANGE[1] + 1e-9, 0.005), 3)
+    data = fold_data(runs, objective.results.fold)
+    grid = np.round(np.arange(solver._ETA_RANGE[0], solver._ETA_RANGE[1] + 1e-9, 0.005), 3)
     x = x.copy()
     for j, (values, classes) in enumerate(
         ((data.absolute, objective.results.k_classes), (data.relative, objective.results.b_classes))
     ):
-        margins = [partition_margins(values, data.sensors, classes, eta, fit.PARTITION_DELTA)[2]
+        margins = [partition_margins(values, data.sensors, classes, eta, PARTITION_DELTA)[2]
                    for eta in grid]  # fmt: skip
         x[-2 + j] = grid[int(np.argmax(margins))]
     return x
 
 
-def _read(objective: fit._Objective, x: np.ndarray, pipeline) -> dict[str, float]:
+def _read(objective: solver._Objective, x: np.ndarray, pipeline) -> dict[str, float]:
     """Every target at x, from what the pipeline assembles of the raw files of x."""
     objective.correct_to_pipeline(x, pipeline)
     runs = objective.observables(x)
-    _, summary = fit.result_residuals(runs, objective.results, (x[-2], x[-1]))
-    rms = fit.rms_by_target(fit.target_residuals(runs, objective.targets))
+    _, summary = result_residuals(runs, objective.results, (x[-2], x[-1]))
+    rms = rms_by_target(target_residuals(runs, objective.targets))
     table6 = (
         summary["k_partition_margin"] >= 0
         and summary["b_partition_margin"] >= 0
@@ -115,19 +124,19 @@ def _read(objective: fit._Objective, x: np.ndarray, pipeline) -> dict[str, float
 
 def conflicts(pipeline, workers: int = 2, progress=print) -> list[Experiment]:
     """The committed calibration, every group alone and every pair of groups (module docstring)."""
-    problem = fit._problem(cond.STEP_S)
-    objective = fit._Objective(problem, cond.STEP_S)
+    problem = _problem(cond.STEP_S)
+    objective = solver._Objective(problem, cond.STEP_S)
     committed = mdl.load_params()
-    x0 = np.concatenate([committed.vector(problem.runs), [fit._ETA_START, fit._ETA_START]])
-    lower, upper = fit._bounds(problem.runs)
+    x0 = np.concatenate([committed.vector(problem.runs), [solver._ETA_START, solver._ETA_START]])
+    lower, upper = solver._bounds(problem.runs)
     x0 = _best_etas(objective, np.clip(x0, lower, upper))
-    fit._WORKER = objective
-    pool = fit.worker_pool(workers)
+    solver._WORKER = objective
+    pool = solver.worker_pool(workers)
     out = [Experiment((), _read(objective, x0, pipeline))]
     try:
         for size in (1, 2):
             for groups in combinations(GROUPS, size):
-                x, _, record = fit._solve(
+                x, _, record = solver._solve(
                     objective, pool, x0, _stage(groups), lower, upper, pipeline
                 )
                 out.append(Experiment(groups, _read(objective, x, pipeline)))

@@ -1,6 +1,6 @@
 """The calibration's last leg: a compass search on the workflow's own faithfulness table.
 
-The least-squares stages (:data:`thermaxis.twin.fit.STAGES`) see the pipeline through a
+The least-squares stages (:data:`thermaxis.twin.stages.STAGES`) see the pipeline through a
 defect correction, and not its decoupled SVR: which (C, epsilon, gamma) the SVR's inner
 search picks is a discrete choice, won by about 1 % on fold E4, so the held-out SVR's
 error is a step function of the twin's parameters that finite differences cannot follow
@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 
 from . import model as mdl
-from .fit import worker_pool
+from .solver import worker_pool
 
 __all__ = ["STEPS", "MAX_SWEEPS", "rank", "polish"]
 

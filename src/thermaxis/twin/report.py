@@ -40,13 +40,6 @@ from thermaxis.templates import fill
 from . import conditions as cond
 from . import faults
 from . import model as mdl
-from .fit import (
-    PAPER_TABLE5,
-    RunObservables,
-    acceptance_bounds,
-    objective_weights,
-    target_residuals,
-)
 from .observe import (
     HMI_CLOCK_OFFSET_S,
     INTERFEROMETER,
@@ -54,6 +47,13 @@ from .observe import (
     SOURCES,
     WIRELESS_JITTER_S,
     WIRELESS_PERIOD_S,
+)
+from .problem import (
+    RunObservables,
+    acceptance_bounds,
+    objective_weights,
+    paper_table5,
+    target_residuals,
 )
 
 __all__ = [
@@ -374,10 +374,10 @@ def _rms(values) -> float:
 def _comparison(kb: pd.DataFrame) -> pd.DataFrame:
     out = kb.copy()
     out["k_paper"] = [
-        PAPER_TABLE5[r][0][m - 1] for r, m in zip(out["run"], out["measurement"], strict=False)
+        paper_table5()[r][0][m - 1] for r, m in zip(out["run"], out["measurement"], strict=False)
     ]
     out["b_paper"] = [
-        PAPER_TABLE5[r][1][m - 1] for r, m in zip(out["run"], out["measurement"], strict=False)
+        paper_table5()[r][1][m - 1] for r, m in zip(out["run"], out["measurement"], strict=False)
     ]
     out["dk"] = out["k_um_per_m"] - out["k_paper"]
     out["db"] = out["b_um"] - out["b_paper"]
@@ -595,8 +595,8 @@ def _first_measurement_floor(targets: PublishedTargets) -> str:
     last = max(targets.pointwise)
     lever = (last - cond.FIRST_TARGET_MM) / 1000.0
     const = targets.pointwise[last].const
-    miss = {run: const - (b[0] + lever * k[0]) for run, (k, b) in PAPER_TABLE5.items()}
-    miss_b = {run: targets.b.const - b[0] for run, (_, b) in PAPER_TABLE5.items()}
+    miss = {run: const - (b[0] + lever * k[0]) for run, (k, b) in paper_table5().items()}
+    miss_b = {run: targets.b.const - b[0] for run, (_, b) in paper_table5().items()}
     return (
         f"At each run's first measurement every relative temperature is 0, so Eq. 8 predicts its constant, "
         f"{const:g} um at {last:g} mm, for every run, while Table 5 puts the error there (b + k * {lever:g} m) at "
@@ -605,7 +605,7 @@ def _first_measurement_floor(targets: PublishedTargets) -> str:
         + ", ".join(f"{m:+.2f}" for m in miss.values())
         + f" um that no temperature field can remove (RMS over the four first measurements {_rms(list(miss.values())):.2f} um). "
         f"Likewise Eq. 9 gives b = {targets.b.const:g} um at every first measurement, Table 5 "
-        + ", ".join(f"{PAPER_TABLE5[r][1][0]:g}" for r in miss_b)
+        + ", ".join(f"{paper_table5()[r][1][0]:g}" for r in miss_b)
         + " um. "
         + _start_gap(targets)
     )
@@ -631,7 +631,7 @@ def _table4_tension(residuals: dict, targets: PublishedTargets, fold: str) -> st
 def _start_gap(targets: PublishedTargets) -> str:
     """How far from a uniform machine Eq. 9 puts E2's start against E1's."""
     table1 = load_table("table1").set_index("run")
-    dk = PAPER_TABLE5["E2"][0][0] - PAPER_TABLE5["E1"][0][0]
+    dk = paper_table5()["E2"][0][0] - paper_table5()["E1"][0][0]
     gain = sum(targets.k.coef.values())
     air = table1.loc["E2", "ambient_min_c"] - table1.loc["E1", "ambient_min_c"]
     return (
@@ -644,7 +644,8 @@ def _start_gap(targets: PublishedTargets) -> str:
 
 def _fit_values(fit: dict) -> dict:
     """The calibration's stages and its noise-free margins, from the parameter file's ``fit``."""
-    from .fit import PARTITION_DELTA, POINT_DELTA, STAGES, TABLE3_DELTA
+    from .problem import PARTITION_DELTA, POINT_DELTA, TABLE3_DELTA
+    from .stages import STAGES
 
     recorded = {stage["name"]: stage for stage in fit.get("stages", [])}
     rows = ["| stage | targets | iterations (Jacobians) | model evaluations |", "|---|---|---|---|"]
