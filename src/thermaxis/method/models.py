@@ -77,8 +77,9 @@ COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
 # libsvm stops once the dual's largest KKT violation is below ``tol`` (targets standardised).
 # At scikit-learn's 1e-3 the solver stops wherever its path first gets there: last-bit
 # differences in the inputs (OpenBLAS kernels differ between CPUs) moved the twin's held-out
-# SVR results by up to 0.1 um (3 %). At 1e-9 two kernels agree to about 1e-8 um, and the
-# fits on a record's tens of rows stay cheap (docs/reports.md, "Byte-identical runs").
+# SVR results by up to 0.1 um (3 %). At 1e-9 two kernels agree to about 1e-8 um; the
+# solver runs longer (the twin's held-out SVRs of four folds: 1.6 CPU-s instead of 0.8;
+# 300 rows at C 100: 51 ms instead of 19) (docs/reports.md, "Byte-identical runs").
 SVR_TOL = 1e-9
 
 
