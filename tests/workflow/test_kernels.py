@@ -107,7 +107,9 @@ def _differences(a: pd.DataFrame, b: pd.DataFrame) -> list[str]:
         allowed = np.maximum(digit, RTOL * scale)
         worst = int(np.argmax(np.abs(u - v) - allowed))
         if abs(u[worst] - v[worst]) > allowed[worst]:
-            found.append(f"{column}: {u[worst]!r} vs {v[worst]!r} (allowed {allowed[worst]:.3g})")
+            found.append(
+                f"{column}: {u[worst]:.17g} vs {v[worst]:.17g} (allowed {allowed[worst]:.3g})"
+            )
     return found
 
 
