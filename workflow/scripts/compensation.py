@@ -241,7 +241,7 @@ def main(snakemake):
                 ],
                 ignore_index=True,
             ).sort_values(SORT, kind="stable", ignore_index=True)
-            body = frame.to_csv(index=False, float_format="%.10g", lineterminator="\n")
+            body = csv_text(frame, float_format="%.10g")
             texts[output[name]] = file_header(name, statement) + body
         texts[output.st] = structured_text(record, f"{p.statement} Deployment: {sentence}")
         write_texts(texts)

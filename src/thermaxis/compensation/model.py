@@ -138,17 +138,25 @@ def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline)
 
 
 def evaluate_regression(record: Mapping, values) -> np.ndarray:
-    """A record's prediction for input rows ``values`` (n, inputs of the record)."""
+    """A record's prediction for input rows ``values`` (n, inputs of the record).
+
+    Every row goes through the same operations in the same order (products, then numpy's
+    sum along the row), so equal rows give equal predictions and a change since the
+    reference state is exactly 0 at the reference. A BLAS matrix-vector product does not
+    promise that: OpenBLAS's SkylakeX kernel summed the last row of six in another order
+    than the first, and the first measurement's K0 came out -4.1e-35 mm instead of 0.
+    """
     u = np.atleast_2d(np.asarray(values, dtype=float))
     if record["form"] == "affine":
-        return record["constant"] + u @ np.asarray(record["coefficients"], dtype=float)
+        return record["constant"] + (u * np.asarray(record["coefficients"], dtype=float)).sum(
+            axis=1
+        )
     z = (u - np.asarray(record["input_mean"])) / np.asarray(record["input_scale"])
     centres = np.asarray(record["centres"], dtype=float)
     squared = ((z[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
-    standardised = (
-        np.exp(-record["gamma"] * squared) @ np.asarray(record["weights"]) + record["offset"]
-    )
-    return standardised * record["target_scale"] + record["target_mean"]
+    kernel = np.exp(-record["gamma"] * squared)
+    standardised = (kernel * np.asarray(record["weights"], dtype=float)).sum(axis=1)
+    return (standardised + record["offset"]) * record["target_scale"] + record["target_mean"]
 
 
 def line_weights(positions_mm: Sequence[float], origin_mm: float, basis: np.ndarray) -> np.ndarray:

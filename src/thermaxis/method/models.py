@@ -54,6 +54,7 @@ from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
 
 __all__ = [
     "COEFFICIENT_COLUMNS",
+    "SVR_TOL",
     "make_regressor",
     "pls_fits",
     "checked_once",
@@ -72,6 +73,14 @@ __all__ = [
 
 
 COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
+
+# libsvm stops once the dual's largest KKT violation is below ``tol`` (targets standardised).
+# At scikit-learn's 1e-3 the solver stops wherever its path first gets there: last-bit
+# differences in the inputs (OpenBLAS kernels differ between CPUs) moved the twin's held-out
+# SVR results by up to 0.1 um (3 %). At 1e-9 two kernels agree to about 1e-8 um; the
+# solver runs longer (the twin's held-out SVRs of four folds: 1.6 CPU-s instead of 0.8;
+# 300 rows at C 100: 51 ms instead of 19) (docs/reports.md, "Byte-identical runs").
+SVR_TOL = 1e-9
 
 
 _ALLOWED_PARAMS = {
@@ -140,7 +149,7 @@ def _base_regressor(algorithm: str, params: dict, random_state: int, n_features:
         return pls
     if algorithm == "svr":
         numbers = {name: float(params[name]) for name in ("C", "epsilon") if name in params}
-        return SVR(**{**params, **numbers})
+        return SVR(tol=SVR_TOL, **{**params, **numbers})
     # gpr: bounds are in standardised units.  A nearly linear response drives the RBF
     # towards long length scales and large amplitudes, hence the wide upper bounds; a
     # noise floor of 1e-6 keeps exact (noise-free) training data well posed.
