@@ -27,35 +27,23 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import nnls
 
 from thermaxis.cleaning.run import model_inputs
-from thermaxis.config import Settings
+from thermaxis.config import KERNEL_ALGORITHMS, Settings
 from thermaxis.labels import natural_sorted
 from thermaxis.method.recommend import (
     BASELINE,
     EVIDENCE,
     candidate_from_record,
     held_out_predictions,
+    super_learner_weights,
     training_sets,
 )
 from tools.bench.replay import record_scores, table_command
 
-__all__ = ["stacking_weights", "stacked_rmse", "STACKS"]
+__all__ = ["stacked_rmse", "STACKS"]
 
 START, END = "<!-- stacking:start -->", "<!-- stacking:end -->"
-KERNELS = ("svr", "gpr")
-
-
-def stacking_weights(predictions: np.ndarray, measured: np.ndarray) -> np.ndarray:
-    """Non-negative least-squares weights of the columns of ``predictions``, summing to one.
-
-    ``predictions`` (n, candidates), ``measured`` (n,). All zero (no candidate helps) gives
-    equal weights, as SuperLearner does.
-    """
-    weights, _ = nnls(predictions, measured)
-    total = weights.sum()
-    return weights / total if total > 0 else np.full(weights.size, 1.0 / weights.size)
 
 
 def _record_inputs(folder: Path):
@@ -126,10 +114,10 @@ def _equal(P, y):
 
 
 STACKS = {
-    "super learner, every candidate": (lambda cs: [c.name for c in cs], stacking_weights),
+    "super learner, every candidate": (lambda cs: [c.name for c in cs], super_learner_weights),
     "super learner, linear candidates": (
-        lambda cs: [c.name for c in cs if c.algorithm not in KERNELS],
-        stacking_weights,
+        lambda cs: [c.name for c in cs if c.algorithm not in KERNEL_ALGORITHMS],
+        super_learner_weights,
     ),
     "equal average of the two plain references": (lambda cs: [BASELINE, EVIDENCE], _equal),
 }
