@@ -40,9 +40,11 @@ def test_outputs_carry_their_conventions(lines_run):
     assert sorted(summary["fold"].unique()) == ["R1", "R2", "R3"] and len(summary) == 15
     siemens = pd.read_csv(out / "siemens_840d.csv", comment="#")
     assert set(siemens["parameter"]) == {"SD43900", "SD43910", "SD43920"}
-    # The reference state (first measurement of a run) needs no temperature compensation.
+    # The reference state (first measurement of a run) needs no temperature compensation:
+    # zero to rounding (the cycles' inputs go through one matrix product, whose rows may
+    # round differently from the reference's).
     first = siemens[(siemens["measurement"] == 1) & (siemens["parameter"] != "SD43920")]
-    assert (first["value"] == 0).all()
+    assert (first["value"].abs() < 1e-12).all()
     assert "END_FUNCTION_BLOCK" in (out / "ThermalCompensation.st").read_text()
 
 

@@ -15,8 +15,9 @@ three combinations fixed from the literature before any record was replayed:
 * the equal average of the two plain references (the ridge with lags, the evidence ridge).
 
 Each outer fold's weights come from its inner runs alone; the held-out run is predicted
-by the candidates fitted on the other runs. Not deployed: the recommendation still
-chooses one candidate (docs/recommendation.md says why). Evaluation only.
+by the candidates fitted on the other runs. Evaluation only: the recommendation deploys
+the super learner of ``recommend.combine`` (thermaxis.method.recommend.combine), whose
+figures are the replay's (tools.bench.replay).
 """
 
 from __future__ import annotations
