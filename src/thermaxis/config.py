@@ -489,9 +489,15 @@ class ExtraCandidate:
     signals: bool
 
 
+# The recommendation's kernel candidate and the kernel algorithms: none may join the
+# combination (config recommend.combine).
+KERNEL_CANDIDATE = "pointwise-svr"
+KERNEL_ALGORITHMS = ("svr", "gpr")
+
+
 @dataclass(frozen=True)
 class RecommendSettings:
-    score: str  # max_abs | rmse
+    combine: tuple[str, ...]  # the super learner's members: linear candidates
     lags_min: tuple[float, ...]
     baseline_lags_min: tuple[float, ...]
     max_loco_runs: int  # of the outer loop; the inner one always leaves one run out
@@ -513,8 +519,16 @@ class RecommendSettings:
             )
             for e in r["extra_candidates"]
         )
+        # A kernel model's expansion cannot join one affine block (model.json).
+        kernels = {KERNEL_CANDIDATE} | {e.name for e in extra if e.algorithm in KERNEL_ALGORITHMS}
+        for name in r["combine"]:
+            if name in kernels:
+                raise ValueError(
+                    f"config recommend.combine: {name!r} is a kernel candidate; the combination "
+                    "is one linear model, expected linear candidates (paper, evidence-ridge, ...)"
+                )
         return cls(
-            score=r["score"],
+            combine=tuple(r["combine"]),
             lags_min=tuple(float(v) for v in r["lags_min"]),
             baseline_lags_min=tuple(float(v) for v in r["baseline_lags_min"]),
             max_loco_runs=int(r["max_loco_runs"]),

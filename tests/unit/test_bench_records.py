@@ -8,10 +8,10 @@ import yaml
 from scipy.optimize import nnls
 
 from helpers import REPO
+from thermaxis.method.recommend import COMBINED, super_learner_weights
 from tools.bench.records import channel_mapping, record_quality, without_signals
 from tools.bench.replay import main as replay_main
 from tools.bench.replay import replay, replay_markdown, with_table
-from tools.bench.stacking import stacking_weights
 
 
 def test_record_quality_reads_the_workflows_tables(tmp_path):
@@ -56,8 +56,11 @@ def test_without_signals_drops_the_declaration_and_the_logs(tmp_path):
 
 def _toy_scores():
     """Three runs; inner RMSE favours the evidence ridge, inner largest |residual| the
-    paper's configuration; held out: paper 4, ridge with lags 3, evidence ridge 2 µm."""
-    rows = []
+    paper's configuration; held out: paper 4, ridge with lags 3, evidence ridge 2 µm, the
+    super learner 2.5 µm."""
+    rows = [{"kind": "loco", "fold": run, "candidate": COMBINED, "held_out": run, "rmse": 2.5,
+             "max_abs": 2.5, "mae": 0.0, "residual_min": 0.0, "residual_max": 0.0}
+            for run in ("A", "B", "C")]  # fmt: skip
     inner = {"paper": (9.0, 1.0), "baseline-ridge+lags": (5.0, 5.0), "evidence-ridge": (1.0, 6.0)}
     outer = {"paper": 4.0, "baseline-ridge+lags": 3.0, "evidence-ridge": 2.0}
     runs = ["A", "B", "C"]
@@ -76,12 +79,13 @@ def _toy_scores():
 
 def test_the_replay_applies_each_rule_to_the_inner_scores_alone(tmp_path):
     figures = replay(_toy_scores())
-    # Lowest mean inner RMSE: the evidence ridge in every fold, 2 µm held out; lowest inner
+    # The super learner as deployed: 2.5 µm. Lowest mean inner RMSE: the evidence ridge in every fold, 2 µm held out; lowest inner
     # largest |residual|: the paper's configuration, 4 µm; the previous rule: two inner
     # runs give a signed-rank p of at least 1/4, so the ridge with lags stands, 3 µm.
-    assert list(figures.values()) == [2.0, 4.0, 3.0, 4.0, 3.0, 2.0]
+    assert list(figures.values()) == [2.5, 2.0, 4.0, 3.0, 4.0, 3.0, 2.0]
     table = replay_markdown({"toy": _toy_scores()})
-    assert "| **lowest mean inner RMSE** (kept) | 2.00 (1.00) |" in table
+    assert "| **super learner of `recommend.combine`** (deployed) | 2.50 (1.25) |" in table
+    assert "| lowest mean inner RMSE (replaced) | 2.00 (1.00) |" in table
     assert "| the paper's configuration always | 4.00 (2.00) |" in table
     doc = tmp_path / "doc.md"
     doc.write_text("before\n<!-- replay:start -->\nold\n<!-- replay:end -->\nafter\n")
@@ -97,15 +101,15 @@ def test_stacking_weights_by_hand_and_by_scipy():
     b = np.array([0.0, 1.0, 1.0, 3.0])
     c = np.array([5.0, -4.0, 0.5, 0.0])
     P = np.column_stack([a, b, c])
-    np.testing.assert_allclose(stacking_weights(P, 0.25 * a + 0.75 * b), [0.25, 0.75, 0.0],
+    np.testing.assert_allclose(super_learner_weights(P, 0.25 * a + 0.75 * b), [0.25, 0.75, 0.0],
                                atol=1e-12)  # fmt: skip
     # Twice the measurement: scipy's NNLS gives (0.5, 1.5, 0), scaled to sum to one.
     y = 0.5 * a + 1.5 * b
     raw, _ = nnls(P, y)
-    np.testing.assert_allclose(stacking_weights(P, y), raw / raw.sum(), atol=1e-12)
-    np.testing.assert_allclose(stacking_weights(P, y), [0.25, 0.75, 0.0], atol=1e-12)
+    np.testing.assert_allclose(super_learner_weights(P, y), raw / raw.sum(), atol=1e-12)
+    np.testing.assert_allclose(super_learner_weights(P, y), [0.25, 0.75, 0.0], atol=1e-12)
     # No candidate helps (every weight zero): equal weights.
-    np.testing.assert_allclose(stacking_weights(np.abs(P), -np.ones(4)), [1 / 3] * 3)
+    np.testing.assert_allclose(super_learner_weights(np.abs(P), -np.ones(4)), [1 / 3] * 3)
 
 
 def test_the_replay_command_writes_the_table_into_the_document(tmp_path, capsys):

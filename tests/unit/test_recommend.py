@@ -5,15 +5,17 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.optimize import nnls
 
 from thermaxis.config import Settings
 from thermaxis.method.folds import run_groups
 from thermaxis.method.recommend import (
     BASELINE,
+    COMBINED,
     EVIDENCE,
     Candidate,
+    Combination,
     Recommendation,
-    _choose,
     candidate_view,
     candidates_for,
     default_candidates,
@@ -22,6 +24,7 @@ from thermaxis.method.recommend import (
     held_out_scores,
     recommend,
     recommendation_markdown,
+    super_learner_weights,
     training_sets,
 )
 
@@ -66,57 +69,109 @@ def fixed(sensor):
 
 
 CANDIDATES = [fixed("T3"), fixed("T2"), fixed("T1"), fixed("T4")]
+MEMBERS = [c.name for c in CANDIDATES]
 
 
 def run(X, Y, **kwargs):
-    return recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, score="max_abs",
+    return recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, members=MEMBERS,
                      max_loco_runs=12, n_group_folds=5, **kwargs)  # fmt: skip
 
 
-def test_the_candidate_that_made_the_data_is_chosen_on_every_fold():
+def weights_of(result, fold):
+    return dict(zip(result.combination.members, result.combination.folds[fold], strict=True))
+
+
+def test_the_member_that_made_the_data_takes_the_weight_on_every_fold():
     X, Y = make_runs()
     result = run(X, Y)
-    assert result.final == "pointwise-mlr-T1"
-    assert list(result.folds["chosen"]) == ["pointwise-mlr-T1"] * 5
-    # The chosen candidate's held-out error is that of T1 fitted on the other four runs:
-    # about the noise, far below the reference (T3, unrelated to the errors).
+    assert list(result.folds["chosen"]) == [COMBINED] * 5
+    for fold in result.folds["fold"]:
+        assert weights_of(result, fold)["pointwise-mlr-T1"] > 0.95
+        assert sum(weights_of(result, fold).values()) == pytest.approx(1.0, abs=1e-12)
+    assert dict(zip(MEMBERS, result.combination.final, strict=True))["pointwise-mlr-T1"] > 0.95
+    # The table carries each fold's weights.
+    assert result.folds["weight_pointwise-mlr-T1"].tolist() == [
+        weights_of(result, f)["pointwise-mlr-T1"] for f in result.folds["fold"]
+    ]
+    # The combination's held-out error is about the noise, far below the reference's (T3,
+    # unrelated to the errors).
     assert (result.folds["rmse_um"] < 0.2).all()
     assert (result.folds["paper_rmse_um"] > 5 * result.folds["rmse_um"]).all()
 
 
-def test_the_held_out_run_never_reaches_the_inner_choice():
-    X, Y = make_runs()
-    honest = run(X, Y)
-    # Make R3's errors follow T2 instead of T1: only R3 changes.
-    X2, Y2 = make_runs(driver="T1")
-    rise = X2.loc[X2.run == "R3", "T2"].to_numpy() - X2.loc[X2.run == "R3", "T2"].to_numpy()[0]
-    Y2.loc[(X2.run == "R3").to_numpy()] = rise[:, None] * np.array([[1.0, 2.0, 3.0]])
-    poisoned = run(X2, Y2)
-    fold = honest.folds.set_index("fold")
-    other = poisoned.folds.set_index("fold")
-    # Fold R3's choice is made on R1, R2, R4, R5 alone: it cannot see the change ...
-    assert other.loc["R3", "chosen"] == fold.loc["R3", "chosen"]
-    assert other.loc["R3", "inner_score"] == pytest.approx(fold.loc["R3", "inner_score"], rel=1e-12)
-    # ... but its held-out error does (R3 no longer follows T1).
-    assert other.loc["R3", "rmse_um"] > 10 * fold.loc["R3", "rmse_um"]
-    inner = poisoned.inner
-    assert not ((inner["fold"] == "R3") & (inner["held_out"] == "R3")).any()
+def by_hand_predictions(X, Y, sensor, train, test):
+    """Least squares of each position's error on ``sensor``'s rise, fitted on ``train``."""
+    rise = X[sensor] - X.groupby("run")[sensor].transform("first")
+    fit, out = X["run"].isin(train).to_numpy(), X["run"].isin(test).to_numpy()
+    coef, *_ = np.linalg.lstsq(np.column_stack([np.ones(fit.sum()), rise[fit]]),
+                               Y.to_numpy()[fit], rcond=None)  # fmt: skip
+    return np.column_stack([np.ones(out.sum()), rise[out]]) @ coef
 
 
-def test_ties_go_to_the_candidate_listed_first():
-    X, Y = make_runs()
-    twin = replace(fixed("T1"), name="pointwise-mlr-T1-again")
-    result = recommend(
-        X,
-        Y,
-        [fixed("T3"), twin, fixed("T1")],
-        reference="pointwise-mlr-T3",
-        degree=1,
-        score="rmse",
-        max_loco_runs=12,
-        n_group_folds=5,
-    )
-    assert result.final == "pointwise-mlr-T1-again"
+def test_the_weights_are_nnls_on_the_inner_predictions_worked_out_by_hand():
+    X, Y = make_runs(n_runs=4, seed=2)
+    # Two members that each explain part of the errors: the errors follow T1 + T2's rises.
+    rises = X[["T1", "T2"]] - X.groupby("run")[["T1", "T2"]].transform("first")
+    Y = pd.DataFrame((rises["T1"] + 0.5 * rises["T2"]).to_numpy()[:, None] * np.array([[1.0, 2.0, 3.0]]),
+                     columns=Y.columns)  # fmt: skip
+    members = ["pointwise-mlr-T1", "pointwise-mlr-T2"]
+    result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1,
+                       members=members, max_loco_runs=12, n_group_folds=5)  # fmt: skip
+    runs = ["R1", "R2", "R3", "R4"]
+
+    def weights(pairs):
+        P = np.vstack([np.column_stack([by_hand_predictions(X, Y, s, train, [run]).ravel()
+                                        for s in ("T1", "T2")]) for train, run in pairs])  # fmt: skip
+        y = np.concatenate([Y.to_numpy()[(X["run"] == run).to_numpy()].ravel() for _, run in pairs])
+        w, _ = nnls(P, y)
+        return w / w.sum()
+
+    # Fold R2: each of R1, R3, R4 predicted by the members fitted on the other two.
+    inner = [([r for r in runs if r not in ("R2", i)], i) for i in ("R1", "R3", "R4")]
+    np.testing.assert_allclose(result.combination.folds["R2"], weights(inner), rtol=1e-9)
+    # Final: every run predicted by the members fitted on the other three.
+    every = [([r for r in runs if r != i], i) for i in runs]
+    np.testing.assert_allclose(result.combination.final, weights(every), rtol=1e-9)
+    # Fold R2's held-out error: its weights on the members fitted on R1, R3, R4.
+    train = ["R1", "R3", "R4"]
+    combined = np.column_stack([by_hand_predictions(X, Y, s, train, ["R2"]).ravel()
+                                for s in ("T1", "T2")]) @ weights(inner)  # fmt: skip
+    residual = Y.to_numpy()[(X["run"] == "R2").to_numpy()].ravel() - combined
+    row = result.folds.set_index("fold").loc["R2"]
+    assert row["rmse_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
+    assert row["max_abs_um"] == pytest.approx(np.abs(residual).max(), rel=1e-9)
+
+
+def test_super_learner_weights_on_a_toy_problem_solved_by_hand():
+    # Unconstrained least squares of y = (1, 2, 3) on the columns (1, 0, 1), (0, 1, 1):
+    # normal equations [[2, 1], [1, 2]] w = (4, 5), w = (1, 2), scaled to (1/3, 2/3).
+    P = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    np.testing.assert_allclose(super_learner_weights(P, np.array([1.0, 2.0, 3.0])), [1 / 3, 2 / 3])
+    # A member that would need a negative weight gets 0: y = (1, -1) on the identity.
+    np.testing.assert_allclose(super_learner_weights(np.eye(2), np.array([1.0, -1.0])), [1.0, 0.0])
+    # No member helps (NNLS all zero): equal weights, as SuperLearner's method.NNLS.
+    np.testing.assert_allclose(super_learner_weights(np.eye(2), np.array([-1.0, -1.0])), [0.5, 0.5])
+    # A missing measurement is left out of the fit.
+    y = np.array([1.0, 2.0, 3.0, np.nan])
+    np.testing.assert_allclose(super_learner_weights(np.vstack([P, [5.0, 5.0]]), y), [1 / 3, 2 / 3])
+    # scipy's NNLS on a random problem, scaled.
+    rng = np.random.default_rng(3)
+    P, y = rng.normal(size=(40, 3)), rng.normal(size=40)
+    w, _ = nnls(P, y)
+    np.testing.assert_allclose(super_learner_weights(P, y), w / w.sum())
+
+
+def test_a_kernel_candidate_cannot_join_the_combination():
+    with pytest.raises(ValueError, match=r"^config recommend.combine: 'pointwise-svr' is a kernel"):
+        Settings.from_config({"recommend": {"combine": ["paper", "pointwise-svr"]}})
+    extra = {"name": "my-gpr", "approach": "pointwise", "algorithm": "gpr"}
+    with pytest.raises(ValueError, match="'my-gpr' is a kernel candidate"):
+        Settings.from_config({"recommend": {"combine": ["my-gpr"], "extra_candidates": [extra]}})
+    assert DEFAULTS.recommend.combine == ("paper", EVIDENCE, BASELINE)
+    X, Y = make_runs(n_runs=3)
+    with pytest.raises(ValueError, match="'nope' is not a candidate"):
+        recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, members=["nope"],
+                  max_loco_runs=12, n_group_folds=5)  # fmt: skip
 
 
 def test_run_groups_become_group_folds_above_the_limit():
@@ -172,7 +227,9 @@ def test_shared_fits_give_the_scores_of_one_fit_per_evaluation():
     X, Y = make_runs(n_runs=4)
     candidates = [fixed("T1"), fixed("T2")]
     runs = ["R1", "R2", "R3", "R4"]
-    shared = pd.concat(fold_scores(X, Y, candidates, runs, 1), ignore_index=True)
+    frames, combination = fold_scores(X, Y, candidates, runs, 1)
+    shared = pd.concat(frames, ignore_index=True)
+    assert combination is None
     for row in shared.itertuples():
         train = [r for r in runs if r not in (row.fold, row.held_out)]
         by_hand = [c for c in candidates if c.name == row.candidate]
@@ -187,12 +244,12 @@ def test_shared_fits_give_the_scores_of_one_fit_per_evaluation():
 def test_above_the_limit_the_outer_loop_holds_out_groups_of_runs():
     X, Y = make_runs(n_runs=6)
     result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1,
-                       score="max_abs", max_loco_runs=4,
+                       members=["pointwise-mlr-T1"], max_loco_runs=4,
                        n_group_folds=3)  # fmt: skip
     # Six runs above a limit of four: three outer groups, R1+R2, R3+R4, R5+R6, every run
-    # still a row, each chosen without its group.
+    # still a row, each weighted without its group (one member: weight 1).
     assert list(result.folds["fold"]) == [f"R{i}" for i in range(1, 7)]
-    assert list(result.folds["chosen"]) == ["pointwise-mlr-T1"] * 6
+    assert result.folds["weight_pointwise-mlr-T1"].tolist() == [1.0] * 6
     inner = result.inner.loc[result.inner["fold"] == "R1"]
     assert set(inner["held_out"]) == {"R3", "R4", "R5", "R6"}
     # By hand: R1's error from T1's rise fitted on R3-R6 alone (R2 is in R1's group).
@@ -225,66 +282,60 @@ def test_time_inputs_and_signals_are_seen_only_by_candidates_that_use_them():
     assert models.signals == ("S", "S@lag30min")
 
 
-def test_with_two_runs_no_fold_is_chosen_but_the_final_choice_is_made():
+def test_with_two_runs_the_folds_weight_equally_but_the_final_weights_are_fitted():
     X, Y = make_runs(n_runs=2)
     result = run(X, Y)
-    # One training run per fold leaves nothing to choose on: the reference stands there.
-    assert list(result.folds["chosen"]) == ["pointwise-mlr-T3"] * 2
-    assert result.folds["inner_score"].isna().all() and result.inner.empty
-    assert result.final == "pointwise-mlr-T1"
+    # One training run per fold leaves no inner prediction: equal weights there.
+    for fold in ("R1", "R2"):
+        assert result.combination.folds[fold] == pytest.approx((0.25,) * 4)
+    assert result.inner.empty
+    # The final weights come from each run predicted by the members fitted on the other.
+    assert dict(zip(MEMBERS, result.combination.final, strict=True))["pointwise-mlr-T1"] > 0.9
 
 
-def test_the_lowest_mean_inner_score_chooses_ties_to_the_first_listed():
-    def rows(name, values):
-        return [{"candidate": name, "held_out": f"R{i}", "rmse": v} for i, v in enumerate(values)]
-
-    def choose(*tables, order):
-        return _choose(pd.DataFrame([r for t in tables for r in t]), order, "rmse")
-
-    # By hand: means 1.1 (baseline), (0.4 + 1.6 + 1.0 + 0.9 + 1.3) / 5 = 1.04 (lucky) and
-    # 0.9 (steady). The cross-validation selector takes the lowest, with no baseline privilege.
-    base = rows(BASELINE, [1.0, 1.0, 1.3, 1.1, 1.1])
-    lucky = rows("lucky", [0.4, 1.6, 1.0, 0.9, 1.3])
-    steady = rows("steady", [0.8, 0.8, 1.1, 0.9, 0.9])
-    assert choose(base, lucky, order=[BASELINE, "lucky"]) == ("lucky", pytest.approx(1.04))
-    assert choose(base, lucky, steady, order=[BASELINE, "lucky", "steady"]) == (
-        "steady",
-        pytest.approx(0.9),
-    )
-    # The same scores under another name: the one listed first.
-    again = rows("again", [0.8, 0.8, 1.1, 0.9, 0.9])
-    assert choose(again, steady, order=["steady", "again"])[0] == "steady"
-    assert choose(again, steady, order=["again", "steady"])[0] == "again"
-
-
-def test_replacing_the_held_out_runs_data_changes_no_choice_of_its_fold():
+def test_replacing_the_held_out_runs_data_changes_no_weight_of_its_fold():
     X, Y = make_runs(n_runs=5, seed=4)
-    candidates = [*CANDIDATES, replace(fixed("T1"), name="evidence-T1", algorithm="bayesridge")]
-    kwargs = dict(reference="pointwise-mlr-T3", degree=1, score="rmse", max_loco_runs=12,
+    # Members that share the work: errors follow T1 and T2 (noise 0.05 um), and a
+    # bayesridge member (not through the numpy core).
+    rises = X[["T1", "T2"]] - X.groupby("run")[["T1", "T2"]].transform("first")
+    Y = Y + (0.7 * rises["T2"]).to_numpy()[:, None]
+    evidence = replace(fixed("T1"), name="evidence-T1", algorithm="bayesridge")
+    candidates = [*CANDIDATES, evidence]
+    members = ["pointwise-mlr-T1", "pointwise-mlr-T2", "evidence-T1"]
+    kwargs = dict(reference="pointwise-mlr-T3", degree=1, members=members, max_loco_runs=12,
                   n_group_folds=5)  # fmt: skip
     honest = recommend(X, Y, candidates, **kwargs)
-    # R2's temperatures and errors replaced by noise and by a constant: whatever the fold
-    # R2 chooses, and how it scores its candidates, is fitted on R1, R3, R4, R5 alone.
+    assert min(honest.combination.folds["R2"]) < 0.99  # more than one member weighs
+    # R2's temperatures and errors replaced by noise, and by a constant: fold R2's weights,
+    # and the inner scores they are fitted beside, come from R1, R3, R4, R5 alone.
     rng = np.random.default_rng(11)
     at = (X["run"] == "R2").to_numpy()
     noisy_X, noisy_Y = X.copy(), Y.copy()
     noisy_X.loc[at, ["T1", "T2", "T3", "T4"]] = rng.normal(50.0, 9.0, size=(at.sum(), 4))
     noisy_Y.loc[at] = 123.0
-    noisy = recommend(noisy_X, noisy_Y, candidates, **kwargs)
-    before = honest.folds.set_index("fold").loc["R2"]
-    after = noisy.folds.set_index("fold").loc["R2"]
-    assert after["chosen"] == before["chosen"]
-    assert after["inner_score"] == pytest.approx(before["inner_score"], rel=1e-12)
-    inner = [r.inner.loc[r.inner["fold"] == "R2"].reset_index(drop=True) for r in (honest, noisy)]
-    pd.testing.assert_frame_equal(inner[0], inner[1], rtol=1e-12)
-    # The held-out error itself sees the new data (a constant 123 um is far from the fit).
-    assert after["rmse_um"] > 10 * before["rmse_um"]
+    constant_Y = Y.copy()
+    constant_Y.loc[at] = -4.0
+    for replaced_X, replaced_Y in ((noisy_X, noisy_Y), (X, constant_Y)):
+        other = recommend(replaced_X, replaced_Y, candidates, **kwargs)
+        np.testing.assert_allclose(
+            other.combination.folds["R2"], honest.combination.folds["R2"], rtol=1e-9, atol=1e-12
+        )
+        before = honest.folds.set_index("fold").loc["R2"]
+        after = other.folds.set_index("fold").loc["R2"]
+        for m in members:
+            assert after[f"weight_{m}"] == pytest.approx(before[f"weight_{m}"], rel=1e-9, abs=1e-12)
+        inner = [r.inner.loc[r.inner["fold"] == "R2"].reset_index(drop=True) for r in (honest, other)]
+        pd.testing.assert_frame_equal(inner[0], inner[1], rtol=1e-12)
+        # The held-out error itself sees the new data (a constant far from the fit).
+        assert after["rmse_um"] > 10 * before["rmse_um"]
+        # The other folds' weights see R2: it is one of their inner runs.
+        assert not np.allclose(other.combination.folds["R1"], honest.combination.folds["R1"])
 
 
 def test_the_inner_loop_leaves_one_run_out_above_the_outer_limit():
     X, Y = make_runs(n_runs=7, n_measurements=5)
     result = recommend(X, Y, CANDIDATES[:2], reference="pointwise-mlr-T3", degree=1,
-                       score="rmse", max_loco_runs=3, n_group_folds=2)  # fmt: skip
+                       members=MEMBERS[:2], max_loco_runs=3, n_group_folds=2)  # fmt: skip
     # Seven runs above an outer limit of three: two outer groups (R1-R4, R5-R7); inside
     # each, every training run is held out on its own.
     inner = result.inner.loc[result.inner["fold"] == "R1"]
@@ -331,29 +382,31 @@ def test_the_plain_references_are_always_candidates_and_see_only_their_own_lags(
     assert selectable == ["run", "measurement", "time_min", "T1", "T1@lag20min"]
 
 
-def test_the_page_says_which_folds_had_no_inner_split_to_choose_on():
-    # Two runs: each fold trains on one run, so it keeps the reference, unchosen.
+def test_the_page_says_which_folds_had_no_inner_split_to_weight_on():
+    # Two runs: each fold trains on one run, so it weights its members equally.
     folds = pd.DataFrame(
-        {"fold": ["R1", "R2"], "chosen": ["paper", "paper"], "inner_score": [np.nan, np.nan],
-         "rmse_um": [5.0, 1.5], "max_abs_um": [8.0, 3.5],
+        {"fold": ["R1", "R2"], "chosen": [COMBINED] * 2, "weight_a": [0.5, 0.5],
+         "weight_b": [0.5, 0.5], "rmse_um": [5.0, 1.5], "max_abs_um": [8.0, 3.5],
          "paper_rmse_um": [5.0, 1.5], "paper_max_abs_um": [8.0, 3.5]}
     )  # fmt: skip
+    combination = Combination(("a", "b"), {"R1": (0.5, 0.5), "R2": (0.5, 0.5)}, (0.25, 0.75))
     page = recommendation_markdown(
-        Recommendation(folds, pd.DataFrame(), pd.DataFrame(), "baseline-ridge+lags", "max_abs"),
+        Recommendation(folds, pd.DataFrame(), pd.DataFrame(), COMBINED, combination),
         "Dataset `two`: SIMULATED data.",
     )
     assert (
-        "Fold(s) R1, R2 had a single training run, so no inner split to choose on: they keep "
-        "the paper's configuration." in page
+        "Fold(s) R1, R2 had a single training run, so no inner predictions to fit weights on: "
+        "they weight the members equally." in page
     )
+    assert "with the weights fitted on every run's held-out predictions (a 0.250, b 0.750)" in page
     # The means over the two folds: RMSE (5.0 + 1.5) / 2, largest |residual| (8.0 + 3.5) / 2.
     assert (
         "a mean held-out RMSE of 3.25 µm and a mean largest |residual| of 5.75 µm, against "
         "3.25 and 5.75 µm for the paper's configuration" in page
     )
-    chosen = folds.assign(inner_score=[0.9, np.nan])
+    inner = pd.DataFrame({"fold": ["R1"], "candidate": ["a"], "held_out": ["R2"]})
     page = recommendation_markdown(
-        Recommendation(chosen, pd.DataFrame(), pd.DataFrame(), "paper", "max_abs"), "x"
+        Recommendation(folds, inner, pd.DataFrame(), COMBINED, combination), "x"
     )
     assert "Fold(s) R2 had a single training run" in page
 

@@ -14,7 +14,7 @@ import pytest
 from helpers.builders import lagged_model, logged_run
 from helpers.plc import parsed_constants, st_twincat
 from thermaxis.compensation.exports import twincat
-from thermaxis.compensation.model import CONVENTION, model_record
+from thermaxis.compensation.model import CONVENTION, combined_record, model_record, validate_model
 from thermaxis.compensation.plc import st_real, structured_text
 from thermaxis.compensation.runtime import Compensator
 from thermaxis.config import FallbackSettings
@@ -233,3 +233,48 @@ def test_a_rate_input_is_refused_by_name():
     model["inputs"][1]["sensor"] = "T2@rate10min"
     with pytest.raises(ValueError, match=r"'T2@rate10min'.*lag inputs only"):
         structured_text(model, "SIMULATED")
+
+
+def test_a_combination_is_the_weighted_sum_of_its_members_in_one_block():
+    # The super learner deploys its members as one linear model.json: decoupled MLR on T1
+    # (k) and T2 (b), and a point-by-point ridge on both rises, weighted 0.3 and 0.7.
+    X, Y = exact_runs(wobble_um=0.3)
+    decoupled = DecoupledAxisModel(("T1",), ("T2",), algorithm="mlr").fit(X, Y)
+    pointwise = PointwiseAxisModel(("T1", "T2"), algorithm="ridge").fit(X, Y)
+    members = [
+        ("paper", 0.3, model_record(decoupled, "decoupled", "mlr", X, RAMP, {"T2": 0.125})),
+        ("ridge", 0.7, model_record(pointwise, "pointwise", "ridge", X, RAMP, {"T1": 0.25})),
+        ("unused", 0.0, model_record(pointwise, "pointwise", "ridge", X, RAMP)),
+    ]
+    model = combined_record(members, dataset="exact")
+    validate_model(model)
+    # Inputs merged: T1 absolute (decoupled k), T2 relative (both), T1 relative (pointwise).
+    assert [(i["sensor"], i["temperature"]) for i in model["inputs"]] == [
+        ("T1", "absolute"), ("T2", "relative"), ("T1", "relative"),
+    ]  # fmt: skip
+    assert len(model["regressions"]) == 2 + TARGETS.size
+    assert [(m["candidate"], m["weight"]) for m in model["members"]] == [
+        ("paper", 0.3), ("ridge", 0.7),
+    ]  # fmt: skip
+    assert model["noise_c"] == {"T1": 0.25, "T2": 0.125}
+    combined = Compensator(model)
+    alone = [Compensator(record) for _, _, record in members[:2]]
+    for now, ref in [((32.0, 26.5), (30.0, 25.0)), ((29.25, 24.1), (30.5, 25.3))]:
+        state, home = dict(zip(("T1", "T2"), now, strict=True)), dict(zip(("T1", "T2"), ref, strict=True))
+        # The members' compensations (minus their predicted changes), weighted by hand in numpy.
+        expected = 0.3 * np.array(alone[0].parameters(state, home).curve_um) + 0.7 * np.array(
+            alone[1].parameters(state, home).curve_um
+        )
+        got = combined.parameters(state, home)
+        np.testing.assert_allclose(got.curve_um, expected, rtol=1e-12, atol=1e-9)
+        # The least-squares line of that curve, by hand, is what the controllers get.
+        design = np.column_stack([np.ones(TARGETS.size), (TARGETS - 185.0) / 1000.0])
+        (b, k), *_ = np.linalg.lstsq(design, expected, rcond=None)
+        assert got.k0_mm == pytest.approx(b / 1000.0, abs=1e-12)
+        assert got.tan_beta == pytest.approx(k * 1e-6, abs=1e-15)
+        # The Structured Text block gives the Compensator's values.
+        c = parsed_constants(structured_text(model, "SIMULATED test data."))
+        values = {row[0]: row[2] for row in twincat(got)}
+        block = st_twincat(c, np.array(now), np.array(ref))
+        for parameter, value in values.items():
+            assert block[parameter] == pytest.approx(value, abs=1e-9), parameter

@@ -128,14 +128,17 @@ def test_the_model_schema_refuses_an_unknown_algorithm():
     import jsonschema
 
     validator = jsonschema.Draft202012Validator(load_schema("compensation_model"))
+    # A model's algorithm is one of the vocabulary's, or the recommendation's super learner.
     errors = [
-        e.message
+        message
         for e in validator.iter_errors({"approach": "pointwise", "algorithm": "elasticnet"})
+        for message in (e.message, *(c.message for c in e.context))
     ]
     assert (
         "'elasticnet' is not one of ['mlr', 'svr', 'ridge', 'lasso', 'pls', 'gpr', 'bayesridge']"
         in errors
     )
+    assert "'super learner' was expected" in errors
     assert not any("'pointwise'" in message for message in errors)
 
 

@@ -14,17 +14,18 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Sequence
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from thermaxis.labels import natural_sorted
-from thermaxis.method.recommend import BASELINE, EVIDENCE, collect
+from thermaxis.method.recommend import BASELINE, COMBINED, EVIDENCE
 from thermaxis.statistics.paired import wilcoxon_p
 from thermaxis.tables import read_table
 
-__all__ = ["RULES", "replay", "replay_markdown", "previous_rule"]
+__all__ = ["RULES", "replay", "replay_markdown", "previous_rule", "lowest_mean"]
 
 START, END = "<!-- replay:start -->", "<!-- replay:end -->"
 
@@ -49,36 +50,49 @@ def previous_rule(inner: pd.DataFrame, order: Sequence[str]) -> str:
     return min(beaten, key=lambda c: (means[c], list(order).index(c))) if beaten else BASELINE
 
 
-def _kept(score: str) -> Callable[[pd.DataFrame, Sequence[str]], pd.Series]:
+def lowest_mean(inner: pd.DataFrame, order: Sequence[str], score: str) -> str:
+    """The cross-validation selector replaced on 2026-12-07 by the super learner: the
+    candidate with the lowest mean inner ``score``; ties (1e-12 relative) to the first listed."""
+    means = inner.pivot_table(index="held_out", columns="candidate", values=score).mean()
+    best = min(means.loc[list(order)])
+    return next(n for n in order if np.isclose(means[n], best, rtol=1e-12, atol=0.0))
+
+
+def _per_fold(choose: Callable[[pd.DataFrame, Sequence[str]], str]):
+    """A rule choosing per outer fold from that fold's inner scores (the paper's without any)."""
+
     def rule(scores: pd.DataFrame, order: Sequence[str]) -> pd.Series:
-        return collect(scores, order, "paper", score).folds.set_index("fold")["chosen"]
+        inner = scores.loc[scores["kind"] == "inner"]
+        folds = natural_sorted(pd.unique(scores["fold"]).tolist())
+        return pd.Series(
+            {
+                f: choose(inner.loc[inner["fold"] == f], order)
+                if (inner["fold"] == f).any()
+                else "paper"
+                for f in folds
+            }
+        )
 
     return rule
 
 
-def _previous(scores: pd.DataFrame, order: Sequence[str]) -> pd.Series:
-    inner = scores.loc[scores["kind"] == "inner"]
+def _deployed(scores: pd.DataFrame, order: Sequence[str]) -> pd.Series:
+    """The super learner, as the recommend job weighted it fold by fold."""
     folds = natural_sorted(pd.unique(scores["fold"]).tolist())
-    return pd.Series(
-        {
-            f: previous_rule(inner.loc[inner["fold"] == f], order)
-            if (inner["fold"] == f).any()
-            else "paper"
-            for f in folds
-        }
-    )
+    return pd.Series(dict.fromkeys(folds, COMBINED))
 
 
 RULES = {
-    "**lowest mean inner RMSE** (kept)": _kept("rmse"),
-    "lowest mean inner largest \\|residual\\|": _kept("max_abs"),
-    "ridge with lags unless 1 SE + signed-rank (previous)": _previous,
+    "**super learner of `recommend.combine`** (deployed)": _deployed,
+    "lowest mean inner RMSE (replaced)": _per_fold(partial(lowest_mean, score="rmse")),
+    "lowest mean inner largest \\|residual\\|": _per_fold(partial(lowest_mean, score="max_abs")),
+    "ridge with lags unless 1 SE + signed-rank (previous)": _per_fold(previous_rule),
 }
 
 
 def replay(scores: pd.DataFrame) -> dict[str, float]:
     """Mean held-out RMSE (µm) of each rule's choices and of the references, on one record."""
-    order = list(dict.fromkeys(scores["candidate"]))
+    order = [c for c in dict.fromkeys(scores["candidate"]) if c != COMBINED]
     outer = scores.loc[scores["kind"] == "loco"].set_index(["candidate", "held_out"])["rmse"]
     out = {}
     for name, rule in RULES.items():

@@ -15,8 +15,9 @@ three combinations fixed from the literature before any record was replayed:
 * the equal average of the two plain references (the ridge with lags, the evidence ridge).
 
 Each outer fold's weights come from its inner runs alone; the held-out run is predicted
-by the candidates fitted on the other runs. Not deployed: the recommendation still
-chooses one candidate (docs/recommendation.md says why). Evaluation only.
+by the candidates fitted on the other runs. Evaluation only: the recommendation deploys
+the super learner of ``recommend.combine`` (thermaxis.method.recommend.combine), whose
+figures are the replay's (tools.bench.replay).
 """
 
 from __future__ import annotations
@@ -27,35 +28,23 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import nnls
 
 from thermaxis.cleaning.run import model_inputs
-from thermaxis.config import Settings
+from thermaxis.config import KERNEL_ALGORITHMS, Settings
 from thermaxis.labels import natural_sorted
 from thermaxis.method.recommend import (
     BASELINE,
     EVIDENCE,
     candidate_from_record,
     held_out_predictions,
+    super_learner_weights,
     training_sets,
 )
 from tools.bench.replay import record_scores, table_command
 
-__all__ = ["stacking_weights", "stacked_rmse", "STACKS"]
+__all__ = ["stacked_rmse", "STACKS"]
 
 START, END = "<!-- stacking:start -->", "<!-- stacking:end -->"
-KERNELS = ("svr", "gpr")
-
-
-def stacking_weights(predictions: np.ndarray, measured: np.ndarray) -> np.ndarray:
-    """Non-negative least-squares weights of the columns of ``predictions``, summing to one.
-
-    ``predictions`` (n, candidates), ``measured`` (n,). All zero (no candidate helps) gives
-    equal weights, as SuperLearner does.
-    """
-    weights, _ = nnls(predictions, measured)
-    total = weights.sum()
-    return weights / total if total > 0 else np.full(weights.size, 1.0 / weights.size)
 
 
 def _record_inputs(folder: Path):
@@ -126,10 +115,10 @@ def _equal(P, y):
 
 
 STACKS = {
-    "super learner, every candidate": (lambda cs: [c.name for c in cs], stacking_weights),
+    "super learner, every candidate": (lambda cs: [c.name for c in cs], super_learner_weights),
     "super learner, linear candidates": (
-        lambda cs: [c.name for c in cs if c.algorithm not in KERNELS],
-        stacking_weights,
+        lambda cs: [c.name for c in cs if c.algorithm not in KERNEL_ALGORITHMS],
+        super_learner_weights,
     ),
     "equal average of the two plain references": (lambda cs: [BASELINE, EVIDENCE], _equal),
 }

@@ -62,46 +62,71 @@ def _select(setup, Y, fold, scope, degree):
     )
 
 
+def deployed_fit(snakemake, X, Y, s, deployed, steps, fold=None, **about) -> dict:
+    """The deployed model's model.json record, fitted on every run (``fold`` None) or on the
+    runs but ``fold``, its sensitive points chosen on the same runs.
+
+    ``deployed`` is :func:`thermaxis.method.recommend.deployed_record`'s: None for the
+    paper's configured model, else candidates with weights: one candidate is its own
+    record, the super learner its members' records combined into one linear model.
+    """
+    p, degree = snakemake.params, s["decoupling"].degree
+    train = (X["run"] != fold).to_numpy()
+    X_train, Y_train = X.loc[train].reset_index(drop=True), Y.loc[train].reset_index(drop=True)
+    noise = heldout.step_noise(steps, X_train["run"].unique())
+    where, scope = ("all runs", "all") if fold is None else (fold, "training")
+    fitted = []
+    for record, weight in deployed["members"] if deployed else [(None, 1.0)]:
+        setup = recommend.deployed_setup(
+            record, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
+        )
+        if record is None and fold is not None:
+            # The configured model's selection of this fold, as the models rule made it.
+            with open(snakemake.input.selections[list(p.folds).index(fold)], encoding="utf-8") as fh:
+                selection = selection_from_dict(json.load(fh))
+        else:
+            selection = _select(setup, Y, where, scope, degree)
+        member = comp_model.fit_model_record(
+            setup.view.loc[train].reset_index(drop=True), Y_train, selection, setup.approach,
+            setup.models, s["decoupling"], setup.settings, noise,
+            **({} if deployed and len(deployed["members"]) > 1 else about),
+        )  # fmt: skip
+        fitted.append((record["name"] if record else "paper", weight, member))
+    if deployed is None or deployed["name"] != recommend.COMBINED:
+        return fitted[0][2]
+    return comp_model.combined_record(
+        fitted, trained_on=sorted(X_train["run"].unique().tolist()), **about
+    )
+
+
 def fitted_model(snakemake, X, Y, s, choice, steps) -> dict:
     """The deployed model on every run (the verdict comes later)."""
     p = snakemake.params
-    record = recommend.deployed_record(s["compensation"].model, choice)
-    setup = recommend.deployed_setup(
-        record, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
-    )
-    if record is None:
+    deployed = recommend.deployed_record(s["compensation"].model, choice)
+    if deployed is None:
         deployment = {"model": "paper", "candidate": "paper"}
+        setup = recommend.deployed_setup(
+            None, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
+        )
         accuracy = heldout.held_out_accuracy(
             read_table(snakemake.input.metrics), setup.approach, setup.settings.algorithm
         )
     else:
-        deployment = {"model": p.model, "candidate": record["name"]}
+        deployment = {"model": p.model, "candidate": deployed["name"]}
         scores = pd.concat([read_table(path) for path in snakemake.input.scores], ignore_index=True)
-        accuracy = recommend.held_out_accuracy(scores, record["name"])
-    # The deployed model sees every run, its sensitive points too.
-    selection = _select(setup, Y, "all runs", "all", s["decoupling"].degree)
-    fitted = comp_model.fit_model_record(
-        setup.view,
-        Y,
-        selection,
-        setup.approach,
-        setup.models,
-        s["decoupling"],
-        setup.settings,
-        heldout.step_noise(steps, X["run"].unique()),
+        accuracy = recommend.held_out_accuracy(scores, deployed["name"])
+    fitted = deployed_fit(
+        snakemake, X, Y, s, deployed, steps,
         **p.about,
         held_out_accuracy=accuracy,
-        deployment={
-            **deployment,
-            "approach": setup.approach,
-            "algorithm": setup.settings.algorithm,
-        },
+        deployment=deployment,
         provenance={
             "citation": p.citation,
             "packages": {name: version(name) for name in ("thermaxis", "scikit-learn", "numpy")},
             "settings": p.sections,
         },
-    )
+    )  # fmt: skip
+    fitted["deployment"] |= {"approach": fitted["approach"], "algorithm": fitted["algorithm"]}
     comp_model.validate_model(fitted, where=snakemake.output.fitted)
     return fitted
 
@@ -114,34 +139,15 @@ def _run_log(inputs, run: str) -> str:
 def fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps) -> tuple[str, dict]:
     """One held-out run: its fold's model (JSON text) and the exports and error left."""
     p, inputs = snakemake.params, snakemake.input
-    # The model the procedure would have deployed without this run (its fold's choice).
-    chosen = recommend.deployed_record(s["compensation"].model, choice, fold)
-    setup = recommend.deployed_setup(
-        chosen, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
-    )
-    if chosen is None:
-        # The configured model's selection of this fold, as the models rule made it.
-        with open(inputs.selections[i], encoding="utf-8") as fh:
-            selection = selection_from_dict(json.load(fh))
-    else:
-        selection = _select(setup, Y, fold, "training", s["decoupling"].degree)
-    view = setup.view
-    train = (view["run"] != fold).to_numpy()
-    record = comp_model.fit_model_record(
-        view.loc[train].reset_index(drop=True),
-        Y.loc[train].reset_index(drop=True),
-        selection,
-        setup.approach,
-        setup.models,
-        s["decoupling"],
-        setup.settings,
-        heldout.step_noise(steps, view.loc[train, "run"].unique()),
-        **p.about,
-    )
+    # The model the procedure would have deployed without this run: its fold's weights,
+    # the members fitted on the other runs.
+    deployed = recommend.deployed_record(s["compensation"].model, choice, fold)
+    record = deployed_fit(snakemake, X, Y, s, deployed, steps, fold, **p.about)
+    train = (X["run"] != fold).to_numpy()
     text = json.dumps(record, indent=1) + "\n"
     # The controller side reads the exported numbers, not the fitted estimator.
     model = runtime.Compensator(json.loads(text))
-    X_run = view.loc[~train]
+    X_run = X.loc[~train]
     cycles = None
     if model.derived or final.derived:
         sensors = list(dict.fromkeys([*model.sensors, *final.sensors]))

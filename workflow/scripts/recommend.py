@@ -1,6 +1,6 @@
 """The recommendation in one job: every outer fold's candidate scores (inner
-leave-one-condition-out on its training runs, and the held-out run), then the choice per
-fold, the final one and the tables."""
+leave-one-condition-out on its training runs, and the held-out run), the super learner's
+weights per fold and on all runs, and the tables."""
 
 import io
 import json
@@ -27,15 +27,12 @@ from thermaxis.tables import read_table
 
 
 def choice_record(result, candidates) -> dict:
-    """What the compensation deploys (compensation.model: recommended | paper | <candidate>)."""
-    by_name = {c.name: c for c in candidates}
+    """What the compensation deploys (compensation.model: recommended | paper | <candidate>):
+    the super learner's members with their final and per-fold weights, and every candidate."""
+    c = result.combination
     return {
-        "final": candidate_record(by_name[result.final]),
-        "paper": candidate_record(by_name["paper"]),
-        "folds": {
-            row.fold: candidate_record(by_name[row.chosen]) for row in result.folds.itertuples()
-        },
-        "score": result.score,
+        "final": {"name": result.final, "weights": dict(zip(c.members, c.final, strict=True))},
+        "folds": {fold: dict(zip(c.members, w, strict=True)) for fold, w in c.folds.items()},
         "candidates": {c.name: candidate_record(c) for c in candidates},
     }
 
@@ -60,7 +57,7 @@ def main(snakemake):
         # A bad-input test runs this script without Snakemake's threads: one process. The
         # work grows with the runs, however they are grouped.
         workers = fold_workers(getattr(snakemake, "threads", 1), len(p.folds), "recommend")
-        by_fold = fold_scores(
+        by_fold, combination = fold_scores(
             X,
             Y,
             candidates,
@@ -70,6 +67,7 @@ def main(snakemake):
             # Workers start without this job's logging: only one process says its progress.
             progress=log.info if workers == 1 else None,
             map_sets=lambda one_set, sets: map_folds(one_set, sets, min(workers, len(sets))),
+            members=recommend.combine,
         )
         by_run = pd.concat(by_fold, ignore_index=True)
         texts = {
@@ -83,7 +81,7 @@ def main(snakemake):
             [read_table(io.StringIO(texts[path])) for path in output.scores], ignore_index=True
         )
         names = [c.name for c in candidates]
-        result = collect(scores, names, "paper", recommend.score)
+        result = collect(scores, names, "paper", combination)
         means = fold_means(result.loco, StatisticsSettings.from_section(p.statistics))
         table = candidate_table(candidates).join(means, on="candidate")
         record = choice_record(result, candidates)

@@ -61,6 +61,7 @@ __all__ = [
     "regression_record",
     "evaluate_regression",
     "model_record",
+    "combined_record",
     "line_weights",
     "validate_model",
     "fit_axis_model",
@@ -280,6 +281,74 @@ def model_record(
         "line_weights": line_weights(positions, origin, basis).tolist(),
         "curve_basis": basis.tolist(),
         "fallback": asdict(fallback) | {"plausible_c": list(fallback.plausible_c)},
+    }
+
+
+def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> dict:
+    """One linear ``model.json`` from member records fitted on the same runs, weighted.
+
+    ``members``: (candidate name, weight, its :func:`model_record`). The combination's
+    predicted error curve is the weighted sum of the members' (the super learner,
+    :mod:`thermaxis.method.recommend`): the members' regressions are concatenated, their
+    inputs merged, and each member's ``curve_basis`` columns scaled by its weight, so
+    ``curve_basis`` times the regressions' changes is that sum, and ``line_weights`` its
+    least-squares line. A member of weight 0 is left out (the controller reads nothing it
+    does not use); an RBF member cannot share the block and is refused.
+    """
+    kept = [(name, float(w), r) for name, w, r in members if w > 0]
+    first = kept[0][2]
+    inputs: list[dict] = []
+    index: dict[tuple[str, str], int] = {}
+    regressions, bases, about_members = [], [], []
+    for name, weight, record in kept:
+        if record["positions_mm"] != first["positions_mm"]:
+            raise ValueError(f"combination: member {name!r} has other positions than {kept[0][0]!r}")
+        local = []
+        for spec in record["inputs"]:
+            key = (spec["sensor"], spec["temperature"])
+            if key not in index:
+                index[key] = len(inputs)
+                inputs.append(dict(spec))
+            local.append(index[key])
+        for regression in record["regressions"]:
+            if regression["form"] != "affine":
+                raise ValueError(
+                    f"combination: member {name!r} is not linear ({regression['form']}); "
+                    "expected affine regressions only"
+                )
+            regressions.append({**regression, "inputs": [local[i] for i in regression["inputs"]]})
+        bases.append(weight * np.asarray(record["curve_basis"], dtype=float))
+        about_members.append(
+            {"candidate": name, "weight": weight, "approach": record["approach"],
+             "algorithm": record["algorithm"], "regressions": len(record["regressions"])}
+        )  # fmt: skip
+    basis = np.hstack(bases)
+    positions = np.asarray(first["positions_mm"], dtype=float)
+    origin = float(first["reference"]["reference_position_mm"])
+    noise: dict[str, float] = {}
+    for _, _, record in kept:
+        for sensor, value in record["noise_c"].items():
+            noise[sensor] = max(noise.get(sensor, 0.0), value)
+    return {
+        "schema": first["schema"],
+        "schema_version": first["schema_version"],
+        **about,
+        "convention": first["convention"],
+        "approach": "combination",
+        "algorithm": "super learner",
+        "degree": max(int(r["degree"]) for _, _, r in kept),
+        "members": about_members,
+        "sensors": list(dict.fromkeys(s for _, _, r in kept for s in r["sensors"])),
+        "signals": list(dict.fromkeys(s for _, _, r in kept for s in r["signals"])),
+        "noise_c": noise,
+        "inputs": inputs,
+        "reference": first["reference"],
+        "positions_mm": first["positions_mm"],
+        "units": first["units"],
+        "regressions": regressions,
+        "line_weights": line_weights(positions, origin, basis).tolist(),
+        "curve_basis": basis.tolist(),
+        "fallback": first["fallback"],
     }
 
 

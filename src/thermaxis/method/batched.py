@@ -47,7 +47,13 @@ from thermaxis.method.models import (
     standardised_split,
 )
 
-__all__ = ["batchable", "decoupled_metrics", "pointwise_metrics"]
+__all__ = [
+    "batchable",
+    "decoupled_metrics",
+    "pointwise_metrics",
+    "decoupled_curves",
+    "pointwise_curves",
+]
 
 
 def batchable(algorithm: str, model: ModelSettings, Y: pd.DataFrame) -> bool:
@@ -165,6 +171,40 @@ def _columns(index: dict, points, signals) -> tuple[int, ...]:
     return (*(index[s] for s in points), *range(len(index), len(index) + len(signals)))
 
 
+def _decoupled_fits(X, Y, fold, algorithm, model, degree, point_sets):
+    """The held-out rows of ``fold`` and, per (k points, b points), the predicted slope and
+    shape coefficients, intercept and error curves: what :func:`decoupled_metrics` scores."""
+    X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
+    sensors = _used(X, [s for pair in point_sets for points in pair for s in points])
+    index = {s: i for i, s in enumerate(sensors)}
+    positions = _positions_of(X_train, Y_train)
+    kb_train = decouple_rows(X_train, Y_train, degree)
+    shape = [_KB_COLUMNS["k"], *(_KB_COLUMNS[f"c{p}"] for p in range(2, degree + 1))]
+    fitter = _Fitter(algorithm, model, X_train["run"].to_numpy())
+    signals = model.signals
+    k_sets = [_columns(index, k, signals) for k, _ in point_sets]
+    b_sets = [_columns(index, b, signals) for _, b in point_sets]
+    shape_predicted = fitter.predict_sets(
+        _features(X_train, sensors, "absolute", signals),
+        kb_train[shape].to_numpy(dtype=float),
+        _features(X_test, sensors, "absolute", signals),
+        k_sets,
+    )
+    b_predicted = fitter.predict_sets(
+        _features(X_train, sensors, "relative", signals),
+        kb_train[[_KB_COLUMNS["b"]]].to_numpy(dtype=float),
+        _features(X_test, sensors, "relative", signals),
+        b_sets,
+    )
+    fits = []
+    for k_set, b_set in zip(k_sets, b_sets, strict=True):
+        k_and_shape, b = shape_predicted[k_set], b_predicted[b_set][:, 0]
+        # Eq. 7's ascending powers: b, k, c2, c3.
+        curve = compose_curve(np.column_stack([b, k_and_shape]), positions, float(positions[0]))
+        fits.append((k_and_shape, b, curve))
+    return X_test, Y_test, fits
+
+
 def decoupled_metrics(
     X: pd.DataFrame,
     Y: pd.DataFrame,
@@ -184,48 +224,45 @@ def decoupled_metrics(
     temperatures of the k points, b on the rise of the b points since each run's first
     measurement, each coefficient its own standardised regression (Eq. 9).
     """
-    X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
-    sensors = _used(X, [s for pair in point_sets for points in pair for s in points])
-    index = {s: i for i, s in enumerate(sensors)}
-    positions = _positions_of(X_train, Y_train)
-    kb_train = decouple_rows(X_train, Y_train, degree)
+    X_test, Y_test, fits = _decoupled_fits(X, Y, fold, algorithm, model, degree, point_sets)
     kb_test = decouple_rows(X_test, Y_test, degree)
-    shape = [_KB_COLUMNS["k"], *(_KB_COLUMNS[f"c{p}"] for p in range(2, degree + 1))]
-    fitter = _Fitter(algorithm, model, X_train["run"].to_numpy())
-    signals = model.signals
-    k_sets = [_columns(index, k, signals) for k, _ in point_sets]
-    b_sets = [_columns(index, b, signals) for _, b in point_sets]
-    shape_predicted = fitter.predict_sets(
-        _features(X_train, sensors, "absolute", signals),
-        kb_train[shape].to_numpy(dtype=float),
-        _features(X_test, sensors, "absolute", signals),
-        k_sets,
-    )
-    b_predicted = fitter.predict_sets(
-        _features(X_train, sensors, "relative", signals),
-        kb_train[[_KB_COLUMNS["b"]]].to_numpy(dtype=float),
-        _features(X_test, sensors, "relative", signals),
-        b_sets,
-    )
     label = {"fold": fold_name(fold), "approach": "decoupled", "algorithm": algorithm}
     measured = Y_test.to_numpy(dtype=float)
-    frames = []
-    for k_set, b_set in zip(k_sets, b_sets, strict=True):
-        k_and_shape, b = shape_predicted[k_set], b_predicted[b_set][:, 0]
-        # Eq. 7's ascending powers: b, k, c2, c3.
-        curve = compose_curve(np.column_stack([b, k_and_shape]), positions, float(positions[0]))
-        frames.append(
-            metric_frame(
-                label,
-                [
-                    ("k", kb_test[_KB_COLUMNS["k"]].to_numpy(), k_and_shape[:, 0]),
-                    ("b", kb_test[_KB_COLUMNS["b"]].to_numpy(), b),
-                    ("error", measured, curve),
-                ],
-                X_test["run"].to_numpy() if per_run else None,
-            )
+    return [
+        metric_frame(
+            label,
+            [
+                ("k", kb_test[_KB_COLUMNS["k"]].to_numpy(), k_and_shape[:, 0]),
+                ("b", kb_test[_KB_COLUMNS["b"]].to_numpy(), b),
+                ("error", measured, curve),
+            ],
+            X_test["run"].to_numpy() if per_run else None,
         )
-    return frames
+        for k_and_shape, b, curve in fits
+    ]
+
+
+def decoupled_curves(X, Y, fold, algorithm, model, degree, k_points, b_points) -> np.ndarray:
+    """The held-out error curves (rows of ``fold`` in X's order, positions) of one
+    decoupled fit, as :func:`decoupled_metrics` scores them."""
+    _, _, fits = _decoupled_fits(X, Y, fold, algorithm, model, degree, [(k_points, b_points)])
+    return fits[0][2]
+
+
+def _pointwise_fits(X, Y, fold, algorithm, model, point_sets):
+    """The held-out rows of ``fold`` and each point set's predicted error curves."""
+    X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
+    sensors = _used(X, [s for points in point_sets for s in points])
+    index = {s: i for i, s in enumerate(sensors)}
+    signals = model.signals
+    sets = [_columns(index, points, signals) for points in point_sets]
+    predicted = _Fitter(algorithm, model, X_train["run"].to_numpy()).predict_sets(
+        _features(X_train, sensors, "relative", signals),
+        Y_train.to_numpy(dtype=float),
+        _features(X_test, sensors, "relative", signals),
+        sets,
+    )
+    return X_test, Y_test, [predicted[s] for s in sets]
 
 
 def pointwise_metrics(
@@ -243,18 +280,15 @@ def pointwise_metrics(
     As :class:`thermaxis.method.models.PointwiseAxisModel` (Eq. 8): each position's error
     its own standardised regression on the points' rise since each run's first measurement.
     """
-    X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
-    sensors = _used(X, [s for points in point_sets for s in points])
-    index = {s: i for i, s in enumerate(sensors)}
-    signals = model.signals
-    sets = [_columns(index, points, signals) for points in point_sets]
-    predicted = _Fitter(algorithm, model, X_train["run"].to_numpy()).predict_sets(
-        _features(X_train, sensors, "relative", signals),
-        Y_train.to_numpy(dtype=float),
-        _features(X_test, sensors, "relative", signals),
-        sets,
-    )
+    X_test, Y_test, curves = _pointwise_fits(X, Y, fold, algorithm, model, point_sets)
     label = {"fold": fold_name(fold), "approach": "pointwise", "algorithm": algorithm}
     measured = Y_test.to_numpy(dtype=float)
     runs = X_test["run"].to_numpy() if per_run else None
-    return [metric_frame(label, [("error", measured, predicted[s])], runs) for s in sets]
+    return [metric_frame(label, [("error", measured, curve)], runs) for curve in curves]
+
+
+def pointwise_curves(X, Y, fold, algorithm, model, points) -> np.ndarray:
+    """The held-out error curves (rows of ``fold`` in X's order, positions) of one
+    point-by-point fit, as :func:`pointwise_metrics` scores them."""
+    return _pointwise_fits(X, Y, fold, algorithm, model, [points])[2][0]
+

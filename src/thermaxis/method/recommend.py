@@ -1,22 +1,27 @@
-"""Which model a user's own runs support: a nested leave-one-condition-out choice.
+"""Which model a user's own runs support: a nested leave-one-condition-out super learner.
 
 A *candidate* is one configuration the main workflow or the sweep can express: an
 approach, an algorithm, a sensitive-point selection and the inputs it may use
 (temperatures, their time-aware lags, the operating signals). The question a machine
-builder asks is which candidate to deploy and how much error it leaves on a condition
-it has not seen. Answering it honestly needs two loops:
+builder asks is which model to deploy and how much error it leaves on a condition it has
+not seen. Answering it honestly needs two loops:
 
 * the *outer* loop holds out one condition (run) at a time: it is the unseen condition;
-* the *inner* loop, on the remaining training runs alone, scores every candidate by
-  leave-one-condition-out, one run at a time whatever the number of runs, and chooses
-  the candidate with the lowest mean inner score (:func:`_choose`: the cross-validation
-  selector, or discrete super learner, of van der Laan, Polley and Hubbard 2007), ties
-  to the candidate listed first (the default list runs from simple to complex).
+* the *inner* loop, on the remaining training runs alone, predicts each training run by
+  every candidate fitted on the other training runs, one run at a time whatever the number
+  of runs.
 
-The chosen candidate's error on the outer held-out run is the estimate of what the
-pipeline would deploy; the held-out run reaches no choice. The final recommendation is
-the same choice made on all runs, whose scores are the candidates' own
-leave-one-condition-out errors.
+The recommendation is the super learner (van der Laan, Polley and Hubbard 2007; Breiman
+1996) over a small library of linear candidates (config ``recommend.combine``): the
+convex combination of the members' predicted error curves whose non-negative weights are
+fitted by least squares on their inner predictions and scaled to sum to one
+(:func:`super_learner_weights`). Choosing one candidate on four to six runs is noise;
+weighting a few structurally different ones is steadier. Each outer fold's weights come
+from its inner predictions alone, so the held-out run reaches no weight; its held-out
+error is the members fitted on the training runs, so weighted. The final weights are
+fitted on every run's held-out predictions, and the deployed model is the members refitted
+on all runs, so weighted: one linear model (:func:`thermaxis.compensation.model.combined_record`).
+Every candidate is still scored, as information (``recommend/candidates.csv``).
 
 Every evaluation is :func:`thermaxis.method.folds.fold_metrics` (the metrics of the
 models rule's ``evaluate_configuration``) after
@@ -32,17 +37,26 @@ from functools import partial
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import nnls
 
 from thermaxis.config import (
+    KERNEL_CANDIDATE,
     ModelSettings,
     RecommendSettings,
     SelectionSettings,
     selection_overrides,
 )
 from thermaxis.labels import natural_sorted
-from thermaxis.method.batched import batchable, decoupled_metrics, pointwise_metrics
+from thermaxis.method.batched import (
+    batchable,
+    decoupled_curves,
+    decoupled_metrics,
+    pointwise_curves,
+    pointwise_metrics,
+)
 from thermaxis.method.folds import (
     META,
+    _predictions,
     fit_held_out,
     fold_metrics,
     fold_name,
@@ -51,10 +65,14 @@ from thermaxis.method.folds import (
     select_for_fold,
 )
 from thermaxis.method.inputs import base_of, parse_input_name
+from thermaxis.method.metrics import prediction_metrics
 from thermaxis.reports.formatting import markdown_table
 
 __all__ = [
-    "SCORES",
+    "COMBINED",
+    "Combination",
+    "super_learner_weights",
+    "combine",
     "Candidate",
     "Recommendation",
     "candidate_view",
@@ -87,9 +105,6 @@ __all__ = [
     "held_out_accuracy",
 ]
 
-# What the inner loop minimises: the mean over inner folds of the held-out error curves'
-# largest |residual| (what a compensation must bound) or their RMSE.
-SCORES = ("max_abs", "rmse")
 # Every held-out score recorded (model.json's held_out_accuracy takes them all).
 METRICS = ("rmse", "max_abs", "mae", "residual_min", "residual_max")
 
@@ -115,21 +130,21 @@ class Candidate:
 
 @dataclass(frozen=True)
 class Recommendation:
-    """The outcome: per outer fold the choice and its honest error, and the final choice.
+    """The outcome: per outer fold the combination and its honest error, and the final one.
 
-    ``folds`` has one row per outer fold: fold, chosen, inner_score (the chosen
-    candidate's mean inner score), rmse_um, max_abs_um (the chosen candidate on the
-    held-out run), paper_rmse_um, paper_max_abs_um (the reference candidate there).
-    ``inner`` has one row per outer fold x candidate x inner held-out run.
-    ``loco`` has one row per candidate x run: each candidate's leave-one-condition-out
-    error on all runs, whose means choose ``final``.
+    ``folds`` has one row per outer fold: fold, chosen (:data:`COMBINED`), weight_<member>
+    (the fold's weights), rmse_um, max_abs_um (the combination on the held-out run),
+    paper_rmse_um, paper_max_abs_um (the reference candidate there). ``inner`` has one row
+    per outer fold x candidate x inner held-out run. ``loco`` has one row per candidate x
+    run: each candidate's leave-one-condition-out error (information: every candidate is
+    scored). ``combination`` holds the fold weights and the final ones.
     """
 
     folds: pd.DataFrame
     inner: pd.DataFrame
     loco: pd.DataFrame
     final: str
-    score: str
+    combination: Combination
 
 
 def candidate_view(X: pd.DataFrame, candidate: Candidate, signals: Sequence[str]):
@@ -188,14 +203,41 @@ def _fold_setup(X, Y, fold, candidate, degree, signals, cache):
     return view, models, cache[key]
 
 
-def _error_metrics(X, Y, fold, candidate, degree, signals, cache) -> list[tuple]:
+def _curves(view, Y, fold, candidate, models, selection, degree) -> np.ndarray:
+    """The error curves of ``fold``'s rows (in X's order) predicted by ``candidate`` fitted
+    on the other rows of ``view``: the numpy core where it applies, else the estimator."""
+    if batchable(candidate.algorithm, models, Y):
+        if candidate.approach == "decoupled":
+            return decoupled_curves(view, Y, fold, candidate.algorithm, models, degree,
+                                    selection.k_sensors, selection.b_sensors)  # fmt: skip
+        return pointwise_curves(view, Y, fold, candidate.algorithm, models, selection.pointwise)
+    decoupled = candidate.approach == "decoupled"
+    estimator, X_test, Y_test = fit_held_out(
+        view, Y, fold, candidate.approach, candidate.algorithm, selection, models,
+        degree if decoupled else None,
+    )  # fmt: skip
+    return _predictions(estimator, X_test, Y_test, candidate.approach, degree)[2]
+
+
+def _error_metrics(X, Y, fold, candidate, degree, signals, cache, keep=False):
     """Select on the training rows of X, fit, predict ``fold``: its error metrics.
 
-    ``fold`` is a run or a group of runs, fitted once: ``[(run, metrics), ...]`` for each
-    of its runs.
+    ``fold`` is a run or a group of runs, fitted once: ``([(run, metrics), ...], curves)``
+    for each of its runs, ``curves`` the predicted error curves of its rows with ``keep``
+    (a member of the combination), else None.
     """
     view, models, selection = _fold_setup(X, Y, fold, candidate, degree, signals, cache)
     decoupled = candidate.approach == "decoupled"
+    if keep:
+        # One fit gives the curves the weights are fitted on and the member's scores.
+        curves = _curves(view, Y, fold, candidate, models, selection, degree)
+        test = X["run"].isin(held_out_runs(fold)).to_numpy()
+        runs, measured = X.loc[test, "run"].to_numpy(), Y.loc[test].to_numpy(dtype=float)
+        scored = [
+            (run, prediction_metrics(measured[runs == run], curves[runs == run]))
+            for run in pd.unique(runs)
+        ]
+        return [(run, {name: float(m[name]) for name in METRICS}) for run, m in scored], curves
     if batchable(candidate.algorithm, models, Y):
         # The numpy core: the same numbers as evaluate_configuration to 1e-9.
         (metrics,) = (
@@ -213,7 +255,7 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache) -> list[tuple]
     errors = metrics.loc[metrics["target"] == "error"]
     return [
         (row["fold"], {name: float(row[name]) for name in METRICS}) for _, row in errors.iterrows()
-    ]
+    ], None
 
 
 def held_out_predictions(
@@ -232,13 +274,10 @@ def held_out_predictions(
     candidates is fitted on and judged by).
     """
     view, models, selection = _fold_setup(X, Y, fold, candidate, degree, signals, cache)
-    decoupled = candidate.approach == "decoupled"
-    estimator, X_test, _ = fit_held_out(
-        view, Y, fold, candidate.approach, candidate.algorithm, selection, models,
-        degree if decoupled else None,
-    )  # fmt: skip
-    predicted = estimator.predict(X_test)
-    return X_test["run"].to_numpy(), np.asarray(predicted, dtype=float)
+    test = X["run"].isin(held_out_runs(fold)).to_numpy()
+    return X.loc[test, "run"].to_numpy(), _curves(
+        view, Y, fold, candidate, models, selection, degree
+    )
 
 
 def held_out_scores(
@@ -261,7 +300,8 @@ def held_out_scores(
     X, Y = X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True)
     rows = []
     for group in held_out:
-        for name, metrics in _error_metrics(X, Y, group, candidate, degree, signals, cache):
+        scored, _ = _error_metrics(X, Y, group, candidate, degree, signals, cache)
+        for name, metrics in scored:
             rows.append({"candidate": candidate.name, "held_out": name, **metrics})
     return rows
 
@@ -319,23 +359,31 @@ def training_set_scores(
     degree: int,
     signals: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
-) -> dict[tuple[str, str], dict]:
+    members: Sequence[str] = (),
+) -> tuple[dict[tuple[str, str], dict], dict[tuple[str, str], np.ndarray]]:
     """Every candidate fitted once on ``training.train``, scored on each held-out run.
 
-    ``{(candidate, run): metrics}``: the held-out runs share one call (they are all held
-    out of the same fit).
+    ``({(candidate, run): metrics}, {(member, run): predicted error curves})``: the
+    held-out runs share one fit; the curves are kept for the ``members`` of the
+    combination alone, from the same fit as their scores.
     """
     say = progress or (lambda message: None)
+    keep = X["run"].isin([*training.train, *training.scored]).to_numpy()
+    X, Y = X.loc[keep].reset_index(drop=True), Y.loc[keep].reset_index(drop=True)
+    runs = X.loc[X["run"].isin(training.scored), "run"].to_numpy()
     cache: dict = {}
-    out = {}
+    scores, curves = {}, {}
     for candidate in candidates:
         say(f"training runs {fold_name(training.train)}: {candidate.name}")
-        for row in held_out_scores(
-            X, Y, [*training.train, *training.scored], [training.scored], candidate, degree,
-            signals, cache,
-        ):  # fmt: skip
-            out[(candidate.name, row["held_out"])] = {m: row[m] for m in METRICS}
-    return out
+        member = candidate.name in members
+        scored, predicted = _error_metrics(
+            X, Y, training.scored, candidate, degree, signals, cache, keep=member
+        )
+        for run, metrics in scored:
+            scores[(candidate.name, run)] = metrics
+            if member:
+                curves[(candidate.name, run)] = predicted[runs == run]
+    return scores, curves
 
 
 SCORE_COLUMNS = ["kind", "fold", "candidate", "held_out", *METRICS]
@@ -375,6 +423,72 @@ def outer_fold_scores(
     return pd.DataFrame([r for run in held for r in rows[run]], columns=SCORE_COLUMNS)
 
 
+COMBINED = "super learner"
+
+
+def super_learner_weights(predictions: np.ndarray, measured: np.ndarray) -> np.ndarray:
+    """Non-negative least-squares weights of the columns of ``predictions``, summing to one.
+
+    ``predictions`` (n, members), ``measured`` (n,), pairs with a missing measurement left
+    out. The super learner's ``method.NNLS`` (van der Laan, Polley and Hubbard 2007;
+    Breiman 1996): all zero (no member helps) gives equal weights, as SuperLearner does.
+    """
+    finite = np.isfinite(measured)
+    weights, _ = nnls(predictions[finite], measured[finite])
+    total = weights.sum()
+    return weights / total if total > 0 else np.full(weights.size, 1.0 / weights.size)
+
+
+@dataclass(frozen=True)
+class Combination:
+    """The super learner's weights: ``folds`` per held-out run (its outer fold's, fitted on
+    that fold's inner predictions), ``final`` on every run's held-out predictions; each in
+    the order of ``members``."""
+
+    members: tuple[str, ...]
+    folds: Mapping[str, tuple[float, ...]]
+    final: tuple[float, ...]
+
+
+def _weights(pairs, members, curves, measured) -> tuple[float, ...]:
+    """The weights fitted on the held-out runs ``pairs`` ((training runs, run), ...), each
+    run predicted by the members fitted on its training runs; none: equal weights."""
+    if not pairs:
+        return tuple(np.full(len(members), 1.0 / len(members)))
+    predictions = np.vstack(
+        [np.column_stack([curves[train][(m, run)].ravel() for m in members])
+         for train, run in pairs]
+    )  # fmt: skip
+    target = np.concatenate([measured[run].ravel() for _, run in pairs])
+    return tuple(float(w) for w in super_learner_weights(predictions, target))
+
+
+def combine(runs, folds, members, curves, measured) -> tuple[Combination, dict[str, dict]]:
+    """The super learner of ``members`` in every outer fold, and on all runs.
+
+    ``curves`` maps each training set's runs to :func:`training_set_scores`' curves,
+    ``measured`` each run to its error curves. An outer fold's weights are fitted on its
+    inner predictions alone (each training run predicted by the members fitted on the other
+    training runs: the held-out run reaches no weight); its held-out error is its members
+    fitted on the training runs, so weighted. The final weights are fitted on every run's
+    held-out predictions. Returns the weights and each held-out run's error metrics.
+    """
+    members = tuple(members)
+    by_run, errors, every = {}, {}, []
+    for fold in folds:
+        held, train, splits = _outer_splits(runs, fold)
+        inner = [(tuple(r for r in train if r != run), run) for (run,) in splits]
+        weights = _weights(inner, members, curves, measured)
+        for run in held:
+            by_run[run] = weights
+            outer = np.stack([curves[tuple(train)][(m, run)] for m in members], axis=-1)
+            metrics = prediction_metrics(measured[run], outer @ np.asarray(weights))
+            errors[run] = {name: float(metrics[name]) for name in METRICS}
+            every.append((tuple(train), run))
+    final = _weights(every, members, curves, measured)
+    return Combination(members, by_run, final), errors
+
+
 def fold_scores(
     X: pd.DataFrame,
     Y: pd.DataFrame,
@@ -384,8 +498,11 @@ def fold_scores(
     signals: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
     map_sets: Callable[[Callable, list], list] | None = None,
-) -> list[pd.DataFrame]:
-    """The rows of each outer fold (:func:`outer_fold_scores`), each training set fitted once.
+    members: Sequence[str] = (),
+) -> tuple[list[pd.DataFrame], Combination | None]:
+    """The rows of each outer fold (:func:`outer_fold_scores`), each training set fitted
+    once, and the super learner of ``members`` (:func:`combine`; None without members),
+    whose held-out errors join each fold's rows as candidate :data:`COMBINED`.
 
     ``map_sets(function, training_sets)`` runs the training sets (default: in turn; the
     workflow spreads them over its cores, :func:`thermaxis.pipeline.parallel.map_folds`).
@@ -395,74 +512,68 @@ def fold_scores(
         raise ValueError(f"{len(runs)} run: leave-one-condition-out needs at least 2")
     sets = training_sets(runs, folds)
     one_set = partial(
-        training_set_scores, X, Y, candidates, degree=degree, signals=signals, progress=progress
-    )
+        training_set_scores, X, Y, candidates, degree=degree, signals=signals,
+        progress=progress, members=tuple(members),
+    )  # fmt: skip
     done = (map_sets or (lambda f, items: [f(i) for i in items]))(one_set, sets)
-    scores = {s.train: d for s, d in zip(sets, done, strict=True)}
-    return [outer_fold_scores(runs, candidates, fold, scores) for fold in folds]
+    scores = {s.train: d[0] for s, d in zip(sets, done, strict=True)}
+    frames = [outer_fold_scores(runs, candidates, fold, scores) for fold in folds]
+    if not members:
+        return frames, None
+    measured = {r: Y.loc[(X["run"] == r).to_numpy()].to_numpy(dtype=float) for r in runs}
+    curves = {s.train: d[1] for s, d in zip(sets, done, strict=True)}
+    combination, errors = combine(runs, folds, members, curves, measured)
+    for i, fold in enumerate(folds):
+        rows = [{"kind": "loco", "fold": run, "candidate": COMBINED, "held_out": run,
+                 **errors[run]} for run in held_out_runs(fold)]  # fmt: skip
+        frames[i] = pd.concat([frames[i], pd.DataFrame(rows, columns=SCORE_COLUMNS)],
+                              ignore_index=True)  # fmt: skip
+    return frames, combination
 
 
-def _lowest(means: pd.Series, order: Sequence[str]) -> str:
-    """The lowest mean; ties (to 1e-12 relative) go to the first listed."""
-    best = min(means.loc[list(order)])
-    return next(n for n in order if np.isclose(means[n], best, rtol=1e-12, atol=0.0))
-
-
-def _choose(scores: pd.DataFrame, order: Sequence[str], score: str) -> tuple[str, float]:
-    """The candidate with the lowest mean held-out score over the held-out runs.
-
-    The cross-validation selector (the discrete super learner of van der Laan, Polley and
-    Hubbard 2007): with every held-out run a piece of evidence, its risk is within a
-    constant of the best candidate's as the runs grow, for a fixed, small list of
-    candidates; so the list is kept short and structurally different
-    (:func:`default_candidates`). Ties (to 1e-12 relative) go to the candidate listed
-    first, the simpler one.
-    """
-    wide = scores.pivot_table(index="held_out", columns="candidate", values=score, sort=True)
-    name = _lowest(wide.mean(), order)
-    return name, float(wide.mean()[name])
-
-
-def _check_choice(names: Sequence[str], reference: str, score: str) -> None:
-    if score not in SCORES:
-        raise ValueError(f"config recommend.score: {score!r} is not one of {', '.join(SCORES)}")
+def _check_choice(names: Sequence[str], reference: str, members: Sequence[str]) -> None:
     if len(set(names)) != len(names):
         raise ValueError(f"candidate names must be unique, got {list(names)}")
     if reference not in names:
         raise ValueError(f"reference candidate {reference!r} is not one of {list(names)}")
+    unknown = [m for m in members if m not in names]
+    if unknown or not members:
+        raise ValueError(
+            f"config recommend.combine: {unknown[0] if unknown else 'empty'!r} is not a "
+            f"candidate; expected names among {', '.join(names)}"
+        )
 
 
 def collect(
-    scores: pd.DataFrame, names: Sequence[str], reference: str, score: str
+    scores: pd.DataFrame, names: Sequence[str], reference: str, combination: Combination
 ) -> Recommendation:
-    """The choice of every outer fold, and the final one, from the folds' scores."""
-    _check_choice(names, reference, score)
+    """Every outer fold's combination and its held-out error, from the folds' scores."""
+    _check_choice(names, reference, combination.members)
+    combined = scores.loc[(scores["candidate"] == COMBINED) & (scores["kind"] == "loco")]
     scores = scores.loc[scores["candidate"].isin(names)]
     loco = scores.loc[scores["kind"] == "loco", ["candidate", "held_out", *METRICS]].reset_index(
         drop=True
     )
     inner = scores.loc[scores["kind"] == "inner", ["fold", "candidate", "held_out", *METRICS]]
     at = loco.set_index(["candidate", "held_out"])
+    held = combined.set_index("held_out")
     rows = []
     for fold in natural_sorted(pd.unique(scores["fold"]).tolist()):
-        fold_inner = inner.loc[inner["fold"] == fold]
-        # No inner scores (one training run): the reference stands, unchosen.
-        chosen, inner_score = (
-            _choose(fold_inner, names, score) if len(fold_inner) else (reference, np.nan)
-        )
+        weights = dict(zip(combination.members, combination.folds[fold], strict=True))
         rows.append(
             {
                 "fold": fold,
-                "chosen": chosen,
-                "inner_score": inner_score,
-                "rmse_um": at.loc[(chosen, fold), "rmse"],
-                "max_abs_um": at.loc[(chosen, fold), "max_abs"],
+                "chosen": COMBINED,
+                **{f"weight_{m}": w for m, w in weights.items()},
+                "rmse_um": held.loc[fold, "rmse"],
+                "max_abs_um": held.loc[fold, "max_abs"],
                 "paper_rmse_um": at.loc[(reference, fold), "rmse"],
                 "paper_max_abs_um": at.loc[(reference, fold), "max_abs"],
             }
         )
-    final, _ = _choose(loco, names, score)
-    return Recommendation(pd.DataFrame(rows), inner.reset_index(drop=True), loco, final, score)
+    return Recommendation(
+        pd.DataFrame(rows), inner.reset_index(drop=True), loco, COMBINED, combination
+    )
 
 
 def recommend(
@@ -471,20 +582,19 @@ def recommend(
     candidates: Sequence[Candidate],
     reference: str,
     degree: int,
-    score: str,
+    members: Sequence[str],
     max_loco_runs: int,
     n_group_folds: int,
     signals: Sequence[str] = (),
     outer_folds: Sequence[str] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Recommendation:
-    """Nested leave-one-condition-out choice among ``candidates`` (simplest first).
+    """The nested leave-one-condition-out super learner of ``members`` among ``candidates``.
 
-    ``reference`` names the candidate reported beside the choice (the paper's
-    configuration). ``outer_folds`` default to every run, each held out alone up to
-    ``max_loco_runs`` runs and in ``n_group_folds`` groups above. The workflow runs
-    :func:`fold_scores` in one job, its training sets spread over the job's cores, and
-    :func:`collect` once.
+    ``reference`` names the candidate reported beside it (the paper's configuration).
+    ``outer_folds`` default to every run, each held out alone up to ``max_loco_runs`` runs
+    and in ``n_group_folds`` groups above. The workflow runs :func:`fold_scores` in one
+    job, its training sets spread over the job's cores, and :func:`collect` once.
     """
     folds = (
         list(outer_folds)
@@ -492,12 +602,12 @@ def recommend(
         else natural_sorted(pd.unique(X["run"]).tolist())
     )
     names = [c.name for c in candidates]
-    _check_choice(names, reference, score)
+    _check_choice(names, reference, members)
     outer = run_groups(folds, max_loco_runs, n_group_folds)
-    scores = pd.concat(
-        fold_scores(X, Y, candidates, outer, degree, signals, progress), ignore_index=True
+    frames, combination = fold_scores(
+        X, Y, candidates, outer, degree, signals, progress, members=members
     )
-    return collect(scores, names, reference, score)
+    return collect(pd.concat(frames, ignore_index=True), names, reference, combination)
 
 
 def candidate_table(candidates: Sequence[Candidate]) -> pd.DataFrame:
@@ -633,7 +743,7 @@ def default_candidates(
     if kernel:
         candidates.append(
             Candidate(
-                "pointwise-svr",
+                KERNEL_CANDIDATE,
                 "pointwise",
                 "svr",
                 selection,
@@ -742,39 +852,52 @@ def recommendation_markdown(recommendation: Recommendation, statement: str) -> s
     """recommendation.md: the answer first, then the folds."""
     s = summary_of(recommendation)
     f = recommendation.folds
+    c = recommendation.combination
+    final = ", ".join(f"{m} {w:.3f}" for m, w in zip(c.members, c.final, strict=True))
     head = (
         f"# Recommended model\n\n{statement}\n\n"
-        f"Recommended (chosen on all runs): **{recommendation.final}**. Chosen fold by fold without the "
-        f"held-out run (score: mean inner {recommendation.score}), the pipeline's choice leaves a mean "
-        f"held-out RMSE of {s['rmse_um']:.2f} µm and a mean largest |residual| of {s['max_abs_um']:.2f} µm, "
-        f"against {s['paper_rmse_um']:.2f} and {s['paper_max_abs_um']:.2f} µm for the paper's configuration "
-        f"on the same folds.\n\n"
+        f"Recommended: the **{recommendation.final}**, the convex combination of {len(c.members)} "
+        f"linear candidates with the weights fitted on every run's held-out predictions ({final}). "
+        f"Weighted fold by fold without the held-out run, it leaves a mean held-out RMSE of "
+        f"{s['rmse_um']:.2f} µm and a mean largest |residual| of {s['max_abs_um']:.2f} µm, "
+        f"against {s['paper_rmse_um']:.2f} and {s['paper_max_abs_um']:.2f} µm for the paper's "
+        f"configuration on the same folds.\n\n"
     )
-    unchosen = f.loc[f["inner_score"].isna(), "fold"].astype(str).tolist()
-    if unchosen:
-        # One training run leaves nothing to hold out inside the fold (collect).
+    unweighted = [fold for fold in f["fold"].astype(str) if not _has_inner(recommendation, fold)]
+    if unweighted:
+        # One training run leaves nothing to hold out inside the fold (combine).
         head += (
-            f"Fold(s) {', '.join(unchosen)} had a single training run, so no inner split to "
-            "choose on: they keep the paper's configuration.\n\n"
+            f"Fold(s) {', '.join(unweighted)} had a single training run, so no inner predictions "
+            "to fit weights on: they weight the members equally.\n\n"
         )
     return head + markdown_table(f, "%.3f")
 
 
+def _has_inner(recommendation: Recommendation, fold: str) -> bool:
+    inner = recommendation.inner
+    return bool(len(inner)) and bool((inner["fold"].astype(str) == fold).any())
+
+
 def deployed_record(model: str, choice: Mapping, fold: str | None = None) -> dict | None:
-    """The candidate record the compensation deploys (on ``fold``'s training runs when given).
+    """What the compensation deploys (on ``fold``'s training runs when given).
 
     ``model`` is config ``compensation.model``: ``paper`` (None: the configured approach
-    and algorithm), ``recommended`` (the final choice, or the one chosen without
-    ``fold``) or a candidate's name. Every candidate can be deployed: ``model.json``,
+    and algorithm), ``recommended`` (the super learner: ``{"name", "members": [(candidate
+    record, weight), ...]}`` with the final weights, or those of ``fold``) or a candidate's
+    name (one member of weight 1). Every candidate can be deployed: ``model.json``,
     :class:`~thermaxis.compensation.runtime.Compensator` and the Structured Text block
     read temperatures, operating signals and their lags cycle by cycle.
     """
     if model == "paper":
         return None
     if model == "recommended":
-        return choice["final"] if fold is None else choice["folds"][fold]
+        weights = choice["final"]["weights"] if fold is None else choice["folds"][fold]
+        return {
+            "name": choice["final"]["name"],
+            "members": [(choice["candidates"][m], float(w)) for m, w in weights.items()],
+        }
     if model in choice["candidates"]:
-        return choice["candidates"][model]
+        return {"name": model, "members": [(choice["candidates"][model], 1.0)]}
     raise ValueError(
         f"config compensation.model: {model!r} is not 'recommended', 'paper' or a candidate "
         f"({', '.join(choice['candidates'])})"

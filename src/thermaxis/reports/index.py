@@ -148,7 +148,7 @@ def _grid_sentence(ranking: pd.DataFrame) -> str:
     if len(ranking) > 1:
         high = ranking.iloc[-1]
         text += f" The {model_name(high['approach'], high['algorithm'])} leaves {high['mean_rmse_um']:.2f} µm."
-    return text + " The answer above is chosen among more candidates, without each held-out run."
+    return text + " The answer above combines more candidates, weighted without each held-out run."
 
 
 # --------------------------------------------------------------------------- HTML pieces
