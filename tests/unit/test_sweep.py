@@ -453,16 +453,11 @@ def test_scaling_fit_by_hand():
 def test_measure_counts_the_whole_process_tree(tmp_path):
     from tools.bench import measure
 
-    # A grandchild (python under sh) holds 300 MiB and spins 0.4 s of CPU.
-    script = (
-        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); "
-        "t = time.process_time()\n"
-        "while time.process_time() - t < 0.4: pass"
-    )
+    # A grandchild (python under sh) holds 300 MiB; no time is asserted (a test never does).
+    script = "b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096])"
     command = ["sh", "-c", f'"{sys.executable}" -c "$0"; exit 3', script]
     m = measure("probe", command, tmp_path, tmp_path / "logs" / "probe.log")
     assert m.returncode == 3 and not m.ok
-    assert m.cpu_s >= 0.4 and m.wall_s >= m.cpu_s * 0.5
     assert 300 <= m.peak_rss_mib < 600
     assert m.peak_tree_rss_mib is None or m.peak_tree_rss_mib >= 250
 
