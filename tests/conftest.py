@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from helpers.builders import write_dataset
@@ -16,6 +18,35 @@ def pytest_configure(config):
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(limits=1, user_api="blas")
+
+
+# The tiers that need something outside Python (marks of pyproject.toml). .ci/run names in
+# THERMAXIS_REQUIRE_TIERS the ones it installed; there a skip of such a test is a failure.
+TIERS = ("browser", "slurm", "mount")
+
+
+def required_tiers() -> set[str]:
+    names = {t.strip() for t in os.environ.get("THERMAXIS_REQUIRE_TIERS", "").split(",")}
+    unknown = names - set(TIERS) - {""}
+    if unknown:
+        raise pytest.UsageError(f"THERMAXIS_REQUIRE_TIERS: unknown tier(s) {sorted(unknown)}")
+    return names & set(TIERS)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    report = outcome.get_result()
+    if not report.skipped or hasattr(report, "wasxfail"):
+        return
+    tiers = {m.name for m in item.iter_markers() if m.name in TIERS} & required_tiers()
+    if tiers:
+        reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else report.longrepr
+        report.outcome = "failed"
+        report.longrepr = (
+            f"the {', '.join(sorted(tiers))} tier was installed (THERMAXIS_REQUIRE_TIERS) "
+            f"but its test skipped: {reason}"
+        )
 
 
 @pytest.fixture

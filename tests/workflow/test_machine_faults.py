@@ -124,6 +124,7 @@ def tiny(tmp_path):
     return work, dataset, tiny_config(work, dataset)
 
 
+@pytest.mark.mount
 def test_a_full_disk_is_one_line_naming_the_file_and_a_rerun_finishes(tiny):
     work, _, config = tiny
     with tmpfs(work / "results", "1m") as results:
@@ -149,6 +150,7 @@ def test_a_full_disk_is_one_line_naming_the_file_and_a_rerun_finishes(tiny):
         assert sorted(qc["run"].unique()) == ["R1", "R2"]
 
 
+@pytest.mark.mount
 def test_a_read_only_results_folder_is_one_line_before_any_job(tiny):
     work, _, config = tiny
     (work / "results").mkdir()
@@ -163,6 +165,7 @@ def test_a_read_only_results_folder_is_one_line_before_any_job(tiny):
     assert (work / TARGET).is_file()
 
 
+@pytest.mark.mount
 def test_a_read_only_dataset_does_not_matter(tiny):
     work, dataset, config = tiny
     before = _tree(dataset)
