@@ -133,7 +133,7 @@ def test_index_links_every_report_figure_and_table(built):
     assert (built.out / "provenance.json").resolve() in targets
 
 
-def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built, library_unchanged):
+def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built):
     """A dataset report and a model report made again, in new processes, have the same bytes
     (the session's `lines_run` makes no model reports, so this is where they are checked)."""
     assert planned_rules(snakemake(built, "-n")) - {"all"} == set()
@@ -146,7 +146,7 @@ def test_nothing_reruns_and_a_rebuilt_report_is_byte_identical(built, library_un
     ] == before
 
 
-def test_changing_n_clusters_reruns_only_the_affected_reports(built, library_unchanged):
+def test_changing_n_clusters_reruns_only_the_affected_reports(built):
     changed = built.work / "n_clusters_3.yaml"
     doc = yaml.safe_load(built.config.read_text())
     doc["selection"]["n_clusters"] = 3

@@ -6,23 +6,20 @@ from __future__ import annotations
 import pandas as pd
 import yaml
 
-from helpers.workflow import run_snakemake
 from thermaxis.method.metrics import METRIC_COLUMNS
 
 
-def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(
-    lines_run, library_unchanged
-):
+def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines_run):
     """The sweep on the session's `lines_run`, whose config carries the sweep grid
     (helpers.runs.LINES_SWEEP)."""
-    work, path, out = lines_run.work, lines_run.config, lines_run.out
+    path, out = lines_run.config, lines_run.out
     config = yaml.safe_load(path.read_text())
     assert config["selection"] == {"n_clusters": 2} and config["models"]["algorithms"] == [
         "mlr",
         "svr",
     ]
     assert config["sweep"]["svr_grid"] == "models"
-    proc = run_snakemake(work, "--configfile", str(path), "--", "sweep")
+    proc = lines_run.snakemake("--configfile", str(path), "--", "sweep")
     assert "sweep batch 2/2: 100%" in proc.stderr
 
     for name in ("summary.csv", "ranking.csv", "factor_effects.csv", "sweep_report.html",
@@ -46,5 +43,5 @@ def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(
     assert ranking["main_config"].sum() == 2 * 2  # decoupled d1 + pointwise, mlr + svr
     html = (out / "sweep" / "sweep_report.html").read_text()
     assert "SIMULATED" in html and "Ranking" in html
-    rerun = run_snakemake(work, "--configfile", str(path), "-n", "--", "sweep")
+    rerun = lines_run.snakemake("--configfile", str(path), "-n", "--", "sweep")
     assert "Nothing to be done" in rerun.stdout + rerun.stderr
