@@ -17,11 +17,8 @@ import pandas as pd
 import pytest
 
 from helpers.runs import LINES_RUNS
-from helpers.truth import b_true, k_true
+from helpers.truth import LINES_POSITIONS, lines_mlr_by_hand
 from thermaxis.cli import main
-
-# The lines dataset's targets (helpers.builders.write_dataset's default).
-POSITIONS_MM = np.array([0.0, 50.0, 100.0, 150.0])
 
 
 @pytest.mark.parametrize("fold", LINES_RUNS)
@@ -57,25 +54,16 @@ def test_compensate_replays_residuals_csv(fold, lines_run, tmp_path, capsys):
 
 
 def _compensation_by_hand(temperatures, folder, fold, residuals) -> np.ndarray:
-    """c = -(e(T) - e(T at homing)), e = k x / 1000 + b: k and b fitted with numpy least
-    squares to the exact lines of the other runs (x from the first target, which is 0 here)."""
-    sensors = json.loads((folder / "model.json").read_text())["sensors"]
-    wide = temperatures.pivot(index=["run", "measurement"], columns="sensor", values="absolute_c")
-    absolute = wide[sensors]
-    relative = absolute - absolute.groupby(level="run").transform("first")
-    runs = absolute.index.get_level_values("run")
-    r = np.array([LINES_RUNS.index(run) for run in runs])
-    m = absolute.index.get_level_values("measurement").to_numpy() - 1
-    train = runs != fold
-
-    def fit_predict(inputs, target):
-        design = np.column_stack([np.ones(len(inputs)), inputs.to_numpy()])
-        coef, *_ = np.linalg.lstsq(design[train], target[train], rcond=None)
-        return pd.Series(design @ coef, index=inputs.index).loc[fold]
-
-    k = fit_predict(absolute, k_true(r, m))
-    b = fit_predict(relative, b_true(r, m))
-    error = k.to_numpy()[:, None] * POSITIONS_MM / 1000.0 + b.to_numpy()[:, None]
-    change = pd.DataFrame(-(error - error[0]), index=k.index, columns=POSITIONS_MM)
+    """c = -(e(T) - e(T at homing)): the decoupled MLR's error change since the first
+    measurement, on the model's inputs for k and b (helpers.truth.lines_mlr_by_hand)."""
+    model = json.loads((folder / "model.json").read_text())
+    inputs = {
+        reg["target"]: tuple(model["inputs"][i]["sensor"] for i in reg["inputs"])
+        for reg in model["regressions"]
+    }
+    _, predicted = lines_mlr_by_hand(temperatures, {**inputs, "pointwise": ()}, fold, LINES_RUNS)
+    error = predicted["decoupled"]
+    measurements = np.arange(1, len(error) + 1)
+    change = pd.DataFrame(-(error - error[0]), index=measurements, columns=LINES_POSITIONS)
     wanted = pd.MultiIndex.from_arrays([residuals["measurement"], residuals["position_mm"]])
     return change.stack().reindex(wanted).to_numpy()
