@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 
@@ -119,3 +121,23 @@ def lines_mlr_by_hand(temperatures: pd.DataFrame, inputs: dict[str, tuple], fold
         "pointwise": fit_predict(rise[list(inputs["pointwise"])], errors),
     }
     return truth, predicted
+
+
+def lines_mlr_residuals(out) -> dict[str, dict[tuple[str, str], np.ndarray]]:
+    """Each fold's MLR residuals (k, b, decoupled and point-by-point error) of the ``lines``
+    run in ``out``: :func:`lines_mlr_by_hand` on the sensitive points the run chose."""
+    temperatures = pd.read_parquet(out / "assembled" / "temperatures.parquet")
+    runs = sorted(temperatures["run"].unique())
+    residuals = {}
+    for fold in runs:
+        chosen = json.loads((out / "selection" / f"{fold}.json").read_text())
+        inputs = {"k": chosen["k"]["selected"], "b": chosen["b"]["selected"],
+                  "pointwise": chosen["pointwise"]}  # fmt: skip
+        truth, predicted = lines_mlr_by_hand(temperatures, inputs, fold, runs)
+        residuals[fold] = {
+            ("decoupled", "k"): truth["k"] - predicted["k"],
+            ("decoupled", "b"): truth["b"] - predicted["b"],
+            ("decoupled", "error"): truth["error"] - predicted["decoupled"],
+            ("pointwise", "error"): truth["error"] - predicted["pointwise"],
+        }
+    return residuals

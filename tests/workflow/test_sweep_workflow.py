@@ -1,11 +1,14 @@
 """The `sweep` target end to end: its rows for the main configuration equal the main
-workflow's metrics."""
+workflow's metrics, and their MLR rows numpy least squares on the exact lines."""
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
+import pytest
 import yaml
 
+from helpers.truth import lines_mlr_residuals
 from thermaxis.method.metrics import METRIC_COLUMNS
 
 
@@ -38,6 +41,13 @@ def test_sweep_target_matches_the_main_workflow_for_the_main_configuration(lines
     theirs = theirs[columns].sort_values(keys, ignore_index=True)
     assert len(theirs) == 3 * (2 * 3 + 2 * 1)
     pd.testing.assert_frame_equal(ours, theirs)
+    # And its MLR rows against numpy least squares on the exact lines (6 decimals).
+    mlr = ours[ours["algorithm"] == "mlr"].set_index(["fold", "approach", "target"])
+    for fold, residuals in lines_mlr_residuals(out).items():
+        for (approach, target), residual in residuals.items():
+            row = mlr.loc[(fold, approach, target)]
+            assert float(row["rmse"]) == pytest.approx(np.sqrt(np.mean(residual**2)), abs=1e-6)
+            assert float(row["max_abs"]) == pytest.approx(np.abs(residual).max(), abs=1e-6)
 
     ranking = pd.read_csv(out / "sweep" / "ranking.csv")
     assert ranking["main_config"].sum() == 2 * 2  # decoupled d1 + pointwise, mlr + svr

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 import re
 
@@ -11,8 +10,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from helpers.runs import LINES_RUNS
-from helpers.truth import b_true, k_true, lines_mlr_by_hand
+from helpers.truth import b_true, k_true, lines_mlr_residuals
 from helpers.workflow import planned_rules
 
 
@@ -82,30 +80,11 @@ def test_metrics_cover_every_fold_approach_algorithm(lines_run):
     assert (metrics["rmse"] <= metrics["max_abs"] + 1e-12).all()
     # The MLR rows by hand, against the exact lines (the CSV carries 6 decimals).
     rows = metrics.set_index(["fold", "approach", "algorithm", "target"])
-    for fold, residuals in _mlr_residuals_by_hand(lines_run).items():
+    for fold, residuals in lines_mlr_residuals(lines_run.out).items():
         for (approach, target), residual in residuals.items():
             row = rows.loc[(fold, approach, "mlr", target)]
             assert row["rmse"] == pytest.approx(np.sqrt(np.mean(residual**2)), abs=1e-6)
             assert row["max_abs"] == pytest.approx(np.abs(residual).max(), abs=1e-6)
-
-
-def _mlr_residuals_by_hand(lines_run) -> dict[str, dict[tuple[str, str], np.ndarray]]:
-    """Each fold's MLR residuals (k, b, decoupled and pointwise error) by numpy least squares
-    on the fold's sensitive points (helpers.truth.lines_mlr_by_hand)."""
-    temperatures = pd.read_parquet(lines_run.out / "assembled" / "temperatures.parquet")
-    residuals = {}
-    for fold in LINES_RUNS:
-        chosen = json.loads((lines_run.out / "selection" / f"{fold}.json").read_text())
-        inputs = {"k": chosen["k"]["selected"], "b": chosen["b"]["selected"],
-                  "pointwise": chosen["pointwise"]}  # fmt: skip
-        truth, predicted = lines_mlr_by_hand(temperatures, inputs, fold, LINES_RUNS)
-        residuals[fold] = {
-            ("decoupled", "k"): truth["k"] - predicted["k"],
-            ("decoupled", "b"): truth["b"] - predicted["b"],
-            ("decoupled", "error"): truth["error"] - predicted["decoupled"],
-            ("pointwise", "error"): truth["error"] - predicted["pointwise"],
-        }
-    return residuals
 
 
 def test_claims_and_comparisons_are_tables_of_verdicts_and_intervals(lines_run):
@@ -128,7 +107,7 @@ def test_claims_and_comparisons_are_tables_of_verdicts_and_intervals(lines_run):
     # by hand; the claim's effect is the point-by-point RMSE minus the decoupled one.
     mean_rmse = {
         approach: np.mean([np.sqrt(np.mean(r[(approach, "error")] ** 2))
-                           for r in _mlr_residuals_by_hand(lines_run).values()])
+                           for r in lines_mlr_residuals(lines_run.out).values()])
         for approach in ("decoupled", "pointwise")
     }  # fmt: skip
     pair = comparisons.set_index(["a", "b"]).loc[("decoupled mlr", "pointwise mlr")]
