@@ -16,6 +16,7 @@ import pytest
 import yaml
 
 from helpers import REPO
+from helpers.runs import BUILT_RUNS
 from helpers.runs import reports_snakemake as snakemake
 from helpers.workflow import planned_rules, run_snakemake
 from thermaxis.reports import provenance
@@ -35,6 +36,18 @@ def test_every_report_and_the_index_are_built(built):
     assert sorted(p.name for p in (built.out / "reports").glob("model_*.html")) == ["model_02.html"]
     page = (built.out / "reports" / "model_02.html").read_text(encoding="utf-8")
     assert "<h3>decoupled MLR</h3>" in page and "<h3>pointwise MLR</h3>" in page
+    # The paper report's Table 5 is the exact lines the dataset was written from
+    # (helpers.builders.write_dataset's default: k = -10 + 0.5 m + r, b = -0.7 m - 0.1 r;
+    # adding 0.0 prints -0.0 as the table does, 0.00).
+    paper = (built.out / "reports" / "paper_report.html").read_text(encoding="utf-8")
+    text = " ".join(re.sub(r"<[^>]+>", " ", paper).split())
+    table = text[text.index("Table 5 reproduced") :]
+    rows = " ".join(
+        f"{run} {m + 1} {20.0 * m:.2f} {-10 + 0.5 * m + r:.2f} {-0.7 * m - 0.1 * r + 0.0:.2f} 1.00 0.00"
+        for r, run in enumerate(BUILT_RUNS)
+        for m in range(4)
+    )
+    assert rows in table, table[:600]
 
 
 def test_first_screen_says_the_data_are_simulated(built):
