@@ -90,7 +90,17 @@ SHARED_RUN_FILES = {
     "tests/workflow/test_reports.py": "built",
     "tests/workflow/test_browser.py": "built",
 }
-_FIRST = ("slurm", "lines_run", "built")  # the longest chains start first
+# The longest chains start first (the shared runs, then the files of a cold run of their own),
+# so that no long unit is left alone at the end.
+_FIRST = (
+    "slurm",
+    "lines_run",
+    "built",
+    "tests/workflow/test_make_results.py",
+    "tests/workflow/test_measured_shapes.py",
+    "tests/workflow/test_real_record.py",
+    "tests/workflow/test_machine_faults.py",
+)
 # Files of many independent cases, dealt out in this many units so that both workers share
 # them (each unit makes the file's module fixtures once).
 SPLIT_FILES = {"tests/workflow/test_bad_input_catalogue.py": 8}
