@@ -131,15 +131,16 @@ def make_lines_run(tmp: Path) -> Run:
         **base,
         "PYTHONPATH": os.pathsep.join(filter(None, [str(library), base.get("PYTHONPATH")])),
     }
-    # No model reports (notebooks are the costliest jobs): the reports build `built` has
-    # them and checks their bytes.
+    # No model reports and one report of all conditions instead of one per run (notebooks
+    # are the costliest jobs): the reports build `built` has the per-run and model reports
+    # and checks their bytes; test_conditions_report reads the combined one.
     # The paper's decoupled model is deployed: its controller line (K0, tan beta, P0) is the
     # compensation exactly, which test_cli_workflow replays; on these three runs the
     # recommendation keeps the plain baseline, a point-by-point ridge with lags.
     config = tiny_config(
         work,
         dataset,
-        reports={"model_algorithms": []},
+        reports={"model_algorithms": [], "combined_above_runs": 2},
         sweep=LINES_SWEEP,
         compensation={"model": "paper"},
     )
