@@ -490,8 +490,11 @@ def test_scaling_fit_by_hand():
 def test_measure_counts_the_whole_process_tree(tmp_path):
     from tools.bench import measure
 
-    # A grandchild (python under sh) holds 300 MiB; no time is asserted (a test never does).
-    script = "b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096])"
+    # A grandchild (python under sh) holds 300 MiB for a second, so that the tree sampler
+    # sees it; no time is asserted (a test never does).
+    script = (
+        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); time.sleep(1)"
+    )
     command = ["sh", "-c", f'"{sys.executable}" -c "$0"; exit 3', script]
     m = measure("probe", command, tmp_path, tmp_path / "logs" / "probe.log")
     assert m.returncode == 3 and not m.ok
