@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import os
+import zlib
+
 import pytest
 
 from helpers.builders import write_dataset
-from helpers.locks import library_lock
 from helpers.runs import Built, Run, make_built, make_lines_run
 
 
@@ -16,6 +18,35 @@ def pytest_configure(config):
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(limits=1, user_api="blas")
+
+
+# The tiers that need something outside Python (marks of pyproject.toml). .ci/run names in
+# THERMAXIS_REQUIRE_TIERS the ones it installed; there a skip of such a test is a failure.
+TIERS = ("browser", "slurm", "mount")
+
+
+def required_tiers() -> set[str]:
+    names = {t.strip() for t in os.environ.get("THERMAXIS_REQUIRE_TIERS", "").split(",")}
+    unknown = names - set(TIERS) - {""}
+    if unknown:
+        raise pytest.UsageError(f"THERMAXIS_REQUIRE_TIERS: unknown tier(s) {sorted(unknown)}")
+    return names & set(TIERS)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    report = outcome.get_result()
+    if not report.skipped or hasattr(report, "wasxfail"):
+        return
+    tiers = {m.name for m in item.iter_markers() if m.name in TIERS} & required_tiers()
+    if tiers:
+        reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else report.longrepr
+        report.outcome = "failed"
+        report.longrepr = (
+            f"the {', '.join(sorted(tiers))} tier was installed (THERMAXIS_REQUIRE_TIERS) "
+            f"but its test skipped: {reason}"
+        )
 
 
 @pytest.fixture
@@ -31,26 +62,14 @@ def lines_run(tmp_path_factory) -> Run:
     Tests read it or dry-run against it (`-n`); only test_sweep_workflow adds to it, the
     ``sweep/`` folder of the `sweep` target, which `all` does not make.
     """
-    # Shared lock: a test that edits a module meanwhile (holding it exclusively) would make
-    # the run record a dirty checkout in provenance.json, which a later dry run sees as changed.
-    with library_lock(tmp_path_factory):
-        return make_lines_run(tmp_path_factory.mktemp("lines"))
+    return make_lines_run(tmp_path_factory.mktemp("lines"))
 
 
 @pytest.fixture(scope="session")
 def built(tmp_path_factory) -> Built:
     """The workflow with every kind of report on a small simulated dataset that reproduces
     the paper, once per test session (the reports and the browser tests read it)."""
-    with library_lock(tmp_path_factory):  # as for lines_run
-        return make_built(tmp_path_factory.mktemp("reports"))
-
-
-@pytest.fixture
-def library_unchanged(tmp_path_factory):
-    """For tests that dry-run (`-n`) and check what would rerun: no module is being edited
-    meanwhile."""
-    with library_lock(tmp_path_factory):
-        yield
+    return make_built(tmp_path_factory.mktemp("reports"))
 
 
 # --------------------------------------------------------------------------- pytest-xdist
@@ -72,11 +91,26 @@ SHARED_RUN_FILES = {
     "tests/workflow/test_reports.py": "built",
     "tests/workflow/test_browser.py": "built",
 }
-_FIRST = ("slurm", "lines_run", "built")  # the longest chains start first
+# The longest chains start first (the shared runs, then the files of a cold run of their own),
+# so that no long unit is left alone at the end.
+_FIRST = (
+    "slurm",
+    "lines_run",
+    "built",
+    "tests/workflow/test_make_results.py",
+    "tests/workflow/test_measured_shapes.py",
+    "tests/workflow/test_real_record.py",
+    "tests/workflow/test_machine_faults.py",
+)
+# Files of many independent cases, dealt out in this many units so that both workers share
+# them (each unit makes the file's module fixtures once).
+SPLIT_FILES = {"tests/workflow/test_bad_input_catalogue.py": 8}
 
 
 def _unit_of(nodeid: str) -> str:
-    path = nodeid.split("::", 1)[0]
+    path, _, test = nodeid.partition("::")
+    if path in SPLIT_FILES:
+        return f"{path}#{zlib.crc32(test.encode()) % SPLIT_FILES[path]}"
     return SHARED_RUN_FILES.get(path, path)
 
 

@@ -11,8 +11,7 @@ Modules by concern:
 - ``helpers.workflow``: Snakemake in a scratch work folder (work folder, environment,
   run, planned rules, the end-to-end tests' config);
 - ``helpers.runs``: the recipes of the session runs shared by the workflow tests
-  (``lines_run``, ``built``); the fixtures themselves are in ``tests/conftest.py``;
-- ``helpers.locks``: the lock over the library's sources shared by pytest-xdist workers.
+  (``lines_run``, ``built``); the fixtures themselves are in ``tests/conftest.py``.
 """
 
 from __future__ import annotations

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 
@@ -69,6 +71,10 @@ def eq8_errors(X: pd.DataFrame) -> pd.DataFrame:
 # --------------------------------------------------------------------------- the `lines` dataset
 
 
+# The `lines` dataset's targets (helpers.builders.write_dataset's default stroke, mm).
+LINES_POSITIONS = np.array([0.0, 50.0, 100.0, 150.0])
+
+
 # k and b of each (run, measurement) of the `lines` dataset: exact lines the pipeline must recover.
 def k_true(r, m):
     return -10.0 + 0.5 * m + r + 0.1 * m * m
@@ -80,3 +86,58 @@ def b_true(r, m):
 
 def exact_line(r, m, x):
     return k_true(r, m) * (x - x[0]) / 1000.0 + b_true(r, m)
+
+
+def lines_mlr_by_hand(temperatures: pd.DataFrame, inputs: dict[str, tuple], fold: str, runs):
+    """The held-out run's k, b and error of the ``lines`` dataset predicted by MLR with numpy
+    least squares on the other runs' exact lines: k on absolute temperatures, b and the
+    point-by-point errors on the rises since each run's first measurement (the paper's forms).
+
+    ``temperatures``: assembled (run, measurement, sensor, absolute_c); ``inputs``: the
+    sensors of ``k``, ``b`` and ``pointwise``. Returns (truth, predictions) with keys ``k``,
+    ``b`` (per measurement), ``decoupled`` and ``pointwise`` (measurements x LINES_POSITIONS).
+    """
+    wide = temperatures.pivot(index=["run", "measurement"], columns="sensor", values="absolute_c")
+    rise = wide - wide.groupby(level="run").transform("first")
+    run_of = wide.index.get_level_values("run")
+    r = np.array([list(runs).index(run) for run in run_of])
+    m = wide.index.get_level_values("measurement").to_numpy() - 1
+    test = np.asarray(run_of == fold)
+    x = LINES_POSITIONS
+    errors = np.array([exact_line(ri, mi, x) for ri, mi in zip(r, m, strict=True)])
+
+    def fit_predict(table, target):
+        design = np.column_stack([np.ones(len(table)), table.to_numpy()])
+        coef, *_ = np.linalg.lstsq(design[~test], target[~test], rcond=None)
+        return design[test] @ coef
+
+    k = fit_predict(wide[list(inputs["k"])], k_true(r, m))
+    b = fit_predict(rise[list(inputs["b"])], b_true(r, m))
+    truth = {"k": k_true(r, m)[test], "b": b_true(r, m)[test], "error": errors[test]}
+    predicted = {
+        "k": k,
+        "b": b,
+        "decoupled": k[:, None] * (x - x[0]) / 1000.0 + b[:, None],
+        "pointwise": fit_predict(rise[list(inputs["pointwise"])], errors),
+    }
+    return truth, predicted
+
+
+def lines_mlr_residuals(out) -> dict[str, dict[tuple[str, str], np.ndarray]]:
+    """Each fold's MLR residuals (k, b, decoupled and point-by-point error) of the ``lines``
+    run in ``out``: :func:`lines_mlr_by_hand` on the sensitive points the run chose."""
+    temperatures = pd.read_parquet(out / "assembled" / "temperatures.parquet")
+    runs = sorted(temperatures["run"].unique())
+    residuals = {}
+    for fold in runs:
+        chosen = json.loads((out / "selection" / f"{fold}.json").read_text())
+        inputs = {"k": chosen["k"]["selected"], "b": chosen["b"]["selected"],
+                  "pointwise": chosen["pointwise"]}  # fmt: skip
+        truth, predicted = lines_mlr_by_hand(temperatures, inputs, fold, runs)
+        residuals[fold] = {
+            ("decoupled", "k"): truth["k"] - predicted["k"],
+            ("decoupled", "b"): truth["b"] - predicted["b"],
+            ("decoupled", "error"): truth["error"] - predicted["decoupled"],
+            ("pointwise", "error"): truth["error"] - predicted["pointwise"],
+        }
+    return residuals

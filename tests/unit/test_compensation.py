@@ -200,6 +200,20 @@ def test_model_json_predicts_what_the_estimator_predicts(algorithm):
         np.testing.assert_allclose(
             comp.predicted_change(now, reference), predicted[i] - predicted[0], atol=1e-9
         )
+    if algorithm == "mlr":
+        # By hand: k on absolute T1 and b on T2's rise, numpy least squares on the
+        # measurements' least-squares lines; a change of temperature moves the curve by
+        # dk x + db.
+        x_m = (np.asarray(TARGETS) - TARGETS[0]) / 1000.0
+        k, b = np.polyfit(x_m, Y.to_numpy().T, 1)
+        rise = X["T2"] - X.groupby("run")["T2"].transform("first")
+        slope_k = np.linalg.lstsq(np.column_stack([np.ones(len(X)), X["T1"]]), k, rcond=None)[0][1]
+        slope_b = np.linalg.lstsq(np.column_stack([np.ones(len(X)), rise]), b, rcond=None)[0][1]
+        for i in range(len(run)):
+            now = {"T1": run.loc[i, "T1"], "T2": run.loc[i, "T2"]}
+            by_hand = (slope_k * (now["T1"] - reference["T1"]) * x_m
+                       + slope_b * (now["T2"] - reference["T2"]))  # fmt: skip
+            np.testing.assert_allclose(comp.predicted_change(now, reference), by_hand, atol=1e-9)
 
 
 def test_pointwise_curve_gets_a_fitted_line_and_its_gap():

@@ -30,6 +30,7 @@ def test_a_writable_folder_and_a_missing_one_below_it_pass(tmp_path):
     check_writable(tmp_path / "results" / "tiny")
 
 
+@pytest.mark.mount
 def test_a_read_only_mount_is_named_with_the_folder_that_exists(tmp_path):
     results = tmp_path / "results"
     results.mkdir()
@@ -57,6 +58,7 @@ def test_an_immutable_folder_cannot_be_written_even_by_root(tmp_path):
         _run("chattr", "-i", str(results))
 
 
+@pytest.mark.mount
 def test_a_full_disk_names_the_file_and_leaves_nothing(tmp_path):
     disk = tmp_path / "disk"
     disk.mkdir()

@@ -398,7 +398,25 @@ def test_svr_coefficients_are_empty_but_searched_params_recorded():
         "value",
     ]
     assert set(model.searched_params_) == {"k", "b"}
-    assert model.searched_params_["k"]["C"] in (1.0, 10.0)
+    # The reference: scikit-learn's GridSearchCV, leaving one run out, on k (absolute T1,
+    # T6, T12) and b (the rises of T2, T7, T11) of each measurement's numpy line.
+    from sklearn.model_selection import GridSearchCV, LeaveOneGroupOut
+
+    x_m = (POSITIONS - POSITIONS[0]) / 1000.0
+    k, b = np.polyfit(x_m, Y.to_numpy().T, 1)
+    absolute = X[["T1", "T6", "T12"]]
+    rise = X[["T2", "T7", "T11"]] - X.groupby("run")[["T2", "T7", "T11"]].transform("first")
+    for target, inputs, y in (("k", absolute, k), ("b", rise, b)):
+        search = GridSearchCV(
+            make_regressor("svr", random_state=0),
+            {f"regress__regressor__{key}": v for key, v in SMALL_GRID.items()},
+            scoring="neg_root_mean_squared_error",
+            cv=LeaveOneGroupOut(),
+        ).fit(inputs.to_numpy(), y, groups=X["run"].to_numpy())
+        best = {
+            key.removeprefix("regress__regressor__"): v for key, v in search.best_params_.items()
+        }
+        assert model.searched_params_[target] == best, target
 
 
 # --------------------------------------------------------------------------- bad input

@@ -1,13 +1,15 @@
 """The transcribed paper values (thermaxis/paper/values/) against the paper itself.
 
-The expected numbers are parsed here, independently of the CSV files, from the two texts in
-``shared/paper/`` beside the repository: the digest's markdown tables and formulas, and the
-full text's own tables (the full text rules where they differ).  Without ``shared/paper`` those
-tests are skipped; the structural tests of ``published_values()`` always run.
+The expected numbers are parsed here, independently of the CSV files, from verbatim excerpts
+of the two texts in ``shared/paper/`` kept in ``tests/data/paper/``: the digest's markdown
+tables and formulas, and the full text's own tables (the full text rules where they differ).
+Where ``shared/paper`` sits beside the repository, the excerpts are checked line by line
+against it and its SHA-256.
 """
 
 from __future__ import annotations
 
+import hashlib
 import re
 from collections import Counter
 from pathlib import Path
@@ -19,13 +21,17 @@ from thermaxis.paper import published
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SHARED_PAPER = REPO_ROOT.parent / "shared" / "paper"
-DIGEST = SHARED_PAPER / "DIGEST.md"
-FULL_TEXT = SHARED_PAPER / "000_298bf3df7931147d.txt"
-
-needs_shared = pytest.mark.skipif(
-    not (DIGEST.is_file() and FULL_TEXT.is_file()),
-    reason=f"the paper's texts are not at {SHARED_PAPER} (shared/ must sit beside the repository)",
-)
+EXCERPTS = REPO_ROOT / "tests" / "data" / "paper"
+DIGEST = EXCERPTS / "DIGEST.excerpt.md"
+FULL_TEXT = EXCERPTS / "full_text.excerpt.txt"
+# excerpt -> (source in shared/paper, the source's SHA-256), as in tests/data/paper/README.md.
+SOURCES = {
+    DIGEST: ("DIGEST.md", "998a79208b6cd7bbea6262ee0e2c87281cda3c494187f9b0e4e2ac562c31370d"),
+    FULL_TEXT: (
+        "000_298bf3df7931147d.txt",
+        "298bf3df7931147d372cf43706ebff11bd81c7c7f7c59958ab65ab8555cc3714",
+    ),
+}
 
 RUNS = ("E1", "E2", "E3", "E4")
 TARGET_WORDS = {"斜率": "k", "截距": "b", "热定位误差": "error"}
@@ -85,6 +91,22 @@ def _sensor_key(sensor: str) -> int:
     return int(sensor[1:])
 
 
+# ----------------------------------------------------------------------------- the excerpts
+@pytest.mark.skipif(
+    not SHARED_PAPER.is_dir(),
+    reason=f"the paper's texts are not at {SHARED_PAPER}: the excerpts are not traced to them",
+)
+@pytest.mark.parametrize("excerpt", list(SOURCES), ids=lambda p: p.name)
+def test_the_excerpts_are_lines_of_the_paper_in_order(excerpt):
+    name, sha256 = SOURCES[excerpt]
+    source = (SHARED_PAPER / name).read_bytes()
+    assert hashlib.sha256(source).hexdigest() == sha256
+    lines = iter(source.decode("utf-8").splitlines())
+    missing = [line for line in excerpt.read_text(encoding="utf-8").splitlines()
+               if not any(line == other for other in lines)]  # fmt: skip
+    assert missing == []
+
+
 # ----------------------------------------------------------------------------- fixtures
 @pytest.fixture(scope="module")
 def values() -> pd.DataFrame:
@@ -92,7 +114,6 @@ def values() -> pd.DataFrame:
 
 
 # ----------------------------------------------------------------------------- Table 1
-@needs_shared
 def test_table1_matches_digest_and_full_text():
     table = published.load_table("table1").set_index("experiment")
     digest_rows = _digest_table("Table 1")
@@ -115,7 +136,6 @@ def test_table1_matches_digest_and_full_text():
 
 
 # ----------------------------------------------------------------------------- Table 2
-@needs_shared
 def test_table2_sensors_match_digest():
     sensors = published.load_table("table2").set_index("sensor")
     assert list(sensors.index) == [f"T{i}" for i in range(1, 13)]
@@ -138,7 +158,6 @@ def _table3_sets() -> dict[int, set[str]]:
     return {int(p): set(g["sensor"]) for p, g in df.groupby("position_mm")}
 
 
-@needs_shared
 def test_table3_matches_digest_and_full_text():
     digest = {}
     for p1, s1, p2, s2 in _digest_table("Table 3"):
@@ -174,7 +193,6 @@ def _digest_table5() -> dict[tuple[str, int, str], float]:
     return expected
 
 
-@needs_shared
 def test_table5_all_64_numbers_match_digest(values):
     expected = _digest_table5()
     assert len(expected) == 64
@@ -185,7 +203,6 @@ def test_table5_all_64_numbers_match_digest(values):
         assert values.loc[f"table5/{run}/m{m}/{target}", "value"] == value
 
 
-@needs_shared
 def test_table5_digest_agrees_with_full_text():
     printed = re.findall(r"^([1-8])((?:[ \t]+-?\d+\.\d){8})\s*$", _full_text(), re.M)
     assert len(printed) == 8
@@ -210,7 +227,6 @@ def _parse_clusters(cell: str) -> list[set[str]]:
     return [set(c.split(",")) for c in re.findall(r"\{([^}]*)\}", cell.replace(" ", ""))]
 
 
-@needs_shared
 def test_table6_matches_digest_and_full_text():
     table = published.load_table("table6")
     ours = {
@@ -257,7 +273,6 @@ _DIGEST_MODELS = {
 }
 
 
-@needs_shared
 def test_prediction_metrics_match_digest(values):
     rows = _digest_table("Prediction of experiment 4")
     assert len(rows) == 7
@@ -271,7 +286,6 @@ def test_prediction_metrics_match_digest(values):
     assert len(table) == 7
 
 
-@needs_shared
 def test_prediction_metrics_match_full_text_tables():
     printed, current_table = {}, None
     for line in _full_text().splitlines():
@@ -287,7 +301,6 @@ def test_prediction_metrics_match_full_text_tables():
     assert ours == printed
 
 
-@needs_shared
 def test_residual_ranges_and_largest_error_match_digest(values):
     text = _digest_paragraph("Residual ranges of the error", "Figures:")
     mlr = re.search(r"MLR (−?\d+\.\d) … (−?\d+\.\d) µm", text)
@@ -317,7 +330,6 @@ def test_slope_induced_error_is_the_max_slope_residual_over_the_stroke(values):
 
 
 # ----------------------------------------------------------------------------- Eq. 8, Eq. 9
-@needs_shared
 def test_eq8_matches_digest_and_full_text(values):
     digest_text = _digest_paragraph("Eq. 8", "3. Decoupling")
     parts = re.split(r"dx(\d+) =", digest_text)[1:]
@@ -346,7 +358,6 @@ def test_eq8_matches_digest_and_full_text(values):
     assert values.loc["eq8/dx14/T11", "value"] == digest[14]["T11"]
 
 
-@needs_shared
 def test_eq9_matches_digest_and_full_text(values):
     digest_text = _digest_paragraph("Eq. 9 (MLR):", "5. Train")
     k_expr, b_expr = re.split(r"\bb =", digest_text.split("k =", 1)[1])

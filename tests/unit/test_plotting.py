@@ -210,11 +210,25 @@ def lines_of(ax):
 def test_every_figure_renders_on_every_shape(dataset):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        for name, make in all_figures(dataset).items():
-            fig = make()
+        figures = {name: make() for name, make in all_figures(dataset).items()}
+        for name, fig in figures.items():
             assert isinstance(fig, Figure), name
             FigureCanvasAgg(fig).draw()
             assert fig.axes, name
+    # On every shape the curves are the numbers the tables were made from (slope, intercept).
+    x, n, runs = dataset["positions"], dataset["n_meas"], dataset["runs"]
+    curves = [line.get_ydata() for line in figures["fig5"].axes[0].get_lines()
+              if len(line.get_xdata()) == len(x)]  # fmt: skip
+    expected = [intercept(m) + slope(0) * (x - x[0]) / 1000.0 for m in range(1, n + 1)]
+    np.testing.assert_allclose(curves, expected)
+    ax_k, ax_b = figures["fig12"].axes[:2]
+    np.testing.assert_allclose(
+        [line.get_ydata() for line in lines_of(ax_k)], [[slope(r)] * n for r in range(len(runs))]
+    )
+    np.testing.assert_allclose(
+        [line.get_ydata() for line in lines_of(ax_b)],
+        [[intercept(m) for m in range(1, n + 1)]] * len(runs),
+    )
 
 
 def test_figure_functions_leave_global_rcparams_alone(tiny):

@@ -238,6 +238,15 @@ def test_shared_fits_give_the_scores_of_one_fit_per_evaluation():
         )
         assert row.rmse == pytest.approx(alone["rmse"], rel=1e-12)
         assert row.max_abs == pytest.approx(alone["max_abs"], rel=1e-12)
+        # And by hand: a line per position on the sensor's rise, numpy least squares.
+        sensor = by_hand[0].name.rsplit("-", 1)[1]
+        rise = X[sensor] - X.groupby("run")[sensor].transform("first")
+        fit, test = X["run"].isin(train).to_numpy(), (X["run"] == row.held_out).to_numpy()
+        design = np.column_stack([np.ones(len(X)), rise])
+        coef, *_ = np.linalg.lstsq(design[fit], Y.to_numpy()[fit], rcond=None)
+        residual = Y.to_numpy()[test] - design[test] @ coef
+        assert row.rmse == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
+        assert row.max_abs == pytest.approx(np.abs(residual).max(), rel=1e-9)
     assert len(shared) == 4 * 2 * (1 + 3)
 
 

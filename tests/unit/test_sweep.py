@@ -202,6 +202,43 @@ def test_batch_rows_are_the_library_functions_metrics():
             got[["target", *METRIC_COLUMNS]].reset_index(drop=True),
             expected[["target", *METRIC_COLUMNS]].reset_index(drop=True),
         )
+    # The MLR rows by hand, with numpy least squares on the fold's sensitive points.
+    mlr = rows[rows["algorithm"] == "mlr"].set_index(["approach", "target"])
+    for (approach, target), residual in _mlr_residuals_by_hand(X, Y, "R2", selection).items():
+        assert mlr.loc[(approach, target), "rmse"] == pytest.approx(
+            np.sqrt(np.mean(residual**2)), rel=1e-9
+        )
+        assert mlr.loc[(approach, target), "max_abs"] == pytest.approx(
+            np.abs(residual).max(), rel=1e-9
+        )
+
+
+def _mlr_residuals_by_hand(X, Y, fold, selection) -> dict[tuple[str, str], np.ndarray]:
+    """Residuals of the held-out run: pointwise, one line per position on the rises of the
+    common points; decoupled, k on absolute and b on relative temperatures (the paper's
+    Eq. 9 form), from each measurement's least-squares line (x from the first target)."""
+    test = (X["run"] == fold).to_numpy()
+    rise = X.drop(columns=["run", "measurement", "time_min"]) - X.groupby("run")[
+        ["S1", "S2", "S3", "S4"]
+    ].transform("first")
+
+    def fit_predict(inputs, target):
+        design = np.column_stack([np.ones(len(inputs)), inputs.to_numpy()])
+        coef, *_ = np.linalg.lstsq(design[~test], target[~test], rcond=None)
+        return design[test] @ coef
+
+    y = Y.to_numpy()
+    x_m = (Y.columns.to_numpy(float) - float(Y.columns[0])) / 1000.0
+    k, b = np.polyfit(x_m, y.T, 1)
+    k_hat = fit_predict(X[list(selection.k_sensors)], k)
+    b_hat = fit_predict(rise[list(selection.b_sensors)], b)
+    pointwise = fit_predict(rise[list(selection.pointwise)], y)
+    return {
+        ("pointwise", "error"): (y[test] - pointwise).ravel(),
+        ("decoupled", "k"): k[test] - k_hat,
+        ("decoupled", "b"): b[test] - b_hat,
+        ("decoupled", "error"): (y[test] - (np.outer(k_hat, x_m) + b_hat[:, None])).ravel(),
+    }
 
 
 @pytest.mark.parametrize("algorithm", ["svr", "mlr"])
@@ -453,16 +490,14 @@ def test_scaling_fit_by_hand():
 def test_measure_counts_the_whole_process_tree(tmp_path):
     from tools.bench import measure
 
-    # A grandchild (python under sh) holds 300 MiB and spins 0.4 s of CPU.
+    # A grandchild (python under sh) holds 300 MiB for a second, so that the tree sampler
+    # sees it; no time is asserted (a test never does).
     script = (
-        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); "
-        "t = time.process_time()\n"
-        "while time.process_time() - t < 0.4: pass"
+        "import time; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); time.sleep(1)"
     )
     command = ["sh", "-c", f'"{sys.executable}" -c "$0"; exit 3', script]
     m = measure("probe", command, tmp_path, tmp_path / "logs" / "probe.log")
     assert m.returncode == 3 and not m.ok
-    assert m.cpu_s >= 0.4 and m.wall_s >= m.cpu_s * 0.5
     assert 300 <= m.peak_rss_mib < 600
     assert m.peak_tree_rss_mib is None or m.peak_tree_rss_mib >= 250
 

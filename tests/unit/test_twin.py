@@ -51,11 +51,29 @@ def _files(root: Path) -> dict[str, bytes]:
     }
 
 
-def _measurements(run: str) -> list[pd.DataFrame]:
+def _measurements(run: str, raw: Path = RAW) -> list[pd.DataFrame]:
     frames = [
-        pd.read_csv(p, parse_dates=["time"]) for p in sorted((RAW / run / "errors").glob("*.csv"))
+        pd.read_csv(p, parse_dates=["time"]) for p in sorted((raw / run / "errors").glob("*.csv"))
     ]
     return sorted(frames, key=lambda f: f["time"].iloc[0])
+
+
+def _agrees_with_truth(raw: Path, truth: Path, runs=RUNS) -> None:
+    """The raw files' lines (numpy) against the generator's noise-free truth, within the
+    instrument's noise, and against the paper's Table 5 within the calibration's bounds."""
+    kb = pd.read_csv(truth / "kb_truth.csv").set_index(["run", "measurement"])
+    dk, db, dk_paper, db_paper = [], [], [], []
+    for run in runs:
+        for m, frame in enumerate(_measurements(run, raw), start=1):
+            k, b, _ = _polyfit_line(frame)
+            dk.append(k - kb.loc[(run, m), "k_um_per_m"])
+            db.append(b - kb.loc[(run, m), "b_um"])
+            dk_paper.append(k - TABLE5_K[run][m - 1])
+            db_paper.append(b - TABLE5_B[run][m - 1])
+    assert len(dk) == 8 * len(runs)
+    assert np.abs(dk).max() <= 0.3 and np.abs(db).max() <= 0.15
+    assert np.sqrt(np.mean(np.square(dk_paper))) <= 0.5 * (len(RUNS) / len(runs)) ** 0.5
+    assert np.sqrt(np.mean(np.square(db_paper))) <= 0.3 * (len(RUNS) / len(runs)) ** 0.5
 
 
 def _polyfit_line(frame: pd.DataFrame) -> tuple[float, float, float]:
@@ -100,6 +118,7 @@ def _within_printed_precision(want: str, got: str) -> bool:
 
 def test_generate_regenerates_the_committed_files_byte_for_byte(tmp_path):
     generate_dataset(tmp_path / "raw", tmp_path / "truth")
+    _agrees_with_truth(tmp_path / "raw", tmp_path / "truth")
     for committed, fresh in ((RAW, tmp_path / "raw"), (TRUTH, tmp_path / "truth")):
         want, got = _files(committed), _files(fresh)
         assert sorted(got) == sorted(want), f"file sets differ under {committed}"
@@ -118,6 +137,7 @@ def test_a_reduced_twin_of_one_run_is_written_byte_for_byte_twice(tmp_path):
         out.mkdir()
         write_runs(out, simulate_records(mdl.load_params())[:1])
     assert _files(first) == _files(second)
+    _agrees_with_truth(first, TRUTH, runs=("E1",))
     # And it is the committed E1, file for file.
     committed = _files(RAW)
     run_files = {name: data for name, data in _files(first).items() if name.startswith("E1/")}

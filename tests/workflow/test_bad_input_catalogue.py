@@ -488,6 +488,13 @@ CASES = [
         3,
     ),
     Case(
+        "runs_feed_text",
+        lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "x"),
+        "column 'feed_mm_min': expected a finite number, got 'x'",
+        "runs.tsv",
+        3,
+    ),
+    Case(
         "runs_feed_nan",
         lambda ds, w: _runs_row(ds, "E2", "feed_mm_min", "nan"),
         "column 'feed_mm_min': expected a finite number",
@@ -1414,9 +1421,14 @@ END_TO_END = {
     "measurement_symlink_outside",  # clean refuses a file outside the dataset
     "temp_fahrenheit",  # clean warns, and the warning reaches the terminal
     "error_positions_differ",  # assemble refuses
-    "constant_sensor_too_few_for_clusters",  # the models rule's selection refuses
     "constant_every_sensor",  # the models rule refuses, naming the fold's temperatures file
 }
+# Cases the end-to-end tests elsewhere used to repeat are run in-process above and, for the
+# config and the compensation algorithm, end to end here: a non-number in an error file
+# (error_text), a text in runs.tsv's feed column (runs_feed_text), a degree out of range and a
+# compensation algorithm that is not modelled. A second refusal of the models rule
+# (constant_sensor_too_few_for_clusters) runs in-process only: one models case shows that
+# its line passes through Snakemake.
 
 
 # --------------------------------------------------------------------------- #

@@ -50,17 +50,17 @@ def test_outputs_carry_their_conventions(lines_run):
     assert "END_FUNCTION_BLOCK" in (out / "ThermalCompensation.st").read_text()
 
 
-def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run, library_unchanged):
+def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run):
     work, config, wanted = lines_run.work, lines_run.config, WANTED
     doc = yaml.safe_load(config.read_text())
     model_change = work / "model_change.yaml"
     model_change.write_text(yaml.safe_dump({**doc, "models": {**doc["models"], "random_state": 7}}))
-    rules = planned_rules(run_snakemake(work, *wanted, "-n", "--configfile", str(model_change)))
+    rules = planned_rules(lines_run.snakemake(*wanted, "-n", "--configfile", str(model_change)))
     assert "compensation" in rules, rules
 
     figure_change = work / "figure_change.yaml"
     figure_change.write_text(yaml.safe_dump({**doc, "figures": {**doc["figures"], "dpi": 120}}))
-    rules = planned_rules(run_snakemake(work, *wanted, "-n", "--configfile", str(figure_change)))
+    rules = planned_rules(lines_run.snakemake(*wanted, "-n", "--configfile", str(figure_change)))
     assert rules == {"fig_results"}, rules
 
 
@@ -95,21 +95,6 @@ def test_the_default_deploys_the_super_learner_with_each_folds_weights(tmp_path)
     assert set(table["chosen"]) == {"super learner"}
     for member, weight in choice["folds"]["R2"].items():
         assert table.set_index("fold").loc["R2", f"weight_{member}"] == pytest.approx(weight, abs=1e-6)
-
-
-def test_compensation_algorithm_outside_the_fitted_ones_stops_with_one_line(tmp_path):
-    dataset = write_dataset(tmp_path / "tiny", name="tiny")
-    work = workflow_workdir(tmp_path)
-    config = tiny_config(
-        work, dataset, models={"algorithms": ["mlr"]}, compensation={"algorithm": "gpr"}
-    )
-    proc = run_snakemake(work, "-n", "--configfile", str(config), check=False)
-    assert proc.returncode != 0
-    line = (
-        "thermaxis error: config compensation.algorithm: 'gpr' is not one of "
-        "models.algorithms (mlr)"
-    )
-    assert line in proc.stderr
 
 
 def test_the_verdict_reads_the_same_on_every_surface(lines_run, capsys):

@@ -12,6 +12,7 @@ import json
 
 import numpy as np
 import pandas as pd
+import pytest
 import yaml
 
 from helpers.builders import write_dataset
@@ -20,9 +21,14 @@ from helpers.workflow import run_snakemake, workflow_workdir
 RUNS = ("cold_start_morning_1250rpm", "warm_afternoon_2500rpm", "night_cooldown_variable")
 
 
+def _drift(r, m):
+    """The error of run index r at measurement index m: a first-order rise, no slope."""
+    return -1.5 * (1 + r) * (1 - np.exp(-m / 8.0))
+
+
 def _measured_like(root):
     def curve(r, m, x):
-        return np.full(x.shape, -1.5 * (1 + r) * (1 - np.exp(-m / 8.0)))
+        return np.full(x.shape, _drift(r, m))
 
     write_dataset(
         root,
@@ -101,6 +107,21 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
     assert "spindle_rpm" in set(coefficients["term"])
     for target in targets:
         assert (work / target).stat().st_size > 0
+    for r, run in enumerate(RUNS):
+        # The measured errors are the drift the dataset was written from (6 decimals), and
+        # each fold's metrics the RMSE and largest |residual| of its predictions.
+        fold = pd.read_csv(out / "models" / run / "error_predictions.csv")
+        fold = fold[fold["algorithm"] == "mlr"]
+        truth = _drift(r, fold["measurement"].to_numpy() - 1)
+        np.testing.assert_allclose(fold["measured"], truth, atol=1e-6)
+        residual = truth - fold["predicted"].to_numpy()
+        row = metrics[(metrics["fold"] == run) & (metrics["algorithm"] == "mlr")].iloc[0]
+        assert row["rmse"] == pytest.approx(np.sqrt(np.mean(residual**2)), abs=1e-5)
+        assert row["max_abs"] == pytest.approx(np.abs(residual).max(), abs=1e-5)
+        replay = pd.read_csv(out / "compensation" / "folds" / run / "summary.csv")
+        np.testing.assert_allclose(replay["largest_abs_uncompensated_um"],
+                                   np.abs(_drift(r, replay["measurement"].to_numpy() - 1)),
+                                   atol=1e-9)  # fmt: skip
     # One position: the compensation is an offset only, point by point.
     comp = out / "compensation"
     model = json.loads((comp / "model.json").read_text())
