@@ -6,21 +6,21 @@
 rule recommend:
     input:
         code=code_of("recommend.py"),
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
-        signals=f"{OUT}/assembled/signals.parquet",
-        inputs=f"{OUT}/assembled/inputs.parquet",
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
+        signals=out(paths.ASSEMBLED_SIGNALS),
+        inputs=out(paths.ASSEMBLED_INPUTS),
     output:
-        scores=expand(f"{OUT}/recommend/folds/{{fold}}.csv", fold=FOLDS),
+        scores=expand(out(paths.FOLD_SCORES), fold=FOLDS),
         table=report(
-            f"{OUT}/tables/recommendation.csv",
+            out(paths.RECOMMENDATION),
             caption="../report/recommendation.rst",
             category=CATEGORY["compensation"],
             labels={"table": "recommendation"},
         ),
-        markdown=f"{OUT}/tables/recommendation.md",
-        candidates=f"{OUT}/recommend/candidates.csv",
-        choice=f"{OUT}/recommend/choice.json",
+        markdown=out(paths.RECOMMENDATION_MARKDOWN),
+        candidates=out(paths.CANDIDATES),
+        choice=out(paths.CHOICE),
     log:
         f"{LOGS}/recommend.log",
     benchmark:
