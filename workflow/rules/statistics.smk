@@ -1,7 +1,7 @@
 # Every comparison with its uncertainty (thermaxis.statistics, docs/statistics.md), one
 # job: the paired comparisons of the models and the paper's claims from the held-out
 # predictions, the stability of the sensitive points and, for a dataset that reproduces
-# the paper, the audit of every published value (thermaxis.paper). metrics.csv's
+# the paper, the audit of every published value (thermaxis.paper). The metrics table's
 # intervals are added where it is collected (model.smk), the sweep's where its ranking
 # is (sweep.smk).
 
