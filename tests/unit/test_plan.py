@@ -17,7 +17,6 @@ from thermaxis.pipeline.plan import plan_of
 from thermaxis.reports import pages
 
 REPO = Path(__file__).resolve().parents[2]
-COMPENSATION_TABLES = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
 
 
 def checked_of(dataset: Path, tmp_path, monkeypatch, **overrides):
@@ -34,9 +33,7 @@ def pages_of(checked):
         plan, checked.dataset.signal_units(), config["selection"], config["decoupling"]["degree"]
     )
     figures = registry.expand(facts, "all")
-    return plan, figures, pages.Pages(
-        plan, checked.out, facts, figures, config, "workflow/rules", COMPENSATION_TABLES
-    )
+    return plan, figures, pages.Pages(plan, checked.out, facts, figures, config, "workflow/rules")
 
 
 @pytest.fixture
@@ -69,7 +66,7 @@ def test_the_twin_plans_four_folds_both_approaches_and_the_paper(twin):
 
 def test_the_twins_targets_and_pages(twin):
     plan, figures, page = pages_of(twin)
-    outputs = targets.all_outputs(plan, twin.out, figures, COMPENSATION_TABLES)
+    outputs = targets.all_outputs(plan, twin.out, figures)
     assert len(outputs) == len(set(outputs))
     root = "results/twin"
     for name in ("paper_report", "dataset_report", "condition_E1", "condition_E4", "model_E4"):
@@ -77,10 +74,17 @@ def test_the_twins_targets_and_pages(twin):
     assert f"{root}/tables/paper_comparison.csv" in outputs
     assert f"{root}/tables/table5_slope_intercept.csv" in outputs
     assert set(targets.dataset_tables(plan, root)) == {
-        "ambient", "ambient_series", "kb", "kb_markdown", "polynomials"
+        "ambient",
+        "ambient_series",
+        "kb",
+        "kb_markdown",
+        "polynomials",
     }
     assert set(targets.audit_tables(plan, root)) == {
-        "paper_csv", "paper_markdown", "faithfulness", "faithfulness_markdown"
+        "paper_csv",
+        "paper_markdown",
+        "faithfulness",
+        "faithfulness_markdown",
     }
     # Runs, events, metrics, recommendation, compensation, sensitive points, faithfulness.
     assert [p for _, p, _ in page.index_tables()] == [
@@ -130,7 +134,7 @@ def test_a_record_without_ambient_leaves_out_fig3_and_table1(two_runs):
 
 def test_the_targets_of_two_runs_counted_by_hand(two_runs):
     plan, figures, _ = pages_of(two_runs)
-    outputs = targets.all_outputs(plan, "r", figures, COMPENSATION_TABLES)
+    outputs = targets.all_outputs(plan, "r", figures)
     figure_files = [p for p in outputs if p.startswith("r/figures/")]
     # Figs. 2, 5, 6, 7, 8, 9, 10, 12, the fold comparison, the recommendation and the
     # stability of the sensitive points (11); per fold (2): error predictions of
@@ -153,7 +157,10 @@ def test_the_targets_of_two_runs_counted_by_hand(two_runs):
         "r/tables/selection_stability.csv",
         "r/compensation/model.json",
         "r/compensation/ThermalCompensation.st",
-        *(f"r/compensation/{t}.csv" for t in COMPENSATION_TABLES),
+        *(
+            f"r/compensation/{t}.csv"
+            for t in ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
+        ),
         "r/provenance.json",
         "r/index.html",
         "r/reports/dataset_report.html",
@@ -172,7 +179,7 @@ def test_a_single_position_runs_the_pointwise_branch_alone(tmp_path, monkeypatch
     assert plan.report_models == (("pointwise", "mlr"), ("pointwise", "svr"))
     assert plan.left_out()[0].startswith("a single target position")
     assert targets.dataset_tables(plan, "r") == {}
-    outputs = targets.all_outputs(plan, "r", figures, COMPENSATION_TABLES)
+    outputs = targets.all_outputs(plan, "r", figures)
     assert "r/tables/table5_slope_intercept.csv" not in outputs
     # Figs. 5, 6, 9, 10, the fold comparison, the recommendation and the stability (7);
     # per fold (2): pointwise error predictions of mlr and svr and the drift (3 each).
@@ -192,7 +199,9 @@ def test_many_runs_share_one_conditions_report_and_workers(tmp_path, monkeypatch
     plan, _, page = pages_of(checked)
     assert plan.folds == runs and plan.combined_conditions  # 13 runs > 12
     assert targets.condition_reports(plan, "r") == ["r/reports/conditions.html"]
-    assert page.condition_links("R7") == [("section", "results/many/reports/conditions.html#run-R7")]
+    assert page.condition_links("R7") == [
+        ("section", "results/many/reports/conditions.html#run-R7")
+    ]
     # 13 folds at 4 a worker: 3 processes; 13 runs at 8 a worker: 1.
     assert plan.fold_threads == {"models": 3, "recommend": 3} and plan.clean_threads == 1
     table = tuning.resource_table(len(plan.runs), len(plan.folds), lambda w: 1)
@@ -200,9 +209,9 @@ def test_many_runs_share_one_conditions_report_and_workers(tmp_path, monkeypatch
     assert runtime(None, 1) == 130 and runtime(None, 2) == 260  # 10 min a fold, per attempt
     memory = tuning.rule_resources(table, "model_report")["mem_mb"]
     assert memory(None, 1) == 750
-    assert tuning.rule_priority("recommend") > tuning.rule_priority("models") + tuning.rule_priority(
-        "fig_predictions"
-    )
+    assert tuning.rule_priority("recommend") > tuning.rule_priority(
+        "models"
+    ) + tuning.rule_priority("fig_predictions")
     assert tuning.rule_priority("no_such_rule") == 0
 
 

@@ -17,7 +17,7 @@ rule assemble:
         paper=f"{PAPER_DIR}/table5_slope_intercept.csv",
         code=code_of("assemble.py"),
     output:
-        **dataset_tables(),
+        **filed(targets.dataset_tables(PLAN, OUT)),
         errors=out(paths.ASSEMBLED_ERRORS),
         temperatures=out(paths.ASSEMBLED_TEMPERATURES),
         signals=out(paths.ASSEMBLED_SIGNALS),

@@ -1,8 +1,6 @@
-# What needs Snakemake: the parse-time gate and the plan, the wildcard constraints, the
-# report()/expand wrappers, the sweep's plan and onstart. The plan (thermaxis.pipeline.plan),
-# the result files (.paths), the targets (.targets), the resources (.tuning) and the pages
-# (thermaxis.reports.pages) are library code, unit-tested without Snakemake. The other
-# rule files define rules only; their paths start with OUT, LOGS or BENCH.
+# What needs Snakemake; the plan, result files, targets and resources (thermaxis.pipeline:
+# plan, paths, targets, tuning) and the pages (thermaxis.reports.pages) are library code,
+# tested without Snakemake. The other rule files define rules only (paths below OUT, LOGS, BENCH).
 import functools
 import json
 import os
@@ -11,39 +9,31 @@ from pathlib import Path
 
 from thermaxis import vocabulary
 from thermaxis.figures import registry
-from thermaxis.figures.family import family_workers
 from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
 from thermaxis.pipeline import paths, preflight, targets, tuning
 from thermaxis.pipeline.deps import library_modules, named_modules
-from thermaxis.pipeline.plan import plan_of
+from thermaxis.pipeline.plan import compensation_params, plan_of, recommend_params
 from thermaxis.reports import pages
-from thermaxis.reports.pages import (
-    CATEGORY,
-    DATA_SECTIONS,
-    RUN_NOTEBOOK,
-    RUN_NOTEBOOK_PAGES,
-)
+from thermaxis.reports.pages import CATEGORY
 from thermaxis.reports.provenance import git_state
 from thermaxis.schemas import schema_path
-from thermaxis.sweep.plan import batch_minutes, cost_estimate
+from thermaxis.sweep.plan import batch_minutes, cost_note
 
 
 envvars:
     "PATH",
 
 
-# Shell rules call `python`: make it the interpreter running Snakemake (the project's
-# venv) even when Snakemake was started by path without activating it. Under
-# --sdm conda the rule's environment is activated later and still comes first.
+# Shell rules call `python`: the interpreter running Snakemake (the project's venv), even
+# unactivated. Under --sdm conda the rule's environment is activated later, first.
 os.environ["PATH"] = (
     os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
 )
 
 # --------------------------------------------------------------------------- the plan
-# One dataset per Snakemake run: --config dataset=<folder>, else the first of `datasets`.
-# thermaxis.pipeline.preflight is the one parse-time gate (the bad-input tests call it
-# too): the config is validated once, its defaults filled, and the dataset checked, so a
-# bad value stops everything with one line before any job starts.
+# One dataset per run (--config dataset=<folder>, else the first of `datasets`). The one
+# parse-time gate validates the config once and checks the dataset: a bad value stops
+# everything with one line before any job starts (the bad-input tests call it too).
 with preflight.one_line():
     CHECKED = preflight.check_before_jobs(config)
 config.update(CHECKED.config)
@@ -53,10 +43,8 @@ SIMULATED, PAPER, DECOUPLED = PLAN.simulated, PLAN.paper, PLAN.decoupled
 AMBIENT, DATA_STATEMENT = PLAN.ambient, PLAN.statement
 APPROACHES, ALGORITHMS = list(PLAN.approaches), list(PLAN.algorithms)
 if PLAN.left_out():
-    print(
-        f"thermaxis: dataset {DATASET.name!r}: {'; '.join(PLAN.left_out())}",
-        file=sys.stderr,
-    )
+    notes = "; ".join(PLAN.left_out())
+    print(f"thermaxis: dataset {DATASET.name!r}: {notes}", file=sys.stderr)
 
 # Every output, log and benchmark is below OUT, LOGS or BENCH (preflight.check_rules).
 OUT, LOGS, BENCH = CHECKED.out, CHECKED.logs, CHECKED.bench
@@ -72,6 +60,8 @@ MODEL_SCHEMA = os.path.relpath(schema_path("compensation_model"))
 # Snakemake records a checksum of every input for every output of a job (36 s at 43 runs).
 DATA_MANIFEST = f"{OUT}/{paths.DATA_MANIFEST}"
 MODEL_TABLES = list(targets.MODEL_TABLES)
+dataset_sheets = functools.partial(targets.dataset_sheets, DATASET.root)
+dataset_files = functools.partial(targets.dataset_files, DATASET.root)
 
 
 def out(path, **wildcards):
@@ -85,54 +75,35 @@ def code_of(entry):
     return library_modules(entry if entry.endswith(".ipynb") else SCRIPTS / entry)
 
 
-def dataset_sheets():
-    return targets.dataset_sheets(DATASET.root)
-
-
-def dataset_files():
-    return targets.dataset_files(DATASET.root)
-
-
-def _one_of(names):
-    return "|".join(name.replace(".", r"\.") for name in names)
-
-
 wildcard_constraints:
-    approach=_one_of(vocabulary.APPROACHES),
-    algorithm=_one_of(vocabulary.ALGORITHMS),
-    run=_one_of(RUNS),
-    fold=_one_of(RUNS),
+    approach=targets.one_of(vocabulary.APPROACHES),
+    algorithm=targets.one_of(vocabulary.ALGORITHMS),
+    run=targets.one_of(RUNS),
+    fold=targets.one_of(RUNS),
     batch=r"\d+",
     n_batches=r"\d+",
 
 
-# --------------------------------------------------------------------------- report()
-def filed(record):
-    """A path, or a targets.Filed record filed in the Snakemake report."""
-    if not isinstance(record, targets.Filed):
-        return record
-    caption = f"../report/{record.caption}.rst"
-    category = CATEGORY[record.category]
-    return report(record.path, caption=caption, category=category, labels=record.labels)
+def filed(records):
+    """``records`` (name: a path or a targets.Filed), filed ones in the Snakemake report."""
+    return {name: in_report(r) for name, r in records.items()}
 
 
-def dataset_tables():
-    return {k: filed(v) for k, v in targets.dataset_tables(PLAN, OUT).items()}
-
-
-def audit_tables():
-    return {k: filed(v) for k, v in targets.audit_tables(PLAN, OUT).items()}
+def in_report(r):
+    if not isinstance(r, targets.Filed):
+        return r
+    category, caption = CATEGORY[r.category], f"../report/{r.caption}.rst"
+    return report(r.path, caption=caption, category=category, labels=r.labels)
 
 
 # --------------------------------------------------------------------------- figures
 # The figure table (thermaxis.figures.registry): figures.smk has one rule per family.
-units, selection = DATASET.signal_units(), config["selection"]
-FACTS = pages.figure_facts(PLAN, units, selection, config["decoupling"]["degree"])
+FACTS = pages.figure_facts(
+    PLAN, DATASET.signal_units(), config["selection"], config["decoupling"]["degree"]
+)
 FIGURES = registry.expand(FACTS, "all")
 SWEEP_FIGURES = registry.expand(FACTS, "sweep")
-FIGURE_FAMILIES = {}
-for _figure in FIGURES + SWEEP_FIGURES:
-    FIGURE_FAMILIES.setdefault(_figure.family, []).append(_figure)
+FIGURE_FAMILIES = targets.families(FIGURES + SWEEP_FIGURES)
 
 
 def figure_code(figures):
@@ -140,12 +111,6 @@ def figure_code(figures):
     drawn = [p for f in figures for p in (f.draw, f.reader) if p]
     names = {f"thermaxis.{p.rsplit('.', 1)[0]}" for p in drawn}
     return sorted(set(code_of("plot.py")) | set(named_modules(*names)))
-
-
-def figure_threads(figures):
-    """Processes a family's job can use: one per MIN_FIGURES_PER_WORKER of its figures."""
-    n = len(targets.figure_instances(PLAN, figures))
-    return family_workers(n, n)
 
 
 def figure_output(figure, wildcards):
@@ -158,30 +123,24 @@ def figure_output(figure, wildcards):
     return report(files, caption=caption, category=category, **fields)
 
 
-# --------------------------------------------------------------------------- reports
-@functools.cache
-def git_of_checkout():
-    """Commit and dirty flag, taken once per run and only by a job that records them."""
-    return git_state(REPO)
+# Commit and dirty flag, taken once per run and only by a job that records them.
+git_of_checkout = functools.cache(functools.partial(git_state, REPO))
 
 
 # --------------------------------------------------------------------------- sweep
-# The sweep (`make sweep`, i.e. `snakemake sweep`): every configuration of config `sweep`
-# on every leave-one-condition-out fold, in batches (sweep.smk); not part of `rule all`.
-# The executor is chosen after the Snakefile is parsed; what is known then is that a
-# cluster run is given --jobs (a profile's `jobs:`; locally --jobs means --cores), and
-# that a job the cluster runs parses the workflow again in remote mode: it must find
-# the same plan (preflight.sweep_plan).
+# `make sweep` (sweep.smk), not part of `rule all`. A cluster run is given --jobs, and a
+# job the cluster runs parses the workflow again in remote mode: it must find the same
+# plan (preflight.sweep_plan).
 SWEEP_ON_CLUSTER = workflow.remote_exec or workflow.resource_settings.nodes is not None
+SECONDS_PER_EVALUATION = SETTINGS.sweep.seconds_per_evaluation
 
 
 @functools.cache
 def sweep_plan():
     """The sweep's units and batches, planned the first time a sweep job asks for them."""
     with preflight.one_line():
-        return preflight.sweep_plan(
-            CHECKED, workflow.resource_settings.cores, SWEEP_ON_CLUSTER
-        )
+        cores = workflow.resource_settings.cores
+        return preflight.sweep_plan(CHECKED, cores, SWEEP_ON_CLUSTER)
 
 
 def sweep_batch_files(wildcards):
@@ -195,14 +154,9 @@ def sweep_batch_benchmarks(wildcards):
 
 
 def sweep_batch_minutes(wildcards):
-    return batch_minutes(
-        SETTINGS.sweep.grid,
-        sweep_plan().units,
-        int(wildcards.n_batches),
-        int(wildcards.batch),
-        SETTINGS.sweep.seconds_per_evaluation,
-        DECOUPLED,
-    )
+    n, batch, grid = int(wildcards.n_batches), int(wildcards.batch), SETTINGS.sweep.grid
+    units = sweep_plan().units
+    return batch_minutes(grid, units, n, batch, SECONDS_PER_EVALUATION, DECOUPLED)
 
 
 def sweep_report_parameters(wildcards, input):
@@ -213,72 +167,31 @@ def sweep_report_parameters(wildcards, input):
 # The cost estimate, before the first job starts and only when batches are to run.
 onstart:
     if any(j.rule.name == "sweep_batch" for j in workflow.dag.needrun_jobs()):
-        _plan = sweep_plan()
-        _cost = cost_estimate(
-            _plan.evaluations, SETTINGS.sweep.seconds_per_evaluation, _plan.batches
+        s = sweep_plan()
+        note = cost_note(
+            len(s.units), s.evaluations, s.batches, SECONDS_PER_EVALUATION
         )
-        print(
-            f"thermaxis: sweep of {len(_plan.units)} fold x selection units, "
-            f"{_cost['evaluations']} evaluations in {_plan.batches} batches; estimated "
-            f"{_cost['cpu_hours']:.2f} CPU-hours at {_cost['seconds_per_evaluation']:g} s each "
-            "(config sweep.seconds_per_evaluation), "
-            f">= {_cost['wall_minutes']:.1f} min wall with every batch running at once",
-            file=sys.stderr,
-        )
+        print(note, file=sys.stderr)
 
 
 # --------------------------------------------------------------------------- resources
 RESOURCES = tuning.resource_table(len(RUNS), len(FOLDS), sweep_batch_minutes)
-
-
-def rule_resources(name):
-    return tuning.rule_resources(RESOURCES, name)
-
-
+rule_resources = functools.partial(tuning.rule_resources, RESOURCES)
 rule_priority = tuning.rule_priority
 FOLD_THREADS, CLEAN_THREADS = PLAN.fold_threads, PLAN.clean_threads
 
 
-# --------------------------------------------------------------------------- compensation
-# The deployable compensation: the configured model fitted on all runs (model.json and a
-# Structured Text block), and per held-out run the controller exports of that fold's
-# model and the error left after compensating. Folds stay for evaluation only.
-# A single target has no slope: the point-by-point model gives an offset (SD43900 alone).
-COMP_APPROACH = SETTINGS.compensation.approach if DECOUPLED else "pointwise"
-COMP_ALGORITHM = SETTINGS.compensation.algorithm
-COMP_TABLES = ["siemens_840d", "twincat", "residuals", "iso230_2", "summary"]
-COMP_PARAMS = dict(
-    approach=COMP_APPROACH,
-    model=SETTINGS.compensation.model,
-    sections={
-        name: config[name]
-        for name in ("selection", "decoupling", "models", "compensation")
-    },
-    about=dict(dataset=DATASET.name, simulated=SIMULATED, statement=DATA_STATEMENT),
-    signals=list(DATASET.signals),
-)
-
-
-# --------------------------------------------------------------------------- recommendation
-# Which model the runs support: one job per outer fold scores every candidate (inner
-# leave-one-condition-out on the other runs, and the held-out run), one job chooses
-# (thermaxis.method.recommend). The compensation deploys its choice (compensation.model).
-RECOMMEND_PARAMS = dict(
-    recommend=config["recommend"],
-    selection=config["selection"],
-    models=config["models"],
-    decoupling=config["decoupling"],
-    decoupled=DECOUPLED,
-    signals=list(DATASET.signals),
-)
+# --------------------------------------------------------------------------- params
+COMP_TABLES = list(targets.COMPENSATION_TABLES)
+COMP_PARAMS = compensation_params(CHECKED, PLAN)
+RECOMMEND_PARAMS = recommend_params(CHECKED, PLAN)
 
 
 # --------------------------------------------------------------------------- targets
-PAGES = pages.Pages(PLAN, OUT, FACTS, FIGURES, config, REPO, tuple(COMP_TABLES))
+PAGES = pages.Pages(PLAN, OUT, FACTS, FIGURES, config, REPO)
 
 
-def all_outputs():
-    return targets.all_outputs(PLAN, OUT, FIGURES, COMP_TABLES)
+all_outputs = functools.partial(targets.all_outputs, PLAN, OUT, FIGURES)
 
 
 def check_rules(rules):

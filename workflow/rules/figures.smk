@@ -26,7 +26,7 @@ for family, figures in FIGURE_FAMILIES.items():
         conda:
             ENV
         # Snakemake gives at most --cores; the job deals its figures to that many workers.
-        threads: figure_threads(figures)
+        threads: PAGES.figure_threads(figures)
         resources:
             **rule_resources(family),
         params:

@@ -1,5 +1,5 @@
 # Reports: parametrised notebooks executed by papermill and turned into self-contained
-# HTML (RUN_NOTEBOOK), the dataset's provenance record and the index page. The notebooks
+# HTML (thermaxis.reports.pages.RUN_NOTEBOOK), the dataset's provenance record and the index page. The notebooks
 # only read tables the workflow wrote; they recompute nothing.
 #
 # Provenance and reruns: provenance.json (the whole configuration, the raw-data
@@ -48,11 +48,11 @@ rule dataset_report:
         statement=DATA_STATEMENT,
         parameters=lambda w, input: PAGES.notebook_parameters(
             input,
-            PAGES.sections(*DATA_SECTIONS, "figures"),
+            PAGES.sections(*pages.DATA_SECTIONS, "figures"),
             figures=PAGES.dataset_report_figures(),
         ),
     shell:
-        RUN_NOTEBOOK
+        pages.RUN_NOTEBOOK
 
 
 rule condition_report:
@@ -87,13 +87,13 @@ rule condition_report:
             RUNS,
             PAGES.condition_report_inputs,
             lambda run: f"Condition report: run {run} ({DATASET.name})",
-            PAGES.sections(*DATA_SECTIONS),
+            PAGES.sections(*pages.DATA_SECTIONS),
             run=lambda run: run,
             captions=PAGES.condition_captions,
             stamp=PAGES.stamp,
         ),
     shell:
-        RUN_NOTEBOOK_PAGES
+        pages.RUN_NOTEBOOK_PAGES
 
 
 rule conditions_report:
@@ -125,10 +125,10 @@ rule conditions_report:
         title=f"Conditions report: all runs ({DATASET.name})",
         statement=DATA_STATEMENT,
         parameters=lambda w, input: PAGES.notebook_parameters(
-            input, PAGES.sections(*DATA_SECTIONS), runs=RUNS, stamp=PAGES.stamp
+            input, PAGES.sections(*pages.DATA_SECTIONS), runs=RUNS, stamp=PAGES.stamp
         ),
     shell:
-        RUN_NOTEBOOK
+        pages.RUN_NOTEBOOK
 
 
 rule model_report:
@@ -164,7 +164,7 @@ rule model_report:
             PAGES.model_report_inputs,
             lambda fold: f"Model report: fold {fold} ({DATASET.name})",
             PAGES.sections(
-                *DATA_SECTIONS,
+                *pages.DATA_SECTIONS,
                 "selection",
                 "models",
                 "folds",
@@ -177,7 +177,7 @@ rule model_report:
             figures=PAGES.model_report_figures,
         ),
     shell:
-        RUN_NOTEBOOK_PAGES
+        pages.RUN_NOTEBOOK_PAGES
 
 
 rule paper_report:
@@ -227,7 +227,7 @@ rule paper_report:
             figures=PAGES.paper_report_figures(),
         ),
     shell:
-        RUN_NOTEBOOK
+        pages.RUN_NOTEBOOK
 
 
 rule index:

@@ -22,7 +22,7 @@ rule statistics:
         selection=out(paths.SENSITIVE_POINTS),
         paper=PAPER_FILES if PAPER else [],
     output:
-        **audit_tables(),
+        **filed(targets.audit_tables(PLAN, OUT)),
         comparisons=report(
             out(paths.COMPARISONS),
             caption="../report/comparisons.rst",

@@ -86,7 +86,7 @@ rule sweep_report:
         statement=DATA_STATEMENT,
         parameters=sweep_report_parameters,
     shell:
-        RUN_NOTEBOOK
+        pages.RUN_NOTEBOOK
 
 
 rule sweep:

@@ -141,3 +141,37 @@ def plan_of(checked: Checked) -> Plan:
             reproduces_paper=paper,
         ),
     )
+
+
+# The deployable compensation: the configured model fitted on all runs (model.json and a
+# Structured Text block), and per held-out run the controller exports of that fold's
+# model and the error left after compensating. Folds stay for evaluation only.
+def compensation_params(checked: Checked, plan: Plan) -> dict:
+    """The compensation rule's parameters (workflow/scripts/compensation.py)."""
+    settings, config, dataset = checked.settings, checked.config, checked.dataset
+    return dict(
+        # A single target has no slope: the point-by-point model gives an offset (SD43900 alone).
+        approach=settings.compensation.approach if plan.decoupled else "pointwise",
+        model=settings.compensation.model,
+        sections={
+            name: config[name] for name in ("selection", "decoupling", "models", "compensation")
+        },
+        about=dict(dataset=dataset.name, simulated=plan.simulated, statement=plan.statement),
+        signals=list(dataset.signals),
+    )
+
+
+# Which model the runs support: one job per outer fold scores every candidate (inner
+# leave-one-condition-out on the other runs, and the held-out run), one job chooses
+# (thermaxis.method.recommend). The compensation deploys its choice (compensation.model).
+def recommend_params(checked: Checked, plan: Plan) -> dict:
+    """The recommend rule's parameters (workflow/scripts/recommend.py)."""
+    config = checked.config
+    return dict(
+        recommend=config["recommend"],
+        selection=config["selection"],
+        models=config["models"],
+        decoupling=config["decoupling"],
+        decoupled=plan.decoupled,
+        signals=list(checked.dataset.signals),
+    )

@@ -15,6 +15,9 @@ from thermaxis.pipeline.plan import Plan
 
 # The tables each fold of the models rule writes (thermaxis.method.folds.SORT_KEYS).
 MODEL_TABLES = ("metrics", "coefficients", "kb_predictions", "error_predictions", "fitting")
+# The compensation's tables, per held-out run and collected: the controller exports, the
+# residuals, ISO 230-2 and the before/after summary.
+COMPENSATION_TABLES = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
 
 
 @dataclass(frozen=True)
@@ -83,6 +86,14 @@ def audit_tables(plan: Plan, root) -> dict:
 
 
 # --------------------------------------------------------------------------- figures
+def families(figures) -> dict[str, list]:
+    """The figures by family (one rule each), in table order."""
+    grouped = {}
+    for figure in figures:
+        grouped.setdefault(figure.family, []).append(figure)
+    return grouped
+
+
 def figure_instances(plan: Plan, figures) -> list:
     """Each figure with its wildcards: once per fold when its stem holds the fold, else once."""
     return [
@@ -169,12 +180,12 @@ def recommendation_outputs(root) -> list[str]:
     ]
 
 
-def compensation_outputs(root, tables) -> list[str]:
-    """model.json, the ST block and the ``tables``; the drift figures are figures."""
+def compensation_outputs(root) -> list[str]:
+    """model.json, the ST block and the tables; the drift figures are figures."""
     return [
         under(root, paths.DEPLOYED_MODEL),
         under(root, paths.STRUCTURED_TEXT),
-        *(under(root, paths.COMPENSATION_TABLE, table=name) for name in tables),
+        *(under(root, paths.COMPENSATION_TABLE, table=name) for name in COMPENSATION_TABLES),
     ]
 
 
@@ -205,9 +216,9 @@ def linked_tables(plan: Plan, root) -> list[str]:
     return [under(root, name) for name in tables] + statistics_outputs(root)
 
 
-def all_outputs(plan: Plan, root, figures, compensation_tables) -> list[str]:
+def all_outputs(plan: Plan, root, figures) -> list[str]:
     """What `rule all` asks for: ``figures`` (the figure table's, expanded), the tables,
-    the recommendation, the compensation (with ``compensation_tables``) and the reports."""
+    the recommendation, the compensation and the reports."""
     return [
         *figure_files(plan, root, figures),
         under(root, paths.DATASET_SUMMARY),
@@ -218,9 +229,14 @@ def all_outputs(plan: Plan, root, figures, compensation_tables) -> list[str]:
         *([under(root, paths.TABLE5)] if plan.decoupled else []),
         *recommendation_outputs(root),
         *statistics_outputs(root),
-        *compensation_outputs(root, compensation_tables),
+        *compensation_outputs(root),
         *report_outputs(plan, root),
     ]
+
+
+def one_of(names) -> str:
+    """A wildcard's constraint: one of ``names``, literally."""
+    return "|".join(name.replace(".", r"\.") for name in names)
 
 
 def suffix(path: str) -> str:

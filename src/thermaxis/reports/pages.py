@@ -13,6 +13,7 @@ from pathlib import Path
 
 from thermaxis.figures import registry
 from thermaxis.figures.captions import figure_caption, provenance_note
+from thermaxis.figures.family import family_workers
 from thermaxis.pipeline import paths, targets
 from thermaxis.pipeline.paths import under
 from thermaxis.pipeline.plan import Plan
@@ -104,7 +105,6 @@ class Pages:
     figures: list
     config: Mapping
     repo: str
-    compensation_tables: tuple
 
     def out(self, path: str, **wildcards) -> str:
         return under(self.root, path, **wildcards)
@@ -152,6 +152,11 @@ class Pages:
                 spec["reader"] = fig.reader
             specs.append(spec)
         return specs
+
+    def figure_threads(self, figures) -> int:
+        """Processes a family's job can use: one per MIN_FIGURES_PER_WORKER of its figures."""
+        n = len(targets.figure_instances(self.plan, figures))
+        return family_workers(n, n)
 
     def dataset_report_figures(self) -> dict:
         plan = self.plan
@@ -324,7 +329,7 @@ class Pages:
         ]
         tables = [(Path(p).name, [(suffix(p), p)]) for p in targets.linked_tables(plan, self.root)]
         compensation = {}
-        for p in targets.compensation_outputs(self.root, self.compensation_tables):
+        for p in targets.compensation_outputs(self.root):
             compensation.setdefault(Path(p).stem, []).append((suffix(p), p))
         answer = [
             (
