@@ -10,7 +10,6 @@ import pandas as pd
 from thermaxis.compensation.exports import siemens_840d, twincat
 from thermaxis.compensation.runtime import ControllerParameters, Step
 from thermaxis.config import ErrorCleaning
-from thermaxis.pipeline import paths
 
 __all__ = [
     "held_out_accuracy",
@@ -30,7 +29,7 @@ def held_out_accuracy(metrics: pd.DataFrame, approach: str, algorithm: str) -> l
     rows = metrics[(metrics["approach"] == approach) & (metrics["algorithm"] == algorithm)]
     if rows.empty:
         raise ValueError(
-            f"{paths.METRICS}: no rows for approach {approach!r} and algorithm {algorithm!r}"
+            f"the metrics table: no rows for approach {approach!r} and algorithm {algorithm!r}"
         )
     columns = ["fold", "target", "rmse", "max_abs", "mae", "residual_min", "residual_max"]
     return [
