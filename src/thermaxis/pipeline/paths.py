@@ -13,6 +13,8 @@ from __future__ import annotations
 DATA_MANIFEST = "data_manifest.sha256"
 PROVENANCE = "provenance.json"
 INDEX = "index.html"
+# Snakemake's own report (`make report`, `thermaxis report --zip`).
+REPORT_ZIP = "report.zip"
 
 # Cleaning, one of each per run.
 CLEAN_SERIES = "clean/{run}/temperatures.parquet"
