@@ -1,6 +1,6 @@
-# The deployable compensation (thermaxis.pipeline.plan.compensation_params), one job: model.json and
-# its Structured Text block from all runs, and per held-out run its fold's model, its
-# controller exports and the error left after compensating, collected per table.
+# The deployable compensation (thermaxis.pipeline.plan.compensation_params), one job:
+# model.json and its Structured Text block from all runs, and per held-out run its fold's
+# model, its controller exports and the error left after compensating, collected per table.
 
 
 rule compensation:

@@ -1,6 +1,6 @@
-# The recommendation (thermaxis.pipeline.plan.recommend_params), one job: per held-out run, every
-# candidate's inner scores on the other runs and its error on the held-out run; then the
-# choice per fold, the final one, and the tables.
+# The recommendation (thermaxis.pipeline.plan.recommend_params), one job: per held-out
+# run, every candidate's inner scores on the other runs and its error on the held-out run;
+# then the choice per fold, the final one, and the tables.
 
 
 rule recommend:
