@@ -43,8 +43,8 @@ SIMULATED, PAPER, DECOUPLED = PLAN.simulated, PLAN.paper, PLAN.decoupled
 AMBIENT, DATA_STATEMENT = PLAN.ambient, PLAN.statement
 APPROACHES, ALGORITHMS = list(PLAN.approaches), list(PLAN.algorithms)
 if PLAN.left_out():
-    notes = "; ".join(PLAN.left_out())
-    print(f"thermaxis: dataset {DATASET.name!r}: {notes}", file=sys.stderr)
+    _left_out = "; ".join(PLAN.left_out())
+    print(f"thermaxis: dataset {DATASET.name!r}: {_left_out}", file=sys.stderr)
 
 # Every output, log and benchmark is below OUT, LOGS or BENCH (preflight.check_rules).
 OUT, LOGS, BENCH = CHECKED.out, CHECKED.logs, CHECKED.bench
