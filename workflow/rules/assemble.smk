@@ -6,37 +6,31 @@
 
 rule assemble:
     input:
-        errors=expand(f"{OUT}/clean/{{run}}/errors.parquet", run=RUNS),
-        temperatures=expand(
-            f"{OUT}/clean/{{run}}/measurement_temperatures.parquet", run=RUNS
-        ),
-        signals=expand(f"{OUT}/clean/{{run}}/measurement_signals.parquet", run=RUNS),
-        qc=expand(f"{OUT}/clean/{{run}}/qc.csv", run=RUNS),
-        inputs=expand(f"{OUT}/clean/{{run}}/measurement_inputs.parquet", run=RUNS),
-        windows=expand(f"{OUT}/clean/{{run}}/windows.csv", run=RUNS),
-        series=(
-            expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS)
-            if AMBIENT
-            else []
-        ),
+        errors=expand(out(paths.CLEAN_ERRORS), run=RUNS),
+        temperatures=expand(out(paths.CLEAN_TEMPERATURES), run=RUNS),
+        signals=expand(out(paths.CLEAN_SIGNALS), run=RUNS),
+        qc=expand(out(paths.CLEAN_QC), run=RUNS),
+        inputs=expand(out(paths.CLEAN_INPUTS), run=RUNS),
+        windows=expand(out(paths.CLEAN_WINDOWS), run=RUNS),
+        series=(expand(out(paths.CLEAN_SERIES), run=RUNS) if AMBIENT else []),
         sheets=dataset_sheets(),
         paper=f"{PAPER_DIR}/table5_slope_intercept.csv",
         code=code_of("assemble.py"),
     output:
-        **dataset_tables(),
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
-        signals=f"{OUT}/assembled/signals.parquet",
-        inputs=f"{OUT}/assembled/inputs.parquet",
+        **filed(targets.dataset_tables(PLAN, OUT)),
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
+        signals=out(paths.ASSEMBLED_SIGNALS),
+        inputs=out(paths.ASSEMBLED_INPUTS),
         qc=report(
-            f"{OUT}/tables/cleaning_qc.csv",
+            out(paths.CLEANING_QC),
             caption="../report/cleaning_qc.rst",
             category=CATEGORY["dataset"],
             labels={"table": "cleaning QC"},
         ),
-        events=f"{OUT}/tables/cleaning_events.csv",
+        events=out(paths.CLEANING_EVENTS),
         summary=report(
-            f"{OUT}/tables/dataset_summary.csv",
+            out(paths.DATASET_SUMMARY),
             caption="../report/dataset_summary.rst",
             category=CATEGORY["dataset"],
             labels={"table": "dataset summary"},

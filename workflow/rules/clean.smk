@@ -31,17 +31,15 @@ rule clean:
         sheets=dataset_sheets(),
         manifest=DATA_MANIFEST,
     output:
-        series=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
-        qc=expand(f"{OUT}/clean/{{run}}/qc.csv", run=RUNS),
-        gaps=expand(f"{OUT}/clean/{{run}}/gaps.csv", run=RUNS),
-        errors=expand(f"{OUT}/clean/{{run}}/errors.parquet", run=RUNS),
-        temperatures=expand(
-            f"{OUT}/clean/{{run}}/measurement_temperatures.parquet", run=RUNS
-        ),
-        windows=expand(f"{OUT}/clean/{{run}}/windows.csv", run=RUNS),
-        signals=expand(f"{OUT}/clean/{{run}}/measurement_signals.parquet", run=RUNS),
-        signal_series=expand(f"{OUT}/clean/{{run}}/signals.parquet", run=RUNS),
-        inputs=expand(f"{OUT}/clean/{{run}}/measurement_inputs.parquet", run=RUNS),
+        series=expand(out(paths.CLEAN_SERIES), run=RUNS),
+        qc=expand(out(paths.CLEAN_QC), run=RUNS),
+        gaps=expand(out(paths.CLEAN_GAPS), run=RUNS),
+        errors=expand(out(paths.CLEAN_ERRORS), run=RUNS),
+        temperatures=expand(out(paths.CLEAN_TEMPERATURES), run=RUNS),
+        windows=expand(out(paths.CLEAN_WINDOWS), run=RUNS),
+        signals=expand(out(paths.CLEAN_SIGNALS), run=RUNS),
+        signal_series=expand(out(paths.CLEAN_SIGNAL_SERIES), run=RUNS),
+        inputs=expand(out(paths.CLEAN_INPUTS), run=RUNS),
     log:
         f"{LOGS}/clean.log",
     benchmark:

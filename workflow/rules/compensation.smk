@@ -1,47 +1,47 @@
-# The deployable compensation (common.smk, compensation block), one job: model.json and
-# its Structured Text block from all runs, and per held-out run its fold's model, its
-# controller exports and the error left after compensating, collected per table.
+# The deployable compensation (thermaxis.pipeline.plan.compensation_params), one job:
+# model.json and its Structured Text block from all runs, and per held-out run its fold's
+# model, its controller exports and the error left after compensating, collected per table.
 
 
 rule compensation:
     input:
         code=code_of("compensation.py"),
         schema=MODEL_SCHEMA,
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
-        signals=f"{OUT}/assembled/signals.parquet",
-        inputs=f"{OUT}/assembled/inputs.parquet",
-        metrics=f"{OUT}/tables/metrics.csv",
-        choice=f"{OUT}/recommend/choice.json",
-        scores=expand(f"{OUT}/recommend/folds/{{fold}}.csv", fold=FOLDS),
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
+        signals=out(paths.ASSEMBLED_SIGNALS),
+        inputs=out(paths.ASSEMBLED_INPUTS),
+        metrics=out(paths.METRICS),
+        choice=out(paths.CHOICE),
+        scores=expand(out(paths.FOLD_SCORES), fold=FOLDS),
         # Every run's log: the sensors' noise in the training runs (model.json noise_c),
         # and a held-out run's cycles for a model with time-aware inputs.
-        logs=expand(f"{OUT}/clean/{{run}}/temperatures.parquet", run=RUNS),
-        signal_series=expand(f"{OUT}/clean/{{fold}}/signals.parquet", fold=FOLDS),
-        windows=expand(f"{OUT}/clean/{{fold}}/windows.csv", fold=FOLDS),
-        selections=expand(f"{OUT}/selection/{{fold}}.json", fold=FOLDS),
+        logs=expand(out(paths.CLEAN_SERIES), run=RUNS),
+        signal_series=expand(out(paths.CLEAN_SIGNAL_SERIES), run=FOLDS),
+        windows=expand(out(paths.CLEAN_WINDOWS), run=FOLDS),
+        selections=expand(out(paths.SELECTION), fold=FOLDS),
         sheets=dataset_sheets(),
         manifest=DATA_MANIFEST,
     output:
         **{
             f"fold_{name}": expand(
-                f"{OUT}/compensation/folds/{{fold}}/{name}.csv", fold=FOLDS
+                out(paths.FOLD_COMPENSATION), fold=FOLDS, table=name
             )
             for name in COMP_TABLES
         },
         **{
             name: report(
-                f"{OUT}/compensation/{name}.csv",
+                out(paths.COMPENSATION_TABLE, table=name),
                 caption="../report/compensation_tables.rst",
                 category=CATEGORY["compensation"],
                 labels={"table": name},
             )
             for name in COMP_TABLES
         },
-        fitted=f"{OUT}/compensation/fitted_model.json",
-        model=f"{OUT}/compensation/model.json",
-        st=f"{OUT}/compensation/ThermalCompensation.st",
-        fold_models=expand(f"{OUT}/compensation/folds/{{fold}}/model.json", fold=FOLDS),
+        fitted=out(paths.FITTED_MODEL),
+        model=out(paths.DEPLOYED_MODEL),
+        st=out(paths.STRUCTURED_TEXT),
+        fold_models=expand(out(paths.FOLD_MODEL), fold=FOLDS),
     log:
         f"{LOGS}/compensation/compensation.log",
     benchmark:

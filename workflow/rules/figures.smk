@@ -11,12 +11,12 @@ for family, figures in FIGURE_FAMILIES.items():
         name:
             family
         input:
-            tables=figure_tables(figures),
+            tables=targets.figure_tables(PLAN, OUT, figures),
             code=figure_code(figures),
         output:
             *(
                 figure_output(fig, wildcards)
-                for fig, wildcards in figure_instances(figures)
+                for fig, wildcards in targets.figure_instances(PLAN, figures)
             ),
         log:
             f"{LOGS}/figures/{family}.log",
@@ -26,12 +26,12 @@ for family, figures in FIGURE_FAMILIES.items():
         conda:
             ENV
         # Snakemake gives at most --cores; the job deals its figures to that many workers.
-        threads: figure_threads(figures)
+        threads: PAGES.figure_threads(figures)
         resources:
             **rule_resources(family),
         params:
-            figures=figure_specs(figures),
-            stamp=STAMP,
+            figures=PAGES.figure_specs(figures),
+            stamp=PAGES.stamp,
             dpi=SETTINGS.figures.dpi,
         script:
             "../scripts/plot.py"

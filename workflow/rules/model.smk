@@ -7,48 +7,48 @@
 rule models:
     input:
         code=code_of("models.py"),
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
-        signals=f"{OUT}/assembled/signals.parquet",
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
+        signals=out(paths.ASSEMBLED_SIGNALS),
     output:
         **{
-            f"fold_{name}": expand(f"{OUT}/models/{{fold}}/{name}.csv", fold=FOLDS)
+            f"fold_{name}": expand(out(paths.FOLD_TABLE), fold=FOLDS, table=name)
             for name in MODEL_TABLES
         },
-        selections=expand(f"{OUT}/selection/{{fold}}.json", fold=FOLDS),
-        selection_tables=expand(f"{OUT}/selection/{{fold}}.csv", fold=FOLDS),
+        selections=expand(out(paths.SELECTION), fold=FOLDS),
+        selection_tables=expand(out(paths.SELECTION_TABLE), fold=FOLDS),
         metrics=report(
-            f"{OUT}/tables/metrics.csv",
+            out(paths.METRICS),
             caption="../report/metrics.rst",
             category=CATEGORY["prediction"],
             labels={"table": "metrics"},
         ),
         coefficients=report(
-            f"{OUT}/tables/coefficients.csv",
+            out(paths.COEFFICIENTS),
             caption="../report/coefficients.rst",
             category=CATEGORY["models"],
             labels={"table": "coefficients"},
         ),
         kb_predictions=report(
-            f"{OUT}/tables/kb_predictions.csv",
+            out(paths.KB_PREDICTIONS),
             caption="../report/kb_predictions.rst",
             category=CATEGORY["prediction"],
             labels={"table": "k and b predictions"},
         ),
         error_predictions=report(
-            f"{OUT}/tables/error_predictions.csv",
+            out(paths.ERROR_PREDICTIONS),
             caption="../report/error_predictions.rst",
             category=CATEGORY["prediction"],
             labels={"table": "error predictions"},
         ),
         fitting=report(
-            f"{OUT}/tables/fitting.csv",
+            out(paths.FITTING),
             caption="../report/fitting.rst",
             category=CATEGORY["models"],
             labels={"table": "fitting"},
         ),
         selection=report(
-            f"{OUT}/tables/sensitive_points.csv",
+            out(paths.SENSITIVE_POINTS),
             caption="../report/sensitive_points.rst",
             category=CATEGORY["sensitive_points"],
             labels={"table": "sensitive points"},

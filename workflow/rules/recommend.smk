@@ -1,26 +1,26 @@
-# The recommendation (common.smk, recommendation block), one job: per held-out run, every
-# candidate's inner scores on the other runs and its error on the held-out run; then the
-# choice per fold, the final one, and the tables.
+# The recommendation (thermaxis.pipeline.plan.recommend_params), one job: per held-out
+# run, every candidate's inner scores on the other runs and its error on the held-out run;
+# then the choice per fold, the final one, and the tables.
 
 
 rule recommend:
     input:
         code=code_of("recommend.py"),
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
-        signals=f"{OUT}/assembled/signals.parquet",
-        inputs=f"{OUT}/assembled/inputs.parquet",
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
+        signals=out(paths.ASSEMBLED_SIGNALS),
+        inputs=out(paths.ASSEMBLED_INPUTS),
     output:
-        scores=expand(f"{OUT}/recommend/folds/{{fold}}.csv", fold=FOLDS),
+        scores=expand(out(paths.FOLD_SCORES), fold=FOLDS),
         table=report(
-            f"{OUT}/tables/recommendation.csv",
+            out(paths.RECOMMENDATION),
             caption="../report/recommendation.rst",
             category=CATEGORY["compensation"],
             labels={"table": "recommendation"},
         ),
-        markdown=f"{OUT}/tables/recommendation.md",
-        candidates=f"{OUT}/recommend/candidates.csv",
-        choice=f"{OUT}/recommend/choice.json",
+        markdown=out(paths.RECOMMENDATION_MARKDOWN),
+        candidates=out(paths.CANDIDATES),
+        choice=out(paths.CHOICE),
     log:
         f"{LOGS}/recommend.log",
     benchmark:

@@ -1,5 +1,5 @@
 # Reports: parametrised notebooks executed by papermill and turned into self-contained
-# HTML (RUN_NOTEBOOK), the dataset's provenance record and the index page. The notebooks
+# HTML (thermaxis.reports.pages.RUN_NOTEBOOK), the dataset's provenance record and the index page. The notebooks
 # only read tables the workflow wrote; they recompute nothing.
 #
 # Provenance and reruns: provenance.json (the whole configuration, the raw-data
@@ -18,18 +18,18 @@ rule dataset_report:
         notebook="notebooks/dataset_report.ipynb",
         library=code_of("notebooks/dataset_report.ipynb"),
         sheets=dataset_sheets(),
-        summary=f"{OUT}/tables/dataset_summary.csv",
-        qc=f"{OUT}/tables/cleaning_qc.csv",
-        gaps=expand(f"{OUT}/clean/{{run}}/gaps.csv", run=RUNS),
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
-        recommendation=f"{OUT}/tables/recommendation.csv",
-        model=f"{OUT}/compensation/model.json",
-        figures=[f["path"] for f in dataset_report_figures().values()],
+        summary=out(paths.DATASET_SUMMARY),
+        qc=out(paths.CLEANING_QC),
+        gaps=expand(out(paths.CLEAN_GAPS), run=RUNS),
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
+        recommendation=out(paths.RECOMMENDATION),
+        model=out(paths.DEPLOYED_MODEL),
+        figures=[f["path"] for f in PAGES.dataset_report_figures().values()],
     output:
-        notebook=f"{OUT}/reports/dataset_report.ipynb",
+        notebook=out(paths.DATASET_REPORT, ext="ipynb"),
         html=report(
-            f"{OUT}/reports/dataset_report.html",
+            out(paths.DATASET_REPORT, ext="html"),
             caption="../report/notebook_report.rst",
             category=CATEGORY["reports"],
             labels={"report": "dataset"},
@@ -46,25 +46,25 @@ rule dataset_report:
     params:
         title=f"Dataset report: {DATASET.name}",
         statement=DATA_STATEMENT,
-        parameters=lambda w, input: notebook_parameters(
+        parameters=lambda w, input: PAGES.notebook_parameters(
             input,
-            sections(*DATA_SECTIONS, "figures"),
-            figures=dataset_report_figures(),
+            PAGES.sections(*pages.DATA_SECTIONS, "figures"),
+            figures=PAGES.dataset_report_figures(),
         ),
     shell:
-        RUN_NOTEBOOK
+        pages.RUN_NOTEBOOK
 
 
 rule condition_report:
     input:
         notebook="notebooks/condition_report.ipynb",
         library=code_of("notebooks/condition_report.ipynb"),
-        pages=page_files(condition_report_inputs, RUNS),
+        pages=pages.page_files(PAGES.condition_report_inputs, RUNS),
     output:
-        notebooks=expand(f"{OUT}/reports/condition_{{run}}.ipynb", run=RUNS),
+        notebooks=expand(out(paths.CONDITION_REPORT), run=RUNS, ext="ipynb"),
         html=[
             report(
-                f"{OUT}/reports/condition_{run}.html",
+                out(paths.CONDITION_REPORT, run=run, ext="html"),
                 caption="../report/notebook_report.rst",
                 category=CATEGORY["reports"],
                 subcategory="Conditions",
@@ -82,31 +82,31 @@ rule condition_report:
     resources:
         **rule_resources("condition_report"),
     params:
-        pages=report_pages(
-            "condition",
+        pages=PAGES.report_pages(
+            paths.CONDITION_REPORT,
             RUNS,
-            condition_report_inputs,
+            PAGES.condition_report_inputs,
             lambda run: f"Condition report: run {run} ({DATASET.name})",
-            sections(*DATA_SECTIONS),
+            PAGES.sections(*pages.DATA_SECTIONS),
             run=lambda run: run,
-            captions=condition_captions,
-            stamp=STAMP,
+            captions=PAGES.condition_captions,
+            stamp=PAGES.stamp,
         ),
     shell:
-        RUN_NOTEBOOK_PAGES
+        pages.RUN_NOTEBOOK_PAGES
 
 
 rule conditions_report:
     input:
         notebook="notebooks/conditions_report.ipynb",
         library=code_of("notebooks/conditions_report.ipynb"),
-        summary=f"{OUT}/tables/dataset_summary.csv",
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
+        summary=out(paths.DATASET_SUMMARY),
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
     output:
-        notebook=f"{OUT}/reports/conditions.ipynb",
+        notebook=out(paths.CONDITIONS_REPORT, ext="ipynb"),
         html=report(
-            f"{OUT}/reports/conditions.html",
+            out(paths.CONDITIONS_REPORT, ext="html"),
             caption="../report/notebook_report.rst",
             category=CATEGORY["reports"],
             subcategory="Conditions",
@@ -124,23 +124,23 @@ rule conditions_report:
     params:
         title=f"Conditions report: all runs ({DATASET.name})",
         statement=DATA_STATEMENT,
-        parameters=lambda w, input: notebook_parameters(
-            input, sections(*DATA_SECTIONS), runs=RUNS, stamp=STAMP
+        parameters=lambda w, input: PAGES.notebook_parameters(
+            input, PAGES.sections(*pages.DATA_SECTIONS), runs=RUNS, stamp=PAGES.stamp
         ),
     shell:
-        RUN_NOTEBOOK
+        pages.RUN_NOTEBOOK
 
 
 rule model_report:
     input:
         notebook="notebooks/model_report.ipynb",
         library=code_of("notebooks/model_report.ipynb"),
-        pages=page_files(model_report_inputs, FOLDS),
+        pages=pages.page_files(PAGES.model_report_inputs, FOLDS),
     output:
-        notebooks=expand(f"{OUT}/reports/model_{{fold}}.ipynb", fold=FOLDS),
+        notebooks=expand(out(paths.MODEL_REPORT), fold=FOLDS, ext="ipynb"),
         html=[
             report(
-                f"{OUT}/reports/model_{fold}.html",
+                out(paths.MODEL_REPORT, fold=fold, ext="html"),
                 caption="../report/notebook_report.rst",
                 category=CATEGORY["reports"],
                 subcategory="Models",
@@ -158,13 +158,13 @@ rule model_report:
     resources:
         **rule_resources("model_report"),
     params:
-        pages=report_pages(
-            "model",
+        pages=PAGES.report_pages(
+            paths.MODEL_REPORT,
             FOLDS,
-            model_report_inputs,
+            PAGES.model_report_inputs,
             lambda fold: f"Model report: fold {fold} ({DATASET.name})",
-            sections(
-                *DATA_SECTIONS,
+            PAGES.sections(
+                *pages.DATA_SECTIONS,
                 "selection",
                 "models",
                 "folds",
@@ -172,12 +172,12 @@ rule model_report:
                 "figures",
             ),
             fold=lambda fold: fold,
-            models=REPORT_MODELS,
+            models=PLAN.report_models,
             runs=RUNS,
-            figures=model_report_figures,
+            figures=PAGES.model_report_figures,
         ),
     shell:
-        RUN_NOTEBOOK_PAGES
+        pages.RUN_NOTEBOOK_PAGES
 
 
 rule paper_report:
@@ -185,21 +185,21 @@ rule paper_report:
         notebook="notebooks/paper_report.ipynb",
         library=code_of("notebooks/paper_report.ipynb"),
         sheets=dataset_sheets(),
-        summary=f"{OUT}/tables/dataset_summary.csv",
-        ambient=f"{OUT}/tables/ambient_ranges.csv",
-        kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
-        metrics=f"{OUT}/tables/metrics.csv",
-        coefficients=f"{OUT}/tables/coefficients.csv",
-        sensitive_points=f"{OUT}/tables/sensitive_points.csv",
-        comparison=f"{OUT}/tables/paper_comparison.csv",
-        faithfulness=f"{OUT}/tables/faithfulness.csv",
-        claims=f"{OUT}/tables/claims.csv",
+        summary=out(paths.DATASET_SUMMARY),
+        ambient=out(paths.AMBIENT_RANGES),
+        kb=[out(paths.TABLE5)] if DECOUPLED else [],
+        metrics=out(paths.METRICS),
+        coefficients=out(paths.COEFFICIENTS),
+        sensitive_points=out(paths.SENSITIVE_POINTS),
+        comparison=out(paths.PAPER_COMPARISON),
+        faithfulness=out(paths.FAITHFULNESS),
+        claims=out(paths.CLAIMS),
         paper=PAPER_FILES,
-        figures=[f["path"] for f in paper_report_figures().values()],
+        figures=[f["path"] for f in PAGES.paper_report_figures().values()],
     output:
-        notebook=f"{OUT}/reports/paper_report.ipynb",
+        notebook=out(paths.PAPER_REPORT, ext="ipynb"),
         html=report(
-            f"{OUT}/reports/paper_report.html",
+            out(paths.PAPER_REPORT, ext="html"),
             caption="../report/notebook_report.rst",
             category=CATEGORY["reports"],
             labels={"report": "paper"},
@@ -216,18 +216,18 @@ rule paper_report:
     params:
         title=f"Paper report: Xu et al. reproduced on {DATASET.name}",
         statement=DATA_STATEMENT,
-        parameters=lambda w, input: notebook_parameters(
+        parameters=lambda w, input: PAGES.notebook_parameters(
             input,
             {k: v for k, v in config.items() if k not in ("reports", "sweep")},
             paper_fold=config["paper_fold"],
-            fold=REPORT_FOLD,
-            algorithms=PAPER_ALGORITHMS,
+            fold=PLAN.report_fold,
+            algorithms=list(PLAN.paper_algorithms),
             approaches=APPROACHES,
             paper_dir=PAPER_DIR,
-            figures=paper_report_figures(),
+            figures=PAGES.paper_report_figures(),
         ),
     shell:
-        RUN_NOTEBOOK
+        pages.RUN_NOTEBOOK
 
 
 rule index:
@@ -235,10 +235,10 @@ rule index:
         code=code_of("index.py"),
         sheets=dataset_sheets(),
         data=dataset_files(),
-        linked=index_inputs(),
+        linked=PAGES.index_inputs(),
     output:
-        index=f"{OUT}/index.html",
-        provenance=f"{OUT}/provenance.json",
+        index=out(paths.INDEX),
+        provenance=out(paths.PROVENANCE),
     log:
         f"{LOGS}/index.log",
     benchmark:
@@ -255,20 +255,20 @@ rule index:
         dataset_name=DATASET.name,
         simulated=SIMULATED,
         statement=DATA_STATEMENT,
-        sections=index_sections(),
-        figures=index_figures(),
-        tables=INDEX_TABLES,
-        sweep=f"{OUT}/sweep/sweep_report.html",
-        headline=HEADLINE,
+        sections=PAGES.index_sections(),
+        figures=PAGES.index_figures(),
+        tables=PAGES.index_tables(),
+        sweep=out(paths.SWEEP_REPORT, ext="html"),
+        headline=pages.headline(PLAN, DATASET.meta),
         answer=dict(
-            markdown=f"{OUT}/tables/recommendation.md",
-            recommendation=f"{OUT}/tables/recommendation.csv",
-            metrics=f"{OUT}/tables/metrics.csv",
-            model=f"{OUT}/compensation/model.json",
+            markdown=out(paths.RECOMMENDATION_MARKDOWN),
+            recommendation=out(paths.RECOMMENDATION),
+            metrics=out(paths.METRICS),
+            model=out(paths.DEPLOYED_MODEL),
             # The paper's claims, tested (an input of the index through linked_tables).
-            claims=f"{OUT}/tables/claims.csv",
+            claims=out(paths.CLAIMS),
             # Beside the answer: each held-out run's error, recommended and the paper's.
-            figure=embedded("recommendation"),
+            figure=PAGES.embedded("recommendation"),
         ),
     script:
         "../scripts/index.py"

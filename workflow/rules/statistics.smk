@@ -1,7 +1,7 @@
 # Every comparison with its uncertainty (thermaxis.statistics, docs/statistics.md), one
 # job: the paired comparisons of the models and the paper's claims from the held-out
 # predictions, the stability of the sensitive points and, for a dataset that reproduces
-# the paper, the audit of every published value (thermaxis.paper). metrics.csv's
+# the paper, the audit of every published value (thermaxis.paper). The metrics table's
 # intervals are added where it is collected (model.smk), the sweep's where its ranking
 # is (sweep.smk).
 
@@ -9,35 +9,35 @@
 rule statistics:
     input:
         code=code_of("statistics.py"),
-        kb_predictions=f"{OUT}/tables/kb_predictions.csv",
-        error_predictions=f"{OUT}/tables/error_predictions.csv",
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
-        recommendation=f"{OUT}/tables/recommendation.csv",
-        summary=f"{OUT}/tables/dataset_summary.csv",
-        ambient=[f"{OUT}/tables/ambient_ranges.csv"] if AMBIENT else [],
-        kb=[f"{OUT}/tables/table5_slope_intercept.csv"] if DECOUPLED else [],
-        metrics=f"{OUT}/tables/metrics.csv",
-        coefficients=f"{OUT}/tables/coefficients.csv",
-        selection=f"{OUT}/tables/sensitive_points.csv",
+        kb_predictions=out(paths.KB_PREDICTIONS),
+        error_predictions=out(paths.ERROR_PREDICTIONS),
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
+        recommendation=out(paths.RECOMMENDATION),
+        summary=out(paths.DATASET_SUMMARY),
+        ambient=[out(paths.AMBIENT_RANGES)] if AMBIENT else [],
+        kb=[out(paths.TABLE5)] if DECOUPLED else [],
+        metrics=out(paths.METRICS),
+        coefficients=out(paths.COEFFICIENTS),
+        selection=out(paths.SENSITIVE_POINTS),
         paper=PAPER_FILES if PAPER else [],
     output:
-        **audit_tables(),
+        **filed(targets.audit_tables(PLAN, OUT)),
         comparisons=report(
-            f"{OUT}/tables/comparisons.csv",
+            out(paths.COMPARISONS),
             caption="../report/comparisons.rst",
             category=CATEGORY["prediction"],
             labels={"table": "paired comparisons"},
         ),
         claims=report(
-            f"{OUT}/tables/claims.csv",
+            out(paths.CLAIMS),
             caption="../report/claims.rst",
             category=CATEGORY["audit"],
             labels={"table": "the paper's claims"},
         ),
-        markdown=f"{OUT}/tables/claims.md",
+        markdown=out(paths.CLAIMS_MARKDOWN),
         stability=report(
-            f"{OUT}/tables/selection_stability.csv",
+            out(paths.SELECTION_STABILITY),
             caption="../report/selection_stability.rst",
             category=CATEGORY["sensitive_points"],
             labels={"table": "stability of the sensitive points"},

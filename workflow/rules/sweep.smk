@@ -6,10 +6,10 @@
 rule sweep_batch:
     input:
         code=code_of("sweep_batch.py"),
-        errors=f"{OUT}/assembled/errors.parquet",
-        temperatures=f"{OUT}/assembled/temperatures.parquet",
+        errors=out(paths.ASSEMBLED_ERRORS),
+        temperatures=out(paths.ASSEMBLED_TEMPERATURES),
     output:
-        f"{OUT}/sweep/batches/{{n_batches}}/{{batch}}.parquet",
+        out(paths.SWEEP_BATCH),
     log:
         f"{LOGS}/sweep/batch_{{n_batches}}_{{batch}}.log",
     benchmark:
@@ -36,9 +36,9 @@ rule sweep_collect:
         code=code_of("sweep_collect.py"),
         batches=sweep_batch_files,
     output:
-        summary=f"{OUT}/sweep/summary.csv",
-        ranking=f"{OUT}/sweep/ranking.csv",
-        effects=f"{OUT}/sweep/factor_effects.csv",
+        summary=out(paths.SWEEP_SUMMARY),
+        ranking=out(paths.SWEEP_RANKING),
+        effects=out(paths.SWEEP_EFFECTS),
     log:
         f"{LOGS}/sweep/collect.log",
     benchmark:
@@ -59,15 +59,15 @@ rule sweep_report:
     input:
         library=code_of("notebooks/sweep_report.ipynb"),
         notebook="notebooks/sweep_report.ipynb",
-        summary=f"{OUT}/sweep/summary.csv",
-        ranking=f"{OUT}/sweep/ranking.csv",
-        effects=f"{OUT}/sweep/factor_effects.csv",
-        figures=figure_files(SWEEP_FIGURES),
+        summary=out(paths.SWEEP_SUMMARY),
+        ranking=out(paths.SWEEP_RANKING),
+        effects=out(paths.SWEEP_EFFECTS),
+        figures=targets.figure_files(PLAN, OUT, SWEEP_FIGURES),
         benchmarks=sweep_batch_benchmarks,
     output:
-        notebook=f"{OUT}/sweep/sweep_report.ipynb",
+        notebook=out(paths.SWEEP_REPORT, ext="ipynb"),
         html=report(
-            f"{OUT}/sweep/sweep_report.html",
+            out(paths.SWEEP_REPORT, ext="html"),
             caption="../report/notebook_report.rst",
             category=CATEGORY["reports"],
             subcategory="Sweep",
@@ -86,13 +86,13 @@ rule sweep_report:
         statement=DATA_STATEMENT,
         parameters=sweep_report_parameters,
     shell:
-        RUN_NOTEBOOK
+        pages.RUN_NOTEBOOK
 
 
 rule sweep:
     input:
-        f"{OUT}/sweep/summary.csv",
-        f"{OUT}/sweep/ranking.csv",
-        f"{OUT}/sweep/factor_effects.csv",
-        figure_files(SWEEP_FIGURES),
-        f"{OUT}/sweep/sweep_report.html",
+        out(paths.SWEEP_SUMMARY),
+        out(paths.SWEEP_RANKING),
+        out(paths.SWEEP_EFFECTS),
+        targets.figure_files(PLAN, OUT, SWEEP_FIGURES),
+        out(paths.SWEEP_REPORT, ext="html"),

@@ -257,13 +257,14 @@ def _run(args) -> int:
 
 def _sweep(args) -> int:
     from thermaxis.config import dataset_of
+    from thermaxis.pipeline import paths
 
     dataset = args.dataset or dataset_of(_config())
     code = _wrapped(_snakemake_command(args, ["--config", f"dataset={dataset}", "--", "sweep"]))
     if code:
         return code
     # The index links the sweep report only if it existed when the index was built.
-    index = _results_of(dataset) / "index.html"
+    index = _results_of(dataset) / paths.INDEX
     if not index.is_file() or _dry_run(args):
         return 0
     return _wrapped(
@@ -280,13 +281,14 @@ def _results_of(dataset: str) -> Path:
 
 
 def _report(args) -> int:
+    from thermaxis.pipeline import paths
     from thermaxis.reports import answer
 
     folders = []
     for dataset in _datasets(args):
         out = _results_of(dataset)
         target = (
-            ["--report", str(out / "report.zip")] if args.zip else ["--", str(out / "index.html")]
+            ["--report", str(out / paths.REPORT_ZIP)] if args.zip else ["--", str(out / paths.INDEX)]
         )
         code = _wrapped(_snakemake_command(args, ["--config", f"dataset={dataset}", *target]))
         if code:

@@ -29,7 +29,7 @@ def held_out_accuracy(metrics: pd.DataFrame, approach: str, algorithm: str) -> l
     rows = metrics[(metrics["approach"] == approach) & (metrics["algorithm"] == algorithm)]
     if rows.empty:
         raise ValueError(
-            f"tables/metrics.csv: no rows for approach {approach!r} and algorithm {algorithm!r}"
+            f"the metrics table: no rows for approach {approach!r} and algorithm {algorithm!r}"
         )
     columns = ["fold", "target", "rmse", "max_abs", "mae", "residual_min", "residual_max"]
     return [

@@ -275,7 +275,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
 
     Grouped bars: one group per fold, one bar per (approach, algorithm) pair; a pair
     missing from a fold leaves a gap. Where the table has ``<metric>_lo`` and
-    ``<metric>_hi`` (metrics.csv's bootstrap intervals), each bar gets its error bar.
+    ``<metric>_hi`` (the metrics table's bootstrap intervals), each bar gets its error bar.
 
     Parameters
     ----------
@@ -361,7 +361,7 @@ def _by_fold(rows: pd.DataFrame, column: str, folds) -> np.ndarray:
 def fig_recommendation(recommendation: pd.DataFrame) -> Figure:
     """Held-out RMSE (top) and largest |residual| (bottom) per fold: the nested choice and the paper's.
 
-    ``recommendation`` is ``tables/recommendation.csv``: per fold the candidate chosen
+    ``recommendation`` is the recommendation table: per fold the candidate chosen
     without the held-out run, its error there, and the paper's configuration's.
     """
     _require_columns(

@@ -35,6 +35,7 @@ from itertools import groupby, product
 from typing import Any
 
 from thermaxis.figures.captions import figure_caption
+from thermaxis.pipeline import paths
 
 __all__ = [
     "Fact",
@@ -137,7 +138,7 @@ class Figure:
         }
 
 
-ERRORS = "assembled/errors.parquet"
+ERRORS = paths.ASSEMBLED_ERRORS
 RUN = Fact("run")
 FOLD = Fact("fold")  # a value of `each`, else the fold of a per-fold job
 APPROACH = Fact("approach")
@@ -176,7 +177,7 @@ FIGURES: tuple[FigureEntry, ...] = (
     _run_figure("fig8_rezeroed", "Fig. 8", when="decoupled"),
     FigureEntry(
         "fig3_ambient", "figures.paper.fig3_ambient", family="fig_data", when="ambient",
-        target="all", tables={"ambient": "tables/ambient_series.parquet"},
+        target="all", tables={"ambient": paths.AMBIENT_SERIES},
         category="data", label="Fig. 3", labels={"run": "all"},
     ),
     FigureEntry(
@@ -189,8 +190,8 @@ FIGURES: tuple[FigureEntry, ...] = (
         "fig10_temperature_rise", "figures.paper.fig10_temperature_rise", family="fig_data",
         when="always", target="all",
         tables={
-            "series": "clean/{run}/temperatures.parquet",
-            "signals": "clean/{run}/signals.parquet",
+            "series": paths.CLEAN_SERIES,
+            "signals": paths.CLEAN_SIGNAL_SERIES,
         },
         category="data", label="Fig. 10", labels={"run": RUN}, arguments={"units": Fact("units")},
         caption={"run": RUN},
@@ -198,55 +199,55 @@ FIGURES: tuple[FigureEntry, ...] = (
     FigureEntry(
         "fig12_slope_intercept", "figures.paper.fig12_slope_intercept",
         family="fig_data", when="decoupled", target="all",
-        tables={"kb": "tables/table5_slope_intercept.csv"}, category="decoupling", label="Fig. 12",
+        tables={"kb": paths.TABLE5}, category="decoupling", label="Fig. 12",
         labels={"run": "all"},
     ),
     FigureEntry(
         "fold_comparison", "figures.predictions.fig_fold_comparison", family="fig_results",
-        when="always", target="all", tables={"metrics": "tables/metrics.csv"},
+        when="always", target="all", tables={"metrics": paths.METRICS},
         category="prediction", label="fold comparison", labels={"fold": "all"},
         caption={"target": "error"},
     ),
     FigureEntry(
         "recommendation", "figures.predictions.fig_recommendation", family="fig_results",
-        when="always", target="all", tables={"recommendation": "tables/recommendation.csv"},
+        when="always", target="all", tables={"recommendation": paths.RECOMMENDATION},
         category="prediction", label="recommendation", labels={"fold": "all"},
     ),
     # Beside Table 6: how often each sensor is chosen when a training run is left out.
     FigureEntry(
         "selection_stability", "figures.statistics.fig_selection_stability",
         family="fig_results", when="always", target="all",
-        tables={"stability": "tables/selection_stability.csv"}, category="sensitive_points",
+        tables={"stability": paths.SELECTION_STABILITY}, category="sensitive_points",
         label="stability", labels={"fold": "all"},
     ),
     # Figs. 11/15/17 (point by point: 11) and 14/16.
-    _prediction("error_prediction", "always", {"err_pred": "tables/error_predictions.csv"},
+    _prediction("error_prediction", "always", {"err_pred": paths.ERROR_PREDICTIONS},
                 "Figs. 11/15/17", approaches=Fact("approaches")),
-    _prediction("kb_prediction", "decoupled", {"kb_pred": "tables/kb_predictions.csv"},
+    _prediction("kb_prediction", "decoupled", {"kb_pred": paths.KB_PREDICTIONS},
                 "Figs. 14/16", approaches=("decoupled",)),
     # The drift of each compensated held-out run, all in one job.
     FigureEntry(
         "compensation_drift", "figures.compensation.fig_compensation_drift",
         family="fig_results", when="always", target="all",
-        tables={"summary": "compensation/folds/{fold}/summary.csv"}, category="compensation",
+        tables={"summary": paths.FOLD_COMPENSATION.format(fold="{fold}", table="summary")}, category="compensation",
         label="thermal drift", labels={"fold": FOLD}, arguments={"fold": FOLD},
         caption={"fold": FOLD}, each={"fold": Fact("folds")}, stem="{id}_{fold}",
     ),
     # The sweep's figures, from its ranking (`make sweep`).
     FigureEntry(
         "sweep_heatmap", "figures.registry.sweep_heatmap", family="fig_sweep", when="always",
-        target="sweep", tables={"ranking": "sweep/ranking.csv"}, reader="sweep.run.read_table",
+        target="sweep", tables={"ranking": paths.SWEEP_RANKING}, reader="sweep.run.read_table",
         arguments={"selection": Fact("selection"), "degree": Fact("degree")}, caption=None,
         folder="sweep/figures",
     ),
     FigureEntry(
         "sweep_factor_effects", "figures.sweep.fig_factor_effects", family="fig_sweep",
-        when="always", target="sweep", tables={"ranking": "sweep/ranking.csv"},
+        when="always", target="sweep", tables={"ranking": paths.SWEEP_RANKING},
         reader="sweep.run.read_table", caption=None, folder="sweep/figures",
     ),
     FigureEntry(
         "sweep_critical_difference", "figures.statistics.fig_sweep_critical_difference",
-        family="fig_sweep", when="always", target="sweep", tables={"ranking": "sweep/ranking.csv"},
+        family="fig_sweep", when="always", target="sweep", tables={"ranking": paths.SWEEP_RANKING},
         reader="sweep.run.read_table", caption=None, folder="sweep/figures",
     ),
     # Held-out error across datasets, after every dataset's run (results/_datasets/).

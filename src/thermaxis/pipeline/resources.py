@@ -12,7 +12,7 @@ prints one line per rule: its benchmarks, the measured peaks and the requests.
 Which benchmark files belong to which rule is read from the rule files
 (``benchmark:`` paths), so a new rule needs no entry here.
 
-Every rule declares its requests through :func:`per_attempt` (``workflow/rules/common.smk``
+Every rule declares its requests through :func:`per_attempt` (``thermaxis.pipeline.tuning``
 keeps the per-rule values, beside the floors :data:`MIN_MEMORY_MB` and
 :data:`MIN_RUNTIME_MIN` every rule gets at least).
 """

@@ -16,6 +16,7 @@ from pathlib import Path
 import pandas as pd
 
 from thermaxis.compensation.verdict import verdict_sentence
+from thermaxis.pipeline import paths
 from thermaxis.tables import read_table
 
 __all__ = ["LEADS", "answer_of", "answer_sentence", "read_answer", "main"]
@@ -62,8 +63,8 @@ def answer_sentence(answer: dict) -> str:
 def read_answer(results: Path | str) -> dict:
     """The answer of ``results/<dataset>`` from its recommendation.csv and model.json."""
     results = Path(results)
-    folds = read_table(results / "tables" / "recommendation.csv", comment="#")
-    with open(results / "compensation" / "model.json", encoding="utf-8") as fh:
+    folds = read_table(results / paths.RECOMMENDATION, comment="#")
+    with open(results / paths.DEPLOYED_MODEL, encoding="utf-8") as fh:
         deployment = json.load(fh)["deployment"]
     return answer_of(folds, deployment)
 
@@ -72,8 +73,8 @@ def main(argv: list[str] | None = None) -> int:
     """``python -m thermaxis.reports.answer results/<dataset> ...``: one line per dataset."""
     for folder in argv if argv is not None else sys.argv[1:]:
         path = Path(folder)
-        if not (path / "compensation" / "model.json").is_file():
-            print(f"{path.name}: no answer yet ({path / 'compensation' / 'model.json'} is missing)")
+        if not (path / paths.DEPLOYED_MODEL).is_file():
+            print(f"{path.name}: no answer yet ({path / paths.DEPLOYED_MODEL} is missing)")
             continue
         print(f"{path.name}: {answer_sentence(read_answer(path))} See {path / 'index.html'}")
     return 0

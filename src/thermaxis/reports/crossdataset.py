@@ -1,6 +1,6 @@
 """Held-out error across datasets: one row per dataset x approach x algorithm.
 
-Each dataset's workflow run writes ``results/<dataset>/tables/metrics.csv`` (one row
+Each dataset's workflow run writes its metrics table (thermaxis.pipeline.paths.METRICS, one row
 per fold x approach x algorithm x target, see :data:`thermaxis.method.metrics.METRICS_CSV_COLUMNS`).
 This module reads the tables of the datasets it is asked for (by default every dataset
 whose results are under ``results/``: each folder holding the workflow's
@@ -38,6 +38,7 @@ import yaml
 from thermaxis.config import StatisticsSettings, load_config, validate_config
 from thermaxis.errors import DataError, shown
 from thermaxis.figures import registry
+from thermaxis.pipeline import paths
 from thermaxis.statistics.resampling import fold_mean_interval
 from thermaxis.tables import read_table
 
@@ -75,7 +76,7 @@ _ALGORITHM_ORDER = ("mlr", "svr", "ridge", "pls", "gpr")
 
 
 def read_metrics(path) -> pd.DataFrame:
-    """One dataset's metrics.csv, checked for the columns the summary needs."""
+    """One dataset's metrics table, checked for the columns the summary needs."""
     path = Path(path)
     try:
         frame = read_table(
@@ -193,7 +194,7 @@ def summarise(
                 )
     if not rows:
         raise DataError(
-            "no dataset results could be read; expected results/<dataset>/tables/metrics.csv "
+            f"no dataset results could be read; expected results/<dataset>/{paths.METRICS} "
             "for the datasets of config datasets"
         )
     return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
@@ -249,7 +250,7 @@ def _readable(results: Path, names: Iterable[str]) -> tuple[dict, dict]:
     for name in names:
         folder = results / name
         try:
-            metrics[name] = read_metrics(folder / "tables" / "metrics.csv")
+            metrics[name] = read_metrics(folder / paths.METRICS)
             kinds[name] = dataset_kind(folder)
         except DataError as exc:
             metrics.pop(name, None)

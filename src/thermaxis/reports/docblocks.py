@@ -23,6 +23,7 @@ from pathlib import Path
 import pandas as pd
 
 from thermaxis.errors import DataError
+from thermaxis.pipeline import paths
 from thermaxis.reports.formatting import markdown_table
 
 __all__ = ["KINDS", "blocks_of", "render", "rewrite", "main"]
@@ -65,10 +66,10 @@ def _statement(folder: Path) -> str:
 def _heldout(results: Path, names: list[str]) -> str:
     """The held-out error of the error curves per dataset, approach and algorithm, as
     results/_datasets/summary.md gives it (thermaxis.reports.crossdataset.summarise), from
-    each dataset's tables/metrics.csv."""
+    each dataset's metrics table."""
     from thermaxis.reports.crossdataset import read_metrics, summarise
 
-    metrics = {n: read_metrics(_need(results / n / "tables" / "metrics.csv")) for n in names}
+    metrics = {n: read_metrics(_need(results / n / paths.METRICS)) for n in names}
     data = {n: _statement(results / n).split()[0].lower() for n in names}
     summary = summarise(metrics, data)
     shown = summary[["dataset", "data", "approach", "algorithm", "n_folds", "mean_rmse_um",
@@ -77,9 +78,9 @@ def _heldout(results: Path, names: list[str]) -> str:
 
 
 def _faithfulness(results: Path, names: list[str]) -> str:
-    """The twin's faithfulness table (tables/faithfulness.csv), verbatim."""
+    """The twin's faithfulness table, verbatim."""
     (name,) = names
-    path = _need(results / name / "tables" / "faithfulness.csv")
+    path = _need(results / name / paths.FAITHFULNESS)
     return markdown_table(pd.read_csv(path, dtype=str, keep_default_na=False), "%.3f")
 
 

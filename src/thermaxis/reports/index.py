@@ -97,11 +97,11 @@ class PageTable:
 class Headline:
     """What a visitor came for, from the workflow's tables."""
 
-    ranking: pd.DataFrame  # thermaxis.reports.crossdataset.model_ranking(metrics.csv)
+    ranking: pd.DataFrame  # thermaxis.reports.crossdataset.model_ranking(the metrics table)
     recommendation: str  # the answer sentence of recommendation.md
     deployment: dict  # model.json's deployment record
     comparison: pd.DataFrame | None = None  # deployment_comparison(recommendation.csv)
-    claims: pd.DataFrame | None = None  # tables/claims.csv, when the workflow made it
+    claims: pd.DataFrame | None = None  # the claims table, when the workflow made it
     answer: str = ""  # thermaxis.reports.answer.answer_sentence: what to deploy, and whether
     figure: str = ""  # the recommendation figure beside it, relative to the page
     figure_caption: str = ""

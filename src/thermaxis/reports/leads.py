@@ -58,7 +58,7 @@ def model_lead(
 ) -> str:
     """A model report's opening: the held-out run's largest errors, then what compensating did.
 
-    ``metrics`` is tables/metrics.csv, ``compensation`` the fold's compensation summary
+    ``metrics`` is the metrics table (thermaxis.pipeline.paths.METRICS), ``compensation`` the fold's compensation summary
     (one row per measurement), ``compensating`` the (approach, algorithm) it used.
     """
     rows = metrics[(metrics["fold"] == fold) & (metrics["target"] == "error")]

@@ -97,7 +97,7 @@ def metric_intervals(sums: pd.DataFrame, settings: StatisticsSettings) -> pd.Dat
 
 
 def with_intervals(metrics: pd.DataFrame, intervals: pd.DataFrame) -> pd.DataFrame:
-    """metrics.csv with each metric's interval beside it, rows in their order."""
+    """The metrics table with each metric's interval beside it, rows in their order."""
     merged = metrics.merge(intervals, on=MODEL_KEYS, how="left", validate="one_to_one")
     rest = [c for c in metrics.columns if c not in (*MODEL_KEYS, *INTERVAL_METRICS)]
     return merged[[*MODEL_KEYS, *interval_columns(), *rest]]

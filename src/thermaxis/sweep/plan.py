@@ -48,6 +48,7 @@ __all__ = [
     "batch_minutes",
     "subset_count",
     "cost_estimate",
+    "cost_note",
     "batch_units",
 ]
 
@@ -325,6 +326,18 @@ def cost_estimate(n_evaluations: int, seconds_per_evaluation: float, workers: in
         "workers": int(workers),
         "wall_minutes": cpu_s / max(int(workers), 1) / 60.0,
     }
+
+
+def cost_note(n_units: int, n_evaluations: int, batches: int, seconds_per_evaluation: float) -> str:
+    """The line printed before a sweep's first batch starts: its size and :func:`cost_estimate`."""
+    cost = cost_estimate(n_evaluations, seconds_per_evaluation, batches)
+    return (
+        f"thermaxis: sweep of {n_units} fold x selection units, "
+        f"{cost['evaluations']} evaluations in {batches} batches; estimated "
+        f"{cost['cpu_hours']:.2f} CPU-hours at {cost['seconds_per_evaluation']:g} s each "
+        "(config sweep.seconds_per_evaluation), "
+        f">= {cost['wall_minutes']:.1f} min wall with every batch running at once"
+    )
 
 
 def batch_units(units: Sequence[Unit], n_batches: int, batch: int) -> list[Unit]:

@@ -35,6 +35,7 @@ from thermaxis.paper.audit import ReproducedTables, paper_comparison
 from thermaxis.paper.equations import PublishedTargets, published_targets
 from thermaxis.paper.faithfulness import faithfulness
 from thermaxis.paper.published import load_table, published_values
+from thermaxis.pipeline import paths
 from thermaxis.templates import fill
 
 from . import conditions as cond
@@ -227,7 +228,7 @@ def write_dataset_docs(root: Path | str) -> None:
 #: The held-out comparisons of the paper: (approach, algorithm, paper table).
 HELDOUT = (("decoupled", "mlr", 7), ("decoupled", "svr", 8), ("pointwise", "mlr", 4))
 #: The twin before it was calibrated to Eq. 8 and Eq. 9 too (to Table 5 only), fold E4 with the default
-#: configuration: ``snakemake results/twin/tables/metrics.csv`` at commit fac73bc.
+#: configuration: the twin's metrics table (``snakemake`` at commit fac73bc).
 #: A record of that run for comparison; nothing is computed from it.
 PREVIOUS_TWIN_HELDOUT = {
     ("decoupled", "mlr", "k"): (4.477, 7.785, 3.505),
@@ -704,6 +705,7 @@ def write_calibration_report(root: Path | str, params: mdl.TwinParams, fit: dict
         **_measurement_values(table),
         **_fit_values(fit),
         n_initial_parameters=len(mdl.INITIAL_PARAMETERS),
+        metrics_table=paths.METRICS,
         parameter_tables=_parameter_tables(params),
     )
     (root / "CALIBRATION.md").write_text(text, encoding="utf-8")
