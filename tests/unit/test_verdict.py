@@ -124,7 +124,8 @@ def test_the_sentence_is_ascii_for_exports_and_in_micrometres_for_pages():
         "Not established: of 3 held-out run(s) compensating improves 2 beyond the +/-0.10 {u} "
         "the measurement resolves (67%, 90% interval 14% to 98%; sign test p = 0.5 > 0.05), "
         "leaves 0 unchanged and worsens 1; median change of the largest |deviation| -0.50 {u} "
-        "(75% interval -5.00 to +7.70 {u}). It worsens R2 (worst R2: +7.70 {u}, 93% of its "
+        "(75% interval -5.00 to +7.70 {u}). It worsens R2 (worst R2: largest |deviation| +7.70 {u}, "
+        "93% of its "
         "uncompensated error). Too few runs to tell: 5 more held-out run(s) that it improves "
         "would establish it, at the conditions of R2 or outside those tested."
     )
@@ -262,3 +263,14 @@ def test_a_quantity_some_runs_do_not_give_is_summed_up_over_those_that_do():
     verdict = deployment_verdict(summary(rows), tolerance=0.1, significance=0.05)
     assert verdict["E"]["median_change_um"] == 1.0 and verdict["E"]["worst_run"] == "R2"
     assert [r["effect"] for r in verdict["runs"]] == ["improved", "worsened"]
+
+
+def test_a_run_worsened_only_in_e_is_named_with_that_quantity():
+    # R1: largest |deviation| 8 -> 3 (better) but E 1.0 -> 2.5 (+1.5, 150 % of 1.0): worsened.
+    # R2 improves in both; the largest |deviation|'s own worst run (-4.0) is R2, not R1.
+    rows = [("R1", 1, 8.0, 3.0, 1.0, 2.5), ("R2", 1, 8.0, 4.0, 1.0, 0.8)]
+    verdict = deployment_verdict(summary(rows), tolerance=0.1, significance=0.05)
+    assert verdict["worsened"] == ["R1"] and verdict["largest_abs"]["worst_run"] == "R2"
+    assert "It worsens R1 (worst R1: E of ISO 230-2 +1.50 um, 150% of its uncompensated error)" in (
+        verdict_sentence(verdict)
+    )

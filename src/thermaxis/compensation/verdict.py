@@ -204,6 +204,25 @@ def _names(runs: list[str]) -> str:
     return ", ".join(runs[:-1]) + f" and {runs[-1]}" if len(runs) > 1 else runs[0]
 
 
+def _worst_increase(verdict: dict, unit: str) -> str:
+    """The largest increase among the worsened runs, in whichever quantity grew: a run is
+    worsened by either, so the largest |deviation|'s own worst run may be one that improved."""
+    words = {"largest_abs": "largest |deviation|", "E": "E of ISO 230-2"}
+    run, name = max(
+        (
+            (r, q)
+            for r in verdict["runs"]
+            if r["effect"] == "worsened"
+            for q in words
+            if np.isfinite(r.get(f"{q}_change_um", np.nan))
+        ),
+        key=lambda pair: pair[0][f"{pair[1]}_change_um"],
+    )
+    change, before = run[f"{name}_change_um"], run[f"{name}_before_um"]
+    of = f", {change / before:.0%} of its uncompensated error" if before > 0 else ""
+    return f"worst {run['run']}: {words[name]} {change:+.2f} {unit}{of}"
+
+
 def verdict_sentence(verdict: dict, unit: str = "um") -> str:
     """The verdict in a few sentences, the same words on every surface: with ``unit`` "um"
     (ASCII) for model.json and the export headers, "µm" for the index, the model reports and
@@ -224,14 +243,7 @@ def verdict_sentence(verdict: dict, unit: str = "um") -> str:
         f"{m_high:+.2f} {unit})."
     )
     worsened = verdict["worsened"]
-    worst = ""
-    if worsened:
-        share = largest["worst_share_of_uncompensated"]
-        of = f", {share:.0%} of its uncompensated error" if share is not None else ""
-        worst = (
-            f" It worsens {_names(worsened)} (worst {largest['worst_run']}: "
-            f"{largest['worst_change_um']:+.2f} {unit}{of})"
-        )
+    worst = f" It worsens {_names(worsened)} ({_worst_increase(verdict, unit)})" if worsened else ""
     outcome = verdict["outcome"]
     if outcome == "recommended":
         edge = f"{worst}: the edge of the conditions it was tested on." if worsened else ""
