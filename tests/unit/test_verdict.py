@@ -89,7 +89,8 @@ def test_a_change_within_the_tolerance_is_unchanged():
     verdict = deployment_verdict(summary(rows), tolerance=0.125, significance=0.05)
     assert [r["effect"] for r in verdict["runs"]] == ["improved", "unchanged", "unchanged"]
     assert (verdict["improved_runs"], verdict["unchanged_runs"]) == (1, 2)
-    assert verdict["outcome"] == "not_recommended"  # 1 of 3: at most half
+    # 1 improved, none worsened, median -0.125: it leans to improvement, too few to tell.
+    assert verdict["outcome"] == "not_established"
     verdict = deployment_verdict(summary(rows), tolerance=0.1, significance=0.05)
     assert [r["effect"] for r in verdict["runs"]] == ["improved", "worsened", "improved"]
 
@@ -274,3 +275,22 @@ def test_a_run_worsened_only_in_e_is_named_with_that_quantity():
     assert "It worsens R1 (worst R1: E of ISO 230-2 +1.50 um, 150% of its uncompensated error)" in (
         verdict_sentence(verdict)
     )
+
+
+def test_harm_is_judged_on_the_runs_that_changed():
+    # 6 runs: 3 improved, 3 worsened -> not recommended; with one of the worsened made
+    # unchanged instead (3 improved, 2 worsened, 1 unchanged) it leans to improvement:
+    # not established, and p = P(X >= 3 | 6, 1/2) = 42/64.
+    def rows(last_after):
+        improved = [(f"R{i}", 1, 8.0, 4.0, 1.0, 0.5) for i in (1, 2, 3)]
+        worsened = [("R4", 1, 4.0, 9.0, 1.0, 2.0), ("R5", 1, 4.0, 9.0, 1.0, 2.0)]
+        return improved + worsened + [("R6", 1, 4.0, last_after, 1.0, 1.0)]
+
+    harm = deployment_verdict(summary(rows(9.0)), tolerance=0.1, significance=0.05)
+    assert (harm["improved_runs"], harm["worsened_runs"], harm["outcome"]) == (
+        3, 3, "not_recommended",
+    )  # fmt: skip
+    lean = deployment_verdict(summary(rows(4.0)), tolerance=0.1, significance=0.05)
+    assert (lean["improved_runs"], lean["worsened_runs"], lean["unchanged_runs"]) == (3, 2, 1)
+    assert lean["outcome"] == "not_established"
+    assert lean["sign_test_p"] == pytest.approx(42 / 64)

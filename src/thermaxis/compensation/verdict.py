@@ -12,8 +12,8 @@ stroke and both directions, and of E of ISO 230-2, each the worst over its measu
   sign test of "at most half improve", p <= significance) and the median change of the
   largest |deviation| is a reduction; the runs it worsens are the edge of the conditions
   it was tested on;
-- **not recommended** when at most half the runs improve, or the median change is an
-  increase;
+- **not recommended** when the runs say it harms: at least as many worsened as improved
+  (unchanged runs set aside, as the sign test does), or the median change is an increase;
 - **not established** otherwise: the runs lean to improvement but are too few; the verdict
   says how many more improving runs would pass the test.
 
@@ -145,8 +145,11 @@ def _quantity(changes: pd.DataFrame, name: str, alpha: float) -> dict:
     }
 
 
-def _outcome(n: int, improved: int, p: float, median_change: float, alpha: float) -> str:
-    if 2 * improved <= n or median_change > 0:
+def _outcome(improved: int, worsened: int, p: float, median_change: float, alpha: float) -> str:
+    # Harm is what the runs that changed say: as many worsened as improved (the sign test's
+    # own view, which sets unchanged runs aside), or a median increase. Establishing a
+    # benefit is stricter: there an unchanged run counts against it (sign_test_p).
+    if worsened >= improved or median_change > 0:
         return "not_recommended"
     if p <= alpha and median_change < 0:
         return "recommended"
@@ -187,7 +190,13 @@ def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: fl
     }
     for name in names:
         verdict[name] = _quantity(changes, name, significance)
-    outcome = _outcome(n, improved, p, verdict["largest_abs"]["median_change_um"], significance)
+    outcome = _outcome(
+        improved,
+        verdict["worsened_runs"],
+        p,
+        verdict["largest_abs"]["median_change_um"],
+        significance,
+    )
     verdict["outcome"] = outcome
     verdict["runs_needed"] = (
         max(runs_needed(n, improved, significance), 1) if outcome == "not_established" else None
