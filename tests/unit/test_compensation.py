@@ -14,7 +14,7 @@ from thermaxis.compensation.heldout import held_out_tables, largest_steps, step_
 from thermaxis.compensation.model import line_weights, model_record
 from thermaxis.compensation.runtime import Compensator, ControllerParameters, Step
 from thermaxis.config import FallbackSettings
-from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
 
 REF = {"T1": 30.0, "T2": 25.0}
 WARM = {"T1": 32.0, "T2": 26.5}

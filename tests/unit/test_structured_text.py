@@ -18,7 +18,7 @@ from thermaxis.compensation.model import CONVENTION, combined_record, model_reco
 from thermaxis.compensation.plc import st_real, structured_text
 from thermaxis.compensation.runtime import Compensator
 from thermaxis.config import FallbackSettings
-from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
 
 TARGETS = np.array([185.0 + 20.0 * i for i in range(14)])
 RAMP = FallbackSettings(1.5, (-10.0, 90.0), 0.25, 30.0, "ramp_to_zero", 20.0)

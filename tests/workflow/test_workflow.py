@@ -177,7 +177,7 @@ def test_plot_option_reruns_only_figure_rules(lines_run, library_unchanged):
 def test_editing_a_module_selection_imports_indirectly_reruns_selection(
     lines_run, tmp_path_factory
 ):
-    """method/models.py is named in no rule; the models rule's script reaches it through
+    """method/estimators.py is named in no rule; the models rule's script reaches it through
     method.folds.
 
     Snakemake compares checksums of inputs newer than the outputs, so the edit must
@@ -185,10 +185,10 @@ def test_editing_a_module_selection_imports_indirectly_reruns_selection(
     """
     import os
 
-    import thermaxis.method.models
+    import thermaxis.method.estimators
 
     work, config = lines_run.work, lines_run.config
-    module = Path(thermaxis.method.models.__file__)
+    module = Path(thermaxis.method.estimators.__file__)
     original, stat = module.read_bytes(), module.stat()
     with library_lock(tmp_path_factory, exclusive=True):  # other workers' dry runs wait
         try:

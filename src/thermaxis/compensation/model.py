@@ -84,7 +84,7 @@ CONVENTION = (
 
 
 def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline) -> dict:
-    """One fitted :func:`thermaxis.method.models.make_regressor` pipeline as plain numbers.
+    """One fitted :func:`thermaxis.method.regressors.make_regressor` pipeline as plain numbers.
 
     ``inputs`` are indices into the model's input list. Affine fits (mlr, ridge, lasso, pls) keep
     the constant and one coefficient per input in physical units (target unit per degree
@@ -93,7 +93,7 @@ def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline)
     """
     record = {"target": target, "position_mm": position_mm, "inputs": [int(i) for i in inputs]}
     # The fitting side's imports (scikit-learn) stay out of the controller side's start.
-    from thermaxis.method.models import linear_terms
+    from thermaxis.method.regressors import linear_terms
 
     terms = linear_terms(pipeline, [str(i) for i in inputs])
     if terms is not None:
@@ -216,7 +216,7 @@ def model_record(
     positions = np.asarray(estimator.positions_mm_, dtype=float)
     origin = float(positions[0])
     regressions = []
-    # Every regression sees the operating signals after its temperatures (models._features).
+    # Every regression sees the operating signals after its temperatures (estimators._features).
     signal_inputs = [index[(s, "signal")] for s in estimator.signals]
     if approach == "decoupled":
         k_inputs = [index[(s, "absolute")] for s in estimator.k_sensors] + signal_inputs

@@ -326,7 +326,7 @@ def _build_model(
 ):
     # Imported here: selecting sensitive points, which shares this module, needs no
     # scikit-learn, and a selection job should not pay for importing it.
-    from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+    from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
 
     common = dict(
         algorithm=algorithm,
