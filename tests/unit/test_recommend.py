@@ -8,25 +8,27 @@ import pytest
 from scipy.optimize import nnls
 
 from thermaxis.config import Settings
-from thermaxis.method.folds import run_groups
-from thermaxis.method.recommend import (
+from thermaxis.method.candidates import (
     BASELINE,
-    COMBINED,
     EVIDENCE,
     Candidate,
-    Combination,
-    Recommendation,
     candidate_view,
     candidates_for,
     default_candidates,
+)
+from thermaxis.method.folds import run_groups
+from thermaxis.method.nested import (
+    COMBINED,
+    Combination,
+    Recommendation,
     fold_scores,
     held_out_predictions,
     held_out_scores,
     recommend,
-    recommendation_markdown,
     super_learner_weights,
     training_sets,
 )
+from thermaxis.reports.recommendation import recommendation_markdown
 
 DEFAULTS = Settings.from_config({})
 POSITIONS = (0.0, 200.0, 400.0)

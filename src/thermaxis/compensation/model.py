@@ -289,7 +289,7 @@ def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> d
 
     ``members``: (candidate name, weight, its :func:`model_record`). The combination's
     predicted error curve is the weighted sum of the members' (the super learner,
-    :mod:`thermaxis.method.recommend`): the members' regressions are concatenated, their
+    :mod:`thermaxis.method.nested`): the members' regressions are concatenated, their
     inputs merged, and each member's ``curve_basis`` columns scaled by its weight, so
     ``curve_basis`` times the regressions' changes is that sum, and ``line_weights`` its
     least-squares line. A member of weight 0 is left out (the controller reads nothing it
