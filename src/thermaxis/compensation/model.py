@@ -462,9 +462,9 @@ def fit_axis_model(
 ):
     """The configured model fitted on the rows given (all runs, or a fold's training runs)."""
     # The estimator the folds are evaluated with, so the deployed model is the one scored.
-    from thermaxis.method.folds import _build_model
+    from thermaxis.method.folds import build_model
 
-    return _build_model(approach, algorithm, selection, model_settings, degree).fit(X, Y)
+    return build_model(approach, algorithm, selection, model_settings, degree).fit(X, Y)
 
 
 def fit_model_record(
