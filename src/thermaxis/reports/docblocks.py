@@ -23,7 +23,7 @@ from pathlib import Path
 import pandas as pd
 
 from thermaxis.errors import DataError
-from thermaxis.reports.formatting import markdown_table
+from thermaxis.tables import markdown_table
 
 __all__ = ["KINDS", "blocks_of", "render", "rewrite", "main"]
 

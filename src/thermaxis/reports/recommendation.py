@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from thermaxis.method.nested import Recommendation, summary_of
-from thermaxis.reports.formatting import markdown_table
+from thermaxis.tables import markdown_table
 
 __all__ = ["recommendation_markdown"]
 
