@@ -31,8 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from thermaxis.dataset.safety import _error
-from thermaxis.errors import SelectionWarning
+from thermaxis.errors import DataError, SelectionWarning
 
 __all__ = [
     "SensitivePoints",
@@ -702,22 +701,22 @@ def informative_sensors(
     NaN), so it cannot be selected; a fixed sensitive point that is constant is an error.
     """
     if len(temperatures) < 2:
-        raise _error(
-            where, f"{len(temperatures)} training measurement; selection and models need at least 2"
+        raise DataError(
+            f"{where}: {len(temperatures)} training measurement; selection and models need at least 2"
         )
     spread = temperatures.max() - temperatures.min()
     constant = [str(s) for s in temperatures.columns if not spread[s] > 0]
     fixed_constant = [s for s in constant if s in fixed]
     if fixed_constant:
-        raise _error(
-            "config selection.fixed",
+        raise DataError(
+            "config selection.fixed: "
             f"sensor {fixed_constant[0]} is constant over the training measurements; "
-            "expected a sensor whose temperature varies",
+            "expected a sensor whose temperature varies"
         )
     if len(constant) == len(temperatures.columns):
-        raise _error(
-            where,
-            "every sensor is constant over the training measurements; expected temperatures that vary",
+        raise DataError(
+            f"{where}: every sensor is constant over the training measurements; "
+            "expected temperatures that vary"
         )
     for sensor in constant:
         warnings.warn(
