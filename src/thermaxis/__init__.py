@@ -20,8 +20,8 @@ _PUBLIC = {
     "Settings": "thermaxis.config",
     "DataError": "thermaxis.errors",
     "load_dataset": "thermaxis.dataset.reader",
-    "DecoupledAxisModel": "thermaxis.method.models",
-    "PointwiseAxisModel": "thermaxis.method.models",
+    "DecoupledAxisModel": "thermaxis.method.estimators",
+    "PointwiseAxisModel": "thermaxis.method.estimators",
     "Compensator": "thermaxis.compensation.runtime",
 }
 

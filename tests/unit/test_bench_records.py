@@ -8,7 +8,7 @@ import yaml
 from scipy.optimize import nnls
 
 from helpers import REPO
-from thermaxis.method.recommend import COMBINED, super_learner_weights
+from thermaxis.method.nested import COMBINED, super_learner_weights
 from tools.bench.records import channel_mapping, record_quality, without_signals
 from tools.bench.replay import main as replay_main
 from tools.bench.replay import replay, replay_markdown, with_table

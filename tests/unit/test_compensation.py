@@ -14,7 +14,7 @@ from thermaxis.compensation.heldout import held_out_tables, largest_steps, step_
 from thermaxis.compensation.model import line_weights, model_record
 from thermaxis.compensation.runtime import Compensator, ControllerParameters, Step
 from thermaxis.config import FallbackSettings
-from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
 
 REF = {"T1": 30.0, "T2": 25.0}
 WARM = {"T1": 32.0, "T2": 26.5}
@@ -308,3 +308,35 @@ def test_pass_deviations_split_the_passes_per_measurement():
     np.testing.assert_array_equal(out[1]["+"], [0.0, 2.0])
     np.testing.assert_array_equal(out[1]["-"], [0.5, 1.5])
     np.testing.assert_array_equal(out[2]["-"], [1.5, 2.5])
+
+
+def test_held_out_accuracy_reads_a_candidates_loco_rows_and_the_configured_metrics_alike():
+    from thermaxis.compensation.heldout import (
+        candidate_accuracy,
+        configured_accuracy,
+        held_out_accuracy,
+    )
+
+    metrics = dict(rmse=1.5, max_abs=3.0, mae=1.0, residual_min=-3.0, residual_max=2.0)
+    scores = pd.DataFrame(
+        [
+            {"kind": "loco", "fold": "10", "candidate": "a", "held_out": "10", **metrics},
+            {"kind": "inner", "fold": "10", "candidate": "a", "held_out": "2", **metrics},
+            {"kind": "loco", "fold": "10", "candidate": "b", "held_out": "10", **metrics},
+        ]
+    )
+    table = pd.DataFrame(
+        [
+            {"fold": "R1", "approach": "decoupled", "algorithm": "mlr", "target": "k", **metrics},
+            {"fold": "R1", "approach": "pointwise", "algorithm": "mlr", "target": "k", **metrics},
+        ]
+    )
+    # Only candidate a's leave-one-condition-out row, of the whole error curve.
+    assert held_out_accuracy(candidate_accuracy(scores, "a")) == [
+        {"fold": "10", "target": "error", **metrics}
+    ]
+    assert held_out_accuracy(configured_accuracy(table, "decoupled", "mlr")) == [
+        {"fold": "R1", "target": "k", **metrics}
+    ]
+    with pytest.raises(ValueError, match="no rows for approach 'decoupled' and algorithm 'svr'"):
+        configured_accuracy(table, "decoupled", "svr")

@@ -7,7 +7,7 @@ import pandas as pd
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVR
 
-from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
 from thermaxis.reports.summaries import fitting_summary
 
 POSITIONS = [0.0, 300.0, 600.0]

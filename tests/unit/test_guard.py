@@ -18,7 +18,7 @@ from thermaxis.dataset import plausibility, safety
 from thermaxis.errors import DataError
 from thermaxis.method import selection
 from thermaxis.method.folds import select_for_fold
-from thermaxis.reports.formatting import format_cell
+from thermaxis.tables import format_cell
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -97,7 +97,9 @@ def test_the_page_leads_with_the_answer_and_escapes_every_value():
     assert "not recommended for deployment" in page
     # The verdict's words in the page's unit (model.json and the exports keep ASCII "um").
     assert "of 1 held-out run(s) compensating improves 0 beyond the +/-0.10 µm" in page
-    assert "It worsens &lt;E2&gt; (worst &lt;E2&gt;: largest |deviation| +0.50 µm, 50% of its" in page
+    assert (
+        "It worsens &lt;E2&gt; (worst &lt;E2&gt;: largest |deviation| +0.50 µm, 50% of its" in page
+    )
     assert " um" not in page
     assert "decoupling &lt;b&gt;halves&lt;/b&gt; the error" in page and ">holds<" in page
     # The best model's mean RMSE, in full precision for the sort and rounded for reading.

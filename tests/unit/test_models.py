@@ -1,4 +1,4 @@
-"""Tests of thermaxis.method.models against coefficients known by construction or computed
+"""Tests of thermaxis.method.estimators, regressors and search against coefficients known by construction or computed
 directly."""
 
 from __future__ import annotations
@@ -11,15 +11,10 @@ from threadpoolctl import threadpool_limits
 
 from helpers.builders import synthetic_temperatures
 from helpers.truth import EQ8, EQ9_B, EQ9_K, POSITIONS, SENSORS, eq8_errors, eq9_errors, eq9_truth
-from thermaxis.method.models import (
-    DecoupledAxisModel,
-    PointwiseAxisModel,
-    fit_by_group_search,
-    linear_terms,
-    make_regressor,
-    predict_with_std,
-    relative_temperatures,
-)
+from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.method.features import relative_temperatures
+from thermaxis.method.regressors import linear_terms, make_regressor, predict_with_std
+from thermaxis.method.search import fit_by_group_search
 from thermaxis.vocabulary import ALGORITHMS
 
 pytestmark = pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
@@ -567,7 +562,7 @@ def test_one_lars_path_predicts_as_a_lasso_fitted_at_each_strength():
     # held-out predictions against scikit-learn's LassoLars fitted at that strength alone.
     from sklearn.linear_model import LassoLars
 
-    from thermaxis.method.models import lasso_path_predictions
+    from thermaxis.method.search import lasso_path_predictions
 
     rng = np.random.default_rng(11)
     sources = rng.normal(size=(40, 2)).cumsum(axis=0)
@@ -588,7 +583,7 @@ def test_one_svd_predicts_as_a_ridge_fitted_at_each_strength(shape):
     # with more rows than inputs and fewer (many lagged inputs, Ridge's kernel solver).
     from sklearn.linear_model import Ridge
 
-    from thermaxis.method.models import ridge_grid_predictions
+    from thermaxis.method.search import ridge_grid_predictions
 
     rows, columns = shape
     rng = np.random.default_rng(12)

@@ -8,25 +8,27 @@ import pytest
 from scipy.optimize import nnls
 
 from thermaxis.config import Settings
-from thermaxis.method.folds import run_groups
-from thermaxis.method.recommend import (
+from thermaxis.method.candidates import (
     BASELINE,
-    COMBINED,
     EVIDENCE,
     Candidate,
-    Combination,
-    Recommendation,
     candidate_view,
     candidates_for,
     default_candidates,
+)
+from thermaxis.method.folds import run_groups
+from thermaxis.method.nested import (
+    COMBINED,
+    Combination,
+    Recommendation,
     fold_scores,
     held_out_predictions,
     held_out_scores,
     recommend,
-    recommendation_markdown,
     super_learner_weights,
     training_sets,
 )
+from thermaxis.reports.recommendation import recommendation_markdown
 
 DEFAULTS = Settings.from_config({})
 POSITIONS = (0.0, 200.0, 400.0)
@@ -333,7 +335,9 @@ def test_replacing_the_held_out_runs_data_changes_no_weight_of_its_fold():
         after = other.folds.set_index("fold").loc["R2"]
         for m in members:
             assert after[f"weight_{m}"] == pytest.approx(before[f"weight_{m}"], rel=1e-9, abs=1e-12)
-        inner = [r.inner.loc[r.inner["fold"] == "R2"].reset_index(drop=True) for r in (honest, other)]
+        inner = [
+            r.inner.loc[r.inner["fold"] == "R2"].reset_index(drop=True) for r in (honest, other)
+        ]
         pd.testing.assert_frame_equal(inner[0], inner[1], rtol=1e-12)
         # The held-out error itself sees the new data (a constant far from the fit).
         assert after["rmse_um"] > 10 * before["rmse_um"]

@@ -14,13 +14,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from thermaxis.method.grey import absolute_grey_incidence, grey_relational_grade
 from thermaxis.method.selection import (
     SensitivePoints,
-    absolute_grey_incidence,
     classes_for_count,
     common_points,
     fuzzy_equivalence,
-    grey_relational_grade,
     lambda_cut_classes,
     max_min_compose,
     rank_by_correlation,

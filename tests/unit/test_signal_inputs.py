@@ -19,7 +19,7 @@ from thermaxis.compensation.model import model_record, validate_model
 from thermaxis.compensation.plc import structured_text
 from thermaxis.compensation.runtime import Compensator
 from thermaxis.config import FallbackSettings
-from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
 
 TARGETS = np.array([0.0, 500.0, 1000.0])
 PER_C = np.array([1.0, 2.0, 3.0])

@@ -18,7 +18,7 @@ from thermaxis.compensation.model import CONVENTION, combined_record, model_reco
 from thermaxis.compensation.plc import st_real, structured_text
 from thermaxis.compensation.runtime import Compensator
 from thermaxis.config import FallbackSettings
-from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
 
 TARGETS = np.array([185.0 + 20.0 * i for i in range(14)])
 RAMP = FallbackSettings(1.5, (-10.0, 90.0), 0.25, 30.0, "ramp_to_zero", 20.0)
@@ -260,7 +260,10 @@ def test_a_combination_is_the_weighted_sum_of_its_members_in_one_block():
     combined = Compensator(model)
     alone = [Compensator(record) for _, _, record in members[:2]]
     for now, ref in [((32.0, 26.5), (30.0, 25.0)), ((29.25, 24.1), (30.5, 25.3))]:
-        state, home = dict(zip(("T1", "T2"), now, strict=True)), dict(zip(("T1", "T2"), ref, strict=True))
+        state, home = (
+            dict(zip(("T1", "T2"), now, strict=True)),
+            dict(zip(("T1", "T2"), ref, strict=True)),
+        )
         # The members' compensations (minus their predicted changes), weighted by hand in numpy.
         expected = 0.3 * np.array(alone[0].parameters(state, home).curve_um) + 0.7 * np.array(
             alone[1].parameters(state, home).curve_um

@@ -417,7 +417,9 @@ def test_the_faithfulness_block_of_docs_datasets_states_table5_as_recomputed_her
     # The block is copied from the workflow's faithfulness.csv; its Table 5 rows must be
     # the RMS differences of the committed raw files, recomputed here with numpy.
     text = (REPO / "docs" / "datasets.md").read_text(encoding="utf-8")
-    block = text.split("<!-- results:begin faithfulness twin -->", 1)[1].split("<!-- results:end -->", 1)[0]
+    block = text.split("<!-- results:begin faithfulness twin -->", 1)[1].split(
+        "<!-- results:end -->", 1
+    )[0]
     rows = {
         cells[0]: cells
         for line in block.splitlines()

@@ -17,7 +17,7 @@ from thermaxis.cleaning.run import clean_and_assemble_run, model_inputs
 from thermaxis.config import Settings, load_config
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.method.decouple import decouple_table
-from thermaxis.method.models import DecoupledAxisModel
+from thermaxis.method.estimators import DecoupledAxisModel
 
 TWIN = REPO / "data" / "raw" / "twin"
 TRUTH = REPO / "data" / "twin_truth"

@@ -94,7 +94,9 @@ def test_the_default_deploys_the_super_learner_with_each_folds_weights(tmp_path)
     table = pd.read_csv(out / "tables" / "recommendation.csv")
     assert set(table["chosen"]) == {"super learner"}
     for member, weight in choice["folds"]["R2"].items():
-        assert table.set_index("fold").loc["R2", f"weight_{member}"] == pytest.approx(weight, abs=1e-6)
+        assert table.set_index("fold").loc["R2", f"weight_{member}"] == pytest.approx(
+            weight, abs=1e-6
+        )
 
 
 def test_the_verdict_reads_the_same_on_every_surface(lines_run, capsys):

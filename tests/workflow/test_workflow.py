@@ -145,14 +145,14 @@ def test_plot_option_reruns_only_figure_rules(lines_run):
 
 
 def test_editing_a_module_selection_imports_indirectly_reruns_selection(lines_run):
-    """method/models.py is named in no rule; the models rule's script reaches it through
+    """method/estimators.py is named in no rule; the models rule's script reaches it through
     method.folds.
 
     The edit is made in the run's own copy of the library (``lines_run.library``), never in
     the checkout. Snakemake compares checksums of inputs newer than the outputs, so the edit
     must change the file's content; it is restored byte for byte afterwards.
     """
-    module = lines_run.library / "method" / "models.py"
+    module = lines_run.library / "method" / "estimators.py"
     original, stat = module.read_bytes(), module.stat()
     try:
         module.write_bytes(original + b"\n# an edit of the method\n")

@@ -23,7 +23,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from thermaxis.method.recommend import BASELINE, EVIDENCE
+from thermaxis.method.candidates import BASELINE, EVIDENCE
 
 __all__ = ["CHANNELS", "channel_mapping", "record_quality", "RECORD_TARGETS", "without_signals"]
 

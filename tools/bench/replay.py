@@ -21,7 +21,8 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.labels import natural_sorted
-from thermaxis.method.recommend import BASELINE, COMBINED, EVIDENCE
+from thermaxis.method.candidates import BASELINE, EVIDENCE
+from thermaxis.method.nested import COMBINED
 from thermaxis.statistics.paired import wilcoxon_p
 from thermaxis.tables import read_table
 

@@ -16,7 +16,7 @@ three combinations fixed from the literature before any record was replayed:
 
 Each outer fold's weights come from its inner runs alone; the held-out run is predicted
 by the candidates fitted on the other runs. Evaluation only: the recommendation deploys
-the super learner of ``recommend.combine`` (thermaxis.method.recommend.combine), whose
+the super learner of ``recommend.combine`` (thermaxis.method.nested.combine), whose
 figures are the replay's (tools.bench.replay).
 """
 
@@ -32,14 +32,8 @@ import pandas as pd
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import KERNEL_ALGORITHMS, Settings
 from thermaxis.labels import natural_sorted
-from thermaxis.method.recommend import (
-    BASELINE,
-    EVIDENCE,
-    candidate_from_record,
-    held_out_predictions,
-    super_learner_weights,
-    training_sets,
-)
+from thermaxis.method.candidates import BASELINE, EVIDENCE, candidate_from_record
+from thermaxis.method.nested import held_out_predictions, super_learner_weights, training_sets
 from tools.bench.replay import record_scores, table_command
 
 __all__ = ["stacked_rmse", "STACKS"]

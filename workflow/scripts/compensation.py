@@ -4,7 +4,7 @@ controller exports and the Structured Text block.
 
 The deployed model is config compensation.model: the recommendation's choice among the
 candidates the controller exports can compute, the paper's configured model, or a named
-candidate (thermaxis.method.recommend.deployed_record). The inputs are read once; every
+candidate (thermaxis.method.deployment.deployed_record). The inputs are read once; every
 fold's replay starts from them.
 """
 
@@ -31,8 +31,9 @@ from thermaxis.config import (
 )
 from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.errors import SelectionWarning
-from thermaxis.method import recommend
+from thermaxis.method.deployment import deployed_record, deployed_setup
 from thermaxis.method.folds import select_for_fold, selection_from_dict
+from thermaxis.method.nested import COMBINED
 from thermaxis.pipeline.runner import csv_text, log_only, run_script, write_texts
 from thermaxis.tables import read_table
 
@@ -66,7 +67,7 @@ def deployed_fit(snakemake, X, Y, s, deployed, steps, fold=None, **about) -> dic
     """The deployed model's model.json record, fitted on every run (``fold`` None) or on the
     runs but ``fold``, its sensitive points chosen on the same runs.
 
-    ``deployed`` is :func:`thermaxis.method.recommend.deployed_record`'s: None for the
+    ``deployed`` is :func:`thermaxis.method.deployment.deployed_record`'s: None for the
     paper's configured model, else candidates with weights: one candidate is its own
     record, the super learner its members' records combined into one linear model.
     """
@@ -77,12 +78,14 @@ def deployed_fit(snakemake, X, Y, s, deployed, steps, fold=None, **about) -> dic
     where, scope = ("all runs", "all") if fold is None else (fold, "training")
     fitted = []
     for record, weight in deployed["members"] if deployed else [(None, 1.0)]:
-        setup = recommend.deployed_setup(
+        setup = deployed_setup(
             record, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
         )
         if record is None and fold is not None:
             # The configured model's selection of this fold, as the models rule made it.
-            with open(snakemake.input.selections[list(p.folds).index(fold)], encoding="utf-8") as fh:
+            with open(
+                snakemake.input.selections[list(p.folds).index(fold)], encoding="utf-8"
+            ) as fh:
                 selection = selection_from_dict(json.load(fh))
         else:
             selection = _select(setup, Y, where, scope, degree)
@@ -92,7 +95,7 @@ def deployed_fit(snakemake, X, Y, s, deployed, steps, fold=None, **about) -> dic
             **({} if deployed and len(deployed["members"]) > 1 else about),
         )  # fmt: skip
         fitted.append((record["name"] if record else "paper", weight, member))
-    if deployed is None or deployed["name"] != recommend.COMBINED:
+    if deployed is None or deployed["name"] != COMBINED:
         return fitted[0][2]
     return comp_model.combined_record(
         fitted, trained_on=sorted(X_train["run"].unique().tolist()), **about
@@ -102,19 +105,21 @@ def deployed_fit(snakemake, X, Y, s, deployed, steps, fold=None, **about) -> dic
 def fitted_model(snakemake, X, Y, s, choice, steps) -> dict:
     """The deployed model on every run (the verdict comes later)."""
     p = snakemake.params
-    deployed = recommend.deployed_record(s["compensation"].model, choice)
+    deployed = deployed_record(s["compensation"].model, choice)
     if deployed is None:
         deployment = {"model": "paper", "candidate": "paper"}
-        setup = recommend.deployed_setup(
+        setup = deployed_setup(
             None, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
         )
         accuracy = heldout.held_out_accuracy(
-            read_table(snakemake.input.metrics), setup.approach, setup.settings.algorithm
+            heldout.configured_accuracy(
+                read_table(snakemake.input.metrics), setup.approach, setup.settings.algorithm
+            )
         )
     else:
         deployment = {"model": p.model, "candidate": deployed["name"]}
         scores = pd.concat([read_table(path) for path in snakemake.input.scores], ignore_index=True)
-        accuracy = recommend.held_out_accuracy(scores, deployed["name"])
+        accuracy = heldout.held_out_accuracy(heldout.candidate_accuracy(scores, deployed["name"]))
     fitted = deployed_fit(
         snakemake, X, Y, s, deployed, steps,
         **p.about,
@@ -141,7 +146,7 @@ def fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps) -> tuple[str,
     p, inputs = snakemake.params, snakemake.input
     # The model the procedure would have deployed without this run: its fold's weights,
     # the members fitted on the other runs.
-    deployed = recommend.deployed_record(s["compensation"].model, choice, fold)
+    deployed = deployed_record(s["compensation"].model, choice, fold)
     record = deployed_fit(snakemake, X, Y, s, deployed, steps, fold, **p.about)
     train = (X["run"] != fold).to_numpy()
     text = json.dumps(record, indent=1) + "\n"

@@ -11,17 +11,12 @@ import pandas as pd
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import DecouplingSettings, RecommendSettings, StatisticsSettings
 from thermaxis.errors import SelectionWarning
+from thermaxis.method.candidates import candidate_record, candidate_table, configured_candidates
 from thermaxis.method.folds import run_groups
-from thermaxis.method.recommend import (
-    candidate_record,
-    candidate_table,
-    collect,
-    configured_candidates,
-    fold_scores,
-    recommendation_markdown,
-)
+from thermaxis.method.nested import collect, fold_scores
 from thermaxis.pipeline.parallel import fold_workers, map_folds
 from thermaxis.pipeline.runner import csv_text, log_only, run_script, write_texts
+from thermaxis.reports.recommendation import recommendation_markdown
 from thermaxis.statistics import fold_means
 from thermaxis.tables import read_table
 

@@ -20,7 +20,7 @@ from thermaxis.dataset.import_parsing import read_numeric, read_seconds, read_ta
 from thermaxis.dataset.safety import load_yaml
 from thermaxis.errors import DataError
 from thermaxis.pipeline.runner import write_csv, write_text
-from thermaxis.reports.formatting import markdown_table
+from thermaxis.tables import markdown_table
 
 
 def read_record(spec: dict, spec_path: Path):

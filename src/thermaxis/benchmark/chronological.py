@@ -22,7 +22,7 @@ from sklearn.model_selection import TimeSeriesSplit
 
 from thermaxis.method.inputs import lag_filter, rate_of_change
 from thermaxis.method.metrics import prediction_metrics
-from thermaxis.method.models import make_regressor
+from thermaxis.method.regressors import make_regressor
 
 __all__ = ["INPUT_KINDS", "InputSet", "block", "input_sets", "choose", "evaluate_channel"]
 

@@ -288,7 +288,9 @@ def _report(args) -> int:
     for dataset in _datasets(args):
         out = _results_of(dataset)
         target = (
-            ["--report", str(out / paths.REPORT_ZIP)] if args.zip else ["--", str(out / paths.INDEX)]
+            ["--report", str(out / paths.REPORT_ZIP)]
+            if args.zip
+            else ["--", str(out / paths.INDEX)]
         )
         code = _wrapped(_snakemake_command(args, ["--config", f"dataset={dataset}", *target]))
         if code:

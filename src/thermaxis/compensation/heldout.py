@@ -10,8 +10,11 @@ import pandas as pd
 from thermaxis.compensation.exports import siemens_840d, twincat
 from thermaxis.compensation.runtime import ControllerParameters, Step
 from thermaxis.config import ErrorCleaning
+from thermaxis.method.metrics import METRIC_COLUMNS
 
 __all__ = [
+    "configured_accuracy",
+    "candidate_accuracy",
     "held_out_accuracy",
     "run_states",
     "measurement_cycles",
@@ -24,17 +27,36 @@ __all__ = [
 ]
 
 
-def held_out_accuracy(metrics: pd.DataFrame, approach: str, algorithm: str) -> list[dict]:
-    """The folds' held-out metrics of this approach and algorithm (every target), for model.json."""
+def configured_accuracy(metrics: pd.DataFrame, approach: str, algorithm: str) -> pd.DataFrame:
+    """The folds' held-out metrics of this approach and algorithm (every target), from
+    tables/metrics.csv: what the paper's configuration leaves on unseen runs."""
     rows = metrics[(metrics["approach"] == approach) & (metrics["algorithm"] == algorithm)]
     if rows.empty:
         raise ValueError(
             f"the metrics table: no rows for approach {approach!r} and algorithm {algorithm!r}"
         )
-    columns = ["fold", "target", "rmse", "max_abs", "mae", "residual_min", "residual_max"]
+    return rows
+
+
+def candidate_accuracy(scores: pd.DataFrame, name: str) -> pd.DataFrame:
+    """A recommendation candidate's leave-one-condition-out errors, from its scores
+    (:data:`thermaxis.method.nested.SCORE_COLUMNS`): one row per held-out run, of the error
+    curve as a whole."""
+    rows = scores.loc[(scores["kind"] == "loco") & (scores["candidate"] == name)]
+    # A loco row's fold is its held-out run; "held_out" names it in every kind of row.
+    return rows.drop(columns="fold").rename(columns={"held_out": "fold"}).assign(target="error")
+
+
+def held_out_accuracy(rows: pd.DataFrame) -> list[dict]:
+    """Held-out metric rows (:func:`configured_accuracy`, :func:`candidate_accuracy`) as
+    model.json's held_out_accuracy."""
     return [
-        {c: (str(v) if c in ("fold", "target") else float(v)) for c, v in row.items()}
-        for row in rows[columns].to_dict("records")
+        {
+            "fold": str(r["fold"]),
+            "target": str(r["target"]),
+            **{m: float(r[m]) for m in METRIC_COLUMNS},
+        }
+        for r in rows.to_dict("records")
     ]
 
 

@@ -84,7 +84,7 @@ CONVENTION = (
 
 
 def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline) -> dict:
-    """One fitted :func:`thermaxis.method.models.make_regressor` pipeline as plain numbers.
+    """One fitted :func:`thermaxis.method.regressors.make_regressor` pipeline as plain numbers.
 
     ``inputs`` are indices into the model's input list. Affine fits (mlr, ridge, lasso, pls) keep
     the constant and one coefficient per input in physical units (target unit per degree
@@ -93,7 +93,7 @@ def regression_record(target: str, position_mm, inputs: Sequence[int], pipeline)
     """
     record = {"target": target, "position_mm": position_mm, "inputs": [int(i) for i in inputs]}
     # The fitting side's imports (scikit-learn) stay out of the controller side's start.
-    from thermaxis.method.models import linear_terms
+    from thermaxis.method.regressors import linear_terms
 
     terms = linear_terms(pipeline, [str(i) for i in inputs])
     if terms is not None:
@@ -216,7 +216,7 @@ def model_record(
     positions = np.asarray(estimator.positions_mm_, dtype=float)
     origin = float(positions[0])
     regressions = []
-    # Every regression sees the operating signals after its temperatures (models._features).
+    # Every regression sees the operating signals after its temperatures (estimators._features).
     signal_inputs = [index[(s, "signal")] for s in estimator.signals]
     if approach == "decoupled":
         k_inputs = [index[(s, "absolute")] for s in estimator.k_sensors] + signal_inputs
@@ -289,7 +289,7 @@ def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> d
 
     ``members``: (candidate name, weight, its :func:`model_record`). The combination's
     predicted error curve is the weighted sum of the members' (the super learner,
-    :mod:`thermaxis.method.recommend`): the members' regressions are concatenated, their
+    :mod:`thermaxis.method.nested`): the members' regressions are concatenated, their
     inputs merged, and each member's ``curve_basis`` columns scaled by its weight, so
     ``curve_basis`` times the regressions' changes is that sum, and ``line_weights`` its
     least-squares line. A member of weight 0 is left out (the controller reads nothing it
@@ -302,7 +302,9 @@ def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> d
     regressions, bases, about_members = [], [], []
     for name, weight, record in kept:
         if record["positions_mm"] != first["positions_mm"]:
-            raise ValueError(f"combination: member {name!r} has other positions than {kept[0][0]!r}")
+            raise ValueError(
+                f"combination: member {name!r} has other positions than {kept[0][0]!r}"
+            )
         local = []
         for spec in record["inputs"]:
             key = (spec["sensor"], spec["temperature"])
@@ -462,9 +464,9 @@ def fit_axis_model(
 ):
     """The configured model fitted on the rows given (all runs, or a fold's training runs)."""
     # The estimator the folds are evaluated with, so the deployed model is the one scored.
-    from thermaxis.method.folds import _build_model
+    from thermaxis.method.folds import build_model
 
-    return _build_model(approach, algorithm, selection, model_settings, degree).fit(X, Y)
+    return build_model(approach, algorithm, selection, model_settings, degree).fit(X, Y)
 
 
 def fit_model_record(

@@ -32,7 +32,7 @@ def provenance_note(simulated: bool, twin: bool = True) -> str | None:
     return SIMULATED_NOTE if twin else OTHER_SIMULATED_NOTE
 
 
-# How the model labels of the tables (thermaxis.method.models) read in legends and captions;
+# How the model labels of the tables (thermaxis.method.estimators) read in legends and captions;
 # unknown labels are shown as they are.
 DISPLAY_NAMES = {
     "mlr": "MLR", "svr": "SVR", "gpr": "GPR", "pls": "PLS", "ridge": "ridge", "lasso": "lasso",

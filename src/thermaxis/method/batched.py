@@ -10,7 +10,7 @@ conditioned set with scikit-learn itself), checked by ``tests/unit/test_batched.
 against ``evaluate_configuration`` on the same data.
 
 A searched strength (ridge ``alpha``, pls ``n_components``, config ``models.searched``)
-is chosen as :func:`thermaxis.method.models.fit_by_group_search` chooses it: the same
+is chosen as :func:`thermaxis.method.search.fit_by_group_search` chooses it: the same
 inner split of the training runs, RMSE of each held-out group, the first best grid point;
 every grid point's held-out predictions come from one leave-one-group-out call of the
 core (:func:`thermaxis.method.linear.loco_fit`, the Gram matrices downdated by each
@@ -34,15 +34,14 @@ from sklearn.model_selection import ParameterGrid
 from thermaxis.config import ModelSettings
 from thermaxis.method import linear
 from thermaxis.method.decouple import compose_curve
+from thermaxis.method.estimators import _features, _positions_of
+from thermaxis.method.features import KB_COLUMNS as _KB_COLUMNS
+from thermaxis.method.features import decouple_rows
 from thermaxis.method.folds import _split_fold, fold_name, sensor_columns
 from thermaxis.method.metrics import metric_frame
-from thermaxis.method.models import (
-    _KB_COLUMNS,
-    _features,
-    _positions_of,
-    decouple_rows,
+from thermaxis.method.regressors import pls_fits
+from thermaxis.method.search import (
     inner_group_splitter,
-    pls_fits,
     ridge_grid_predictions,
     standardised_split,
 )
@@ -126,9 +125,9 @@ def _ridge_inner_rmse(train, targets, held, alphas) -> np.ndarray:
     """``_inner_rmse`` of ridge at every strength: (strengths, outputs).
 
     Each inner split is standardised as the pipeline does
-    (:func:`thermaxis.method.models.standardised_split`) and solved for the whole strength
+    (:func:`thermaxis.method.search.standardised_split`) and solved for the whole strength
     grid and every output from one SVD
-    (:func:`thermaxis.method.models.ridge_grid_predictions`), instead of one eigensystem
+    (:func:`thermaxis.method.search.ridge_grid_predictions`), instead of one eigensystem
     per strength, and one scikit-learn refit per strength where that system was ill-
     conditioned (many lagged inputs, few training rows).
     """
@@ -220,7 +219,7 @@ def decoupled_metrics(
     ``per_run``: a fold of several runs (:func:`thermaxis.method.folds.held_out_runs`) is
     scored run by run, each row's ``fold`` its run, from one fit.
 
-    As :class:`thermaxis.method.models.DecoupledAxisModel`: k (and c2, c3) on the absolute
+    As :class:`thermaxis.method.estimators.DecoupledAxisModel`: k (and c2, c3) on the absolute
     temperatures of the k points, b on the rise of the b points since each run's first
     measurement, each coefficient its own standardised regression (Eq. 9).
     """
@@ -277,7 +276,7 @@ def pointwise_metrics(
     """``evaluate_configuration(..., "pointwise", ...).metrics`` for each set of points
     (``per_run`` as for :func:`decoupled_metrics`).
 
-    As :class:`thermaxis.method.models.PointwiseAxisModel` (Eq. 8): each position's error
+    As :class:`thermaxis.method.estimators.PointwiseAxisModel` (Eq. 8): each position's error
     its own standardised regression on the points' rise since each run's first measurement.
     """
     X_test, Y_test, curves = _pointwise_fits(X, Y, fold, algorithm, model, point_sets)
@@ -291,4 +290,3 @@ def pointwise_curves(X, Y, fold, algorithm, model, points) -> np.ndarray:
     """The held-out error curves (rows of ``fold`` in X's order, positions) of one
     point-by-point fit, as :func:`pointwise_metrics` scores them."""
     return _pointwise_fits(X, Y, fold, algorithm, model, [points])[2][0]
-

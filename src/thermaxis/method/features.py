@@ -1,6 +1,6 @@
 """The models' inputs and targets without the models: relative temperatures, decoupled rows.
 
-Apart from :mod:`thermaxis.method.models` so that the sensitive-point selection, the
+Apart from :mod:`thermaxis.method.estimators` so that the sensitive-point selection, the
 statistics and the controller side compute them without importing scikit-learn, which
 costs every Snakemake job that imports it a second or more at start.
 """

@@ -41,6 +41,7 @@ __all__ = [
     "evaluate_configuration",
     "fold_metrics",
     "fit_held_out",
+    "build_model",
     "selection_table",
     "selection_to_dict",
     "selection_from_dict",
@@ -317,16 +318,18 @@ class FoldResult:
     fitting: pd.DataFrame  # per regression: inner search, choice, rows (models' fit_notes_)
 
 
-def _build_model(
+def build_model(
     approach: str,
     algorithm: str,
     selection: FoldSelection,
     model: ModelSettings,
     degree: int | None,
 ):
+    """The unfitted estimator of an approach and algorithm on a fold's sensitive points:
+    what the folds are scored with and the compensation deploys."""
     # Imported here: selecting sensitive points, which shares this module, needs no
     # scikit-learn, and a selection job should not pay for importing it.
-    from thermaxis.method.models import DecoupledAxisModel, PointwiseAxisModel
+    from thermaxis.method.estimators import DecoupledAxisModel, PointwiseAxisModel
 
     common = dict(
         algorithm=algorithm,
@@ -420,7 +423,7 @@ def fold_metrics(
 def fit_held_out(X, Y, fold, approach, algorithm, selection, model, degree):
     """The configuration fitted on every run but ``fold``, and ``fold``'s own X and Y."""
     X_train, Y_train, X_test, Y_test = _split_fold(X, Y, fold)
-    estimator = _build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
+    estimator = build_model(approach, algorithm, selection, model, degree).fit(X_train, Y_train)
     return estimator, X_test, Y_test
 
 

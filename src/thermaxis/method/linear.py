@@ -381,7 +381,7 @@ def _sklearn_fit(Xs, Y, algorithm, alpha, k):
     One pipeline per output, as the models fit them: on a singular system even mlr's and
     ridge's rounding differs between one output and several.
     """
-    from thermaxis.method.models import checked_once, make_regressor
+    from thermaxis.method.regressors import checked_once, make_regressor
 
     s, m = Xs.shape[1], Y.shape[1]
     params = {"ridge": {"alpha": alpha}, "pls": {"n_components": k}}.get(algorithm)

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 from thermaxis.dataset.summary import data_statement
-from thermaxis.reports.formatting import markdown_table
+from thermaxis.tables import markdown_table
 
 __all__ = ["ReproducedTables", "paper_comparison", "comparison_markdown"]
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from thermaxis.reports.formatting import markdown_table
+from thermaxis.tables import markdown_table
 
 from .equations import PublishedTargets
 from .published import load_table

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from thermaxis.reports.formatting import markdown_table
+from thermaxis.tables import markdown_table
 
 __all__ = [
     "table5_markdown",

@@ -163,7 +163,7 @@ def compensation_params(checked: Checked, plan: Plan) -> dict:
 
 # Which model the runs support: one job per outer fold scores every candidate (inner
 # leave-one-condition-out on the other runs, and the held-out run), one job chooses
-# (thermaxis.method.recommend). The compensation deploys its choice (compensation.model).
+# (thermaxis.method.nested). The compensation deploys its choice (compensation.model).
 def recommend_params(checked: Checked, plan: Plan) -> dict:
     """The recommend rule's parameters (workflow/scripts/recommend.py)."""
     config = checked.config

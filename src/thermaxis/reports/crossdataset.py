@@ -215,7 +215,7 @@ def model_ranking(metrics: pd.DataFrame) -> pd.DataFrame:
 
 def to_markdown(summary: pd.DataFrame) -> str:
     """The summary as a Markdown table, with a line on which datasets are simulated."""
-    from thermaxis.reports.formatting import markdown_table
+    from thermaxis.tables import markdown_table
 
     simulated = sorted(summary.loc[summary["data"] == "simulated", "dataset"].unique())
     lines = ["# Held-out error per dataset, approach and algorithm", ""]

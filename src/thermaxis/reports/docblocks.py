@@ -24,7 +24,7 @@ import pandas as pd
 
 from thermaxis.errors import DataError
 from thermaxis.pipeline import paths
-from thermaxis.reports.formatting import markdown_table
+from thermaxis.tables import markdown_table
 
 __all__ = ["KINDS", "blocks_of", "render", "rewrite", "main"]
 

@@ -32,8 +32,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from thermaxis.reports.formatting import format_cell
-from thermaxis.tables import read_table
+from thermaxis.tables import format_cell, read_table
 
 __all__ = [
     "REPORT_CSS",

@@ -255,7 +255,7 @@ def claims_table(dataset: str, results: dict, settings: StatisticsSettings) -> p
 
 def claims_markdown(table: pd.DataFrame, statement: str, settings: StatisticsSettings) -> str:
     """claims.md: the verdicts, then what each effect measures."""
-    from thermaxis.reports.formatting import markdown_table
+    from thermaxis.tables import markdown_table
 
     level = f"{settings.level:.0%}"
     lines = [

@@ -123,7 +123,7 @@ def _clock_text(seconds: float) -> str:
 def _model_inputs_of(selection, approach: str) -> tuple:
     """The sensors the model of ``approach`` reads: what makes two evaluations equal.
 
-    Must follow thermaxis.method.folds._build_model: decoupled models read the k and b
+    Must follow thermaxis.method.folds.build_model: decoupled models read the k and b
     points, pointwise models the common set.
     """
     if approach == "decoupled":

@@ -4,7 +4,7 @@ The twin is calibrated to what the paper concludes, not only to its inputs.  Eve
 here is computed with the pipeline's own method on the twin's temperatures and errors:
 the fuzzy similarity (:func:`thermaxis.method.selection.similarity_matrix`, Eq. 1), its
 max-min closure (:func:`~thermaxis.method.selection.fuzzy_equivalence`, Eq. 2), Deng's grey
-relational grade (:func:`~thermaxis.method.selection.grey_relational_grade`, Eq. 4) with the
+relational grade (:func:`~thermaxis.method.grey.grey_relational_grade`, Eq. 4) with the
 default settings, and least-squares MLR on the training runs of the paper's fold.  What
 the optimiser needs on top is a MARGIN: how far each published choice is from flipping.
 
@@ -40,9 +40,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from thermaxis.method.grey import grey_relational_grade
 from thermaxis.method.selection import (
     fuzzy_equivalence,
-    grey_relational_grade,
     similarity_matrix,
 )
 from thermaxis.paper.published import load_table

@@ -19,465 +19,44 @@ positions in mm, ascending, values the unzeroed errors in um (NaN where a readin
 Relative temperatures are referenced to each run's lowest ``measurement`` present in X,
 so an X passed to ``predict`` must hold the run's first measurement.
 
-Every regressor is wrapped so that inputs AND target are standardised (see
-:func:`make_regressor`); :func:`linear_terms` converts any affine fit back to the paper's
-units, per degree C.
+Each regression is a :func:`~thermaxis.method.regressors.make_regressor` pipeline, its
+hyper-parameters searched on the training runs (:mod:`thermaxis.method.search`); the
+estimators' ``coefficients()`` tables give the affine fits in the paper's units.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
-from sklearn import config_context
 from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.compose import TransformedTargetRegressor
-from sklearn.cross_decomposition import PLSRegression
-from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.linear_model import BayesianRidge, LassoLars, LinearRegression, Ridge
-from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, ParameterGrid
-from sklearn.pipeline import Pipeline
-from sklearn.preprocessing import StandardScaler
-from sklearn.svm import SVR
+from sklearn.model_selection import LeaveOneGroupOut
 
 from thermaxis.method.decouple import compose_curve, stroke_powers
 from thermaxis.method.features import ID_COLUMNS as _ID_COLUMNS
 from thermaxis.method.features import KB_COLUMNS as _KB_COLUMNS
 from thermaxis.method.features import decouple_rows, relative_temperatures
-from thermaxis.method.gp_kernel import ScaledRBFWithNoise
-from thermaxis.method.scaling import scaler_moments
-from thermaxis.method.svr_grid import svr_grid_predictions
-from thermaxis.vocabulary import ALGORITHMS, SEARCHABLE
+from thermaxis.method.regressors import (
+    check_algorithm,
+    check_params,
+    checked_once,
+    linear_terms,
+    make_regressor,
+    predict_with_std,
+)
+from thermaxis.method.search import fit_by_group_search, inner_group_splitter
+from thermaxis.vocabulary import SEARCHABLE
 
 __all__ = [
     "COEFFICIENT_COLUMNS",
-    "SVR_TOL",
-    "make_regressor",
-    "pls_fits",
-    "checked_once",
-    "inner_group_splitter",
-    "fit_by_group_search",
-    "lasso_path_predictions",
-    "ridge_grid_predictions",
-    "standardised_split",
-    "linear_terms",
-    "predict_with_std",
-    "relative_temperatures",
-    "decouple_rows",
     "DecoupledAxisModel",
     "PointwiseAxisModel",
 ]
 
 
 COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
-
-# libsvm stops once the dual's largest KKT violation is below ``tol`` (targets standardised).
-# At scikit-learn's 1e-3 the solver stops wherever its path first gets there: last-bit
-# differences in the inputs (OpenBLAS kernels differ between CPUs) moved the twin's held-out
-# SVR results by up to 0.1 um (3 %). At 1e-9 two kernels agree to about 1e-8 um; the
-# solver runs longer (the twin's held-out SVRs of four folds: 1.6 CPU-s instead of 0.8;
-# 300 rows at C 100: 51 ms instead of 19) (docs/reports.md, "Byte-identical runs").
-SVR_TOL = 1e-9
-
-
-_ALLOWED_PARAMS = {
-    "mlr": set(),
-    "ridge": {"alpha"},
-    "lasso": {"alpha"},
-    "pls": {"n_components"},
-    "svr": {"C", "epsilon", "gamma", "kernel"},
-    "gpr": {"length_scale", "noise_level", "n_restarts_optimizer"},
-    "bayesridge": set(),
-}
-# Where make_regressor's pipeline keeps the wrapped regressor's parameters.
-
-
-# --------------------------------------------------------------------------- regressors
-
-
-def _check_algorithm(algorithm: str) -> None:
-    if algorithm not in ALGORITHMS:
-        raise ValueError(
-            f"unknown algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}"
-        )
-
-
-def _check_params(algorithm: str, params: Mapping | None) -> dict:
-    params = dict(params or {})
-    unknown = sorted(set(params) - _ALLOWED_PARAMS[algorithm])
-    if unknown:
-        allowed = ", ".join(sorted(_ALLOWED_PARAMS[algorithm])) or "none"
-        raise ValueError(f"unknown parameter(s) {unknown} for {algorithm}; allowed: {allowed}")
-    return params
-
-
-def pls_fits(n_components: int, n_rows: int, n_features: int) -> bool:
-    """Whether PLS can fit ``n_components`` on ``n_rows`` rows of ``n_features`` inputs.
-
-    make_regressor caps the components at the inputs; scikit-learn bounds them by the rows
-    as well (``min(n, p)``).  A search's grid point past the rows of one of its inner
-    splits scores NaN there, as GridSearchCV scores a failed fit, so it ranks last.
-    """
-    return min(int(n_components), n_features) <= n_rows
-
-
-def _base_regressor(algorithm: str, params: dict, random_state: int, n_features: int | None):
-    if algorithm == "mlr":
-        return LinearRegression()
-    if algorithm == "bayesridge":
-        # The ridge strength (the ratio of the noise's precision to the weights') that
-        # maximises the evidence of the training rows (MacKay 1992; Tipping 2001): no
-        # inner search, so no training run is spent on choosing it.
-        return BayesianRidge()
-    # A hyper-parameter left out keeps scikit-learn's default: the workflow's come from config.
-    if algorithm == "ridge":
-        return Ridge(**{name: float(value) for name, value in params.items()})
-    if algorithm == "lasso":
-        # The lasso's exact optimum by LARS (the same objective as coordinate descent's
-        # Lasso): weak penalties on many correlated temperatures left coordinate descent
-        # short of its optimum after 100,000 iterations, at 0.15 s a fit on 60 sensors,
-        # where LARS reaches it in a few steps (docs/performance.md).  Deterministic.
-        return LassoLars(**{name: float(value) for name, value in params.items()})
-    if algorithm == "pls":
-        # Inputs and target are already standardised by the pipeline.
-        pls = PLSRegression(scale=False, **{name: int(value) for name, value in params.items()})
-        if n_features is not None:
-            pls.set_params(n_components=min(pls.n_components, n_features))
-        return pls
-    if algorithm == "svr":
-        numbers = {name: float(params[name]) for name in ("C", "epsilon") if name in params}
-        return SVR(tol=SVR_TOL, **{**params, **numbers})
-    # gpr: bounds are in standardised units.  A nearly linear response drives the RBF
-    # towards long length scales and large amplitudes, hence the wide upper bounds; a
-    # noise floor of 1e-6 keeps exact (noise-free) training data well posed.
-    kernel = ScaledRBFWithNoise(
-        1.0,
-        (1e-3, 1e5),
-        float(params.get("length_scale", 1.0)),
-        (1e-2, 1e4),
-        float(params.get("noise_level", 0.1)),
-        (1e-6, 1e1),
-    )
-    return GaussianProcessRegressor(
-        kernel=kernel,
-        normalize_y=False,
-        n_restarts_optimizer=int(params.get("n_restarts_optimizer", 0)),
-        random_state=random_state,
-    )
-
-
-def make_regressor(
-    algorithm: str,
-    params: Mapping | None = None,
-    *,
-    random_state: int,
-    n_features: int | None = None,
-) -> Pipeline:
-    """An unfitted regressor with standardised inputs and standardised target.
-
-    Parameters
-    ----------
-    algorithm : {"mlr", "svr", "ridge", "lasso", "pls", "gpr", "bayesridge"}
-        Multiple linear regression, support-vector regression, ridge, lasso, partial least
-        squares, Gaussian-process regression, evidence-maximising ridge.
-    params : mapping, optional
-        Hyper-parameters: ridge ``alpha``; pls ``n_components``; svr ``C``, ``epsilon`` (in
-        standardised target units), ``gamma``, ``kernel`` (the workflow sets them from config
-        ``models``; one left out keeps scikit-learn's default); gpr ``length_scale`` (1.0),
-        ``noise_level`` (0.1), ``n_restarts_optimizer`` (0), the starting point of this
-        module's kernel.  Unknown keys raise ``ValueError``.
-    random_state : int
-        Seed of the GPR optimiser restarts (config ``models.random_state``; the other
-        algorithms are deterministic).
-    n_features : int, optional
-        Number of inputs; caps PLS ``n_components`` (PLS cannot use more components than
-        inputs).
-
-    Returns
-    -------
-    sklearn.pipeline.Pipeline
-        ``StandardScaler`` followed by ``TransformedTargetRegressor(regressor,
-        transformer=StandardScaler())``; GPR kernel ``Constant * RBF + White``.
-    """
-    _check_algorithm(algorithm)
-    params = _check_params(algorithm, params)
-    regressor = _base_regressor(algorithm, params, random_state, n_features)
-    return Pipeline(
-        [
-            ("standardise", StandardScaler()),
-            (
-                "regress",
-                TransformedTargetRegressor(regressor=regressor, transformer=StandardScaler()),
-            ),
-        ]
-    )
-
-
-def inner_group_splitter(groups, max_loco_groups: int, group_folds: int):
-    """The inner search's split of the training runs: leave one out, or k group folds.
-
-    Leave-one-condition-out costs one fit per run and candidate: above
-    ``max_loco_groups`` runs (config ``models.inner_search.max_loco_runs``) the runs are
-    dealt into ``group_folds`` folds instead (scikit-learn's GroupKFold, deterministic).
-    """
-    n_groups = np.unique(groups).size
-    if n_groups <= max_loco_groups:
-        return LeaveOneGroupOut()
-    return GroupKFold(n_splits=min(group_folds, n_groups))
-
-
-def fit_by_group_search(
-    algorithm: str,
-    X,
-    y,
-    groups,
-    grid: Mapping,
-    random_state: int,
-    inner: tuple[int, int],
-    max_group_folds: int | None = None,
-):
-    """Fit a regressor whose hyper-parameters are chosen by a group search on the runs.
-
-    Only the data passed in is used, so calling this on the training conditions of an
-    outer leave-one-condition-out fold keeps the held-out condition unseen.
-
-    Parameters
-    ----------
-    algorithm : {"svr", "ridge", "lasso", "pls"}
-    X : array-like, shape (n, f)
-    y : array-like, shape (n,)
-    groups : array-like, shape (n,)
-        Group label per row (the run id): each group is held out once in the inner search
-        (or each of k group folds, see :func:`inner_group_splitter`).
-    grid : mapping of str to list
-        Candidate values per parameter (svr ``C``, ``epsilon``, ``gamma``, ``kernel``:
-        C and epsilon act on the STANDARDISED target, so epsilon 0.05 means 5 % of the
-        target's spread; ridge and lasso ``alpha``; pls ``n_components``). The
-        workflow's grids are config ``models.svr_grid`` and ``models.search_grids``.
-    random_state : int
-        Passed to :func:`make_regressor` for symmetry (these algorithms are deterministic).
-    inner : (int, int)
-        ``(max_loco_groups, group_folds)`` of :func:`inner_group_splitter`.
-    max_group_folds : int, optional
-        With group folds (above ``max_loco_groups`` groups), score the grid on the first
-        this many of them only (config ``models.inner_search.svr_folds``); leave-one-out
-        always uses every group.
-
-    Returns
-    -------
-    estimator : Pipeline
-        Refitted on all rows with the chosen parameters.
-    chosen : dict
-        The chosen parameters, by their plain names.  With fewer than two groups there
-        is nothing to hold out, so the first grid point (each parameter's first value) is
-        used without search.  Scoring is RMSE; ties go to the earlier grid point.
-    """
-    grid = dict(grid)
-    _check_params(algorithm, grid)
-    if not grid or any(len(values) == 0 for values in grid.values()):
-        raise ValueError(
-            f"{algorithm} search grid must give at least one value for each listed parameter"
-        )
-    X = np.asarray(X, dtype=float)
-    y = np.asarray(y, dtype=float)
-    groups = np.asarray(groups)
-    candidates = list(ParameterGrid(grid))
-    n_features = X.shape[1]
-    if np.unique(groups).size < 2:
-        chosen = dict(candidates[0])
-        return make_regressor(
-            algorithm, chosen, random_state=random_state, n_features=n_features
-        ).fit(X, y), chosen
-    # GridSearchCV over make_regressor's pipeline, without its per-candidate cloning,
-    # re-validation and scorer calls: each hold-out is standardised once, the regressor
-    # fitted per candidate on the same arrays the pipeline would give it, so the scores,
-    # the choice and the refitted model are the ones GridSearchCV gives (test_models checks).
-    splits = _search_splits(X, y, groups, inner, max_group_folds)
-    scores = np.empty((len(candidates), len(splits)))
-    regressors = [_base_regressor(algorithm, p, random_state, n_features) for p in candidates]
-    # Every grid point's parameters and the inputs checked once, for the inner fits and
-    # the refit alike.
-    with checked_once(regressors, X, y):
-        _search_scores(algorithm, X, y, splits, regressors, scores)
-        means = np.average(scores, axis=1)
-        # The first best candidate, NaN scores last, as GridSearchCV ranks them.
-        chosen = dict(candidates[int(np.argmax(np.where(np.isnan(means), -np.inf, means)))])
-        refit = make_regressor(algorithm, chosen, random_state=random_state, n_features=n_features)
-        return refit.fit(X, y), chosen
-
-
-def _search_splits(X, y, groups, inner: tuple[int, int], max_group_folds: int | None) -> list:
-    """The (train, test) splits a search scores its grid on (:func:`fit_by_group_search`)."""
-    splitter = inner_group_splitter(groups, *inner)
-    splits = list(splitter.split(X, y, groups))
-    if max_group_folds is None or isinstance(splitter, LeaveOneGroupOut):
-        return splits
-    return splits[:max_group_folds]
-
-
-def standardised_split(X, y, train, test) -> tuple:
-    """A hold-out as the pipeline sees it: ``StandardScaler`` fitted on the training rows of
-    X and of y (one output (n,) or several (n, m), each scaled on its own).
-
-    Returns X's training and held-out rows and y's training rows standardised, and y's
-    mean and scale to undo it (scalars for one output).
-    """
-    y_train = y[train]
-    x_mean, x_scale = scaler_moments(X[train])
-    y_mean, y_scale = scaler_moments(y_train.reshape(len(y_train), -1))
-    if y_train.ndim == 1:
-        y_mean, y_scale = y_mean[0], y_scale[0]
-    # StandardScaler.transform's own arithmetic (minus mean_, over scale_).
-    return (
-        (X[train] - x_mean) / x_scale,
-        (X[test] - x_mean) / x_scale,
-        (y_train - y_mean) / y_scale,
-        y_mean,
-        y_scale,
-    )
-
-
-def _search_scores(algorithm, X, y, splits, regressors, scores):
-    """Fill ``scores[candidate, split]`` with minus the RMSE of each hold-out, as
-    GridSearchCV's ``neg_root_mean_squared_error`` scores it; ``regressors``: one
-    :func:`_base_regressor` per grid point, fitted afresh on each hold-out."""
-    for split, (train, test) in enumerate(splits):
-        X_train, X_test, y_train, y_mean, y_scale = standardised_split(X, y, train, test)
-        if algorithm == "lasso":
-            standardised = lasso_path_predictions(
-                X_train, y_train, X_test, [r.alpha for r in regressors]
-            )
-        elif algorithm == "ridge":
-            standardised = ridge_grid_predictions(
-                X_train, y_train, X_test, [r.alpha for r in regressors]
-            )
-        elif algorithm == "svr":
-            standardised = svr_grid_predictions(X_train, y_train, X_test, regressors)
-        else:
-            standardised = [
-                r.fit(X_train, y_train).predict(X_test)
-                if algorithm != "pls" or pls_fits(r.n_components, len(train), X.shape[1])
-                else np.full(len(test), np.nan)
-                for r in regressors
-            ]
-        for c, values in enumerate(standardised):
-            # StandardScaler.inverse_transform's own arithmetic (times scale_, plus
-            # mean_), without its input checks, which cost more than the prediction.
-            predicted = np.asarray(values, dtype=float).reshape(-1)
-            predicted = predicted * y_scale + y_mean
-            scores[c, split] = -np.sqrt(np.mean((y[test] - predicted) ** 2))
-
-
-def ridge_grid_predictions(X_train, y_train, X_test, alphas: Sequence[float]) -> list:
-    """Ridge's predictions of ``X_test`` at every strength in ``alphas``, from one SVD.
-
-    ``y_train`` is one output (n,) or several (n, m), each fitted on its own.
-
-    Ridge with its intercept is w = V diag(s / (s^2 + alpha)) U'(y - mean y) on the
-    centred inputs X - mean X = U diag(s) V', so a search over the strength grid costs one
-    decomposition per inner split, not one solve per strength (a strength grid on many
-    lagged inputs was most of a compensation job). Ridge's own fit to rounding
-    (test_models); a direction the training rows do not span (s = 0) gets no weight.
-    """
-    x_mean, y_mean = X_train.mean(axis=0), y_train.mean(axis=0)
-    U, s, Vt = np.linalg.svd(X_train - x_mean, full_matrices=False)
-    projected = U.T @ (y_train - y_mean)
-    test = (X_test - x_mean) @ Vt.T
-    predictions = []
-    for alpha in alphas:
-        denominator = s**2 + alpha
-        shrink = np.divide(s, denominator, out=np.zeros_like(s), where=denominator > 0)
-        # Transposed twice so that a 2-D y_train (one column per output) scales each row.
-        predictions.append(test @ (shrink * projected.T).T + y_mean)
-    return predictions
-
-
-def lasso_path_predictions(X_train, y_train, X_test, alphas: Sequence[float]) -> list:
-    """The lasso's predictions of ``X_test`` at every strength in ``alphas``, from one LARS path.
-
-    The lasso's coefficients are piecewise linear in alpha between the path's knots, so one
-    path down to the smallest alpha (LassoLars, with its path) gives every larger alpha by
-    the interpolation LassoLars makes at its own: a search over the strength grid costs
-    one fit, not one per strength.
-    """
-    smallest = _base_regressor("lasso", {"alpha": min(alphas)}, 0, None).fit(X_train, y_train)
-    knots, path = np.asarray(smallest.alphas_), np.asarray(smallest.coef_path_)
-    x_offset, y_offset = X_train.mean(axis=0), y_train.mean()
-    predictions = []
-    for alpha in alphas:
-        # The knots fall: i is the last knot at or above alpha.
-        i = int(np.searchsorted(-knots, -alpha, side="right")) - 1
-        if i < 0:
-            coef = np.zeros(X_train.shape[1])
-        elif knots[i] == alpha or i == knots.size - 1:
-            coef = path[:, i]
-        else:
-            step = (knots[i] - alpha) / (knots[i] - knots[i + 1])
-            coef = path[:, i] + step * (path[:, i + 1] - path[:, i])
-        predictions.append((X_test - x_offset) @ coef + y_offset)
-    return predictions
-
-
-def _final_regressor(fitted):
-    return fitted.named_steps["regress"].regressor_
-
-
-def linear_terms(fitted_estimator, feature_names: Sequence[str]) -> dict[str, float] | None:
-    """Constant and per-feature coefficients of an affine fit, in the inputs' own units.
-
-    The pipeline standardises inputs and target internally; since every step is affine
-    for mlr, ridge, lasso, pls and the evidence ridge, probing the prediction at the origin and at unit vectors
-    gives the constant and the slopes in original units (per degree C).
-
-    Parameters
-    ----------
-    fitted_estimator : Pipeline
-        A fitted :func:`make_regressor` pipeline.
-    feature_names : sequence of str
-        Names of the inputs, in column order.
-
-    Returns
-    -------
-    dict or None
-        ``{"const": c, name: slope, ...}``; ``None`` for svr and gpr, which are not affine.
-    """
-    if not isinstance(
-        _final_regressor(fitted_estimator),
-        (LinearRegression, Ridge, LassoLars, PLSRegression, BayesianRidge),
-    ):
-        return None
-    names = list(feature_names)
-    n_inputs = fitted_estimator.named_steps["standardise"].n_features_in_
-    if len(names) != n_inputs:
-        raise ValueError(f"got {len(names)} feature names for a model with {n_inputs} inputs")
-    probes = np.vstack([np.zeros(len(names)), np.eye(len(names))])
-    values = np.asarray(fitted_estimator.predict(probes), dtype=float).ravel()
-    const = float(values[0])
-    terms = {"const": const}
-    terms.update({name: float(v - const) for name, v in zip(names, values[1:], strict=False)})
-    return terms
-
-
-def predict_with_std(fitted_estimator, X) -> tuple[np.ndarray, np.ndarray]:
-    """Predictive mean and standard deviation of a fitted GPR pipeline, original units.
-
-    Raises
-    ------
-    NotImplementedError
-        If the pipeline does not end in a Gaussian-process regressor.
-    """
-    gpr = _final_regressor(fitted_estimator)
-    if not isinstance(gpr, GaussianProcessRegressor):
-        raise NotImplementedError("prediction intervals are only available for algorithm 'gpr'")
-    scaled = fitted_estimator.named_steps["standardise"].transform(np.asarray(X, dtype=float))
-    mean_s, std_s = gpr.predict(scaled, return_std=True)
-    target_scaler = fitted_estimator.named_steps["regress"].transformer_
-    scale = float(target_scaler.scale_[0])
-    offset = float(target_scaler.mean_[0])
-    return np.asarray(mean_s).ravel() * scale + offset, np.asarray(std_s).ravel() * scale
 
 
 # --------------------------------------------------------------------------- data checks
@@ -572,7 +151,7 @@ def _fit_one(features, target, groups, estimator):
             )
         # Fixed parameters (e.g. kernel) apply to every grid point unless the grid varies them.
         grid = {
-            **{k: [v] for k, v in _check_params("svr", params).items()},
+            **{k: [v] for k, v in check_params("svr", params).items()},
             **dict(estimator.svr_grid),
         }
         # libsvm's cost grows faster than the square of the rows (at C = 100 and
@@ -610,19 +189,6 @@ def _fit_one(features, target, groups, estimator):
     X, y = features[keep], target[keep]
     with checked_once([model.named_steps["regress"].regressor], X, y):
         return model.fit(X, y), None
-
-
-@contextmanager
-def checked_once(regressors: Sequence, X: np.ndarray, y: np.ndarray) -> Iterator[None]:
-    """Check ``regressors``' parameters and the finiteness of ``X`` and ``y`` once, then fit
-    and predict inside with scikit-learn's own checks of both off: each of a
-    :func:`make_regressor` pipeline's five estimators makes them again, and on tens of rows
-    they cost several times the arithmetic (the same numbers either way)."""
-    for regressor in regressors:
-        regressor._validate_params()
-    finite = bool(np.isfinite(X).all() and np.isfinite(y).all())
-    with config_context(assume_finite=finite, skip_parameter_validation=True):
-        yield
 
 
 def _fit_note(estimator, target: str, position_mm: float, rows: int, groups, chosen) -> dict:
@@ -804,7 +370,7 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
 
     def fit(self, X: pd.DataFrame, Y: pd.DataFrame) -> DecoupledAxisModel:
         """Decouple every training measurement and regress its coefficients on temperature."""
-        _check_algorithm(self.algorithm)
+        check_algorithm(self.algorithm)
         if self.degree not in (1, 2, 3):
             raise ValueError(f"decoupling degree must be 1, 2 or 3, got {self.degree}")
         _check_X(X, (*self.k_sensors, *self.b_sensors, *self.signals))
@@ -986,7 +552,7 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
 
     def fit(self, X: pd.DataFrame, Y: pd.DataFrame) -> PointwiseAxisModel:
         """Fit one regression per position on relative temperatures."""
-        _check_algorithm(self.algorithm)
+        check_algorithm(self.algorithm)
         _check_X(X, (*self.sensors, *self.signals))
         self.positions_mm_ = _positions_of(X, Y, min_positions=1)
         features = _features(X, self.sensors, "relative", self.signals)

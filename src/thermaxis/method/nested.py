@@ -1,8 +1,6 @@
 """Which model a user's own runs support: a nested leave-one-condition-out super learner.
 
-A *candidate* is one configuration the main workflow or the sweep can express: an
-approach, an algorithm, a sensitive-point selection and the inputs it may use
-(temperatures, their time-aware lags, the operating signals). The question a machine
+The candidates are :mod:`thermaxis.method.candidates`'. The question a machine
 builder asks is which model to deploy and how much error it leaves on a condition it has
 not seen. Answering it honestly needs two loops:
 
@@ -39,13 +37,6 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import nnls
 
-from thermaxis.config import (
-    KERNEL_CANDIDATE,
-    ModelSettings,
-    RecommendSettings,
-    SelectionSettings,
-    selection_overrides,
-)
 from thermaxis.labels import natural_sorted
 from thermaxis.method.batched import (
     batchable,
@@ -54,8 +45,8 @@ from thermaxis.method.batched import (
     pointwise_curves,
     pointwise_metrics,
 )
+from thermaxis.method.candidates import Candidate, candidate_view
 from thermaxis.method.folds import (
-    META,
     _predictions,
     fit_held_out,
     fold_metrics,
@@ -64,68 +55,26 @@ from thermaxis.method.folds import (
     run_groups,
     select_for_fold,
 )
-from thermaxis.method.inputs import base_of, parse_input_name
-from thermaxis.method.metrics import prediction_metrics
-from thermaxis.reports.formatting import markdown_table
+from thermaxis.method.metrics import METRIC_COLUMNS, prediction_metrics
 
 __all__ = [
-    "COMBINED",
-    "Combination",
-    "super_learner_weights",
-    "combine",
-    "Candidate",
     "Recommendation",
-    "candidate_view",
-    "held_out_scores",
     "held_out_predictions",
-    "SCORE_COLUMNS",
+    "held_out_scores",
     "TrainingSet",
     "training_sets",
     "training_set_scores",
+    "SCORE_COLUMNS",
     "outer_fold_scores",
+    "COMBINED",
+    "super_learner_weights",
+    "Combination",
+    "combine",
     "fold_scores",
     "collect",
     "recommend",
-    "default_candidates",
-    "BASELINE",
-    "EVIDENCE",
-    "baseline_candidate",
-    "evidence_candidate",
-    "extra_candidates",
-    "candidate_table",
-    "candidates_for",
-    "configured_candidates",
-    "candidate_record",
-    "candidate_from_record",
-    "recommendation_markdown",
     "summary_of",
-    "deployed_record",
-    "DeployedSetup",
-    "deployed_setup",
-    "held_out_accuracy",
 ]
-
-# Every held-out score recorded (model.json's held_out_accuracy takes them all).
-METRICS = ("rmse", "max_abs", "mae", "residual_min", "residual_max")
-
-
-@dataclass(frozen=True)
-class Candidate:
-    """One configuration the recommendation may choose.
-
-    ``time_inputs`` lets the candidate's selection and model see the time-aware input
-    columns of X (their names hold ``@``, e.g. ``T5@lag30min``) whose lag time constants
-    are ``lags_min``; without it they are dropped. ``models.signals`` are the operating
-    signals it uses as inputs.
-    """
-
-    name: str
-    approach: str
-    algorithm: str
-    selection: SelectionSettings
-    models: ModelSettings
-    time_inputs: bool
-    lags_min: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -145,37 +94,6 @@ class Recommendation:
     loco: pd.DataFrame
     final: str
     combination: Combination
-
-
-def candidate_view(X: pd.DataFrame, candidate: Candidate, signals: Sequence[str]):
-    """What a candidate may use: (X's columns it sees, those selection may choose, its settings).
-
-    Temperatures, and with ``time_inputs`` their lags, are candidates for the sensitive
-    points; the operating signals the candidate uses (and their lags) are added to every
-    model's inputs, as ``models.signals`` does, never selected.
-    """
-    every_derived = [c for c in X.columns if "@" in str(c)]
-    temperatures = [
-        c for c in X.columns if c not in META and c not in signals and c not in every_derived
-    ]
-    derived = [c for c in every_derived if _seen_lag(c, candidate.lags_min)]
-    if candidate.time_inputs:
-        temperatures += [c for c in derived if base_of(c) not in signals]
-    used = [s for s in candidate.models.signals if s in X.columns]
-    if candidate.time_inputs:
-        used += [c for c in derived if base_of(c) in candidate.models.signals]
-    keys = [c for c in X.columns if c in META]
-    return (
-        X[keys + temperatures + used],
-        keys + temperatures,
-        replace(candidate.models, signals=tuple(used)),
-    )
-
-
-def _seen_lag(name: str, lags_min: Sequence[float]) -> bool:
-    """Whether derived input ``name`` is a lag at one of the time constants ``lags_min``."""
-    _, kind, seconds = parse_input_name(name)
-    return kind == "lag" and any(np.isclose(seconds, 60.0 * m) for m in lags_min)
 
 
 def _fold_setup(X, Y, fold, candidate, degree, signals, cache):
@@ -237,7 +155,9 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache, keep=False):
             (run, prediction_metrics(measured[runs == run], curves[runs == run]))
             for run in pd.unique(runs)
         ]
-        return [(run, {name: float(m[name]) for name in METRICS}) for run, m in scored], curves
+        return [
+            (run, {name: float(m[name]) for name in METRIC_COLUMNS}) for run, m in scored
+        ], curves
     if batchable(candidate.algorithm, models, Y):
         # The numpy core: the same numbers as evaluate_configuration to 1e-9.
         (metrics,) = (
@@ -254,7 +174,8 @@ def _error_metrics(X, Y, fold, candidate, degree, signals, cache, keep=False):
         )  # fmt: skip
     errors = metrics.loc[metrics["target"] == "error"]
     return [
-        (row["fold"], {name: float(row[name]) for name in METRICS}) for _, row in errors.iterrows()
+        (row["fold"], {name: float(row[name]) for name in METRIC_COLUMNS})
+        for _, row in errors.iterrows()
     ], None
 
 
@@ -386,7 +307,7 @@ def training_set_scores(
     return scores, curves
 
 
-SCORE_COLUMNS = ["kind", "fold", "candidate", "held_out", *METRICS]
+SCORE_COLUMNS = ["kind", "fold", "candidate", "held_out", *METRIC_COLUMNS]
 
 
 def outer_fold_scores(
@@ -483,7 +404,7 @@ def combine(runs, folds, members, curves, measured) -> tuple[Combination, dict[s
             by_run[run] = weights
             outer = np.stack([curves[tuple(train)][(m, run)] for m in members], axis=-1)
             metrics = prediction_metrics(measured[run], outer @ np.asarray(weights))
-            errors[run] = {name: float(metrics[name]) for name in METRICS}
+            errors[run] = {name: float(metrics[name]) for name in METRIC_COLUMNS}
             every.append((tuple(train), run))
     final = _weights(every, members, curves, measured)
     return Combination(members, by_run, final), errors
@@ -551,10 +472,12 @@ def collect(
     _check_choice(names, reference, combination.members)
     combined = scores.loc[(scores["candidate"] == COMBINED) & (scores["kind"] == "loco")]
     scores = scores.loc[scores["candidate"].isin(names)]
-    loco = scores.loc[scores["kind"] == "loco", ["candidate", "held_out", *METRICS]].reset_index(
-        drop=True
-    )
-    inner = scores.loc[scores["kind"] == "inner", ["fold", "candidate", "held_out", *METRICS]]
+    loco = scores.loc[
+        scores["kind"] == "loco", ["candidate", "held_out", *METRIC_COLUMNS]
+    ].reset_index(drop=True)
+    inner = scores.loc[
+        scores["kind"] == "inner", ["fold", "candidate", "held_out", *METRIC_COLUMNS]
+    ]
     at = loco.set_index(["candidate", "held_out"])
     held = combined.set_index("held_out")
     rows = []
@@ -610,26 +533,6 @@ def recommend(
     return collect(pd.concat(frames, ignore_index=True), names, reference, combination)
 
 
-def candidate_table(candidates: Sequence[Candidate]) -> pd.DataFrame:
-    """One row per candidate: what it is, in words a reader of the table needs."""
-    return pd.DataFrame(
-        [
-            {
-                "candidate": c.name,
-                "approach": c.approach,
-                "algorithm": c.algorithm,
-                "selection": c.selection.method,
-                "n_clusters": c.selection.n_clusters
-                if c.selection.method in ("fuzzy_grey", "correlation")
-                else np.nan,
-                "time_inputs": c.time_inputs,
-                "signals": " ".join(c.models.signals),
-            }
-            for c in candidates
-        ]
-    )
-
-
 def summary_of(recommendation: Recommendation) -> Mapping[str, float]:
     """Mean held-out errors of the nested choice and of the reference over the outer folds."""
     f = recommendation.folds
@@ -639,318 +542,3 @@ def summary_of(recommendation: Recommendation) -> Mapping[str, float]:
         "paper_rmse_um": float(f["paper_rmse_um"].mean()),
         "paper_max_abs_um": float(f["paper_max_abs_um"].mean()),
     }
-
-
-BASELINE = "baseline-ridge+lags"
-EVIDENCE = "evidence-ridge"
-
-
-def baseline_candidate(
-    selection: SelectionSettings, models: ModelSettings, lags_min: Sequence[float]
-) -> Candidate:
-    """The strong plain baseline (:data:`BASELINE`): what a user would fit in a notebook.
-
-    A ridge per target (point by point), over every sensor's rise and its causal
-    first-order lags at ``lags_min`` (config ``recommend.baseline_lags_min``), the strength
-    chosen by inner leave-one-condition-out on the training runs; no operating signal.
-    """
-    return Candidate(
-        BASELINE,
-        "pointwise",
-        "ridge",
-        replace(selection, method="all"),
-        replace(models, signals=(), searched=("ridge",)),
-        True,
-        tuple(lags_min),
-    )
-
-
-def evidence_candidate(
-    selection: SelectionSettings,
-    models: ModelSettings,
-    decoupled: bool,
-    signals: Sequence[str],
-    lags_min: Sequence[float] = (),
-) -> Candidate:
-    """The evidence ridge (:data:`EVIDENCE`, with ``lags_min`` ``+lags``): the other plain reference.
-
-    scikit-learn's BayesianRidge (algorithm ``bayesridge``) on standardised inputs, over
-    every sensor, with the declared operating ``signals`` as inputs; decoupled where there
-    are several positions (k on absolute temperatures, b on their rise, Eq. 9), point by
-    point otherwise. Its strength maximises the evidence of the training rows, so it needs
-    no inner search and spends no run on one.
-    """
-    return Candidate(
-        EVIDENCE + ("+lags" if lags_min else ""),
-        "decoupled" if decoupled else "pointwise",
-        "bayesridge",
-        replace(selection, method="all"),
-        replace(models, signals=tuple(signals), searched=()),
-        bool(lags_min),
-        tuple(lags_min),
-    )
-
-
-def default_candidates(
-    selection: SelectionSettings,
-    models: ModelSettings,
-    decoupled: bool,
-    signals: Sequence[str],
-    lags_min: Sequence[float],
-    baseline_lags_min: Sequence[float],
-    kernel: bool = True,
-) -> list[Candidate]:
-    """A short list of structurally different candidates, simplest first.
-
-    * ``paper``: the configured selection, the decoupled approach (point by point for a
-      single-position dataset) and MLR, as the paper models (also the reference);
-    * the evidence ridge over every sensor (:func:`evidence_candidate`), without and with
-      the lags ``baseline_lags_min``;
-    * the plain baseline (:func:`baseline_candidate`): ridge over every sensor's rise and
-      its lags ``baseline_lags_min``, its strength searched;
-    * PLS over every sensor with the operating signals, its components searched, and with
-      ``lags_min`` again with those lags;
-    * with ``kernel``, the point-by-point SVR on the configured selection (a kernel model's
-      inner search is costly: config ``recommend.kernel_max_runs`` caps it).
-
-    Each is a different kind of model (selected points, shrinkage by the evidence or by a
-    search, latent components, a kernel): the choice among a few such candidates is
-    what the runs can support; twenty near-duplicates made it noise.
-    """
-    first = "decoupled" if decoupled else "pointwise"
-    every_sensor = replace(selection, method="all")
-    pls = Candidate(
-        f"{first}-pls-all",
-        first,
-        "pls",
-        every_sensor,
-        replace(models, signals=tuple(signals), searched=("pls",)),
-        False,
-    )
-    candidates = [
-        Candidate(
-            "paper", first, "mlr", selection, replace(models, signals=(), searched=()), False
-        ),
-        evidence_candidate(selection, models, decoupled, signals),
-        evidence_candidate(selection, models, decoupled, signals, baseline_lags_min),
-        baseline_candidate(selection, models, baseline_lags_min),
-        pls,
-    ]
-    if lags_min:
-        candidates.append(
-            replace(pls, name=f"{pls.name}+lags", time_inputs=True, lags_min=tuple(lags_min))
-        )
-    if kernel:
-        candidates.append(
-            Candidate(
-                KERNEL_CANDIDATE,
-                "pointwise",
-                "svr",
-                selection,
-                replace(models, signals=(), searched=()),
-                False,
-            )  # fmt: skip
-        )
-    return candidates
-
-
-def extra_candidates(
-    settings, selection: SelectionSettings, models: ModelSettings, signals: Sequence[str]
-):
-    """The user's candidates (config ``recommend.extra_candidates``), after the default ones."""
-    out = []
-    for extra in settings.extra_candidates:
-        used = tuple(signals) if extra.signals else ()
-        out.append(
-            Candidate(
-                name=extra.name,
-                approach=extra.approach,
-                algorithm=extra.algorithm,
-                selection=selection_overrides(selection, dict(extra.selection)),
-                models=replace(models, signals=used, searched=("ridge", "lasso", "pls")),
-                time_inputs=extra.time_inputs,
-                lags_min=tuple(settings.lags_min) if extra.time_inputs else (),
-            )
-        )
-    return out
-
-
-def candidates_for(
-    selection: SelectionSettings,
-    models: ModelSettings,
-    recommend_settings,
-    decoupled: bool,
-    signals: Sequence[str],
-    n_runs: int,
-) -> list[Candidate]:
-    """The configured candidate list: the defaults, then the user's (config ``recommend``).
-
-    The kernel candidate is in the list only up to ``recommend.kernel_max_runs`` runs: its
-    search is a kernel fit per grid point and inner run, nested twice.
-    """
-    return [
-        *default_candidates(
-            selection,
-            models,
-            decoupled,
-            signals,
-            recommend_settings.lags_min,
-            recommend_settings.baseline_lags_min,
-            kernel=n_runs <= recommend_settings.kernel_max_runs,
-        ),
-        *extra_candidates(recommend_settings, selection, models, signals),
-    ]
-
-
-def configured_candidates(params) -> list[Candidate]:
-    """The candidate list of the recommendation rules, from their params (config sections)."""
-    return candidates_for(
-        SelectionSettings.from_section(params.selection),
-        ModelSettings.from_section(params.models),
-        RecommendSettings.from_section(params.recommend),
-        params.decoupled,
-        params.signals,
-        len(params.folds),
-    )
-
-
-def candidate_record(candidate: Candidate) -> dict:
-    """A candidate as plain JSON: what the compensation refits on all runs."""
-    selection = {
-        f: getattr(candidate.selection, f) for f in candidate.selection.__dataclass_fields__
-    }
-    selection["fixed"] = {target: list(sensors) for target, sensors in candidate.selection.fixed}
-    return {
-        "name": candidate.name,
-        "approach": candidate.approach,
-        "algorithm": candidate.algorithm,
-        "selection": selection,
-        "signals": list(candidate.models.signals),
-        "searched": list(candidate.models.searched),
-        "time_inputs": candidate.time_inputs,
-        "lags_min": list(candidate.lags_min),
-    }
-
-
-def candidate_from_record(record: Mapping, models: ModelSettings) -> Candidate:
-    """The inverse of :func:`candidate_record`, on the configured model settings."""
-    selection = SelectionSettings.from_section(record["selection"])
-    return Candidate(
-        name=record["name"],
-        approach=record["approach"],
-        algorithm=record["algorithm"],
-        selection=selection,
-        models=replace(
-            models, signals=tuple(record["signals"]), searched=tuple(record["searched"])
-        ),
-        time_inputs=bool(record["time_inputs"]),
-        lags_min=tuple(float(m) for m in record["lags_min"]),
-    )
-
-
-def recommendation_markdown(recommendation: Recommendation, statement: str) -> str:
-    """recommendation.md: the answer first, then the folds."""
-    s = summary_of(recommendation)
-    f = recommendation.folds
-    c = recommendation.combination
-    final = ", ".join(f"{m} {w:.3f}" for m, w in zip(c.members, c.final, strict=True))
-    head = (
-        f"# Recommended model\n\n{statement}\n\n"
-        f"Recommended: the **{recommendation.final}**, the convex combination of {len(c.members)} "
-        f"linear candidates with the weights fitted on every run's held-out predictions ({final}). "
-        f"Weighted fold by fold without the held-out run, it leaves a mean held-out RMSE of "
-        f"{s['rmse_um']:.2f} µm and a mean largest |residual| of {s['max_abs_um']:.2f} µm, "
-        f"against {s['paper_rmse_um']:.2f} and {s['paper_max_abs_um']:.2f} µm for the paper's "
-        f"configuration on the same folds.\n\n"
-    )
-    unweighted = [fold for fold in f["fold"].astype(str) if not _has_inner(recommendation, fold)]
-    if unweighted:
-        # One training run leaves nothing to hold out inside the fold (combine).
-        head += (
-            f"Fold(s) {', '.join(unweighted)} had a single training run, so no inner predictions "
-            "to fit weights on: they weight the members equally.\n\n"
-        )
-    return head + markdown_table(f, "%.3f")
-
-
-def _has_inner(recommendation: Recommendation, fold: str) -> bool:
-    inner = recommendation.inner
-    return bool(len(inner)) and bool((inner["fold"].astype(str) == fold).any())
-
-
-def deployed_record(model: str, choice: Mapping, fold: str | None = None) -> dict | None:
-    """What the compensation deploys (on ``fold``'s training runs when given).
-
-    ``model`` is config ``compensation.model``: ``paper`` (None: the configured approach
-    and algorithm), ``recommended`` (the super learner: ``{"name", "members": [(candidate
-    record, weight), ...]}`` with the final weights, or those of ``fold``) or a candidate's
-    name (one member of weight 1). Every candidate can be deployed: ``model.json``,
-    :class:`~thermaxis.compensation.runtime.Compensator` and the Structured Text block
-    read temperatures, operating signals and their lags cycle by cycle.
-    """
-    if model == "paper":
-        return None
-    if model == "recommended":
-        weights = choice["final"]["weights"] if fold is None else choice["folds"][fold]
-        return {
-            "name": choice["final"]["name"],
-            "members": [(choice["candidates"][m], float(w)) for m, w in weights.items()],
-        }
-    if model in choice["candidates"]:
-        return {"name": model, "members": [(choice["candidates"][model], 1.0)]}
-    raise ValueError(
-        f"config compensation.model: {model!r} is not 'recommended', 'paper' or a candidate "
-        f"({', '.join(choice['candidates'])})"
-    )
-
-
-@dataclass(frozen=True)
-class DeployedSetup:
-    """What the compensation fits: the columns of X it sees, those its selection may
-    choose, and its approach, selection, model and compensation settings."""
-
-    view: pd.DataFrame
-    selectable: list
-    approach: str
-    selection: SelectionSettings
-    models: ModelSettings
-    settings: object
-
-
-def deployed_setup(
-    record: Mapping | None,
-    X: pd.DataFrame,
-    approach: str,
-    selection: SelectionSettings,
-    models: ModelSettings,
-    settings,
-    signals: Sequence[str],
-) -> DeployedSetup:
-    """The deployed model's setup (:class:`DeployedSetup`).
-
-    ``record`` is :func:`deployed_record`'s; None keeps the configured model (``approach``,
-    ``selection``, ``models`` and ``settings.algorithm``) on the temperatures alone, as the
-    paper models. A candidate sees what it saw in the recommendation (:func:`candidate_view`).
-    """
-    if record is None:
-        keep = [c for c in X.columns if c not in signals and "@" not in str(c)]
-        return DeployedSetup(X[keep], keep, approach, selection, models, settings)
-    candidate = candidate_from_record(record, models)
-    view, selectable, candidate_models = candidate_view(X, candidate, signals)
-    return DeployedSetup(
-        view,
-        selectable,
-        candidate.approach,
-        candidate.selection,
-        candidate_models,
-        replace(settings, algorithm=candidate.algorithm),
-    )
-
-
-def held_out_accuracy(scores: pd.DataFrame, name: str) -> list[dict]:
-    """A candidate's leave-one-condition-out errors as model.json's held_out_accuracy."""
-    rows = scores.loc[(scores["kind"] == "loco") & (scores["candidate"] == name)]
-    return [
-        {"fold": str(r["held_out"]), "target": "error", **{m: float(r[m]) for m in METRICS}}
-        for r in rows.to_dict("records")
-    ]
