@@ -25,7 +25,7 @@ import jsonschema
 
 from thermaxis.errors import schema_message
 from thermaxis.schemas import load_trusted_yaml, schema_path
-from thermaxis.sweep.plan import SweepGrid
+from thermaxis.sweep_grid import SweepGrid
 from thermaxis.vocabulary import SEARCHABLE
 
 __all__ = [

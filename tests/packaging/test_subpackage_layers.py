@@ -16,8 +16,6 @@ import ast
 from collections import defaultdict
 from pathlib import Path
 
-import pytest
-
 from helpers import REPO
 
 SRC = REPO / "src"
@@ -95,10 +93,6 @@ def test_no_underscored_name_is_imported_across_subpackages():
     assert underscored_crossings(SRC, outside) == []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 63: config<->sweep and pipeline<->sweep still import each other",
-)
 def test_no_two_subpackages_import_each_other():
     assert two_way_pairs(SRC) == {}
 

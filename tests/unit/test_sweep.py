@@ -19,6 +19,7 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 from helpers import DEFAULTS
+from thermaxis import sweep_grid
 from thermaxis.config import Settings, load_config
 from thermaxis.errors import SelectionWarning
 from thermaxis.method import batched, folds
@@ -103,9 +104,9 @@ def test_settings_the_dataset_cannot_support_are_left_out_with_a_note():
 
 def test_spec_settings_apply_only_the_factors_of_the_method():
     base = replace(DEFAULTS.selection, n_clusters=3, similarity="pearson", grade="deng")
-    s = sweep_plan.SelectionSpec("correlation", 5).settings(base, ())
+    s = sweep_grid.SelectionSpec("correlation", 5).settings(base, ())
     assert (s.method, s.n_clusters, s.similarity, s.grade) == ("correlation", 5, "pearson", "deng")
-    f = sweep_plan.SelectionSpec("fixed").settings(base, PAPER_FIXED)
+    f = sweep_grid.SelectionSpec("fixed").settings(base, PAPER_FIXED)
     assert f.fixed_for("k") == ("T1", "T6", "T12")
 
 
@@ -113,7 +114,7 @@ def test_spec_settings_apply_only_the_factors_of_the_method():
 
 
 def test_batches_cover_every_unit_once_in_contiguous_near_equal_shares():
-    units = [sweep_plan.Unit(f"F{i}", sweep_plan.SelectionSpec("all")) for i in range(10)]
+    units = [sweep_plan.Unit(f"F{i}", sweep_grid.SelectionSpec("all")) for i in range(10)]
     shares = [sweep_plan.batch_units(units, 4, b) for b in range(4)]
     # 10 units in 4 shares: boundaries round(0, 2.5, 5, 7.5, 10) = 0, 2, 5, 8, 10.
     assert [len(s) for s in shares] == [2, 3, 3, 2]

@@ -11,6 +11,8 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 from helpers import DEFAULTS
+from thermaxis import sweep_grid
+from thermaxis.pipeline import tuning
 from thermaxis.sweep import plan as sweep_plan
 from thermaxis.sweep import run as sweep_run
 
@@ -30,7 +32,7 @@ def test_every_subset_once_counted_by_hand():
     assert len({s.sensors for s in specs}) == 220
     assert all(len(s.sensors) == 3 and s.n_clusters == 3 for s in specs)
     assert specs[0].sensors == ("T1", "T2", "T3") and specs[-1].sensors == ("T10", "T11", "T12")
-    assert sweep_plan.subset_count(12, (2, 3)) == 66 + 220
+    assert sweep_grid.subset_count(12, (2, 3)) == 66 + 220
     # 220 subsets x (decoupled d1-3 + pointwise) x 5 algorithms.
     assert len(subset_grid((3,)).configurations(TWELVE)) == 220 * 4 * 5
     # A size above the sensor count is left out with a note, as for cluster counts.
@@ -49,12 +51,12 @@ def test_more_subsets_than_the_cap_stop_the_plan_with_the_count():
 
 
 def test_a_subset_is_the_fixed_choice_for_k_b_and_pointwise():
-    spec = sweep_plan.SelectionSpec("subset", 2, sensors=("T4", "T9"))
+    spec = sweep_grid.SelectionSpec("subset", 2, sensors=("T4", "T9"))
     settings = spec.settings(DEFAULTS.selection, ())
     assert settings.method == "fixed"
     assert [settings.fixed_for(t) for t in ("k", "b", "pointwise")] == [("T4", "T9")] * 3
     assert (
-        sweep_plan.Configuration(spec, "pointwise", None, "mlr").config_id
+        sweep_grid.Configuration(spec, "pointwise", None, "mlr").config_id
         == "subset:n2:T4+T9/pointwise/mlr"
     )
 
@@ -132,6 +134,6 @@ def test_batch_time_limit_by_hand():
     )
     units, _ = sweep_plan.plan_units(grid, ["E1"], TWELVE)
     assert len(units) == 27
-    assert sweep_plan.batch_minutes(grid, units, 3, 0, 2.0) == 30
+    assert tuning.batch_minutes(grid, units, 3, 0, 2.0) == 30
     # 180 x 0.05 s = 9 s: the 5-minute floor.
-    assert sweep_plan.batch_minutes(grid, units, 3, 2, 0.05) == 5
+    assert tuning.batch_minutes(grid, units, 3, 2, 0.05) == 5

@@ -145,7 +145,7 @@ def test_the_model_schema_refuses_an_unknown_algorithm():
 def test_the_code_knows_every_algorithm_and_approach():
     from thermaxis.figures.captions import DISPLAY_NAMES
     from thermaxis.method import regressors
-    from thermaxis.sweep.plan import LEVEL_ORDER
+    from thermaxis.sweep_grid import LEVEL_ORDER
 
     assert set(regressors._ALLOWED_PARAMS) == set(ALGORITHMS)
     assert set(ALGORITHMS) | set(APPROACHES) <= set(DISPLAY_NAMES)

@@ -17,7 +17,7 @@ from thermaxis.reports import pages
 from thermaxis.reports.pages import CATEGORY
 from thermaxis.reports.provenance import git_state
 from thermaxis.schemas import schema_path
-from thermaxis.sweep.plan import batch_minutes, cost_note
+from thermaxis.sweep.plan import cost_note
 
 
 envvars:
@@ -156,7 +156,7 @@ def sweep_batch_benchmarks(wildcards):
 def sweep_batch_minutes(wildcards):
     n, batch, grid = int(wildcards.n_batches), int(wildcards.batch), SETTINGS.sweep.grid
     units = sweep_plan().units
-    return batch_minutes(grid, units, n, batch, SECONDS_PER_EVALUATION, DECOUPLED)
+    return tuning.batch_minutes(grid, units, n, batch, SECONDS_PER_EVALUATION, DECOUPLED)
 
 
 def sweep_report_parameters(wildcards, input):

@@ -8,9 +8,11 @@ benchmarks; the sweep's batches get a runtime from their share of the grid.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
-from thermaxis.pipeline.resources import MIN_MEMORY_MB, MIN_RUNTIME_MIN, per_attempt
+from thermaxis.pipeline.resources import MIN_MEMORY_MB, MIN_RUNTIME_MIN, per_attempt, request
+from thermaxis.sweep.plan import Unit, batch_units
+from thermaxis.sweep_grid import SweepGrid
 
 REPORT_RULES = (
     "dataset_report",
@@ -69,3 +71,20 @@ def rule_resources(table: dict, name: str) -> dict:
 def rule_priority(name: str) -> int:
     """The ``priority:`` of rule ``name`` (PRIORITY; 0 for a rule not listed)."""
     return PRIORITY.get(name, 0)
+
+
+def batch_minutes(
+    grid: SweepGrid,
+    units: Sequence[Unit],
+    n_batches: int,
+    batch: int,
+    seconds_per_evaluation: float,
+    decoupled: bool = True,
+) -> int:
+    """Time limit (minutes) of one batch job: its evaluations at the given cost, with the
+    headroom :func:`thermaxis.pipeline.resources.request` gives every rule."""
+    evaluations = sum(
+        len(grid.unit_configurations(u.selection, decoupled))
+        for u in batch_units(units, n_batches, batch)
+    )
+    return request(evaluations * seconds_per_evaluation, 0.0)[1]

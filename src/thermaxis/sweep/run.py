@@ -38,7 +38,8 @@ import pandas as pd
 
 from thermaxis.config import ModelSettings, SelectionSettings
 from thermaxis.method.metrics import METRIC_COLUMNS
-from thermaxis.sweep.plan import FACTORS, LEVEL_ORDER, Configuration, SelectionSpec, SweepGrid, Unit
+from thermaxis.sweep.plan import Unit
+from thermaxis.sweep_grid import FACTORS, LEVEL_ORDER, Configuration, SelectionSpec, SweepGrid
 from thermaxis.tables import read_table as read_labelled
 
 __all__ = [
