@@ -14,13 +14,8 @@ from helpers import DEFAULTS
 from helpers.builders import set_csv_cell
 from thermaxis.cleaning.run import clean_run
 from thermaxis.dataset.plausibility import check_run_plausibility
-from thermaxis.dataset.reader import (
-    clock_back_hint,
-    load_dataset,
-    read_measurement,
-    read_run,
-    read_temperature_source,
-)
+from thermaxis.dataset.raw_files import clock_back_hint, read_measurement, read_temperature_source
+from thermaxis.dataset.reader import load_dataset, read_run
 from thermaxis.errors import DataError
 
 

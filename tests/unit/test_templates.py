@@ -26,14 +26,16 @@ def test_the_templates_are_where_the_package_data_globs_look():
 def test_each_template_is_valid_and_names_only_placeholders_its_code_passes(path):
     template = string.Template(path.read_text(encoding="utf-8"))
     assert template.is_valid(), path
-    # The module that fills it passes each placeholder by keyword (dict(...) or
+    # The modules that fill it pass each placeholder by keyword (dict(...) or
     # fill(..., name=...)).
-    filler = {"compensation": SRC / "compensation" / "plc.py", "twin": SRC / "twin" / "report.py"}[
-        path.parent.parent.name
-    ]
+    fillers = {
+        "compensation": ["compensation/plc.py"],
+        "twin": ["twin/documents.py", "twin/report.py"],
+    }[path.parent.parent.name]
     passed = {
         k.arg
-        for node in ast.walk(ast.parse(filler.read_text()))
+        for filler in fillers
+        for node in ast.walk(ast.parse((SRC / filler).read_text()))
         if isinstance(node, ast.Call)
         for k in node.keywords
     }
@@ -52,7 +54,7 @@ def test_fill_refuses_a_missing_value():
 
 def test_generated_texts_keep_no_placeholder():
     from thermaxis.compensation.plc import structured_text
-    from thermaxis.twin.report import _readme
+    from thermaxis.twin.documents import _readme
 
     readme = _readme()
     assert "${" not in readme and readme == (

@@ -25,7 +25,7 @@ from thermaxis.dataset.import_mapping import (
     header_name,
     table_layout,
 )
-from thermaxis.dataset.reader import clock_back_hint, median_step_s
+from thermaxis.dataset.raw_files import clock_back_hint, median_step_s
 from thermaxis.errors import DataError, shown
 
 __all__ = [

@@ -15,7 +15,8 @@ paper's published fits (Table 5, Eq. 8, Eq. 9) and results (Tables 3, 4, 6, 7, 8
 * :mod:`~thermaxis.twin.stages`, :mod:`~thermaxis.twin.solver` -- the staged calibration
   (published fits, then results) and its least squares;
 * :mod:`~thermaxis.twin.calibration` -- that calibration through the pipeline;
-* :mod:`~thermaxis.twin.generate`, :mod:`~thermaxis.twin.report` -- files and documents;
+* :mod:`~thermaxis.twin.generate`, :mod:`~thermaxis.twin.documents` -- files and documents;
+* :mod:`~thermaxis.twin.report` -- the calibration report;
 * :mod:`~thermaxis.twin.scale` -- benchmark datasets.
 """
 

@@ -298,7 +298,7 @@ the start of M1.
 
 def write_runs(out_dir: Path, records: list[RunRecord]) -> None:
     """The raw files of every run and the dataset's description (no ground truth)."""
-    from .report import write_dataset_docs
+    from .documents import write_dataset_docs
 
     for record in records:
         _write_run(out_dir, record)
