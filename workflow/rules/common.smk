@@ -13,7 +13,6 @@ from thermaxis.paper.published import PAPER_DIR as PUBLISHED_DIR
 from thermaxis.pipeline import paths, preflight, targets, tuning
 from thermaxis.pipeline.deps import library_modules, named_modules
 from thermaxis.pipeline.plan import compensation_params, plan_of, recommend_params
-from thermaxis.pipeline.tuning import batch_minutes
 from thermaxis.reports import pages
 from thermaxis.reports.pages import CATEGORY
 from thermaxis.reports.provenance import git_state
@@ -156,8 +155,8 @@ def sweep_batch_benchmarks(wildcards):
 
 def sweep_batch_minutes(wildcards):
     n, batch, grid = int(wildcards.n_batches), int(wildcards.batch), SETTINGS.sweep.grid
-    units = sweep_plan().units
-    return batch_minutes(grid, units, n, batch, SECONDS_PER_EVALUATION, DECOUPLED)
+    units, cost = sweep_plan().units, SECONDS_PER_EVALUATION
+    return tuning.batch_minutes(grid, units, n, batch, cost, DECOUPLED)
 
 
 def sweep_report_parameters(wildcards, input):
