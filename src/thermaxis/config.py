@@ -19,12 +19,13 @@ from __future__ import annotations
 import copy
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
+from functools import cache
 from pathlib import Path
 
 import jsonschema
 
 from thermaxis.errors import schema_message
-from thermaxis.schemas import load_trusted_yaml, schema_path
+from thermaxis.schemas import load_schema, load_trusted_yaml, schema_path
 from thermaxis.sweep_grid import SweepGrid
 from thermaxis.vocabulary import SEARCHABLE
 
@@ -34,6 +35,7 @@ __all__ = [
     "validate_config",
     "merge",
     "fill_defaults",
+    "schema_default",
     "dataset_of",
     "TemperatureCleaning",
     "ErrorCleaning",
@@ -79,6 +81,25 @@ def fill_defaults(instance: dict, schema: dict) -> None:
             for item in value:
                 if isinstance(item, dict):
                     fill_defaults(item, sub["items"])
+
+
+@cache
+def _schema_defaults() -> dict:
+    defaults: dict = {}
+    fill_defaults(defaults, load_schema("config"))
+    return defaults
+
+
+def schema_default(*keys: str):
+    """The config schema's default at ``keys`` (e.g. ``"models", "gpr_max_samples"``), read once.
+
+    For code that takes a setting without a config, such as an estimator's keyword
+    parameters, so that its default is the schema's rather than a second copy.
+    """
+    value = _schema_defaults()
+    for key in keys:
+        value = value[key]
+    return copy.deepcopy(value)
 
 
 def validate_config(config: dict, schema_path=CONFIG_SCHEMA) -> dict:
@@ -152,12 +173,11 @@ def _grid(grid: Mapping) -> tuple:
 class TemperatureCleaning:
     """Settings of :func:`thermaxis.cleaning.temperatures.clean_temperatures` (config ``temperatures``).
 
-    With ``estimate_clock_offsets`` every source but ``reference_source`` (default:
-    the source with most sensors) gets the offset
+    With ``estimate_clock_offsets`` every source but ``reference_source`` (None: the
+    source with most sensors) gets the offset
     :func:`thermaxis.cleaning.clock.estimate_clock_offset` finds *after* its given offset is
     applied, added to it; ``max_offset_s`` bounds the search and ``offset_step_s`` is
-    its lag step (refined below one step). These three are not configurable, so they
-    keep their values here rather than in the schema.
+    its lag step (refined below one step). The schema enforces every range and choice.
     """
 
     interval_s: float
@@ -169,36 +189,15 @@ class TemperatureCleaning:
     limits_c: tuple[float, float]
     max_gap_s: float
     estimate_clock_offsets: bool
-    reference_source: str | None = None
-    max_offset_s: float = 120.0
-    offset_step_s: float = 1.0
+    reference_source: str | None
+    max_offset_s: float
+    offset_step_s: float
 
     def __post_init__(self):
-        if not self.interval_s > 0:
-            raise ValueError(f"interval_s must be > 0, got {self.interval_s}")
-        if not self.spike_threshold > 0:
-            raise ValueError(f"spike_threshold must be > 0, got {self.spike_threshold}")
-        if not self.spike_min_deviation_c >= 0:
-            raise ValueError(
-                f"spike_min_deviation_c must be >= 0, got {self.spike_min_deviation_c}"
-            )
-        if not self.spike_max_rate_c_per_min > 0:
-            raise ValueError(
-                f"spike_max_rate_c_per_min must be > 0, got {self.spike_max_rate_c_per_min}"
-            )
-        if not self.spike_window_s >= 0:
-            raise ValueError(f"spike_window_s must be >= 0, got {self.spike_window_s}")
-        if self.excursions not in ("keep", "fault"):
-            raise ValueError(f"excursions must be 'keep' or 'fault', got {self.excursions!r}")
+        # JSON Schema cannot compare two items of one array.
         low, high = self.limits_c
         if not low < high:
             raise ValueError(f"limits_c must be (low, high) with low < high, got {self.limits_c}")
-        if not self.max_gap_s >= 0:
-            raise ValueError(f"max_gap_s must be >= 0, got {self.max_gap_s}")
-        if not self.max_offset_s > 0:
-            raise ValueError(f"max_offset_s must be > 0, got {self.max_offset_s}")
-        if not self.offset_step_s > 0:
-            raise ValueError(f"offset_step_s must be > 0, got {self.offset_step_s}")
 
 
 @dataclass(frozen=True)
@@ -211,14 +210,6 @@ class ErrorCleaning:
 
     direction: str
     max_missing_fraction: float
-
-    def __post_init__(self):
-        if self.direction not in ("mean", "+", "-"):
-            raise ValueError(f"direction must be 'mean', '+' or '-', got {self.direction!r}")
-        if not 0 <= self.max_missing_fraction <= 1:
-            raise ValueError(
-                f"max_missing_fraction must be in [0, 1], got {self.max_missing_fraction}"
-            )
 
 
 @dataclass(frozen=True)
@@ -235,16 +226,6 @@ class DisplacementQC:
     steps: str
     threshold: float
     min_deviation_um: float
-
-    def __post_init__(self):
-        if self.outliers not in ("warn", "drop"):
-            raise ValueError(f"outliers must be 'warn' or 'drop', got {self.outliers!r}")
-        if self.steps not in ("warn", "refuse"):
-            raise ValueError(f"steps must be 'warn' or 'refuse', got {self.steps!r}")
-        if not self.threshold > 0:
-            raise ValueError(f"qc_threshold must be > 0, got {self.threshold}")
-        if not self.min_deviation_um >= 0:
-            raise ValueError(f"qc_min_deviation_um must be >= 0, got {self.min_deviation_um}")
 
 
 @dataclass(frozen=True)
@@ -273,6 +254,9 @@ class CleaningSettings:
                 limits_c=_pair(t["limits_c"]),
                 max_gap_s=float(t["max_gap_s"]),
                 estimate_clock_offsets=bool(t["estimate_clock_offsets"]),
+                reference_source=t["reference_source"] or None,
+                max_offset_s=float(t["max_offset_s"]),
+                offset_step_s=float(t["offset_step_s"]),
             ),
             errors=ErrorCleaning(
                 direction=e["direction"], max_missing_fraction=float(e["max_missing_fraction"])
@@ -434,13 +418,6 @@ class FallbackSettings:
     policy: str
     ramp_to_zero_min: float
 
-    def __post_init__(self):
-        policies = ("hold", "ramp_to_zero")
-        if self.policy not in policies:
-            raise ValueError(
-                f"compensation fallback policy {self.policy!r}: expected one of {', '.join(policies)}"
-            )
-
 
 @dataclass(frozen=True)
 class CompensationSettings:
@@ -513,9 +490,9 @@ class RecommendSettings:
                 name=e["name"],
                 approach=e["approach"],
                 algorithm=e["algorithm"],
-                selection=tuple(sorted((e.get("selection") or {}).items())),
-                time_inputs=bool(e.get("time_inputs", False)),
-                signals=bool(e.get("signals", False)),
+                selection=tuple(sorted(e["selection"].items())),
+                time_inputs=bool(e["time_inputs"]),
+                signals=bool(e["signals"]),
             )
             for e in r["extra_candidates"]
         )

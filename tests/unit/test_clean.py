@@ -15,6 +15,7 @@ from thermaxis.cleaning.passes import combine_passes, run_targets, without_stray
 from thermaxis.cleaning.run import clean_run, cleaning_events
 from thermaxis.cleaning.temperatures import CleanedTemperatures, clean_temperatures
 from thermaxis.cleaning.windows import gap_overlaps, temperatures_in_windows
+from thermaxis.config import Settings
 
 T0 = pd.Timestamp("2022-05-10T09:00:00")  # a whole multiple of 10 s since the epoch
 SETTINGS = DEFAULTS.cleaning.temperatures
@@ -450,15 +451,24 @@ def test_sensor_in_two_sources_raises():
         clean({"box": source(s, T1=ramp(s)), "nut": source(s, T1=ramp(s))})
 
 
-def test_settings_are_validated():
-    with pytest.raises(ValueError, match="spike_max_rate_c_per_min"):
-        replace(DEFAULTS.cleaning.temperatures, spike_max_rate_c_per_min=0.0)
-    with pytest.raises(ValueError, match="steps"):
-        replace(DEFAULTS.cleaning.displacement, steps="ignore")
+@pytest.mark.parametrize(
+    "section, key, value",
+    [
+        ("temperatures", "spike_max_rate_c_per_min", 0.0),
+        ("temperatures", "max_offset_s", 0.0),
+        ("errors", "steps", "ignore"),
+        ("errors", "direction", "both"),
+    ],
+)
+def test_settings_are_validated_by_the_schema(section, key, value):
+    with pytest.raises(ValueError, match=f"config {section}/{key}: "):
+        Settings.from_config({section: {key: value}})
+
+
+def test_limits_are_ordered():
+    # The one check the schema cannot express: two items of one array compared.
     with pytest.raises(ValueError, match="limits_c"):
         replace(DEFAULTS.cleaning.temperatures, limits_c=(120.0, -20.0))
-    with pytest.raises(ValueError, match="direction"):
-        replace(DEFAULTS.cleaning.errors, direction="both")
 
 
 # ----------------------------------------------------------------------------- everything at once

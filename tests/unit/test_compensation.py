@@ -10,7 +10,7 @@ import pytest
 
 from helpers.builders import HOLD, TARGETS, hand_model
 from thermaxis.compensation.exports import siemens_840d, twincat
-from thermaxis.compensation.heldout import held_out_tables, largest_steps, step_noise
+from thermaxis.compensation.held_out import held_out_tables, largest_steps, step_noise
 from thermaxis.compensation.model import line_weights, model_record
 from thermaxis.compensation.runtime import Compensator, ControllerParameters, Step
 from thermaxis.config import FallbackSettings
@@ -282,7 +282,7 @@ def test_residuals_and_summary_by_hand():
 
 
 def test_pass_deviations_split_the_passes_per_measurement():
-    from thermaxis.compensation.heldout import pass_deviations
+    from thermaxis.compensation.held_out import pass_deviations
     from thermaxis.dataset.reader import RawRun
 
     def measurement(start, up, down):
@@ -311,7 +311,7 @@ def test_pass_deviations_split_the_passes_per_measurement():
 
 
 def test_held_out_accuracy_reads_a_candidates_loco_rows_and_the_configured_metrics_alike():
-    from thermaxis.compensation.heldout import (
+    from thermaxis.compensation.held_out import (
         candidate_accuracy,
         configured_accuracy,
         held_out_accuracy,

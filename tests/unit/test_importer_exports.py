@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from thermaxis.dataset.import_parsing import read_numeric, read_table
+from thermaxis.dataset.import_parsing import read_numeric, read_wide_table
 from thermaxis.dataset.import_writing import RunSummary
 from thermaxis.dataset.importer import import_dataset, run_warnings
 from thermaxis.dataset.reader import load_dataset
@@ -436,14 +436,14 @@ def test_a_line_break_in_a_header_cell_reads_as_a_space(tmp_path):
 
 
 def test_a_tab_separated_table_is_named_so_before_its_names_are_normalised(tmp_path):
-    from thermaxis.dataset.import_parsing import read_table
+    from thermaxis.dataset.import_parsing import read_wide_table
 
     path = tmp_path / "tabs.csv"
     path.write_text("when\ttemp A\n2020-06-15 08:00:00\t20\n")
     with pytest.raises(
         DataError, match=re.escape("looks '\\t'-separated; set csv.delimiter: '\\t'")
     ):
-        read_table(path, 0, {})
+        read_wide_table(path, 0, {})
 
 
 def test_errors_logged_in_mm_are_written_in_um_and_the_description_says_so(tmp_path):
@@ -507,7 +507,7 @@ def test_a_cell_that_is_not_a_finite_number_is_quoted_readably(tmp_path, cell, q
     path = tmp_path / "log.csv"
     path.write_text(f"time_s,T1\n0,20.1\n10,{cell}\n")
     with pytest.raises(DataError) as raised:
-        read_numeric(path, read_table(path), "T1", allow_empty=True)
+        read_numeric(path, read_wide_table(path), "T1", allow_empty=True)
     assert str(raised.value) == (
         f"{path}: row 3, column 'T1': expected a finite number, got {quoted}"
     )
@@ -517,7 +517,7 @@ def test_an_empty_table_is_one_line_saying_what_was_expected(tmp_path):
     path = tmp_path / "log.csv"
     path.write_text("")
     with pytest.raises(DataError, match=r"log\.csv: empty file, expected a header and data rows$"):
-        read_table(path)
+        read_wide_table(path)
 
 
 def _edited_clock_mapping(tmp_path: Path, edit) -> Path:

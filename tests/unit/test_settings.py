@@ -7,15 +7,16 @@ import dataclasses
 import pytest
 import yaml
 
+from thermaxis import config as config_module
 from thermaxis.config import (
     CleaningSettings,
-    CompensationSettings,
     DecouplingSettings,
     DisplacementQC,
+    FallbackSettings,
     ModelSettings,
     SelectionSettings,
     Settings,
-    SweepSettings,
+    TemperatureCleaning,
     load_config,
 )
 from thermaxis.schemas import schema_path
@@ -54,14 +55,13 @@ def test_values_missing_from_the_config_get_the_schema_defaults():
 
 
 def test_the_dataclasses_have_no_defaults_of_their_own():
-    for cls in (
-        DecouplingSettings,
-        SelectionSettings,
-        ModelSettings,
-        CompensationSettings,
-        CleaningSettings,
-        SweepSettings,
-    ):
+    settings_classes = [
+        cls
+        for name in config_module.__all__
+        if dataclasses.is_dataclass(cls := getattr(config_module, name))
+    ]
+    assert TemperatureCleaning in settings_classes and FallbackSettings in settings_classes
+    for cls in settings_classes:
         fields = dataclasses.fields(cls)
         assert all(
             f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
@@ -144,7 +144,10 @@ def test_each_section_builds_from_its_config_section():
             "max_gap_s": 120,
             "plausible_median_c": [0, 50],
             "allow_long_gaps": True,
-            "estimate_clock_offsets": False,
+            "estimate_clock_offsets": True,
+            "reference_source": "",
+            "max_offset_s": 60,
+            "offset_step_s": 0.5,
             "window": "start",
         },
         {
@@ -165,6 +168,8 @@ def test_each_section_builds_from_its_config_section():
         90.0,
         "fault",
     )
+    clock = cleaning.temperatures
+    assert (clock.reference_source, clock.max_offset_s, clock.offset_step_s) == (None, 60.0, 0.5)
     assert (cleaning.errors.direction, cleaning.max_abs_error_um, cleaning.window) == (
         "+",
         200.0,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pandas as pd
 
 from thermaxis.reports.html import load_table
-from thermaxis.sweep.run import read_table as read_sweep_table
+from thermaxis.sweep.run import read_sweep_table
 from thermaxis.tables import read_table
 
 CSV = "fold,run,sensor,term,rmse\n01,01,007,3,0.5\n10,10,12,T1,1.25\n"

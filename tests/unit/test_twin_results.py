@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from thermaxis.twin.results import FoldData, heldout_slope_rmse, result_targets
+from thermaxis.twin.results import FoldData, held_out_slope_rmse, result_targets
 
 SENSORS = ("T1", "T2", "T6", "T7", "T11", "T12")
 
@@ -41,7 +41,7 @@ def test_the_slope_rmse_is_the_held_out_runs_departure_from_an_exact_linear_law(
     targets = result_targets()
     assert targets.k_points == ("T1", "T6", "T12")
     data = _fold(train, test, law(train), law(test) + np.array([0.3, -0.4]))
-    assert heldout_slope_rmse(data, targets) == pytest.approx(np.sqrt(0.125), abs=1e-9)
+    assert held_out_slope_rmse(data, targets) == pytest.approx(np.sqrt(0.125), abs=1e-9)
 
 
 def test_the_slope_target_is_table_7s_k_rmse():

@@ -9,7 +9,7 @@ import pytest
 from scipy.stats import binom
 
 from helpers.builders import held_out_summary as summary
-from thermaxis.compensation.heldout import held_out_tables
+from thermaxis.compensation.held_out import held_out_tables
 from thermaxis.compensation.runtime import ControllerParameters, Step
 from thermaxis.compensation.verdict import (
     clopper_pearson,
@@ -185,7 +185,7 @@ TOLERANCE = tolerance_um(TARGETS[-1] - TARGETS[0], 0.5, 0.1)  # 0.13 um
 
 
 def _run_summary(run: str, speed_rpm: float, ambient_c: float, gain: float) -> pd.DataFrame:
-    """One held-out run as compensation.heldout tabulates it: six measurements 20 min apart
+    """One held-out run as compensation.held_out tabulates it: six measurements 20 min apart
     while the axis warms at a rate set by its condition (spindle speed, ambient), read in
     both directions with 2 um of reversal, and a controller that applies ``gain`` times
     the true drift's opposite (0.9: a model that tracks the run; above 2: a run unlike

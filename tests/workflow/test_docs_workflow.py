@@ -31,7 +31,7 @@ def test_make_docs_writes_the_answer_and_the_held_out_error_from_results(lines_r
     guide = tmp_path / "guide.md"
     stale = (
         "Intro.\n\n<!-- results:begin answers lines -->\nDeploy x: 1.30 µm.\n<!-- results:end -->\n\n"
-        "<!-- results:begin heldout lines -->\n<!-- results:end -->\nEnd.\n"
+        "<!-- results:begin held-out lines -->\n<!-- results:end -->\nEnd.\n"
     )
     guide.write_text(stale, encoding="utf-8")
     proc = _make_docs(results, guide)

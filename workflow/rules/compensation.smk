@@ -53,7 +53,7 @@ rule compensation:
         **rule_resources("compensation"),
     params:
         **COMP_PARAMS,
-        citation=DATASET.meta["provenance"].get("citation", ""),
+        citation=DATASET.meta["provenance"]["citation"],
         dataset=lambda w, input: os.path.dirname(input.sheets[0]),
         max_missing_fraction=config["errors"]["max_missing_fraction"],
         statement=DATA_STATEMENT,

@@ -18,7 +18,7 @@ from pathlib import Path
 import pandas as pd
 
 from thermaxis.cleaning.run import logged_series, model_inputs
-from thermaxis.compensation import heldout, runtime
+from thermaxis.compensation import held_out, runtime
 from thermaxis.compensation import model as comp_model
 from thermaxis.compensation.exports import file_header
 from thermaxis.compensation.plc import structured_text
@@ -74,7 +74,7 @@ def deployed_fit(snakemake, X, Y, s, deployed, steps, fold=None, **about) -> dic
     p, degree = snakemake.params, s["decoupling"].degree
     train = (X["run"] != fold).to_numpy()
     X_train, Y_train = X.loc[train].reset_index(drop=True), Y.loc[train].reset_index(drop=True)
-    noise = heldout.step_noise(steps, X_train["run"].unique())
+    noise = held_out.step_noise(steps, X_train["run"].unique())
     where, scope = ("all runs", "all") if fold is None else (fold, "training")
     fitted = []
     for record, weight in deployed["members"] if deployed else [(None, 1.0)]:
@@ -111,15 +111,15 @@ def fitted_model(snakemake, X, Y, s, choice, steps) -> dict:
         setup = deployed_setup(
             None, X, p.approach, s["selection"], s["models"], s["compensation"], p.signals
         )
-        accuracy = heldout.held_out_accuracy(
-            heldout.configured_accuracy(
+        accuracy = held_out.held_out_accuracy(
+            held_out.configured_accuracy(
                 read_table(snakemake.input.metrics), setup.approach, setup.settings.algorithm
             )
         )
     else:
         deployment = {"model": p.model, "candidate": deployed["name"]}
         scores = pd.concat([read_table(path) for path in snakemake.input.scores], ignore_index=True)
-        accuracy = heldout.held_out_accuracy(heldout.candidate_accuracy(scores, deployed["name"]))
+        accuracy = held_out.held_out_accuracy(held_out.candidate_accuracy(scores, deployed["name"]))
     fitted = deployed_fit(
         snakemake, X, Y, s, deployed, steps,
         **p.about,
@@ -156,22 +156,22 @@ def fold_tables(snakemake, i, fold, X, Y, s, choice, final, steps) -> tuple[str,
     cycles = None
     if model.derived or final.derived:
         sensors = list(dict.fromkeys([*model.sensors, *final.sensors]))
-        cycles = heldout.measurement_cycles(
+        cycles = held_out.measurement_cycles(
             logged_series(
                 pd.read_parquet(_run_log(inputs, fold)), pd.read_parquet(inputs.signal_series[i])
             ),
             read_table(inputs.windows[i]),
             sensors,
         )
-    steps, _ = heldout.replay(model, X_run, cycles)
+    steps, _ = held_out.replay(model, X_run, cycles)
     # The final model may read inputs this fold's does not (a signal): it replays on all of X.
-    _, final_values = heldout.replay(final, X.loc[~train], cycles)
-    for line in heldout.fallback_summary(fold, steps):
+    _, final_values = held_out.replay(final, X.loc[~train], cycles)
+    for line in held_out.fallback_summary(fold, steps):
         logging.getLogger("thermaxis").warning(line)
     raw = read_run(load_dataset(p.dataset), fold)
-    deviations = heldout.pass_deviations(raw, list(Y.columns), p.max_missing_fraction)
+    deviations = held_out.pass_deviations(raw, list(Y.columns), p.max_missing_fraction)
     time_min = X_run.sort_values("measurement")["time_min"].tolist()
-    return text, heldout.held_out_tables(
+    return text, held_out.held_out_tables(
         fold, steps, time_min, deviations, list(Y.columns), final_values
     )
 
@@ -220,7 +220,7 @@ def main(snakemake):
         # are not kept: a held-out run's is read again for its cycles (at 86 long 1 s logs,
         # keeping every one would cost hundreds of MB).
         steps = {
-            Path(path).parent.name: heldout.largest_steps(pd.read_parquet(path))
+            Path(path).parent.name: held_out.largest_steps(pd.read_parquet(path))
             for path in snakemake.input.logs
         }
         fitted_text = json.dumps(fitted_model(snakemake, X, Y, s, choice, steps), indent=1) + "\n"

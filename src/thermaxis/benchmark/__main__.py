@@ -16,7 +16,7 @@ import pandas as pd
 
 from thermaxis.benchmark.chronological import block, evaluate_channel, input_sets
 from thermaxis.dataset.import_mapping import load_mapping, table_layout
-from thermaxis.dataset.import_parsing import read_numeric, read_seconds, read_table
+from thermaxis.dataset.import_parsing import read_numeric, read_seconds, read_wide_table
 from thermaxis.dataset.safety import load_yaml
 from thermaxis.errors import DataError
 from thermaxis.pipeline.runner import write_csv, write_text
@@ -28,7 +28,7 @@ def read_record(spec: dict, spec_path: Path):
     mapping_path = (spec_path.parent / spec["mapping"]).resolve()
     mapping = load_mapping(mapping_path)
     source = (mapping_path.parent / mapping["source"]).resolve()
-    frame = read_table(source, *table_layout(mapping))
+    frame = read_wide_table(source, *table_layout(mapping))
     seconds = read_seconds(source, frame, mapping["time"])
     temperatures = {
         s["id"]: read_numeric(source, frame, s["column"], False) for s in mapping["sensors"]

@@ -14,7 +14,7 @@ import pandas as pd
 
 from thermaxis.compensation.model import UM_PER_MM
 from thermaxis.compensation.runtime import Compensator, Step
-from thermaxis.dataset.import_parsing import read_numeric, read_seconds, read_table
+from thermaxis.dataset.import_parsing import read_numeric, read_seconds, read_wide_table
 from thermaxis.errors import DataError
 from thermaxis.method.decouple import MM_PER_M
 
@@ -30,7 +30,7 @@ LOG_TIME_COLUMNS = {
 def read_log(path, sensors) -> tuple[np.ndarray, list[dict]]:
     """Cycle times [s] and one temperature sample per cycle; an empty cell is a missing reading."""
     path = Path(path)
-    frame = read_table(path)
+    frame = read_wide_table(path)
     time = next((LOG_TIME_COLUMNS[c] for c in LOG_TIME_COLUMNS if c in frame.columns), None)
     if time is None:
         raise DataError(

@@ -208,7 +208,7 @@ def model_record(
     """The ``model.json`` content of a fitted Decoupled- or PointwiseAxisModel.
 
     ``noise_c``: each temperature sensor's largest step between log samples in the
-    training runs (:func:`thermaxis.compensation.heldout.step_noise`; 0 where absent).
+    training runs (:func:`thermaxis.compensation.held_out.step_noise`; 0 where absent).
     ``about`` adds descriptive keys (dataset, provenance, held_out_accuracy, ...).
     """
     inputs = _inputs_of(approach, estimator)

@@ -1,7 +1,7 @@
 """Does compensating help? The deployment verdict from the held-out runs.
 
 Each held-out run was compensated by the model of its own fold, which never saw it
-(:func:`thermaxis.compensation.heldout.held_out_tables`). The verdict rests on the paired
+(:func:`thermaxis.compensation.held_out.held_out_tables`). The verdict rests on the paired
 change of each run (compensated minus uncompensated) of its largest |deviation| over the
 stroke and both directions, and of E of ISO 230-2, each the worst over its measurements:
 

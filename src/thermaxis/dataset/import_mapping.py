@@ -171,7 +171,7 @@ def header_name(name) -> str:
 
 
 def table_layout(mapping: dict) -> tuple:
-    """:func:`read_table`'s arguments after the path, from the mapping."""
+    """:func:`read_wide_table`'s arguments after the path, from the mapping."""
     return mapping["sheet"], mapping["csv"], mapping["header_row"], mapping["units_rows"]
 
 

@@ -31,7 +31,7 @@ from thermaxis.errors import DataError, shown
 __all__ = [
     "TIME_UNITS_S",
     "Progress",
-    "read_table",
+    "read_wide_table",
     "read_numeric",
     "read_seconds",
     "time_columns",
@@ -48,7 +48,7 @@ Progress = Callable[[int, int, str], None]
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+$")
 
 
-def read_table(
+def read_wide_table(
     path, sheet=0, csv: dict | None = None, header_row: int = 1, units_rows: int = 0
 ) -> pd.DataFrame:
     """A wide table, one row per sample; column names as :func:`header_name` compares them.
@@ -153,7 +153,7 @@ def _check_unique_header(path: Path, frame: pd.DataFrame, header_row: int) -> No
 
 def read_numeric(path: Path, frame: pd.DataFrame, column: str, allow_empty: bool) -> np.ndarray:
     """Column ``column`` of ``frame`` (read from ``path``) as floats, with the decimal mark
-    :func:`read_table` read the table with.
+    :func:`read_wide_table` read the table with.
 
     A cell that is not a finite number raises one line naming the file, the row and the
     column; with ``allow_empty`` an empty cell is a missing reading (NaN) instead.
@@ -355,14 +355,14 @@ def _runs_rows(mapping_path: Path, mapping: dict, progress: Progress) -> list[tu
         for i, run in enumerate(mapping["runs"]):
             table_path = source / run["file"]
             progress(i, len(mapping["runs"]), f"reading {run['file']}")
-            frame = read_table(table_path, *table_layout(mapping))
+            frame = read_wide_table(table_path, *table_layout(mapping))
             pieces.append(
                 (_tidy(table_path, frame, mapping), read_start(table_path, frame, mapping["time"]))
             )
         progress(len(mapping["runs"]), len(mapping["runs"]), "tables read")
         return pieces
     progress(0, 1, f"reading {source.name}")
-    frame = read_table(source, *table_layout(mapping))
+    frame = read_wide_table(source, *table_layout(mapping))
     start = read_start(source, frame, mapping["time"])
     runs = split_runs(_tidy(source, frame, mapping), mapping, str(mapping_path))
     progress(1, 1, "table read")

@@ -19,6 +19,7 @@ import jsonschema
 import numpy as np
 import pandas as pd
 
+from thermaxis.config import fill_defaults
 from thermaxis.dataset import layout, safety
 from thermaxis.dataset.raw_files import (
     _csv_rows,
@@ -81,15 +82,15 @@ class Dataset:
     @property
     def temperature_kind(self) -> str:
         """``absolute`` (degrees C) or ``rise`` (degrees C above the logger's own reference)."""
-        return self.meta.get("temperature_kind", "absolute")
+        return self.meta["temperature_kind"]
 
     @property
     def signals(self) -> tuple[str, ...]:
         """Operating signals (spindle speed, feed programme, ...) logged over time like temperatures."""
-        return tuple(s["id"] for s in self.meta.get("signals", ()))
+        return tuple(s["id"] for s in self.meta["signals"])
 
     def signal_units(self) -> dict[str, str]:
-        return {s["id"]: s["unit"] for s in self.meta.get("signals", ())}
+        return {s["id"]: s["unit"] for s in self.meta["signals"]}
 
     @property
     def descriptors(self) -> tuple[str, ...]:
@@ -104,14 +105,14 @@ class Dataset:
         return tuple(s["id"] for s in self.meta["sensors"] if s["source"] == source)
 
     def signals_of(self, source: str) -> tuple[str, ...]:
-        return tuple(s["id"] for s in self.meta.get("signals", ()) if s["source"] == source)
+        return tuple(s["id"] for s in self.meta["signals"] if s["source"] == source)
 
     @property
     def sources(self) -> tuple[str, ...]:
         return tuple(s["name"] for s in self.meta["sources"])
 
     def clock_offsets_s(self) -> dict[str, float]:
-        return {s["name"]: float(s.get("clock_offset_s", 0.0)) for s in self.meta["sources"]}
+        return {s["name"]: float(s["clock_offset_s"]) for s in self.meta["sources"]}
 
     def condition_of(self, run: str) -> str:
         return str(self.runs.loc[self.runs["run"] == run, "condition"].iloc[0])
@@ -127,7 +128,10 @@ def _read_yaml(path: Path) -> dict:
 
 
 def _validate_meta(path: Path, meta: dict) -> None:
-    validator = jsonschema.Draft202012Validator(load_schema("dataset"))
+    """Validate ``meta`` against the dataset schema, its defaults filled in first (in place)."""
+    schema = load_schema("dataset")
+    fill_defaults(meta, schema)
+    validator = jsonschema.Draft202012Validator(schema)
     errors = sorted(validator.iter_errors(meta), key=lambda e: list(e.absolute_path))
     if errors:
         raise _schema_error(path, errors[0])
@@ -135,14 +139,14 @@ def _validate_meta(path: Path, meta: dict) -> None:
     dup = sorted({i for i in ids if ids.count(i) > 1})
     if dup:
         raise DataError(f"{path}: sensors: sensor id {dup[0]!r} declared more than once")
-    signals = [s["id"] for s in meta.get("signals", ())]
+    signals = [s["id"] for s in meta["signals"]]
     clash = sorted(set(signals) & set(ids) | {i for i in signals if signals.count(i) > 1})
     if clash:
         raise DataError(
             f"{path}: signals: id {clash[0]!r} declared more than once (sensor and signal ids share one namespace)"
         )
     sources = {s["name"] for s in meta["sources"]}
-    for kind, items in (("sensors", meta["sensors"]), ("signals", meta.get("signals", ()))):
+    for kind, items in (("sensors", meta["sensors"]), ("signals", meta["signals"])):
         for i, item in enumerate(items):
             if item["source"] not in sources:
                 raise DataError(

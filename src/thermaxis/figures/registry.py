@@ -236,19 +236,19 @@ FIGURES: tuple[FigureEntry, ...] = (
     # The sweep's figures, from its ranking (`make sweep`).
     FigureEntry(
         "sweep_heatmap", "figures.registry.sweep_heatmap", family="fig_sweep", when="always",
-        target="sweep", tables={"ranking": paths.SWEEP_RANKING}, reader="sweep.run.read_table",
+        target="sweep", tables={"ranking": paths.SWEEP_RANKING}, reader="sweep.run.read_sweep_table",
         arguments={"selection": Fact("selection"), "degree": Fact("degree")}, caption=None,
         folder="sweep/figures",
     ),
     FigureEntry(
         "sweep_factor_effects", "figures.sweep.fig_factor_effects", family="fig_sweep",
         when="always", target="sweep", tables={"ranking": paths.SWEEP_RANKING},
-        reader="sweep.run.read_table", caption=None, folder="sweep/figures",
+        reader="sweep.run.read_sweep_table", caption=None, folder="sweep/figures",
     ),
     FigureEntry(
         "sweep_critical_difference", "figures.statistics.fig_sweep_critical_difference",
         family="fig_sweep", when="always", target="sweep", tables={"ranking": paths.SWEEP_RANKING},
-        reader="sweep.run.read_table", caption=None, folder="sweep/figures",
+        reader="sweep.run.read_sweep_table", caption=None, folder="sweep/figures",
     ),
     # Held-out error across datasets, after every dataset's run (results/_datasets/).
     FigureEntry(

@@ -34,6 +34,7 @@ import pandas as pd
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.model_selection import LeaveOneGroupOut
 
+from thermaxis.config import schema_default
 from thermaxis.method.decouple import compose_curve, stroke_powers
 from thermaxis.method.features import ID_COLUMNS as _ID_COLUMNS
 from thermaxis.method.features import KB_COLUMNS as _KB_COLUMNS
@@ -57,6 +58,27 @@ __all__ = [
 
 
 COEFFICIENT_COLUMNS = ("target", "position_mm", "term", "temperature", "value")
+
+# The estimators' keyword defaults, read from the config schema once at import:
+# scikit-learn's get_params/clone need plain keyword parameters, and the values must be
+# the schema's, not a second copy. The sensors are the paper's (Tables 3 and 6), the
+# defaults of the sweep's method "fixed".
+_INNER = schema_default("models", "inner_search")
+_PAPER_SENSORS = schema_default("sweep", "fixed")
+_DEFAULTS = {
+    "k_sensors": tuple(_PAPER_SENSORS["k"]),
+    "b_sensors": tuple(_PAPER_SENSORS["b"]),
+    "sensors": tuple(_PAPER_SENSORS["pointwise"]),
+    "algorithm": schema_default("compensation", "algorithm"),
+    "degree": schema_default("decoupling", "degree"),
+    "random_state": schema_default("models", "random_state"),
+    "signals": tuple(schema_default("models", "signals")),
+    "inner_search": (_INNER["max_loco_runs"], _INNER["group_folds"]),
+    "gpr_max_samples": schema_default("models", "gpr_max_samples"),
+    "svr_max_samples": schema_default("models", "svr_max_samples"),
+    "svr_search_folds": _INNER["svr_folds"],
+    "svr_max_loco_runs": _INNER["svr_max_loco_runs"],
+}
 
 
 # --------------------------------------------------------------------------- data checks
@@ -329,20 +351,20 @@ class DecoupledAxisModel(RegressorMixin, BaseEstimator):
     # The workflow sets each one from the settings (thermaxis.method.folds).
     def __init__(
         self,
-        k_sensors=("T1", "T6", "T12"),
-        b_sensors=("T2", "T7", "T11"),
-        algorithm="mlr",
+        k_sensors=_DEFAULTS["k_sensors"],
+        b_sensors=_DEFAULTS["b_sensors"],
+        algorithm=_DEFAULTS["algorithm"],
         params=None,
         svr_grid=None,
-        degree=1,
-        random_state=0,
-        signals=(),
+        degree=_DEFAULTS["degree"],
+        random_state=_DEFAULTS["random_state"],
+        signals=_DEFAULTS["signals"],
         search_grid=None,
-        inner_search=(12, 5),
-        gpr_max_samples=300,
-        svr_max_samples=300,
-        svr_search_folds=1,
-        svr_max_loco_runs=5,
+        inner_search=_DEFAULTS["inner_search"],
+        gpr_max_samples=_DEFAULTS["gpr_max_samples"],
+        svr_max_samples=_DEFAULTS["svr_max_samples"],
+        svr_search_folds=_DEFAULTS["svr_search_folds"],
+        svr_max_loco_runs=_DEFAULTS["svr_max_loco_runs"],
     ):
         self.k_sensors = k_sensors
         self.b_sensors = b_sensors
@@ -524,18 +546,18 @@ class PointwiseAxisModel(RegressorMixin, BaseEstimator):
     # Defaults for scikit-learn, as for DecoupledAxisModel: the paper's Eq. 8 model.
     def __init__(
         self,
-        sensors=("T1", "T11", "T12"),
-        algorithm="mlr",
+        sensors=_DEFAULTS["sensors"],
+        algorithm=_DEFAULTS["algorithm"],
         params=None,
         svr_grid=None,
-        random_state=0,
-        signals=(),
+        random_state=_DEFAULTS["random_state"],
+        signals=_DEFAULTS["signals"],
         search_grid=None,
-        inner_search=(12, 5),
-        gpr_max_samples=300,
-        svr_max_samples=300,
-        svr_search_folds=1,
-        svr_max_loco_runs=5,
+        inner_search=_DEFAULTS["inner_search"],
+        gpr_max_samples=_DEFAULTS["gpr_max_samples"],
+        svr_max_samples=_DEFAULTS["svr_max_samples"],
+        svr_search_folds=_DEFAULTS["svr_search_folds"],
+        svr_max_loco_runs=_DEFAULTS["svr_max_loco_runs"],
     ):
         self.sensors = sensors
         self.algorithm = algorithm

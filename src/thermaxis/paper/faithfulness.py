@@ -99,7 +99,7 @@ def _value(comparison: pd.DataFrame, item: str, column: str = "reproduced") -> f
     return float(rows.iloc[0]) if len(rows) else float("nan")
 
 
-def _heldout_rows(comparison: pd.DataFrame, fold: str) -> list[dict]:
+def _held_out_rows(comparison: pd.DataFrame, fold: str) -> list[dict]:
     out = []
     for quantity, label in (("max_abs", "largest absolute residual"), ("rmse", "RMSE")):
         for table, model in _HELDOUT:
@@ -242,7 +242,7 @@ def faithfulness(
     rows = (
         _table6_rows(selection, fold)
         + [_table3_row(comparison, fold)]
-        + _heldout_rows(comparison, fold)
+        + _held_out_rows(comparison, fold)
         + _table5_rows(comparison)
         + _eq9_rows(temperatures, kb, targets)
         + [_ambient_row(comparison)]

@@ -137,7 +137,7 @@ def plan_of(checked: Checked) -> Plan:
         statement=data_statement(
             dataset.name,
             dataset.simulated,
-            dataset.meta["provenance"].get("citation", ""),
+            dataset.meta["provenance"]["citation"],
             reproduces_paper=paper,
         ),
     )

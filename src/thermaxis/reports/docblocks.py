@@ -63,7 +63,7 @@ def _statement(folder: Path) -> str:
     return "SIMULATED data" if simulated else "MEASURED data"
 
 
-def _heldout(results: Path, names: list[str]) -> str:
+def _held_out(results: Path, names: list[str]) -> str:
     """The held-out error of the error curves per dataset, approach and algorithm, as
     results/_datasets/summary.md gives it (thermaxis.reports.crossdataset.summarise), from
     each dataset's metrics table."""
@@ -118,7 +118,7 @@ def _benchmark(results: Path, names: list[str]) -> str:
 # kind -> the function that writes its body from results/ and the block's names
 KINDS: dict[str, Callable[[Path, list[str]], str]] = {
     "answers": _answers,
-    "heldout": _heldout,
+    "held-out": _held_out,
     "faithfulness": _faithfulness,
     "benchmark": _benchmark,
     "benchmark-line": _benchmark_line,

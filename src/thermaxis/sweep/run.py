@@ -47,7 +47,7 @@ __all__ = [
     "RANKING_COLUMNS",
     "Progress",
     "run_batch",
-    "read_table",
+    "read_sweep_table",
     "collect_summary",
     "rank_configurations",
     "factor_effects",
@@ -344,7 +344,7 @@ def _as_summary_frame(rows: list[dict]) -> pd.DataFrame:
 # --------------------------------------------------------------------------- summary and ranking
 
 
-def read_table(path) -> pd.DataFrame:
+def read_sweep_table(path) -> pd.DataFrame:
     """summary.csv or ranking.csv with the integer factors as nullable integers (empty = n/a)."""
     return read_labelled(path, dtype={name: "Int64" for name in _INTEGER_FACTORS})
 

@@ -50,8 +50,8 @@ from .results import (
     FoldData,
     ResultTargets,
     grades,
-    heldout_max_residuals,
-    heldout_slope_rmse,
+    held_out_max_residuals,
+    held_out_slope_rmse,
     partition_margins,
     point_margins,
 )
@@ -432,17 +432,17 @@ def result_residuals(
     pointwise = common_points(
         chosen, 3, order=data.sensors, scores=dict(zip(data.sensors, total, strict=True))
     )
-    heldout = heldout_max_residuals(data, targets, pointwise)
+    held_out = held_out_max_residuals(data, targets, pointwise)
     out["heldout"] = np.array(
-        [value - targets.max_residual_um[model] for model, (value, _) in heldout.items()]
+        [value - targets.max_residual_um[model] for model, (value, _) in held_out.items()]
     )
     out["heldout_rmse"] = np.array(
-        [rmse - targets.rmse_um[model] for model, (_, rmse) in heldout.items()]
+        [rmse - targets.rmse_um[model] for model, (_, rmse) in held_out.items()]
     )
-    slope_rmse = heldout_slope_rmse(data, targets)
+    slope_rmse = held_out_slope_rmse(data, targets)
     out["heldout_slope"] = np.array([slope_rmse - targets.slope_rmse_um_per_m])
     summary["decoupled_mlr_k_rmse"] = slope_rmse
-    for (approach, algorithm), (value, rmse) in heldout.items():
+    for (approach, algorithm), (value, rmse) in held_out.items():
         summary[f"{approach}_{algorithm}_max_abs"] = value
         summary[f"{approach}_{algorithm}_rmse"] = rmse
     out["rise"] = np.array(

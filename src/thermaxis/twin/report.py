@@ -163,7 +163,7 @@ def _paper_fold(view: PipelineView) -> tuple[FoldSelection, list[FoldResult]]:
     return selection, results
 
 
-def heldout_results(view: PipelineView) -> tuple[pd.DataFrame, dict[str, str]]:
+def held_out_results(view: PipelineView) -> tuple[pd.DataFrame, dict[str, str]]:
     """The paper's fold's metrics, and the sensitive points it chose."""
     selection, results = _paper_fold(view)
     metrics = pd.concat([r.metrics for r in results], ignore_index=True)
@@ -396,7 +396,7 @@ def _rise_table(view: PipelineView) -> tuple[str, str]:
     )
 
 
-def _heldout_rows(metrics: pd.DataFrame) -> str:
+def _held_out_rows(metrics: pd.DataFrame) -> str:
     paper = load_table("prediction_metrics").set_index(["table", "approach", "algorithm", "target"])
     rows = []
     for approach, algorithm, table in HELDOUT:
@@ -530,14 +530,14 @@ def write_calibration_report(root: Path | str, params: mdl.TwinParams, fit: dict
     targets = published_targets()
     residuals = target_residuals(view.observables(), targets)
     table = _comparison(view.kb)
-    metrics, selected = heldout_results(view)
+    metrics, selected = held_out_results(view)
     _figure(table, residuals, root / "calibration.png")
     text = fill(
         "thermaxis.twin",
         "CALIBRATION.md.tmpl",
         **_missing_reading_values(),
         **_target_values(view, targets, residuals),
-        **_heldout_values(view, metrics, selected),
+        **_held_out_values(view, metrics, selected),
         **_measurement_values(table),
         **_fit_values(fit),
         n_initial_parameters=len(mdl.INITIAL_PARAMETERS),
@@ -563,11 +563,11 @@ def _target_values(view: PipelineView, targets: PublishedTargets, residuals: dic
     )
 
 
-def _heldout_values(view: PipelineView, metrics: pd.DataFrame, selected: dict[str, str]) -> dict:
+def _held_out_values(view: PipelineView, metrics: pd.DataFrame, selected: dict[str, str]) -> dict:
     """The paper's fold as the workflow runs it: metrics, sensitive points, and the previous twin's."""
     return dict(
         paper_fold=view.config["paper_fold"],
-        heldout_rows=_heldout_rows(metrics),
+        heldout_rows=_held_out_rows(metrics),
         selected_k=selected["k"],
         selected_b=selected["b"],
         selected_pointwise=selected["pointwise"],

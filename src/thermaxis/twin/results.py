@@ -54,8 +54,8 @@ __all__ = [
     "single_switch_targets",
     "partition_margins",
     "point_margins",
-    "heldout_max_residuals",
-    "heldout_slope_rmse",
+    "held_out_max_residuals",
+    "held_out_slope_rmse",
     "HEATED_RISE_K",
 ]
 
@@ -288,13 +288,13 @@ def _decoupled_kb(data: FoldData, targets: ResultTargets) -> tuple[np.ndarray, n
     return k, b
 
 
-def heldout_slope_rmse(data: FoldData, targets: ResultTargets) -> float:
+def held_out_slope_rmse(data: FoldData, targets: ResultTargets) -> float:
     """RMSE of the held-out slope k under decoupled MLR (Table 7's k row), um/m."""
     k, _ = _decoupled_kb(data, targets)
     return float(np.sqrt(np.mean((data.test_k - k) ** 2)))
 
 
-def heldout_max_residuals(
+def held_out_max_residuals(
     data: FoldData, targets: ResultTargets, pointwise: Sequence[str]
 ) -> dict[tuple[str, str], tuple]:
     """Largest |residual| and RMSE of the held-out errors, decoupled and point-by-point MLR.

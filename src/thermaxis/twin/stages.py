@@ -127,10 +127,10 @@ STAGES: tuple[Stage, ...] = (
         _restart(
             f"Table 3 restart {i}",
             evaluations,
-            {"table3_points": table3, **({} if heldout is None else {"heldout": heldout})},
+            {"table3_points": table3, **({} if held_out is None else {"heldout": held_out})},
             {"table5_k": 0.5, "table5_b": 0.25, "eq9_k": 0.8, "eq9_b": eq9_b},
         )
-        for i, (evaluations, table3, heldout, eq9_b) in enumerate(
+        for i, (evaluations, table3, held_out, eq9_b) in enumerate(
             (
                 (15, 0.002, None, 0.6),
                 (30, 0.002, 0.1, 0.5),
@@ -150,11 +150,11 @@ STAGES: tuple[Stage, ...] = (
         _restart(
             f"held-out RMSE restart {i}",
             evaluations,
-            {"table3_points": table3, "heldout": heldout, "heldout_rmse": rmse}
+            {"table3_points": table3, "heldout": held_out, "heldout_rmse": rmse}
             | ({"heldout_slope": slope} if slope else {}),
             {"table5_k": table5_k, "table5_b": table5_b, "eq9_k": eq9_k, "eq9_b": 0.3},
         )
-        for i, (evaluations, table3, heldout, rmse, slope, table5_k, table5_b, eq9_k) in enumerate(
+        for i, (evaluations, table3, held_out, rmse, slope, table5_k, table5_b, eq9_k) in enumerate(
             (
                 (30, 0.001, 0.2, 0.05, None, 0.5, 0.25, 0.8),
                 (30, 0.001, 0.2, 0.05, 0.2, 0.5, 0.25, 0.8),

@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from helpers.builders import hand_model, lagged_model
-from thermaxis.compensation.heldout import measurement_cycles, replay
+from thermaxis.compensation.held_out import measurement_cycles, replay
 from thermaxis.compensation.runtime import Compensator
 
 START = pd.Timestamp("2026-01-05 08:00:00")
@@ -87,7 +87,7 @@ def test_a_model_without_time_aware_inputs_is_replayed_one_measurement_at_a_time
 
 
 def test_fallback_warnings_are_one_line_per_fold_and_status():
-    from thermaxis.compensation.heldout import fallback_summary
+    from thermaxis.compensation.held_out import fallback_summary
     from thermaxis.compensation.runtime import ControllerParameters, Step
 
     p = ControllerParameters(0.0, 0.0, 0.0, (0.0,), 0.0, True)
