@@ -77,7 +77,7 @@ def _peak_mib(m: Measurement) -> float:
     return m.peak_tree_rss_mib if m.peak_tree_rss_mib is not None else m.peak_rss_mib
 
 
-def _targets(measurements: list[Measurement]) -> list[dict]:
+def _targets(measurements: list[Measurement]) -> list[dict]:  # noqa: PLR0915 -- not split yet (issue 63)
     by_name = {m.name: m for m in measurements}
     rows = []
 

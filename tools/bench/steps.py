@@ -120,7 +120,7 @@ def _sweep_size(work: Path, dataset_name: str) -> dict:
     return {"configurations": int(len(table)), "folds": int(table["n_folds"].max())}
 
 
-def run_bench(
+def run_bench(  # noqa: PLR0915 -- not split yet (issue 63)
     out: Path,
     cores: int,
     runs=SCALE_RUNS,

@@ -135,7 +135,7 @@ class _Native:
     offset_estimated: bool = False
 
 
-def _clean_source(
+def _clean_source(  # noqa: PLR0915 -- not split yet (issue 63)
     name: str, frame: pd.DataFrame, offset_s: float, settings: TemperatureCleaning
 ) -> list[_Native]:
     if "time" not in frame.columns:

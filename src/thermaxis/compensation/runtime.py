@@ -302,7 +302,7 @@ class Compensator:
             and ages.get(s, 0.0) <= self.fallback.max_sensor_age_s
         }
 
-    def run(
+    def run(  # noqa: PLR0915 -- not split yet (issue 63)
         self,
         times_s: Sequence[float],
         temperatures: Sequence[Mapping[str, float]],

@@ -48,7 +48,7 @@ Progress = Callable[[int, int, str], None]
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+$")
 
 
-def read_table(
+def read_table(  # noqa: PLR0915 -- not split yet (issue 63)
     path, sheet=0, csv: dict | None = None, header_row: int = 1, units_rows: int = 0
 ) -> pd.DataFrame:
     """A wide table, one row per sample; column names as :func:`header_name` compares them.

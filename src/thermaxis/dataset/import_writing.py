@@ -129,7 +129,7 @@ def _write_run(
     return RunSummary(folder.name, float(t[-1] - t[0]), len(rows), len(picked))
 
 
-def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
+def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:  # noqa: PLR0915 -- not split yet (issue 63)
     """What the import assumed, in sentences for the dataset's description."""
     time = mapping["time"]
     notes = []

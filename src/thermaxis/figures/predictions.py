@@ -270,7 +270,7 @@ _METRIC_UNITS = {"k": "µm/m", "b": "µm", "error": "µm"}
 
 
 @_styled
-def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
+def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:  # noqa: PLR0915 -- not split yet (issue 63)
     """RMSE (top) and maximum absolute residual (bottom) of every fold, approach and algorithm.
 
     Grouped bars: one group per fold, one bar per (approach, algorithm) pair; a pair

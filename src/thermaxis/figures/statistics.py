@@ -32,7 +32,7 @@ TOP_CONFIGURATIONS = 15
 
 
 @_styled
-def fig_selection_stability(stability: pd.DataFrame) -> Figure:
+def fig_selection_stability(stability: pd.DataFrame) -> Figure:  # noqa: PLR0915 -- not split yet (issue 63)
     """Per target a sensors x folds map of how often each sensor is chosen (0 to 1).
 
     ``stability`` is tables/selection_stability.csv. Ringed cells: the fold's own choice.

@@ -183,7 +183,7 @@ def fold_name(fold: str | Sequence[str]) -> str:
     return "+".join(held_out_runs(fold))
 
 
-def select_for_fold(
+def select_for_fold(  # noqa: PLR0915 -- not split yet (issue 63)
     X: pd.DataFrame,
     Y: pd.DataFrame,
     fold: str,

@@ -413,7 +413,7 @@ def parse_input_name(name: str) -> tuple[str, str, float]:
 # ----------------------------------------------------------------------------- at measurements
 
 
-def inputs_at_measurements(
+def inputs_at_measurements(  # noqa: PLR0915 -- not split yet (issue 63)
     frame,
     measurements,
     lags_s: Sequence[float] = (),

@@ -236,7 +236,7 @@ def _downdate(full, held, W, train):
 # --------------------------------------------------------------------------- solving
 
 
-def _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components):
+def _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components):  # noqa: PLR0915 -- not split yet (issue 63)
     if algorithm not in ALGORITHMS:
         raise ValueError(
             f"unknown linear algorithm {algorithm!r}; expected one of {', '.join(ALGORITHMS)}"

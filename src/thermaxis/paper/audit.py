@@ -56,7 +56,7 @@ def _positions(t: ReproducedTables) -> np.ndarray:
     return np.sort(t.errors["position_mm"].unique())
 
 
-def _reproduce(row, t: ReproducedTables) -> tuple[float, str]:
+def _reproduce(row, t: ReproducedTables) -> tuple[float, str]:  # noqa: PLR0915 -- not split yet (issue 63)
     table, q = row["table"], row["quantity"]
     fold = t.paper_fold
     if table == "table1":

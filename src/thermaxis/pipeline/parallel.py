@@ -60,7 +60,7 @@ def _import(module: str) -> None:
     importlib.import_module(module)
 
 
-def map_folds(function: Callable, items: Sequence, workers: int) -> list:
+def map_folds(function: Callable, items: Sequence, workers: int) -> list:  # noqa: PLR0915 -- not split yet (issue 63)
     """``[function(item) for item in items]``, shared with ``workers - 1`` worker
     processes when ``workers`` is more than one.
 

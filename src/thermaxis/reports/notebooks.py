@@ -286,7 +286,7 @@ def json_argument(value: str, stdin=None):
     return json.loads((stdin or sys.stdin).read() if value == "-" else value)
 
 
-def main(argv=None) -> int:
+def main(argv=None) -> int:  # noqa: PLR0915 -- not split yet (issue 63)
     parser = argparse.ArgumentParser(
         prog="python -m thermaxis.reports.notebooks", description=__doc__.splitlines()[0]
     )

@@ -159,7 +159,7 @@ class SweepGrid:
     fixed: tuple  # ((target, (sensor, ...)), ...) for method "fixed"
     max_subsets: int  # method "subset": more subsets than this stop the plan
 
-    def selection_specs(self, sensors: Sequence[str]) -> tuple[list[SelectionSpec], list[str]]:
+    def selection_specs(self, sensors: Sequence[str]) -> tuple[list[SelectionSpec], list[str]]:  # noqa: PLR0915 -- not split yet (issue 63)
         """Selection settings the dataset allows, and one note per setting left out.
 
         A cluster (or ranking) count above the number of sensors cannot be asked for;

@@ -249,7 +249,7 @@ def _config_rows(
     ]
 
 
-def run_batch(
+def run_batch(  # noqa: PLR0915 -- not split yet (issue 63)
     X: pd.DataFrame,
     Y: pd.DataFrame,
     units: Iterable[Unit],

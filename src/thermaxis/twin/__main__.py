@@ -69,7 +69,7 @@ def _resume_point(path: Path) -> tuple[mdl.TwinParams, str]:
     return mdl.load_params(path), stages[-1]["name"]
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None) -> int:  # noqa: PLR0915 -- not split yet (issue 63)
     args = _parser().parse_args(argv)
     if args.command == "generate":
         from .generate import generate_dataset

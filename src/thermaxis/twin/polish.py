@@ -70,7 +70,7 @@ def _candidates(
     return out
 
 
-def polish(
+def polish(  # noqa: PLR0915 -- not split yet (issue 63)
     params: mdl.TwinParams,
     evaluate: Callable[[mdl.TwinParams], pd.DataFrame],
     workers: int = 2,

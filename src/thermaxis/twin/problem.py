@@ -386,7 +386,7 @@ RESULT_TOLERANCE: dict[str, float] = {
 }
 
 
-def result_residuals(
+def result_residuals(  # noqa: PLR0915 -- not split yet (issue 63)
     runs: dict[str, RunObservables], targets: ResultTargets, eta: tuple[float, float]
 ) -> tuple[dict[str, np.ndarray], dict[str, float]]:
     """Residuals towards Tables 3, 4, 6, 7 and 8 (fold ``targets.fold``), and a summary.

@@ -224,7 +224,7 @@ def _restarted(x: np.ndarray, objective: _Objective, lower, upper) -> np.ndarray
     return np.clip(np.array(twin + [_ETA_START, _ETA_START]), lower, upper)
 
 
-def calibrate(
+def calibrate(  # noqa: PLR0915 -- not split yet (issue 63)
     pipeline,
     step_s: float = cond.STEP_S,
     workers: int = 2,
