@@ -413,7 +413,7 @@ def parse_input_name(name: str) -> tuple[str, str, float]:
 # ----------------------------------------------------------------------------- at measurements
 
 
-def inputs_at_measurements(  # noqa: PLR0915 -- not split yet (issue 63)
+def inputs_at_measurements(
     frame,
     measurements,
     lags_s: Sequence[float] = (),
@@ -480,67 +480,13 @@ def inputs_at_measurements(  # noqa: PLR0915 -- not split yet (issue 63)
     if at not in ("end", "start", "mid"):
         raise ValueError(f"at must be 'end', 'start' or 'mid', got {at!r}")
     lags, rates = list(lags_s), list(rates_s)
-    if not lags and not rates:
-        raise ValueError(
-            "no derived input configured: give at least one lag time constant or rate window"
-        )
     columns = [c for c in frame.columns if c != "time"] if columns is None else list(columns)
-    names = {c: [lag_name(c, s) for s in lags] + [rate_name(c, s) for s in rates] for c in columns}
-    flat = [n for c in columns for n in names[c]]
-    if len(set(flat)) < len(flat):
-        twice = next(n for n in flat if flat.count(n) > 1)
-        raise ValueError(
-            f"derived input {twice!r} configured twice; expected distinct time constants and windows"
-        )
-    absent = [c for c in columns if c not in frame.columns]
-    if absent:
-        raise ValueError(
-            f"temperature table: no column {absent[0]!r}; it has {', '.join(map(str, frame.columns))}"
-        )
-
-    def ns(values) -> np.ndarray:
-        return np.asarray(pd.to_datetime(values), dtype="datetime64[ns]").astype(np.int64)
-
-    if isinstance(measurements, pd.DataFrame):
-        for column in ("start", "end"):
-            if column not in measurements.columns:
-                raise ValueError(
-                    f"measurement windows: missing column {column!r} (expected start, end)"
-                )
-        start, end = ns(measurements["start"]), ns(measurements["end"])
-        labels = (
-            [str(m) for m in measurements["measurement"]]
-            if "measurement" in measurements.columns
-            else [str(i) for i in range(len(measurements))]
-        )
-        out = measurements[
-            [c for c in ("measurement", "start", "end") if c in measurements.columns]
-        ]
-        out = out.reset_index(drop=True).copy()
-    else:
-        start = end = ns(list(measurements))
-        labels = [str(i) for i in range(start.size)]
-        out = pd.DataFrame(index=range(start.size))
-    if start.size == 0:
-        raise ValueError("no measurement given")
-    if (end < start).any():
-        i = int(np.flatnonzero(end < start)[0])
-        raise ValueError(
-            f"measurement {labels[i]}: its window ends before it starts; expected start <= end"
-        )
+    names = _derived_names(frame, columns, lags, rates)
+    start, end, labels, out = _measurement_windows(measurements)
     # Half the window in integer nanoseconds: exact, no float rounding of the instant.
     when = {"end": end, "start": start, "mid": start + (end - start) // 2}[at]
-
-    grid_ns = ns(frame["time"])
-    if grid_ns.size == 0 or (np.diff(grid_ns) <= 0).any():
-        raise ValueError("temperature table: 'time' must be non-empty and strictly increasing")
-    outside = (when < grid_ns[0]) | (when > grid_ns[-1])
-    if outside.any():
-        i = int(np.flatnonzero(outside)[0])
-        raise ValueError(
-            f"measurement {labels[i]} at {pd.Timestamp(when[i])} lies outside the temperature table "
-            f"({pd.Timestamp(grid_ns[0])} to {pd.Timestamp(grid_ns[-1])})"
-        )
+    grid_ns = _ns(frame["time"])
+    _check_within(grid_ns, when, labels)
 
     # Seconds since the run's start; float64 resolves nanoseconds over days.
     grid = (grid_ns - grid_ns[0]) / 1e9
@@ -550,18 +496,7 @@ def inputs_at_measurements(  # noqa: PLR0915 -- not split yet (issue 63)
     last = int(np.searchsorted(grid, te.max(), side="left"))
     grid = grid[: last + 1]
     values = frame[columns].to_numpy(dtype=float)[: last + 1]
-    for j, column in enumerate(columns):
-        holes = np.flatnonzero(np.isnan(values[:, j]))
-        if holes.size:
-            k = int(holes[0])
-            # The first measurement whose history reaches grid point k.
-            needs = te > grid[k - 1] if k > 0 else np.ones(te.size, dtype=bool)
-            i = int(np.flatnonzero(needs)[np.argmin(te[needs])])
-            raise ValueError(
-                f"signal {column!r} has no value at {pd.Timestamp(grid_ns[k])} in the temperature table, and its "
-                f"lags and rates at measurement {labels[i]} ({pd.Timestamp(when[i])}) depend on every sample since "
-                f"the run's start ({pd.Timestamp(grid_ns[0])}); fill the gap or leave the signal out"
-            )
+    _check_history(columns, values, grid, grid_ns, te, when, labels)
 
     # The evaluation instants joined to the grid, the signal interpolated linearly there:
     # the filters are exact for a linear signal between samples, so the added points
@@ -577,3 +512,102 @@ def inputs_at_measurements(  # noqa: PLR0915 -- not split yet (issue 63)
             derived[name] = block[:, j]
     out["time"] = when.astype("datetime64[ns]")
     return pd.concat([out, pd.DataFrame(derived, index=out.index)], axis=1)
+
+
+def _ns(values) -> np.ndarray:
+    """Instants as integer nanoseconds, so that window arithmetic is exact."""
+    import pandas as pd
+
+    return np.asarray(pd.to_datetime(values), dtype="datetime64[ns]").astype(np.int64)
+
+
+def _derived_names(frame, columns: list, lags: list, rates: list) -> dict:
+    """The derived input names per signal, checked to be configured, distinct and present."""
+    if not lags and not rates:
+        raise ValueError(
+            "no derived input configured: give at least one lag time constant or rate window"
+        )
+    names = {c: [lag_name(c, s) for s in lags] + [rate_name(c, s) for s in rates] for c in columns}
+    flat = [n for c in columns for n in names[c]]
+    if len(set(flat)) < len(flat):
+        twice = next(n for n in flat if flat.count(n) > 1)
+        raise ValueError(
+            f"derived input {twice!r} configured twice; expected distinct time constants and windows"
+        )
+    absent = [c for c in columns if c not in frame.columns]
+    if absent:
+        raise ValueError(
+            f"temperature table: no column {absent[0]!r}; it has {', '.join(map(str, frame.columns))}"
+        )
+    return names
+
+
+def _measurement_windows(measurements):
+    """Start and end (ns), labels and the carried columns of the measurement windows.
+
+    A DataFrame gives windows (``start``, ``end``, optionally ``measurement``); a
+    sequence of instants gives windows of no length.
+    """
+    import pandas as pd
+
+    if isinstance(measurements, pd.DataFrame):
+        for column in ("start", "end"):
+            if column not in measurements.columns:
+                raise ValueError(
+                    f"measurement windows: missing column {column!r} (expected start, end)"
+                )
+        start, end = _ns(measurements["start"]), _ns(measurements["end"])
+        labels = (
+            [str(m) for m in measurements["measurement"]]
+            if "measurement" in measurements.columns
+            else [str(i) for i in range(len(measurements))]
+        )
+        out = measurements[
+            [c for c in ("measurement", "start", "end") if c in measurements.columns]
+        ]
+        out = out.reset_index(drop=True).copy()
+    else:
+        start = end = _ns(list(measurements))
+        labels = [str(i) for i in range(start.size)]
+        out = pd.DataFrame(index=range(start.size))
+    if start.size == 0:
+        raise ValueError("no measurement given")
+    if (end < start).any():
+        i = int(np.flatnonzero(end < start)[0])
+        raise ValueError(
+            f"measurement {labels[i]}: its window ends before it starts; expected start <= end"
+        )
+    return start, end, labels, out
+
+
+def _check_within(grid_ns: np.ndarray, when: np.ndarray, labels: list) -> None:
+    """The grid strictly increasing and every evaluation instant within it."""
+    import pandas as pd
+
+    if grid_ns.size == 0 or (np.diff(grid_ns) <= 0).any():
+        raise ValueError("temperature table: 'time' must be non-empty and strictly increasing")
+    outside = (when < grid_ns[0]) | (when > grid_ns[-1])
+    if outside.any():
+        i = int(np.flatnonzero(outside)[0])
+        raise ValueError(
+            f"measurement {labels[i]} at {pd.Timestamp(when[i])} lies outside the temperature table "
+            f"({pd.Timestamp(grid_ns[0])} to {pd.Timestamp(grid_ns[-1])})"
+        )
+
+
+def _check_history(columns, values, grid, grid_ns, te, when, labels) -> None:
+    """No NaN in the history a measurement's lags and rates depend on (every sample since the start)."""
+    import pandas as pd
+
+    for j, column in enumerate(columns):
+        holes = np.flatnonzero(np.isnan(values[:, j]))
+        if holes.size:
+            k = int(holes[0])
+            # The first measurement whose history reaches grid point k.
+            needs = te > grid[k - 1] if k > 0 else np.ones(te.size, dtype=bool)
+            i = int(np.flatnonzero(needs)[np.argmin(te[needs])])
+            raise ValueError(
+                f"signal {column!r} has no value at {pd.Timestamp(grid_ns[k])} in the temperature table, and its "
+                f"lags and rates at measurement {labels[i]} ({pd.Timestamp(when[i])}) depend on every sample since "
+                f"the run's start ({pd.Timestamp(grid_ns[0])}); fill the gap or leave the signal out"
+            )
