@@ -498,20 +498,30 @@ def inputs_at_measurements(
     values = frame[columns].to_numpy(dtype=float)[: last + 1]
     _check_history(columns, values, grid, grid_ns, te, when, labels)
 
+    derived = _derived_at(grid, values, te, lags, rates, [names[c] for c in columns])
+    out["time"] = when.astype("datetime64[ns]")
+    return pd.concat([out, pd.DataFrame(derived, index=out.index)], axis=1)
+
+
+def _derived_at(grid, values, te, lags: list, rates: list, names: list[list[str]]) -> dict:
+    """Each signal's lags, then rates, at the instants ``te`` (s), by name.
+
+    ``values`` holds one column per signal on ``grid`` (s); ``names`` their derived
+    input names, per signal, in the order of ``lags`` then ``rates``.
+    """
     # The evaluation instants joined to the grid, the signal interpolated linearly there:
     # the filters are exact for a linear signal between samples, so the added points
     # change nothing else, and the value at an instant between grid points is exact.
     base = np.union1d(grid, te)
-    u = np.column_stack([np.interp(base, grid, values[:, j]) for j in range(len(columns))])
+    u = np.column_stack([np.interp(base, grid, values[:, j]) for j in range(values.shape[1])])
     rows = np.searchsorted(base, te)
-    derived = {}
     lagged = [lag_filter(base, u, tau)[rows] for tau in lags]
     rated = [rate_of_change(base, u, w)[rows] for w in rates]
-    for j, column in enumerate(columns):
-        for name, block in zip(names[column], lagged + rated, strict=False):
+    derived = {}
+    for j, signal_names in enumerate(names):
+        for name, block in zip(signal_names, lagged + rated, strict=False):
             derived[name] = block[:, j]
-    out["time"] = when.astype("datetime64[ns]")
-    return pd.concat([out, pd.DataFrame(derived, index=out.index)], axis=1)
+    return derived
 
 
 def _ns(values) -> np.ndarray:
