@@ -166,13 +166,7 @@ class SweepGrid:
                         continue
                     specs.append(SelectionSpec(method, n))
             elif method == "subset":
-                count = subset_count(n_sensors, self.n_clusters)
-                if count > self.max_subsets:
-                    raise ValueError(
-                        f"config sweep: method subset would evaluate {count} subsets of "
-                        f"{'/'.join(map(str, self.n_clusters))} of {n_sensors} sensors; "
-                        f"the cap sweep.max_subsets is {self.max_subsets}"
-                    )
+                self._check_subset_cap(n_sensors)
                 for n in self.n_clusters:
                     if n > n_sensors:
                         notes.append(
@@ -184,19 +178,34 @@ class SweepGrid:
                         for c in itertools.combinations(sensors, n)
                     ]
             elif method == "fixed":
-                wanted = sorted({s for _, chosen in self.fixed for s in chosen})
-                missing = [s for s in wanted if s not in sensors]
-                if not self.fixed:
-                    notes.append("fixed: config sweep.fixed lists no sensors")
-                elif missing:
-                    notes.append(
-                        f"fixed: sensor(s) {', '.join(missing)} of sweep.fixed are not in the dataset"
-                    )
+                note = self._fixed_note(sensors)
+                if note:
+                    notes.append(note)
                 else:
                     specs.append(SelectionSpec(method))
             else:
                 specs.append(SelectionSpec(method))
         return specs, notes
+
+    def _check_subset_cap(self, n_sensors: int) -> None:
+        """Refuse a subset sweep larger than sweep.max_subsets before any fit."""
+        count = subset_count(n_sensors, self.n_clusters)
+        if count > self.max_subsets:
+            raise ValueError(
+                f"config sweep: method subset would evaluate {count} subsets of "
+                f"{'/'.join(map(str, self.n_clusters))} of {n_sensors} sensors; "
+                f"the cap sweep.max_subsets is {self.max_subsets}"
+            )
+
+    def _fixed_note(self, sensors: Sequence[str]) -> str | None:
+        """Why the fixed selection cannot be swept on the dataset, or None."""
+        wanted = sorted({s for _, chosen in self.fixed for s in chosen})
+        missing = [s for s in wanted if s not in sensors]
+        if not self.fixed:
+            return "fixed: config sweep.fixed lists no sensors"
+        if missing:
+            return f"fixed: sensor(s) {', '.join(missing)} of sweep.fixed are not in the dataset"
+        return None
 
     def approach_degrees(self, decoupled: bool = True) -> list[tuple[str, int | None]]:
         """(approach, degree) pairs; without a decoupled branch only the pointwise one."""

@@ -79,22 +79,30 @@ def _peak_mib(m: Measurement) -> float:
 
 def _targets(measurements: list[Measurement]) -> list[dict]:
     by_name = {m.name: m for m in measurements}
+    return _workflow_targets(by_name) + _scale_targets(by_name)
+
+
+def _target(name: str, met: bool, measured: str) -> dict:
+    return {"target": TARGETS[name], "measured": measured, "met": met}
+
+
+def _ratio_target(name, m, floor, limit, met=True, note="") -> dict:
+    """A target on the wall time against a floor's: at most ``limit`` times it."""
+    ratio = m.wall_s / floor.wall_s
+    return _target(
+        name,
+        m.ok and floor.ok and ratio <= limit and met,
+        f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x{note}",
+    )
+
+
+def _workflow_targets(by_name: dict[str, Measurement]) -> list[dict]:
+    """The workflow's targets: make results cold and with nothing to do, the sweep, the dry
+    run, the test suite."""
     rows = []
-
-    def add(name, met, measured):
-        rows.append({"target": TARGETS[name], "measured": measured, "met": met})
-
-    def add_ratio(name, m, floor, limit, met=True, note=""):
-        ratio = m.wall_s / floor.wall_s
-        add(
-            name,
-            m.ok and floor.ok and ratio <= limit and met,
-            f"{m.wall_s:.1f} s vs {floor.wall_s:.1f} s: {ratio:.2f} x{note}",
-        )
-
     if "results_cold" in by_name:
         m = by_name["results_cold"]
-        add("results_cold", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s")
+        rows.append(_target("results_cold", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s"))
     if "results_noop" in by_name and "one_rule_noop" in by_name:
         params = by_name.get("one_rule_params_noop")
         note = (
@@ -103,45 +111,63 @@ def _targets(measurements: list[Measurement]) -> list[dict]:
             if params is not None
             else ""
         )
-        add_ratio(
-            "results_noop", by_name["results_noop"], by_name["one_rule_noop"], 1.25, note=note
+        rows.append(
+            _ratio_target(
+                "results_noop", by_name["results_noop"], by_name["one_rule_noop"], 1.25, note=note
+            )
         )
     if "sweep_default" in by_name:
         m = by_name["sweep_default"]
         n = m.extra.get("configurations", 0)
-        add("sweep_default", m.ok and m.wall_s <= 15.0,
-            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s")  # fmt: skip
+        rows.append(_target("sweep_default", m.ok and m.wall_s <= 15.0,
+                            f"{n} configurations x {m.extra.get('folds', '?')} folds in {m.wall_s:.1f} s"))  # fmt: skip
     if "dryrun_twin" in by_name and "dryrun_one_rule" in by_name:
         m, floor = by_name["dryrun_twin"], by_name["dryrun_one_rule"]
         extra = m.cpu_s - floor.cpu_s
-        add("dryrun_twin", m.ok and extra <= 2.0,
-            f"{m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU vs {floor.wall_s:.1f} s, {floor.cpu_s:.1f} s: "
-            f"+{m.wall_s - floor.wall_s:.1f} s wall, +{extra:.1f} s CPU")  # fmt: skip
+        rows.append(_target("dryrun_twin", m.ok and extra <= 2.0,
+                            f"{m.wall_s:.1f} s wall, {m.cpu_s:.1f} s CPU vs {floor.wall_s:.1f} s, {floor.cpu_s:.1f} s: "
+                            f"+{m.wall_s - floor.wall_s:.1f} s wall, +{extra:.1f} s CPU"))  # fmt: skip
     if "test_suite" in by_name:
         m = by_name["test_suite"]
-        add("test_suite", m.ok and m.wall_s <= 180.0, f"{m.wall_s:.1f} s")
+        rows.append(_target("test_suite", m.ok and m.wall_s <= 180.0, f"{m.wall_s:.1f} s"))
+    return rows
+
+
+def _scale_targets(by_name: dict[str, Measurement]) -> list[dict]:
+    """The targets of the large datasets, the subset sweep, the calibration and Slurm's start."""
+    rows = []
     if "scale_one_position_43" in by_name:
         m = by_name["scale_one_position_43"]
         peak = _peak_mib(m)
-        add("scale_one_position_43", m.ok and m.wall_s <= 300.0 and peak < 2000.0,
-            f"{m.wall_s:.1f} s, peak {peak:.0f} MiB")  # fmt: skip
+        rows.append(_target("scale_one_position_43", m.ok and m.wall_s <= 300.0 and peak < 2000.0,
+                            f"{m.wall_s:.1f} s, peak {peak:.0f} MiB"))  # fmt: skip
     if "scale_one_position_86" in by_name and "scale_one_position_43" in by_name:
         m, base = by_name["scale_one_position_86"], by_name["scale_one_position_43"]
         peak = _peak_mib(m)
-        add_ratio("scale_one_position_86", m, base, 2.3, peak < 2000.0, f", peak {peak:.0f} MiB")
+        rows.append(
+            _ratio_target(
+                "scale_one_position_86", m, base, 2.3, peak < 2000.0, f", peak {peak:.0f} MiB"
+            )
+        )
     if "sweep_subsets" in by_name:
         m = by_name["sweep_subsets"]
-        add("sweep_subsets", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s")
+        rows.append(_target("sweep_subsets", m.ok and m.wall_s <= 30.0, f"{m.wall_s:.1f} s"))
     if "twin_calibrate" in by_name:
         m = by_name["twin_calibrate"]
-        add(
-            "twin_calibrate",
-            m.ok and m.wall_s <= 600.0,
-            f"{m.wall_s:.1f} s on {os.cpu_count()} cores; "
-            f"committed parameters reproduced: {m.extra.get('reproduces_committed')}",
+        rows.append(
+            _target(
+                "twin_calibrate",
+                m.ok and m.wall_s <= 600.0,
+                f"{m.wall_s:.1f} s on {os.cpu_count()} cores; "
+                f"committed parameters reproduced: {m.extra.get('reproduces_committed')}",
+            )
         )
     if "startup_noop_slurm" in by_name and "startup_noop_venv" in by_name:
-        add_ratio("startup_slurm", by_name["startup_noop_slurm"], by_name["startup_noop_venv"], 1.5)
+        rows.append(
+            _ratio_target(
+                "startup_slurm", by_name["startup_noop_slurm"], by_name["startup_noop_venv"], 1.5
+            )
+        )
     return rows
 
 

@@ -120,7 +120,7 @@ def _sweep_size(work: Path, dataset_name: str) -> dict:
     return {"configurations": int(len(table)), "folds": int(table["n_folds"].max())}
 
 
-def run_bench(
+def run_bench(  # noqa: PLR0915 -- the steps in the order they run, each one a helper call
     out: Path,
     cores: int,
     runs=SCALE_RUNS,
@@ -136,17 +136,7 @@ def run_bench(
     scratch = Path(workdir) if workdir else Path(tempfile.mkdtemp(prefix="thermaxis-bench-"))
     env = _environment()
     logs = out / "logs"
-    doc = {
-        "machine": _machine(),
-        "git_commit": _git_commit(REPO),
-        "settings": {
-            "cores": cores,
-            "scale_runs": list(runs),
-            "scale_shapes": {shape: SCALE_SHAPES[shape] for shape in shapes},
-            "steps": list(steps),
-        },
-        "measurements": [],
-    }
+    doc = _document(cores, runs, steps, shapes)
     measurements: list[Measurement] = []
 
     def record(m: Measurement) -> Measurement:
@@ -166,48 +156,8 @@ def run_bench(
             work = prepare_workdir(scratch / "default")
             dataset_name = _default_dataset_name(REPO)
         if "results" in steps:
-            record(measure("results_cold", _snakemake(cores), work, logs / "results_cold.log",
-                                  "snakemake --cores N on nothing (make results after set-up)", env, timeout_s))  # fmt: skip
-            record(measure("results_noop", _snakemake(cores), work, logs / "results_noop.log",
-                           "the same again: nothing to do", env, timeout_s))  # fmt: skip
-            for name, snakefile, what in (
-                ("one_rule_noop", ONE_RULE_SNAKEFILE,
-                 "a one-rule Snakemake workflow with nothing to do (the floor)"),
-                ("one_rule_params_noop", ONE_RULE_PARAMS_SNAKEFILE,
-                 "the same rule with one params entry (Snakemake then imports pandas)"),
-            ):  # fmt: skip
-                baseline = scratch / name
-                baseline.mkdir(parents=True, exist_ok=True)
-                (baseline / "Snakefile").write_text(snakefile)
-                subprocess.run(
-                    _snakemake(cores),
-                    cwd=baseline,
-                    env=env,
-                    capture_output=True,
-                    check=True,
-                    timeout=timeout_s,
-                )
-                record(
-                    measure(
-                        name,
-                        _snakemake(cores),
-                        baseline,
-                        logs / f"{name}.log",
-                        what,
-                        env,
-                        timeout_s,
-                    )
-                )
-            base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
-            alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
-            (work / "bench_param.yaml").write_text(
-                yaml.safe_dump({"models": {"ridge_alpha": alpha}})
-            )
-            record(measure("results_model_param",
-                                     _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
-                                     work, logs / "results_model_param.log",
-                                     f"after changing one model parameter (models.ridge_alpha -> {alpha:g})", env,
-                                     timeout_s))  # fmt: skip
+            for m in _results_steps(work, scratch, cores, env, logs, timeout_s):
+                record(m)
         if "sweep" in steps:
             m = record(measure("sweep_default", _snakemake(cores, "sweep"), work, logs / "sweep_default.log",
                                "snakemake sweep, default grid (assembled data present)", env, timeout_s))  # fmt: skip
@@ -223,55 +173,121 @@ def run_bench(
                 for n in runs:
                     _scale_run(scratch, logs, shape, spec, n, cores, env, timeout_s, keep, record)
         if "records" in steps:
-            work = prepare_workdir(scratch / "records")
-            datasets = [REPO / d for d in load_config(REPO / "config" / "config.yaml")["datasets"]]
-            datasets += bench_records.import_channels(
-                REPO, scratch / "records_data", env, timeout_s
-            )
-            for m, quality in bench_records.run_records(
-                datasets, work, lambda *a: _snakemake(cores, *a), measure, logs, env, timeout_s
-            ):
+            for m, quality in _record_runs(scratch, cores, env, logs, timeout_s):
                 record(m)
                 if quality is not None:
                     doc.setdefault("records", []).append(quality)
         if "twin_calibrate" in steps:
-            # Into the scratch folder: the committed parameters and data stay as they are.
-            target = scratch / "twin_calibrate"
-            command = [sys.executable, "-m", "thermaxis.twin", "calibrate",
-                       "--out", str(target / "raw"), "--truth", str(target / "truth"),
-                       "--params", str(target / "twin_params.json"),
-                       "--resume", str(REPO / TWIN_RESUME)]  # fmt: skip
-            target.mkdir(parents=True, exist_ok=True)
-            m = measure("twin_calibrate", command, REPO, logs / "twin_calibrate.log",
-                        "make twin-calibrate: the polish from the held-out RMSE restarts' end, "
-                        "then the regeneration", env, timeout_s)  # fmt: skip
-            written = target / "twin_params.json"
-            m.extra["reproduces_committed"] = written.is_file() and (
-                written.read_bytes() == (REPO / "src/thermaxis/twin_params.json").read_bytes()
-            )
-            record(m)
+            record(_twin_calibrate(scratch, env, logs, timeout_s))
         if "test" in steps:
-            workers = os.environ.get("PYTEST_WORKERS", "2")  # as the Makefile's test target
-            suite = [
-                sys.executable,
-                "-m",
-                "pytest",
-                "-q",
-                "-p",
-                "no:cacheprovider",
-                "-n",
-                workers,
-                "--dist",
-                "loadgroup",
-            ]
-            record(measure("test_suite", suite, REPO,
-                           logs / "test_suite.log", "the test suite, as make test runs it (set-up done)", env,
-                           timeout_s))  # fmt: skip
+            record(_test_suite(env, logs, timeout_s))
     finally:
         if not keep and workdir is None:
             shutil.rmtree(scratch, ignore_errors=True)
     doc["machine"]["load_average_at_end"] = [round(v, 2) for v in os.getloadavg()]
     return finish(doc, measurements, out)
+
+
+def _document(cores: int, runs, steps, shapes) -> dict:
+    """bench.json before any measurement: the machine, the commit and the settings."""
+    doc = {
+        "machine": _machine(),
+        "git_commit": _git_commit(REPO),
+        "settings": {
+            "cores": cores,
+            "scale_runs": list(runs),
+            "scale_shapes": {shape: SCALE_SHAPES[shape] for shape in shapes},
+            "steps": list(steps),
+        },
+        "measurements": [],
+    }
+    return doc
+
+
+def _results_steps(work: Path, scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float):
+    """``make results`` cold, then with nothing to do, beside the one-rule floors, then after
+    one model parameter changed; each measurement yielded as soon as it is made."""
+    yield measure("results_cold", _snakemake(cores), work, logs / "results_cold.log",
+                  "snakemake --cores N on nothing (make results after set-up)", env, timeout_s)  # fmt: skip
+    yield measure("results_noop", _snakemake(cores), work, logs / "results_noop.log",
+                  "the same again: nothing to do", env, timeout_s)  # fmt: skip
+    for name, snakefile, what in (
+        ("one_rule_noop", ONE_RULE_SNAKEFILE,
+         "a one-rule Snakemake workflow with nothing to do (the floor)"),
+        ("one_rule_params_noop", ONE_RULE_PARAMS_SNAKEFILE,
+         "the same rule with one params entry (Snakemake then imports pandas)"),
+    ):  # fmt: skip
+        baseline = scratch / name
+        baseline.mkdir(parents=True, exist_ok=True)
+        (baseline / "Snakefile").write_text(snakefile)
+        subprocess.run(
+            _snakemake(cores),
+            cwd=baseline,
+            env=env,
+            capture_output=True,
+            check=True,
+            timeout=timeout_s,
+        )
+        yield measure(name, _snakemake(cores), baseline, logs / f"{name}.log", what, env, timeout_s)
+    base = yaml.safe_load((REPO / "config" / "config.yaml").read_text(encoding="utf-8"))
+    alpha = float(base.get("models", {}).get("ridge_alpha", 1.0)) * 2.0
+    (work / "bench_param.yaml").write_text(yaml.safe_dump({"models": {"ridge_alpha": alpha}}))
+    yield measure("results_model_param",
+                  _snakemake(cores, "--configfile", "config/config.yaml", "bench_param.yaml"),
+                  work, logs / "results_model_param.log",
+                  f"after changing one model parameter (models.ridge_alpha -> {alpha:g})", env,
+                  timeout_s)  # fmt: skip
+
+
+def _record_runs(scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float):
+    """The workflow on each configured dataset and each channel of the imported records:
+    (measurement, its quality row or None)."""
+    work = prepare_workdir(scratch / "records")
+    datasets = [REPO / d for d in load_config(REPO / "config" / "config.yaml")["datasets"]]
+    datasets += bench_records.import_channels(REPO, scratch / "records_data", env, timeout_s)
+    return bench_records.run_records(
+        datasets, work, lambda *a: _snakemake(cores, *a), measure, logs, env, timeout_s
+    )
+
+
+def _twin_calibrate(scratch: Path, env: dict, logs: Path, timeout_s: float) -> Measurement:
+    """``make twin-calibrate`` from the committed resume point, and whether it gives the
+    committed parameters again."""
+    # Into the scratch folder: the committed parameters and data stay as they are.
+    target = scratch / "twin_calibrate"
+    command = [sys.executable, "-m", "thermaxis.twin", "calibrate",
+               "--out", str(target / "raw"), "--truth", str(target / "truth"),
+               "--params", str(target / "twin_params.json"),
+               "--resume", str(REPO / TWIN_RESUME)]  # fmt: skip
+    target.mkdir(parents=True, exist_ok=True)
+    m = measure("twin_calibrate", command, REPO, logs / "twin_calibrate.log",
+                "make twin-calibrate: the polish from the held-out RMSE restarts' end, "
+                "then the regeneration", env, timeout_s)  # fmt: skip
+    written = target / "twin_params.json"
+    m.extra["reproduces_committed"] = written.is_file() and (
+        written.read_bytes() == (REPO / "src/thermaxis/twin_params.json").read_bytes()
+    )
+    return m
+
+
+def _test_suite(env: dict, logs: Path, timeout_s: float) -> Measurement:
+    """The test suite, as ``make test`` runs it."""
+    workers = os.environ.get("PYTEST_WORKERS", "2")  # as the Makefile's test target
+    suite = [
+        sys.executable,
+        "-m",
+        "pytest",
+        "-q",
+        "-p",
+        "no:cacheprovider",
+        "-n",
+        workers,
+        "--dist",
+        "loadgroup",
+    ]
+    return measure("test_suite", suite, REPO,
+                   logs / "test_suite.log", "the test suite, as make test runs it (set-up done)", env,
+                   timeout_s)  # fmt: skip
 
 
 def _generate_command(out: Path, runs: int, spec: dict) -> list[str]:

@@ -191,18 +191,7 @@ def combine_passes(
         ``max_missing_fraction`` of targets missing.
     """
     label = f"measurement {name}" if name else "measurement"
-    targets = np.asarray(targets, dtype=float)
-    if targets.ndim != 1 or targets.size == 0 or not np.isfinite(targets).all():
-        raise ValueError(
-            f"{label}: targets must be a non-empty 1-D sequence of finite positions in mm"
-        )
-    if np.unique(targets).size != targets.size:
-        raise ValueError(f"{label}: targets must be distinct, got {targets.tolist()}")
-    for column in ("position_mm", "error_um"):
-        if column not in measurement.columns:
-            raise ValueError(
-                f"{label}: missing column {column!r} (expected position_mm, error_um[, direction])"
-            )
+    targets = _checked_targets(measurement, targets, label)
 
     repeated = measurement.duplicated(keep="first")
     measurement = measurement[~repeated.to_numpy()]
@@ -225,6 +214,23 @@ def combine_passes(
     result = pd.Series(combined, index=pd.Index(targets, name="position_mm"), name="error_um")
     result.attrs["n_duplicate_rows"] = int(repeated.sum())
     return result, warnings
+
+
+def _checked_targets(measurement: pd.DataFrame, targets, label: str) -> np.ndarray:
+    """The targets as distinct finite positions (mm), the measurement with its columns."""
+    targets = np.asarray(targets, dtype=float)
+    if targets.ndim != 1 or targets.size == 0 or not np.isfinite(targets).all():
+        raise ValueError(
+            f"{label}: targets must be a non-empty 1-D sequence of finite positions in mm"
+        )
+    if np.unique(targets).size != targets.size:
+        raise ValueError(f"{label}: targets must be distinct, got {targets.tolist()}")
+    for column in ("position_mm", "error_um"):
+        if column not in measurement.columns:
+            raise ValueError(
+                f"{label}: missing column {column!r} (expected position_mm, error_um[, direction])"
+            )
+    return targets
 
 
 def _combine(

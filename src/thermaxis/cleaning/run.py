@@ -602,13 +602,7 @@ def model_inputs(
     leave-one-condition-out every fold trains or tests on every run, so it is no
     candidate of any fold. It costs that sensor only; none left is an error.
     """
-    wide = temperatures.pivot_table(
-        index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True
-    )
-    # A sensor unusable in every run has no value to pivot, and is still a column; a
-    # measurement no sensor was read in (every log of the run starts late) is still a row.
-    read = pd.MultiIndex.from_frame(temperatures[["run", "measurement"]].drop_duplicates())
-    wide = wide.reindex(index=wide.index.union(read), columns=pd.unique(temperatures["sensor"]))
+    wide = _absolute_by_measurement(temperatures)
     if sensors is None:
         # Natural order (T2 before T10), so clusters and tables read like the paper's.
         sensors = sorted(wide.columns, key=natural_key)
@@ -628,6 +622,30 @@ def model_inputs(
             "(tables/cleaning_qc.csv, finding 'unusable'); expected at least one sensor read in every measurement"
         )
     X = X.drop(columns=unusable)
+    X = _with_inputs(X, index, signals, inputs, unusable)
+    X = X.reset_index()
+    X.insert(2, "time_min", times.loc[index].to_numpy())
+    X.columns.name = None
+    Y = Y.loc[index].reset_index(drop=True)
+    Y.columns = [float(c) for c in Y.columns]
+    Y.columns.name = None
+    return X, Y
+
+
+def _absolute_by_measurement(temperatures: pd.DataFrame) -> pd.DataFrame:
+    """Absolute temperature per (run, measurement) row and sensor column."""
+    wide = temperatures.pivot_table(
+        index=["run", "measurement"], columns="sensor", values="absolute_c", sort=True
+    )
+    # A sensor unusable in every run has no value to pivot, and is still a column; a
+    # measurement no sensor was read in (every log of the run starts late) is still a row.
+    read = pd.MultiIndex.from_frame(temperatures[["run", "measurement"]].drop_duplicates())
+    wide = wide.reindex(index=wide.index.union(read), columns=pd.unique(temperatures["sensor"]))
+    return wide
+
+
+def _with_inputs(X: pd.DataFrame, index, signals, inputs, unusable: list) -> pd.DataFrame:
+    """X with the operating signals, then the time-aware inputs of the usable sensors."""
     if signals is not None and len(signals):
         signal_wide = signals.pivot_table(
             index=["run", "measurement"], columns="signal", values="value", sort=True
@@ -639,10 +657,4 @@ def model_inputs(
         )
         kept = [c for c in derived.columns if time_inputs.base_of(c) not in unusable]
         X = X.join(derived.reindex(index)[sorted(kept, key=natural_key)])
-    X = X.reset_index()
-    X.insert(2, "time_min", times.loc[index].to_numpy())
-    X.columns.name = None
-    Y = Y.loc[index].reset_index(drop=True)
-    Y.columns = [float(c) for c in Y.columns]
-    Y.columns.name = None
-    return X, Y
+    return X

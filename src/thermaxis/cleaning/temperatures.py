@@ -157,6 +157,37 @@ def _clean_source(
     out_of_range = ~np.isnan(values) & ((values < low) | (values > high))
     values = np.where(out_of_range, np.nan, values)
 
+    values, t, duplicates, merged = _merge_repeated_times(values, t, sensors, duplicates)
+
+    natives = []
+    for j, sensor in enumerate(sensors):
+        ok = np.isfinite(values[:, j])
+        ts, vs = t[ok], values[ok, j]
+        ts, vs, n_spikes, events = _despiked(ts, vs, settings)
+        natives.append(
+            _Native(
+                sensor=str(sensor),
+                source=name,
+                t=ts,
+                v=vs,
+                n_raw=int(n_raw[j]),
+                n_duplicates=int(duplicates[j]),
+                n_out_of_range=int(out_of_range[:, j].sum()),
+                n_spikes=n_spikes,
+                clock_offset_s=float(offset_s),
+                excursions=events,
+                merged=merged[j],
+            )
+        )
+    return natives
+
+
+def _merge_repeated_times(values: np.ndarray, t: np.ndarray, sensors: list, duplicates):
+    """One row per timestamp, readings logged at the same time averaged (step 4).
+
+    Returns the values, times and duplicate counts after merging, and per sensor
+    ``(rows merged with differing readings, first such time, largest spread)`` or None.
+    """
     merged: list = [None] * len(sensors)
     if t.size and np.any(np.diff(t) == 0):
         grouped = pd.DataFrame(values, columns=sensors).groupby(t, sort=True)
@@ -171,46 +202,32 @@ def _clean_source(
         for j in np.flatnonzero(conflicting.any(axis=0)):
             rows = np.flatnonzero(conflicting[:, j])
             merged[j] = (int(rows.size), int(t[rows[0]]), float(spread[rows, j].max()))
+    return values, t, duplicates, merged
 
-    natives = []
-    for j, sensor in enumerate(sensors):
-        ok = np.isfinite(values[:, j])
-        ts, vs = t[ok], values[ok, j]
-        spikes = spike_mask(
-            ts / _NS,
-            vs,
-            threshold=settings.spike_threshold,
-            min_deviation=settings.spike_min_deviation_c,
-            max_rate_c_per_min=settings.spike_max_rate_c_per_min,
-            window_s=settings.spike_window_s,
-        )
-        ts, vs = ts[~spikes], vs[~spikes]
-        limit = spike_limit(ts / _NS, vs, settings.spike_threshold, settings.spike_min_deviation_c)
-        found = excursions(ts / _NS, vs, limit * (1.0 + _TIE_RTOL))
-        if settings.excursions == "fault" and found:
-            faulty = np.zeros(ts.shape, dtype=bool)
-            for first, last, _ in found:
-                faulty[first : last + 1] = True
-            events = tuple((int(ts[a]), int(ts[b]), size) for a, b, size in found)
-            ts, vs = ts[~faulty], vs[~faulty]
-        else:
-            events = tuple((int(ts[a]), int(ts[b]), size) for a, b, size in found)
-        natives.append(
-            _Native(
-                sensor=str(sensor),
-                source=name,
-                t=ts,
-                v=vs,
-                n_raw=int(n_raw[j]),
-                n_duplicates=int(duplicates[j]),
-                n_out_of_range=int(out_of_range[:, j].sum()),
-                n_spikes=int(spikes.sum()),
-                clock_offset_s=float(offset_s),
-                excursions=events,
-                merged=merged[j],
-            )
-        )
-    return natives
+
+def _despiked(ts: np.ndarray, vs: np.ndarray, settings: TemperatureCleaning):
+    """One sensor's samples without spikes (and faulty excursions), the spike count and
+    the excursions found, as (first time, last time, size)."""
+    spikes = spike_mask(
+        ts / _NS,
+        vs,
+        threshold=settings.spike_threshold,
+        min_deviation=settings.spike_min_deviation_c,
+        max_rate_c_per_min=settings.spike_max_rate_c_per_min,
+        window_s=settings.spike_window_s,
+    )
+    ts, vs = ts[~spikes], vs[~spikes]
+    limit = spike_limit(ts / _NS, vs, settings.spike_threshold, settings.spike_min_deviation_c)
+    found = excursions(ts / _NS, vs, limit * (1.0 + _TIE_RTOL))
+    if settings.excursions == "fault" and found:
+        faulty = np.zeros(ts.shape, dtype=bool)
+        for first, last, _ in found:
+            faulty[first : last + 1] = True
+        events = tuple((int(ts[a]), int(ts[b]), size) for a, b, size in found)
+        ts, vs = ts[~faulty], vs[~faulty]
+    else:
+        events = tuple((int(ts[a]), int(ts[b]), size) for a, b, size in found)
+    return ts, vs, int(spikes.sum()), events
 
 
 def _estimate_offsets(

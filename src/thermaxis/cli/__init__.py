@@ -66,6 +66,7 @@ def _snakemake_parser(parser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    # One helper per subcommand: each reads as the `--help` it gives.
     parser = argparse.ArgumentParser(
         prog="thermaxis",
         description="Thermal positioning error of machine-tool linear axes: the workflow, "
@@ -81,6 +82,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
+    _run_parser(sub)
+    _check_parser(sub)
+    _import_parser(sub)
+    _compensate_parser(sub)
+    _sweep_parser(sub)
+    _report_parser(sub)
+    return parser
+
+
+def _run_parser(sub) -> None:
+    """The `thermaxis run` subcommand and its arguments."""
     run = _subcommand(
         sub,
         "run",
@@ -100,6 +112,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _snakemake_parser(run)
 
+
+def _check_parser(sub) -> None:
+    """The `thermaxis check` subcommand and its arguments."""
     check = _subcommand(
         sub,
         "check",
@@ -115,6 +130,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="config file(s), later ones win (default: config/config.yaml if present, else the schema's defaults)",
     )
 
+
+def _import_parser(sub) -> None:
+    """The `thermaxis import` subcommand and its arguments."""
     imp = _subcommand(
         sub,
         "import",
@@ -135,6 +153,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="the dataset folder to write (replaced when complete)",
     )
 
+
+def _compensate_parser(sub) -> None:
+    """The `thermaxis compensate` subcommand and its arguments."""
     comp = _subcommand(
         sub,
         "compensate",
@@ -161,6 +182,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--figure", metavar="FILE.png", help="the figure (default: FILE.csv with .png)"
     )
 
+
+def _sweep_parser(sub) -> None:
+    """The `thermaxis sweep` subcommand and its arguments."""
     sweep = _subcommand(
         sub,
         "sweep",
@@ -176,6 +200,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _snakemake_parser(sweep)
 
+
+def _report_parser(sub) -> None:
+    """The `thermaxis report` subcommand and its arguments."""
     report = _subcommand(
         sub,
         "report",
@@ -195,7 +222,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="Snakemake's HTML report, results/<dataset>/report.zip (what `make report` does)",
     )
     _snakemake_parser(report)
-    return parser
 
 
 # --------------------------------------------------------------------------- the workflow

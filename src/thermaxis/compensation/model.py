@@ -215,25 +215,7 @@ def model_record(
     index = {item: i for i, item in enumerate(inputs)}
     positions = np.asarray(estimator.positions_mm_, dtype=float)
     origin = float(positions[0])
-    regressions = []
-    # Every regression sees the operating signals after its temperatures (estimators._features).
-    signal_inputs = [index[(s, "signal")] for s in estimator.signals]
-    if approach == "decoupled":
-        k_inputs = [index[(s, "absolute")] for s in estimator.k_sensors] + signal_inputs
-        b_inputs = [index[(s, "relative")] for s in estimator.b_sensors] + signal_inputs
-        for target, _, kind in estimator._targets():
-            chosen = b_inputs if kind == "relative" else k_inputs
-            regressions.append(
-                regression_record(target, None, chosen, estimator.estimators_[target])
-            )
-        power = {"b": 0, "k": 1, "c2": 2, "c3": 3}
-        shifted = (positions - origin) / MM_PER_M
-        basis = np.column_stack([shifted ** power[r["target"]] for r in regressions])
-    else:
-        chosen = [index[(s, "relative")] for s in estimator.sensors] + signal_inputs
-        for position, pipeline in zip(positions, estimator.estimators_, strict=False):
-            regressions.append(regression_record("error", float(position), chosen, pipeline))
-        basis = np.eye(positions.size)
+    regressions, basis = _regressions(estimator, approach, index, positions)
     values = _input_values(X_train, inputs)
     return {
         "schema": "thermaxis-compensation-model",
@@ -253,16 +235,7 @@ def model_record(
             sensor: round(float((noise_c or {}).get(sensor, 0.0)), 6)
             for sensor in dict.fromkeys(base_of(s) for s, kind in inputs if kind != "signal")
         },
-        "inputs": [
-            {
-                "sensor": s,
-                "temperature": kind,
-                "training_min_c": float(values[:, i].min()),
-                "training_max_c": float(values[:, i].max()),
-                **({"definition": input_definition(s)} if "@" in s else {}),
-            }
-            for i, (s, kind) in enumerate(inputs)
-        ],
+        "inputs": _input_entries(inputs, values),
         "reference": {
             "temperatures": "captured when the axis is homed (referenced); relative inputs are temperature minus this reference",
             "static_pitch_table": "measured in the reference state; the temperature compensation is zero there",
@@ -282,6 +255,50 @@ def model_record(
         "curve_basis": basis.tolist(),
         "fallback": asdict(fallback) | {"plausible_c": list(fallback.plausible_c)},
     }
+
+
+def _regressions(estimator, approach: str, index: Mapping, positions: np.ndarray):
+    """The regressions of the model and the curve basis that turns their targets into errors.
+
+    Decoupled: one regression per coefficient (b, k, c2, c3), the basis the powers of the
+    position from the first one, in metres.  Point by point: one regression per position,
+    the basis the identity.
+    """
+    origin = float(positions[0])
+    regressions = []
+    # Every regression sees the operating signals after its temperatures (estimators._features).
+    signal_inputs = [index[(s, "signal")] for s in estimator.signals]
+    if approach == "decoupled":
+        k_inputs = [index[(s, "absolute")] for s in estimator.k_sensors] + signal_inputs
+        b_inputs = [index[(s, "relative")] for s in estimator.b_sensors] + signal_inputs
+        for target, _, kind in estimator._targets():
+            chosen = b_inputs if kind == "relative" else k_inputs
+            regressions.append(
+                regression_record(target, None, chosen, estimator.estimators_[target])
+            )
+        power = {"b": 0, "k": 1, "c2": 2, "c3": 3}
+        shifted = (positions - origin) / MM_PER_M
+        basis = np.column_stack([shifted ** power[r["target"]] for r in regressions])
+    else:
+        chosen = [index[(s, "relative")] for s in estimator.sensors] + signal_inputs
+        for position, pipeline in zip(positions, estimator.estimators_, strict=False):
+            regressions.append(regression_record("error", float(position), chosen, pipeline))
+        basis = np.eye(positions.size)
+    return regressions, basis
+
+
+def _input_entries(inputs: Sequence[tuple[str, str]], values: np.ndarray) -> list[dict]:
+    """Each input with its training range (and, time-aware, its definition)."""
+    return [
+        {
+            "sensor": s,
+            "temperature": kind,
+            "training_min_c": float(values[:, i].min()),
+            "training_max_c": float(values[:, i].max()),
+            **({"definition": input_definition(s)} if "@" in s else {}),
+        }
+        for i, (s, kind) in enumerate(inputs)
+    ]
 
 
 def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> dict:
@@ -305,20 +322,7 @@ def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> d
             raise ValueError(
                 f"combination: member {name!r} has other positions than {kept[0][0]!r}"
             )
-        local = []
-        for spec in record["inputs"]:
-            key = (spec["sensor"], spec["temperature"])
-            if key not in index:
-                index[key] = len(inputs)
-                inputs.append(dict(spec))
-            local.append(index[key])
-        for regression in record["regressions"]:
-            if regression["form"] != "affine":
-                raise ValueError(
-                    f"combination: member {name!r} is not linear ({regression['form']}); "
-                    "expected affine regressions only"
-                )
-            regressions.append({**regression, "inputs": [local[i] for i in regression["inputs"]]})
+        regressions += _member_regressions(name, record, inputs, index)
         bases.append(weight * np.asarray(record["curve_basis"], dtype=float))
         about_members.append(
             {"candidate": name, "weight": weight, "approach": record["approach"],
@@ -327,10 +331,6 @@ def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> d
     basis = np.hstack(bases)
     positions = np.asarray(first["positions_mm"], dtype=float)
     origin = float(first["reference"]["reference_position_mm"])
-    noise: dict[str, float] = {}
-    for _, _, record in kept:
-        for sensor, value in record["noise_c"].items():
-            noise[sensor] = max(noise.get(sensor, 0.0), value)
     return {
         "schema": first["schema"],
         "schema_version": first["schema_version"],
@@ -342,7 +342,7 @@ def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> d
         "members": about_members,
         "sensors": list(dict.fromkeys(s for _, _, r in kept for s in r["sensors"])),
         "signals": list(dict.fromkeys(s for _, _, r in kept for s in r["signals"])),
-        "noise_c": noise,
+        "noise_c": _largest_noise(record for _, _, record in kept),
         "inputs": inputs,
         "reference": first["reference"],
         "positions_mm": first["positions_mm"],
@@ -352,6 +352,39 @@ def combined_record(members: Sequence[tuple[str, float, Mapping]], **about) -> d
         "curve_basis": basis.tolist(),
         "fallback": first["fallback"],
     }
+
+
+def _member_regressions(name: str, record: Mapping, inputs: list, index: dict) -> list[dict]:
+    """A member's regressions, their inputs renumbered into the merged ``inputs``.
+
+    ``inputs`` and ``index`` (sensor, temperature) -> position grow with the member's
+    inputs not seen yet, so a sensor two members read is read once.
+    """
+    regressions = []
+    local = []
+    for spec in record["inputs"]:
+        key = (spec["sensor"], spec["temperature"])
+        if key not in index:
+            index[key] = len(inputs)
+            inputs.append(dict(spec))
+        local.append(index[key])
+    for regression in record["regressions"]:
+        if regression["form"] != "affine":
+            raise ValueError(
+                f"combination: member {name!r} is not linear ({regression['form']}); "
+                "expected affine regressions only"
+            )
+        regressions.append({**regression, "inputs": [local[i] for i in regression["inputs"]]})
+    return regressions
+
+
+def _largest_noise(records) -> dict[str, float]:
+    """Each sensor's step noise, the largest over the members: the fallback's safe side."""
+    noise: dict[str, float] = {}
+    for record in records:
+        for sensor, value in record["noise_c"].items():
+            noise[sensor] = max(noise.get(sensor, 0.0), value)
+    return noise
 
 
 def validate_model(record: Mapping, where: str = "model.json") -> None:

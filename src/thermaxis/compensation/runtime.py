@@ -61,6 +61,18 @@ def _zero_parameters(p0_mm: float, offset_only: bool, n_positions: int) -> Contr
     return ControllerParameters(0.0, 0.0, p0_mm, (0.0,) * n_positions, 0.0, offset_only)
 
 
+def _ramped(good: ControllerParameters, elapsed_min: float, ramp_to_zero_min: float):
+    """The last good parameters scaled down linearly to zero over ``ramp_to_zero_min``
+    after a fault began (at once when it is 0): the fallback policy "ramp"."""
+    scale = max(0.0, 1.0 - elapsed_min / ramp_to_zero_min) if ramp_to_zero_min > 0 else 0.0
+    return replace(
+        good,
+        k0_mm=good.k0_mm * scale,
+        tan_beta=good.tan_beta * scale,
+        curve_um=tuple(v * scale for v in good.curve_um),
+    )
+
+
 class Compensator:
     """The deployable model: predicted error curve and controller parameters from temperatures
     (and operating signals, when the model reads any).
@@ -349,15 +361,6 @@ class Compensator:
             if f.policy == "hold":
                 steps.append(Step(time_s, good, "hold", reasons))
                 continue
-            elapsed_min = (time_s - fault_since) / 60.0
-            scale = (
-                max(0.0, 1.0 - elapsed_min / f.ramp_to_zero_min) if f.ramp_to_zero_min > 0 else 0.0
-            )
-            ramped = replace(
-                good,
-                k0_mm=good.k0_mm * scale,
-                tan_beta=good.tan_beta * scale,
-                curve_um=tuple(v * scale for v in good.curve_um),
-            )
+            ramped = _ramped(good, (time_s - fault_since) / 60.0, f.ramp_to_zero_min)
             steps.append(Step(time_s, ramped, "ramp", reasons))
         return steps

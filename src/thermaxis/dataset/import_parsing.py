@@ -64,9 +64,24 @@ def read_wide_table(
     csv = {**_plain_csv(), **(csv or {})}
     if not path.is_file():
         raise DataError(f"{path}: file not found (the mapping's source)")
-    suffix = path.suffix.lower()
     # 0-based rows to skip: above the header, and between it and the first sample.
     skip = [*range(header_row - 1), *range(header_row, header_row + units_rows)]
+    frame = _parsed(path, sheet, csv, skip, mapped)
+    _check_delimiter(path, frame, csv, mapped)
+    frame.columns = [header_name(c) for c in frame.columns]
+    _check_unique_header(path, frame, header_row)
+    frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped, decimal=csv["decimal"])
+    # A spreadsheet's export often ends in rows of empty cells (",,,"): no samples.
+    filled = np.flatnonzero(frame.notna().any(axis=1).to_numpy())
+    frame = frame.iloc[: filled[-1] + 1] if filled.size else frame.iloc[:0]
+    if frame.empty:
+        raise DataError(f"{path}: no data rows below the header")
+    return frame
+
+
+def _parsed(path: Path, sheet, csv: dict, skip: list[int], mapped: bool) -> pd.DataFrame:
+    """The table as pandas reads it, its errors turned into one-line messages on the file."""
+    suffix = path.suffix.lower()
     try:
         if suffix in (".xlsx", ".xlsm"):
             frame = pd.read_excel(path, sheet_name=sheet, skiprows=skip)
@@ -106,6 +121,11 @@ def read_wide_table(
             else ""
         )
         raise DataError(f"{path}: cannot read the table ({first}){above}") from None
+    return frame
+
+
+def _check_delimiter(path: Path, frame: pd.DataFrame, csv: dict, mapped: bool) -> None:
+    """One column holding another delimiter: the CSV was read with the wrong one."""
     if len(frame.columns) == 1:  # before names are normalised: a tab is white space
         only = str(frame.columns[0])
         other = next((d for d in (";", "\t", ",", "|") if d in only), None)
@@ -116,15 +136,6 @@ def read_wide_table(
                 else f"expected {csv['delimiter']!r} between columns"
             )
             raise DataError(f"{path}: one column {only[:60]!r}: looks {other!r}-separated; {fix}")
-    frame.columns = [header_name(c) for c in frame.columns]
-    _check_unique_header(path, frame, header_row)
-    frame.attrs.update(first_row=header_row + units_rows + 1, mapped=mapped, decimal=csv["decimal"])
-    # A spreadsheet's export often ends in rows of empty cells (",,,"): no samples.
-    filled = np.flatnonzero(frame.notna().any(axis=1).to_numpy())
-    frame = frame.iloc[: filled[-1] + 1] if filled.size else frame.iloc[:0]
-    if frame.empty:
-        raise DataError(f"{path}: no data rows below the header")
-    return frame
 
 
 def _column(path: Path, frame: pd.DataFrame, name: str) -> pd.Series:

@@ -131,23 +131,7 @@ def _write_run(
 
 def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
     """What the import assumed, in sentences for the dataset's description."""
-    time = mapping["time"]
-    notes = []
-    if time.get("format"):
-        notes.append(
-            f"Times are the logged clock times of {_words(time_columns(time))} (format {time['format']}); "
-            "a time zone, where given, was converted to UTC."
-        )
-    elif time["column"]:
-        notes.append(
-            f"Times are {_UNIT_WORDS[time['unit']]} since the record's start (column {time['column']!r}); "
-            f"the clock time {time['start']} given to the first row is invented by the import, not measured."
-        )
-    else:
-        notes.append(
-            f"The source has no time column: row i is taken at i x {time['interval_s']:g} s after {time['start']}, "
-            "an invented clock."
-        )
+    notes = [_time_note(mapping["time"])]
     if mapping["temperature_unit"] != "degC":
         notes.append(
             f"Temperatures were logged in {mapping['temperature_unit']} and converted to degrees C."
@@ -165,18 +149,7 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
             f"{'comma' if csv['decimal'] == ',' else 'point'} and the {csv['encoding']} encoding, "
             "as the mapping states."
         )
-    split = mapping["split"]
-    if split["by"] == "signal":
-        notes.append(
-            f"The record was cut into {len(counts)} runs where signal {split['signal']!r} leaves its rest value "
-            f"{split['rest']:g} (the first run keeps the record's start)."
-        )
-    elif split["by"] == "ranges":
-        notes.append(
-            "The record was cut into runs at the time ranges listed in the import mapping."
-        )
-    else:
-        notes.append("Each run comes from its own file.")
+    notes.append(_split_note(mapping["split"], counts))
     every = mapping["errors"]["every_s"]
     notes.append(
         f"Measurements are the error samples at (or just after) every {every:g} s of each run "
@@ -193,6 +166,36 @@ def _assumptions(mapping: dict, counts: dict[str, int]) -> list[str]:
             f"The record has one measuring point; it is stored as target position {positions[0]:g} mm."
         )
     return notes
+
+
+def _time_note(time: dict) -> str:
+    """Where the times come from: the logged clock, a relative time or the row number."""
+    if time.get("format"):
+        return (
+            f"Times are the logged clock times of {_words(time_columns(time))} (format {time['format']}); "
+            "a time zone, where given, was converted to UTC."
+        )
+    if time["column"]:
+        return (
+            f"Times are {_UNIT_WORDS[time['unit']]} since the record's start (column {time['column']!r}); "
+            f"the clock time {time['start']} given to the first row is invented by the import, not measured."
+        )
+    return (
+        f"The source has no time column: row i is taken at i x {time['interval_s']:g} s after {time['start']}, "
+        "an invented clock."
+    )
+
+
+def _split_note(split: dict, counts: dict[str, int]) -> str:
+    """How the record was cut into runs."""
+    if split["by"] == "signal":
+        return (
+            f"The record was cut into {len(counts)} runs where signal {split['signal']!r} leaves its rest value "
+            f"{split['rest']:g} (the first run keeps the record's start)."
+        )
+    if split["by"] == "ranges":
+        return "The record was cut into runs at the time ranges listed in the import mapping."
+    return "Each run comes from its own file."
 
 
 def _dataset_yaml(mapping: dict, notes: list[str]) -> dict:

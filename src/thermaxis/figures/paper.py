@@ -288,14 +288,7 @@ def fig7_error_surface(errors: pd.DataFrame, run) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    run_errors = _run_errors(errors, run)
-    grid = run_errors.pivot_table(
-        index="measurement", columns="position_mm", values="error_um", aggfunc="mean", dropna=False
-    )
-    grid = grid.sort_index().sort_index(axis=1)
-    times = _measurement_times(run_errors).reindex(grid.index).to_numpy(dtype=float)
-    positions = grid.columns.to_numpy(dtype=float)
-    z = grid.to_numpy(dtype=float)
+    positions, times, z = _error_grid(errors, run)
     x, y = np.meshgrid(positions, times)
 
     # Fixed axes instead of constrained layout, which does not see the labels of 3-D axes.
@@ -330,6 +323,19 @@ def fig7_error_surface(errors: pd.DataFrame, run) -> Figure:
     ax.view_init(elev=25.0, azim=-60.0)
     ax.set_box_aspect(None, zoom=0.88)
     return fig
+
+
+def _error_grid(errors: pd.DataFrame, run):
+    """A run's positions (mm), measurement times (min) and errors, measurement x position."""
+    run_errors = _run_errors(errors, run)
+    grid = run_errors.pivot_table(
+        index="measurement", columns="position_mm", values="error_um", aggfunc="mean", dropna=False
+    )
+    grid = grid.sort_index().sort_index(axis=1)
+    times = _measurement_times(run_errors).reindex(grid.index).to_numpy(dtype=float)
+    positions = grid.columns.to_numpy(dtype=float)
+    z = grid.to_numpy(dtype=float)
+    return positions, times, z
 
 
 def _padded_limits(values: np.ndarray) -> tuple[float, float]:

@@ -311,32 +311,7 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
         pair_rows = keyed[(keyed["approach"] == approach) & (keyed["algorithm"] == algorithm)]
         offsets = centres + (j - (len(pairs) - 1) / 2) * bar_width
         for ax, column in ((ax_rmse, "rmse"), (ax_max, "max_abs")):
-            heights = _by_fold(pair_rows, column, folds)
-            keep = np.isfinite(heights)
-            ax.bar(
-                offsets[keep],
-                heights[keep],
-                width=bar_width,
-                color=CATEGORICAL_COLORS[j % len(CATEGORICAL_COLORS)],
-                edgecolor="0.2",
-                linewidth=0.4,
-                label=f"{_display(approach)}, {_display(algorithm)}",
-            )
-            if {f"{column}_lo", f"{column}_hi"} <= set(pair_rows.columns):
-                lo = _by_fold(pair_rows, f"{column}_lo", folds)
-                hi = _by_fold(pair_rows, f"{column}_hi", folds)
-                shown = keep & np.isfinite(lo) & np.isfinite(hi)
-                # The interval as computed, about its own centre: a percentile interval need
-                # not contain the estimate (a skewed statistic, the tables' rounding).
-                ax.errorbar(
-                    offsets[shown],
-                    (lo[shown] + hi[shown]) / 2,
-                    yerr=(hi[shown] - lo[shown]) / 2,
-                    fmt="none",
-                    ecolor="0.15",
-                    elinewidth=0.5,
-                    capsize=1.2,
-                )
+            _fold_bars(ax, pair_rows, column, folds, offsets, bar_width, j, (approach, algorithm))
     ax_rmse.set_ylabel(f"RMSE{suffix}")
     ax_max.set_ylabel(f"Max |residual|{suffix}")
     labels = list(short_names(folds).values())
@@ -351,6 +326,37 @@ def fig_fold_comparison(metrics: pd.DataFrame, target: str = "error") -> Figure:
         ax.set_axisbelow(True)
     _top_legend(fig, ax_rmse)
     return fig
+
+
+def _fold_bars(ax, pair_rows, column, folds, offsets, bar_width, j, pair) -> None:
+    """One (approach, algorithm) pair's bars of one metric, with its bootstrap intervals."""
+    approach, algorithm = pair
+    heights = _by_fold(pair_rows, column, folds)
+    keep = np.isfinite(heights)
+    ax.bar(
+        offsets[keep],
+        heights[keep],
+        width=bar_width,
+        color=CATEGORICAL_COLORS[j % len(CATEGORICAL_COLORS)],
+        edgecolor="0.2",
+        linewidth=0.4,
+        label=f"{_display(approach)}, {_display(algorithm)}",
+    )
+    if {f"{column}_lo", f"{column}_hi"} <= set(pair_rows.columns):
+        lo = _by_fold(pair_rows, f"{column}_lo", folds)
+        hi = _by_fold(pair_rows, f"{column}_hi", folds)
+        shown = keep & np.isfinite(lo) & np.isfinite(hi)
+        # The interval as computed, about its own centre: a percentile interval need
+        # not contain the estimate (a skewed statistic, the tables' rounding).
+        ax.errorbar(
+            offsets[shown],
+            (lo[shown] + hi[shown]) / 2,
+            yerr=(hi[shown] - lo[shown]) / 2,
+            fmt="none",
+            ecolor="0.15",
+            elinewidth=0.5,
+            capsize=1.2,
+        )
 
 
 def _by_fold(rows: pd.DataFrame, column: str, folds) -> np.ndarray:

@@ -63,26 +63,7 @@ def fig_selection_stability(stability: pd.DataFrame) -> Figure:
     axes = np.atleast_1d(fig.subplots(1, len(targets), sharey=True))
     image = None
     for ax, target in zip(axes, targets, strict=True):
-        rows = stability.loc[stability["target"] == target].assign(
-            fold=lambda t: t["fold"].astype(str), sensor=lambda t: t["sensor"].astype(str)
-        )
-        grid = rows.pivot(index="sensor", columns="fold", values="frequency")
-        grid = grid.reindex(index=sensors, columns=folds).to_numpy(dtype=float)
-        chosen = rows.pivot(index="sensor", columns="fold", values="chosen")
-        chosen = chosen.reindex(index=sensors, columns=folds).fillna(False).to_numpy(dtype=bool)
-        image = ax.imshow(grid, cmap=ORDERED_CMAP, vmin=0.0, vmax=1.0, aspect="auto")
-        ys, xs = np.nonzero(chosen)
-        ax.scatter(xs, ys, s=30, facecolors="none", edgecolors="black", linewidths=0.7)
-        ax.set_xticks(
-            range(len(folds)),
-            shown_folds,
-            rotation=30 if slanted else 0,
-            ha="right" if slanted else "center",
-        )
-        ax.set_yticks(range(len(sensors)), list(short_names(sensors).values()))
-        ax.set_title(_TARGETS[target])
-        ax.set_xlabel("Fold (held-out run)")
-        ax.grid(False)
+        image = _stability_panel(ax, stability, target, sensors, folds, slanted)
     axes[0].set_ylabel(
         "Sensor"
         if len(sensors) == n_sensors
@@ -91,6 +72,31 @@ def fig_selection_stability(stability: pd.DataFrame) -> Figure:
     if image is not None:
         fig.colorbar(image, ax=list(axes), label="Share of subsets choosing it", shrink=0.9)
     return fig
+
+
+def _stability_panel(ax, stability: pd.DataFrame, target: str, sensors, folds, slanted: bool):
+    """One target's sensors x folds map, the folds' own choices ringed; returns the image."""
+    rows = stability.loc[stability["target"] == target].assign(
+        fold=lambda t: t["fold"].astype(str), sensor=lambda t: t["sensor"].astype(str)
+    )
+    grid = rows.pivot(index="sensor", columns="fold", values="frequency")
+    grid = grid.reindex(index=sensors, columns=folds).to_numpy(dtype=float)
+    chosen = rows.pivot(index="sensor", columns="fold", values="chosen")
+    chosen = chosen.reindex(index=sensors, columns=folds).fillna(False).to_numpy(dtype=bool)
+    image = ax.imshow(grid, cmap=ORDERED_CMAP, vmin=0.0, vmax=1.0, aspect="auto")
+    ys, xs = np.nonzero(chosen)
+    ax.scatter(xs, ys, s=30, facecolors="none", edgecolors="black", linewidths=0.7)
+    ax.set_xticks(
+        range(len(folds)),
+        list(short_names(folds).values()),
+        rotation=30 if slanted else 0,
+        ha="right" if slanted else "center",
+    )
+    ax.set_yticks(range(len(sensors)), list(short_names(sensors).values()))
+    ax.set_title(_TARGETS[target])
+    ax.set_xlabel("Fold (held-out run)")
+    ax.grid(False)
+    return image
 
 
 def _name(row) -> str:

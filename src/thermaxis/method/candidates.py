@@ -189,15 +189,7 @@ def default_candidates(
     what the runs can support; twenty near-duplicates made it noise.
     """
     first = "decoupled" if decoupled else "pointwise"
-    every_sensor = replace(selection, method="all")
-    pls = Candidate(
-        f"{first}-pls-all",
-        first,
-        "pls",
-        every_sensor,
-        replace(models, signals=tuple(signals), searched=("pls",)),
-        False,
-    )
+    pls = _pls_candidate(first, selection, models, signals)
     candidates = [
         Candidate(
             "paper", first, "mlr", selection, replace(models, signals=(), searched=()), False
@@ -212,17 +204,34 @@ def default_candidates(
             replace(pls, name=f"{pls.name}+lags", time_inputs=True, lags_min=tuple(lags_min))
         )
     if kernel:
-        candidates.append(
-            Candidate(
-                KERNEL_CANDIDATE,
-                "pointwise",
-                "svr",
-                selection,
-                replace(models, signals=(), searched=()),
-                False,
-            )  # fmt: skip
-        )
+        candidates.append(_kernel_candidate(selection, models))
     return candidates
+
+
+def _pls_candidate(
+    approach: str, selection: SelectionSettings, models: ModelSettings, signals: Sequence[str]
+) -> Candidate:
+    """PLS over every sensor with the operating signals, its components searched."""
+    return Candidate(
+        f"{approach}-pls-all",
+        approach,
+        "pls",
+        replace(selection, method="all"),
+        replace(models, signals=tuple(signals), searched=("pls",)),
+        False,
+    )
+
+
+def _kernel_candidate(selection: SelectionSettings, models: ModelSettings) -> Candidate:
+    """The point-by-point SVR on the configured selection: the kernel candidate."""
+    return Candidate(
+        KERNEL_CANDIDATE,
+        "pointwise",
+        "svr",
+        selection,
+        replace(models, signals=(), searched=()),
+        False,
+    )
 
 
 def extra_candidates(

@@ -219,6 +219,26 @@ def select_for_fold(
         tuple(s for _, names in settings.fixed for s in names) if settings.method == "fixed" else ()
     )
     sensors = informative_sensors(X[sensor_columns(X)], fixed, where=f"fold {name}")
+    settings = _capped_clusters(settings, sensors, name, cap_clusters)
+    absolute = X[sensors]
+    relative = (relative_temperatures(X) if relative is None else relative)[sensors]
+    k_points = b_points = None
+    if decoupled:
+        kb = decouple_rows(X, Y, degree=degree)
+        k_points = _points(settings.method, absolute, kb["k_um_per_m"].to_numpy(), settings, "k")
+        b_points = _points(settings.method, relative, kb["b_um"].to_numpy(), settings, "b")
+    per_position, common = (
+        _pointwise_points(Y, relative, sensors, settings, name) if pointwise else ({}, ())
+    )
+    return FoldSelection(
+        fold=name, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common)
+    )
+
+
+def _capped_clusters(
+    settings: SelectionSettings, sensors: list, name: str, cap_clusters: bool
+) -> SelectionSettings:
+    """The settings with at most one cluster per sensor that varies over the fold's training."""
     if settings.method in ("fuzzy_grey", "correlation") and settings.n_clusters > len(sensors):
         # More clusters than sensors that vary: each sensor is a cluster of its own, and
         # so a sensitive point (a dataset of two sensors, a fold whose others are constant).
@@ -232,20 +252,18 @@ def select_for_fold(
         warnings.warn(
             f"{what}; each is a cluster of its own, and a sensitive point",
             SelectionWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
         settings = replace(settings, n_clusters=len(sensors))
-    absolute = X[sensors]
-    relative = (relative_temperatures(X) if relative is None else relative)[sensors]
-    k_points = b_points = None
-    if decoupled:
-        kb = decouple_rows(X, Y, degree=degree)
-        k_points = _points(settings.method, absolute, kb["k_um_per_m"].to_numpy(), settings, "k")
-        b_points = _points(settings.method, relative, kb["b_um"].to_numpy(), settings, "b")
+    return settings
+
+
+def _pointwise_points(
+    Y: pd.DataFrame, relative: pd.DataFrame, sensors: list, settings: SelectionSettings, name: str
+) -> tuple[dict, tuple]:
+    """Point-by-point: the sensitive points of each position and their common set."""
     per_position = {}
-    if not pointwise:
-        common = ()
-    elif settings.method == "all":
+    if settings.method == "all":
         # Every sensor ties under "all": the common set is every sensor, not the first n.
         common = tuple(sensors)
     elif settings.method == "fixed":
@@ -267,14 +285,12 @@ def select_for_fold(
                 "selected over the positions; "
                 f"the point-by-point common set has {n_common} instead of {settings.pointwise_common}",
                 SelectionWarning,
-                stacklevel=2,
+                stacklevel=3,
             )
         common = common_points(
             chosen, n_common, order=sensors, scores=_mean_scores(list(per_position.values()))
         )
-    return FoldSelection(
-        fold=name, k=k_points, b=b_points, per_position=per_position, pointwise=tuple(common)
-    )
+    return per_position, common
 
 
 def selection_table(selection: FoldSelection) -> pd.DataFrame:

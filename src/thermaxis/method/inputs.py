@@ -480,11 +480,63 @@ def inputs_at_measurements(
     if at not in ("end", "start", "mid"):
         raise ValueError(f"at must be 'end', 'start' or 'mid', got {at!r}")
     lags, rates = list(lags_s), list(rates_s)
+    columns = [c for c in frame.columns if c != "time"] if columns is None else list(columns)
+    names = _derived_names(frame, columns, lags, rates)
+    start, end, labels, out = _measurement_windows(measurements)
+    # Half the window in integer nanoseconds: exact, no float rounding of the instant.
+    when = {"end": end, "start": start, "mid": start + (end - start) // 2}[at]
+    grid_ns = _ns(frame["time"])
+    _check_within(grid_ns, when, labels)
+
+    # Seconds since the run's start; float64 resolves nanoseconds over days.
+    grid = (grid_ns - grid_ns[0]) / 1e9
+    te = (when - grid_ns[0]) / 1e9
+    # Only the history up to the last measurement matters (up to the grid point at or
+    # after it, which the interpolation there needs); a gap after it is harmless.
+    last = int(np.searchsorted(grid, te.max(), side="left"))
+    grid = grid[: last + 1]
+    values = frame[columns].to_numpy(dtype=float)[: last + 1]
+    _check_history(columns, values, grid, grid_ns, te, when, labels)
+
+    derived = _derived_at(grid, values, te, lags, rates, [names[c] for c in columns])
+    out["time"] = when.astype("datetime64[ns]")
+    return pd.concat([out, pd.DataFrame(derived, index=out.index)], axis=1)
+
+
+def _derived_at(grid, values, te, lags: list, rates: list, names: list[list[str]]) -> dict:
+    """Each signal's lags, then rates, at the instants ``te`` (s), by name.
+
+    ``values`` holds one column per signal on ``grid`` (s); ``names`` their derived
+    input names, per signal, in the order of ``lags`` then ``rates``.
+    """
+    # The evaluation instants joined to the grid, the signal interpolated linearly there:
+    # the filters are exact for a linear signal between samples, so the added points
+    # change nothing else, and the value at an instant between grid points is exact.
+    base = np.union1d(grid, te)
+    u = np.column_stack([np.interp(base, grid, values[:, j]) for j in range(values.shape[1])])
+    rows = np.searchsorted(base, te)
+    lagged = [lag_filter(base, u, tau)[rows] for tau in lags]
+    rated = [rate_of_change(base, u, w)[rows] for w in rates]
+    derived = {}
+    for j, signal_names in enumerate(names):
+        for name, block in zip(signal_names, lagged + rated, strict=False):
+            derived[name] = block[:, j]
+    return derived
+
+
+def _ns(values) -> np.ndarray:
+    """Instants as integer nanoseconds, so that window arithmetic is exact."""
+    import pandas as pd
+
+    return np.asarray(pd.to_datetime(values), dtype="datetime64[ns]").astype(np.int64)
+
+
+def _derived_names(frame, columns: list, lags: list, rates: list) -> dict:
+    """The derived input names per signal, checked to be configured, distinct and present."""
     if not lags and not rates:
         raise ValueError(
             "no derived input configured: give at least one lag time constant or rate window"
         )
-    columns = [c for c in frame.columns if c != "time"] if columns is None else list(columns)
     names = {c: [lag_name(c, s) for s in lags] + [rate_name(c, s) for s in rates] for c in columns}
     flat = [n for c in columns for n in names[c]]
     if len(set(flat)) < len(flat):
@@ -497,9 +549,16 @@ def inputs_at_measurements(
         raise ValueError(
             f"temperature table: no column {absent[0]!r}; it has {', '.join(map(str, frame.columns))}"
         )
+    return names
 
-    def ns(values) -> np.ndarray:
-        return np.asarray(pd.to_datetime(values), dtype="datetime64[ns]").astype(np.int64)
+
+def _measurement_windows(measurements):
+    """Start and end (ns), labels and the carried columns of the measurement windows.
+
+    A DataFrame gives windows (``start``, ``end``, optionally ``measurement``); a
+    sequence of instants gives windows of no length.
+    """
+    import pandas as pd
 
     if isinstance(measurements, pd.DataFrame):
         for column in ("start", "end"):
@@ -507,7 +566,7 @@ def inputs_at_measurements(
                 raise ValueError(
                     f"measurement windows: missing column {column!r} (expected start, end)"
                 )
-        start, end = ns(measurements["start"]), ns(measurements["end"])
+        start, end = _ns(measurements["start"]), _ns(measurements["end"])
         labels = (
             [str(m) for m in measurements["measurement"]]
             if "measurement" in measurements.columns
@@ -518,7 +577,7 @@ def inputs_at_measurements(
         ]
         out = out.reset_index(drop=True).copy()
     else:
-        start = end = ns(list(measurements))
+        start = end = _ns(list(measurements))
         labels = [str(i) for i in range(start.size)]
         out = pd.DataFrame(index=range(start.size))
     if start.size == 0:
@@ -528,10 +587,13 @@ def inputs_at_measurements(
         raise ValueError(
             f"measurement {labels[i]}: its window ends before it starts; expected start <= end"
         )
-    # Half the window in integer nanoseconds: exact, no float rounding of the instant.
-    when = {"end": end, "start": start, "mid": start + (end - start) // 2}[at]
+    return start, end, labels, out
 
-    grid_ns = ns(frame["time"])
+
+def _check_within(grid_ns: np.ndarray, when: np.ndarray, labels: list) -> None:
+    """The grid strictly increasing and every evaluation instant within it."""
+    import pandas as pd
+
     if grid_ns.size == 0 or (np.diff(grid_ns) <= 0).any():
         raise ValueError("temperature table: 'time' must be non-empty and strictly increasing")
     outside = (when < grid_ns[0]) | (when > grid_ns[-1])
@@ -542,14 +604,11 @@ def inputs_at_measurements(
             f"({pd.Timestamp(grid_ns[0])} to {pd.Timestamp(grid_ns[-1])})"
         )
 
-    # Seconds since the run's start; float64 resolves nanoseconds over days.
-    grid = (grid_ns - grid_ns[0]) / 1e9
-    te = (when - grid_ns[0]) / 1e9
-    # Only the history up to the last measurement matters (up to the grid point at or
-    # after it, which the interpolation there needs); a gap after it is harmless.
-    last = int(np.searchsorted(grid, te.max(), side="left"))
-    grid = grid[: last + 1]
-    values = frame[columns].to_numpy(dtype=float)[: last + 1]
+
+def _check_history(columns, values, grid, grid_ns, te, when, labels) -> None:
+    """No NaN in the history a measurement's lags and rates depend on (every sample since the start)."""
+    import pandas as pd
+
     for j, column in enumerate(columns):
         holes = np.flatnonzero(np.isnan(values[:, j]))
         if holes.size:
@@ -562,18 +621,3 @@ def inputs_at_measurements(
                 f"lags and rates at measurement {labels[i]} ({pd.Timestamp(when[i])}) depend on every sample since "
                 f"the run's start ({pd.Timestamp(grid_ns[0])}); fill the gap or leave the signal out"
             )
-
-    # The evaluation instants joined to the grid, the signal interpolated linearly there:
-    # the filters are exact for a linear signal between samples, so the added points
-    # change nothing else, and the value at an instant between grid points is exact.
-    base = np.union1d(grid, te)
-    u = np.column_stack([np.interp(base, grid, values[:, j]) for j in range(len(columns))])
-    rows = np.searchsorted(base, te)
-    derived = {}
-    lagged = [lag_filter(base, u, tau)[rows] for tau in lags]
-    rated = [rate_of_change(base, u, w)[rows] for w in rates]
-    for j, column in enumerate(columns):
-        for name, block in zip(names[column], lagged + rated, strict=False):
-            derived[name] = block[:, j]
-    out["time"] = when.astype("datetime64[ns]")
-    return pd.concat([out, pd.DataFrame(derived, index=out.index)], axis=1)

@@ -247,18 +247,7 @@ def _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components)
     k = min(int(n_components), s)
     if algorithm == "pls" and (k < 1 or any(st[0] < k for st in stats)):
         raise ValueError(f"pls needs 1 <= n_components <= training rows, got {n_components}")
-    n_t = np.array([st[0] for st in stats], dtype=float)  # (F,)
-    mean = np.stack([st[1] for st in stats])  # (F, p + m)
-    S = np.stack([st[2] for st in stats])
-    variance = np.stack([st[3] for st in stats])
-    constant = is_constant(variance, mean, n_t[:, None])
-    scale = np.where(constant, 1.0, np.sqrt(variance))[:, :p]
-    # The standardised system of every sensor (Z'Z with Z = (x - mean) / scale, Z'y); a
-    # constant sensor's row and column are zero, a constant output's column too.
-    A = S[:, :p, :p] / (scale[:, :, None] * scale[:, None, :])
-    B = S[:, :p, p:] / scale[:, :, None]
-    A = np.where(constant[:, :p, None] | constant[:, None, :p], 0.0, A)
-    B = np.where(constant[:, :p, None] | constant[:, None, p:], 0.0, B)
+    n_t, mean, constant, scale, A, B = _standardised_systems(stats, p)
     # Every subset's block, gathered for all folds: (F, q, s, s) and (F, q, s, m).
     A = A[:, subsets[:, :, None], subsets[:, None, :]]
     B = B[:, subsets, :]
@@ -279,6 +268,27 @@ def _fit_folds(X, Y, train_rows, stats, subsets, algorithm, alpha, n_components)
         )
     intercept = level - np.einsum("fqs,fqsm->fqm", centre, slopes)
     return intercept, slopes, level, centre, refitted
+
+
+def _standardised_systems(stats, p: int):
+    """Each fold's standardised system of every sensor from its training statistics.
+
+    Returns the training row counts (F,), the means (F, p + m), which columns are
+    constant, the sensors' scales (F, p), and Z'Z (F, p, p) and Z'y (F, p, m).
+    """
+    n_t = np.array([st[0] for st in stats], dtype=float)  # (F,)
+    mean = np.stack([st[1] for st in stats])  # (F, p + m)
+    S = np.stack([st[2] for st in stats])
+    variance = np.stack([st[3] for st in stats])
+    constant = is_constant(variance, mean, n_t[:, None])
+    scale = np.where(constant, 1.0, np.sqrt(variance))[:, :p]
+    # The standardised system of every sensor (Z'Z with Z = (x - mean) / scale, Z'y); a
+    # constant sensor's row and column are zero, a constant output's column too.
+    A = S[:, :p, :p] / (scale[:, :, None] * scale[:, None, :])
+    B = S[:, :p, p:] / scale[:, :, None]
+    A = np.where(constant[:, :p, None] | constant[:, None, :p], 0.0, A)
+    B = np.where(constant[:, :p, None] | constant[:, None, p:], 0.0, B)
+    return n_t, mean, constant, scale, A, B
 
 
 def _normal_equations(A, B, fixed, n_t, alpha):

@@ -57,19 +57,10 @@ def _positions(t: ReproducedTables) -> np.ndarray:
 
 
 def _reproduce(row, t: ReproducedTables) -> tuple[float, str]:
+    # One helper per table of the paper: each reads its own reproduced table.
     table, q = row["table"], row["quantity"]
-    fold = t.paper_fold
     if table == "table1":
-        runs = t.runs.set_index("run")
-        if row["run"] not in runs.index:
-            return np.nan, "run not in dataset"
-        if q == "feed":
-            return float(runs.loc[row["run"], "feed_mm_min"]), ""
-        if q == "measurements":
-            return float(t.errors.loc[t.errors["run"] == row["run"], "measurement"].nunique()), ""
-        amb = t.ambient.set_index("run")
-        column = "ambient_min_c" if q == "ambient_min" else "ambient_max_c"
-        return float(amb.loc[row["run"], column]), "ambient sensor, first to last measurement"
+        return _table1(row, t)
     if table == "table5":
         kb = t.kb
         sel = kb[(kb["run"] == row["run"]) & (kb["measurement"] == int(row["measurement"]))]
@@ -77,70 +68,105 @@ def _reproduce(row, t: ReproducedTables) -> tuple[float, str]:
     if table in ("table4", "table7", "table8") or (
         table == "text" and q in ("residual_min", "residual_max")
     ):
-        target = row["target"]
-        value = _metric(t, row["approach"], row["algorithm"], target, q)
-        return value, f"fold {fold}"
+        value = _metric(t, row["approach"], row["algorithm"], row["target"], q)
+        return value, f"fold {t.paper_fold}"
     if table == "table3":
-        sp = t.sensitive_points
-        sel = sp[
-            (sp["fold"] == fold)
-            & (sp["target"] == "error")
-            & np.isclose(sp["position_mm"], float(row["position_mm"]))
-        ]
-        if len(sel) == 0:
-            return (
-                np.nan,
-                "position not selected by the workflow (fixed selection or missing position)",
-            )
-        return float(
-            ((sel["sensor"] == row["term"]) & sel["selected"]).any()
-        ), f"fold {fold}; 1 = also selected"
+        return _table3(row, t)
     if table == "table6":
-        sp = t.sensitive_points
-        sel = sp[
-            (sp["fold"] == fold) & (sp["target"] == row["target"]) & (sp["sensor"] == row["term"])
-        ]
-        if len(sel) == 0:
-            return np.nan, "sensor not in the workflow's selection table"
-        if q == "sensitive_point":
-            return float(bool(sel["selected"].iloc[0])), f"fold {fold}; 1 = also selected"
-        return float(
-            sel["cluster"].iloc[0]
-        ), f"fold {fold}; clusters numbered by their first sensor"
+        return _table6(row, t)
     if table in ("eq8", "eq9"):
-        c = t.coefficients
-        approach = "pointwise" if table == "eq8" else "decoupled"
-        sel = c[
-            (c["fold"] == fold)
-            & (c["approach"] == approach)
-            & (c["algorithm"] == "mlr")
-            & (c["target"] == row["target"])
-            & (c["term"] == row["term"])
-        ]
-        if table == "eq8":
-            sel = sel[np.isclose(sel["position_mm"], float(row["position_mm"]))]
-        if len(sel) == 0:
-            return np.nan, "term not in the reproduced model (other sensitive points)"
-        return _one(sel, "value"), f"fold {fold}"
+        return _equation(row, t)
     if table == "text":
-        if q == "max_abs_residual":
-            e = t.error_predictions
-            sel = e[
-                (e["fold"] == fold)
-                & (e["approach"] == row["approach"])
-                & (e["algorithm"] == row["algorithm"])
-                & np.isclose(e["position_mm"], float(row["position_mm"]))
-            ]
-            return (float(sel["residual"].abs().max()) if len(sel) else np.nan), f"fold {fold}"
-        if q == "max_abs_error":
-            e = t.errors[t.errors["run"] == row["run"]]
-            return (float(e["error_um"].abs().max()) if len(e) else np.nan), ""
-        if q == "max_error_from_k_residual":
-            positions = _positions(t)
-            stroke_m = (positions[-1] - positions[0]) / 1000.0
-            return _metric(
-                t, "decoupled", "mlr", "k", "max_abs"
-            ) * stroke_m, f"fold {fold}; max |k residual| x stroke"
+        return _text(row, t)
+    return np.nan, "not reproduced"
+
+
+def _table1(row, t: ReproducedTables) -> tuple[float, str]:
+    """Table 1: a run's feed, measurement count and ambient range."""
+    q = row["quantity"]
+    runs = t.runs.set_index("run")
+    if row["run"] not in runs.index:
+        return np.nan, "run not in dataset"
+    if q == "feed":
+        return float(runs.loc[row["run"], "feed_mm_min"]), ""
+    if q == "measurements":
+        return float(t.errors.loc[t.errors["run"] == row["run"], "measurement"].nunique()), ""
+    amb = t.ambient.set_index("run")
+    column = "ambient_min_c" if q == "ambient_min" else "ambient_max_c"
+    return float(amb.loc[row["run"], column]), "ambient sensor, first to last measurement"
+
+
+def _table3(row, t: ReproducedTables) -> tuple[float, str]:
+    """Table 3: whether the paper's sensitive point at a position is also selected."""
+    fold = t.paper_fold
+    sp = t.sensitive_points
+    sel = sp[
+        (sp["fold"] == fold)
+        & (sp["target"] == "error")
+        & np.isclose(sp["position_mm"], float(row["position_mm"]))
+    ]
+    if len(sel) == 0:
+        return (
+            np.nan,
+            "position not selected by the workflow (fixed selection or missing position)",
+        )
+    return float(
+        ((sel["sensor"] == row["term"]) & sel["selected"]).any()
+    ), f"fold {fold}; 1 = also selected"
+
+
+def _table6(row, t: ReproducedTables) -> tuple[float, str]:
+    """Table 6: a sensor's cluster and whether it is a sensitive point for k or b."""
+    q, fold = row["quantity"], t.paper_fold
+    sp = t.sensitive_points
+    sel = sp[(sp["fold"] == fold) & (sp["target"] == row["target"]) & (sp["sensor"] == row["term"])]
+    if len(sel) == 0:
+        return np.nan, "sensor not in the workflow's selection table"
+    if q == "sensitive_point":
+        return float(bool(sel["selected"].iloc[0])), f"fold {fold}; 1 = also selected"
+    return float(sel["cluster"].iloc[0]), f"fold {fold}; clusters numbered by their first sensor"
+
+
+def _equation(row, t: ReproducedTables) -> tuple[float, str]:
+    """Equations 8 (point by point) and 9 (decoupled): a coefficient of the MLR model."""
+    table, fold = row["table"], t.paper_fold
+    c = t.coefficients
+    approach = "pointwise" if table == "eq8" else "decoupled"
+    sel = c[
+        (c["fold"] == fold)
+        & (c["approach"] == approach)
+        & (c["algorithm"] == "mlr")
+        & (c["target"] == row["target"])
+        & (c["term"] == row["term"])
+    ]
+    if table == "eq8":
+        sel = sel[np.isclose(sel["position_mm"], float(row["position_mm"]))]
+    if len(sel) == 0:
+        return np.nan, "term not in the reproduced model (other sensitive points)"
+    return _one(sel, "value"), f"fold {fold}"
+
+
+def _text(row, t: ReproducedTables) -> tuple[float, str]:
+    """The figures quoted in the paper's text: maximum residuals and errors."""
+    q, fold = row["quantity"], t.paper_fold
+    if q == "max_abs_residual":
+        e = t.error_predictions
+        sel = e[
+            (e["fold"] == fold)
+            & (e["approach"] == row["approach"])
+            & (e["algorithm"] == row["algorithm"])
+            & np.isclose(e["position_mm"], float(row["position_mm"]))
+        ]
+        return (float(sel["residual"].abs().max()) if len(sel) else np.nan), f"fold {fold}"
+    if q == "max_abs_error":
+        e = t.errors[t.errors["run"] == row["run"]]
+        return (float(e["error_um"].abs().max()) if len(e) else np.nan), ""
+    if q == "max_error_from_k_residual":
+        positions = _positions(t)
+        stroke_m = (positions[-1] - positions[0]) / 1000.0
+        return _metric(
+            t, "decoupled", "mlr", "k", "max_abs"
+        ) * stroke_m, f"fold {fold}; max |k residual| x stroke"
     return np.nan, "not reproduced"
 
 

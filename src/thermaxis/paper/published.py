@@ -423,6 +423,11 @@ def published_values(paper_dir: str | Path | None = None) -> pd.DataFrame:
         raise ValueError(
             f"published values: item keys must be unique, repeated: {sorted(set(duplicated))}"
         )
+    return _typed(out)
+
+
+def _typed(out: pd.DataFrame) -> pd.DataFrame:
+    """Whole numbers as nullable integers, labels as text, whatever rows gave them."""
     for col in ("measurement", "position_mm"):
         out[col] = out[col].astype("Int64")
     for col in (

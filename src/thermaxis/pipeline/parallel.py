@@ -71,66 +71,81 @@ def map_folds(function: Callable, items: Sequence, workers: int) -> list:
         return [function(item) for item in items]
     from joblib.externals.loky import get_reusable_executor
 
-    pending = deque(range(len(items)))
-    settled = threading.Condition()
-    running = 0  # folds taken and not finished
-    done: dict[int, tuple] = {}
-    failed: dict[int, BaseException] = {}
+    folds = _Folds(function, items)
+    executor = get_reusable_executor(max_workers=workers - 1)
+    for _ in range(workers - 1):
+        threading.Thread(target=folds.serve, args=(executor,), daemon=True).start()
+    try:
+        while (i := folds.take(from_back=False)) is not None:
+            folds.run(i)
+        with folds.settled:
+            folds.settled.wait_for(lambda: folds.running == 0)
+    finally:
+        # A worker still importing the library is not waited for.
+        executor.shutdown(wait=False, kill_workers=True)
+    return folds.values()
 
-    def take(from_back: bool) -> int | None:
-        nonlocal running
+
+class _Folds:
+    """The folds of one :func:`map_folds` call, taken from the front by the job's own
+    process and from the back by the threads serving the workers.
+
+    One condition guards the queue and the outcomes, which every thread reads.
+    """
+
+    def __init__(self, function: Callable, items: Sequence) -> None:
+        self.function, self.items = function, items
+        self.pending = deque(range(len(items)))
+        self.settled = threading.Condition()
+        self.running = 0  # folds taken and not finished
+        self.done: dict[int, tuple] = {}
+        self.failed: dict[int, BaseException] = {}
+
+    def take(self, from_back: bool) -> int | None:
         # After a failure only the folds before it still run, so the error raised is the
         # one a single process would have raised.
-        with settled:
+        with self.settled:
+            pending, failed = self.pending, self.failed
             if not pending or (failed and pending[-1 if from_back else 0] > min(failed)):
                 return None
-            running += 1
+            self.running += 1
             return pending.pop() if from_back else pending.popleft()
 
-    def run(i: int, executor=None) -> None:
-        nonlocal running
-        outcome, value = done, None
+    def run(self, i: int, executor=None) -> None:
+        outcome, value = self.done, None
         try:
             if executor is None:
-                value = _recorded(function, items[i])
+                value = _recorded(self.function, self.items[i])
             else:
-                value = executor.submit(_recorded, function, items[i]).result()
+                value = executor.submit(_recorded, self.function, self.items[i]).result()
         except BaseException as exc:  # raised below, in the job's own process
-            outcome, value = failed, exc
+            outcome, value = self.failed, exc
         finally:
             # Under the lock: take() reads `failed` from the other threads.
-            with settled:
+            with self.settled:
                 outcome[i] = value
-                running -= 1
-                settled.notify_all()
+                self.running -= 1
+                self.settled.notify_all()
 
-    def serve(executor) -> None:
+    def serve(self, executor) -> None:
         # A fold handed to a worker that is still starting would wait there while the
         # job's process could have done it: a worker is handed folds once it is ready.
-        # A worker that cannot start (or is stopped below) leaves its folds to this process.
+        # A worker that cannot start (or is stopped by map_folds) leaves its folds to this process.
+        function = self.function
         try:
             executor.submit(_import, getattr(function, "func", function).__module__).result()
         except BaseException:
             return
-        while (i := take(from_back=True)) is not None:
-            run(i, executor)
+        while (i := self.take(from_back=True)) is not None:
+            self.run(i, executor)
 
-    executor = get_reusable_executor(max_workers=workers - 1)
-    for _ in range(workers - 1):
-        threading.Thread(target=serve, args=(executor,), daemon=True).start()
-    try:
-        while (i := take(from_back=False)) is not None:
-            run(i)
-        with settled:
-            settled.wait_for(lambda: running == 0)
-    finally:
-        # A worker still importing the library is not waited for.
-        executor.shutdown(wait=False, kill_workers=True)
-    if failed:
-        raise failed[min(failed)]
-    values = []
-    for i in range(len(items)):
-        value, raised = done[i]
-        raise_again(raised)
-        values.append(value)
-    return values
+    def values(self) -> list:
+        """The folds' values in order, or the first failing fold's exception."""
+        if self.failed:
+            raise self.failed[min(self.failed)]
+        values = []
+        for i in range(len(self.items)):
+            value, raised = self.done[i]
+            raise_again(raised)
+            values.append(value)
+        return values

@@ -157,47 +157,57 @@ def summarise(
     if statistics is None:
         statistics = StatisticsSettings.from_section(validate_config({})["statistics"])
 
-    def interval(values) -> tuple[float, float]:
-        return fold_mean_interval(values, statistics.level, statistics.n_resamples, statistics.seed)
-
-    rows = []
-    for name in sorted(metrics):
-        errors = metrics[name][metrics[name]["target"] == "error"]
-        if errors.empty:
-            raise DataError(
-                f"dataset {name}: metrics hold no row with target 'error'; expected held-out error curves"
-            )
-        for approach in _order(errors["approach"], _APPROACH_ORDER):
-            for algorithm in _order(
-                errors.loc[errors["approach"] == approach, "algorithm"], _ALGORITHM_ORDER
-            ):
-                group = errors[
-                    (errors["approach"] == approach) & (errors["algorithm"] == algorithm)
-                ]
-                rmse_lo, rmse_hi = interval(group["rmse"])
-                max_lo, max_hi = interval(group["max_abs"])
-                rows.append(
-                    {
-                        "dataset": name,
-                        "data": kinds[name],
-                        "approach": approach,
-                        "algorithm": algorithm,
-                        "n_folds": int(group["fold"].nunique()),
-                        "mean_rmse_um": float(group["rmse"].mean()),
-                        "mean_rmse_um_lo": rmse_lo,
-                        "mean_rmse_um_hi": rmse_hi,
-                        "mean_max_abs_um": float(group["max_abs"].mean()),
-                        "mean_max_abs_um_lo": max_lo,
-                        "mean_max_abs_um_hi": max_hi,
-                        "worst_max_abs_um": float(group["max_abs"].max()),
-                    }
-                )
+    rows = [
+        row
+        for name in sorted(metrics)
+        for row in _dataset_rows(name, metrics[name], kinds[name], statistics)
+    ]
     if not rows:
         raise DataError(
             f"no dataset results could be read; expected results/<dataset>/{paths.METRICS} "
             "for the datasets of config datasets"
         )
     return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
+
+
+def _dataset_rows(
+    name: str, metrics: pd.DataFrame, kind: str, statistics: StatisticsSettings
+) -> list[dict]:
+    """One dataset's summary rows, approach and algorithm in the paper's order."""
+
+    def interval(values) -> tuple[float, float]:
+        return fold_mean_interval(values, statistics.level, statistics.n_resamples, statistics.seed)
+
+    rows = []
+    errors = metrics[metrics["target"] == "error"]
+    if errors.empty:
+        raise DataError(
+            f"dataset {name}: metrics hold no row with target 'error'; expected held-out error curves"
+        )
+    for approach in _order(errors["approach"], _APPROACH_ORDER):
+        for algorithm in _order(
+            errors.loc[errors["approach"] == approach, "algorithm"], _ALGORITHM_ORDER
+        ):
+            group = errors[(errors["approach"] == approach) & (errors["algorithm"] == algorithm)]
+            rmse_lo, rmse_hi = interval(group["rmse"])
+            max_lo, max_hi = interval(group["max_abs"])
+            rows.append(
+                {
+                    "dataset": name,
+                    "data": kind,
+                    "approach": approach,
+                    "algorithm": algorithm,
+                    "n_folds": int(group["fold"].nunique()),
+                    "mean_rmse_um": float(group["rmse"].mean()),
+                    "mean_rmse_um_lo": rmse_lo,
+                    "mean_rmse_um_hi": rmse_hi,
+                    "mean_max_abs_um": float(group["max_abs"].mean()),
+                    "mean_max_abs_um_lo": max_lo,
+                    "mean_max_abs_um_hi": max_hi,
+                    "worst_max_abs_um": float(group["max_abs"].max()),
+                }
+            )
+    return rows
 
 
 def model_ranking(metrics: pd.DataFrame) -> pd.DataFrame:

@@ -416,19 +416,7 @@ def render_results_index(
     parts += [
         '<section id="answer"><h2>Lowest error of the paper\'s grid per dataset</h2><ul>',
     ]
-    for name, rows in summary.groupby("dataset", sort=True):
-        best = rows.sort_values(["mean_rmse_um", "mean_max_abs_um"], kind="stable").iloc[0]
-        link = pages.get(name)
-        title = (
-            f'<a href="{html.escape(link, quote=True)}">{html.escape(name)}</a>'
-            if link
-            else html.escape(name)
-        )
-        parts.append(
-            f"<li>{title} ({html.escape(str(best['data']).upper())}): the paper's grid's lowest, the "
-            f"{html.escape(model_name(best['approach'], best['algorithm']))}, leaves a mean RMSE of {best['mean_rmse_um']:.2f} µm "
-            f"over {int(best['n_folds'])} held-out runs.</li>"
-        )
+    parts += _lowest_per_dataset(summary, pages)
     parts.append("</ul></section>")
     if figure:
         parts.append(
@@ -445,3 +433,22 @@ def render_results_index(
         "</body></html>",
     ]
     return "\n".join(parts) + "\n"
+
+
+def _lowest_per_dataset(summary: pd.DataFrame, pages: dict[str, str]) -> list[str]:
+    """Per dataset, linked to its page, the model of the paper's grid with the lowest mean RMSE."""
+    parts = []
+    for name, rows in summary.groupby("dataset", sort=True):
+        best = rows.sort_values(["mean_rmse_um", "mean_max_abs_um"], kind="stable").iloc[0]
+        link = pages.get(name)
+        title = (
+            f'<a href="{html.escape(link, quote=True)}">{html.escape(name)}</a>'
+            if link
+            else html.escape(name)
+        )
+        parts.append(
+            f"<li>{title} ({html.escape(str(best['data']).upper())}): the paper's grid's lowest, the "
+            f"{html.escape(model_name(best['approach'], best['algorithm']))}, leaves a mean RMSE of {best['mean_rmse_um']:.2f} µm "
+            f"over {int(best['n_folds'])} held-out runs.</li>"
+        )
+    return parts

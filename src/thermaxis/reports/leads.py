@@ -92,26 +92,31 @@ def model_lead(
                 f"{how_much_more(worst[2], best[2])} the {model_name(best[0], best[1])}'s {best[2]:.1f} µm "
                 f"(RMSE {best[3]:.2f} µm)."
             )
-    if not compensation.empty:
-        before = float(compensation["largest_abs_uncompensated_um"].max())
-        after = float(compensation["largest_abs_compensated_um"].max())
-        effect = (
-            "better"
-            if after < before
-            else "worse"
-            if after > before
-            else "neither better nor worse"
-        )
-        sentences.append(
-            f"Compensating with the {model_name(*compensating)} takes the largest |deviation| of {fold} "
-            f"from {before:.1f} µm to {after:.1f} µm: it makes {fold} {effect}."
-        )
-        held = int((compensation["status"] != "ok").sum())
-        if held:
-            sentences.append(
-                f"The fallback policy acted at {held} of {len(compensation)} measurements."
-            )
+    sentences += _compensation_sentences(compensation, fold, compensating)
     return " ".join(sentences)
+
+
+def _compensation_sentences(
+    compensation: pd.DataFrame, fold: str, compensating: tuple[str, str]
+) -> list[str]:
+    """What compensating did to the held-out run's largest deviation, and the fallbacks."""
+    if compensation.empty:
+        return []
+    before = float(compensation["largest_abs_uncompensated_um"].max())
+    after = float(compensation["largest_abs_compensated_um"].max())
+    effect = (
+        "better" if after < before else "worse" if after > before else "neither better nor worse"
+    )
+    sentences = [
+        f"Compensating with the {model_name(*compensating)} takes the largest |deviation| of {fold} "
+        f"from {before:.1f} µm to {after:.1f} µm: it makes {fold} {effect}."
+    ]
+    held = int((compensation["status"] != "ok").sum())
+    if held:
+        sentences.append(
+            f"The fallback policy acted at {held} of {len(compensation)} measurements."
+        )
+    return sentences
 
 
 def condition_lead(

@@ -287,6 +287,44 @@ def json_argument(value: str, stdin=None):
 
 
 def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "run":
+            execute(
+                args.notebook,
+                args.executed,
+                args.html,
+                args.title,
+                json_argument(args.parameters),
+                kernel=args.kernel,
+                start_timeout=args.start_timeout,
+                execution_timeout=args.execution_timeout,
+            )
+        elif args.command == "run-pages":
+            execute_pages(
+                args.notebook,
+                json_argument(args.pages),
+                kernel=args.kernel,
+                start_timeout=args.start_timeout,
+                execution_timeout=args.execution_timeout,
+            )
+        else:
+            convert(args.notebook, args.html, args.title)
+    except (OSError, ValueError) as exc:
+        print(f"thermaxis error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # papermill's execution error: the traceback of the failing cell
+        print(exc, file=sys.stderr)
+        print(
+            f"thermaxis error: {args.notebook}: {type(exc).__name__} while executing the notebook",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def _parser() -> argparse.ArgumentParser:
+    """The subcommands run, run-pages and html, as the workflow's rules call them."""
     parser = argparse.ArgumentParser(
         prog="python -m thermaxis.reports.notebooks", description=__doc__.splitlines()[0]
     )
@@ -321,40 +359,7 @@ def main(argv=None) -> int:
     to_html.add_argument("notebook")
     to_html.add_argument("html")
     to_html.add_argument("--title", required=True)
-    args = parser.parse_args(argv)
-    try:
-        if args.command == "run":
-            execute(
-                args.notebook,
-                args.executed,
-                args.html,
-                args.title,
-                json_argument(args.parameters),
-                kernel=args.kernel,
-                start_timeout=args.start_timeout,
-                execution_timeout=args.execution_timeout,
-            )
-        elif args.command == "run-pages":
-            execute_pages(
-                args.notebook,
-                json_argument(args.pages),
-                kernel=args.kernel,
-                start_timeout=args.start_timeout,
-                execution_timeout=args.execution_timeout,
-            )
-        else:
-            convert(args.notebook, args.html, args.title)
-    except (OSError, ValueError) as exc:
-        print(f"thermaxis error: {str(exc).splitlines()[0]}", file=sys.stderr)
-        return 1
-    except Exception as exc:  # papermill's execution error: the traceback of the failing cell
-        print(exc, file=sys.stderr)
-        print(
-            f"thermaxis error: {args.notebook}: {type(exc).__name__} while executing the notebook",
-            file=sys.stderr,
-        )
-        return 1
-    return 0
+    return parser
 
 
 if __name__ == "__main__":

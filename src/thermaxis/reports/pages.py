@@ -301,28 +301,7 @@ class Pages:
     def index_sections(self) -> list:
         """What the index links, in order: (title, intro, rows of (label, [(text, path)]))."""
         plan, suffix = self.plan, targets.suffix
-        reports = []
-        if plan.paper:
-            reports.append(
-                (
-                    "The paper, figure by figure and table by table",
-                    [("paper report", self.out(paths.PAPER_REPORT, ext="html"))],
-                )
-            )
-        reports.append(
-            (
-                "Dataset: runs, sensors, cleaning",
-                [("dataset report", self.out(paths.DATASET_REPORT, ext="html"))],
-            )
-        )
-        if plan.combined_conditions:
-            reports.append(
-                (
-                    f"All {len(plan.runs)} runs",
-                    [("conditions report", self.out(paths.CONDITIONS_REPORT, ext="html"))],
-                )
-            )
-        reports += [(f"Run {run}", self.condition_links(run)) for run in plan.runs]
+        reports = self.report_rows()
         models = [
             (f"Fold {fold} (held-out run)", [("model report", path)])
             for fold, path in zip(plan.folds, targets.model_reports(plan, self.root), strict=False)
@@ -363,6 +342,33 @@ class Pages:
                 list(compensation.items()),
             ),
         ]
+
+    def report_rows(self) -> list:
+        """The dataset's reports: the paper's, the dataset's, the conditions' and each run's."""
+        plan = self.plan
+        reports = []
+        if plan.paper:
+            reports.append(
+                (
+                    "The paper, figure by figure and table by table",
+                    [("paper report", self.out(paths.PAPER_REPORT, ext="html"))],
+                )
+            )
+        reports.append(
+            (
+                "Dataset: runs, sensors, cleaning",
+                [("dataset report", self.out(paths.DATASET_REPORT, ext="html"))],
+            )
+        )
+        if plan.combined_conditions:
+            reports.append(
+                (
+                    f"All {len(plan.runs)} runs",
+                    [("conditions report", self.out(paths.CONDITIONS_REPORT, ext="html"))],
+                )
+            )
+        reports += [(f"Run {run}", self.condition_links(run)) for run in plan.runs]
+        return reports
 
     def index_figures(self) -> list:
         """The index's thumbnails by stage: (stage, [(stem, caption, thumbnail, [(ext, path)])])."""

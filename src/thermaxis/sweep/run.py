@@ -304,22 +304,38 @@ def run_batch(
         selections = _unit_selections(X, Y, unit, grid, base_selection, decoupled, relative)
         for config in grid.unit_configurations(unit.selection, decoupled):
             selection = selections[config.degree]
-            if isinstance(selection, str):
-                planned.append((config, unit.fold, (), None, selection))
-            else:
-                inputs = _model_inputs_of(selection, config.approach)
-                key = (unit.fold, config.approach, config.algorithm, config.degree, inputs)
-                planned.append((config, unit.fold, inputs, key, None))
-                new = key not in done and key not in deferred
-                if new and batched[config.algorithm]:
-                    deferred[key] = (config, selection)
-                elif new:
-                    started = time.perf_counter()
-                    done[key] = _evaluate(X, Y, unit.fold, config, selection, model)
-                    seconds[key] = time.perf_counter() - started
+            planned.append(_planned(config, unit.fold, selection))
+            key = planned[-1][3]
+            # Each fit is made once: a key seen again (same fold, model and inputs) is reused.
+            new = key is not None and key not in done and key not in deferred
+            if new and batched[config.algorithm]:
+                deferred[key] = (config, selection)
+            elif new:
+                started = time.perf_counter()
+                done[key] = _evaluate(X, Y, unit.fold, config, selection, model)
+                seconds[key] = time.perf_counter() - started
             if progress is not None:
                 progress.update()
     done.update(_evaluate_batched(X, Y, deferred, model))
+    return _as_summary_frame(_planned_rows(planned, done, deferred, seconds))
+
+
+def _planned(config, fold: str, selection) -> tuple:
+    """(config, fold, inputs, key of its fit, failure): a selection that failed has no fit."""
+    if isinstance(selection, str):
+        return (config, fold, (), None, selection)
+    inputs = _model_inputs_of(selection, config.approach)
+    return (
+        config,
+        fold,
+        inputs,
+        (fold, config.approach, config.algorithm, config.degree, inputs),
+        None,
+    )
+
+
+def _planned_rows(planned: list[tuple], done: dict, deferred: dict, seconds: dict) -> list[dict]:
+    """The summary rows in the planned order, each saying how its fit was made."""
     rows: list[dict] = []
     seen: set[tuple] = set()
     for config, fold, inputs, key, failure in planned:
@@ -329,7 +345,7 @@ def run_batch(
         how = "reused" if key in seen else "batched" if key in deferred else "fitted"
         rows += _config_rows(config, fold, inputs, done[key], how, seconds.get(key, 0.0))
         seen.add(key)
-    return _as_summary_frame(rows)
+    return rows
 
 
 def _as_summary_frame(rows: list[dict]) -> pd.DataFrame:

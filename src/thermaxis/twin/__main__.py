@@ -70,78 +70,95 @@ def _resume_point(path: Path) -> tuple[mdl.TwinParams, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # One function per subcommand; each returns the exit status.
     args = _parser().parse_args(argv)
     if args.command == "generate":
         from .generate import generate_dataset
 
         generate_dataset(args.out, args.truth)
-    elif args.command == "calibrate":
-        from .calibration import calibrate
-        from .generate import generate_dataset
-        from .stages import resume_index
+        return 0
+    if args.command == "calibrate":
+        return _calibrate(args)
+    if args.command == "conflicts":
+        return _conflicts(args)
+    return _scale(args)
 
-        try:
-            resume = _resume_point(args.resume) if args.resume else None
-            if resume is not None:
-                resume_index(resume[1])
-        except (OSError, ValueError) as exc:
-            print(f"error: {args.resume}: {exc}", file=sys.stderr)
-            return 2
-        result = calibrate(resume=resume)
-        start = (
-            f"resumed after stage {resume[1]!r} from {args.resume.name} "
-            f"(sha256 {_sha256(args.resume)})"
-            if resume
-            else "start at the priors"
-        )
-        summary = {
-            "method": f"scipy.optimize.least_squares on the noise-free model, {start}, "
-            "staged (thermaxis.twin.stages.STAGES), then the compass search on the workflow's "
-            "faithfulness table (thermaxis.twin.polish)",
-            **{f"rms_{name}": round(value, 4) for name, value in result.rms.items()},
-            **{name: round(value, 4) for name, value in result.summary.items()},
-            "evaluations": result.evaluations,
-            # A resumed leg's record goes on from the one it resumed.
-            "stages": (_recorded_stages(args.resume) if resume else [])
-            + [
-                {key: value for key, value in stage.items() if key != "seconds"}
-                for stage in result.stages
-            ],
-        }
-        mdl.save_params(result.params, args.params, summary)
-        generate_dataset(args.out, args.truth, args.params)
-        figures = ", ".join(f"{name} {value:.3f}" for name, value in result.rms.items())
-        seconds = ", ".join(f"{s['name']} {s['seconds']:.0f} s" for s in result.stages)
-        print(
-            f"calibrated (noise-free RMS): {figures}; stages: {seconds}; "
-            f"wrote {args.params} and regenerated {args.out}"
-        )
-    elif args.command == "conflicts":
-        from .calibration import pipeline_observables
-        from .conflicts import conflicts, conflicts_markdown
 
-        experiments = conflicts(
-            pipeline_observables, progress=lambda line: print(line, file=sys.stderr)
-        )
-        args.out.write_text(conflicts_markdown(experiments), encoding="utf-8")
-        print(f"wrote {args.out}")
-    else:
-        from .scale import ScaleSpec, generate_scale
+def _calibrate(args) -> int:
+    """Calibrate the twin's parameters, save them with the record of the stages, regenerate."""
+    from .calibration import calibrate
+    from .generate import generate_dataset
+    from .stages import resume_index
 
-        spec = ScaleSpec(
-            args.runs,
-            args.sensors,
-            args.positions,
-            args.hours,
-            args.rate_hz,
-            args.seed,
-            60.0 * args.measurement_min,
-        )
-        try:
-            generate_scale(args.out, spec)
-        except ValueError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
+    try:
+        resume = _resume_point(args.resume) if args.resume else None
+        if resume is not None:
+            resume_index(resume[1])
+    except (OSError, ValueError) as exc:
+        print(f"error: {args.resume}: {exc}", file=sys.stderr)
+        return 2
+    result = calibrate(resume=resume)
+    start = (
+        f"resumed after stage {resume[1]!r} from {args.resume.name} (sha256 {_sha256(args.resume)})"
+        if resume
+        else "start at the priors"
+    )
+    summary = {
+        "method": f"scipy.optimize.least_squares on the noise-free model, {start}, "
+        "staged (thermaxis.twin.stages.STAGES), then the compass search on the workflow's "
+        "faithfulness table (thermaxis.twin.polish)",
+        **{f"rms_{name}": round(value, 4) for name, value in result.rms.items()},
+        **{name: round(value, 4) for name, value in result.summary.items()},
+        "evaluations": result.evaluations,
+        # A resumed leg's record goes on from the one it resumed.
+        "stages": (_recorded_stages(args.resume) if resume else [])
+        + [
+            {key: value for key, value in stage.items() if key != "seconds"}
+            for stage in result.stages
+        ],
+    }
+    mdl.save_params(result.params, args.params, summary)
+    generate_dataset(args.out, args.truth, args.params)
+    figures = ", ".join(f"{name} {value:.3f}" for name, value in result.rms.items())
+    seconds = ", ".join(f"{s['name']} {s['seconds']:.0f} s" for s in result.stages)
+    print(
+        f"calibrated (noise-free RMS): {figures}; stages: {seconds}; "
+        f"wrote {args.params} and regenerated {args.out}"
+    )
+    return 0
+
+
+def _conflicts(args) -> int:
+    """The experiments on the conflicts between the calibration targets, as markdown."""
+    from .calibration import pipeline_observables
+    from .conflicts import conflicts, conflicts_markdown
+
+    experiments = conflicts(
+        pipeline_observables, progress=lambda line: print(line, file=sys.stderr)
+    )
+    args.out.write_text(conflicts_markdown(experiments), encoding="utf-8")
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _scale(args) -> int:
+    """A large simulated benchmark dataset of the size asked (not committed)."""
+    from .scale import ScaleSpec, generate_scale
+
+    spec = ScaleSpec(
+        args.runs,
+        args.sensors,
+        args.positions,
+        args.hours,
+        args.rate_hz,
+        args.seed,
+        60.0 * args.measurement_min,
+    )
+    try:
+        generate_scale(args.out, spec)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     return 0
 
 

@@ -96,11 +96,10 @@ def polish(
             tables = pool.map(evaluate, trial) if pool else list(map(evaluate, trial))
             evaluations += len(trial)
             sweeps += 1
-            keys = [rank(t, repaired) for t in tables]
-            best = min(range(len(keys)), key=keys.__getitem__)
-            if keys[best] < current:
+            best, key = _best_candidate(tables, repaired)
+            if key < current:
                 i, sign, x = candidates[best]
-                current = keys[best]
+                current = key
                 moves.append(f"{mdl.parameter_names(runs)[i]} {sign * steps[0]:+g} of its range")
             else:
                 steps.pop(0)
@@ -116,3 +115,10 @@ def polish(
         seconds=round(time.perf_counter() - start, 1),
     )
     return mdl.TwinParams.from_vector(x, runs), record
+
+
+def _best_candidate(tables: list[pd.DataFrame], repaired: frozenset) -> tuple[int, tuple]:
+    """The candidate whose faithfulness table ranks first, and its rank; ties to the first."""
+    keys = [rank(t, repaired) for t in tables]
+    best = min(range(len(keys)), key=keys.__getitem__)
+    return best, keys[best]

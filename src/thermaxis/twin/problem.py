@@ -396,37 +396,10 @@ def result_residuals(
     """
     data = fold_data(runs, targets.fold)
     col = {s: i for i, s in enumerate(data.sensors)}
-    out, summary = {}, {}
-    classes_residuals, points_residuals, options = [], [], {}
-    for name, values, target, classes, points, threshold in (
-        ("k", data.absolute, data.k, targets.k_classes, targets.k_points, eta[0]),
-        ("b", data.relative, data.b, targets.b_classes, targets.b_points, eta[1]),
-    ):
-        residuals, option, margin = partition_margins(
-            values, data.sensors, classes, threshold, PARTITION_DELTA
-        )
-        classes_residuals.append(residuals)
-        options[name] = option
-        gap, wins = point_margins(
-            grades(target, values), option, [col[p] for p in points], POINT_DELTA
-        )
-        points_residuals.append(gap)
-        summary[f"{name}_partition_margin"] = margin
-        summary[f"{name}_points"] = wins
-    out["table6_classes"] = np.concatenate(classes_residuals)
-    out["table6_points"] = np.concatenate(points_residuals)
+    options, out, summary = _table6_residuals(data, targets, eta, col)
     # Table 3 is selected within the b partition (same relative temperatures).
-    b_option = options["b"]
-    table3, hits, chosen, total = [], 0, [], np.zeros(len(data.sensors))
-    for j, x in enumerate(data.positions_mm):
-        g = grades(data.curves[:, j], data.relative)
-        aimed = [col[p] for p in targets.switch_targets[float(x)]]
-        table3.append(point_margins(g, b_option, aimed, TABLE3_DELTA)[0])
-        winners = [data.sensors[int(max(members, key=lambda m: g[m]))] for members in b_option]
-        hits += sum(p in winners for p in targets.per_position[float(x)])
-        chosen.append(winners)
-        total += g
-    out["table3_points"] = np.concatenate(table3)
+    chosen, total, table3, hits = _table3_residuals(data, targets, options["b"], col)
+    out["table3_points"] = table3
     summary["table3_hits"] = hits
     # The point-by-point inputs as the pipeline picks them from these selections.
     pointwise = common_points(
@@ -453,6 +426,46 @@ def result_residuals(
         ]
     )
     return out, summary
+
+
+def _table6_residuals(data, targets: ResultTargets, eta, col: dict) -> tuple[dict, dict, dict]:
+    """Table 6: each target's partition option, the residuals of the k and b partitions
+    and sensitive points, and their summary."""
+    out, summary = {}, {}
+    classes_residuals, points_residuals, options = [], [], {}
+    for name, values, target, classes, points, threshold in (
+        ("k", data.absolute, data.k, targets.k_classes, targets.k_points, eta[0]),
+        ("b", data.relative, data.b, targets.b_classes, targets.b_points, eta[1]),
+    ):
+        residuals, option, margin = partition_margins(
+            values, data.sensors, classes, threshold, PARTITION_DELTA
+        )
+        classes_residuals.append(residuals)
+        options[name] = option
+        gap, wins = point_margins(
+            grades(target, values), option, [col[p] for p in points], POINT_DELTA
+        )
+        points_residuals.append(gap)
+        summary[f"{name}_partition_margin"] = margin
+        summary[f"{name}_points"] = wins
+    out["table6_classes"] = np.concatenate(classes_residuals)
+    out["table6_points"] = np.concatenate(points_residuals)
+    return options, out, summary
+
+
+def _table3_residuals(data, targets: ResultTargets, b_option, col: dict):
+    """Table 3: the winners per position, the summed grades, the margins of the
+    point-by-point sensitive points and how many the b partition's winners hit."""
+    table3, hits, chosen, total = [], 0, [], np.zeros(len(data.sensors))
+    for j, x in enumerate(data.positions_mm):
+        g = grades(data.curves[:, j], data.relative)
+        aimed = [col[p] for p in targets.switch_targets[float(x)]]
+        table3.append(point_margins(g, b_option, aimed, TABLE3_DELTA)[0])
+        winners = [data.sensors[int(max(members, key=lambda m: g[m]))] for members in b_option]
+        hits += sum(p in winners for p in targets.per_position[float(x)])
+        chosen.append(winners)
+        total += g
+    return chosen, total, np.concatenate(table3), hits
 
 
 def rms_by_target(residuals: dict[str, dict[str, np.ndarray]]) -> dict[str, float]:

@@ -252,18 +252,8 @@ def calibrate(
     problem = _problem(step_s)
     runs = problem.runs
     objective = _Objective(problem, step_s)
-    x = np.array(
-        [p.prior if np.isfinite(p.prior_width) else 0.0 for p in mdl.GLOBAL_PARAMETERS.values()]
-        + [p.prior for _ in runs for p in mdl.INITIAL_PARAMETERS.values()]
-        + [_ETA_START, _ETA_START]
-    )
     lower, upper = _bounds(runs)
-    x = np.clip(x, lower, upper)
-    todo = STAGES
-    if resume is not None:
-        params, after = resume
-        todo = STAGES[resume_index(after) :]
-        x = np.concatenate([params.vector(runs), x[-2:]])
+    x, todo = _start(runs, lower, upper, resume)
     _WORKER = objective
     pool = worker_pool(workers)
     stages, evaluations, solution = [], 0, None
@@ -293,6 +283,21 @@ def calibrate(
         evaluations=evaluations,
         stages=tuple(stages),
     )
+
+
+def _start(runs, lower: np.ndarray, upper: np.ndarray, resume) -> tuple[np.ndarray, tuple]:
+    """The starting vector and the stages still to run: the priors' centres (initial
+    offsets 0) and every stage, or the resumed parameters and the stages after theirs."""
+    x = np.array(
+        [p.prior if np.isfinite(p.prior_width) else 0.0 for p in mdl.GLOBAL_PARAMETERS.values()]
+        + [p.prior for _ in runs for p in mdl.INITIAL_PARAMETERS.values()]
+        + [_ETA_START, _ETA_START]
+    )
+    x = np.clip(x, lower, upper)
+    if resume is None:
+        return x, STAGES
+    params, after = resume
+    return np.concatenate([params.vector(runs), x[-2:]]), STAGES[resume_index(after) :]
 
 
 def _set_stage(args) -> None:
