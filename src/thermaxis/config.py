@@ -22,9 +22,7 @@ from dataclasses import dataclass, fields, replace
 from functools import cache
 from pathlib import Path
 
-import jsonschema
-
-from thermaxis.errors import schema_message
+from thermaxis.errors import first_schema_error, schema_message, schema_where
 from thermaxis.schemas import load_schema, load_trusted_yaml, schema_path
 from thermaxis.sweep_grid import SweepGrid
 from thermaxis.vocabulary import SEARCHABLE
@@ -108,13 +106,9 @@ def validate_config(config: dict, schema_path=CONFIG_SCHEMA) -> dict:
         schema = load_trusted_yaml(fh)
     filled = copy.deepcopy(config)
     fill_defaults(filled, schema)
-    errors = sorted(
-        jsonschema.Draft202012Validator(schema).iter_errors(filled),
-        key=lambda e: list(e.absolute_path),
-    )
-    if errors:
-        where = "/".join(map(str, errors[0].absolute_path)) or "top level"
-        raise ValueError(f"config {where}: {schema_message(errors[0])}")
+    error = first_schema_error(schema, filled)
+    if error is not None:
+        raise ValueError(f"config {schema_where(error)}: {schema_message(error)}")
     filled["dataset"] = dataset_of(filled)
     return filled
 

@@ -46,6 +46,20 @@ def schema_message(error) -> str:
     return error.message
 
 
+def first_schema_error(schema: dict, instance):
+    """The error a one-line message names: the first by path of ``instance`` against the
+    JSON ``schema`` (so the same bad document always names the same place), or None."""
+    import jsonschema
+
+    errors = jsonschema.Draft202012Validator(schema).iter_errors(instance)
+    return min(errors, key=lambda e: list(e.absolute_path), default=None)
+
+
+def schema_where(error) -> str:
+    """Where an error lies, as a path of keys and indices; "top level" for the document."""
+    return "/".join(map(str, error.absolute_path)) or "top level"
+
+
 class SelectionWarning(UserWarning):
     """A sensitive-point selection made with less than it was asked for: a constant sensor
     left out, fewer classes than the lambda-cut was asked for, a smaller common set."""

@@ -122,6 +122,14 @@ class Configuration:
         }
 
 
+# The methods that take a count per level of n_clusters, and how a note names that count.
+_COUNTED = {
+    "fuzzy_grey": "fuzzy_grey with {n} clusters",
+    "correlation": "correlation ranking of {n} sensors",
+    "subset": "subsets of {n} sensors",
+}
+
+
 @dataclass(frozen=True)
 class SweepGrid:
     """The levels of every factor (config ``sweep``, built by :class:`thermaxis.config.SweepSettings`)."""
@@ -142,41 +150,12 @@ class SweepGrid:
         A cluster (or ranking) count above the number of sensors cannot be asked for;
         ``fixed`` needs every listed sensor in the dataset.
         """
-        n_sensors = len(sensors)
         specs, notes = [], []
         for method in self.methods:
-            if method == "fuzzy_grey":
-                for n in self.n_clusters:
-                    if n > n_sensors:
-                        notes.append(
-                            f"fuzzy_grey with {n} clusters: the dataset has only {n_sensors} sensors"
-                        )
-                        continue
-                    specs += [
-                        SelectionSpec(method, n, s, g)
-                        for s in self.similarities
-                        for g in self.grades
-                    ]
-            elif method == "correlation":
-                for n in self.n_clusters:
-                    if n > n_sensors:
-                        notes.append(
-                            f"correlation ranking of {n} sensors: the dataset has only {n_sensors} sensors"
-                        )
-                        continue
-                    specs.append(SelectionSpec(method, n))
-            elif method == "subset":
-                self._check_subset_cap(n_sensors)
-                for n in self.n_clusters:
-                    if n > n_sensors:
-                        notes.append(
-                            f"subsets of {n} sensors: the dataset has only {n_sensors} sensors"
-                        )
-                        continue
-                    specs += [
-                        SelectionSpec(method, n, sensors=c)
-                        for c in itertools.combinations(sensors, n)
-                    ]
+            if method in _COUNTED:
+                if method == "subset":
+                    self._check_subset_cap(len(sensors))
+                specs += self._counted_specs(method, sensors, notes)
             elif method == "fixed":
                 note = self._fixed_note(sensors)
                 if note:
@@ -186,6 +165,25 @@ class SweepGrid:
             else:
                 specs.append(SelectionSpec(method))
         return specs, notes
+
+    def _counted_specs(self, method: str, sensors: Sequence[str], notes: list[str]):
+        """A method's specs at each count of ``n_clusters``; a count above the dataset's
+        sensors cannot be asked for and becomes a note instead."""
+        specs = []
+        for n in self.n_clusters:
+            if n > len(sensors):
+                what = _COUNTED[method].format(n=n)
+                notes.append(f"{what}: the dataset has only {len(sensors)} sensors")
+                continue
+            specs += self._specs_of_count(method, n, sensors)
+        return specs
+
+    def _specs_of_count(self, method: str, n: int, sensors: Sequence[str]):
+        if method == "fuzzy_grey":
+            return [SelectionSpec(method, n, s, g) for s in self.similarities for g in self.grades]
+        if method == "correlation":
+            return [SelectionSpec(method, n)]
+        return [SelectionSpec(method, n, sensors=c) for c in itertools.combinations(sensors, n)]
 
     def _check_subset_cap(self, n_sensors: int) -> None:
         """Refuse a subset sweep larger than sweep.max_subsets before any fit."""

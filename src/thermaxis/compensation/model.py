@@ -36,7 +36,6 @@ import json
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict
 
-import jsonschema
 import numpy as np
 import pandas as pd
 
@@ -47,7 +46,7 @@ from thermaxis.config import (
     ModelSettings,
 )
 from thermaxis.dataset.safety import check_finite
-from thermaxis.errors import schema_message
+from thermaxis.errors import first_schema_error, schema_message, schema_where
 from thermaxis.method.decouple import MM_PER_M
 from thermaxis.method.features import relative_temperatures
 from thermaxis.method.inputs import base_of, input_definition
@@ -391,13 +390,9 @@ def validate_model(record: Mapping, where: str = "model.json") -> None:
     """Raise ValueError with one line when ``record`` does not follow the committed schema."""
     with open(MODEL_SCHEMA, encoding="utf-8") as fh:
         schema = json.load(fh)
-    errors = sorted(
-        jsonschema.Draft202012Validator(schema).iter_errors(record),
-        key=lambda e: list(e.absolute_path),
-    )
-    if errors:
-        path = "/".join(map(str, errors[0].absolute_path)) or "top level"
-        raise ValueError(f"{where}: {path}: {schema_message(errors[0])}")
+    error = first_schema_error(schema, record)
+    if error is not None:
+        raise ValueError(f"{where}: {schema_where(error)}: {schema_message(error)}")
     # Python's JSON reader takes NaN, Infinity and 1e999; a controller would apply them.
     check_finite(where, record)
     _check_consistency(record, where)

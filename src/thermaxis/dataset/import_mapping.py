@@ -13,12 +13,11 @@ import copy
 import functools
 from pathlib import Path
 
-import jsonschema
 import pandas as pd
 import yaml
 
 from thermaxis.config import fill_defaults
-from thermaxis.errors import DataError, schema_message, shown
+from thermaxis.errors import DataError, first_schema_error, schema_message, schema_where, shown
 from thermaxis.schemas import load_schema
 
 __all__ = ["load_mapping", "header_name", "table_layout"]
@@ -35,13 +34,9 @@ def load_mapping(path) -> dict:
     if not isinstance(mapping, dict):
         raise DataError(f"{path}: expected a mapping at top level")
     schema = load_schema("import_mapping")
-    errors = sorted(
-        jsonschema.Draft202012Validator(schema).iter_errors(mapping),
-        key=lambda e: list(e.absolute_path),
-    )
-    if errors:
-        where = "/".join(map(str, errors[0].absolute_path)) or "top level"
-        raise DataError(f"{path}: {where}: {schema_message(errors[0])}")
+    error = first_schema_error(schema, mapping)
+    if error is not None:
+        raise DataError(f"{path}: {schema_where(error)}: {schema_message(error)}")
     fill_defaults(mapping, schema)
     mapping["time"].setdefault("column", None)
     try:

@@ -27,7 +27,7 @@ from thermaxis.dataset.raw_files import (
     read_measurement,
     read_temperature_source,
 )
-from thermaxis.errors import DataError, schema_message, shown
+from thermaxis.errors import DataError, first_schema_error, schema_message, schema_where, shown
 from thermaxis.labels import natural_key
 from thermaxis.schemas import load_schema
 
@@ -44,9 +44,8 @@ RUN_COLUMNS = ("run", "condition", "description")
 
 
 def _schema_error(path: Path, error: jsonschema.ValidationError, where: str = "") -> DataError:
-    location = "/".join(str(p) for p in error.absolute_path) or "top level"
     prefix = f"{path}: {where}" if where else f"{path}: "
-    return DataError(f"{prefix}{location}: {schema_message(error)}")
+    return DataError(f"{prefix}{schema_where(error)}: {schema_message(error)}")
 
 
 @dataclass(frozen=True)
@@ -131,10 +130,9 @@ def _validate_meta(path: Path, meta: dict) -> None:
     """Validate ``meta`` against the dataset schema, its defaults filled in first (in place)."""
     schema = load_schema("dataset")
     fill_defaults(meta, schema)
-    validator = jsonschema.Draft202012Validator(schema)
-    errors = sorted(validator.iter_errors(meta), key=lambda e: list(e.absolute_path))
-    if errors:
-        raise _schema_error(path, errors[0])
+    error = first_schema_error(schema, meta)
+    if error is not None:
+        raise _schema_error(path, error)
     ids = [s["id"] for s in meta["sensors"]]
     dup = sorted({i for i in ids if ids.count(i) > 1})
     if dup:
