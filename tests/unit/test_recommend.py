@@ -169,7 +169,7 @@ def test_a_kernel_candidate_cannot_join_the_combination():
     extra = {"name": "my-gpr", "approach": "pointwise", "algorithm": "gpr"}
     with pytest.raises(ValueError, match="'my-gpr' is a kernel candidate"):
         Settings.from_config({"recommend": {"combine": ["my-gpr"], "extra_candidates": [extra]}})
-    assert DEFAULTS.recommend.combine == ("paper", EVIDENCE, BASELINE)
+    assert DEFAULTS.recommend.combine == (EVIDENCE, BASELINE)
     X, Y = make_runs(n_runs=3)
     with pytest.raises(ValueError, match="'nope' is not a candidate"):
         recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, members=["nope"],

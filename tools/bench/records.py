@@ -25,11 +25,24 @@ import yaml
 
 from thermaxis.method.candidates import BASELINE, EVIDENCE
 
-__all__ = ["CHANNELS", "channel_mapping", "record_quality", "RECORD_TARGETS", "without_signals"]
+__all__ = [
+    "CHANNELS",
+    "DEV_RECORDS",
+    "channel_mapping",
+    "dev_records",
+    "record_quality",
+    "RECORD_TARGETS",
+    "without_signals",
+]
 
 CHANNELS = (1, 2, 3, 4, 5)
 # Issue 61's bounds: at most 1.10 x the better plain reference, at most the paper's configuration.
 RECORD_TARGETS = {"references": 1.10, "paper": 1.0}
+# Simulated development records (runs, sensors, positions, seed): what a change of the
+# combination rule is judged on before it meets a scored record. Shapes of a logger record
+# (5 h at 0.1 Hz, a measurement every 10 min), 5 to 12 runs, seeds apart from the twin's.
+DEV_RECORDS = ((5, 8, 1, 11), (6, 24, 1, 12), (6, 12, 5, 13), (8, 24, 1, 14),
+               (10, 16, 3, 15), (7, 10, 1, 16), (12, 24, 1, 17), (6, 6, 1, 18))  # fmt: skip
 
 
 def channel_mapping(mapping: Path, channel: int) -> dict:
@@ -104,6 +117,31 @@ def import_channels(repo: Path, scratch: Path, env: dict, timeout_s: float) -> l
             env=env, check=True, capture_output=True, timeout=timeout_s,
         )  # fmt: skip
         without_signals(target)
+        out.append(target)
+    return out
+
+
+def dev_records(scratch: Path, env: dict, timeout_s: float) -> list[Path]:
+    """The :data:`DEV_RECORDS` as datasets under ``scratch``, SIMULATED by ``thermaxis.twin
+    scale`` and named ``dev_r<runs>_s<sensors>_p<positions>_seed<seed>``."""
+    out = []
+    for runs, sensors, positions, seed in DEV_RECORDS:
+        name = f"dev_r{runs}_s{sensors}_p{positions}_seed{seed}"
+        target = scratch / name
+        shutil.rmtree(target, ignore_errors=True)
+        subprocess.run(
+            [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(target),
+             "--runs", str(runs), "--sensors", str(sensors), "--positions", str(positions),
+             "--hours", "5", "--rate-hz", "0.1", "--measurement-min", "10", "--seed", str(seed)],
+            env=env, check=True, capture_output=True, timeout=timeout_s,
+        )  # fmt: skip
+        spec_path = target / "dataset.yaml"
+        spec = yaml.safe_load(spec_path.read_text(encoding="utf-8"))
+        spec["name"] = name
+        spec["description"] = "SIMULATED development record. " + spec["description"]
+        spec_path.write_text(
+            yaml.safe_dump(spec, sort_keys=False, allow_unicode=True), encoding="utf-8"
+        )
         out.append(target)
     return out
 

@@ -199,23 +199,12 @@ def bench_markdown(doc: dict) -> str:
     for shape, fit in doc.get("scale_fit", {}).items():
         lines += ["", f"Scaling of the scale series {shape}: {fit['wall']['statement']}.",
                   f"{fit['cpu']['statement']}."]  # fmt: skip
-    if doc.get("records"):
-        lines += [
-            "",
-            "Mean held-out RMSE (µm, leave-one-condition-out) of the recommendation, the two plain "
-            "references (the ridge with lags `baseline-ridge+lags`, the evidence ridge `evidence-ridge`) "
-            "and the paper's configuration, on the same folds (tools/bench/records.py):",
-            "",
-            "| record | folds | recommendation | ridge with lags | evidence ridge | paper's configuration "
-            "| vs better reference | vs paper |",
-            "|---|---:|---:|---:|---:|---:|---:|---:|",
-        ]
-        lines += [
-            f"| {q['record']} | {q['folds']} | {q['recommended_rmse_um']:.2f} | {q['baseline_rmse_um']:.2f} | "
-            f"{q['evidence_rmse_um']:.2f} | {q['paper_rmse_um']:.2f} | {q['vs_references']:.2f} | "
-            f"{q['vs_paper']:.2f} |"
-            for q in doc["records"]
-        ]
+    for key, what in (
+        ("records", "the records at hand"),
+        ("dev_records", "the SIMULATED development records (tools.bench.records.DEV_RECORDS)"),
+    ):
+        if doc.get(key):
+            lines += _quality_table(doc[key], what)
     if doc.get("targets"):
         lines += ["", "| target | measured | met |", "|---|---|---|"]
         lines += [
@@ -234,6 +223,26 @@ def bench_markdown(doc: dict) -> str:
         "tree is sampled every 0.2 s (psutil).",
     ]
     return "\n".join(lines) + "\n"
+
+
+def _quality_table(rows: list, what: str) -> list:
+    """Markdown lines: each record's recommendation beside the references and the paper's."""
+    lines = [
+        "",
+        "Mean held-out RMSE (µm, leave-one-condition-out) of the recommendation, the two plain "
+        "references (the ridge with lags `baseline-ridge+lags`, the evidence ridge `evidence-ridge`) "
+        f"and the paper's configuration, on the same folds, on {what} (tools/bench/records.py):",
+        "",
+        "| record | folds | recommendation | ridge with lags | evidence ridge | paper's configuration "
+        "| vs better reference | vs paper |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    return lines + [
+        f"| {q['record']} | {q['folds']} | {q['recommended_rmse_um']:.2f} | {q['baseline_rmse_um']:.2f} | "
+        f"{q['evidence_rmse_um']:.2f} | {q['paper_rmse_um']:.2f} | {q['vs_references']:.2f} | "
+        f"{q['vs_paper']:.2f} |"
+        for q in rows
+    ]
 
 
 def _shape_phrase(name: str, spec: dict) -> str:

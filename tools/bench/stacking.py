@@ -12,7 +12,13 @@ three combinations fixed from the literature before any record was replayed:
   ``method.NNLS``), over every candidate;
 * the same over the linear candidates only, whose combination is one linear model, so it
   could be exported like one (a kernel model's expansion cannot share an affine block);
-* the equal average of the two plain references (the ridge with lags, the evidence ridge).
+* the equal average of the two plain references (the ridge with lags, the evidence ridge);
+* the super learner of the two plain references (the default ``recommend.combine``), and
+  of the paper's configuration with them (the default until 2026-12-07, second session).
+
+``--block dev`` writes the table into the development records' block instead: the
+simulated records (tools.bench.records.DEV_RECORDS) a change of the rule is judged on
+before it meets a scored record.
 
 Each outer fold's weights come from its inner runs alone; the held-out run is predicted
 by the candidates fitted on the other runs. Evaluation only: the recommendation deploys
@@ -32,13 +38,16 @@ import pandas as pd
 from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import KERNEL_ALGORITHMS, Settings
 from thermaxis.labels import natural_sorted
-from thermaxis.method.candidates import BASELINE, EVIDENCE, candidate_from_record
+from thermaxis.method.candidates import BASELINE, EVIDENCE, PAPER, candidate_from_record
 from thermaxis.method.nested import held_out_predictions, super_learner_weights, training_sets
 from tools.bench.replay import record_scores, table_command
 
 __all__ = ["stacked_rmse", "STACKS"]
 
-START, END = "<!-- stacking:start -->", "<!-- stacking:end -->"
+BLOCKS = {
+    "records": ("<!-- stacking:start -->", "<!-- stacking:end -->"),
+    "dev": ("<!-- stacking-dev:start -->", "<!-- stacking-dev:end -->"),
+}
 
 
 def _record_inputs(folder: Path):
@@ -115,6 +124,14 @@ STACKS = {
         super_learner_weights,
     ),
     "equal average of the two plain references": (lambda cs: [BASELINE, EVIDENCE], _equal),
+    "super learner, the two plain references": (
+        lambda cs: [EVIDENCE, BASELINE],
+        super_learner_weights,
+    ),
+    "super learner, the paper's configuration and the two plain references": (
+        lambda cs: [PAPER, EVIDENCE, BASELINE],
+        super_learner_weights,
+    ),
 }
 
 
@@ -142,8 +159,18 @@ def stacking_table(results: Path) -> str:
 
 
 def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    block = "records"
+    if "--block" in argv:
+        at = argv.index("--block")
+        block = argv[at + 1] if at + 1 < len(argv) else ""
+        del argv[at : at + 2]
+    if block not in BLOCKS:
+        print(f"thermaxis error: --block {block!r}: expected one of {', '.join(BLOCKS)}",
+              file=sys.stderr)  # fmt: skip
+        return 2
     return table_command(
-        argv, "python -m tools.bench.stacking", __doc__, stacking_table, START, END
+        argv, "python -m tools.bench.stacking", __doc__, stacking_table, *BLOCKS[block]
     )
 
 

@@ -28,6 +28,7 @@ STEPS = (
     "subsets",
     "scale",
     "records",
+    "devrecords",
     "twin_calibrate",
     "test",
 )
@@ -177,6 +178,11 @@ def run_bench(  # noqa: PLR0915 -- the steps in the order they run, each one a h
                 record(m)
                 if quality is not None:
                     doc.setdefault("records", []).append(quality)
+        if "devrecords" in steps:
+            for m, quality in _dev_record_runs(scratch, cores, env, logs, timeout_s):
+                record(m)
+                if quality is not None:
+                    doc.setdefault("dev_records", []).append(quality)
         if "twin_calibrate" in steps:
             record(_twin_calibrate(scratch, env, logs, timeout_s))
         if "test" in steps:
@@ -245,6 +251,15 @@ def _record_runs(scratch: Path, cores: int, env: dict, logs: Path, timeout_s: fl
     work = prepare_workdir(scratch / "records")
     datasets = [REPO / d for d in load_config(REPO / "config" / "config.yaml")["datasets"]]
     datasets += bench_records.import_channels(REPO, scratch / "records_data", env, timeout_s)
+    return bench_records.run_records(
+        datasets, work, lambda *a: _snakemake(cores, *a), measure, logs, env, timeout_s
+    )
+
+
+def _dev_record_runs(scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float):
+    """The recommendation of each simulated development record (tools.bench.records.DEV_RECORDS)."""
+    datasets = bench_records.dev_records(scratch / "dev_data", env, timeout_s)
+    work = prepare_workdir(scratch / "dev_records")
     return bench_records.run_records(
         datasets, work, lambda *a: _snakemake(cores, *a), measure, logs, env, timeout_s
     )

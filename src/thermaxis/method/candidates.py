@@ -30,6 +30,7 @@ __all__ = [
     "candidate_view",
     "candidate_table",
     "BASELINE",
+    "PAPER",
     "baseline_candidate",
     "evidence_candidate",
     "default_candidates",
@@ -112,6 +113,7 @@ def candidate_table(candidates: Sequence[Candidate]) -> pd.DataFrame:
     )
 
 
+PAPER = "paper"
 BASELINE = "baseline-ridge+lags"
 EVIDENCE = "evidence-ridge"
 
@@ -191,9 +193,7 @@ def default_candidates(
     first = "decoupled" if decoupled else "pointwise"
     pls = _pls_candidate(first, selection, models, signals)
     candidates = [
-        Candidate(
-            "paper", first, "mlr", selection, replace(models, signals=(), searched=()), False
-        ),
+        Candidate(PAPER, first, "mlr", selection, replace(models, signals=(), searched=()), False),
         evidence_candidate(selection, models, decoupled, signals),
         evidence_candidate(selection, models, decoupled, signals, baseline_lags_min),
         baseline_candidate(selection, models, baseline_lags_min),
