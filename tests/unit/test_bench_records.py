@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 import yaml
@@ -25,11 +27,23 @@ def test_record_quality_reads_the_workflows_tables(tmp_path):
         {"candidate": ["paper", "baseline-ridge+lags", "evidence-ridge"],
          "loco_rmse_um": [4.0, 2.5, 1.6]}
     ).to_csv(results / "recommend" / "candidates.csv", index=False)  # fmt: skip
+    (results / "compensation").mkdir()
+    verdict = {"outcome": "not_established", "improved_runs": 1, "worsened_runs": 1,
+               "held_out_runs": 2, "sign_test_p": 0.75}  # fmt: skip
+    (results / "compensation" / "model.json").write_text(
+        json.dumps({"deployment": {"verdict": verdict}}), encoding="utf-8"
+    )
     q = record_quality(results)
     # Mean 2.0 against the better reference 1.6 (1.25 x, above 1.10) and 4.0 (0.5 x).
     assert (q["recommended_rmse_um"], q["vs_references"], q["vs_paper"]) == (2.0, 1.25, 0.5)
     assert (q["baseline_rmse_um"], q["evidence_rmse_um"]) == (2.5, 1.6)
     assert not q["met"] and q["folds"] == 2
+    assert (q["verdict"], q["improved_runs"], q["worsened_runs"], q["sign_test_p"]) == (
+        "not_established",
+        1,
+        1,
+        0.75,
+    )
 
 
 def test_channel_mapping_swaps_the_displacement_channel_only():
@@ -87,6 +101,11 @@ def test_the_replay_applies_each_rule_to_the_inner_scores_alone(tmp_path):
     assert "| **super learner of `recommend.combine`** (deployed) | 2.50 (1.25) |" in table
     assert "| lowest mean inner RMSE (replaced) | 2.00 (1.00) |" in table
     assert "| the paper's configuration always | 4.00 (2.00) |" in table
+    # 2.5 / 2.0 = 1.25 > 1.10; 2.5 / 4.0 = 0.625 <= 1.
+    assert table.endswith(
+        "on 0 of 1 records; it misses them on toy (1.25 x the better reference, 0.62 x the "
+        "paper's).\n"
+    )
     doc = tmp_path / "doc.md"
     doc.write_text("before\n<!-- replay:start -->\nold\n<!-- replay:end -->\nafter\n")
     doc.write_text(with_table(doc.read_text(), table))

@@ -14,6 +14,7 @@ workflow's own tables (``tables/recommendation.csv``, ``recommend/candidates.csv
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 import sys
@@ -79,7 +80,8 @@ def without_signals(dataset: Path) -> None:
 
 
 def record_quality(results: Path) -> dict:
-    """Mean held-out RMSE (µm) of the recommendation, the two plain references and the paper's."""
+    """Mean held-out RMSE (µm) of the recommendation, the two plain references and the
+    paper's, and the deployment verdict of the compensation (``compensation/model.json``)."""
     folds = pd.read_csv(results / "tables" / "recommendation.csv")
     candidates = pd.read_csv(results / "recommend" / "candidates.csv").set_index("candidate")
     recommended = float(folds["rmse_um"].mean())
@@ -87,6 +89,9 @@ def record_quality(results: Path) -> dict:
     evidence = float(candidates.loc[EVIDENCE, "loco_rmse_um"])
     paper = float(folds["paper_rmse_um"].mean())
     better = min(baseline, evidence)
+    verdict = json.loads((results / "compensation" / "model.json").read_text(encoding="utf-8"))[
+        "deployment"
+    ]["verdict"]
     return {
         "record": results.name,
         "folds": int(len(folds)),
@@ -98,6 +103,11 @@ def record_quality(results: Path) -> dict:
         "vs_paper": recommended / paper,
         "met": recommended <= RECORD_TARGETS["references"] * better
         and recommended <= RECORD_TARGETS["paper"] * paper,
+        "verdict": verdict["outcome"],
+        "improved_runs": int(verdict["improved_runs"]),
+        "worsened_runs": int(verdict["worsened_runs"]),
+        "held_out_runs": int(verdict["held_out_runs"]),
+        "sign_test_p": float(verdict["sign_test_p"]),
     }
 
 
@@ -162,13 +172,14 @@ def run_records(
         targets = [
             f"results/{name}/tables/recommendation.csv",
             f"results/{name}/recommend/candidates.csv",
+            f"results/{name}/compensation/model.json",
         ]
         m = measure(
             f"records_{name}",
             snakemake("--config", f"dataset={dataset}", "--", *targets),
             work,
             logs / f"records_{name}.log",
-            f"the recommendation of {name}, from its raw files",
+            f"the recommendation of {name}, from its raw files to its compensation verdict",
             env,
             timeout_s,
         )

@@ -25,6 +25,7 @@ from thermaxis.method.candidates import BASELINE, EVIDENCE
 from thermaxis.method.nested import COMBINED
 from thermaxis.statistics.paired import wilcoxon_p
 from thermaxis.tables import read_table
+from tools.bench.records import RECORD_TARGETS
 
 __all__ = ["RULES", "replay", "replay_markdown", "previous_rule", "lowest_mean"]
 
@@ -133,7 +134,26 @@ def replay_markdown(records: dict[str, pd.DataFrame]) -> str:
             better = min(f[BASELINE], f[EVIDENCE])
             cells.append(f"{f[row]:.2f} ({f[row] / better:.2f})")
         lines.append(f"| {labels.get(row, row)} | " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n\n" + _bounds_sentence(figures) + "\n"
+
+
+def _bounds_sentence(figures: dict[str, dict[str, float]]) -> str:
+    """Where the deployed rule meets issue 61's bounds (tools.bench.records.RECORD_TARGETS)."""
+    deployed = next(iter(RULES))
+    missed = []
+    for name, f in figures.items():
+        vs_better = f[deployed] / min(f[BASELINE], f[EVIDENCE])
+        vs_paper = f[deployed] / f["paper"]
+        if vs_better > RECORD_TARGETS["references"] or vs_paper > RECORD_TARGETS["paper"]:
+            missed.append(f"{name} ({vs_better:.2f} x the better reference, "
+                          f"{vs_paper:.2f} x the paper's)")  # fmt: skip
+    met = len(figures) - len(missed)
+    sentence = (
+        f"The deployed rule meets both bounds (at most {RECORD_TARGETS['references']:.2f} x the "
+        f"better plain reference and {RECORD_TARGETS['paper']:.2f} x the paper's configuration) "
+        f"on {met} of {len(figures)} records"
+    )
+    return sentence + (f"; it misses them on {', '.join(missed)}." if missed else ".")
 
 
 def with_table(document: str, table: str, start: str = START, end: str = END) -> str:

@@ -234,15 +234,23 @@ def _quality_table(rows: list, what: str) -> list:
         f"and the paper's configuration, on the same folds, on {what} (tools/bench/records.py):",
         "",
         "| record | folds | recommendation | ridge with lags | evidence ridge | paper's configuration "
-        "| vs better reference | vs paper |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| vs better reference | vs paper | verdict (improved / worsened of held-out runs, sign test p) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     return lines + [
         f"| {q['record']} | {q['folds']} | {q['recommended_rmse_um']:.2f} | {q['baseline_rmse_um']:.2f} | "
         f"{q['evidence_rmse_um']:.2f} | {q['paper_rmse_um']:.2f} | {q['vs_references']:.2f} | "
-        f"{q['vs_paper']:.2f} |"
+        f"{q['vs_paper']:.2f} | {_verdict_cell(q)} |"
         for q in rows
     ]
+
+
+def _verdict_cell(q: dict) -> str:
+    """The compensation's verdict in words and its counts."""
+    return (
+        f"{q['verdict'].replace('_', ' ')} ({q['improved_runs']} / {q['worsened_runs']} of "
+        f"{q['held_out_runs']}, p = {q['sign_test_p']:.2g})"
+    )
 
 
 def _shape_phrase(name: str, spec: dict) -> str:
