@@ -135,6 +135,7 @@ def run_bench(  # noqa: PLR0915 -- the steps in the order they run, each one a h
     """Run the benchmark and return the bench.json document (also written to ``out``)."""
     out.mkdir(parents=True, exist_ok=True)
     scratch = Path(workdir) if workdir else Path(tempfile.mkdtemp(prefix="thermaxis-bench-"))
+    scratch.mkdir(parents=True, exist_ok=True)
     env = _environment()
     logs = out / "logs"
     doc = _document(cores, runs, steps, shapes)
