@@ -180,10 +180,11 @@ def test_two_runs_in_two_clones_of_one_dataset_both_finish(tmp_path):
     dataset = write_dataset(tmp_path / "data" / "tiny", name="tiny")
     clones = [workflow_workdir(tmp_path / name) for name in ("a", "b")]
     configs = [tiny_config(work, dataset) for work in clones]
-    target = "results/tiny/tables/metrics.csv"
+    # The jobs that read the shared dataset (its manifest, the cleaning) and the assembly
+    # of what they wrote; the models after them read each clone's own results only.
     procs = [
         subprocess.Popen(
-            _recipe(config, target, cores=1),
+            _recipe(config, TARGET, cores=1),
             cwd=work,
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
@@ -196,3 +197,4 @@ def test_two_runs_in_two_clones_of_one_dataset_both_finish(tmp_path):
     assert [p.returncode for p in procs] == [0, 0], "\n".join(o[-3000:] for o in outputs)
     a, b = (_tree(work / "results" / "tiny") for work in clones)
     assert a == b
+    assert sorted(pd.read_csv(clones[0] / TARGET)["run"].unique()) == ["R1", "R2"]
