@@ -87,4 +87,3 @@ def test_the_readme_quotes_no_result_outside_its_blocks():
     outside = re.sub(r"<!-- results:begin .*?<!-- results:end -->", "", text, flags=re.S)
     assert not re.findall(r"\d+\.\d+\s*µm", outside)
     assert {kind for kind, _, _ in blocks_of(text)} == {"answers", "benchmark-line"}
-

@@ -1463,6 +1463,9 @@ def _broken(case: Case, two_runs: Path, tmp_path: Path) -> tuple[Path, Path, dic
         "dataset": str(ds),
         "ambient_sensor": "T10",
         "selection": {"n_clusters": 3},
+        # The cases of the models job check the selection's line; its fits after the
+        # selection add nothing to them, and one algorithm's take a fraction of five's.
+        **({"models": {"algorithms": ["mlr"]}} if case.target.startswith("select") else {}),
         **case.config,
     }
     (work / "case.yaml").write_text(yaml.safe_dump(config))
