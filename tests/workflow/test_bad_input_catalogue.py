@@ -13,12 +13,13 @@ sweep ``sweep_plan``), then the scripts of the rules up to the first one that mu
 refuse (the case's target). Which script a rule runs and what it hands the script
 (input, output, params, log, wildcards) come from the workflow Snakemake parsed with the
 case's config. ``test_bad_input_end_to_end`` runs a representative set (``END_TO_END``)
-through Snakemake itself and checks that it prints the very same line.
+through Snakemake itself, then in-process with every check of ``test_bad_input`` (which
+leaves those cases to it), and checks that both print the very same line.
 
 With ``THERMAXIS_CATALOGUE=<folder>`` each case also writes its message there;
 ``PYTHONPATH=tests python tests/workflow/test_bad_input_catalogue.py <folder> tests/workflow/CATALOGUE.md``
-lists them (``THERMAXIS_CATALOGUE=<folder> pytest tests/workflow/test_bad_input_catalogue.py -k "test_bad_input["``
-is enough to fill the folder).
+lists them (``THERMAXIS_CATALOGUE=<folder> pytest tests/workflow/test_bad_input_catalogue.py``
+fills the folder).
 """
 
 from __future__ import annotations
