@@ -91,16 +91,23 @@ SHARED_RUN_FILES = {
     "tests/workflow/test_reports.py": "built",
     "tests/workflow/test_browser.py": "built",
 }
-# The longest chains start first (the shared runs, then the files of a cold run of their own),
-# so that no long unit is left alone at the end.
+# The longest units start first, roughly longest first (the shared runs and the files of
+# cold runs of their own, then the catalogue's units and the slowest files of the library's
+# tests), so that no long unit is left alone at the end. (Each worker holds two units
+# queued, so a unit is committed to a worker one unit ahead.)
 _FIRST = (
-    "slurm",
-    "lines_run",
-    "built",
     "tests/workflow/test_make_results.py",
+    "lines_run",
+    "slurm",
+    "built",
+    "tests/workflow/test_kernels.py",
+    "tests/workflow/test_make_targets.py",
+    "tests/workflow/test_machine_faults.py",
     "tests/workflow/test_measured_shapes.py",
     "tests/workflow/test_real_record.py",
-    "tests/workflow/test_machine_faults.py",
+    "tests/unit/test_structured_text.py",
+    "tests/workflow/test_bad_input_catalogue.py",
+    "tests/unit/test_plotting.py",
 )
 # Files of many independent cases, dealt out in this many units so that both workers share
 # them (each unit makes the file's module fixtures once).
@@ -123,7 +130,12 @@ def pytest_collection_modifyitems(config, items):
                     f"{item.nodeid} uses {fixture}: list its file in conftest.SHARED_RUN_FILES"
                 )
     rank = {group: i for i, group in enumerate(_FIRST)}
-    items.sort(key=lambda item: rank.get(_unit_of(item.nodeid), len(rank)))
+
+    def first(item) -> int:
+        unit = _unit_of(item.nodeid)
+        return rank.get(unit, rank.get(unit.partition("#")[0], len(rank)))
+
+    items.sort(key=first)
 
 
 def pytest_xdist_make_scheduler(config, log):

@@ -3,7 +3,9 @@ either fails the run cleanly or is resubmitted, and the completed run has a loca
 
 Skipped, with the reason, where the one-node cluster cannot be started (not root, the
 Debian packages missing). The twin's models and a small sweep on the held-out run E4
-keep each run to about a minute.
+keep each run short; the assembled tables they read are made locally first, so the
+cluster runs the two rules that scancel and the job array are about (and the sweep's
+collection), and the local reference run goes on beside them.
 
 The cluster runs use .venv-slurm (`make slurm-env`: envs/requirements.txt plus the executor
 plugin of envs/requirements-slurm.txt), the local run this test's own environment, which
@@ -24,7 +26,7 @@ import pytest
 import yaml
 
 from helpers import REPO
-from helpers.workflow import run_snakemake, snakemake_env, workflow_workdir
+from helpers.workflow import SNAKEMAKE, run_snakemake, snakemake_env, workflow_workdir
 
 pytestmark = pytest.mark.slurm
 
@@ -151,11 +153,30 @@ def _results(work: Path) -> dict[str, bytes]:
     }
 
 
-@pytest.fixture(scope="module")
-def local_results(tmp_path_factory):
-    work, config = _workdir(tmp_path_factory.mktemp("local"))
-    proc = run_snakemake(work, "--configfile", str(config), "--cores", "1", "--", *TARGETS)
-    assert "thermaxis: sweep of 2 fold x selection units, 8 evaluations in 1 batches" in proc.stderr
+# What the cluster runs read, made locally in its work folder before it starts: the
+# manifest, the cleaning and the assembly (run on the cluster they would only add three
+# queued jobs in a row; their bytes are compared with the local run's all the same).
+ASSEMBLED = "results/twin/assembled/errors.parquet"
+
+
+@pytest.fixture
+def local_run(slurm, tmp_path):
+    """The local run of TARGETS on one core, started in the background: the cluster runs
+    wait on the scheduler most of the time. Its process, log and work folder."""
+    work, config = _workdir(tmp_path / "local")
+    log = tmp_path / "local.log"
+    command = [SNAKEMAKE, "--cores", "1", "--nolock", "--configfile", str(config), "--", *TARGETS]
+    run = _start(work, command, log, snakemake_env())
+    yield run, log, work
+    if run.poll() is None:  # the test failed before it read the local results
+        run.kill()
+        run.wait()
+
+
+def _local_results(run: subprocess.Popen, log: Path, work: Path) -> dict[str, bytes]:
+    output = _finish(run, log)
+    assert run.returncode == 0, output[-5000:]
+    assert "thermaxis: sweep of 2 fold x selection units, 8 evaluations in 1 batches" in output
     assert (work / "results" / "twin" / "sweep" / "batches" / "1" / "0.parquet").is_file()
     return _results(work)
 
@@ -196,12 +217,13 @@ def _finish(run: subprocess.Popen, log: Path) -> str:
 
 
 def test_scancel_fails_cleanly_then_resubmits_and_the_rerun_is_byte_identical_to_the_local_run(
-    slurm_env, local_results, tmp_path
+    slurm_env, local_run, tmp_path
 ):
     """One cluster workflow serves three checks: a killed job fails a run without retries
     cleanly; with the profile's retries it is resubmitted; and the completed run, its sweep
     spread over a job array of two batches, has the local run's bytes."""
-    work, config = _workdir(tmp_path)
+    work, config = _workdir(tmp_path / "cluster")
+    run_snakemake(work, "--configfile", str(config), "--cores", "1", "--", ASSEMBLED)
     # 1. Without retries the killed job fails the run, with the job and its state named.
     # Only the models' table: the sweep's batches are left for the rerun to submit.
     first = _slurm_command(config, "--retries", "0")
@@ -213,6 +235,8 @@ def test_scancel_fails_cleanly_then_resubmits_and_the_rerun_is_byte_identical_to
     assert run.returncode != 0
     assert f"SLURM-job '{killed}' failed, SLURM status is: 'CANCELLED'" in output
     assert "models" in output
+    # The assembled tables were made before: the cluster ran the models' job alone.
+    assert re.findall(r"^rule (\w+):", output, flags=re.M) == ["models"], output[-3000:]
     # Nothing half-written: the killed job's outputs are gone, no temporary file is left.
     fold_dir = work / "results" / "twin" / "models" / "E4"
     assert not (fold_dir.exists() and any(fold_dir.iterdir()))
@@ -240,6 +264,6 @@ def test_scancel_fails_cleanly_then_resubmits_and_the_rerun_is_byte_identical_to
         p.name for p in (work / "results" / "twin" / "sweep" / "batches" / "2").iterdir()
     )
     assert batches == ["0.parquet", "1.parquet"]
-    ours = _results(work)
-    assert sorted(ours) == sorted(local_results)
-    assert [name for name in ours if ours[name] != local_results[name]] == []
+    ours, theirs = _results(work), _local_results(*local_run)
+    assert sorted(ours) == sorted(theirs)
+    assert [name for name in ours if ours[name] != theirs[name]] == []

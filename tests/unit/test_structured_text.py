@@ -259,6 +259,7 @@ def test_a_combination_is_the_weighted_sum_of_its_members_in_one_block():
     assert model["noise_c"] == {"T1": 0.25, "T2": 0.125}
     combined = Compensator(model)
     alone = [Compensator(record) for _, _, record in members[:2]]
+    c = parsed_constants(structured_text(model, "SIMULATED test data."))
     for now, ref in [((32.0, 26.5), (30.0, 25.0)), ((29.25, 24.1), (30.5, 25.3))]:
         state, home = (
             dict(zip(("T1", "T2"), now, strict=True)),
@@ -276,7 +277,6 @@ def test_a_combination_is_the_weighted_sum_of_its_members_in_one_block():
         assert got.k0_mm == pytest.approx(b / 1000.0, abs=1e-12)
         assert got.tan_beta == pytest.approx(k * 1e-6, abs=1e-15)
         # The Structured Text block gives the Compensator's values.
-        c = parsed_constants(structured_text(model, "SIMULATED test data."))
         values = {row[0]: row[2] for row in twincat(got)}
         block = st_twincat(c, np.array(now), np.array(ref))
         for parameter, value in values.items():

@@ -29,11 +29,13 @@ import yaml
 from helpers import REPO
 from helpers.builders import write_dataset
 from helpers.workflow import SNAKEMAKE, snakemake_env
+from thermaxis.reports.docblocks import blocks_of, render
 
 pytestmark = pytest.mark.skipif(shutil.which("make") is None, reason="make is not installed")
 
 VENV = Path(sys.executable).parent.parent
 N_SAMPLES = 400  # the benchmark record's
+GUIDES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
 
 
 def _checkout(root: Path) -> Path:
@@ -49,11 +51,17 @@ def _checkout(root: Path) -> Path:
         selection={**config["selection"], "n_clusters": 2},
         models={**config["models"], "algorithms": ["mlr", "svr"]},
         figures={**config.get("figures", {}), "algorithms": ["mlr"], "formats": ["png"]},
-        reports={**config.get("reports", {}), "model_algorithms": []},
+        # One conditions report of both runs instead of one per run: a notebook fewer.
+        reports={**config.get("reports", {}), "model_algorithms": [], "combined_above_runs": 1},
     )
     (root / "config" / "config.yaml").write_text(yaml.safe_dump(config), encoding="utf-8")
     for name in ("a", "mine"):
         write_dataset(root / "data" / name, name=name)
+    # The published-protocol benchmark `make results` runs by default, on the record that
+    # travels with the repository (its spec reaches the record through data/import).
+    for name in ("data/import", "data/sources", "data/benchmarks/fl_thermal.yaml"):
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).symlink_to(REPO / name)
     return root
 
 
@@ -72,7 +80,7 @@ def _benchmark(folder: Path) -> Path:
         {"時間(s)": np.arange(N_SAMPLES) * 15.0, "spindle(RPM)": 2500.0, **temperatures}
     )
     record["ch1(um)"] = 2.0 * record["t1(°C)"] - 1.5 * record["t3(°C)"] + 4.0
-    folder.mkdir(parents=True)
+    folder.mkdir(parents=True, exist_ok=True)
     record.to_csv(folder / "record.csv", index=False)
     (folder / "LICENSE").write_text("made by the test\n")
     mapping = yaml.safe_load((REPO / "data/import/fl_thermal.yaml").read_text(encoding="utf-8"))
@@ -130,18 +138,19 @@ class Made:
 
 @pytest.fixture(scope="module")
 def made(tmp_path_factory) -> Made:
-    """`make results` (with the exact benchmark) after one target of the extra dataset."""
+    """`make results` (with the exact benchmark and FL_THERMAL's) after one target of the
+    extra dataset."""
     checkout = _checkout(tmp_path_factory.mktemp("make") / "checkout")
     spec = _benchmark(checkout / "data" / "benchmarks")
     _run(
         [SNAKEMAKE, "--cores", "2", "--config", "dataset=data/mine", "--",
-         "results/mine/tables/metrics.csv"],
+         "results/mine/tables/dataset_summary.csv"],
         checkout,
     )  # fmt: skip
     assert not (checkout / "results" / "mine" / "provenance.json").exists()
     proc = _run(
         ["make", "-o", "env", "results", f"VENV={VENV}", "CORES=2",
-         f"BENCHMARKS={spec.relative_to(checkout)}"],
+         f"BENCHMARKS={spec.relative_to(checkout)} data/benchmarks/fl_thermal.yaml"],
         checkout,
     )  # fmt: skip
     return Made(checkout, proc)
@@ -169,6 +178,24 @@ def test_make_results_runs_the_benchmark_on_its_record(made):
     assert row["mae_um"] < 1e-3 and row["below_best_published"]
     # Fit on the first 60 %, score 60-80 %: floor(0.6 x 400) and floor(0.8 x 400) - 240.
     assert (row["n_train"], row["n_test"]) == (240, 80)
+
+
+def test_the_guides_result_blocks_say_what_this_results_tree_says(made):
+    """The README's and the guides' blocks (thermaxis.reports.docblocks) of every dataset or
+    benchmark this tree holds, made again from it, are the committed text: FL_THERMAL's
+    benchmark, which `make results` ran here on the record in data/sources. (The blocks of
+    the embedded datasets' default runs need a `make results` of their own.)"""
+    results = made.checkout / "results"
+    checked = []
+    for guide in GUIDES:
+        for kind, names, body in blocks_of(guide.read_text(encoding="utf-8")):
+            if all((results / n).is_dir() or (results / "_benchmarks" / n).is_dir() for n in names):
+                assert render(kind, names, results, str(guide)) == body, (
+                    f"{guide}: results block {kind} {' '.join(names)} differs from {results} "
+                    "(make results, then make docs)"
+                )
+                checked.append((kind, *names))
+    assert sorted(set(checked)) == [("benchmark", "fl_thermal"), ("benchmark-line", "fl_thermal")]
 
 
 def test_make_report_writes_snakemakes_report(made):
