@@ -14,6 +14,8 @@ from thermaxis.method.nested import COMBINED, super_learner_weights
 from tools.bench.records import channel_mapping, record_quality, without_signals
 from tools.bench.replay import main as replay_main
 from tools.bench.replay import replay, replay_markdown, with_table
+from tools.bench.stacking import BLOCKS
+from tools.bench.stacking import main as stacking_main
 
 
 def test_record_quality_reads_the_workflows_tables(tmp_path):
@@ -147,3 +149,11 @@ def test_the_replay_command_writes_the_table_into_the_document(tmp_path, capsys)
     (tmp_path / "empty").mkdir()
     assert replay_main([str(tmp_path / "empty")]) == 2
     assert "no <record>/recommend/folds/*.csv" in capsys.readouterr().err
+
+
+def test_the_stacking_command_names_a_block_it_does_not_know_in_one_line(tmp_path, capsys):
+    assert stacking_main([str(tmp_path), "--block", "scored"]) == 2
+    assert capsys.readouterr().err == (
+        "thermaxis error: --block 'scored': expected one of records, dev\n"
+    )
+    assert BLOCKS["dev"] == ("<!-- stacking-dev:start -->", "<!-- stacking-dev:end -->")
