@@ -4,47 +4,45 @@ Intervals of the held-out metrics (a block bootstrap of whole measurements withi
 fold), paired comparisons of models on the same measurements, the paper's claims tested
 per dataset, the sweep's ranking with Friedman and a post-hoc test, and the stability of
 the sensitive points. Settings: config ``statistics`` (:class:`thermaxis.config.StatisticsSettings`).
+
+The names below are imported on first use: a job that needs one module (the models'
+intervals, the index's fold-mean interval) does not import scipy.stats and the claims'
+selection with the rest.
 """
 
-from thermaxis.statistics.claims import (
-    CLAIM_COLUMNS,
-    CLAIMS,
-    claim_results,
-    claims_markdown,
-    claims_table,
-)
-from thermaxis.statistics.comparisons import (
-    COMPARISON_COLUMNS,
-    compare_models,
-    compare_recommendation,
-    comparison_table,
-    fold_means,
-    model_sums,
-)
-from thermaxis.statistics.intervals import measurement_sums, metric_intervals, with_intervals
-from thermaxis.statistics.paired import holm, paired_comparison, verdict
-from thermaxis.statistics.ranking import with_uncertainty
-from thermaxis.statistics.stability import STABILITY_COLUMNS, selection_stability
+from importlib import import_module
 
-__all__ = [
-    "CLAIM_COLUMNS",
-    "CLAIMS",
-    "COMPARISON_COLUMNS",
-    "STABILITY_COLUMNS",
-    "claim_results",
-    "claims_markdown",
-    "claims_table",
-    "compare_models",
-    "compare_recommendation",
-    "comparison_table",
-    "fold_means",
-    "holm",
-    "measurement_sums",
-    "metric_intervals",
-    "model_sums",
-    "paired_comparison",
-    "selection_stability",
-    "verdict",
-    "with_intervals",
-    "with_uncertainty",
-]
+_PUBLIC = {
+    "CLAIM_COLUMNS": "claims",
+    "CLAIMS": "claims",
+    "claim_results": "claims",
+    "claims_markdown": "claims",
+    "claims_table": "claims",
+    "COMPARISON_COLUMNS": "comparisons",
+    "compare_models": "comparisons",
+    "compare_recommendation": "comparisons",
+    "comparison_table": "comparisons",
+    "fold_means": "comparisons",
+    "model_sums": "comparisons",
+    "measurement_sums": "intervals",
+    "metric_intervals": "intervals",
+    "with_intervals": "intervals",
+    "holm": "paired",
+    "paired_comparison": "paired",
+    "verdict": "paired",
+    "with_uncertainty": "ranking",
+    "STABILITY_COLUMNS": "stability",
+    "selection_stability": "stability",
+}
+
+__all__ = sorted(_PUBLIC)
+
+
+def __getattr__(name):
+    if name in _PUBLIC:
+        return getattr(import_module(f"{__name__}.{_PUBLIC[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted([*globals(), *_PUBLIC])
