@@ -10,39 +10,32 @@ intervals, the index's fold-mean interval) does not import scipy.stats and the c
 selection with the rest.
 """
 
-from importlib import import_module
+from thermaxis.lazy import lazy_names
 
 _PUBLIC = {
-    "CLAIM_COLUMNS": "claims",
-    "CLAIMS": "claims",
-    "claim_results": "claims",
-    "claims_markdown": "claims",
-    "claims_table": "claims",
-    "COMPARISON_COLUMNS": "comparisons",
-    "compare_models": "comparisons",
-    "compare_recommendation": "comparisons",
-    "comparison_table": "comparisons",
-    "fold_means": "comparisons",
-    "model_sums": "comparisons",
-    "measurement_sums": "intervals",
-    "metric_intervals": "intervals",
-    "with_intervals": "intervals",
-    "holm": "paired",
-    "paired_comparison": "paired",
-    "verdict": "paired",
-    "with_uncertainty": "ranking",
-    "STABILITY_COLUMNS": "stability",
-    "selection_stability": "stability",
+    "CLAIM_COLUMNS": "thermaxis.statistics.claims",
+    "CLAIMS": "thermaxis.statistics.claims",
+    "claim_results": "thermaxis.statistics.claims",
+    "claims_markdown": "thermaxis.statistics.claims",
+    "claims_table": "thermaxis.statistics.claims",
+    "COMPARISON_COLUMNS": "thermaxis.statistics.comparisons",
+    "compare_models": "thermaxis.statistics.comparisons",
+    "compare_recommendation": "thermaxis.statistics.comparisons",
+    "comparison_table": "thermaxis.statistics.comparisons",
+    "fold_means": "thermaxis.statistics.comparisons",
+    "model_sums": "thermaxis.statistics.comparisons",
+    "measurement_sums": "thermaxis.statistics.intervals",
+    "metric_intervals": "thermaxis.statistics.intervals",
+    "with_intervals": "thermaxis.statistics.intervals",
+    "holm": "thermaxis.statistics.paired",
+    "paired_comparison": "thermaxis.statistics.paired",
+    "verdict": "thermaxis.statistics.paired",
+    "with_uncertainty": "thermaxis.statistics.ranking",
+    "STABILITY_COLUMNS": "thermaxis.statistics.stability",
+    "selection_stability": "thermaxis.statistics.stability",
 }
 
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name):
-    if name in _PUBLIC:
-        return getattr(import_module(f"{__name__}.{_PUBLIC[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted([*globals(), *_PUBLIC])
+__getattr__, __dir__ = lazy_names(__name__, _PUBLIC)
