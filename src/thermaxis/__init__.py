@@ -12,7 +12,7 @@ available here, imported on first use so that ``import thermaxis`` stays instant
     from thermaxis import Settings, load_dataset, DecoupledAxisModel, Compensator
 """
 
-from importlib import import_module
+from thermaxis.lazy import lazy_names
 
 __version__ = "0.1.0"
 
@@ -28,11 +28,4 @@ _PUBLIC = {
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name):
-    if name in _PUBLIC:
-        return getattr(import_module(_PUBLIC[name]), name)
-    raise AttributeError(f"module 'thermaxis' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted([*globals(), *_PUBLIC])
+__getattr__, __dir__ = lazy_names(__name__, _PUBLIC)

@@ -4,47 +4,38 @@ Intervals of the held-out metrics (a block bootstrap of whole measurements withi
 fold), paired comparisons of models on the same measurements, the paper's claims tested
 per dataset, the sweep's ranking with Friedman and a post-hoc test, and the stability of
 the sensitive points. Settings: config ``statistics`` (:class:`thermaxis.config.StatisticsSettings`).
+
+The names below are imported on first use: a job that needs one module (the models'
+intervals, the index's fold-mean interval) does not import scipy.stats and the claims'
+selection with the rest.
 """
 
-from thermaxis.statistics.claims import (
-    CLAIM_COLUMNS,
-    CLAIMS,
-    claim_results,
-    claims_markdown,
-    claims_table,
-)
-from thermaxis.statistics.comparisons import (
-    COMPARISON_COLUMNS,
-    compare_models,
-    compare_recommendation,
-    comparison_table,
-    fold_means,
-    model_sums,
-)
-from thermaxis.statistics.intervals import measurement_sums, metric_intervals, with_intervals
-from thermaxis.statistics.paired import holm, paired_comparison, verdict
-from thermaxis.statistics.ranking import with_uncertainty
-from thermaxis.statistics.stability import STABILITY_COLUMNS, selection_stability
+from thermaxis.lazy import lazy_names
 
-__all__ = [
-    "CLAIM_COLUMNS",
-    "CLAIMS",
-    "COMPARISON_COLUMNS",
-    "STABILITY_COLUMNS",
-    "claim_results",
-    "claims_markdown",
-    "claims_table",
-    "compare_models",
-    "compare_recommendation",
-    "comparison_table",
-    "fold_means",
-    "holm",
-    "measurement_sums",
-    "metric_intervals",
-    "model_sums",
-    "paired_comparison",
-    "selection_stability",
-    "verdict",
-    "with_intervals",
-    "with_uncertainty",
-]
+_PUBLIC = {
+    "CLAIM_COLUMNS": "thermaxis.statistics.claims",
+    "CLAIMS": "thermaxis.statistics.claims",
+    "claim_results": "thermaxis.statistics.claims",
+    "claims_markdown": "thermaxis.statistics.claims",
+    "claims_table": "thermaxis.statistics.claims",
+    "COMPARISON_COLUMNS": "thermaxis.statistics.comparisons",
+    "compare_models": "thermaxis.statistics.comparisons",
+    "compare_recommendation": "thermaxis.statistics.comparisons",
+    "comparison_table": "thermaxis.statistics.comparisons",
+    "fold_means": "thermaxis.statistics.comparisons",
+    "model_sums": "thermaxis.statistics.comparisons",
+    "measurement_sums": "thermaxis.statistics.intervals",
+    "metric_intervals": "thermaxis.statistics.intervals",
+    "with_intervals": "thermaxis.statistics.intervals",
+    "holm": "thermaxis.statistics.paired",
+    "paired_comparison": "thermaxis.statistics.paired",
+    "verdict": "thermaxis.statistics.paired",
+    "with_uncertainty": "thermaxis.statistics.ranking",
+    "STABILITY_COLUMNS": "thermaxis.statistics.stability",
+    "selection_stability": "thermaxis.statistics.stability",
+}
+
+__all__ = sorted(_PUBLIC)
+
+
+__getattr__, __dir__ = lazy_names(__name__, _PUBLIC)

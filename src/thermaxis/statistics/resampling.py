@@ -16,7 +16,6 @@ import math
 import warnings
 
 import numpy as np
-from scipy import stats
 
 __all__ = [
     "block_length_for",
@@ -80,6 +79,10 @@ def fold_mean_interval(values, level: float, n_resamples: int, seed: int) -> tup
 
     One fold has nothing to resample: NaN. Equal values give the value itself.
     """
+    # Here, not at module level: scipy.stats costs about 0.6 s to import, and the block
+    # bootstrap above and the index page need none of it.
+    from scipy import stats
+
     values = np.asarray(values, dtype=float)
     values = values[np.isfinite(values)]
     if values.size < 2:
