@@ -165,13 +165,21 @@ def with_table(document: str, table: str, start: str = START, end: str = END) ->
     return f"{head}{start}\n{table}{end}{tail}"
 
 
-def table_command(argv, prog: str, doc: str, table_of, start: str, end: str) -> int:
+def table_command(argv, prog: str, doc: str, table_of, blocks: dict[str, tuple[str, str]]) -> int:
     """A command printing ``table_of(results folder)`` and, with ``--doc``, writing it between
-    the markers ``start`` and ``end`` of that document; a ValueError is one line, status 2."""
+    the markers of that document's block ``blocks[--block]`` (default: the first); a
+    ValueError or an unknown block is one line, status 2."""
     parser = argparse.ArgumentParser(prog, description=doc)
     parser.add_argument("results", type=Path, help="a bench results folder of records")
     parser.add_argument("--doc", type=Path, help="the document to write the table into")
+    parser.add_argument(
+        "--block", default=next(iter(blocks)), help=f"the block of --doc: {', '.join(blocks)}"
+    )
     args = parser.parse_args(argv)
+    if args.block not in blocks:
+        print(f"thermaxis error: --block {args.block!r}: expected one of {', '.join(blocks)}",
+              file=sys.stderr)  # fmt: skip
+        return 2
     try:
         table = table_of(args.results)
     except ValueError as exc:
@@ -179,7 +187,7 @@ def table_command(argv, prog: str, doc: str, table_of, start: str, end: str) -> 
         return 2
     if args.doc:
         text = args.doc.read_text(encoding="utf-8")
-        args.doc.write_text(with_table(text, table, start, end), encoding="utf-8")
+        args.doc.write_text(with_table(text, table, *blocks[args.block]), encoding="utf-8")
     print(table, end="")
     return 0
 
@@ -192,7 +200,9 @@ def _replay_table(results: Path) -> str:
 
 
 def main(argv=None) -> int:
-    return table_command(argv, "python -m tools.bench.replay", __doc__, _replay_table, START, END)
+    return table_command(
+        argv, "python -m tools.bench.replay", __doc__, _replay_table, {"replay": (START, END)}
+    )
 
 
 if __name__ == "__main__":

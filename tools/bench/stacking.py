@@ -159,19 +159,7 @@ def stacking_table(results: Path) -> str:
 
 
 def main(argv=None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    block = "records"
-    if "--block" in argv:
-        at = argv.index("--block")
-        block = argv[at + 1] if at + 1 < len(argv) else ""
-        del argv[at : at + 2]
-    if block not in BLOCKS:
-        print(f"thermaxis error: --block {block!r}: expected one of {', '.join(BLOCKS)}",
-              file=sys.stderr)  # fmt: skip
-        return 2
-    return table_command(
-        argv, "python -m tools.bench.stacking", __doc__, stacking_table, *BLOCKS[block]
-    )
+    return table_command(argv, "python -m tools.bench.stacking", __doc__, stacking_table, BLOCKS)
 
 
 if __name__ == "__main__":
