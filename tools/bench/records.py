@@ -25,6 +25,7 @@ import pandas as pd
 import yaml
 
 from thermaxis.method.candidates import BASELINE, EVIDENCE
+from tools.bench.scaling import generate_command
 
 __all__ = [
     "CHANNELS",
@@ -44,6 +45,7 @@ RECORD_TARGETS = {"references": 1.10, "paper": 1.0}
 # (5 h at 0.1 Hz, a measurement every 10 min), 5 to 12 runs, seeds apart from the twin's.
 DEV_RECORDS = ((5, 8, 1, 11), (6, 24, 1, 12), (6, 12, 5, 13), (8, 24, 1, 14),
                (10, 16, 3, 15), (7, 10, 1, 16), (12, 24, 1, 17), (6, 6, 1, 18))  # fmt: skip
+DEV_LOGGER = {"hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0}
 
 
 def channel_mapping(mapping: Path, channel: int) -> dict:
@@ -139,12 +141,9 @@ def dev_records(scratch: Path, env: dict, timeout_s: float) -> list[Path]:
         name = f"dev_r{runs}_s{sensors}_p{positions}_seed{seed}"
         target = scratch / name
         shutil.rmtree(target, ignore_errors=True)
-        subprocess.run(
-            [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(target),
-             "--runs", str(runs), "--sensors", str(sensors), "--positions", str(positions),
-             "--hours", "5", "--rate-hz", "0.1", "--measurement-min", "10", "--seed", str(seed)],
-            env=env, check=True, capture_output=True, timeout=timeout_s,
-        )  # fmt: skip
+        shape = {"sensors": sensors, "positions": positions, "seed": seed, **DEV_LOGGER}
+        subprocess.run(generate_command(target, runs, shape), env=env, check=True,
+                       capture_output=True, timeout=timeout_s)  # fmt: skip
         spec_path = target / "dataset.yaml"
         spec = yaml.safe_load(spec_path.read_text(encoding="utf-8"))
         spec["name"] = name

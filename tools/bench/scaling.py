@@ -1,8 +1,11 @@
-"""How a cost grows with the number of runs: a power law fitted on a log-log scale."""
+"""The scale datasets: their shapes, the command that generates them, and how a cost grows
+with the number of runs (a power law fitted on a log-log scale)."""
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -17,6 +20,14 @@ SCALE_SHAPES = {
 }  # fmt: skip
 #: The shapes whose growth with the runs the bench measures by default.
 GROWTH_SHAPES = ("one_position", "positions_14")
+
+
+def generate_command(out: Path, runs: int, spec: dict) -> list[str]:
+    """``python -m thermaxis.twin scale`` writing ``runs`` runs of shape ``spec`` to ``out``."""
+    options = ("sensors", "positions", "hours", "rate_hz", "measurement_min", "seed")
+    flags = [[f"--{name.replace('_', '-')}", str(spec[name])] for name in options]
+    return [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(out), "--runs", str(runs),
+            *(part for flag in flags for part in flag)]  # fmt: skip
 
 
 @dataclass(frozen=True)

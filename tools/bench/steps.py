@@ -17,7 +17,7 @@ from thermaxis.dataset.safety import load_yaml
 from tools.bench import records as bench_records
 from tools.bench.measure import MIB, Measurement, _add_jobs, measure
 from tools.bench.report import finish
-from tools.bench.scaling import GROWTH_SHAPES, SCALE_RUNS, SCALE_SHAPES
+from tools.bench.scaling import GROWTH_SHAPES, SCALE_RUNS, SCALE_SHAPES, generate_command
 
 REPO = Path(__file__).resolve().parents[2]
 STEPS = (
@@ -306,20 +306,12 @@ def _test_suite(env: dict, logs: Path, timeout_s: float) -> Measurement:
                    timeout_s)  # fmt: skip
 
 
-def _generate_command(out: Path, runs: int, spec: dict) -> list[str]:
-    """``python -m thermaxis.twin scale`` writing ``runs`` runs of shape ``spec`` to ``out``."""
-    options = ("sensors", "positions", "hours", "rate_hz", "measurement_min", "seed")
-    flags = [[f"--{name.replace('_', '-')}", str(spec[name])] for name in options]
-    return [sys.executable, "-m", "thermaxis.twin", "scale", "--out", str(out), "--runs", str(runs),
-            *(part for flag in flags for part in flag)]  # fmt: skip
-
-
 def _scale_run(scratch, logs, shape: str, spec: dict, n: int, cores, env, timeout_s, keep, record):
     """Generate one scale dataset (timed apart) and run the default configuration end to end."""
     name = f"{shape}_{n}"
     data = scratch / "scale" / f"data_{name}"
     shutil.rmtree(data, ignore_errors=True)
-    record(measure(f"scale_generate_{name}", _generate_command(data, n, spec), scratch, logs / f"scale_generate_{name}.log",
+    record(measure(f"scale_generate_{name}", generate_command(data, n, spec), scratch, logs / f"scale_generate_{name}.log",
                    f"python -m thermaxis.twin scale: {n} runs, {shape} (not part of the fit)", env, timeout_s,
                    runs=n))  # fmt: skip
     work = prepare_workdir(scratch / "scale" / f"work_{name}")
@@ -340,7 +332,7 @@ def _subset_sweep(scratch: Path, logs: Path, cores: int, env: dict, timeout_s: f
     data = scratch / "subsets" / "data"
     shutil.rmtree(data, ignore_errors=True)
     spec = SUBSET_SHAPE
-    subprocess.run(_generate_command(data, SUBSET_RUNS, spec), env=env, check=True, capture_output=True,
+    subprocess.run(generate_command(data, SUBSET_RUNS, spec), env=env, check=True, capture_output=True,
                    timeout=timeout_s)  # fmt: skip
     work = prepare_workdir(scratch / "subsets" / "work")
     override = {"dataset": str(data), "ambient_sensor": "T1", "sweep": SUBSET_SWEEP}
