@@ -31,6 +31,7 @@ __all__ = [
     "CHANNELS",
     "DEV_RECORDS",
     "channel_mapping",
+    "meets_targets",
     "dev_records",
     "record_quality",
     "RECORD_TARGETS",
@@ -40,12 +41,19 @@ __all__ = [
 CHANNELS = (1, 2, 3, 4, 5)
 # Issue 61's bounds: at most 1.10 x the better plain reference, at most the paper's configuration.
 RECORD_TARGETS = {"references": 1.10, "paper": 1.0}
+
 # Simulated development records (runs, sensors, positions, seed): what a change of the
 # combination rule is judged on before it meets a scored record. Shapes of a logger record
 # (5 h at 0.1 Hz, a measurement every 10 min), 5 to 12 runs, seeds apart from the twin's.
 DEV_RECORDS = ((5, 8, 1, 11), (6, 24, 1, 12), (6, 12, 5, 13), (8, 24, 1, 14),
                (10, 16, 3, 15), (7, 10, 1, 16), (12, 24, 1, 17), (6, 6, 1, 18))  # fmt: skip
 DEV_LOGGER = {"hours": 5.0, "rate_hz": 0.1, "measurement_min": 10.0}
+
+
+def meets_targets(vs_references: float, vs_paper: float) -> bool:
+    """Whether a recommendation's ratios to the better reference and to the paper's
+    configuration are within :data:`RECORD_TARGETS`."""
+    return vs_references <= RECORD_TARGETS["references"] and vs_paper <= RECORD_TARGETS["paper"]
 
 
 def channel_mapping(mapping: Path, channel: int) -> dict:
@@ -103,8 +111,7 @@ def record_quality(results: Path) -> dict:
         "paper_rmse_um": paper,
         "vs_references": recommended / better,
         "vs_paper": recommended / paper,
-        "met": recommended <= RECORD_TARGETS["references"] * better
-        and recommended <= RECORD_TARGETS["paper"] * paper,
+        "met": meets_targets(recommended / better, recommended / paper),
         "verdict": verdict["outcome"],
         "improved_runs": int(verdict["improved_runs"]),
         "worsened_runs": int(verdict["worsened_runs"]),

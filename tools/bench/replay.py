@@ -25,7 +25,7 @@ from thermaxis.method.candidates import BASELINE, EVIDENCE
 from thermaxis.method.nested import COMBINED
 from thermaxis.statistics.paired import wilcoxon_p
 from thermaxis.tables import read_table
-from tools.bench.records import RECORD_TARGETS
+from tools.bench.records import RECORD_TARGETS, meets_targets
 
 __all__ = ["RULES", "replay", "replay_markdown", "previous_rule", "lowest_mean"]
 
@@ -144,7 +144,7 @@ def _bounds_sentence(figures: dict[str, dict[str, float]]) -> str:
     for name, f in figures.items():
         vs_better = f[deployed] / min(f[BASELINE], f[EVIDENCE])
         vs_paper = f[deployed] / f["paper"]
-        if vs_better > RECORD_TARGETS["references"] or vs_paper > RECORD_TARGETS["paper"]:
+        if not meets_targets(vs_better, vs_paper):
             missed.append(f"{name} ({vs_better:.2f} x the better reference, "
                           f"{vs_paper:.2f} x the paper's)")  # fmt: skip
     met = len(figures) - len(missed)
