@@ -21,6 +21,8 @@ from pathlib import Path
 from thermaxis.config import Settings
 
 REPO = Path(__file__).resolve().parents[2]
+# The documents whose result blocks `make docs` writes (thermaxis.reports.docblocks).
+GUIDES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
 # Every stage's settings from an empty config: the schema's defaults, through the config
 # loader (the settings dataclasses have no defaults of their own).
 DEFAULTS = Settings.from_config({})

@@ -10,10 +10,8 @@ import re
 import pandas as pd
 import pytest
 
-from helpers import REPO
+from helpers import GUIDES, REPO
 from thermaxis.reports.docblocks import KINDS, blocks_of, main, rewrite
-
-GUIDES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
 
 
 def _comparison(results):

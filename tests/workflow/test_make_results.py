@@ -26,7 +26,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from helpers import REPO
+from helpers import GUIDES, REPO
 from helpers.builders import write_dataset
 from helpers.workflow import SNAKEMAKE, snakemake_env
 from thermaxis.reports.docblocks import blocks_of, render
@@ -35,7 +35,6 @@ pytestmark = pytest.mark.skipif(shutil.which("make") is None, reason="make is no
 
 VENV = Path(sys.executable).parent.parent
 N_SAMPLES = 400  # the benchmark record's
-GUIDES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
 
 
 def _checkout(root: Path) -> Path:
