@@ -135,13 +135,14 @@ def make_lines_run(tmp: Path) -> Run:
     # are the costliest jobs): the reports build `built` has the per-run and model reports
     # and checks their bytes; test_conditions_report reads the combined one.
     # The paper's decoupled model is deployed: its controller line (K0, tan beta, P0) is the
-    # compensation exactly, which test_cli_workflow replays.
+    # compensation exactly, which test_cli_workflow replays. The figures in both formats.
     config = tiny_config(
         work,
         dataset,
         reports={"model_algorithms": [], "combined_above_runs": 2},
         sweep=LINES_SWEEP,
         compensation={"model": "paper"},
+        figures={"algorithms": ["mlr"], "formats": ["png", "pdf"], "dpi": 60},
     )
     out = work / "results" / "lines"
     interruption = _interrupted_then_rerun(work, config, env, out)

@@ -62,9 +62,10 @@ def planned_rules(proc: subprocess.CompletedProcess) -> set[str]:
 def tiny_config(work: Path, dataset: Path, name: str = "test_config.yaml", **extra) -> Path:
     """The workflow configuration of the end-to-end tests, written to ``work/name``.
 
-    Two algorithms with a two-point SVR grid and one figure and report algorithm keep
-    the runs short; the full algorithm set is exercised by the unit tests and `make results`.
-    ``extra`` replaces top-level keys.
+    Two algorithms with a two-point SVR grid, one figure and report algorithm, and the
+    figures as PNG at 60 dpi (drawing them is most of a figure job) keep the runs short;
+    the full algorithm set is exercised by the unit tests and `make results`, the PDFs by
+    the ``lines`` run. ``extra`` replaces top-level keys.
     """
     config = {
         "dataset": str(dataset),
@@ -74,7 +75,7 @@ def tiny_config(work: Path, dataset: Path, name: str = "test_config.yaml", **ext
             "algorithms": ["mlr", "svr"],
             "svr_grid": {"C": [1.0, 10.0], "epsilon": [0.1], "gamma": ["scale"]},
         },
-        "figures": {"algorithms": ["mlr"]},
+        "figures": {"algorithms": ["mlr"], "formats": ["png"], "dpi": 60},
         "reports": {"model_algorithms": ["mlr"]},
         **extra,
     }

@@ -5,12 +5,10 @@ from __future__ import annotations
 import json
 
 import pandas as pd
-import pytest
 import yaml
 
-from helpers.builders import write_dataset
 from helpers.runs import LINES_RUNS
-from helpers.workflow import planned_rules, run_snakemake, tiny_config, workflow_workdir
+from helpers.workflow import planned_rules
 
 TABLES = ("siemens_840d", "twincat", "residuals", "iso230_2", "summary")
 
@@ -62,41 +60,6 @@ def test_model_option_reruns_compensation_and_figure_option_does_not(lines_run):
     figure_change.write_text(yaml.safe_dump({**doc, "figures": {**doc["figures"], "dpi": 120}}))
     rules = planned_rules(lines_run.snakemake(*wanted, "-n", "--configfile", str(figure_change)))
     assert rules == {"fig_results"}, rules
-
-
-def test_the_default_deploys_the_super_learner_with_each_folds_weights(tmp_path):
-    dataset = write_dataset(tmp_path / "tiny", name="tiny", runs=("R1", "R2", "R3", "R4"))
-    work = workflow_workdir(tmp_path)
-    config = tiny_config(work, dataset, models={"algorithms": ["mlr"]})
-    out = work / "results" / "tiny"
-    folds = ("R1", "R2", "R3", "R4")
-    run_snakemake(work, "--configfile", str(config), "--",
-                  "results/tiny/compensation/ThermalCompensation.st")  # fmt: skip
-    choice = json.loads((out / "recommend" / "choice.json").read_text())
-    model = json.loads((out / "compensation" / "model.json").read_text())
-    assert (model["approach"], model["deployment"]["candidate"]) == ("combination", "super learner")
-
-    def weights(record):
-        return {m["candidate"]: m["weight"] for m in record["members"]}
-
-    def positive(mapping):
-        return {m: w for m, w in mapping.items() if w > 0}
-
-    # One linear model with the final weights; each held-out run compensated by its own
-    # fold's weights, on members fitted without it.
-    assert weights(model) == positive(choice["final"]["weights"])
-    assert model["trained_on"] == list(folds)
-    assert {row["fold"] for row in model["held_out_accuracy"]} == set(folds)
-    for fold in folds:
-        fold_model = json.loads((out / "compensation" / "folds" / fold / "model.json").read_text())
-        assert weights(fold_model) == positive(choice["folds"][fold])
-        assert fold_model["trained_on"] == [r for r in folds if r != fold]
-    table = pd.read_csv(out / "tables" / "recommendation.csv")
-    assert set(table["chosen"]) == {"super learner"}
-    for member, weight in choice["folds"]["R2"].items():
-        assert table.set_index("fold").loc["R2", f"weight_{member}"] == pytest.approx(
-            weight, abs=1e-6
-        )
 
 
 def test_the_verdict_reads_the_same_on_every_surface(lines_run, capsys):

@@ -5,6 +5,10 @@ play two. docs/reports.md ("Byte-identical runs") states the contract this test 
 across kernels every number of every table agrees within one unit of its last written
 digit or ``RTOL`` of the largest magnitude in its column, whichever is larger; every
 label, choice and count is equal.
+
+The first kernel's run, of the default recommendation and compensation, also serves the
+check that the default deploys the super learner with each fold's own weights (one cold
+run fewer in the suite).
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import platform
 import re
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -30,17 +35,16 @@ from helpers.workflow import run_snakemake, snakemake_env, tiny_config, workflow
 # with its result, so a value near 0 is held to its column's largest magnitude.
 RTOL = 1e-6
 NAME = "kernels"
-RUNS = ("R1", "R2", "R3")
+RUNS = ("R1", "R2", "R3", "R4")
 
 
-def _kernels() -> tuple[str, str]:
-    """Haswell, and SkylakeX where the CPU has AVX-512 (Sandybridge otherwise)."""
+def _kernels() -> tuple[str, str] | None:
+    """Haswell, and SkylakeX where the CPU has AVX-512 (Sandybridge otherwise); None where
+    the CPU cannot run Haswell's kernel (not x86-64 with AVX2)."""
     cpuinfo = Path("/proc/cpuinfo")
     flags = set(re.findall(r"\w+", cpuinfo.read_text())) if cpuinfo.exists() else set()
     if platform.machine() not in ("x86_64", "AMD64") or "avx2" not in flags:
-        pytest.skip(
-            f"OpenBLAS's Haswell kernel needs an x86-64 CPU with AVX2 ({platform.machine()})"
-        )
+        return None
     return "Haswell", "SkylakeX" if "avx512f" in flags else "Sandybridge"
 
 
@@ -63,7 +67,9 @@ def _curve(r, m, x):
     return (-10.0 + 0.5 * m + r) * (x - x[0]) / 1000.0 - 0.7 * m + 0.3 * np.sin(m + r + x / 60.0)
 
 
-def _run(tmp: Path, dataset: Path, core: str) -> Path:
+def _run(tmp: Path, dataset: Path, core: str | None) -> Path:
+    """The workflow's fits and compensation with OpenBLAS's ``core`` kernel (None: the
+    one OpenBLAS picks for this CPU)."""
     work = workflow_workdir(tmp)
     # The held-out models (MLR and SVR), the recommendation and the compensation of the
     # model it chooses: every table of the fits, the choice and the controller exports.
@@ -73,10 +79,34 @@ def _run(tmp: Path, dataset: Path, core: str) -> Path:
         f"{out}/tables/metrics.csv",
         f"{out}/tables/recommendation.csv",
         *(f"{out}/compensation/{t}.csv" for t in ("siemens_840d", "twincat", "residuals")),
+        f"{out}/compensation/ThermalCompensation.st",
     ]
-    env = {**snakemake_env(), "OPENBLAS_CORETYPE": core}
+    env = snakemake_env() if core is None else {**snakemake_env(), "OPENBLAS_CORETYPE": core}
     run_snakemake(work, *targets, "--configfile", str(config), env=env)
     return work / out
+
+
+@dataclass(frozen=True)
+class Runs:
+    dataset: Path
+    kernels: tuple[str, str] | None  # None where OpenBLAS's kernels cannot be forced
+    first: Path  # results/kernels of the first kernel's run (the CPU's own without kernels)
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory) -> Runs:
+    tmp = tmp_path_factory.mktemp("kernels")
+    dataset = write_dataset(
+        tmp / NAME,
+        runs=RUNS,
+        sensors=("S1", "S2", "S3", "S4"),
+        curve=_curve,
+        name=NAME,
+        n_measurements=5,
+    )
+    kernels = _kernels()
+    core = kernels[0] if kernels else None
+    return Runs(dataset, kernels, _run(tmp / str(core), dataset, core))
 
 
 def _last_digit(text: str) -> float:
@@ -113,8 +143,12 @@ def _differences(a: pd.DataFrame, b: pd.DataFrame) -> list[str]:
     return found
 
 
-def test_tables_agree_across_openblas_kernels(tmp_path, record_property):
-    kernels = _kernels()
+def test_tables_agree_across_openblas_kernels(runs, tmp_path, record_property):
+    kernels = runs.kernels
+    if kernels is None:
+        pytest.skip(
+            f"OpenBLAS's Haswell kernel needs an x86-64 CPU with AVX2 ({platform.machine()})"
+        )
     loaded = {core: _architectures(core) for core in kernels}
     # A kernel OpenBLAS does not load (an unknown name falls back to the CPU's own) would
     # compare a kernel with itself and prove nothing.
@@ -122,15 +156,7 @@ def test_tables_agree_across_openblas_kernels(tmp_path, record_property):
     record_property("openblas_kernels", " vs ".join(kernels))
     print(f"compared OpenBLAS kernels: {' vs '.join(kernels)}")
 
-    dataset = write_dataset(
-        tmp_path / NAME,
-        runs=RUNS,
-        sensors=("S1", "S2", "S3", "S4"),
-        curve=_curve,
-        name=NAME,
-        n_measurements=5,
-    )
-    first, second = (_run(tmp_path / core, dataset, core) for core in kernels)
+    first, second = runs.first, _run(tmp_path / kernels[1], runs.dataset, kernels[1])
     tables = sorted(p.relative_to(first) for p in first.rglob("*.csv"))
     assert tables == sorted(p.relative_to(second) for p in second.rglob("*.csv"))
     assert any(t.parts[0] == "compensation" for t in tables) and len(tables) >= 10, tables
@@ -145,6 +171,35 @@ def test_tables_agree_across_openblas_kernels(tmp_path, record_property):
             mismatches[str(table)] = found
     print(f"{len(tables)} tables, {identical} byte-identical, all within the stated precision")
     assert not mismatches, f"{' vs '.join(kernels)}: {mismatches}"
+
+
+def test_the_default_deploys_the_super_learner_with_each_folds_weights(runs):
+    out = runs.first
+    choice = json.loads((out / "recommend" / "choice.json").read_text())
+    model = json.loads((out / "compensation" / "model.json").read_text())
+    assert (model["approach"], model["deployment"]["candidate"]) == ("combination", "super learner")
+
+    def weights(record):
+        return {m["candidate"]: m["weight"] for m in record["members"]}
+
+    def positive(mapping):
+        return {m: w for m, w in mapping.items() if w > 0}
+
+    # One linear model with the final weights; each held-out run compensated by its own
+    # fold's weights, on members fitted without it.
+    assert weights(model) == positive(choice["final"]["weights"])
+    assert model["trained_on"] == list(RUNS)
+    assert {row["fold"] for row in model["held_out_accuracy"]} == set(RUNS)
+    for fold in RUNS:
+        fold_model = json.loads((out / "compensation" / "folds" / fold / "model.json").read_text())
+        assert weights(fold_model) == positive(choice["folds"][fold])
+        assert fold_model["trained_on"] == [r for r in RUNS if r != fold]
+    table = pd.read_csv(out / "tables" / "recommendation.csv")
+    assert set(table["chosen"]) == {"super learner"}
+    for member, weight in choice["folds"]["R2"].items():
+        assert table.set_index("fold").loc["R2", f"weight_{member}"] == pytest.approx(
+            weight, abs=1e-6
+        )
 
 
 @pytest.mark.parametrize(

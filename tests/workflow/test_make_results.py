@@ -49,7 +49,7 @@ def _checkout(root: Path) -> Path:
         ambient_sensor="S1",
         selection={**config["selection"], "n_clusters": 2},
         models={**config["models"], "algorithms": ["mlr", "svr"]},
-        figures={**config.get("figures", {}), "algorithms": ["mlr"], "formats": ["png"]},
+        figures={**config.get("figures", {}), "algorithms": ["mlr"], "formats": ["png"], "dpi": 60},
         # One conditions report of both runs instead of one per run: a notebook fewer.
         reports={**config.get("reports", {}), "model_algorithms": [], "combined_above_runs": 1},
     )

@@ -107,11 +107,12 @@ def test_make_lint_passes():
 
 
 def test_make_bench_measures_a_small_step(tmp_path):
-    """The dry-run step: the twin's plan and the one-rule floor, best of three each, and
-    their target line in bench.md. (The startup step would also time .venv-slurm, whose
-    executor plugin waits about 10 s a start for an absent Slurm controller.)"""
+    """The dry-run step: the twin's plan and the one-rule floor, best of two each here
+    (``--repeats``; three by default), and their target line in bench.md. (The startup
+    step would also time .venv-slurm, whose executor plugin waits about 10 s a start for
+    an absent Slurm controller.)"""
     out = tmp_path / "bench"
-    args = f"--steps dryrun --out {out} --workdir {tmp_path / 'work'} --cores 1"
+    args = f"--steps dryrun --out {out} --workdir {tmp_path / 'work'} --cores 1 --repeats 2"
     _make("bench", REPO, f"BENCH_ARGS={args}")
     doc = json.loads((out / "bench.json").read_text())
     by_name = {m["name"]: m for m in doc["measurements"]}
@@ -119,9 +120,9 @@ def test_make_bench_measures_a_small_step(tmp_path):
     assert all(m["ok"] and m["wall_s"] > 0 and m["cpu_s"] > 0 for m in by_name.values())
     report = (out / "bench.md").read_text()
     assert "dry run of the twin <= the one-rule dry run + 2 s CPU" in report
-    # The step's logs: three runs of each command, the twin's a plan of the whole workflow.
+    # The step's logs: two runs of each command, the twin's a plan of the whole workflow.
     logs = sorted(p.name for p in (out / "logs").iterdir())
-    assert logs == [f"{n}_{i}.log" for n in ("dryrun_one_rule", "dryrun_twin") for i in range(3)]
+    assert logs == [f"{n}_{i}.log" for n in ("dryrun_one_rule", "dryrun_twin") for i in range(2)]
     assert "This was a dry-run" in (out / "logs" / "dryrun_twin_0.log").read_text()
 
 

@@ -30,7 +30,7 @@ so the repository's own ``results/`` are never touched):
 * ``dryrun_twin`` beside ``dryrun_one_rule``: ``snakemake -n`` of the twin in an empty
   work folder (every job planned, nothing run: what parsing the workflow and building its
   DAG cost, which every Snakemake start pays, each Slurm job included) and of a one-rule
-  workflow (the floor: Snakemake's own start-up); the best of three each.
+  workflow (the floor: Snakemake's own start-up); the best of three each (``--repeats``).
 
 Each command runs in its own process group.  Wall time is measured around it; CPU time
 (user + system) and the largest single process's peak RSS come from ``os.wait4``, which

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from tools.bench.report import render
 from tools.bench.scaling import GROWTH_SHAPES, SCALE_RUNS, SCALE_SHAPES
-from tools.bench.steps import STEPS, _machine, run_bench
+from tools.bench.steps import DRYRUN_REPEATS, STEPS, _machine, run_bench
 
 
 def main(argv=None) -> int:
@@ -41,6 +41,12 @@ def main(argv=None) -> int:
         "--keep", action="store_true", help="keep the scratch work folders and scale datasets"
     )
     parser.add_argument(
+        "--repeats",
+        type=int,
+        default=DRYRUN_REPEATS,
+        help="times each start-up and dry-run timing is taken; the best is kept",
+    )
+    parser.add_argument(
         "--timeout-s", type=float, default=3600.0, help="stop any one measurement after this long"
     )
     parser.add_argument(
@@ -58,10 +64,11 @@ def main(argv=None) -> int:
         print((args.out / "bench.md").read_text(encoding="utf-8"))
         return 0
     cores = args.cores or _machine()["usable_cores"] or 1
-    if cores < 1 or any(n < 1 for n in args.runs):
-        print("thermaxis error: --cores and --runs must be positive integers", file=sys.stderr)
+    if cores < 1 or args.repeats < 1 or any(n < 1 for n in args.runs):
+        print("thermaxis error: --cores, --repeats and --runs must be positive integers",
+              file=sys.stderr)  # fmt: skip
         return 2
     doc = run_bench(args.out, cores, args.runs, args.steps, args.workdir, args.keep, args.timeout_s,
-                    shapes=args.shapes, progress=lambda line: print(line, file=sys.stderr, flush=True))  # fmt: skip
+                    shapes=args.shapes, repeats=args.repeats, progress=lambda line: print(line, file=sys.stderr, flush=True))  # fmt: skip
     print((args.out / "bench.md").read_text(encoding="utf-8"))
     return 0 if all(m["ok"] for m in doc["measurements"]) else 1

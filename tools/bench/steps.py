@@ -37,6 +37,7 @@ SUBSET_RUNS = 5
 TWIN_RESUME = "src/thermaxis/twin_params.heldout_restarts.json"  # the Makefile's RESUME
 SUBSET_SWEEP = {"methods": ["subset"], "n_clusters": [3], "approaches": ["pointwise"], "algorithms": ["mlr"],
                 "max_subsets": 2000}  # fmt: skip
+# Startup and dry-run timings are a few seconds each, so each is the best of this many.
 DRYRUN_REPEATS = 3
 # The smallest workflow Snakemake can run: its no-op is the floor a no-op rerun is measured against.
 ONE_RULE_SNAKEFILE = (
@@ -131,6 +132,7 @@ def run_bench(  # noqa: PLR0915 -- the steps in the order they run, each one a h
     timeout_s: float = 3600.0,
     progress=print,
     shapes=GROWTH_SHAPES,
+    repeats: int = DRYRUN_REPEATS,
 ) -> dict:
     """Run the benchmark and return the bench.json document (also written to ``out``)."""
     out.mkdir(parents=True, exist_ok=True)
@@ -152,7 +154,7 @@ def run_bench(  # noqa: PLR0915 -- the steps in the order they run, each one a h
 
     try:
         if "dryrun" in steps:
-            for m in _dry_runs(scratch, cores, env, logs, timeout_s):
+            for m in _dry_runs(scratch, cores, env, logs, timeout_s, repeats):
                 record(m)
         if "results" in steps or "sweep" in steps:
             work = prepare_workdir(scratch / "default")
@@ -165,7 +167,7 @@ def run_bench(  # noqa: PLR0915 -- the steps in the order they run, each one a h
                                "snakemake sweep, default grid (assembled data present)", env, timeout_s))  # fmt: skip
             m.extra.update(_sweep_size(work, dataset_name))
         if "startup" in steps:
-            for m in _startup(scratch, cores, env, logs, timeout_s):
+            for m in _startup(scratch, cores, env, logs, timeout_s, repeats):
                 record(m)
         if "subsets" in steps:
             record(_subset_sweep(scratch, logs, cores, env, timeout_s, keep))
@@ -350,9 +352,9 @@ def _subset_sweep(scratch: Path, logs: Path, cores: int, env: dict, timeout_s: f
 
 
 def _startup(
-    scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float
+    scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float, repeats: int
 ) -> list[Measurement]:
-    """``snakemake --version`` and a one-rule no-op, in .venv and (if made) in .venv-slurm; best of three."""
+    """``snakemake --version`` and a one-rule no-op, in .venv and (if made) in .venv-slurm; best of ``repeats``."""
     one_rule = scratch / "startup_one_rule"
     one_rule.mkdir(parents=True, exist_ok=True)
     (one_rule / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
@@ -372,15 +374,15 @@ def _startup(
         ]  # fmt: skip
         for name, command, description in cases:
             runs = [measure(name, command, one_rule, logs / f"{name}_{i}.log", description, venv_env, timeout_s)
-                    for i in range(DRYRUN_REPEATS)]  # fmt: skip
+                    for i in range(repeats)]  # fmt: skip
             out.append(min(runs, key=lambda m: (not m.ok, m.wall_s)))
     return out
 
 
 def _dry_runs(
-    scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float
+    scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float, repeats: int
 ) -> list[Measurement]:
-    """``snakemake -n`` of the twin in an empty work folder and of a one-rule workflow, best of DRYRUN_REPEATS."""
+    """``snakemake -n`` of the twin in an empty work folder and of a one-rule workflow, best of ``repeats``."""
     twin = prepare_workdir(scratch / "dryrun_twin")
     one_rule = scratch / "dryrun_one_rule"
     one_rule.mkdir(parents=True, exist_ok=True)
@@ -406,7 +408,7 @@ def _dry_runs(
                 env,
                 timeout_s,
             )
-            for i in range(DRYRUN_REPEATS)
+            for i in range(repeats)
         ]
         best.append(min(runs, key=lambda m: (not m.ok, m.wall_s)))
     return best
