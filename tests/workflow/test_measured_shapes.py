@@ -94,7 +94,7 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
         "--config",
         "dataset=data/measured",
         "models={algorithms: [mlr], signals: [spindle_rpm]}",
-        "figures={algorithms: [mlr]}",
+        "figures={algorithms: [mlr], formats: [png], dpi: 60}",
         "--",
         *targets,
     )
