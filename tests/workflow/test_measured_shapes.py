@@ -84,8 +84,11 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
     # A time-aware candidate with the operating signal, deployed by name: its held-out
     # replay reads the temperature and signal logs.
     lagged = work / "lagged.yaml"
+    # The figures as PNG at 60 dpi: drawing them is most of a figure job.
     lagged.write_text(yaml.safe_dump({"recommend": {"lags_min": [30]},
-                                      "compensation": {"model": "pointwise-pls-all+lags"}}))  # fmt: skip
+                                      "compensation": {"model": "pointwise-pls-all+lags"},
+                                      "figures": {"algorithms": ["mlr"], "formats": ["png"],
+                                                  "dpi": 60}}))  # fmt: skip
     run_snakemake(
         work,
         "--configfile",
@@ -94,7 +97,6 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
         "--config",
         "dataset=data/measured",
         "models={algorithms: [mlr], signals: [spindle_rpm]}",
-        "figures={algorithms: [mlr], formats: [png], dpi: 60}",
         "--",
         *targets,
     )
