@@ -336,6 +336,28 @@ def test_a_workbooks_typed_date_and_time_cells_are_read_whatever_their_display_f
     _assert_r2_read_as_logged(dataset)
 
 
+@pytest.mark.parametrize(
+    "content, expected",
+    [
+        (b"time,temp A\n0,20.0\n", "Cannot detect file format"),  # a CSV given the suffix
+        (b"PK\x03\x04 cut short", "Cannot detect file format"),  # a truncated zip
+    ],
+    ids=["csv_named_xlsx", "truncated_zip"],
+)
+def test_a_file_that_is_no_workbook_is_one_line_naming_it(tmp_path, content, expected):
+    (tmp_path / "clock.xlsx").write_bytes(content)
+    path = _clock_mapping(tmp_path, "ISO8601")
+    mapping = yaml.safe_load(path.read_text())
+    mapping["source"] = "clock.xlsx"
+    path.write_text(yaml.safe_dump(mapping))
+    with pytest.raises(DataError) as caught:
+        import_dataset(path, tmp_path / "raw")
+    message = str(caught.value)
+    assert message.startswith(f"{tmp_path / 'clock.xlsx'}: cannot read the table (")
+    assert expected in message and "\n" not in message
+    assert not (tmp_path / "raw").exists()
+
+
 def test_a_text_cell_among_decimal_commas_is_the_cell_named(tmp_path):
     start = pd.Timestamp("2020-06-15 08:01:02")
     _european_export(

@@ -28,22 +28,33 @@ def irregular(n: int, seed: int, mean_step_s: float = 40.0) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(steps)])
 
 
+def grid(kind: str, n: int, seed: int, mean_step_s: float = 40.0) -> np.ndarray:
+    """Sample times: irregular, or evenly spaced (a logger's usual record, which
+    lag_filter runs as a constant-pole IIR filter)."""
+    return irregular(n, seed, mean_step_s) if kind == "irregular" else np.arange(n) * mean_step_s
+
+
+GRIDS = ["irregular", "even"]
+
+
 # ----------------------------------------------------------------------------- lag
 
 
+@pytest.mark.parametrize("kind", GRIDS)
 @pytest.mark.parametrize("tau", [7.0, 600.0, 1800.0, 5e4])
-def test_step_response_is_one_minus_exp(tau):
+def test_step_response_is_one_minus_exp(tau, kind):
     # A unit step at t = 0 onto a filter at rest: u is 1 throughout, the filter starts at 0.
-    t = irregular(400, seed=1)
+    t = grid(kind, 400, seed=1)
     y = lag_filter(t, np.ones_like(t), tau, initial=0.0)
     np.testing.assert_allclose(y, 1.0 - np.exp(-t / tau), rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("kind", GRIDS)
 @pytest.mark.parametrize("tau", [30.0, 1800.0])
-def test_ramp_response_is_exact_on_an_irregular_grid(tau):
+def test_ramp_response_is_exact_on_any_grid(tau, kind):
     # u = r t from rest: y = r (t - tau (1 - exp(-t / tau))), the solution of
     # tau y' = r t - y, y(0) = 0.
-    t = irregular(500, seed=2)
+    t = grid(kind, 500, seed=2)
     r = 0.013  # degC per second
     y = lag_filter(t, r * t, tau)
     truth = r * (t - tau * -np.expm1(-t / tau))
@@ -66,17 +77,21 @@ def test_starts_at_the_first_value_and_a_constant_stays_constant():
     )
 
 
-def test_filters_columns_independently():
-    t = irregular(200, seed=6)
+@pytest.mark.parametrize("kind", GRIDS)
+def test_filters_columns_independently(kind):
+    t = grid(kind, 200, seed=6)
     u = np.random.default_rng(6).normal(size=(t.size, 3)).cumsum(axis=0)
-    y = lag_filter(t, u, 300.0)
+    initial = np.array([1.0, -2.0, 0.5])
+    y = lag_filter(t, u, 300.0, initial=initial)
     for j in range(3):
-        np.testing.assert_array_equal(y[:, j], lag_filter(t, u[:, j], 300.0))
+        np.testing.assert_array_equal(y[:, j], lag_filter(t, u[:, j], 300.0, initial=initial[j]))
 
 
+@pytest.mark.parametrize("kind", GRIDS)
 @pytest.mark.parametrize("initial", [None, 3.0])
-def test_online_lag_equals_offline(initial):
-    t = 1.7e4 + irregular(2000, seed=7, mean_step_s=5.0)  # a clock that does not start at 0
+def test_online_lag_equals_offline(initial, kind):
+    # A clock that does not start at 0; the online filter steps sample by sample.
+    t = 1.7e4 + grid(kind, 2000, seed=7, mean_step_s=5.0)
     u = 20.0 + np.random.default_rng(7).normal(0, 0.3, t.size).cumsum()
     offline = lag_filter(t, u, 1200.0, initial=initial)
     state = LagState(1200.0, initial=initial)

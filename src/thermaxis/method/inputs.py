@@ -178,11 +178,18 @@ def lag_filter(t, u, tau_s: float, initial=None) -> np.ndarray:
         raise ValueError(f"initial value must be finite, got {initial!r}")
     a, g = _lag_coefficients(np.diff(t), tau)
     drive = g[:, None] * np.diff(u2, axis=0)
-    # A first-order recurrence with time-varying coefficients has no stable closed form
-    # over a long record (the products of a_k underflow), so it is run step by step,
-    # vectorised over the signals.
-    for k in range(1, t.size):
-        e[k] = a[k - 1] * e[k - 1] - drive[k - 1]
+    if a.size and (a == a[0]).all():
+        # Evenly sampled (a logger's usual record): one constant pole, so the recurrence
+        # is an IIR filter, which scipy runs in compiled code: e_k = -drive_k + a e_{k-1},
+        # the state starting at a e_0. Imported here: only a lagged input needs it.
+        from scipy.signal import lfilter
+
+        e[1:] = lfilter([1.0], [1.0, -a[0]], -drive, axis=0, zi=a[0] * e[:1])[0]
+    else:
+        # Time-varying coefficients have no stable closed form over a long record (the
+        # products of a_k underflow): step by step, vectorised over the signals.
+        for k in range(1, t.size):
+            e[k] = a[k - 1] * e[k - 1] - drive[k - 1]
     y = u2 + e
     return y.reshape(t.size) if flat else y
 
