@@ -213,6 +213,13 @@ def _document(cores: int, runs, steps, shapes) -> dict:
     return doc
 
 
+def _one_rule_workdir(folder: Path, snakefile: str = ONE_RULE_SNAKEFILE) -> Path:
+    """``folder`` holding only ``snakefile``: a floor the workflow's start-up is measured against."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "Snakefile").write_text(snakefile)
+    return folder
+
+
 def _results_steps(work: Path, scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float):
     """``make results`` cold, then with nothing to do, beside the one-rule floors, then after
     one model parameter changed; each measurement yielded as soon as it is made."""
@@ -226,9 +233,7 @@ def _results_steps(work: Path, scratch: Path, cores: int, env: dict, logs: Path,
         ("one_rule_params_noop", ONE_RULE_PARAMS_SNAKEFILE,
          "the same rule with one params entry (Snakemake then imports pandas)"),
     ):  # fmt: skip
-        baseline = scratch / name
-        baseline.mkdir(parents=True, exist_ok=True)
-        (baseline / "Snakefile").write_text(snakefile)
+        baseline = _one_rule_workdir(scratch / name, snakefile)
         subprocess.run(
             _snakemake(cores),
             cwd=baseline,
@@ -355,9 +360,7 @@ def _startup(
     scratch: Path, cores: int, env: dict, logs: Path, timeout_s: float, repeats: int
 ) -> list[Measurement]:
     """``snakemake --version`` and a one-rule no-op, in .venv and (if made) in .venv-slurm; best of ``repeats``."""
-    one_rule = scratch / "startup_one_rule"
-    one_rule.mkdir(parents=True, exist_ok=True)
-    (one_rule / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
+    one_rule = _one_rule_workdir(scratch / "startup_one_rule")
     venvs = {"venv": Path(sys.executable).parent, "slurm": REPO / ".venv-slurm" / "bin"}
     out = []
     for label, bin_dir in venvs.items():
@@ -373,9 +376,9 @@ def _startup(
              f"one-rule no-op ({bin_dir.parent.name})"),
         ]  # fmt: skip
         for name, command, description in cases:
-            runs = [measure(name, command, one_rule, logs / f"{name}_{i}.log", description, venv_env, timeout_s)
-                    for i in range(repeats)]  # fmt: skip
-            out.append(min(runs, key=lambda m: (not m.ok, m.wall_s)))
+            out.append(
+                _best_of(repeats, name, command, one_rule, logs, description, venv_env, timeout_s)
+            )
     return out
 
 
@@ -384,9 +387,7 @@ def _dry_runs(
 ) -> list[Measurement]:
     """``snakemake -n`` of the twin in an empty work folder and of a one-rule workflow, best of ``repeats``."""
     twin = prepare_workdir(scratch / "dryrun_twin")
-    one_rule = scratch / "dryrun_one_rule"
-    one_rule.mkdir(parents=True, exist_ok=True)
-    (one_rule / "Snakefile").write_text(ONE_RULE_SNAKEFILE)
+    one_rule = _one_rule_workdir(scratch / "dryrun_one_rule")
     cases = [
         (
             "dryrun_twin",
@@ -396,19 +397,18 @@ def _dry_runs(
         ),
         ("dryrun_one_rule", one_rule, [], "snakemake -n of a one-rule workflow (the floor)"),
     ]
-    best = []
-    for name, cwd, args, description in cases:
-        runs = [
-            measure(
-                name,
-                _snakemake(cores, "-n", *args),
-                cwd,
-                logs / f"{name}_{i}.log",
-                description,
-                env,
-                timeout_s,
-            )
-            for i in range(repeats)
-        ]
-        best.append(min(runs, key=lambda m: (not m.ok, m.wall_s)))
-    return best
+    return [
+        _best_of(
+            repeats, name, _snakemake(cores, "-n", *args), cwd, logs, description, env, timeout_s
+        )
+        for name, cwd, args, description in cases
+    ]
+
+
+def _best_of(repeats: int, name: str, command, cwd: Path, logs: Path, description: str, env: dict,
+             timeout_s: float) -> Measurement:  # fmt: skip
+    """``command`` measured ``repeats`` times (logs ``<name>_<i>.log``): the fastest run that
+    succeeded, or a failed one if none did."""
+    runs = [measure(name, command, cwd, logs / f"{name}_{i}.log", description, env, timeout_s)
+            for i in range(repeats)]  # fmt: skip
+    return min(runs, key=lambda m: (not m.ok, m.wall_s))
