@@ -50,8 +50,22 @@ def run_snakemake(
         timeout=timeout,
     )
     if check and proc.returncode != 0:
-        raise AssertionError(f"snakemake failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}")
+        raise AssertionError(
+            f"snakemake failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}"
+            + failed_job_logs(work, proc.stdout + proc.stderr)
+        )
     return proc
+
+
+def failed_job_logs(work: Path, output: str) -> str:
+    """The tail of each log Snakemake names for a failed job, which its own output only points to."""
+    tails = []
+    named = re.findall(r"^\s*log: (.+?) \(check log", output, flags=re.M)
+    for name in dict.fromkeys(n for logs in named for n in logs.split(", ")):
+        log = work / name
+        if log.is_file():
+            tails.append(f"\n--- {name} ---\n{log.read_text(errors='replace')[-3000:]}")
+    return "".join(tails)
 
 
 def planned_rules(proc: subprocess.CompletedProcess) -> set[str]:

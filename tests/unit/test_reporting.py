@@ -10,6 +10,7 @@ import re
 import shutil
 import subprocess
 from datetime import UTC, datetime
+from pathlib import Path
 
 import nbformat
 import pandas as pd
@@ -261,6 +262,34 @@ def test_pages_share_one_kernel_but_not_its_names(tmp_path):
         assert code[3].outputs[0]["data"]["text/plain"] == str(10 * i)
         assert code[3].outputs[0]["execution_count"] == 4
         assert f"page {i}" in page["html"].read_text(encoding="utf-8")
+
+
+def test_a_page_runs_in_a_kernel_on_private_socket_files_that_go_with_it(tmp_path):
+    """No TCP port another process could take between its choice and the kernel's bind: the
+    kernel reports IPC transport, its connection file in a folder removed after the page."""
+    nb = nbformat.v4.new_notebook(
+        cells=[
+            nbformat.v4.new_code_cell(
+                "import json\nfrom ipykernel.connect import get_connection_file, get_connection_info\n"
+                "print(json.loads(get_connection_info())['transport'])\nprint(get_connection_file())"
+            )
+        ]
+    )
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "language": "python",
+        "display_name": "Python 3",
+    }
+    source = tmp_path / "page.ipynb"
+    nbformat.write(nb, source)
+    executed = tmp_path / "done.ipynb"
+    notebooks.execute(source, executed, tmp_path / "done.html", "one page", {})
+    transport, connection = (
+        nbformat.read(executed, as_version=4).cells[-1].outputs[0]["text"].split()
+    )
+    assert transport == "ipc"
+    assert Path(connection).name == "connection.json" and not Path(connection).parent.exists()
+    assert "one page" in (tmp_path / "done.html").read_text(encoding="utf-8")
 
 
 def test_cleaning_repairs_keeps_only_repaired_sensors():

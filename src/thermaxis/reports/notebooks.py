@@ -8,10 +8,13 @@ kernel, its namespace reset between pages, so the kernel and the imports start o
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import json
+import os
 import re
 import sys
+import tempfile
 
 __all__ = [
     "strip_volatile",
@@ -193,19 +196,8 @@ def execute(
     start_timeout, execution_timeout : float
         Seconds the kernel may take to start, and any one cell to run.
     """
-    import papermill
-
-    papermill.execute_notebook(
-        str(notebook),
-        str(executed),
-        parameters=parameters,
-        kernel_name=kernel,
-        start_timeout=start_timeout,
-        execution_timeout=execution_timeout,
-        progress_bar=False,
-        request_save_on_cell_execute=False,
-    )
-    convert(executed, html_path, title)
+    page = {"executed": executed, "html": html_path, "title": title, "parameters": parameters}
+    execute_pages(notebook, [page], kernel, start_timeout, execution_timeout)
 
 
 def clear_page_names(shell) -> None:
@@ -241,7 +233,6 @@ def execute_pages(
     """
     import nbformat
     import papermill
-    from jupyter_client.manager import KernelManager
     from nbclient import NotebookClient
 
     reset = nbformat.v4.new_notebook(
@@ -251,10 +242,13 @@ def execute_pages(
             )
         ]
     )
-    km = KernelManager(kernel_name=kernel)
-    km.start_kernel()
-    try:
-        for page in pages:
+    with _private_kernel(kernel) as km:
+        for number, page in enumerate(pages):
+            if number:
+                # The kernel's own client runs the reset, as it runs a notebook's cells.
+                NotebookClient(
+                    reset, km=km, timeout=execution_timeout, startup_timeout=start_timeout
+                ).execute()
             papermill.execute_notebook(
                 str(notebook),
                 str(page["executed"]),
@@ -268,13 +262,32 @@ def execute_pages(
                 # cell: a page with its figures is a megabyte of JSON.
                 request_save_on_cell_execute=False,
             )
-            # The kernel's own client runs the reset, as it runs a notebook's cells.
-            NotebookClient(
-                reset, km=km, timeout=execution_timeout, startup_timeout=start_timeout
-            ).execute()
             convert(page["executed"], page["html"], page["title"])
-    finally:
-        km.shutdown_kernel(now=True)
+
+
+@contextlib.contextmanager
+def _private_kernel(kernel: str):
+    """A started kernel that talks over IPC sockets in a folder of its own, shut down after.
+
+    Over TCP, jupyter_client picks free ports and the kernel binds them later; a process
+    that takes one in between kills the kernel at start (papermill#511, jupyter_client#154),
+    and a test suite or a cluster node starts kernels beside many other processes. Socket
+    files in a fresh temporary folder cannot be taken by anyone else.
+    """
+    from jupyter_client.manager import KernelManager
+
+    with tempfile.TemporaryDirectory(prefix="thermaxis-kernel-") as folder:
+        km = KernelManager(
+            kernel_name=kernel,
+            transport="ipc",
+            ip=os.path.join(folder, "socket"),
+            connection_file=os.path.join(folder, "connection.json"),
+        )
+        km.start_kernel()
+        try:
+            yield km
+        finally:
+            km.shutdown_kernel(now=True)
 
 
 def json_argument(value: str, stdin=None):
