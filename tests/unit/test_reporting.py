@@ -9,6 +9,7 @@ import os
 import re
 import shutil
 import subprocess
+import tempfile
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -264,9 +265,18 @@ def test_pages_share_one_kernel_but_not_its_names(tmp_path):
         assert f"page {i}" in page["html"].read_text(encoding="utf-8")
 
 
-def test_a_page_runs_in_a_kernel_on_private_socket_files_that_go_with_it(tmp_path):
+@pytest.mark.parametrize("temporary", ["system", "deep"])
+def test_a_page_runs_in_a_kernel_on_private_socket_files_that_go_with_it(
+    temporary, tmp_path, monkeypatch
+):
     """No TCP port another process could take between its choice and the kernel's bind: the
-    kernel reports IPC transport, its connection file in a folder removed after the page."""
+    kernel reports IPC transport, its connection file in a folder removed after the page.
+    Under a temporary folder too deep for a socket's path (108 bytes on Linux), as a
+    cluster job's TMPDIR can be, the folder goes under /tmp instead."""
+    if temporary == "deep":
+        deep = tmp_path / ("d" * 120)
+        deep.mkdir()
+        monkeypatch.setattr(tempfile, "tempdir", str(deep))
     nb = nbformat.v4.new_notebook(
         cells=[
             nbformat.v4.new_code_cell(
@@ -289,6 +299,7 @@ def test_a_page_runs_in_a_kernel_on_private_socket_files_that_go_with_it(tmp_pat
     )
     assert transport == "ipc"
     assert Path(connection).name == "connection.json" and not Path(connection).parent.exists()
+    assert len(os.fsencode(Path(connection).parent / "socket-99999")) < 108
     assert "one page" in (tmp_path / "done.html").read_text(encoding="utf-8")
 
 

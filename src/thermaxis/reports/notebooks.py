@@ -276,7 +276,7 @@ def _private_kernel(kernel: str):
     """
     from jupyter_client.manager import KernelManager
 
-    with tempfile.TemporaryDirectory(prefix="thermaxis-kernel-") as folder:
+    with tempfile.TemporaryDirectory(prefix="thermaxis-kernel-", dir=_socket_parent()) as folder:
         km = KernelManager(
             kernel_name=kernel,
             transport="ipc",
@@ -288,6 +288,18 @@ def _private_kernel(kernel: str):
             yield km
         finally:
             km.shutdown_kernel(now=True)
+
+
+# A Unix socket's path holds at most 107 bytes (Linux; 103 on macOS); the kernel's are
+# "<folder>/socket-<n>". A cluster's per-job TMPDIR can be deep enough to pass that.
+_SOCKET_PATH_MAX = 100
+
+
+def _socket_parent() -> str | None:
+    """The temporary folder's parent: the system's, unless its sockets' paths would be too long."""
+    default = tempfile.gettempdir()
+    room = _SOCKET_PATH_MAX - len("/thermaxis-kernel-xxxxxxxx/socket-99999")
+    return None if len(os.fsencode(default)) <= room else "/tmp"
 
 
 def json_argument(value: str, stdin=None):
