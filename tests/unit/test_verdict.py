@@ -294,3 +294,50 @@ def test_harm_is_judged_on_the_runs_that_changed():
     assert (lean["improved_runs"], lean["worsened_runs"], lean["unchanged_runs"]) == (3, 2, 1)
     assert lean["outcome"] == "not_established"
     assert lean["sign_test_p"] == pytest.approx(42 / 64)
+
+
+def _with_status(rows, statuses):
+    table = summary(rows)
+    table["status"] = statuses
+    return table
+
+
+def test_runs_the_fallback_withheld_throughout_do_not_test_it():
+    # Two runs, each outside its fold's training range: held at every measurement from the
+    # first, so nothing is applied (after == before). No run tested the model: not
+    # established, not "not recommended". The sign test still counts them as not improved
+    # (the controller applies nothing there either): m more improving runs pass when
+    # P(X >= m | 2 + m, 1/2) <= 0.05; m = 8: (45 + 10 + 1) / 1024 = 0.055, m = 9:
+    # (55 + 11 + 1) / 2048 = 0.033, so 9.
+    rows = [("R1", 1, 3.0, 3.0, 1.0, 1.0), ("R1", 2, 5.0, 5.0, 2.0, 2.0),
+            ("R2", 1, 4.0, 4.0, 1.5, 1.5)]  # fmt: skip
+    held = deployment_verdict(_with_status(rows, ["hold"] * 3), tolerance=0.1, significance=0.05)
+    assert (held["untested_runs"], held["untested"], held["unchanged_runs"]) == (2, ["R1", "R2"], 0)
+    assert [r["effect"] for r in held["runs"]] == ["untested", "untested"]
+    assert held["outcome"] == "not_established" and held["runs_needed"] == 9
+    sentence = verdict_sentence(held)
+    assert sentence.startswith("Not established: ")
+    assert "the fallback withheld it throughout R1 and R2, which do not test it" in sentence
+    assert "No held-out run tests it" in sentence and "nothing here shows" not in sentence
+    # The same numbers with the model applied (status ok) are two runs it leaves unchanged:
+    # it helps none, which is the documented "not recommended".
+    applied = deployment_verdict(_with_status(rows, ["ok"] * 3), tolerance=0.1, significance=0.05)
+    assert (applied["unchanged_runs"], applied["untested_runs"]) == (2, 0)
+    assert applied["outcome"] == "not_recommended"
+
+
+def test_a_run_holding_an_earlier_good_value_is_judged_on_its_changes():
+    # R1 is held at its second measurement but applies the value of its first (8 -> 3):
+    # it is improved, not untested. R2 is held throughout; R3 improves. 2 improved of 3
+    # with R2 untested: p = P(X >= 2 | 3) = 4/8, not established, R2 named.
+    rows = [("R1", 1, 2.0, 1.0, 1.0, 0.5), ("R1", 2, 8.0, 3.0, 2.0, 1.0),
+            ("R2", 1, 4.0, 4.0, 1.0, 1.0),
+            ("R3", 1, 6.0, 2.0, 1.0, 0.5)]  # fmt: skip
+    verdict = deployment_verdict(
+        _with_status(rows, ["ok", "hold", "hold", "ok"]), tolerance=0.1, significance=0.05
+    )
+    assert [r["effect"] for r in verdict["runs"]] == ["improved", "untested", "improved"]
+    assert verdict["sign_test_p"] == 4 / 8 and verdict["outcome"] == "not_established"
+    sentence = verdict_sentence(verdict)
+    assert "the fallback withheld it throughout R2, which does not test it" in sentence
+    assert "Too few runs to tell" in sentence

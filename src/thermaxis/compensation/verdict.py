@@ -7,15 +7,18 @@ stroke and both directions, and of E of ISO 230-2, each the worst over its measu
 
 - a run is *improved* when a quantity shrinks by more than the tolerance and none grows
   by more; *worsened* when one grows by more; *unchanged* otherwise. The tolerance is
-  what the measurement resolves (:func:`tolerance_um`), from the config, never from a run;
+  what the measurement resolves (:func:`tolerance_um`), from the config, never from a run.
+  A run is *untested* when the controller's fallback withheld the compensation at every
+  one of its measurements (a temperature outside its fold's training range, a sensor
+  fault): nothing was applied, so it says nothing of the model;
 - **recommended** when more than half the runs improve with confidence (the one-sided
   sign test of "at most half improve", p <= significance) and the median change of the
   largest |deviation| is a reduction; the runs it worsens are the edge of the conditions
   it was tested on;
 - **not recommended** when the runs say it harms: at least as many worsened as improved
   (unchanged runs set aside, as the sign test does), or the median change is an increase;
-- **not established** otherwise: the runs lean to improvement but are too few; the verdict
-  says how many more improving runs would pass the test.
+- **not established** otherwise: the runs lean to improvement but are too few, or no run
+  tested it; the verdict says how many more improving runs would pass the test.
 
 A compensation that is not recommended is still written, and says so. The rule and its
 sources: docs/recommendation.md.
@@ -39,6 +42,7 @@ __all__ = [
     "median_interval",
     "runs_needed",
     "run_changes",
+    "withheld_throughout",
     "deployment_verdict",
     "verdict_sentence",
 ]
@@ -116,14 +120,36 @@ def run_changes(summary: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(columns)
 
 
-def _effects(changes: pd.DataFrame, names: list[str], tolerance: float) -> list[str]:
-    """Each run improved, unchanged or worsened beyond ``tolerance``, over every quantity."""
+def withheld_throughout(summary: pd.DataFrame, runs) -> list[bool]:
+    """Per run of ``runs``: did the fallback withhold the compensation at every measurement?
+
+    Withheld means a fallback status (not ``ok``) and nothing applied: every quantity the
+    same compensated as uncompensated. A run held from its first cycle applies zero
+    parameters, and adding zero is exact, so the equality is exact too; a run holding an
+    earlier good value applies it and is judged on its changes. A summary without a
+    ``status`` column (no fallback policy) withholds nothing.
+    """
+    if "status" not in summary.columns:
+        return [False] * len(runs)
+    withheld = summary["status"].ne("ok")
+    for _, before, after in _available(summary):
+        same = summary[after].eq(summary[before]) | (summary[after].isna() & summary[before].isna())
+        withheld &= same
+    by_run = withheld.groupby(summary["run"], sort=False).all()
+    return [bool(by_run.loc[run]) for run in runs]
+
+
+def _effects(
+    changes: pd.DataFrame, names: list[str], tolerance: float, withheld: list[bool]
+) -> list[str]:
+    """Each run untested (``withheld``), or improved, unchanged or worsened beyond
+    ``tolerance`` over every quantity."""
     values = changes[[f"{name}_change_um" for name in names]].to_numpy(dtype=float)
     worse = (values > tolerance).any(axis=1)
     better = (values < -tolerance).any(axis=1) & ~worse
     return [
-        "worsened" if w else "improved" if b else "unchanged"
-        for w, b in zip(worse, better, strict=True)
+        "untested" if h else "worsened" if w else "improved" if b else "unchanged"
+        for h, w, b in zip(withheld, worse, better, strict=True)
     ]
 
 
@@ -145,10 +171,16 @@ def _quantity(changes: pd.DataFrame, name: str, alpha: float) -> dict:
     }
 
 
-def _outcome(improved: int, worsened: int, p: float, median_change: float, alpha: float) -> str:
+def _outcome(
+    improved: int, worsened: int, tested: int, p: float, median_change: float, alpha: float
+) -> str:
+    # No run it acted on says nothing either way: absence of evidence, not of an effect.
+    if tested == 0:
+        return "not_established"
     # Harm is what the runs that changed say: as many worsened as improved (the sign test's
     # own view, which sets unchanged runs aside), or a median increase. Establishing a
-    # benefit is stricter: there an unchanged run counts against it (sign_test_p).
+    # benefit is stricter: there an unchanged or untested run counts against it
+    # (sign_test_p), as the controller applies nothing there either.
     if worsened >= improved or median_change > 0:
         return "not_recommended"
     if p <= alpha and median_change < 0:
@@ -172,7 +204,7 @@ def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: fl
         )
     changes = run_changes(summary)
     names = [name for name, _, _ in _available(summary)]
-    effects = _effects(changes, names, tolerance)
+    effects = _effects(changes, names, tolerance, withheld_throughout(summary, changes["run"]))
     n, improved = len(changes), effects.count("improved")
     p = sign_test_p(n, improved)
     low, high = clopper_pearson(n, improved, significance)
@@ -184,6 +216,8 @@ def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: fl
         "unchanged_runs": effects.count("unchanged"),
         "worsened_runs": effects.count("worsened"),
         "worsened": [r for r, e in zip(changes["run"], effects, strict=True) if e == "worsened"],
+        "untested_runs": effects.count("untested"),
+        "untested": [r for r, e in zip(changes["run"], effects, strict=True) if e == "untested"],
         "share_improved": improved / n,
         "share_interval": [low, high],
         "sign_test_p": p,
@@ -193,6 +227,7 @@ def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: fl
     outcome = _outcome(
         improved,
         verdict["worsened_runs"],
+        n - verdict["untested_runs"],
         p,
         verdict["largest_abs"]["median_change_um"],
         significance,
@@ -207,6 +242,15 @@ def deployment_verdict(summary: pd.DataFrame, tolerance: float, significance: fl
         for row, effect in zip(changes.to_dict("records"), effects, strict=True)
     ]
     return verdict
+
+
+def _untested_clause(verdict: dict) -> str:
+    """The runs the fallback withheld the compensation from throughout, when there are any."""
+    untested = verdict.get("untested", [])
+    if not untested:
+        return ""
+    verb = "does" if len(untested) == 1 else "do"
+    return f", and the fallback withheld it throughout {_names(untested)}, which {verb} not test it"
 
 
 def _names(runs: list[str]) -> str:
@@ -246,7 +290,8 @@ def verdict_sentence(verdict: dict, unit: str = "um") -> str:
         f"+/-{verdict['tolerance_um']:.2f} {unit} the measurement resolves "
         f"({k / n:.0%}, {1 - 2 * alpha:.0%} interval {low:.0%} to {high:.0%}; sign test "
         f"p = {p:.2g} {'<=' if p <= alpha else '>'} {alpha:g}), leaves "
-        f"{verdict['unchanged_runs']} unchanged and worsens {verdict['worsened_runs']}; "
+        f"{verdict['unchanged_runs']} unchanged and worsens {verdict['worsened_runs']}"
+        f"{_untested_clause(verdict)}; "
         f"median change of the largest |deviation| {largest['median_change_um']:+.2f} {unit} "
         f"({largest['median_interval_coverage']:.0%} interval {m_low:+.2f} to "
         f"{m_high:+.2f} {unit})."
@@ -258,13 +303,23 @@ def verdict_sentence(verdict: dict, unit: str = "um") -> str:
         edge = f"{worst}: the edge of the conditions it was tested on." if worsened else ""
         return f"Recommended for deployment: {evidence}{edge}"
     if outcome == "not_established":
-        where = (
-            f"at the conditions of {_names(worsened)} or outside those tested"
-            if worsened
-            else "at conditions outside those tested, or repeats of them"
-        )
+        untested = verdict.get("untested_runs", 0) == n
+        if untested:
+            why, where = (
+                "No held-out run tests it (the fallback's reasons are in "
+                "compensation/summary.csv; most often temperatures outside the range its "
+                "fold's model was trained on):",
+                "at conditions within the ranges of the other runs",
+            )
+        else:
+            why = "Too few runs to tell:"
+            where = (
+                f"at the conditions of {_names(worsened)} or outside those tested"
+                if worsened
+                else "at conditions outside those tested, or repeats of them"
+            )
         return (
-            f"Not established: {evidence}{worst + '.' if worsened else ''} Too few runs to tell: "
+            f"Not established: {evidence}{worst + '.' if worsened else ''} {why} "
             f"{verdict['runs_needed']} more held-out run(s) that it improves would establish it, "
             f"{where}."
         )
