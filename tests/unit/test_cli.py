@@ -264,6 +264,23 @@ def test_sweep_and_report_put_their_targets_after_the_options(started):
     )
 
 
+def test_two_datasets_of_one_name_are_refused_before_either_runs(started, tmp_path, capsys):
+    """Each writes results/<name>/: the second would silently replace the first's results."""
+    copy = tmp_path / "twin_again"
+    shutil.copytree(REPO / "data/raw/twin", copy)
+    for command in ("run", "report"):
+        assert main([command, "data/raw/twin", str(copy)]) == 1
+        err = capsys.readouterr().err.splitlines()
+        assert err == [
+            f"thermaxis error: {copy}: dataset name 'twin' (its dataset.yaml) is "
+            "data/raw/twin's too, and both would write results/twin; give one of them "
+            "another name"
+        ]
+    assert main(["run", "data/raw/twin", "data/raw/twin/"]) == 1
+    assert capsys.readouterr().err == "thermaxis error: data/raw/twin/: listed twice\n"
+    assert started == []
+
+
 def test_snakemake_arguments_are_refused_where_no_snakemake_runs():
     with pytest.raises(SystemExit) as info:
         main(["check", "data/raw/twin", "--", "-n"])

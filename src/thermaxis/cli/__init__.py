@@ -236,10 +236,14 @@ def _config(configfiles=(), dataset: str | None = None) -> dict:
     return validate_config(overrides or {})
 
 
-def _snakemake_command(args, extra: list[str]) -> list[str]:
-    """Snakemake through the recovery wrapper of ``make results``, quiet unless ``--verbose``."""
+def _in_checkout() -> None:
     if not Path("Snakefile").is_file():
         raise DataError(f"{Path.cwd()}: no Snakefile; {CHECKOUT_NEEDED}")
+
+
+def _snakemake_command(args, extra: list[str]) -> list[str]:
+    """Snakemake through the recovery wrapper of ``make results``, quiet unless ``--verbose``."""
+    _in_checkout()
     snakemake = Path(sys.executable).with_name("snakemake")
     # "--logger=rich", not "--logger rich": the option takes one or more loggers, and would
     # take a target that follows it for a second one.
@@ -255,7 +259,24 @@ def _wrapped(command: list[str]) -> int:
 
 
 def _datasets(args) -> list[str]:
-    return args.datasets or _config()["datasets"]
+    """The datasets to run, each writing its own results/<name>/: two that share a name
+    would overwrite one another's results, the second silently replacing the first."""
+    from thermaxis.dataset.reader import load_dataset
+
+    _in_checkout()
+    datasets = args.datasets or _config()["datasets"]
+    first: dict[str, str] = {}
+    for dataset in datasets:
+        name = load_dataset(dataset).name
+        if name in first:
+            raise ValueError(
+                f"{dataset}: listed twice"
+                if Path(first[name]).resolve() == Path(dataset).resolve()
+                else f"{dataset}: dataset name {name!r} (its dataset.yaml) is {first[name]}'s "
+                f"too, and both would write results/{name}; give one of them another name"
+            )
+        first[name] = dataset
+    return datasets
 
 
 def _dry_run(args) -> bool:
