@@ -228,6 +228,17 @@ def test_strip_volatile_drops_time_stamps_and_fixes_the_injected_cell_id():
     assert nb["cells"][1] == {"id": "keep", "metadata": {}}
 
 
+def _python_notebook(nb, path):
+    """``nb`` written to ``path`` for the python3 kernel."""
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "language": "python",
+        "display_name": "Python 3",
+    }
+    nbformat.write(nb, path)
+    return path
+
+
 def test_pages_share_one_kernel_but_not_its_names(tmp_path):
     """Three pages of one notebook in one kernel: each sees its own parameter, none sees a
     name the page before defined (an underscored one neither), and each counts its cells
@@ -241,13 +252,7 @@ def test_pages_share_one_kernel_but_not_its_names(tmp_path):
             nbformat.v4.new_code_cell("x * 10"),
         ]
     )
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "language": "python",
-        "display_name": "Python 3",
-    }
-    source = tmp_path / "page.ipynb"
-    nbformat.write(nb, source)
+    source = _python_notebook(nb, tmp_path / "page.ipynb")
     pages = [
         dict(executed=tmp_path / f"p{i}.ipynb", html=tmp_path / f"p{i}.html", title=f"page {i}",
              parameters={"x": i})
@@ -285,13 +290,7 @@ def test_a_page_runs_in_a_kernel_on_private_socket_files_that_go_with_it(
             )
         ]
     )
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "language": "python",
-        "display_name": "Python 3",
-    }
-    source = tmp_path / "page.ipynb"
-    nbformat.write(nb, source)
+    source = _python_notebook(nb, tmp_path / "page.ipynb")
     executed = tmp_path / "done.ipynb"
     notebooks.execute(source, executed, tmp_path / "done.html", "one page", {})
     transport, connection = (
