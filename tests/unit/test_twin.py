@@ -363,10 +363,10 @@ def test_network_steady_state_balances_the_heat_input():
 
 
 def test_scale_generator_writes_the_requested_shape(tmp_path):
-    spec = ScaleSpec(runs=2, sensors=5, positions=4, hours=0.5, rate_hz=0.2, seed=3)
+    spec = ScaleSpec(runs=2, sensors=5, positions=4, hours=0.5, rate_hz=0.2, seed=3, name="r2")
     generate_scale(tmp_path, spec)
     dataset = load_dataset(tmp_path)
-    assert dataset.run_ids == ("S001", "S002")
+    assert dataset.name == "r2" and dataset.run_ids == ("S001", "S002")
     assert dataset.sensors == ("T1", "T2", "T3", "T4", "T5")
     for run in dataset.run_ids:
         box = pd.read_csv(tmp_path / run / "temperatures" / "box.csv")
@@ -384,6 +384,10 @@ def test_scale_generator_rejects_an_impossible_shape(tmp_path):
         generate_scale(tmp_path, ScaleSpec(runs=1, sensors=2, positions=0, hours=1.0, rate_hz=1.0))
     with pytest.raises(ValueError, match="too short"):
         generate_scale(tmp_path, ScaleSpec(runs=1, sensors=2, positions=4, hours=0.05, rate_hz=1.0))
+    # A name is a results folder: never a path out of results/.
+    with pytest.raises(ValueError, match="'../x' is not a safe name"):
+        generate_scale(tmp_path, ScaleSpec(1, 2, 4, 1.0, 1.0, name="../x"))
+    assert not any(tmp_path.iterdir())
 
 
 def test_scale_generator_writes_a_single_position_at_its_measurement_period(tmp_path):

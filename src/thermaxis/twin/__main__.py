@@ -49,6 +49,9 @@ def _parser() -> argparse.ArgumentParser:
     sc.add_argument(
         "--measurement-min", type=float, default=30.0, help="minutes between measurements"
     )
+    sc.add_argument(
+        "--name", default="twin_scale", help="the dataset's name, so its results/<name>/ folder"
+    )
     return parser
 
 
@@ -153,6 +156,7 @@ def _scale(args) -> int:
         args.rate_hz,
         args.seed,
         60.0 * args.measurement_min,
+        args.name,
     )
     try:
         generate_scale(args.out, spec)

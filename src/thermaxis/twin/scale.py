@@ -16,6 +16,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.csv as pacsv
 
+from ..dataset.safety import check_name
 from . import conditions as cond
 from . import model as mdl
 from .network import NODES
@@ -40,8 +41,11 @@ class ScaleSpec:
     rate_hz: float
     seed: int = 0
     measurement_period_s: float = MEASUREMENT_PERIOD_S
+    # The dataset's name, so its results folder: results/<name>/.
+    name: str = "twin_scale"
 
     def validate(self) -> None:
+        check_name(self.name, "dataset name", "thermaxis.twin scale")
         if self.runs < 1 or self.sensors < 1 or self.positions < 1:
             raise ValueError(
                 f"runs, sensors and positions must be >= 1, got runs={self.runs}, "
@@ -206,7 +210,7 @@ def generate_scale(
     )
     (root / "dataset.yaml").write_text(
         f"""# Written by `python -m thermaxis.twin scale` -- a benchmark dataset, not for analysis.
-name: twin_scale
+name: {spec.name}
 description: >-
   Benchmark dataset from thermaxis.twin scale: {spec.runs} runs, {spec.sensors} sensors,
   {spec.positions} targets, {spec.hours:g} h at {spec.rate_hz:g} Hz, measurements every {spec.measurement_period_s / 60:g} min.
