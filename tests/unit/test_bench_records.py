@@ -14,6 +14,7 @@ from thermaxis.method.nested import COMBINED, super_learner_weights
 from tools.bench.records import channel_mapping, record_quality, without_signals
 from tools.bench.replay import main as replay_main
 from tools.bench.replay import replay, replay_markdown, with_table
+from tools.bench.report import _quality_table
 from tools.bench.stacking import BLOCKS
 from tools.bench.stacking import main as stacking_main
 
@@ -31,7 +32,7 @@ def test_record_quality_reads_the_workflows_tables(tmp_path):
     ).to_csv(results / "recommend" / "candidates.csv", index=False)  # fmt: skip
     (results / "compensation").mkdir()
     verdict = {"outcome": "not_established", "improved_runs": 1, "worsened_runs": 1,
-               "held_out_runs": 2, "sign_test_p": 0.75}  # fmt: skip
+               "held_out_runs": 3, "untested_runs": 1, "sign_test_p": 0.875}  # fmt: skip
     (results / "compensation" / "model.json").write_text(
         json.dumps({"deployment": {"verdict": verdict}}), encoding="utf-8"
     )
@@ -44,7 +45,11 @@ def test_record_quality_reads_the_workflows_tables(tmp_path):
         "not_established",
         1,
         1,
-        0.75,
+        0.875,
+    )
+    # The bench table's verdict cell names the untested run (held throughout by the fallback).
+    assert "| not established (1 / 1 of 3, 1 untested, p = 0.88) |" in "\n".join(
+        _quality_table([q], "a test record")
     )
 
 

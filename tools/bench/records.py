@@ -116,6 +116,7 @@ def record_quality(results: Path) -> dict:
         "improved_runs": int(verdict["improved_runs"]),
         "worsened_runs": int(verdict["worsened_runs"]),
         "held_out_runs": int(verdict["held_out_runs"]),
+        "untested_runs": int(verdict["untested_runs"]),
         "sign_test_p": float(verdict["sign_test_p"]),
     }
 

@@ -234,7 +234,8 @@ def _quality_table(rows: list, what: str) -> list:
         f"and the paper's configuration, on the same folds, on {what} (tools/bench/records.py):",
         "",
         "| record | folds | recommendation | ridge with lags | evidence ridge | paper's configuration "
-        "| vs better reference | vs paper | verdict (improved / worsened of held-out runs, sign test p) |",
+        "| vs better reference | vs paper | verdict (improved / worsened of held-out runs, the "
+        "untested if any, sign test p) |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     return lines + [
@@ -246,10 +247,12 @@ def _quality_table(rows: list, what: str) -> list:
 
 
 def _verdict_cell(q: dict) -> str:
-    """The compensation's verdict in words and its counts."""
+    """The compensation's verdict in words and its counts (improved / worsened of held out,
+    and the runs the fallback withheld it from throughout, when there are any)."""
+    untested = f", {q['untested_runs']} untested" if q.get("untested_runs") else ""
     return (
         f"{q['verdict'].replace('_', ' ')} ({q['improved_runs']} / {q['worsened_runs']} of "
-        f"{q['held_out_runs']}, p = {q['sign_test_p']:.2g})"
+        f"{q['held_out_runs']}{untested}, p = {q['sign_test_p']:.2g})"
     )
 
 
