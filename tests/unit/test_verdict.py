@@ -341,3 +341,22 @@ def test_a_run_holding_an_earlier_good_value_is_judged_on_its_changes():
     sentence = verdict_sentence(verdict)
     assert "the fallback withheld it throughout R2, which does not test it" in sentence
     assert "Too few runs to tell" in sentence
+
+
+def test_a_refusal_says_which_measure_fell_where_one_did():
+    # R1: largest |deviation| 8 -> 3 (-5) but E 1.0 -> 2.5 (+1.5): lower and higher at once.
+    # R2 worse in both, R3 within 0.1 in both. None improved, 2 worsened: not recommended.
+    # The temperatures did predict part of R1's drift, so the refusal says that, not
+    # "nothing shows"; with R1 worse in both measures too, it says "nothing shows".
+    rows = [("R1", 1, 8.0, 3.0, 1.0, 2.5), ("R2", 1, 4.0, 9.0, 1.0, 2.0),
+            ("R3", 1, 5.0, 5.05, 1.0, 1.05)]  # fmt: skip
+    verdict = deployment_verdict(summary(rows), tolerance=0.1, significance=0.05)
+    assert (verdict["improved_runs"], verdict["worsened"]) == (0, ["R1", "R2"])
+    assert verdict["outcome"] == "not_recommended"
+    assert verdict_sentence(verdict).endswith(
+        "It helps no held-out run beyond the tolerance in both measures: it lowers the "
+        "largest |deviation| of R1 beyond the tolerance but raises E of ISO 230-2 there."
+    )
+    rows[0] = ("R1", 1, 8.0, 8.5, 1.0, 2.5)
+    nothing = verdict_sentence(deployment_verdict(summary(rows), 0.1, 0.05))
+    assert nothing.endswith("nothing here shows that the temperatures predict this axis's drift.")

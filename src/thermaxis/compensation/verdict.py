@@ -323,10 +323,32 @@ def verdict_sentence(verdict: dict, unit: str = "um") -> str:
             f"{verdict['runs_needed']} more held-out run(s) that it improves would establish it, "
             f"{where}."
         )
-    nothing = (
-        " It helps no held-out run beyond the tolerance: nothing here shows that the "
-        "temperatures predict this axis's drift."
-        if k == 0
-        else ""
-    )
+    nothing = _no_help_clause(verdict) if k == 0 else ""
     return f"NOT recommended for deployment: {evidence}{worst + '.' if worsened else ''}{nothing}"
+
+
+def _no_help_clause(verdict: dict) -> str:
+    """Why a compensation that improves no run is refused. Where some run lowered one
+    measure beyond the tolerance while raising the other, the temperatures did predict part
+    of the drift, and the sentence says which runs and measures instead of claiming they
+    predict none of it."""
+    words = {"largest_abs": "the largest |deviation|", "E": "E of ISO 230-2"}
+    tolerance = verdict["tolerance_um"]
+    mixed: dict[tuple[str, str], list[str]] = {}
+    for run in verdict["runs"]:
+        changes = {q: run.get(f"{q}_change_um", math.nan) for q in words}
+        lower = [q for q, c in changes.items() if c < -tolerance]
+        higher = [q for q, c in changes.items() if c > tolerance]
+        if lower and higher:
+            mixed.setdefault((lower[0], higher[0]), []).append(run["run"])
+    if not mixed:
+        return (
+            " It helps no held-out run beyond the tolerance: nothing here shows that the "
+            "temperatures predict this axis's drift."
+        )
+    parts = [
+        f"it lowers {words[down]} of {_names(runs)} beyond the tolerance but raises "
+        f"{words[up]} there"
+        for (down, up), runs in mixed.items()
+    ]
+    return f" It helps no held-out run beyond the tolerance in both measures: {'; '.join(parts)}."
