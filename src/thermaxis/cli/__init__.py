@@ -258,25 +258,23 @@ def _wrapped(command: list[str]) -> int:
     return subprocess.run(command, stdin=subprocess.DEVNULL).returncode
 
 
-def _datasets(args) -> list[str]:
-    """The datasets to run, each writing its own results/<name>/: two that share a name
-    would overwrite one another's results, the second silently replacing the first."""
-    from thermaxis.dataset.reader import load_dataset
-
+def _datasets(args) -> dict[str, Path]:
+    """The datasets to run, each with the results/<name>/ folder it writes: two that share a
+    name would overwrite one another's results, the second silently replacing the first."""
     _in_checkout()
-    datasets = args.datasets or _config()["datasets"]
-    first: dict[str, str] = {}
-    for dataset in datasets:
-        name = load_dataset(dataset).name
-        if name in first:
+    folders: dict[str, Path] = {}
+    for dataset in args.datasets or _config()["datasets"]:
+        out = _results_of(dataset)
+        first = next((d for d, o in folders.items() if o == out), None)
+        if first is not None:
             raise ValueError(
                 f"{dataset}: listed twice"
-                if Path(first[name]).resolve() == Path(dataset).resolve()
-                else f"{dataset}: dataset name {name!r} (its dataset.yaml) is {first[name]}'s "
-                f"too, and both would write results/{name}; give one of them another name"
+                if Path(first).resolve() == Path(dataset).resolve()
+                else f"{dataset}: dataset name {out.name!r} (its dataset.yaml) is {first}'s "
+                f"too, and both would write {out}; give one of them another name"
             )
-        first[name] = dataset
-    return datasets
+        folders[dataset] = out
+    return folders
 
 
 def _dry_run(args) -> bool:
@@ -287,8 +285,8 @@ def _run(args) -> int:
     """Each dataset's workflow, the page across every dataset under results/, then the answers."""
     from thermaxis.reports import answer, crossdataset
 
-    datasets = _datasets(args)
-    for dataset in datasets:
+    folders = _datasets(args)
+    for dataset in folders:
         print(f"== {dataset}", flush=True)
         code = _wrapped(_snakemake_command(args, ["--config", f"dataset={dataset}"]))
         if code:
@@ -299,7 +297,7 @@ def _run(args) -> int:
     if code:
         return code
     # The answers last, so the terminal ends with them.
-    return answer.main([str(_results_of(dataset)) for dataset in datasets])
+    return answer.main([str(out) for out in folders.values()])
 
 
 def _sweep(args) -> int:
@@ -331,9 +329,8 @@ def _report(args) -> int:
     from thermaxis.pipeline import paths
     from thermaxis.reports import answer
 
-    folders = []
-    for dataset in _datasets(args):
-        out = _results_of(dataset)
+    folders = _datasets(args)
+    for dataset, out in folders.items():
         target = (
             ["--report", str(out / paths.REPORT_ZIP)]
             if args.zip
@@ -342,8 +339,7 @@ def _report(args) -> int:
         code = _wrapped(_snakemake_command(args, ["--config", f"dataset={dataset}", *target]))
         if code:
             return code
-        folders.append(str(out))
-    return 0 if _dry_run(args) else answer.main(folders)
+    return 0 if _dry_run(args) else answer.main([str(out) for out in folders.values()])
 
 
 def _check(args) -> int:
