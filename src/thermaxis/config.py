@@ -469,6 +469,7 @@ KERNEL_ALGORITHMS = ("svr", "gpr")
 @dataclass(frozen=True)
 class RecommendSettings:
     combine: tuple[str, ...]  # the super learner's members: linear candidates
+    weighting: str  # a key of thermaxis.method.nested.WEIGHTINGS
     lags_min: tuple[float, ...]
     baseline_lags_min: tuple[float, ...]
     max_loco_runs: int  # of the outer loop; the inner one always leaves one run out
@@ -500,6 +501,7 @@ class RecommendSettings:
                 )
         return cls(
             combine=tuple(r["combine"]),
+            weighting=r["weighting"],
             lags_min=tuple(float(v) for v in r["lags_min"]),
             baseline_lags_min=tuple(float(v) for v in r["baseline_lags_min"]),
             max_loco_runs=int(r["max_loco_runs"]),

@@ -25,6 +25,8 @@ from thermaxis.method.nested import (
     held_out_predictions,
     held_out_scores,
     recommend,
+    run_rmse_weights,
+    selector_weights,
     super_learner_weights,
     training_sets,
 )
@@ -117,8 +119,8 @@ def test_the_weights_are_nnls_on_the_inner_predictions_worked_out_by_hand():
     Y = pd.DataFrame((rises["T1"] + 0.5 * rises["T2"]).to_numpy()[:, None] * np.array([[1.0, 2.0, 3.0]]),
                      columns=Y.columns)  # fmt: skip
     members = ["pointwise-mlr-T1", "pointwise-mlr-T2"]
-    result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1,
-                       members=members, max_loco_runs=12, n_group_folds=5)  # fmt: skip
+    result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, members=members,
+                       max_loco_runs=12, n_group_folds=5, weighting="nnls")  # fmt: skip
     runs = ["R1", "R2", "R3", "R4"]
 
     def weights(pairs):
@@ -142,6 +144,90 @@ def test_the_weights_are_nnls_on_the_inner_predictions_worked_out_by_hand():
     row = result.folds.set_index("fold").loc["R2"]
     assert row["rmse_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
     assert row["max_abs_um"] == pytest.approx(np.abs(residual).max(), rel=1e-9)
+
+
+def test_the_selector_weights_the_member_of_the_lowest_mean_inner_rmse_worked_out_by_hand():
+    X, Y = make_runs(n_runs=4, seed=2)
+    # T2's rise makes the errors, T1 is the other member; both fitted by plain least squares.
+    rises = X[["T1", "T2"]] - X.groupby("run")[["T1", "T2"]].transform("first")
+    Y = pd.DataFrame((0.3 * rises["T1"] + rises["T2"]).to_numpy()[:, None] * np.array([[1.0, 2.0, 3.0]]),
+                     columns=Y.columns)  # fmt: skip
+    members = ["pointwise-mlr-T1", "pointwise-mlr-T2"]
+    result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, members=members,
+                       max_loco_runs=12, n_group_folds=5, weighting="select")  # fmt: skip
+    runs = ["R1", "R2", "R3", "R4"]
+
+    def weights(pairs):
+        mean_rmse = [
+            np.mean([np.sqrt(np.mean((Y.to_numpy()[(X["run"] == run).to_numpy()]
+                                      - by_hand_predictions(X, Y, s, train, [run])) ** 2))
+                     for train, run in pairs])
+            for s in ("T1", "T2")
+        ]  # fmt: skip
+        return [1.0, 0.0] if mean_rmse[0] <= mean_rmse[1] else [0.0, 1.0]
+
+    for fold in runs:
+        inner = [([r for r in runs if r not in (fold, i)], i) for i in runs if i != fold]
+        assert list(result.combination.folds[fold]) == weights(inner)
+    every = [([r for r in runs if r != i], i) for i in runs]
+    assert list(result.combination.final) == weights(every) == [0.0, 1.0]
+    # The held-out error is the chosen member's, fitted on the fold's training runs.
+    row = result.folds.set_index("fold").loc["R2"]
+    chosen = "T1" if result.combination.folds["R2"][0] == 1.0 else "T2"
+    residual = (Y.to_numpy()[(X["run"] == "R2").to_numpy()]
+                - by_hand_predictions(X, Y, chosen, ["R1", "R3", "R4"], ["R2"]))  # fmt: skip
+    assert row["rmse_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
+
+
+def test_the_selector_counts_each_run_once_on_a_toy_problem_solved_by_hand():
+    # Run A has one reading, run B nine. Member 1 is 4 off on A and exact on B: mean run RMSE
+    # (4 + 0) / 2 = 2, though pooled over the ten readings sqrt(16 / 10) = 1.26. Member 2 is
+    # 1.5 off everywhere: 1.5 either way. Each run counted once, member 2 is chosen.
+    measured = [np.array([0.0]), np.zeros(9)]
+    predictions = [np.array([[4.0, 1.5]]), np.column_stack([np.zeros(9), np.full(9, 1.5)])]
+    np.testing.assert_array_equal(selector_weights(predictions, measured), [0.0, 1.0])
+    # A missing measurement is left out of its run's RMSE: member 1 is then exact on A.
+    measured = [np.array([4.0, np.nan]), np.zeros(9)]
+    predictions = [np.array([[4.0, 1.5], [-50.0, 0.0]]), predictions[1]]
+    np.testing.assert_array_equal(selector_weights(predictions, measured), [1.0, 0.0])
+    # A tie goes to the first member.
+    np.testing.assert_array_equal(
+        selector_weights([np.array([[1.0, -1.0]])], [np.array([0.0])]), [1.0, 0.0]
+    )
+
+
+def test_run_rmse_weights_minimise_the_mean_run_rmse_worked_out_by_hand():
+    # One reading a run, measured 0. Member 1 predicts 1 and 3, member 2 -1 and -1: the
+    # combination's residuals are 2 w1 - 1 and 4 w1 - 1, their mean |.| falls until
+    # w1 = 1/4 (0.25) and rises after: weights (1/4, 3/4).
+    measured = [np.array([0.0]), np.array([0.0])]
+    predictions = [np.array([[1.0, -1.0]]), np.array([[3.0, -1.0]])]
+    np.testing.assert_allclose(run_rmse_weights(predictions, measured), [0.25, 0.75], atol=1e-6)
+    # Random runs of unequal length, two members: a plain numpy grid over w1 in steps of
+    # 5e-5 finds the same weights, and nothing on it does better.
+    rng = np.random.default_rng(7)
+    measured = [rng.normal(size=n) for n in (3, 8, 20)]
+    predictions = [np.column_stack([m + rng.normal(0.3, 1.0, m.size), 0.5 * m + rng.normal(size=m.size)])
+                   for m in measured]  # fmt: skip
+
+    def mean_run_rmse(w):
+        return np.mean(
+            [np.sqrt(np.mean((m - p @ w) ** 2)) for p, m in zip(predictions, measured, strict=True)]
+        )
+
+    grid = np.linspace(0.0, 1.0, 20_001)
+    risks = [mean_run_rmse(np.array([g, 1.0 - g])) for g in grid]
+    w = run_rmse_weights(predictions, measured)
+    assert w.sum() == pytest.approx(1.0, abs=1e-12) and (w >= 0).all()
+    assert w[0] == pytest.approx(grid[int(np.argmin(risks))], abs=1e-4)
+    assert mean_run_rmse(w) <= min(risks) + 1e-12
+    # Three members, one of them useless: nothing on a simplex grid in steps of 0.01 does better.
+    predictions = [np.column_stack([p, np.full(p.shape[0], 5.0)]) for p in predictions]
+    w = run_rmse_weights(predictions, measured)
+    simplex = [np.array([a, b, 1.0 - a - b]) for a in np.linspace(0, 1, 101)
+               for b in np.linspace(0, 1, 101) if a + b <= 1.0 + 1e-12]  # fmt: skip
+    assert mean_run_rmse(w) <= min(mean_run_rmse(np.clip(v, 0, None)) for v in simplex) + 1e-12
+    assert w[2] == pytest.approx(0.0, abs=1e-9)
 
 
 def test_super_learner_weights_on_a_toy_problem_solved_by_hand():

@@ -4,7 +4,7 @@
 candidate of each ``RESULTS/<record>`` (its ``recommend/choice.json`` lists them, its
 ``assembled/`` tables are the inputs) in both loops of the nested leave-one-condition-out,
 keeping the held-out predictions the recommendation's scores are made of, and judges
-three combinations fixed from the literature before any record was replayed:
+combinations fixed from the literature before any record was replayed:
 
 * the super learner (van der Laan, Polley and Hubbard 2007; Breiman 1996, "Stacked
   regressions"): non-negative weights fitted by least squares on the candidates' inner
@@ -14,7 +14,10 @@ three combinations fixed from the literature before any record was replayed:
   could be exported like one (a kernel model's expansion cannot share an affine block);
 * the equal average of the two plain references (the ridge with lags, the evidence ridge);
 * the super learner of the two plain references (the default ``recommend.combine``), and
-  of the paper's configuration with them (the default until 2026-12-07, second session).
+  of the paper's configuration with them (the default until 2026-12-07, second session);
+* the two plain references weighted as ``recommend.weighting`` can: the weights of the
+  lowest mean RMSE over the inner runs, each run counted once (the default), and all the
+  weight on the better of the two by that mean (the discrete super learner).
 
 ``--block dev`` writes the table into the development records' block instead: the
 simulated records (tools.bench.records.DEV_RECORDS) a change of the rule is judged on
@@ -22,8 +25,8 @@ before it meets a scored record.
 
 Each outer fold's weights come from its inner runs alone; the held-out run is predicted
 by the candidates fitted on the other runs. Evaluation only: the recommendation deploys
-the super learner of ``recommend.combine`` (thermaxis.method.nested.combine), whose
-figures are the replay's (tools.bench.replay).
+the super learner of ``recommend.combine`` weighted as ``recommend.weighting``
+(thermaxis.method.nested.combine), whose figures are the replay's (tools.bench.replay).
 """
 
 from __future__ import annotations
@@ -39,7 +42,7 @@ from thermaxis.cleaning.run import model_inputs
 from thermaxis.config import KERNEL_ALGORITHMS, Settings
 from thermaxis.labels import natural_sorted
 from thermaxis.method.candidates import BASELINE, EVIDENCE, PAPER, candidate_from_record
-from thermaxis.method.nested import held_out_predictions, super_learner_weights, training_sets
+from thermaxis.method.nested import WEIGHTINGS, held_out_predictions, training_sets
 from tools.bench.replay import record_scores, table_command
 
 __all__ = ["stacked_rmse", "STACKS"]
@@ -93,44 +96,42 @@ def stacked_rmse(X, Y, names, predicted, stack) -> float:
     rmse = []
     for held in runs:
         train = tuple(r for r in runs if r != held)
-        inner = [
-            (
-                np.column_stack(
-                    [
-                        _rows(predicted, tuple(r for r in train if r != i), n, i).ravel()
-                        for n in names
-                    ]
-                ),
-                measured[i].ravel(),
-            )  # fmt: skip
+        predictions = [
+            np.column_stack(
+                [_rows(predicted, tuple(r for r in train if r != i), n, i).ravel() for n in names]
+            )
             for i in train
         ]
-        P = np.vstack([p for p, _ in inner])
-        y = np.concatenate([m for _, m in inner])
-        weights = stack(P, y)
+        weights = stack(predictions, [measured[i].ravel() for i in train])
         outer = np.column_stack([_rows(predicted, train, n, held).ravel() for n in names])
         rmse.append(np.sqrt(np.mean((measured[held].ravel() - outer @ weights) ** 2)))
     return float(np.mean(rmse))
 
 
-def _equal(P, y):
-    return np.full(P.shape[1], 1.0 / P.shape[1])
+def _equal(predictions, measured):
+    return np.full(predictions[0].shape[1], 1.0 / predictions[0].shape[1])
 
 
+NNLS, RUN_RMSE, SELECT = (WEIGHTINGS[w] for w in ("nnls", "rmse", "select"))
 STACKS = {
-    "super learner, every candidate": (lambda cs: [c.name for c in cs], super_learner_weights),
+    "super learner, every candidate": (lambda cs: [c.name for c in cs], NNLS),
     "super learner, linear candidates": (
         lambda cs: [c.name for c in cs if c.algorithm not in KERNEL_ALGORITHMS],
-        super_learner_weights,
+        NNLS,
     ),
     "equal average of the two plain references": (lambda cs: [BASELINE, EVIDENCE], _equal),
-    "super learner, the two plain references": (
-        lambda cs: [EVIDENCE, BASELINE],
-        super_learner_weights,
-    ),
+    "super learner, the two plain references": (lambda cs: [EVIDENCE, BASELINE], NNLS),
     "super learner, the paper's configuration and the two plain references": (
         lambda cs: [PAPER, EVIDENCE, BASELINE],
-        super_learner_weights,
+        NNLS,
+    ),
+    "the two plain references, weights of the lowest mean run RMSE": (
+        lambda cs: [EVIDENCE, BASELINE],
+        RUN_RMSE,
+    ),
+    "the better of the two plain references by mean run RMSE (selector)": (
+        lambda cs: [EVIDENCE, BASELINE],
+        SELECT,
     ),
 }
 

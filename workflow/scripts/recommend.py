@@ -63,6 +63,7 @@ def main(snakemake):
             progress=log.info if workers == 1 else None,
             map_sets=lambda one_set, sets: map_folds(one_set, sets, min(workers, len(sets))),
             members=recommend.combine,
+            weighting=recommend.weighting,
         )
         by_run = pd.concat(by_fold, ignore_index=True)
         texts = {

@@ -11,13 +11,14 @@ not seen. Answering it honestly needs two loops:
 
 The recommendation is the super learner (van der Laan, Polley and Hubbard 2007; Breiman
 1996) over a small library of linear candidates (config ``recommend.combine``): the
-convex combination of the members' predicted error curves whose non-negative weights are
-fitted by least squares on their inner predictions and scaled to sum to one
-(:func:`super_learner_weights`). Choosing one candidate on four to six runs is noise;
-weighting a few structurally different ones is steadier. Each outer fold's weights come
+convex combination of the members' predicted error curves whose weights minimise the
+mean RMSE of the inner held-out runs, each run counted once (config
+``recommend.weighting``, :data:`WEIGHTINGS`): the loss the recommendation is judged by.
+Choosing one candidate on four to six runs is noise; weighting a few structurally
+different ones is steadier. Each outer fold's weights come
 from its inner predictions alone, so the held-out run reaches no weight; its held-out
-error is the members fitted on the training runs, so weighted. The final weights are
-fitted on every run's held-out predictions, and the deployed model is the members refitted
+error is the members fitted on the training runs, so weighted. The final weights come
+from every run's held-out predictions, and the deployed model is the members refitted
 on all runs, so weighted: one linear model (:func:`thermaxis.compensation.model.combined_record`).
 Every candidate is still scored, as information (``recommend/candidates.csv``).
 
@@ -35,7 +36,7 @@ from functools import partial
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import nnls
+from scipy.optimize import minimize, nnls
 
 from thermaxis.labels import natural_sorted
 from thermaxis.method.batched import (
@@ -68,6 +69,9 @@ __all__ = [
     "outer_fold_scores",
     "COMBINED",
     "super_learner_weights",
+    "selector_weights",
+    "run_rmse_weights",
+    "WEIGHTINGS",
     "Combination",
     "combine",
     "fold_scores",
@@ -371,21 +375,106 @@ class Combination:
     final: tuple[float, ...]
 
 
-def _weights(pairs, members, curves, measured) -> tuple[float, ...]:
+def _run_moments(predictions, measured) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """Per run with a measurement, (A, b, c) of its mean squared error w'Aw - 2b'w + c of
+    the weighted members ``w``; a missing measurement is left out."""
+    moments = []
+    for p, m in zip(predictions, measured, strict=True):
+        keep = np.isfinite(m)
+        if keep.any():
+            p, m, n = p[keep], m[keep], keep.sum()
+            moments.append((p.T @ p / n, p.T @ m / n, float(m @ m) / n))
+    return moments
+
+
+def _mean_run_rmse(moments, w) -> float:
+    return float(np.mean([np.sqrt(max(w @ A @ w - 2.0 * b @ w + c, 0.0)) for A, b, c in moments]))
+
+
+def _mean_run_rmse_gradient(moments, w) -> np.ndarray:
+    # d sqrt(q)/dw = (A w - b) / sqrt(q); a run predicted exactly (q = 0) has no gradient.
+    return np.mean(
+        [(A @ w - b) / max(np.sqrt(max(w @ A @ w - 2.0 * b @ w + c, 0.0)), 1e-300) for A, b, c in moments],
+        axis=0,
+    )  # fmt: skip
+
+
+def selector_weights(
+    predictions: Sequence[np.ndarray], measured: Sequence[np.ndarray]
+) -> np.ndarray:
+    """All the weight on the member of the lowest mean RMSE over the held-out runs.
+
+    ``predictions`` per run (n_r, members), ``measured`` per run (n_r,), a missing
+    measurement left out. Each run's RMSE counts once, as the recommendation's held-out
+    error does (a long run does not outvote a short one); a tie goes to the first member.
+    The discrete super learner, the cross-validation selector of van der Laan, Polley and
+    Hubbard (2007).
+    """
+    moments = _run_moments(predictions, measured)
+    vertices = np.eye(predictions[0].shape[1])
+    return vertices[int(np.argmin([_mean_run_rmse(moments, v) for v in vertices]))]
+
+
+def run_rmse_weights(
+    predictions: Sequence[np.ndarray], measured: Sequence[np.ndarray]
+) -> np.ndarray:
+    """Non-negative weights summing to one of the lowest mean RMSE over the held-out runs.
+
+    As :func:`selector_weights`, over every convex combination: the super learner under
+    the loss the recommendation is judged by, each run's RMSE counted once (van der Laan,
+    Polley and Hubbard 2007 allow any loss). The mean of the runs' RMSEs is convex in the
+    weights (each is the norm of an affine function of them), so a local minimum on the
+    simplex is the minimum; SLSQP is started from the equal weights and from each member
+    alone, and the best point found is kept, a member alone on a tie (the first).
+    """
+    moments = _run_moments(predictions, measured)
+    n_members = predictions[0].shape[1]
+    points = list(np.eye(n_members))
+    for start in [np.full(n_members, 1.0 / n_members), *np.eye(n_members)]:
+        found = minimize(
+            partial(_mean_run_rmse, moments),
+            start,
+            jac=partial(_mean_run_rmse_gradient, moments),
+            method="SLSQP",
+            bounds=[(0.0, 1.0)] * n_members,
+            constraints=[{"type": "eq", "fun": lambda w: w.sum() - 1.0,
+                          "jac": lambda w: np.ones_like(w)}],
+            options={"ftol": 1e-12, "maxiter": 500},
+        )  # fmt: skip
+        w = np.clip(found.x, 0.0, None)
+        points.append(w / w.sum())
+    risks = [_mean_run_rmse(moments, w) for w in points]
+    return points[int(np.argmin(risks))]
+
+
+def _nnls(predictions, measured) -> np.ndarray:
+    return super_learner_weights(np.vstack(predictions), np.concatenate(measured))
+
+
+# config recommend.weighting
+WEIGHTINGS: Mapping[str, Callable[[list, list], np.ndarray]] = {
+    "rmse": run_rmse_weights,
+    "select": selector_weights,
+    "nnls": _nnls,
+}
+
+
+def _weights(pairs, members, curves, measured, weighting) -> tuple[float, ...]:
     """The weights fitted on the held-out runs ``pairs`` ((training runs, run), ...), each
     run predicted by the members fitted on its training runs; none: equal weights."""
     if not pairs:
         return tuple(np.full(len(members), 1.0 / len(members)))
-    predictions = np.vstack(
-        [np.column_stack([curves[train][(m, run)].ravel() for m in members])
-         for train, run in pairs]
-    )  # fmt: skip
-    target = np.concatenate([measured[run].ravel() for _, run in pairs])
-    return tuple(float(w) for w in super_learner_weights(predictions, target))
+    predictions = [np.column_stack([curves[train][(m, run)].ravel() for m in members])
+                   for train, run in pairs]  # fmt: skip
+    target = [measured[run].ravel() for _, run in pairs]
+    return tuple(float(w) for w in WEIGHTINGS[weighting](predictions, target))
 
 
-def combine(runs, folds, members, curves, measured) -> tuple[Combination, dict[str, dict]]:
-    """The super learner of ``members`` in every outer fold, and on all runs.
+def combine(
+    runs, folds, members, curves, measured, weighting="rmse"
+) -> tuple[Combination, dict[str, dict]]:
+    """The super learner of ``members`` in every outer fold, and on all runs, weighted by
+    ``weighting`` (a key of :data:`WEIGHTINGS`).
 
     ``curves`` maps each training set's runs to :func:`training_set_scores`' curves,
     ``measured`` each run to its error curves. An outer fold's weights are fitted on its
@@ -399,14 +488,14 @@ def combine(runs, folds, members, curves, measured) -> tuple[Combination, dict[s
     for fold in folds:
         held, train, splits = _outer_splits(runs, fold)
         inner = [(tuple(r for r in train if r != run), run) for (run,) in splits]
-        weights = _weights(inner, members, curves, measured)
+        weights = _weights(inner, members, curves, measured, weighting)
         for run in held:
             by_run[run] = weights
             outer = np.stack([curves[tuple(train)][(m, run)] for m in members], axis=-1)
             metrics = prediction_metrics(measured[run], outer @ np.asarray(weights))
             errors[run] = {name: float(metrics[name]) for name in METRIC_COLUMNS}
             every.append((tuple(train), run))
-    final = _weights(every, members, curves, measured)
+    final = _weights(every, members, curves, measured, weighting)
     return Combination(members, by_run, final), errors
 
 
@@ -420,10 +509,12 @@ def fold_scores(
     progress: Callable[[str], None] | None = None,
     map_sets: Callable[[Callable, list], list] | None = None,
     members: Sequence[str] = (),
+    weighting: str = "rmse",
 ) -> tuple[list[pd.DataFrame], Combination | None]:
     """The rows of each outer fold (:func:`outer_fold_scores`), each training set fitted
     once, and the super learner of ``members`` (:func:`combine`; None without members),
-    whose held-out errors join each fold's rows as candidate :data:`COMBINED`.
+    weighted by ``weighting`` (:data:`WEIGHTINGS`), whose held-out errors join each fold's
+    rows as candidate :data:`COMBINED`.
 
     ``map_sets(function, training_sets)`` runs the training sets (default: in turn; the
     workflow spreads them over its cores, :func:`thermaxis.pipeline.parallel.map_folds`).
@@ -443,7 +534,7 @@ def fold_scores(
         return frames, None
     measured = {r: Y.loc[(X["run"] == r).to_numpy()].to_numpy(dtype=float) for r in runs}
     curves = {s.train: d[1] for s, d in zip(sets, done, strict=True)}
-    combination, errors = combine(runs, folds, members, curves, measured)
+    combination, errors = combine(runs, folds, members, curves, measured, weighting)
     for i, fold in enumerate(folds):
         rows = [{"kind": "loco", "fold": run, "candidate": COMBINED, "held_out": run,
                  **errors[run]} for run in held_out_runs(fold)]  # fmt: skip
@@ -511,6 +602,7 @@ def recommend(
     signals: Sequence[str] = (),
     outer_folds: Sequence[str] | None = None,
     progress: Callable[[str], None] | None = None,
+    weighting: str = "rmse",
 ) -> Recommendation:
     """The nested leave-one-condition-out super learner of ``members`` among ``candidates``.
 
@@ -528,7 +620,7 @@ def recommend(
     _check_choice(names, reference, members)
     outer = run_groups(folds, max_loco_runs, n_group_folds)
     frames, combination = fold_scores(
-        X, Y, candidates, outer, degree, signals, progress, members=members
+        X, Y, candidates, outer, degree, signals, progress, members=members, weighting=weighting
     )
     return collect(pd.concat(frames, ignore_index=True), names, reference, combination)
 
