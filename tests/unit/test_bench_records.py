@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pandas as pd
+import pytest
 import yaml
 from scipy.optimize import nnls
 
@@ -15,7 +16,7 @@ from tools.bench.records import channel_mapping, record_quality, without_signals
 from tools.bench.replay import main as replay_main
 from tools.bench.replay import replay, replay_markdown, with_table
 from tools.bench.report import _quality_table
-from tools.bench.stacking import BLOCKS
+from tools.bench.stacking import BLOCKS, STACKS, stacked_rmse
 from tools.bench.stacking import main as stacking_main
 
 
@@ -136,6 +137,34 @@ def test_stacking_weights_by_hand_and_by_scipy():
     np.testing.assert_allclose(super_learner_weights(P, y), [0.25, 0.75, 0.0], atol=1e-12)
     # No candidate helps (every weight zero): equal weights.
     np.testing.assert_allclose(super_learner_weights(np.abs(P), -np.ones(4)), [1 / 3] * 3)
+
+
+def test_stacked_rmse_weights_each_outer_fold_on_its_inner_runs_alone():
+    # Three runs of two readings, all measured 0. Member A predicts 1 for every run from
+    # every training set, member B 3 for R1 and 0 for the others whatever it was fitted on.
+    runs = ["R1", "R2", "R3"]
+    X = pd.DataFrame({"run": np.repeat(runs, 2)})
+    Y = pd.DataFrame({"e": np.zeros(6)})
+    value = {"A": dict.fromkeys(runs, 1.0), "B": {"R1": 3.0, "R2": 0.0, "R3": 0.0}}
+    predicted = {}
+    for train in [(a, b) for a in runs for b in runs if a < b] + [(r,) for r in runs]:
+        scored = [r for r in runs if r not in train]
+        for name in ("A", "B"):
+            predicted[(train, name)] = (
+                np.repeat(scored, 2),
+                np.repeat([value[name][r] for r in scored], 2)[:, None],
+            )
+    # Holding out R1, the inner runs R2 and R3 favour B (0 against 1): R1's error is B's, 3.
+    # Holding out R2 (or R3), the inner runs are R1 (B 3, A 1) and R3 (B 0, A 1): the mean
+    # run RMSE is 1 for A and 1.5 for B, so the selector takes A, an error of 1. Mean: 5/3.
+    select = STACKS["the better of the two plain references by mean run RMSE (`select`)"][1]
+    assert stacked_rmse(X, Y, ["A", "B"], predicted, select) == pytest.approx(5 / 3)
+    # The convex weights on R2's fold: |w + 3(1 - w)| on R1 and |w| on R3 have the mean
+    # (3 - 2w + w) / 2, lowest at w = 1 (A alone); R1's fold has B alone (0 on both): 5/3 again.
+    rmse = STACKS[
+        "super learner, the two plain references, lowest mean run RMSE (`rmse`, deployed)"
+    ][1]
+    assert stacked_rmse(X, Y, ["A", "B"], predicted, rmse) == pytest.approx(5 / 3, abs=1e-6)
 
 
 def test_the_replay_command_writes_the_table_into_the_document(tmp_path, capsys):

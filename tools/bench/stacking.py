@@ -120,16 +120,19 @@ STACKS = {
         NNLS,
     ),
     "equal average of the two plain references": (lambda cs: [BASELINE, EVIDENCE], _equal),
-    "super learner, the two plain references": (lambda cs: [EVIDENCE, BASELINE], NNLS),
+    "super learner, the two plain references, least squares (`nnls`)": (
+        lambda cs: [EVIDENCE, BASELINE],
+        NNLS,
+    ),
     "super learner, the paper's configuration and the two plain references": (
         lambda cs: [PAPER, EVIDENCE, BASELINE],
         NNLS,
     ),
-    "the two plain references, weights of the lowest mean run RMSE": (
+    "super learner, the two plain references, lowest mean run RMSE (`rmse`, deployed)": (
         lambda cs: [EVIDENCE, BASELINE],
         RUN_RMSE,
     ),
-    "the better of the two plain references by mean run RMSE (selector)": (
+    "the better of the two plain references by mean run RMSE (`select`)": (
         lambda cs: [EVIDENCE, BASELINE],
         SELECT,
     ),
