@@ -112,15 +112,22 @@ def by_hand_predictions(X, Y, sensor, train, test):
     return np.column_stack([np.ones(out.sum()), rise[out]]) @ coef
 
 
-def test_the_weights_are_nnls_on_the_inner_predictions_worked_out_by_hand():
+def two_member_recommendation(t1: float, t2: float, weighting: str):
+    """Four runs whose errors are t1 T1's rise + t2 T2's rise at three positions, and the
+    recommendation over the members on T1 alone and on T2 alone, weighted by ``weighting``."""
     X, Y = make_runs(n_runs=4, seed=2)
-    # Two members that each explain part of the errors: the errors follow T1 + T2's rises.
     rises = X[["T1", "T2"]] - X.groupby("run")[["T1", "T2"]].transform("first")
-    Y = pd.DataFrame((rises["T1"] + 0.5 * rises["T2"]).to_numpy()[:, None] * np.array([[1.0, 2.0, 3.0]]),
+    Y = pd.DataFrame((t1 * rises["T1"] + t2 * rises["T2"]).to_numpy()[:, None] * np.array([[1.0, 2.0, 3.0]]),
                      columns=Y.columns)  # fmt: skip
     members = ["pointwise-mlr-T1", "pointwise-mlr-T2"]
     result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, members=members,
-                       max_loco_runs=12, n_group_folds=5, weighting="nnls")  # fmt: skip
+                       max_loco_runs=12, n_group_folds=5, weighting=weighting)  # fmt: skip
+    return X, Y, result
+
+
+def test_the_weights_are_nnls_on_the_inner_predictions_worked_out_by_hand():
+    # Two members that each explain part of the errors: the errors follow T1 + T2's rises.
+    X, Y, result = two_member_recommendation(1.0, 0.5, "nnls")
     runs = ["R1", "R2", "R3", "R4"]
 
     def weights(pairs):
@@ -147,14 +154,8 @@ def test_the_weights_are_nnls_on_the_inner_predictions_worked_out_by_hand():
 
 
 def test_the_selector_weights_the_member_of_the_lowest_mean_inner_rmse_worked_out_by_hand():
-    X, Y = make_runs(n_runs=4, seed=2)
-    # T2's rise makes the errors, T1 is the other member; both fitted by plain least squares.
-    rises = X[["T1", "T2"]] - X.groupby("run")[["T1", "T2"]].transform("first")
-    Y = pd.DataFrame((0.3 * rises["T1"] + rises["T2"]).to_numpy()[:, None] * np.array([[1.0, 2.0, 3.0]]),
-                     columns=Y.columns)  # fmt: skip
-    members = ["pointwise-mlr-T1", "pointwise-mlr-T2"]
-    result = recommend(X, Y, CANDIDATES, reference="pointwise-mlr-T3", degree=1, members=members,
-                       max_loco_runs=12, n_group_folds=5, weighting="select")  # fmt: skip
+    # T2's rise makes most of the errors; both members fitted by plain least squares.
+    X, Y, result = two_member_recommendation(0.3, 1.0, "select")
     runs = ["R1", "R2", "R3", "R4"]
 
     def weights(pairs):
