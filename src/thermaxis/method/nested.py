@@ -375,28 +375,35 @@ class Combination:
     final: tuple[float, ...]
 
 
-def _run_moments(predictions, measured) -> list[tuple[np.ndarray, np.ndarray, float]]:
-    """Per run with a measurement, (A, b, c) of its mean squared error w'Aw - 2b'w + c of
-    the weighted members ``w``; a missing measurement is left out."""
-    moments = []
+def _runs_read(predictions, measured) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each run's (predictions, measured) with its missing measurements left out; a run
+    with none is dropped."""
+    runs = []
     for p, m in zip(predictions, measured, strict=True):
         keep = np.isfinite(m)
         if keep.any():
-            p, m, n = p[keep], m[keep], keep.sum()
-            moments.append((p.T @ p / n, p.T @ m / n, float(m @ m) / n))
-    return moments
+            runs.append((p[keep], m[keep]))
+    return runs
 
 
-def _mean_run_rmse(moments, w) -> float:
-    return float(np.mean([np.sqrt(max(w @ A @ w - 2.0 * b @ w + c, 0.0)) for A, b, c in moments]))
+def _run_mse_and_slope(p, m, w) -> tuple[float, np.ndarray]:
+    """A run's mean squared error q of the weighted members ``w`` and half its gradient,
+    from the residuals themselves: near an exact fit, w'Aw - 2b'w + c would cancel."""
+    residual = m - p @ w
+    return float(residual @ residual) / m.size, -(p.T @ residual) / m.size
 
 
-def _mean_run_rmse_gradient(moments, w) -> np.ndarray:
-    # d sqrt(q)/dw = (A w - b) / sqrt(q); a run predicted exactly (q = 0) has no gradient.
-    return np.mean(
-        [(A @ w - b) / max(np.sqrt(max(w @ A @ w - 2.0 * b @ w + c, 0.0)), 1e-300) for A, b, c in moments],
-        axis=0,
-    )  # fmt: skip
+def _mean_run_rmse(runs, w) -> float:
+    return float(np.mean([np.sqrt(_run_mse_and_slope(p, m, w)[0]) for p, m in runs]))
+
+
+def _mean_run_rmse_gradient(runs, w) -> np.ndarray:
+    # d sqrt(q)/dw = (half the gradient of q) / sqrt(q); a run predicted exactly has none.
+    gradient = np.zeros(w.size)
+    for p, m in runs:
+        q, d = _run_mse_and_slope(p, m, w)
+        gradient += d / max(np.sqrt(q), 1e-300)
+    return gradient / len(runs)
 
 
 def selector_weights(
@@ -410,9 +417,9 @@ def selector_weights(
     The discrete super learner, the cross-validation selector of van der Laan, Polley and
     Hubbard (2007).
     """
-    moments = _run_moments(predictions, measured)
+    runs = _runs_read(predictions, measured)
     vertices = np.eye(predictions[0].shape[1])
-    return vertices[int(np.argmin([_mean_run_rmse(moments, v) for v in vertices]))]
+    return vertices[int(np.argmin([_mean_run_rmse(runs, v) for v in vertices]))]
 
 
 def run_rmse_weights(
@@ -427,14 +434,14 @@ def run_rmse_weights(
     simplex is the minimum; SLSQP is started from the equal weights and from each member
     alone, and the best point found is kept, a member alone on a tie (the first).
     """
-    moments = _run_moments(predictions, measured)
+    runs = _runs_read(predictions, measured)
     n_members = predictions[0].shape[1]
     points = list(np.eye(n_members))
     for start in [np.full(n_members, 1.0 / n_members), *np.eye(n_members)]:
         found = minimize(
-            partial(_mean_run_rmse, moments),
+            partial(_mean_run_rmse, runs),
             start,
-            jac=partial(_mean_run_rmse_gradient, moments),
+            jac=partial(_mean_run_rmse_gradient, runs),
             method="SLSQP",
             bounds=[(0.0, 1.0)] * n_members,
             constraints=[{"type": "eq", "fun": lambda w: w.sum() - 1.0,
@@ -443,11 +450,11 @@ def run_rmse_weights(
         )  # fmt: skip
         w = np.clip(found.x, 0.0, None)
         points.append(w / w.sum())
-    risks = [_mean_run_rmse(moments, w) for w in points]
-    return _polished(moments, points[int(np.argmin(risks))])
+    risks = [_mean_run_rmse(runs, w) for w in points]
+    return _polished(runs, points[int(np.argmin(risks))])
 
 
-def _polished(moments, w: np.ndarray) -> np.ndarray:
+def _polished(runs, w: np.ndarray) -> np.ndarray:
     """``w`` taken by Newton's method to the minimum on the face of the simplex it lies on.
 
     SLSQP stops once the risk changes by less than its tolerance, which fixes the weights
@@ -464,13 +471,12 @@ def _polished(moments, w: np.ndarray) -> np.ndarray:
     v[face] = w[face] / w[face].sum()
     for _ in range(50):
         gradient, hessian = np.zeros(w.size), np.zeros((w.size, w.size))
-        for A, b, c in moments:
-            q = v @ A @ v - 2.0 * b @ v + c
+        for p, m in runs:
+            q, d = _run_mse_and_slope(p, m, v)
             if q <= 0.0:
                 return w
-            d = A @ v - b  # half the gradient of q
             gradient += d / np.sqrt(q)
-            hessian += A / np.sqrt(q) - np.outer(d, d) / q**1.5
+            hessian += (p.T @ p / m.size) / np.sqrt(q) - np.outer(d, d) / q**1.5
         try:
             step = Z @ np.linalg.solve(Z.T @ hessian[np.ix_(face, face)] @ Z, Z.T @ gradient[face])
         except np.linalg.LinAlgError:
@@ -480,7 +486,7 @@ def _polished(moments, w: np.ndarray) -> np.ndarray:
         v[face] -= step
         if np.abs(step).max() <= 1e-15:
             break
-    better = _mean_run_rmse(moments, v) <= _mean_run_rmse(moments, w) * (1.0 + 1e-12)
+    better = _mean_run_rmse(runs, v) <= _mean_run_rmse(runs, w) * (1.0 + 1e-12)
     return v if better else w
 
 
