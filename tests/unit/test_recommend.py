@@ -229,6 +229,13 @@ def test_run_rmse_weights_minimise_the_mean_run_rmse_worked_out_by_hand():
                for b in np.linspace(0, 1, 101) if a + b <= 1.0 + 1e-12]  # fmt: skip
     assert mean_run_rmse(w) <= min(mean_run_rmse(np.clip(v, 0, None)) for v in simplex) + 1e-12
     assert w[2] == pytest.approx(0.0, abs=1e-9)
+    # Errors of 1e4 um that the combination fits exactly: members m + e and m - 2e give
+    # m + (3 w1 - 2) e, exact at w1 = 2/3. Moments (w'Aw - 2b'w + c) would cancel to
+    # rounding noise of the squared errors' size there and leave w1 about 1e-5 off.
+    big = [1e4 + 50.0 * rng.standard_normal(n) for n in (4, 6, 9)]
+    wobble = [rng.standard_normal(m.size) for m in big]
+    exact = [np.column_stack([m + e, m - 2.0 * e]) for m, e in zip(big, wobble, strict=True)]
+    np.testing.assert_allclose(run_rmse_weights(exact, big), [2 / 3, 1 / 3], rtol=0, atol=1e-9)
     # Inputs changed in their last digits, as another CPU's BLAS kernels change them, move
     # the weights by no more than rounding: the minimum is found, not where a solver stopped.
     nudged = [p * (1.0 + 1e-15 * rng.standard_normal(p.shape)) for p in predictions]
