@@ -257,23 +257,30 @@ def _names(runs: list[str]) -> str:
     return ", ".join(runs[:-1]) + f" and {runs[-1]}" if len(runs) > 1 else runs[0]
 
 
+# The judged quantities by name; "the" goes before the largest |deviation| in running text.
+_MEASURE_WORDS = {"largest_abs": "largest |deviation|", "E": "E of ISO 230-2"}
+
+
+def _measure_in_text(quantity: str) -> str:
+    return ("the " if quantity == "largest_abs" else "") + _MEASURE_WORDS[quantity]
+
+
 def _worst_increase(verdict: dict, unit: str) -> str:
     """The largest increase among the worsened runs, in whichever quantity grew: a run is
     worsened by either, so the largest |deviation|'s own worst run may be one that improved."""
-    words = {"largest_abs": "largest |deviation|", "E": "E of ISO 230-2"}
     run, name = max(
         (
             (r, q)
             for r in verdict["runs"]
             if r["effect"] == "worsened"
-            for q in words
+            for q in _MEASURE_WORDS
             if np.isfinite(r.get(f"{q}_change_um", np.nan))
         ),
         key=lambda pair: pair[0][f"{pair[1]}_change_um"],
     )
     change, before = run[f"{name}_change_um"], run[f"{name}_before_um"]
     of = f", {change / before:.0%} of its uncompensated error" if before > 0 else ""
-    return f"worst {run['run']}: {words[name]} {change:+.2f} {unit}{of}"
+    return f"worst {run['run']}: {_MEASURE_WORDS[name]} {change:+.2f} {unit}{of}"
 
 
 def verdict_sentence(verdict: dict, unit: str = "um") -> str:
@@ -332,11 +339,10 @@ def _no_help_clause(verdict: dict) -> str:
     measure beyond the tolerance while raising the other, the temperatures did predict part
     of the drift, and the sentence says which runs and measures instead of claiming they
     predict none of it."""
-    words = {"largest_abs": "the largest |deviation|", "E": "E of ISO 230-2"}
     tolerance = verdict["tolerance_um"]
     mixed: dict[tuple[str, str], list[str]] = {}
     for run in verdict["runs"]:
-        changes = {q: run.get(f"{q}_change_um", math.nan) for q in words}
+        changes = {q: run.get(f"{q}_change_um", math.nan) for q in _MEASURE_WORDS}
         lower = [q for q, c in changes.items() if c < -tolerance]
         higher = [q for q, c in changes.items() if c > tolerance]
         if lower and higher:
@@ -347,8 +353,8 @@ def _no_help_clause(verdict: dict) -> str:
             "temperatures predict this axis's drift."
         )
     parts = [
-        f"it lowers {words[down]} of {_names(runs)} beyond the tolerance but raises "
-        f"{words[up]} there"
+        f"it lowers {_measure_in_text(down)} of {_names(runs)} beyond the tolerance but raises "
+        f"{_measure_in_text(up)} there"
         for (down, up), runs in mixed.items()
     ]
     return f" It helps no held-out run beyond the tolerance in both measures: {'; '.join(parts)}."
