@@ -161,10 +161,17 @@ def test_stacked_rmse_weights_each_outer_fold_on_its_inner_runs_alone():
     assert stacked_rmse(X, Y, ["A", "B"], predicted, select) == pytest.approx(5 / 3)
     # The convex weights on R2's fold: |w + 3(1 - w)| on R1 and |w| on R3 have the mean
     # (3 - 2w + w) / 2, lowest at w = 1 (A alone); R1's fold has B alone (0 on both): 5/3 again.
-    rmse = STACKS[
-        "super learner, the two plain references, lowest mean run RMSE (`rmse`, deployed)"
-    ][1]
+    _, rmse, *_ = STACKS[
+        "super learner, the two plain references, lowest mean run RMSE, weighed on fits of one run too"
+    ]
     assert stacked_rmse(X, Y, ["A", "B"], predicted, rmse) == pytest.approx(5 / 3, abs=1e-6)
+    # The deployed rule: every inner fit here holds one run, so each fold weights A and B
+    # equally. R1: (1 + 3) / 2 = 2; R2 and R3: (1 + 0) / 2 = 0.5. Mean: 1.
+    _, rmse, min_runs = STACKS[
+        "super learner, the two plain references, lowest mean run RMSE (`rmse`, deployed)"
+    ]
+    assert min_runs == 2
+    assert stacked_rmse(X, Y, ["A", "B"], predicted, rmse, min_runs) == pytest.approx(1.0)
 
 
 def test_the_replay_command_writes_the_table_into_the_document(tmp_path, capsys):
@@ -188,6 +195,6 @@ def test_the_replay_command_writes_the_table_into_the_document(tmp_path, capsys)
 def test_the_stacking_command_names_a_block_it_does_not_know_in_one_line(tmp_path, capsys):
     assert stacking_main([str(tmp_path), "--block", "scored"]) == 2
     assert capsys.readouterr().err == (
-        "thermaxis error: --block 'scored': expected one of records, dev\n"
+        "thermaxis error: --block 'scored': expected one of records, dev, three-runs\n"
     )
     assert BLOCKS["dev"] == ("<!-- stacking-dev:start -->", "<!-- stacking-dev:end -->")

@@ -112,10 +112,10 @@ def by_hand_predictions(X, Y, sensor, train, test):
     return np.column_stack([np.ones(out.sum()), rise[out]]) @ coef
 
 
-def two_member_recommendation(t1: float, t2: float, weighting: str):
-    """Four runs whose errors are t1 T1's rise + t2 T2's rise at three positions, and the
-    recommendation over the members on T1 alone and on T2 alone, weighted by ``weighting``."""
-    X, Y = make_runs(n_runs=4, seed=2)
+def two_member_recommendation(t1: float, t2: float, weighting: str, n_runs: int = 4):
+    """``n_runs`` runs whose errors are t1 T1's rise + t2 T2's rise at three positions, and
+    the recommendation over the members on T1 alone and on T2 alone, weighted by ``weighting``."""
+    X, Y = make_runs(n_runs=n_runs, seed=2)
     rises = X[["T1", "T2"]] - X.groupby("run")[["T1", "T2"]].transform("first")
     Y = pd.DataFrame((t1 * rises["T1"] + t2 * rises["T2"]).to_numpy()[:, None] * np.array([[1.0, 2.0, 3.0]]),
                      columns=Y.columns)  # fmt: skip
@@ -391,15 +391,48 @@ def test_time_inputs_and_signals_are_seen_only_by_candidates_that_use_them():
     assert models.signals == ("S", "S@lag30min")
 
 
-def test_with_two_runs_the_folds_weight_equally_but_the_final_weights_are_fitted():
+def test_with_two_runs_the_folds_and_the_final_weights_are_equal():
     X, Y = make_runs(n_runs=2)
     result = run(X, Y)
-    # One training run per fold leaves no inner prediction: equal weights there.
+    # One training run per fold leaves no inner prediction: equal weights there; and each
+    # run's held-out prediction is a fit on the other run alone, which weighs nothing.
     for fold in ("R1", "R2"):
         assert result.combination.folds[fold] == pytest.approx((0.25,) * 4)
     assert result.inner.empty
-    # The final weights come from each run predicted by the members fitted on the other.
-    assert dict(zip(MEMBERS, result.combination.final, strict=True))["pointwise-mlr-T1"] > 0.9
+    assert result.combination.final == pytest.approx((0.25,) * 4)
+    assert result.combination.equal_folds == ("R1", "R2")
+    assert not result.combination.final_fitted
+
+
+def test_with_three_runs_fits_on_one_run_weigh_nothing_but_the_final_weights_are_fitted():
+    # The errors follow T1 + 0.5 T2's rises: members on T1 alone and on T2 alone each
+    # explain part, so fitted weights are far from equal (0.5, 0.5).
+    X, Y, result = two_member_recommendation(1.0, 0.5, "rmse", n_runs=3)
+    runs = ["R1", "R2", "R3"]
+    c = result.combination
+    # Every fold trains on two runs, so its inner fits hold one run: equal weights, and the
+    # fold's held-out error is the plain mean of the members fitted on the two runs.
+    assert c.equal_folds == tuple(runs)
+    for held in runs:
+        assert c.folds[held] == (0.5, 0.5)
+        train = [r for r in runs if r != held]
+        mean = 0.5 * sum(by_hand_predictions(X, Y, s, train, [held]) for s in ("T1", "T2"))
+        residual = Y.to_numpy()[(X["run"] == held).to_numpy()] - mean
+        row = result.folds.set_index("fold").loc[held]
+        assert row["rmse_um"] == pytest.approx(np.sqrt(np.mean(residual**2)), rel=1e-9)
+    # The final weights weigh each run's held-out prediction by the fit on the other two:
+    # the lowest mean run RMSE, on a plain numpy grid of w (T1's weight) in steps of 1e-4.
+    assert c.final_fitted
+    held_out = [
+        (Y.to_numpy()[(X["run"] == r).to_numpy()],
+         [by_hand_predictions(X, Y, s, [o for o in runs if o != r], [r]) for s in ("T1", "T2")])
+        for r in runs
+    ]  # fmt: skip
+    grid = np.linspace(0.0, 1.0, 10001)
+    risk = [np.mean([np.sqrt(np.mean((y - w * a - (1 - w) * b) ** 2)) for y, (a, b) in held_out])
+            for w in grid]  # fmt: skip
+    assert c.final[0] == pytest.approx(grid[int(np.argmin(risk))], abs=2e-4)
+    assert 0.05 < c.final[0] < 0.95 and abs(c.final[0] - 0.5) > 0.05
 
 
 def test_replacing_the_held_out_runs_data_changes_no_weight_of_its_fold():
@@ -493,33 +526,39 @@ def test_the_plain_references_are_always_candidates_and_see_only_their_own_lags(
     assert selectable == ["run", "measurement", "time_min", "T1", "T1@lag20min"]
 
 
-def test_the_page_says_which_folds_had_no_inner_split_to_weight_on():
+def test_the_page_says_which_folds_and_whether_the_final_weights_were_weighed():
     # Two runs: each fold trains on one run, so it weights its members equally.
     folds = pd.DataFrame(
         {"fold": ["R1", "R2"], "chosen": [COMBINED] * 2, "weight_a": [0.5, 0.5],
          "weight_b": [0.5, 0.5], "rmse_um": [5.0, 1.5], "max_abs_um": [8.0, 3.5],
          "paper_rmse_um": [5.0, 1.5], "paper_max_abs_um": [8.0, 3.5]}
     )  # fmt: skip
-    combination = Combination(("a", "b"), {"R1": (0.5, 0.5), "R2": (0.5, 0.5)}, (0.25, 0.75))
+    combination = Combination(("a", "b"), {"R1": (0.5, 0.5), "R2": (0.5, 0.5)}, (0.5, 0.5),
+                              ("R1", "R2"), False)  # fmt: skip
     page = recommendation_markdown(
         Recommendation(folds, pd.DataFrame(), pd.DataFrame(), COMBINED, combination),
         "Dataset `two`: SIMULATED data.",
     )
     assert (
-        "Fold(s) R1, R2 had a single training run, so no inner predictions to fit weights on: "
-        "they weight the members equally." in page
+        "Fold(s) R1, R2 had fewer than three training runs, so no inner fit on two runs or "
+        "more to weigh the members on: they weight them equally." in page
     )
-    assert "with the weights fitted on every run's held-out predictions (a 0.250, b 0.750)" in page
+    assert (
+        "with equal weights (every run's held-out prediction is a fit on a single run) "
+        "(a 0.500, b 0.500)" in page
+    )
     # The means over the two folds: RMSE (5.0 + 1.5) / 2, largest |residual| (8.0 + 3.5) / 2.
     assert (
         "a mean held-out RMSE of 3.25 µm and a mean largest |residual| of 5.75 µm, against "
         "3.25 and 5.75 µm for the paper's configuration" in page
     )
-    inner = pd.DataFrame({"fold": ["R1"], "candidate": ["a"], "held_out": ["R2"]})
+    fitted = Combination(("a", "b"), {"R1": (0.5, 0.5), "R2": (0.1, 0.9)}, (0.25, 0.75),
+                         ("R1",), True)  # fmt: skip
     page = recommendation_markdown(
-        Recommendation(folds, inner, pd.DataFrame(), COMBINED, combination), "x"
+        Recommendation(folds, pd.DataFrame(), pd.DataFrame(), COMBINED, fitted), "x"
     )
-    assert "Fold(s) R2 had a single training run" in page
+    assert "with the weights fitted on every run's held-out predictions (a 0.250, b 0.750)" in page
+    assert "Fold(s) R1 had fewer than three training runs" in page and "R1, R2" not in page
 
 
 def test_held_out_predictions_are_the_fit_on_the_other_runs():

@@ -72,6 +72,7 @@ __all__ = [
     "selector_weights",
     "run_rmse_weights",
     "WEIGHTINGS",
+    "MIN_WEIGHING_RUNS",
     "Combination",
     "combine",
     "fold_scores",
@@ -368,11 +369,15 @@ def super_learner_weights(predictions: np.ndarray, measured: np.ndarray) -> np.n
 class Combination:
     """The super learner's weights: ``folds`` per held-out run (its outer fold's, fitted on
     that fold's inner predictions), ``final`` on every run's held-out predictions; each in
-    the order of ``members``."""
+    the order of ``members``. ``equal_folds`` are the held-out runs whose fold weights its
+    members equally, and ``final_fitted`` says whether the final weights were fitted (both
+    for want of fits on :data:`MIN_WEIGHING_RUNS` runs)."""
 
     members: tuple[str, ...]
     folds: Mapping[str, tuple[float, ...]]
     final: tuple[float, ...]
+    equal_folds: tuple[str, ...]
+    final_fitted: bool
 
 
 def _runs_read(predictions, measured) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -503,6 +508,20 @@ WEIGHTINGS: Mapping[str, Callable[[list, list], np.ndarray]] = {
 }
 
 
+# The fewest training runs of a fit whose held-out predictions may weigh the members. A
+# member fitted on a single run has seen one condition, and how it carries over to another
+# says little of the fits on two runs or more that the outer folds and the deployment make:
+# on records of three runs, whose inner fits hold one run, weights fitted on them did worse
+# than equal weights on most records replayed (docs/recommendation.md, "Three runs").
+MIN_WEIGHING_RUNS = 2
+
+
+def _weighing(pairs) -> list:
+    """``pairs`` ((training runs, run), ...) if every fit in them holds
+    :data:`MIN_WEIGHING_RUNS` runs or more; none (equal weights) otherwise."""
+    return list(pairs) if all(len(train) >= MIN_WEIGHING_RUNS for train, _ in pairs) else []
+
+
 def _weights(pairs, members, curves, measured, weighting) -> tuple[float, ...]:
     """The weights fitted on the held-out runs ``pairs`` ((training runs, run), ...), each
     run predicted by the members fitted on its training runs; none: equal weights."""
@@ -525,22 +544,27 @@ def combine(
     inner predictions alone (each training run predicted by the members fitted on the other
     training runs: the held-out run reaches no weight); its held-out error is its members
     fitted on the training runs, so weighted. The final weights are fitted on every run's
-    held-out predictions. Returns the weights and each held-out run's error metrics.
+    held-out predictions. Predictions of fits on fewer than :data:`MIN_WEIGHING_RUNS` runs
+    weigh nothing: such a fold (three runs or two in all), or the final weights (two runs),
+    weight the members equally. Returns the weights and each held-out run's error metrics.
     """
     members = tuple(members)
-    by_run, errors, every = {}, {}, []
+    by_run, errors, every, equal = {}, {}, [], []
     for fold in folds:
         held, train, splits = _outer_splits(runs, fold)
-        inner = [(tuple(r for r in train if r != run), run) for (run,) in splits]
+        inner = _weighing([(tuple(r for r in train if r != run), run) for (run,) in splits])
         weights = _weights(inner, members, curves, measured, weighting)
         for run in held:
             by_run[run] = weights
+            if not inner:
+                equal.append(run)
             outer = np.stack([curves[tuple(train)][(m, run)] for m in members], axis=-1)
             metrics = prediction_metrics(measured[run], outer @ np.asarray(weights))
             errors[run] = {name: float(metrics[name]) for name in METRIC_COLUMNS}
             every.append((tuple(train), run))
+    every = _weighing(every)
     final = _weights(every, members, curves, measured, weighting)
-    return Combination(members, by_run, final), errors
+    return Combination(members, by_run, final, tuple(equal), bool(every)), errors
 
 
 def fold_scores(

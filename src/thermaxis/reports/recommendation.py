@@ -14,25 +14,26 @@ def recommendation_markdown(recommendation: Recommendation, statement: str) -> s
     f = recommendation.folds
     c = recommendation.combination
     final = ", ".join(f"{m} {w:.3f}" for m, w in zip(c.members, c.final, strict=True))
+    how = (
+        "the weights fitted on every run's held-out predictions"
+        if c.final_fitted
+        else "equal weights (every run's held-out prediction is a fit on a single run)"
+    )
     head = (
         f"# Recommended model\n\n{statement}\n\n"
         f"Recommended: the **{recommendation.final}**, the convex combination of {len(c.members)} "
-        f"linear candidates with the weights fitted on every run's held-out predictions ({final}). "
+        f"linear candidates with {how} ({final}). "
         f"Weighted fold by fold without the held-out run, it leaves a mean held-out RMSE of "
         f"{s['rmse_um']:.2f} µm and a mean largest |residual| of {s['max_abs_um']:.2f} µm, "
         f"against {s['paper_rmse_um']:.2f} and {s['paper_max_abs_um']:.2f} µm for the paper's "
         f"configuration on the same folds.\n\n"
     )
-    unweighted = [fold for fold in f["fold"].astype(str) if not _has_inner(recommendation, fold)]
-    if unweighted:
-        # One training run leaves nothing to hold out inside the fold (combine).
+    if c.equal_folds:
+        # A member fitted on a single run has seen one condition: its predictions weigh
+        # nothing (thermaxis.method.nested.MIN_WEIGHING_RUNS).
         head += (
-            f"Fold(s) {', '.join(unweighted)} had a single training run, so no inner predictions "
-            "to fit weights on: they weight the members equally.\n\n"
+            f"Fold(s) {', '.join(c.equal_folds)} had fewer than three training runs, so no "
+            "inner fit on two runs or more to weigh the members on: they weight them equally."
+            "\n\n"
         )
     return head + markdown_table(f, "%.3f")
-
-
-def _has_inner(recommendation: Recommendation, fold: str) -> bool:
-    inner = recommendation.inner
-    return bool(len(inner)) and bool((inner["fold"].astype(str) == fold).any())
