@@ -370,8 +370,7 @@ class Combination:
     """The super learner's weights: ``folds`` per held-out run (its outer fold's, fitted on
     that fold's inner predictions), ``final`` on every run's held-out predictions; each in
     the order of ``members``. ``equal_folds`` are the held-out runs whose fold weights its
-    members equally, and ``final_fitted`` says whether the final weights were fitted (both
-    for want of fits on :data:`MIN_WEIGHING_RUNS` runs)."""
+    members equally; ``final_fitted``, whether the final weights were fitted."""
 
     members: tuple[str, ...]
     folds: Mapping[str, tuple[float, ...]]
@@ -508,17 +507,14 @@ WEIGHTINGS: Mapping[str, Callable[[list, list], np.ndarray]] = {
 }
 
 
-# The fewest training runs of a fit whose held-out predictions may weigh the members. A
-# member fitted on a single run has seen one condition, and how it carries over to another
-# says little of the fits on two runs or more that the outer folds and the deployment make:
-# on records of three runs, whose inner fits hold one run, weights fitted on them did worse
-# than equal weights on most records replayed (docs/recommendation.md, "Three runs").
+# The fewest training runs of a fit whose held-out predictions may weigh the members: a
+# member fitted on one run has seen one condition, which says little of fits on two or more
+# (on three-run records such weights did worse than equal ones: docs/recommendation.md).
 MIN_WEIGHING_RUNS = 2
 
 
 def _weighing(pairs) -> list:
-    """``pairs`` ((training runs, run), ...) if every fit in them holds
-    :data:`MIN_WEIGHING_RUNS` runs or more; none (equal weights) otherwise."""
+    """``pairs`` ((training runs, run), ...), or none (equal weights) if a fit is too small."""
     return list(pairs) if all(len(train) >= MIN_WEIGHING_RUNS for train, _ in pairs) else []
 
 
