@@ -195,6 +195,7 @@ def test_the_replay_command_writes_the_table_into_the_document(tmp_path, capsys)
 def test_the_stacking_command_names_a_block_it_does_not_know_in_one_line(tmp_path, capsys):
     assert stacking_main([str(tmp_path), "--block", "scored"]) == 2
     assert capsys.readouterr().err == (
-        "thermaxis error: --block 'scored': expected one of records, dev, three-runs\n"
+        "thermaxis error: --block 'scored': expected one of records, dev, three-runs, "
+        "measured-cuts\n"
     )
     assert BLOCKS["dev"] == ("<!-- stacking-dev:start -->", "<!-- stacking-dev:end -->")

@@ -22,7 +22,8 @@ combinations fixed from the literature before any record was replayed:
 ``--block dev`` writes the table into the development records' block instead: the
 simulated records (tools.bench.records.DEV_RECORDS) a change of the rule is judged on
 before it meets a scored record; ``--block three-runs`` into the block of the records of
-three runs, on which inner fits hold a single run.
+three runs, on which inner fits hold a single run; ``--block measured-cuts`` into the block
+of the embedded measured record cut to four and five of its runs.
 
 Each outer fold's weights come from its inner runs alone; the held-out run is predicted
 by the candidates fitted on the other runs. Evaluation only: the recommendation deploys
@@ -57,6 +58,10 @@ BLOCKS = {
     "records": ("<!-- stacking:start -->", "<!-- stacking:end -->"),
     "dev": ("<!-- stacking-dev:start -->", "<!-- stacking-dev:end -->"),
     "three-runs": ("<!-- stacking-three-runs:start -->", "<!-- stacking-three-runs:end -->"),
+    "measured-cuts": (
+        "<!-- stacking-measured-cuts:start -->",
+        "<!-- stacking-measured-cuts:end -->",
+    ),
 }
 
 
