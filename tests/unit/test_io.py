@@ -497,3 +497,27 @@ def test_a_line_cut_short_is_named_in_a_log_and_refused_in_a_measurement(tmp_pat
         f"{measurement}: line 3: 2 comma-separated fields but the header has 4; expected 4 fields "
         "(time, position_mm, error_um, direction), an empty one for a missing value (a line cut short?)"
     )
+
+
+def test_a_repeated_target_is_kept_when_exact_and_refused_when_it_conflicts(tmp_path):
+    header = "time,position_mm,error_um,direction\n"
+    rows = [
+        "2022-05-10T09:00:00,0,1.5,+",
+        "2022-05-10T09:00:05,50,2.5,+",
+        "2022-05-10T09:00:10,50,-0.5,-",
+    ]
+    measurement = tmp_path / "M01.csv"
+    # The same target in both passes is no repeat; logged twice with one value, a harmless
+    # duplicate, read as written.
+    measurement.write_text(header + "\n".join([*rows, "2022-05-10T09:00:15,50,-0.5,-"]) + "\n")
+    frame = read_measurement(measurement)
+    np.testing.assert_array_equal(frame["position_mm"], [0, 50, 50, 50])
+    np.testing.assert_array_equal(frame["error_um"], [1.5, 2.5, -0.5, -0.5])
+    # With another value it is two readings of one target in one pass: refused, naming both.
+    measurement.write_text(header + "\n".join([*rows, "2022-05-10T09:00:15,50,-0.75,-"]) + "\n")
+    with pytest.raises(DataError) as exc:
+        read_measurement(measurement)
+    assert one_line(exc) == (
+        f"{measurement}: column 'position_mm': position 50 mm appears twice in the - pass with "
+        "different errors [-0.5, -0.75] (expected one reading per target and pass)"
+    )
