@@ -25,6 +25,7 @@ import pandas as pd
 import yaml
 
 from thermaxis.method.candidates import BASELINE, EVIDENCE
+from thermaxis.pipeline import paths
 from tools.bench.scaling import generate_command
 
 __all__ = [
@@ -92,14 +93,14 @@ def without_signals(dataset: Path) -> None:
 def record_quality(results: Path) -> dict:
     """Mean held-out RMSE (µm) of the recommendation, the two plain references and the
     paper's, and the deployment verdict of the compensation (``compensation/model.json``)."""
-    folds = pd.read_csv(results / "tables" / "recommendation.csv")
-    candidates = pd.read_csv(results / "recommend" / "candidates.csv").set_index("candidate")
+    folds = pd.read_csv(results / paths.RECOMMENDATION)
+    candidates = pd.read_csv(results / paths.CANDIDATES).set_index("candidate")
     recommended = float(folds["rmse_um"].mean())
     baseline = float(candidates.loc[BASELINE, "loco_rmse_um"])
     evidence = float(candidates.loc[EVIDENCE, "loco_rmse_um"])
     paper = float(folds["paper_rmse_um"].mean())
     better = min(baseline, evidence)
-    verdict = json.loads((results / "compensation" / "model.json").read_text(encoding="utf-8"))[
+    verdict = json.loads((results / paths.DEPLOYED_MODEL).read_text(encoding="utf-8"))[
         "deployment"
     ]["verdict"]
     return {
@@ -177,9 +178,8 @@ def run_records(
     for dataset in datasets:
         name = yaml.safe_load((dataset / "dataset.yaml").read_text(encoding="utf-8"))["name"]
         targets = [
-            f"results/{name}/tables/recommendation.csv",
-            f"results/{name}/recommend/candidates.csv",
-            f"results/{name}/compensation/model.json",
+            paths.under(f"results/{name}", path)
+            for path in (paths.RECOMMENDATION, paths.CANDIDATES, paths.DEPLOYED_MODEL)
         ]
         m = measure(
             f"records_{name}",

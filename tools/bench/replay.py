@@ -23,6 +23,7 @@ import pandas as pd
 from thermaxis.labels import natural_sorted
 from thermaxis.method.candidates import BASELINE, EVIDENCE
 from thermaxis.method.nested import COMBINED
+from thermaxis.pipeline import paths
 from thermaxis.statistics.paired import wilcoxon_p
 from thermaxis.tables import read_table
 from tools.bench.records import RECORD_TARGETS, meets_targets
@@ -108,9 +109,9 @@ def replay(scores: pd.DataFrame) -> dict[str, float]:
 
 def record_scores(results: Path) -> dict[str, pd.DataFrame]:
     """Each record's fold scores under ``results``, in natural order of the record names."""
-    records = {}
-    for folder in natural_sorted([p.name for p in results.iterdir() if (p / "recommend").is_dir()]):
-        files = sorted((results / folder / "recommend" / "folds").glob("*.csv"))
+    records, fold_scores = {}, Path(paths.FOLD_SCORES).parent
+    for folder in natural_sorted([p.name for p in results.iterdir() if (p / fold_scores).is_dir()]):
+        files = sorted((results / folder / fold_scores).glob("*.csv"))
         if files:
             records[folder] = pd.concat([read_table(f) for f in files], ignore_index=True)
     return records

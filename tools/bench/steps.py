@@ -14,6 +14,7 @@ import yaml
 
 from thermaxis.config import load_config
 from thermaxis.dataset.safety import load_yaml
+from thermaxis.pipeline import paths
 from tools.bench import records as bench_records
 from tools.bench.measure import MIB, Measurement, _add_jobs, measure
 from tools.bench.report import finish
@@ -113,7 +114,7 @@ def _default_dataset_name(repo: Path) -> str:
 
 
 def _sweep_size(work: Path, dataset_name: str) -> dict:
-    ranking = work / "results" / dataset_name / "sweep" / "ranking.csv"
+    ranking = work / "results" / dataset_name / paths.SWEEP_RANKING
     if not ranking.is_file():
         return {}
     import pandas as pd
