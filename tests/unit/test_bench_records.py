@@ -174,6 +174,23 @@ def test_stacked_rmse_weights_each_outer_fold_on_its_inner_runs_alone():
     assert stacked_rmse(X, Y, ["A", "B"], predicted, rmse, min_runs) == pytest.approx(1.0)
 
 
+def test_stacked_rmse_of_a_two_run_record_weights_every_row_equally():
+    # Two runs of two readings, measured 0 and 2. Fitted on the other run, member A predicts
+    # 1 everywhere and member B 4 for R1 and 0 for R2. No fold has an inner fit, so every
+    # row weighs them equally, whatever its weighting: R1 |0 - (1 + 4) / 2| = 2.5, R2
+    # |2 - (1 + 0) / 2| = 1.5; mean 2.
+    X = pd.DataFrame({"run": ["R1", "R1", "R2", "R2"]})
+    Y = pd.DataFrame({"e": [0.0, 0.0, 2.0, 2.0]})
+    predicted = {
+        (("R2",), "A"): (np.array(["R1", "R1"]), np.ones((2, 1))),
+        (("R2",), "B"): (np.array(["R1", "R1"]), np.full((2, 1), 4.0)),
+        (("R1",), "A"): (np.array(["R2", "R2"]), np.ones((2, 1))),
+        (("R1",), "B"): (np.array(["R2", "R2"]), np.zeros((2, 1))),
+    }
+    for _, stack, *min_runs in STACKS.values():
+        assert stacked_rmse(X, Y, ["A", "B"], predicted, stack, *min_runs) == pytest.approx(2.0)
+
+
 def test_the_replay_command_writes_the_table_into_the_document(tmp_path, capsys):
     scores = _toy_scores()
     folds = tmp_path / "results" / "toy" / "recommend" / "folds"

@@ -50,6 +50,7 @@ from thermaxis.method.nested import (
     held_out_predictions,
     training_sets,
 )
+from thermaxis.pipeline import paths
 from tools.bench.replay import record_scores, table_command
 
 __all__ = ["stacked_rmse", "STACKS"]
@@ -67,15 +68,14 @@ BLOCKS = {
 
 def _record_inputs(folder: Path):
     """X, Y, the candidates and the declared signals of one bench record's results."""
-    assembled = folder / "assembled"
-    signals = pd.read_parquet(assembled / "signals.parquet")
+    signals = pd.read_parquet(folder / paths.ASSEMBLED_SIGNALS)
     X, Y = model_inputs(
-        pd.read_parquet(assembled / "errors.parquet"),
-        pd.read_parquet(assembled / "temperatures.parquet"),
+        pd.read_parquet(folder / paths.ASSEMBLED_ERRORS),
+        pd.read_parquet(folder / paths.ASSEMBLED_TEMPERATURES),
         signals=signals,
-        inputs=pd.read_parquet(assembled / "inputs.parquet"),
+        inputs=pd.read_parquet(folder / paths.ASSEMBLED_INPUTS),
     )
-    choice = json.loads((folder / "recommend" / "choice.json").read_text(encoding="utf-8"))
+    choice = json.loads((folder / paths.CHOICE).read_text(encoding="utf-8"))
     models = Settings.from_config({}).models
     candidates = [candidate_from_record(r, models) for r in choice["candidates"].values()]
     return X, Y, candidates, sorted(pd.unique(signals["signal"]).tolist())
@@ -103,20 +103,26 @@ def _rows(predicted, train, name, run) -> np.ndarray:
 
 def stacked_rmse(X, Y, names, predicted, stack, min_runs=1) -> float:
     """Mean over the outer runs of the held-out RMSE of ``stack``'s combination of ``names``;
-    an outer fold whose inner fits hold fewer than ``min_runs`` runs weights them equally."""
+    an outer fold whose inner fits hold fewer than ``min_runs`` runs, or none (a record of
+    two runs), weights them equally."""
     runs = natural_sorted(pd.unique(X["run"]).tolist())
     measured = {r: Y.loc[(X["run"] == r).to_numpy()].to_numpy(dtype=float) for r in runs}
     rmse = []
     for held in runs:
         train = tuple(r for r in runs if r != held)
-        predictions = [
-            np.column_stack(
-                [_rows(predicted, tuple(r for r in train if r != i), n, i).ravel() for n in names]
-            )
-            for i in train
-        ]
-        weigh = stack if len(train) - 1 >= min_runs else _equal
-        weights = weigh(predictions, [measured[i].ravel() for i in train])
+        if len(train) - 1 >= max(min_runs, 1):
+            predictions = [
+                np.column_stack(
+                    [
+                        _rows(predicted, tuple(r for r in train if r != i), n, i).ravel()
+                        for n in names
+                    ]
+                )
+                for i in train
+            ]
+            weights = stack(predictions, [measured[i].ravel() for i in train])
+        else:
+            weights = np.full(len(names), 1.0 / len(names))
         outer = np.column_stack([_rows(predicted, train, n, held).ravel() for n in names])
         rmse.append(np.sqrt(np.mean((measured[held].ravel() - outer @ weights) ** 2)))
     return float(np.mean(rmse))
