@@ -89,7 +89,7 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
                                       "compensation": {"model": "pointwise-pls-all+lags"},
                                       "figures": {"algorithms": ["mlr"], "formats": ["png"],
                                                   "dpi": 60}}))  # fmt: skip
-    run_snakemake(
+    proc = run_snakemake(
         work,
         "--configfile",
         "config/config.yaml",
@@ -100,6 +100,13 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
         "--",
         *targets,
     )
+    # What a single position leaves out is said once, as not applying: nothing the run
+    # prints calls a part of the method skipped.
+    said = [
+        line for line in (proc.stdout + proc.stderr).splitlines() if line.startswith("thermaxis")
+    ]
+    assert any("decoupled (slope/intercept) branch does not apply" in line for line in said), said
+    assert not [line for line in said if "skipped" in line], said
     metrics = pd.read_csv(out / "tables" / "metrics.csv")
     assert set(metrics["approach"]) == {"pointwise"}
     assert sorted(metrics["fold"]) == sorted(RUNS)

@@ -92,8 +92,8 @@ class Plan:
         notes = []
         if not self.decoupled:
             notes.append(
-                "a single target position: the decoupled (slope/intercept) branch is skipped, "
-                "only point-by-point models run"
+                "a single target position: the decoupled (slope/intercept) branch does not "
+                "apply (a slope needs two positions), only point-by-point models run"
             )
         if self.ambient is None:
             notes.append(
