@@ -102,9 +102,8 @@ def test_single_position_unequal_runs_end_to_end(tmp_path):
     )
     # What a single position leaves out is said once, as not applying: nothing the run
     # prints calls a part of the method skipped.
-    said = [
-        line for line in (proc.stdout + proc.stderr).splitlines() if line.startswith("thermaxis")
-    ]
+    printed = f"{proc.stdout}\n{proc.stderr}".splitlines()
+    said = [line for line in printed if line.startswith("thermaxis")]
     assert any("decoupled (slope/intercept) branch does not apply" in line for line in said), said
     assert not [line for line in said if "skipped" in line], said
     metrics = pd.read_csv(out / "tables" / "metrics.csv")
