@@ -109,7 +109,8 @@ def replay(scores: pd.DataFrame) -> dict[str, float]:
 
 def record_scores(results: Path) -> dict[str, pd.DataFrame]:
     """Each record's fold scores under ``results``, in natural order of the record names."""
-    records, fold_scores = {}, Path(paths.FOLD_SCORES).parent
+    records = {}
+    fold_scores = Path(paths.FOLD_SCORES).parent
     for folder in natural_sorted([p.name for p in results.iterdir() if (p / fold_scores).is_dir()]):
         files = sorted((results / folder / fold_scores).glob("*.csv"))
         if files:

@@ -103,14 +103,14 @@ def _rows(predicted, train, name, run) -> np.ndarray:
 
 def stacked_rmse(X, Y, names, predicted, stack, min_runs=1) -> float:
     """Mean over the outer runs of the held-out RMSE of ``stack``'s combination of ``names``;
-    an outer fold whose inner fits hold fewer than ``min_runs`` runs, or none (a record of
-    two runs), weights them equally."""
+    an outer fold whose inner fits hold fewer than ``min_runs`` (at least 1) runs weights
+    them equally, as one of a two-run record, whose inner fits would hold none."""
     runs = natural_sorted(pd.unique(X["run"]).tolist())
     measured = {r: Y.loc[(X["run"] == r).to_numpy()].to_numpy(dtype=float) for r in runs}
     rmse = []
     for held in runs:
         train = tuple(r for r in runs if r != held)
-        if len(train) - 1 >= max(min_runs, 1):
+        if len(train) - 1 >= min_runs:
             predictions = [
                 np.column_stack(
                     [
