@@ -85,16 +85,16 @@ def _headline(answer, figure: str, caption: str) -> Headline:
     with open(answer["markdown"], encoding="utf-8") as fh:
         recommendation = fh.read().split("\n\n")[2]
     with open(answer["model"], encoding="utf-8") as fh:
-        deployment = json.load(fh)["deployment"]
+        model = json.load(fh)
     claims = None
     if os.path.isfile(answer["claims"]):
         claims = claims_table(read_table(answer["claims"]), answer["claims"])
     folds = read_table(answer["recommendation"])
     return Headline(
-        answer=answer_sentence(answer_of(folds, deployment)),
+        answer=answer_sentence(answer_of(folds, model)),
         ranking=model_ranking(read_table(answer["metrics"])),
         recommendation=recommendation,
-        deployment=deployment,
+        deployment=model["deployment"],
         comparison=deployment_comparison(folds),
         claims=claims,
         figure=figure,

@@ -13,6 +13,7 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from thermaxis.compensation.verdict import verdict_sentence
@@ -22,20 +23,31 @@ from thermaxis.tables import read_table
 __all__ = ["LEADS", "answer_of", "answer_sentence", "read_answer", "main"]
 
 
-def answer_of(folds: pd.DataFrame, deployment: dict) -> dict:
-    """The numbers of the answer from recommendation.csv's folds and model.json's deployment."""
+def answer_of(folds: pd.DataFrame, model: dict) -> dict:
+    """The numbers of the answer from recommendation.csv's folds and model.json.
+
+    The error quoted is the deployed model's own over its held-out runs (model.json's
+    ``held_out_accuracy``): the recommendation's, unless config ``compensation.model``
+    deploys the paper's configuration or a named candidate; then the recommendation's is
+    quoted beside it.
+    """
+    deployment = model["deployment"]
     verdict = deployment["verdict"]
     runs = pd.DataFrame(verdict["runs"])
+    curve = [row["rmse"] for row in model["held_out_accuracy"] if row["target"] == "error"]
     return dict(
         candidate=str(deployment.get("candidate", "")),
         outcome=verdict["outcome"],
         recommended=verdict["outcome"] == "recommended",
-        rmse_um=float(folds["rmse_um"].mean()),
+        rmse_um=float(np.mean(curve)),
         paper_rmse_um=float(folds["paper_rmse_um"].mean()),
-        n_folds=int(len(folds)),
+        n_folds=len(curve),
         uncompensated_um=float(runs["largest_abs_before_um"].max()),
         compensated_um=float(runs["largest_abs_after_um"].max()),
         verdict=verdict,
+        by_config=deployment["model"] != "recommended",
+        evidence=str(deployment["recommended_by_the_evidence"]),
+        evidence_rmse_um=float(folds["rmse_um"].mean()),
     )
 
 
@@ -56,6 +68,11 @@ def answer_sentence(answer: dict) -> str:
         f"|deviation| {answer['compensated_um']:.2f} µm compensated against "
         f"{answer['uncompensated_um']:.2f} µm uncompensated"
     )
+    if answer["by_config"]:
+        error += (
+            f"; deployed as config compensation.model says, where the runs recommend the "
+            f"{answer['evidence']} at {answer['evidence_rmse_um']:.2f} µm"
+        )
     lead = LEADS[answer["outcome"]].format(candidate=answer["candidate"], error=error)
     return f"{lead} {verdict_sentence(answer['verdict'], unit='µm')}"
 
@@ -65,8 +82,7 @@ def read_answer(results: Path | str) -> dict:
     results = Path(results)
     folds = read_table(results / paths.RECOMMENDATION, comment="#")
     with open(results / paths.DEPLOYED_MODEL, encoding="utf-8") as fh:
-        deployment = json.load(fh)["deployment"]
-    return answer_of(folds, deployment)
+        return answer_of(folds, json.load(fh))
 
 
 def main(argv: list[str] | None = None) -> int:

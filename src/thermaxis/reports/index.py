@@ -366,13 +366,13 @@ def render_index(
 
 
 def answers_table(summary: pd.DataFrame, answers: dict[str, dict]) -> pd.DataFrame:
-    """One row per dataset: its data, the model to deploy, its error against the paper's, the verdict."""
+    """One row per dataset: its data, the model deployed, its held-out error against the paper's, the verdict."""
     data = summary.groupby("dataset", sort=True)["data"].first()
     rows = [
         {
             "dataset": name,
             "data": data.get(name, ""),
-            "recommended model": a["candidate"]
+            "deployed model": a["candidate"]
             if a["recommended"]
             else f"none (closest: {a['candidate']})",
             "held-out RMSE, µm": a["rmse_um"],
