@@ -39,18 +39,24 @@ def test_make_docs_writes_the_answer_and_the_held_out_error_from_results(lines_r
     text = guide.read_text(encoding="utf-8")
     assert text.startswith("Intro.\n\n") and text.endswith("<!-- results:end -->\nEnd.\n")
     assert "1.30 µm" not in text
-    # The answer: model.json's verdict in the pages' words, and the mean held-out RMSE of
-    # recommendation.csv, worked out here with the csv module.
+    # The answer: model.json's verdict in the pages' words, the deployed model's mean
+    # held-out RMSE (this run deploys the paper's configuration by config), and beside it
+    # the recommendation's, the mean of recommendation.csv, worked out here with the csv module.
     out = lines_run.out
-    verdict = json.loads((out / "compensation" / "model.json").read_text())["deployment"]["verdict"]
+    model = json.loads((out / "compensation" / "model.json").read_text())
+    verdict = model["deployment"]["verdict"]
     assert verdict["outcome"] in ("recommended", "not_established", "not_recommended")
     from thermaxis.compensation.verdict import verdict_sentence
 
     assert verdict_sentence(verdict, unit="µm") in text
+    curve = [r["rmse"] for r in model["held_out_accuracy"] if r["target"] == "error"]
+    assert f": paper, held-out RMSE {sum(curve) / len(curve):.2f} µm against" in text
     with open(out / "tables" / "recommendation.csv", encoding="utf-8") as fh:
         rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
+    paper = sum(float(r["paper_rmse_um"]) for r in rows) / len(rows)
     rmse = sum(float(r["rmse_um"]) for r in rows) / len(rows)
-    assert f"held-out RMSE {rmse:.2f} µm" in text
+    assert f"against {paper:.2f} µm for the paper's configuration" in text
+    assert f"the runs recommend the super learner at {rmse:.2f} µm" in text
     # The held-out error: each approach x algorithm's mean RMSE over the folds of metrics.csv.
     with open(out / "tables" / "metrics.csv", encoding="utf-8") as fh:
         metrics = [r for r in csv.DictReader(fh) if r["target"] == "error"]
