@@ -56,6 +56,9 @@ env:
 		"$(BIN)/python" -m pip check --disable-pip-version-check; \
 		echo "$$want" > "$(STAMP)"; \
 	fi
+	@# The editable install's modules as bytecode: where PYTHONDONTWRITEBYTECODE is set, every
+	@# job and test process would otherwise compile the thermaxis modules it imports again.
+	@"$(BIN)/python" -m compileall -q src
 
 # The Slurm executor plugin is not in .venv: Snakemake imports every installed executor
 # plugin at each start, and plugin 2.8.0 then waits up to 10 s for an absent Slurm
