@@ -165,7 +165,7 @@ def held_out_run(
         sensors = list(dict.fromkeys([*model.sensors, *final.sensors]))
         cycles = held_out.measurement_cycles(*logged(), sensors)
     steps, _ = held_out.replay(model, X_run, cycles)
-    # The final model may read inputs this fold's does not (a signal): it replays on all of X.
+    # The final model may read inputs this fold's does not (a signal): X_run has every column.
     _, final_values = held_out.replay(final, X_run, cycles)
     for line in held_out.fallback_summary(fold, steps):
         logging.getLogger("thermaxis").warning(line)
