@@ -20,7 +20,7 @@ from pathlib import Path
 
 from thermaxis.errors import DataError
 
-__all__ = ["run_script", "atomic_path", "write_csv", "write_text"]
+__all__ = ["run_script", "thread_pools", "atomic_path", "write_csv", "write_text"]
 
 
 # A solver's warning differs in its numbers at every fit (LARS's dropped regressor, a
@@ -155,8 +155,9 @@ def _configure_logging(log_path: str | None) -> logging.Logger:
 
 
 @contextmanager
-def _thread_pools(threads: int):
-    """BLAS (OpenBLAS) and OpenMP use at most the job's Snakemake ``threads``.
+def thread_pools(threads: int):
+    """BLAS (OpenBLAS) and OpenMP use at most ``threads`` (a job's Snakemake ``threads``)
+    in the libraries loaded so far.
 
     Snakemake runs other jobs on the cores it did not give this one, and OpenBLAS would
     otherwise start a thread per core in every job. On the pipeline's small systems the
@@ -175,7 +176,7 @@ def run_script(main, snakemake) -> None:
     logger = _configure_logging(log)
     warnings.simplefilter("default")
     try:
-        with _thread_pools(getattr(snakemake, "threads", 1)):
+        with thread_pools(getattr(snakemake, "threads", 1)):
             main(snakemake)
     except (DataError, ValueError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
