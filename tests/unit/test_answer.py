@@ -83,3 +83,17 @@ def test_a_model_deployed_by_config_quotes_its_own_error_and_the_recommendations
     assert "compensation.model" not in answer_sentence(
         answer_of(_folds(), _model([-4.0, -1.0, 1.5]))
     )
+
+
+def test_a_harmful_model_deployed_by_config_is_advised_against_by_name():
+    # Three of four runs worsen: not recommended. The runs' own choice is not the one
+    # that harmed, so the answer does not advise against every candidate.
+    model = _model([-4.0, 1.5, 2.0, 3.0], model="pointwise-svr", candidate="pointwise-svr")
+    text = answer_sentence(answer_of(_folds(), model))
+    assert model["deployment"]["verdict"]["outcome"] == "not_recommended"
+    assert text.startswith("Do not compensate with pointwise-svr: held-out RMSE 1.50 µm"), text
+    assert "any candidate" not in text
+    recommended = answer_sentence(answer_of(_folds(), _model([-4.0, 1.5, 2.0, 3.0])))
+    assert recommended.startswith(
+        "Do not compensate with any candidate. Closest: pointwise-mlr-all"
+    )

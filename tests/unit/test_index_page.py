@@ -20,6 +20,7 @@ from thermaxis.reports.index import (
     Headline,
     IndexFigure,
     PageTable,
+    answers_table,
     claims_table,
     deployment_comparison,
     render_index,
@@ -140,3 +141,22 @@ def test_the_results_page_links_each_dataset_with_its_best_model():
     assert "<li>a&lt; (SIMULATED)" in page  # no page for a: named, escaped, not linked
     assert "mean RMSE of 1.23 µm over 4 held-out runs" in page
     assert "SIMULATED DATA" in page
+
+
+def test_the_answers_table_names_the_deployed_model_as_its_verdict_allows():
+    summary = pd.DataFrame({"dataset": ["a", "b", "c"], "data": ["simulated"] * 3})
+    answers = {
+        "a": {"candidate": "super learner", "recommended": True, "by_config": False,
+              "rmse_um": 0.5, "paper_rmse_um": 1.0, "outcome": "recommended"},
+        "b": {"candidate": "super learner", "recommended": False, "by_config": False,
+              "rmse_um": 2.0, "paper_rmse_um": 1.0, "outcome": "not_recommended"},
+        "c": {"candidate": "paper", "recommended": False, "by_config": True,
+              "rmse_um": 1.7, "paper_rmse_um": 1.7, "outcome": "not_established"},
+    }  # fmt: skip
+    table = answers_table(summary, answers).set_index("dataset")
+    assert table["deployed model"].to_dict() == {
+        "a": "super learner",
+        "b": "none (closest: super learner)",
+        "c": "paper (set by config)",
+    }
+    assert table.loc["c", "held-out RMSE, µm"] == 1.7

@@ -51,11 +51,14 @@ def answer_of(folds: pd.DataFrame, model: dict) -> dict:
     )
 
 
-# How the answer opens, per outcome of the verdict; the verdict's own words follow.
+# How the answer opens, per outcome of the verdict; the verdict's own words follow. The
+# recommendation is the candidate the runs favour, so when it harms none is advised; a model
+# deployed by config speaks for itself alone.
 LEADS = {
     "recommended": "Deploy {candidate}: {error}.",
     "not_established": "Not yet: {candidate}, {error}.",
     "not_recommended": "Do not compensate with any candidate. Closest: {candidate}, {error}.",
+    "not_recommended_by_config": "Do not compensate with {candidate}: {error}.",
 }
 
 
@@ -73,7 +76,9 @@ def answer_sentence(answer: dict) -> str:
             f"; deployed as config compensation.model says, where the runs recommend the "
             f"{answer['evidence']} at {answer['evidence_rmse_um']:.2f} µm"
         )
-    lead = LEADS[answer["outcome"]].format(candidate=answer["candidate"], error=error)
+    by_config = answer["by_config"] and answer["outcome"] == "not_recommended"
+    lead = LEADS[answer["outcome"] + ("_by_config" if by_config else "")]
+    lead = lead.format(candidate=answer["candidate"], error=error)
     return f"{lead} {verdict_sentence(answer['verdict'], unit='µm')}"
 
 

@@ -365,6 +365,17 @@ def render_index(
     return "\n".join(parts) + "\n"
 
 
+def _deployed_cell(answer: dict) -> str:
+    """The answers table's model: the one config ``compensation.model`` set, or the
+    recommendation when its verdict says deploy, else none with the closest (the verdict
+    column says how it went)."""
+    if answer["by_config"]:
+        return f"{answer['candidate']} (set by config)"
+    if answer["recommended"]:
+        return answer["candidate"]
+    return f"none (closest: {answer['candidate']})"
+
+
 def answers_table(summary: pd.DataFrame, answers: dict[str, dict]) -> pd.DataFrame:
     """One row per dataset: its data, the model deployed, its held-out error against the paper's, the verdict."""
     data = summary.groupby("dataset", sort=True)["data"].first()
@@ -372,9 +383,7 @@ def answers_table(summary: pd.DataFrame, answers: dict[str, dict]) -> pd.DataFra
         {
             "dataset": name,
             "data": data.get(name, ""),
-            "deployed model": a["candidate"]
-            if a["recommended"]
-            else f"none (closest: {a['candidate']})",
+            "deployed model": _deployed_cell(a),
             "held-out RMSE, µm": a["rmse_um"],
             "paper's configuration, µm": a["paper_rmse_um"],
             "verdict": OUTCOME_WORDS[a["outcome"]][1],
