@@ -110,8 +110,8 @@ def main(argv=None) -> int:
     try:
         spec = load_yaml(args.spec)
         # One BLAS thread, as a one-core job has: the ridge paths are small systems, and a
-        # second thread spinning beside them doubled the CPU time (10.4 against 5.1 s alone,
-        # 19 against 5 s beside another process on two cores).
+        # second thread spinning beside them doubled the CPU time (11.1 against 5.4 s alone,
+        # 19 against 5.6 s beside another process on two cores; docs/performance.md).
         with thread_pools(1):
             table = comparison(spec, args.spec)
     except DataError as exc:

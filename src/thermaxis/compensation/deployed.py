@@ -120,10 +120,7 @@ def fitted_model(
     deployed = deployed_record(d.compensation.model, choice)
     if deployed is None:
         deployment = {"model": "paper", "candidate": "paper"}
-        setup = deployed_setup(
-            None, d.X, d.approach, d.selection, d.models, d.compensation, d.signals
-        )
-        rows = held_out.configured_accuracy(metrics, setup.approach, setup.settings.algorithm)
+        rows = held_out.configured_accuracy(metrics, d.approach, d.compensation.algorithm)
     else:
         deployment = {"model": d.compensation.model, "candidate": deployed["name"]}
         rows = held_out.candidate_accuracy(scores, deployed["name"])

@@ -76,9 +76,10 @@ def answer_sentence(answer: dict) -> str:
             f"; deployed as config compensation.model says, where the runs recommend the "
             f"{answer['evidence']} at {answer['evidence_rmse_um']:.2f} µm"
         )
-    by_config = answer["by_config"] and answer["outcome"] == "not_recommended"
-    lead = LEADS[answer["outcome"] + ("_by_config" if by_config else "")]
-    lead = lead.format(candidate=answer["candidate"], error=error)
+    outcome = answer["outcome"]
+    if answer["by_config"] and outcome == "not_recommended":
+        outcome = "not_recommended_by_config"
+    lead = LEADS[outcome].format(candidate=answer["candidate"], error=error)
     return f"{lead} {verdict_sentence(answer['verdict'], unit='µm')}"
 
 
